@@ -1,0 +1,236 @@
+//! Physical effects that the 3 × N IK matrix cannot express (or can only absorb), each a small documented
+//! model with named parameters that does nothing at its null value.
+//!
+//! An effect acts at one stage of the odometry pipeline:
+//!
+//! | stage | hook | examples |
+//! |---|---|---|
+//! | clock | [`Effect::clock_lag_s`] | `time_offset` |
+//! | wheel speeds (per run, may carry state) | [`Effect::wheel_rates`] | `wheel_asymmetry`, `backlash`, `wheel_eccentricity` |
+//! | body twist (per sample) | [`Effect::twist`] | `rotation_slip` |
+//! | integration | [`Effect::uses_stamps`] | `sample_timing` |
+//! | measurement | [`Effect::sensor_from_body`] | `sensor_offset` |
+//!
+//! The simulator injects effects through exactly these hooks (at its fine step), so the model that is
+//! fitted is the model that generated the data. Law (checked by tests): at the null parameters an effect
+//! leaves the trajectory bit-identical.
+
+mod builtin;
+
+pub use builtin::{
+    AccelSlip, Backlash, RotationSlip, SampleTiming, SensorOffset, SpeedScale, TimeOffset, WheelAsymmetry,
+    WheelEccentricity,
+};
+
+use crate::error::KinError;
+use crate::pose::{Pose2, Twist2};
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::sync::Arc;
+
+/// One parameter of a model or effect.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ParamSpec {
+    /// Name, unique within the model, e.g. `tau_s`, `a_wheel_b`, `m23`.
+    pub name: String,
+    /// Unit, e.g. `s`, `m`, `rad`, `1`.
+    pub unit: String,
+    /// Value at which it does nothing (effects) or the design value (kinematics).
+    pub null: f64,
+    /// Default lower bound for searches.
+    pub lower: f64,
+    /// Default upper bound for searches.
+    pub upper: f64,
+}
+
+impl ParamSpec {
+    /// A parameter spec.
+    pub fn new(name: impl Into<String>, unit: &str, null: f64, lower: f64, upper: f64) -> Self {
+        Self { name: name.into(), unit: unit.into(), null, lower, upper }
+    }
+}
+
+/// The pipeline stage an effect acts on (for reports and for the equivalence analysis).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Stage {
+    /// How wheel stamps map to ground-truth time.
+    Clock,
+    /// Wheel speeds, before the IK matrix.
+    Wheel,
+    /// The body twist, after the IK matrix.
+    Twist,
+    /// How the twist is integrated.
+    Integration,
+    /// How the ground-truth sensor sees the body.
+    Measurement,
+}
+
+/// What a wheel-stage effect sees of a run.
+#[derive(Debug)]
+pub struct WheelContext<'a> {
+    /// Number of wheels.
+    pub n_wheels: usize,
+    /// Sample stamps on the ground-truth clock. s.
+    pub t_s: &'a [f64],
+    /// Step length integrated for each sample. s.
+    pub dt_s: &'a [f64],
+    /// Wheel angle at the first sample, one per wheel (0 when unknown). rad.
+    pub start_angle_rad: &'a [f64],
+}
+
+/// A physical effect that the IK matrix cannot express. Implement only the hook of its stage.
+///
+/// Downstream crates implement this trait for their own effects and add them with [`EffectKind::Custom`].
+pub trait Effect: fmt::Debug + Send + Sync {
+    /// Stable id used by CLI flags, model files, reports and Python: `"time_offset"`.
+    fn id(&self) -> &str;
+    /// One line of physics for reports.
+    fn describe(&self) -> String;
+    /// The stage it acts on.
+    fn stage(&self) -> Stage;
+    /// One spec per parameter: name, unit, null value, bounds.
+    fn params(&self) -> Vec<ParamSpec>;
+    /// Wheel stage: rewrite a run's wheel speeds (row-major `n_samples × n_wheels`, rad/s) in place.
+    fn wheel_rates(&self, _p: &[f64], _ctx: &WheelContext<'_>, _wheel_rad_s: &mut [f64]) {}
+    /// Twist stage: change one sample's body twist (the wheel speeds it came from are given).
+    fn twist(&self, _p: &[f64], twist: Twist2, _wheel_rad_s: &[f64]) -> Twist2 {
+        twist
+    }
+    /// Clock stage: how late the wheel stamps run against the ground-truth clock. s.
+    fn clock_lag_s(&self, _p: &[f64]) -> f64 {
+        0.0
+    }
+    /// Measurement stage: the pose of the ground-truth sensor in the body frame.
+    fn sensor_from_body(&self, _p: &[f64]) -> Pose2 {
+        Pose2::IDENTITY
+    }
+    /// Integration stage: integrate with each sample's measured interval instead of a fixed step.
+    fn uses_stamps(&self) -> bool {
+        false
+    }
+}
+
+/// The built-in effects, plus user effects behind [`EffectKind::Custom`]. Matching on the enum keeps
+/// dynamic dispatch out of the hot loop for the built-ins.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(tag = "effect", rename_all = "snake_case")]
+pub enum EffectKind {
+    /// Ground-truth sensor away from the rotation centre.
+    SensorOffset(SensorOffset),
+    /// Wheel clock lags the ground-truth clock.
+    TimeOffset(TimeOffset),
+    /// Forward/backward radius difference per wheel.
+    WheelAsymmetry(WheelAsymmetry),
+    /// Radius changes with wheel speed.
+    SpeedScale(SpeedScale),
+    /// Translation turned by slip while rotating.
+    RotationSlip(RotationSlip),
+    /// Traction lost while a wheel speeds up.
+    AccelSlip(AccelSlip),
+    /// Lost motion after a wheel reverses.
+    Backlash(Backlash),
+    /// Out-of-round wheels.
+    WheelEccentricity(WheelEccentricity),
+    /// Integrate with measured stamps.
+    SampleTiming(SampleTiming),
+    /// A user effect (not stored in model files by value; only its id is).
+    #[serde(skip)]
+    Custom(Arc<dyn Effect>),
+}
+
+/// Ids of the built-in catalogue, in catalogue order.
+pub const CATALOGUE: &[&str] = &[
+    "sensor_offset",
+    "time_offset",
+    "wheel_asymmetry",
+    "speed_scale",
+    "rotation_slip",
+    "accel_slip",
+    "backlash",
+    "wheel_eccentricity",
+    "sample_timing",
+];
+
+impl EffectKind {
+    /// A built-in effect by id for a robot with `n_wheels` wheels. `sensor_offset_yaw` is `sensor_offset`
+    /// with a yaw parameter.
+    pub fn from_id(id: &str, n_wheels: usize) -> Result<Self, KinError> {
+        Ok(match id {
+            "sensor_offset" => Self::SensorOffset(SensorOffset { with_yaw: false }),
+            "sensor_offset_yaw" => Self::SensorOffset(SensorOffset { with_yaw: true }),
+            "time_offset" => Self::TimeOffset(TimeOffset {}),
+            "wheel_asymmetry" => Self::WheelAsymmetry(WheelAsymmetry { n_wheels }),
+            "speed_scale" => Self::SpeedScale(SpeedScale { n_wheels }),
+            "rotation_slip" => Self::RotationSlip(RotationSlip {}),
+            "accel_slip" => Self::AccelSlip(AccelSlip { n_wheels }),
+            "backlash" => Self::Backlash(Backlash { n_wheels }),
+            "wheel_eccentricity" => Self::WheelEccentricity(WheelEccentricity { n_wheels }),
+            "sample_timing" => Self::SampleTiming(SampleTiming {}),
+            other => {
+                return Err(KinError::Unknown {
+                    what: "effect",
+                    name: other.into(),
+                    known: format!("{}, sensor_offset_yaw", CATALOGUE.join(", ")),
+                });
+            }
+        })
+    }
+
+    /// The whole built-in catalogue for `n_wheels` wheels.
+    pub fn catalogue(n_wheels: usize) -> Vec<Self> {
+        CATALOGUE.iter().filter_map(|id| Self::from_id(id, n_wheels).ok()).collect()
+    }
+
+    fn inner(&self) -> &dyn Effect {
+        match self {
+            Self::SensorOffset(e) => e,
+            Self::TimeOffset(e) => e,
+            Self::WheelAsymmetry(e) => e,
+            Self::SpeedScale(e) => e,
+            Self::RotationSlip(e) => e,
+            Self::AccelSlip(e) => e,
+            Self::Backlash(e) => e,
+            Self::WheelEccentricity(e) => e,
+            Self::SampleTiming(e) => e,
+            Self::Custom(e) => e.as_ref(),
+        }
+    }
+}
+
+impl Effect for EffectKind {
+    fn id(&self) -> &str {
+        match self {
+            Self::SensorOffset(e) if e.with_yaw => "sensor_offset_yaw",
+            _ => self.inner().id(),
+        }
+    }
+    fn describe(&self) -> String {
+        self.inner().describe()
+    }
+    fn stage(&self) -> Stage {
+        self.inner().stage()
+    }
+    fn params(&self) -> Vec<ParamSpec> {
+        self.inner().params()
+    }
+    fn wheel_rates(&self, p: &[f64], ctx: &WheelContext<'_>, w: &mut [f64]) {
+        self.inner().wheel_rates(p, ctx, w)
+    }
+    fn twist(&self, p: &[f64], twist: Twist2, w: &[f64]) -> Twist2 {
+        match self {
+            Self::RotationSlip(e) => e.twist(p, twist, w),
+            Self::Custom(e) => e.twist(p, twist, w),
+            _ => twist,
+        }
+    }
+    fn clock_lag_s(&self, p: &[f64]) -> f64 {
+        self.inner().clock_lag_s(p)
+    }
+    fn sensor_from_body(&self, p: &[f64]) -> Pose2 {
+        self.inner().sensor_from_body(p)
+    }
+    fn uses_stamps(&self) -> bool {
+        self.inner().uses_stamps()
+    }
+}

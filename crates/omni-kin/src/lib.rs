@@ -1,0 +1,31 @@
+//! # omni-kin
+//!
+//! The kinematics core of omnical: robot geometry and the inverse kinematic (IK) matrix (the paper's
+//! Eq. 3 and Eq. 7), validated runs, fixed-step and exact-arc odometry (Eq. 1), costs (Eq. 6 and a path
+//! cost), models with physical effects, and a seeded simulator of the paper's flower benchmark.
+//!
+//! No file or terminal I/O happens here: everything takes and returns plain data.
+//!
+//! Units follow ROS REP-103: metres, seconds, radians, rad/s; x forward, y left, yaw counter-clockwise.
+#![deny(missing_docs)]
+
+pub mod cost;
+pub mod effect;
+pub mod error;
+pub mod geometry;
+pub mod ik;
+pub mod model;
+pub mod odometry;
+pub mod pose;
+pub mod run;
+pub mod simulate;
+
+pub use cost::CostKind;
+pub use effect::{Effect, EffectKind, ParamSpec, Stage};
+pub use error::KinError;
+pub use geometry::{RobotGeometry, Wheel};
+pub use ik::IkMatrix;
+pub use model::{FittedModel, Integration, Kinematics, Model, Scheme, StepMode};
+pub use odometry::{Selection, Trajectory};
+pub use pose::{Pose2, PoseError, StampedPose, Twist2};
+pub use run::{Command, Run, RunData};
