@@ -1,1 +1,7 @@
-//! omni-cli
+//! # omni-cli
+//!
+//! The edges of omnical: datasets (CSV, OptiOdom, ROS 2 MCAP), model files, reports, and the `omnical`
+//! command built on them.
+#![deny(missing_docs)]
+
+pub mod dataset;
