@@ -77,7 +77,8 @@ pub fn cost_resolved(res: &Resolved<'_>, runs: &[Run], kind: CostKind) -> f64 {
     match kind {
         CostKind::EndPose => mean_end_pose_error(&end_pose_errors(res, runs)),
         CostKind::Path { every, heading_weight_m_per_rad } => {
-            let per: Vec<f64> = runs.par_iter().map(|r| run_path_mse(res, r, every, heading_weight_m_per_rad)).collect();
+            let per: Vec<f64> =
+                runs.par_iter().map(|r| run_path_mse(res, r, every, heading_weight_m_per_rad)).collect();
             if per.is_empty() {
                 return 0.0;
             }
@@ -117,7 +118,9 @@ pub fn residual_vector(res: &Resolved<'_>, runs: &[Run], kind: CostKind) -> Vec<
         .map(|r| {
             let e = odometry::residuals(res, r, sel);
             let scale = 1.0 / (n_runs * e.len().max(1) as f64).sqrt();
-            e.iter().flat_map(|e| [e.error.dx_m * scale, e.error.dy_m * scale, w * e.error.dtheta_rad * scale]).collect()
+            e.iter()
+                .flat_map(|e| [e.error.dx_m * scale, e.error.dy_m * scale, w * e.error.dtheta_rad * scale])
+                .collect()
         })
         .collect();
     per.concat()

@@ -62,7 +62,9 @@ pub enum KinError {
         value: f64,
     },
     /// Time stamps do not strictly increase.
-    #[error("run {run}: {what} {index} has time {t_s} s, not after the previous {prev_s} s (stamps must strictly increase)")]
+    #[error(
+        "run {run}: {what} {index} has time {t_s} s, not after the previous {prev_s} s (stamps must strictly increase)"
+    )]
     NotIncreasing {
         /// Run name.
         run: String,
@@ -76,7 +78,9 @@ pub enum KinError {
         prev_s: f64,
     },
     /// Wheel samples do not cover the ground-truth time span.
-    #[error("run {run}: wheel samples span {wheel_start_s}..{wheel_end_s} s but ground truth spans {truth_start_s}..{truth_end_s} s (wheel data must cover the ground truth)")]
+    #[error(
+        "run {run}: wheel samples span {wheel_start_s}..{wheel_end_s} s but ground truth spans {truth_start_s}..{truth_end_s} s (wheel data must cover the ground truth)"
+    )]
     Coverage {
         /// Run name.
         run: String,

@@ -271,7 +271,11 @@ mod tests {
             g.twist_from_wheels().unwrap_err().to_string(),
             "wheel 2: radius_m = -0.1 is not valid (must be > 0)"
         );
-        let collinear = RobotGeometry::new(vec![Wheel::omni(0.1, 0.2, 0.0), Wheel::omni(0.1, 0.2, 0.0), Wheel::omni(0.1, 0.2, 0.0)]);
+        let collinear = RobotGeometry::new(vec![
+            Wheel::omni(0.1, 0.2, 0.0),
+            Wheel::omni(0.1, 0.2, 0.0),
+            Wheel::omni(0.1, 0.2, 0.0),
+        ]);
         assert!(matches!(collinear, Err(KinError::Singular { .. })));
     }
 }

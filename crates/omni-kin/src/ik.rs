@@ -1,5 +1,8 @@
 //! The inverse kinematic (IK) matrix `twist_from_wheels` (3 × N): body twist (vx, vy in m/s, ω in rad/s)
 //! from wheel speeds (rad/s). The paper's Eq. 4 names its entries m11 … m33 row by row.
+//!
+//! The paper's matrices are kept with the digits as printed (hence the lint allowance below).
+#![allow(clippy::excessive_precision)]
 
 use crate::error::KinError;
 use crate::pose::Twist2;
@@ -16,7 +19,11 @@ impl IkMatrix {
     /// A matrix from its row-major entries (3 × `n_wheels`). Entries must be finite.
     pub fn new(n_wheels: usize, entries: Vec<f64>) -> Result<Self, KinError> {
         if entries.len() != 3 * n_wheels || n_wheels == 0 {
-            return Err(KinError::Shape { what: "IK matrix".into(), got: entries.len(), expected: 3 * n_wheels.max(1) });
+            return Err(KinError::Shape {
+                what: "IK matrix".into(),
+                got: entries.len(),
+                expected: 3 * n_wheels.max(1),
+            });
         }
         if let Some(i) = entries.iter().position(|v| !v.is_finite()) {
             return Err(KinError::Invalid {
@@ -125,7 +132,8 @@ impl IkMatrix {
     pub fn twist(&self, wheel_rad_s: &[f64]) -> Twist2 {
         debug_assert_eq!(wheel_rad_s.len(), self.n_wheels);
         let n = self.n_wheels;
-        let dot = |r: usize| -> f64 { self.entries[r * n..(r + 1) * n].iter().zip(wheel_rad_s).map(|(a, b)| a * b).sum() };
+        let dot =
+            |r: usize| -> f64 { self.entries[r * n..(r + 1) * n].iter().zip(wheel_rad_s).map(|(a, b)| a * b).sum() };
         Twist2 { vx_m_s: dot(0), vy_m_s: dot(1), omega_rad_s: dot(2) }
     }
 

@@ -63,7 +63,8 @@ impl Kinematics {
                     .collect()
             }
             Self::Geometry { design } => {
-                let letters: Vec<String> = (0..design.n_wheels()).map(|i| ((b'a' + i as u8) as char).to_string()).collect();
+                let letters: Vec<String> =
+                    (0..design.n_wheels()).map(|i| ((b'a' + i as u8) as char).to_string()).collect();
                 let mut p = Vec::new();
                 for (l, w) in letters.iter().zip(&design.wheels) {
                     p.push(ParamSpec::new(format!("r_{l}"), "m", w.radius_m, 0.9 * w.radius_m, 1.1 * w.radius_m));
@@ -154,7 +155,8 @@ pub struct Integration {
 
 impl Integration {
     /// The paper's Eq. 1: Euler steps of exactly 10 ms.
-    pub const PAPER: Integration = Integration { step: StepMode::Fixed { dt_s: Some(PAPER_STEP_S) }, scheme: Scheme::Euler };
+    pub const PAPER: Integration =
+        Integration { step: StepMode::Fixed { dt_s: Some(PAPER_STEP_S) }, scheme: Scheme::Euler };
     /// Our default: exact arcs, fixed steps of each run's median sample interval. Exact arcs remove Eq. 1's
     /// first-order bias (≈ path length × |ω| × dt / 2), which would otherwise look like a physical effect;
     /// fixed steps keep `sample_timing` a testable effect rather than an assumption.
@@ -258,7 +260,10 @@ impl Model {
         }
         if let Some(i) = params.iter().position(|v| !v.is_finite()) {
             let name = self.params()[i].name.clone();
-            return Err(KinError::Invalid { what: format!("parameter {name}"), why: format!("{} is not finite", params[i]) });
+            return Err(KinError::Invalid {
+                what: format!("parameter {name}"),
+                why: format!("{} is not finite", params[i]),
+            });
         }
         let nb = self.n_base();
         let ik = self.kinematics.ik(&params[..nb])?;

@@ -131,7 +131,15 @@ fn walk(
     } else {
         let s: Vec<f64> = t.iter().map(|t| t - lag).collect();
         let h: Vec<f64> = (0..n)
-            .map(|k| if !res.stamps { fixed } else if k == 0 { median } else { s[k] - s[k - 1] })
+            .map(|k| {
+                if !res.stamps {
+                    fixed
+                } else if k == 0 {
+                    median
+                } else {
+                    s[k] - s[k - 1]
+                }
+            })
             .collect();
         let mut w = run.wheel_rad_s().to_vec();
         let angles = run.wheel_start_rad();
@@ -192,7 +200,9 @@ pub fn residuals(res: &Resolved<'_>, run: &Run, selection: Selection) -> Vec<Res
         res,
         run,
         &idx,
-        |i, p| out.push(Residual { truth_index: i, t_s: truth[i].t_s, predicted: p, error: p.error_to(&truth[i].pose) }),
+        |i, p| {
+            out.push(Residual { truth_index: i, t_s: truth[i].t_s, predicted: p, error: p.error_to(&truth[i].pose) })
+        },
         |_, _| {},
     );
     out
@@ -227,11 +237,11 @@ pub fn integrate(res: &Resolved<'_>, run: &Run) -> Trajectory {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::RobotGeometry;
     use crate::ik::IkMatrix;
     use crate::model::{Integration, Model, StepMode};
     use crate::pose::StampedPose;
     use crate::run::RunData;
-    use crate::geometry::RobotGeometry;
     use approx::assert_relative_eq;
 
     /// A run commanding a constant twist through the design forward kinematics.
@@ -312,7 +322,8 @@ mod tests {
     fn queries_between_samples_interpolate() {
         let run = constant_twist_run([0.2, 0.0, 0.0], 1.0, 0.01);
         let mut d = run.into_data();
-        d.truth = vec![StampedPose { t_s: 0.003, pose: Pose2::IDENTITY }, StampedPose { t_s: 0.5055, pose: Pose2::IDENTITY }];
+        d.truth =
+            vec![StampedPose { t_s: 0.003, pose: Pose2::IDENTITY }, StampedPose { t_s: 0.5055, pose: Pose2::IDENTITY }];
         let run = Run::new(d).unwrap();
         let p = end_pose(&design(Scheme::Euler), &run);
         assert_relative_eq!(p.x_m, 0.2 * (0.5055 - 0.003), epsilon = 1e-12);

@@ -48,11 +48,7 @@ impl Pose2 {
     /// The inverse transform: `b_from_a` for `a_from_b`.
     pub fn inverse(&self) -> Pose2 {
         let (s, c) = self.theta_rad.sin_cos();
-        Pose2 {
-            x_m: -(c * self.x_m + s * self.y_m),
-            y_m: -(-s * self.x_m + c * self.y_m),
-            theta_rad: -self.theta_rad,
-        }
+        Pose2 { x_m: -(c * self.x_m + s * self.y_m), y_m: -(-s * self.x_m + c * self.y_m), theta_rad: -self.theta_rad }
     }
 
     /// Error of `self` against a reference: world-frame (dx, dy) in m and the heading difference wrapped to

@@ -142,12 +142,18 @@ impl Run {
             });
         }
         if let Some(v) = d.wheel_start_rad.iter().find(|v| !v.is_finite()) {
-            return Err(KinError::Invalid { what: format!("run {run}: wheel start angle"), why: format!("{v} is not finite") });
+            return Err(KinError::Invalid {
+                what: format!("run {run}: wheel start angle"),
+                why: format!("{v} is not finite"),
+            });
         }
-        if let Some(c) = &d.command {
-            if !(c.v_m_s.is_finite() && c.alpha_rad.is_finite() && c.omega_rad_s.is_finite()) {
-                return Err(KinError::Invalid { what: format!("run {run}: command"), why: "has a non-finite value".into() });
-            }
+        if let Some(c) = &d.command
+            && !(c.v_m_s.is_finite() && c.alpha_rad.is_finite() && c.omega_rad_s.is_finite())
+        {
+            return Err(KinError::Invalid {
+                what: format!("run {run}: command"),
+                why: "has a non-finite value".into(),
+            });
         }
         Ok(Self {
             name: d.name,
@@ -311,6 +317,9 @@ mod tests {
         );
         let mut d = base();
         d.truth.pop();
-        assert_eq!(Run::new(d).unwrap_err().to_string(), "run r1: ground-truth poses has 1 entries, at least 2 are needed");
+        assert_eq!(
+            Run::new(d).unwrap_err().to_string(),
+            "run r1: ground-truth poses has 1 entries, at least 2 are needed"
+        );
     }
 }
