@@ -1,1 +1,386 @@
-//! placeholder
+//! A seeded simulator of the paper's flower benchmark, standing in for a robot.
+//!
+//! For each run a motion command `(v, α, ω)` is held for `duration_s` between two rests. The robot's
+//! controller turns it into wheel-speed targets with the **design** forward kinematics; each wheel follows
+//! its target through a first-order lag (`controller_tau_s`). The **true** robot (any [`FittedModel`]:
+//! matrix or geometry plus effects) moves the body: its wheel-stage effects act on the true wheel speeds,
+//! its IK matrix and twist-stage effects give the twist, and the motion is integrated with exact arcs on a
+//! fine step (`fine_step_s`, 1 ms). Encoders count ticks of the motor angle (`ticks_per_rev`); the firmware
+//! reports the mean speed over each sample interval (100 Hz, optionally late or dropped samples) plus
+//! Gaussian noise, stamped on a clock that lags by the true model's `time_offset`. Ground truth is the
+//! sensor pose (true model's `sensor_offset`) at irregular 200–300 ms intervals with SLAM-like noise.
+//!
+//! Every random draw comes from `ChaCha8Rng::seed_from_u64(seed)` on its own stream per run, so a dataset
+//! is the same whatever the thread count.
+
+use crate::effect::WheelContext;
+use crate::error::KinError;
+use crate::geometry::RobotGeometry;
+use crate::model::{FittedModel, Scheme};
+use crate::odometry::step;
+use crate::pose::{Pose2, StampedPose};
+use crate::run::{Command, Run, RunData};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+/// The paper's 36 flower commands: v = 0.2 m/s, α = 0°, 30°, …, 330°, ω ∈ {−0.35, 0, +0.35} rad/s.
+pub fn flower_commands() -> Vec<Command> {
+    let mut v = Vec::with_capacity(36);
+    for omega in [-0.35, 0.0, 0.35] {
+        for a in 0..12 {
+            v.push(Command { v_m_s: 0.2, alpha_rad: (30.0 * a as f64).to_radians(), omega_rad_s: omega });
+        }
+    }
+    v
+}
+
+/// Simulator settings. Defaults stand in for the paper's APR-02 recordings.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct SimConfig {
+    /// Design geometry the robot's controller uses to turn commands into wheel targets. Default APR-02.
+    pub design: RobotGeometry,
+    /// Commands, each run `runs_per_command` times. Default: the 36 flower commands.
+    pub commands: Vec<Command>,
+    /// Repetitions of each command. Default 5 (paper).
+    pub runs_per_command: usize,
+    /// How long each command is held. s. Default 10.
+    pub duration_s: f64,
+    /// Rest before and after the motion. s. Default 0.25.
+    pub rest_s: f64,
+    /// Wheel sample rate. Hz. Default 100 (paper: 10 ms).
+    pub wheel_rate_hz: f64,
+    /// Time constant of the wheel-speed controllers. s. Default 0.05.
+    pub controller_tau_s: f64,
+    /// Encoder ticks per wheel revolution (`None`: no quantisation). Default 49152 (1024 lines × 4 × 12:1).
+    pub ticks_per_rev: Option<f64>,
+    /// Gaussian noise on each reported wheel speed. rad/s. Default 0.005.
+    pub wheel_noise_rad_s: f64,
+    /// Ground-truth intervals are uniform in this range. s. Default (0.2, 0.3) (paper's LIDAR).
+    pub truth_interval_s: (f64, f64),
+    /// Ground-truth position noise (per axis). m. Default 0.002.
+    pub truth_noise_m: f64,
+    /// Ground-truth heading noise. rad. Default 0.003 (≈ 0.17°).
+    pub truth_noise_rad: f64,
+    /// Step of the true motion. s. Default 0.001.
+    pub fine_step_s: f64,
+    /// Probability that a wheel sample is dropped (the next one then covers both intervals). Default 0.
+    pub sample_drop_probability: f64,
+    /// Uniform jitter of sample times (late samples). s. Default 0.
+    pub sample_jitter_s: f64,
+    /// Seed of every random draw.
+    pub seed: u64,
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        Self {
+            design: RobotGeometry::apr02(),
+            commands: flower_commands(),
+            runs_per_command: 5,
+            duration_s: 10.0,
+            rest_s: 0.25,
+            wheel_rate_hz: 100.0,
+            controller_tau_s: 0.05,
+            ticks_per_rev: Some(49152.0),
+            wheel_noise_rad_s: 0.005,
+            truth_interval_s: (0.2, 0.3),
+            truth_noise_m: 0.002,
+            truth_noise_rad: 0.003,
+            fine_step_s: 0.001,
+            sample_drop_probability: 0.0,
+            sample_jitter_s: 0.0,
+            seed: 0,
+        }
+    }
+}
+
+impl SimConfig {
+    /// A noise-free configuration (no quantisation, no noise): the model should then fit to integration
+    /// error only.
+    pub fn noise_free(mut self) -> Self {
+        self.ticks_per_rev = None;
+        self.wheel_noise_rad_s = 0.0;
+        self.truth_noise_m = 0.0;
+        self.truth_noise_rad = 0.0;
+        self
+    }
+
+    fn validate(&self) -> Result<(), KinError> {
+        let bad = |what: &str, why: &str| Err(KinError::Invalid { what: format!("simulator {what}"), why: why.into() });
+        if self.commands.is_empty() || self.runs_per_command == 0 {
+            return bad("commands", "at least one command and one repetition are needed");
+        }
+        if !(self.duration_s > 0.0 && self.duration_s.is_finite()) {
+            return bad("duration_s", "must be > 0");
+        }
+        if !(self.wheel_rate_hz > 0.0 && self.fine_step_s > 0.0 && self.fine_step_s < 1.0 / self.wheel_rate_hz) {
+            return bad("rates", "need wheel_rate_hz > 0 and 0 < fine_step_s < the wheel interval");
+        }
+        if !(self.truth_interval_s.0 > 0.0 && self.truth_interval_s.1 >= self.truth_interval_s.0) {
+            return bad("truth_interval_s", "need 0 < low ≤ high");
+        }
+        if !(0.0..0.9).contains(&self.sample_drop_probability) {
+            return bad("sample_drop_probability", "must be in [0, 0.9)");
+        }
+        if !(self.sample_jitter_s >= 0.0 && self.sample_jitter_s < 0.4 / self.wheel_rate_hz) {
+            return bad("sample_jitter_s", "must be ≥ 0 and below 40 % of the wheel interval");
+        }
+        if self.controller_tau_s <= 0.0 || self.rest_s < 0.0 {
+            return bad("controller_tau_s / rest_s", "need tau > 0 and rest ≥ 0");
+        }
+        self.design.validate()
+    }
+}
+
+/// Simulate every command × repetition. Run `i` uses random stream `i` of `config.seed`. Run names are
+/// `{prefix}{command index:02}-r{repetition}` and carry their command and repetition.
+pub fn simulate(config: &SimConfig, truth: &FittedModel, prefix: &str) -> Result<Vec<Run>, KinError> {
+    config.validate()?;
+    if truth.model.n_wheels() != config.design.n_wheels() {
+        return Err(KinError::WheelCount {
+            run: "true model".into(),
+            got: truth.model.n_wheels(),
+            expected: config.design.n_wheels(),
+        });
+    }
+    truth.model.resolve(&truth.params)?;
+    let jobs: Vec<(usize, Command, usize)> = config
+        .commands
+        .iter()
+        .enumerate()
+        .flat_map(|(ci, c)| (0..config.runs_per_command).map(move |r| (ci, *c, r)))
+        .collect();
+    jobs.par_iter()
+        .enumerate()
+        .map(|(i, &(ci, c, rep))| simulate_run(config, truth, c, rep, i as u64, format!("{prefix}{ci:02}-r{rep}")))
+        .collect()
+}
+
+/// Zero-mean Gaussian noise of standard deviation `sigma` (one draw, always, so streams stay aligned).
+fn gauss(rng: &mut ChaCha8Rng, sigma: f64) -> f64 {
+    let z: f64 = StandardNormal.sample(rng);
+    sigma * z
+}
+
+/// Simulate one run on random stream `stream`.
+pub fn simulate_run(
+    config: &SimConfig,
+    truth: &FittedModel,
+    command: Command,
+    repetition: usize,
+    stream: u64,
+    name: String,
+) -> Result<Run, KinError> {
+    let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
+    rng.set_stream(stream);
+    let res = truth.model.resolve(&truth.params)?;
+    let n_w = config.design.n_wheels();
+    let fwd = config.design.wheels_from_twist();
+    let target: Vec<f64> = (0..n_w)
+        .map(|i| {
+            let (s, c) = command.alpha_rad.sin_cos();
+            fwd[(i, 0)] * command.v_m_s * c + fwd[(i, 1)] * command.v_m_s * s + fwd[(i, 2)] * command.omega_rad_s
+        })
+        .collect();
+
+    // Time line (true clock): the robot moves in [rest, rest + duration]; we simulate a margin either side.
+    let total = 2.0 * config.rest_s + config.duration_s;
+    let margin = 0.5;
+    let h = config.fine_step_s;
+    let t0 = -margin;
+    let n_fine = ((total + 2.0 * margin) / h).ceil() as usize + 1;
+    let fine_t: Vec<f64> = (0..n_fine).map(|k| t0 + k as f64 * h).collect();
+
+    // True wheel (motor) speeds through the first-order controller; exact discretisation of the lag.
+    let alpha = 1.0 - (-h / config.controller_tau_s).exp();
+    let mut speed = vec![0.0; n_w];
+    let mut motor_rad_s = vec![0.0; n_fine * n_w];
+    for (k, &t) in fine_t.iter().enumerate() {
+        let on = t >= config.rest_s && t < config.rest_s + config.duration_s;
+        for i in 0..n_w {
+            let goal = if on { target[i] } else { 0.0 };
+            speed[i] += alpha * (goal - speed[i]);
+            motor_rad_s[k * n_w + i] = speed[i];
+        }
+    }
+    let start_angle: Vec<f64> = (0..n_w).map(|_| rng.random_range(0.0..2.0 * PI)).collect();
+
+    // True body motion: wheel effects on the true speeds, then IK, twist effects, exact arcs.
+    let mut effective = motor_rad_s.clone();
+    if !res.wheel_effects.is_empty() {
+        let dts = vec![h; n_fine];
+        let ctx = WheelContext { n_wheels: n_w, t_s: &fine_t, dt_s: &dts, start_angle_rad: &start_angle };
+        for (e, p) in &res.wheel_effects {
+            crate::effect::Effect::wheel_rates(*e, p, &ctx, &mut effective);
+        }
+    }
+    let mut body = vec![Pose2::IDENTITY; n_fine];
+    let mut pose = Pose2::IDENTITY;
+    for k in 0..n_fine {
+        // Speed held over (t_{k-1}, t_k]: pose[k] is the pose at t_k.
+        if k > 0 {
+            let w = &effective[k * n_w..(k + 1) * n_w];
+            let mut tw = res.ik.twist(w);
+            for (e, p) in &res.twist_effects {
+                tw = crate::effect::Effect::twist(*e, p, tw, w);
+            }
+            pose = step(Scheme::ExactArc, pose, tw, h);
+        }
+        body[k] = pose;
+    }
+    let body_at = |t: f64| -> Pose2 {
+        let x = ((t - t0) / h).clamp(0.0, (n_fine - 1) as f64);
+        let k = (x.floor() as usize).min(n_fine - 2);
+        let f = x - k as f64;
+        let (a, b) = (body[k], body[k + 1]);
+        Pose2::new(
+            a.x_m + f * (b.x_m - a.x_m),
+            a.y_m + f * (b.y_m - a.y_m),
+            a.theta_rad + f * (b.theta_rad - a.theta_rad),
+        )
+    };
+    // Motor angle at any true time (trapezoid on the fine grid is exact enough at 1 ms).
+    let mut motor_angle = vec![0.0; n_fine * n_w];
+    for i in 0..n_w {
+        let mut a = start_angle[i];
+        for k in 0..n_fine {
+            if k > 0 {
+                a += motor_rad_s[k * n_w + i] * h;
+            }
+            motor_angle[k * n_w + i] = a;
+        }
+    }
+    let angle_at = |t: f64, i: usize| -> f64 {
+        let x = ((t - t0) / h).clamp(0.0, (n_fine - 1) as f64);
+        let k = (x.floor() as usize).min(n_fine - 2);
+        let f = x - k as f64;
+        motor_angle[k * n_w + i] + f * (motor_angle[(k + 1) * n_w + i] - motor_angle[k * n_w + i])
+    };
+
+    // Encoder samples on the true clock, from just after the margin start to the end.
+    let dt = 1.0 / config.wheel_rate_hz;
+    let first = t0 + dt;
+    let last = total + margin - dt;
+    let n_nominal = ((last - first) / dt).floor() as usize + 1;
+    let lag = res.clock_lag_s;
+    let quantise = |a: f64| match config.ticks_per_rev {
+        Some(tpr) => (a * tpr / (2.0 * PI)).floor() * 2.0 * PI / tpr,
+        None => a,
+    };
+    let mut wheel_t_s = Vec::with_capacity(n_nominal);
+    let mut wheel_rad_s = Vec::with_capacity(n_nominal * n_w);
+    let mut prev_t = t0;
+    let mut prev_counts: Vec<f64> = (0..n_w).map(|i| quantise(angle_at(t0, i))).collect();
+    let wheel_start_rad = prev_counts.clone();
+    for k in 0..n_nominal {
+        let nominal = first + k as f64 * dt;
+        let jitter =
+            if config.sample_jitter_s > 0.0 { rng.random_range(0.0..config.sample_jitter_s) } else { 0.0 };
+        let t = nominal + jitter;
+        let dropped = config.sample_drop_probability > 0.0
+            && k + 1 < n_nominal
+            && rng.random_range(0.0..1.0) < config.sample_drop_probability;
+        if dropped {
+            continue;
+        }
+        let counts: Vec<f64> = (0..n_w).map(|i| quantise(angle_at(t, i))).collect();
+        let interval = t - prev_t;
+        for i in 0..n_w {
+            wheel_rad_s.push((counts[i] - prev_counts[i]) / interval + gauss(&mut rng, config.wheel_noise_rad_s));
+        }
+        wheel_t_s.push(t + lag);
+        prev_t = t;
+        prev_counts = counts;
+    }
+
+    // Ground truth: sensor pose at irregular intervals over [0, total], with noise.
+    let (lo, hi) = config.truth_interval_s;
+    let mut times = vec![0.0];
+    loop {
+        let next = times[times.len() - 1] + if hi > lo { rng.random_range(lo..hi) } else { lo };
+        if next >= total {
+            break;
+        }
+        times.push(next);
+    }
+    if total - times[times.len() - 1] < 0.5 * lo {
+        times.pop();
+    }
+    times.push(total);
+    let truth_poses = times
+        .iter()
+        .map(|&t| {
+            let p = body_at(t).compose(&res.sensor_from_body);
+            StampedPose {
+                t_s: t,
+                pose: Pose2::new(
+                    p.x_m + gauss(&mut rng, config.truth_noise_m),
+                    p.y_m + gauss(&mut rng, config.truth_noise_m),
+                    p.theta_rad + gauss(&mut rng, config.truth_noise_rad),
+                ),
+            }
+        })
+        .collect();
+
+    // The robot's own odometry: the design matrix, Eq. 1 at the nominal step, from the odom origin.
+    let design_ik = config.design.twist_from_wheels()?;
+    let mut odom = Pose2::IDENTITY;
+    let recorded_odometry = wheel_t_s
+        .iter()
+        .enumerate()
+        .map(|(k, &t)| {
+            odom = step(Scheme::Euler, odom, design_ik.twist(&wheel_rad_s[k * n_w..(k + 1) * n_w]), dt);
+            StampedPose { t_s: t, pose: odom }
+        })
+        .collect();
+
+    Run::new(RunData {
+        name,
+        wheel_t_s,
+        wheel_rad_s,
+        n_wheels: n_w,
+        truth: truth_poses,
+        command: Some(command),
+        repetition: Some(repetition as u32),
+        recorded_odometry,
+        wheel_start_rad,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cost::{CostKind, cost};
+    use crate::ik::IkMatrix;
+    use crate::model::Model;
+
+    fn small(seed: u64) -> SimConfig {
+        let commands = flower_commands().into_iter().step_by(5).collect();
+        SimConfig { commands, runs_per_command: 1, seed, ..SimConfig::default() }
+    }
+
+    #[test]
+    fn noise_free_true_model_fits_to_integration_error() {
+        let truth = FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated()));
+        let runs = simulate(&small(1).noise_free(), &truth, "t").unwrap();
+        let c = cost(&truth.model, &truth.params, &runs, CostKind::EndPose).unwrap();
+        assert!(c < 1e-3, "oracle cost on noise-free data {c}");
+        let design = FittedModel::paper_design();
+        let d = cost(&design.model, &design.params, &runs, CostKind::EndPose).unwrap();
+        assert!(d > 0.05, "design cost {d}");
+    }
+
+    #[test]
+    fn same_seed_same_data_different_seed_different_data() {
+        let truth = FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated()));
+        let a = simulate(&small(3), &truth, "t").unwrap();
+        let b = simulate(&small(3), &truth, "t").unwrap();
+        let c = simulate(&small(4), &truth, "t").unwrap();
+        assert_eq!(a, b);
+        assert_ne!(a[0].wheel_rad_s(), c[0].wheel_rad_s());
+    }
+}
