@@ -5,3 +5,4 @@
 #![deny(missing_docs)]
 
 pub mod dataset;
+pub mod model_file;

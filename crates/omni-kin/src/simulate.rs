@@ -278,8 +278,7 @@ pub fn simulate_run(
     let wheel_start_rad = prev_counts.clone();
     for k in 0..n_nominal {
         let nominal = first + k as f64 * dt;
-        let jitter =
-            if config.sample_jitter_s > 0.0 { rng.random_range(0.0..config.sample_jitter_s) } else { 0.0 };
+        let jitter = if config.sample_jitter_s > 0.0 { rng.random_range(0.0..config.sample_jitter_s) } else { 0.0 };
         let t = nominal + jitter;
         let dropped = config.sample_drop_probability > 0.0
             && k + 1 < n_nominal

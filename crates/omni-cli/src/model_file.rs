@@ -1,0 +1,280 @@
+//! Model files: a fitted model as human-readable TOML that `omnical eval --model FILE` reads back
+//! exactly (floats are written in shortest round-trip form).
+//!
+//! ```toml
+//! format = "omnical-model/1"
+//! kinematics = "ik"                      # or "geometry"
+//! wheel_names = ["wheel_a", "wheel_b", "wheel_c"]
+//! # ik: rows vx (m/s), vy (m/s), ω (rad/s); columns: wheel speeds (rad/s)
+//! matrix = [[-0.0883, 0.0, 0.0873], [0.0523, -0.1008, 0.0536], [0.2357, 0.2339, 0.2349]]
+//! design_matrix = [[...], [...], [...]]  # the search centre
+//!
+//! [integration]
+//! step = "fixed"                         # or "stamps"
+//! dt_s = 0.01                            # optional: default each run's median interval
+//! scheme = "exact_arc"                   # or "euler" (the paper's Eq. 1)
+//!
+//! [[effects]]
+//! id = "time_offset"
+//! params = { tau_s = 0.02 }
+//!
+//! [fit]                                  # optional: how it was made (not read back into the model)
+//! ```
+//! `geometry` models store `[[wheels]]` (radius_m, distance_m, angle_rad, drive_offset_rad,
+//! roller_angle_rad) and `[[design_wheels]]` instead of the matrices.
+
+use omni_kin::effect::Effect;
+use omni_kin::{EffectKind, FittedModel, IkMatrix, Integration, Kinematics, Model, RobotGeometry, Wheel};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+use thiserror::Error;
+
+/// Format tag written in every model file.
+pub const FORMAT: &str = "omnical-model/1";
+
+/// A problem reading or writing a model file.
+#[derive(Debug, Error)]
+pub enum ModelFileError {
+    /// The file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The file is not valid TOML of the expected shape.
+    #[error("{path}: {message}")]
+    Parse {
+        /// The file.
+        path: String,
+        /// What is wrong (from the TOML parser, with line and column).
+        message: String,
+    },
+    /// The contents do not make a valid model.
+    #[error("{path}: {message}")]
+    Invalid {
+        /// The file.
+        path: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// One effect in a model file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EffectEntry {
+    /// Effect id, e.g. `time_offset`.
+    pub id: String,
+    /// Parameter values by name (unqualified), in the effect's units.
+    #[serde(default)]
+    pub params: BTreeMap<String, f64>,
+}
+
+/// The file's shape (TOML).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ModelFile {
+    /// Always [`FORMAT`].
+    pub format: String,
+    /// `ik` or `geometry`.
+    pub kinematics: String,
+    /// Wheel (joint) names in column order.
+    pub wheel_names: Vec<String>,
+    /// Fitted IK matrix (ik models): 3 rows × N wheels.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub matrix: Option<Vec<Vec<f64>>>,
+    /// Design IK matrix (ik models).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub design_matrix: Option<Vec<Vec<f64>>>,
+    /// Fitted wheels (geometry models).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wheels: Option<Vec<Wheel>>,
+    /// Design wheels (geometry models).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub design_wheels: Option<Vec<Wheel>>,
+    /// Integration settings.
+    pub integration: Integration,
+    /// Effects in pipeline order.
+    #[serde(default)]
+    pub effects: Vec<EffectEntry>,
+    /// How the model was made (free-form summary; ignored when reading).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fit: Option<toml::Table>,
+}
+
+impl ModelFile {
+    /// The file form of a fitted model.
+    pub fn from_fitted(f: &FittedModel, fit: Option<toml::Table>) -> Result<Self, omni_kin::KinError> {
+        let nb = f.model.n_base();
+        let (matrix, design_matrix, wheels, design_wheels, wheel_names) = match &f.model.kinematics {
+            Kinematics::Ik { design } => {
+                (Some(f.ik()?.rows()), Some(design.rows()), None, None, f.model.kinematics.wheel_names())
+            }
+            Kinematics::Geometry { design } => {
+                let g = f.model.kinematics.geometry_at(&f.params[..nb]).transpose()?.unwrap_or_else(|| design.clone());
+                (None, None, Some(g.wheels), Some(design.wheels.clone()), design.wheel_names.clone())
+            }
+        };
+        let effects = f
+            .model
+            .effects
+            .iter()
+            .zip(f.model.effect_ranges())
+            .map(|(e, r)| EffectEntry {
+                id: e.id().to_string(),
+                params: e.params().iter().map(|p| p.name.clone()).zip(f.params[r].iter().copied()).collect(),
+            })
+            .collect();
+        Ok(Self {
+            format: FORMAT.into(),
+            kinematics: f.model.kinematics.id().into(),
+            wheel_names,
+            matrix,
+            design_matrix,
+            wheels,
+            design_wheels,
+            integration: f.model.integration,
+            effects,
+            fit,
+        })
+    }
+
+    /// The fitted model this file describes. Errors name the offending key.
+    pub fn to_fitted(&self) -> Result<FittedModel, String> {
+        if self.format != FORMAT {
+            return Err(format!("format is {:?}, expected {FORMAT:?}", self.format));
+        }
+        let (kinematics, mut params) = match self.kinematics.as_str() {
+            "ik" => {
+                let m = self.matrix.as_ref().ok_or("kinematics = \"ik\" needs `matrix`")?;
+                let fitted = IkMatrix::from_rows(m).map_err(|e| format!("matrix: {e}"))?;
+                let design = match &self.design_matrix {
+                    Some(d) => IkMatrix::from_rows(d).map_err(|e| format!("design_matrix: {e}"))?,
+                    None => fitted.clone(),
+                };
+                if design.n_wheels() != fitted.n_wheels() {
+                    return Err("design_matrix and matrix have different wheel counts".into());
+                }
+                (Kinematics::Ik { design }, fitted.entries().to_vec())
+            }
+            "geometry" => {
+                let w = self.wheels.as_ref().ok_or("kinematics = \"geometry\" needs `[[wheels]]`")?;
+                let d = self.design_wheels.clone().unwrap_or_else(|| w.clone());
+                let names = self.wheel_names.clone();
+                let design = RobotGeometry { wheel_names: names.clone(), wheels: d };
+                design.validate().map_err(|e| format!("design_wheels: {e}"))?;
+                let fitted = RobotGeometry { wheel_names: names, wheels: w.clone() };
+                fitted.validate().map_err(|e| format!("wheels: {e}"))?;
+                if fitted.n_wheels() != design.n_wheels() {
+                    return Err("design_wheels and wheels have different wheel counts".into());
+                }
+                let mut p: Vec<f64> = fitted.wheels.iter().map(|w| w.radius_m).collect();
+                p.extend(fitted.wheels.iter().map(|w| w.distance_m));
+                p.extend(fitted.wheels.iter().map(|w| w.angle_rad));
+                (Kinematics::Geometry { design }, p)
+            }
+            other => return Err(format!("kinematics = {other:?}: expected \"ik\" or \"geometry\"")),
+        };
+        let n_wheels = kinematics.n_wheels();
+        if self.wheel_names.len() != n_wheels {
+            return Err(format!("wheel_names has {} names for {n_wheels} wheels", self.wheel_names.len()));
+        }
+        let mut model = Model { kinematics, effects: Vec::new(), integration: self.integration };
+        for (i, entry) in self.effects.iter().enumerate() {
+            let e = EffectKind::from_id(&entry.id, n_wheels).map_err(|e| format!("effects[{i}]: {e}"))?;
+            let specs = e.params();
+            for name in entry.params.keys() {
+                if !specs.iter().any(|s| &s.name == name) {
+                    let known: Vec<&str> = specs.iter().map(|s| s.name.as_str()).collect();
+                    return Err(format!(
+                        "effects[{i}] ({}): unknown parameter {name:?}; known: {}",
+                        entry.id,
+                        known.join(", ")
+                    ));
+                }
+            }
+            for s in &specs {
+                match entry.params.get(&s.name) {
+                    Some(v) => params.push(*v),
+                    None => {
+                        return Err(format!("effects[{i}] ({}): missing parameter {:?} ({})", entry.id, s.name, s.unit));
+                    }
+                }
+            }
+            model.effects.push(e);
+        }
+        FittedModel::new(model, params).map_err(|e| e.to_string())
+    }
+
+    /// TOML text.
+    pub fn to_toml(&self) -> Result<String, String> {
+        let body = toml::to_string(self).map_err(|e| e.to_string())?;
+        Ok(format!("# omnical model file: see docs/formats.md\n{body}"))
+    }
+}
+
+/// Read a model file; `design` and `paper` name the paper's APR-02 design model (Eq. 7).
+pub fn read(path: &Path) -> Result<FittedModel, ModelFileError> {
+    let name = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|source| ModelFileError::Io { path: name.clone(), source })?;
+    parse(&text).map_err(|e| match e {
+        ParseFailure::Toml(message) => ModelFileError::Parse { path: name.clone(), message },
+        ParseFailure::Model(message) => ModelFileError::Invalid { path: name.clone(), message },
+    })
+}
+
+enum ParseFailure {
+    Toml(String),
+    Model(String),
+}
+
+fn parse(text: &str) -> Result<FittedModel, ParseFailure> {
+    let file: ModelFile = toml::from_str(text).map_err(|e| ParseFailure::Toml(e.to_string().trim().to_string()))?;
+    file.to_fitted().map_err(ParseFailure::Model)
+}
+
+/// The TOML text of a fitted model, with optional fit metadata.
+pub fn to_toml(f: &FittedModel, fit: Option<toml::Table>) -> Result<String, String> {
+    ModelFile::from_fitted(f, fit).map_err(|e| e.to_string())?.to_toml()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use omni_kin::Model;
+
+    #[test]
+    fn round_trip_is_exact() {
+        let mut f = FittedModel::nominal(Model::ik(IkMatrix::paper_design()))
+            .with_effect(EffectKind::from_id("time_offset", 3).unwrap())
+            .with_effect(EffectKind::from_id("wheel_asymmetry", 3).unwrap());
+        f.params[0] = -0.08832864769631231;
+        f.set("time_offset.tau_s", 0.1 + 0.2).unwrap();
+        f.set("wheel_asymmetry.a_b", -1e-17).unwrap();
+        let text = to_toml(&f, None).unwrap();
+        let back = parse(&text).ok().unwrap();
+        assert_eq!(
+            back.params.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            f.params.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
+        assert_eq!(back.model.effects.len(), 2);
+
+        let g = FittedModel::nominal(Model::geometry(RobotGeometry::apr02()));
+        let back = parse(&to_toml(&g, None).unwrap()).ok().unwrap();
+        assert_eq!(back.params, g.params);
+    }
+
+    #[test]
+    fn bad_effect_parameter_is_named() {
+        let f = FittedModel::nominal(Model::ik(IkMatrix::paper_design()))
+            .with_effect(EffectKind::from_id("time_offset", 3).unwrap());
+        let text = to_toml(&f, None).unwrap().replace("tau_s", "tau");
+        match parse(&text) {
+            Err(ParseFailure::Model(m)) => {
+                assert_eq!(m, "effects[0] (time_offset): unknown parameter \"tau\"; known: tau_s")
+            }
+            _ => panic!("expected a model error"),
+        }
+    }
+}
