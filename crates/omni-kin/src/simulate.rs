@@ -49,7 +49,7 @@ pub struct SimConfig {
     pub runs_per_command: usize,
     /// How long each command is held. s. Default 10.
     pub duration_s: f64,
-    /// Rest before and after the motion. s. Default 0.25.
+    /// Rest before and after the motion (long enough for two ground-truth poses, which the noise-floor estimate uses). s. Default 0.4.
     pub rest_s: f64,
     /// Wheel sample rate. Hz. Default 100 (paper: 10 ms).
     pub wheel_rate_hz: f64,
@@ -82,7 +82,7 @@ impl Default for SimConfig {
             commands: flower_commands(),
             runs_per_command: 5,
             duration_s: 10.0,
-            rest_s: 0.25,
+            rest_s: 0.4,
             wheel_rate_hz: 100.0,
             controller_tau_s: 0.05,
             ticks_per_rev: Some(49152.0),
