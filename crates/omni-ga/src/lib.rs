@@ -1,1 +1,27 @@
-//! omni-ga
+//! # omni-ga
+//!
+//! Optimizers and the science built on them: a bounded genetic algorithm (rayon-parallel fitness, the
+//! paper's method), a Levenberg–Marquardt polish, the calibration presets, and the model-error diagnosis.
+//!
+//! Determinism: the GA's random numbers come from `ChaCha8Rng::seed_from_u64(seed)` on the calling thread
+//! in a fixed order; population costs are evaluated in parallel and collected in order; sums over runs are
+//! sequential. The same seed gives bit-identical results with 1 thread or many.
+//!
+//! No file or terminal I/O happens here.
+#![deny(missing_docs)]
+
+pub mod calibrate;
+pub mod diagnose;
+pub mod error;
+pub mod ga;
+pub mod lm;
+pub mod observe;
+pub mod optimizer;
+pub mod problem;
+
+pub use error::OptimizeError;
+pub use ga::{Ga, GaConfig, StallRule};
+pub use lm::{LevenbergMarquardt, LmConfig};
+pub use observe::{Control, FnObserver, Iteration, NoopObserver, Observer};
+pub use optimizer::{Optimizer, Solution, Termination};
+pub use problem::{Bounds, LeastSquares, Problem};

@@ -1,0 +1,307 @@
+//! Calibration: fit a model's parameters to training runs, the paper's way (`Preset::Paper`) or ours
+//! (`Preset::Default`).
+//!
+//! | | `paper` (reproduces the paper) | `default` (ours) |
+//! |---|---|---|
+//! | objective | Eq. 6 end-pose cost | path cost (every ground-truth pose, 1 m/rad) |
+//! | odometry | Eq. 1, Euler, 10 ms fixed step | exact arcs, each run's median step |
+//! | search | MATLAB-default GA, 200 individuals, stall 50 generations, tol 1e-6 divided by max(1, \|best\|) | small GA (40 × ≤ 60 generations, scale-aware stall rule) then Levenberg–Marquardt |
+//! | bounds | ±10 % of each design value (pins zero entries, e.g. m12 = 0, as Eq. 9) | GA: ±10 % of each row's largest magnitude; the polish is unbounded |
+//!
+//! Every fit reports the parameters that ended on a GA bound and those the polish moved outside the box,
+//! so a trapped fit is never silent. The polish never returns a higher objective than its start.
+
+use crate::error::OptimizeError;
+use crate::ga::{Ga, GaConfig, StallRule};
+use crate::lm::{LevenbergMarquardt, LmConfig};
+use crate::observe::Observer;
+use crate::optimizer::{Optimizer, Solution};
+use crate::problem::{Bounds, LeastSquares, Problem};
+use omni_kin::cost::{self, CostKind};
+use omni_kin::{FittedModel, Integration, KinError, Kinematics, Model, Run};
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+use thiserror::Error;
+
+/// A calibration failed.
+#[derive(Debug, Error)]
+pub enum CalibrateError {
+    /// The model or runs are not usable.
+    #[error(transparent)]
+    Kin(#[from] KinError),
+    /// The optimizer refused its inputs.
+    #[error(transparent)]
+    Optimize(#[from] OptimizeError),
+    /// Nothing to fit.
+    #[error("no training runs")]
+    NoRuns,
+}
+
+/// Which recipe to use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Preset {
+    /// The paper's method, reproduced.
+    Paper,
+    /// Ours: path cost, exact arcs, short GA + LM polish.
+    Default,
+}
+
+/// How the GA's search box is set around the start.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BoxRule {
+    /// ±fraction of each start value (zero entries pinned). Paper: 0.10.
+    PerValue(f64),
+    /// ±fraction of the largest magnitude in the entry's matrix row (ik) or of the value (geometry r, R;
+    /// angles ±fraction rad). Default: 0.10.
+    PerRow(f64),
+}
+
+/// A calibration recipe.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Plan {
+    /// The preset it came from.
+    pub preset: Preset,
+    /// Objective minimised.
+    pub objective: CostKind,
+    /// Odometry integration used during the fit (and stored in the fitted model).
+    pub integration: Integration,
+    /// GA settings (`None`: skip the GA).
+    pub ga: Option<GaConfig>,
+    /// Run Levenberg–Marquardt from the GA result.
+    pub polish: bool,
+    /// Search box of the GA.
+    pub box_rule: BoxRule,
+}
+
+impl Plan {
+    /// The recipe of a preset for a model with `n_params` parameters.
+    pub fn preset(preset: Preset, n_params: usize) -> Self {
+        match preset {
+            Preset::Paper => Plan {
+                preset,
+                objective: CostKind::EndPose,
+                integration: Integration::PAPER,
+                ga: Some(GaConfig::matlab_defaults(n_params)),
+                polish: false,
+                box_rule: BoxRule::PerValue(0.10),
+            },
+            Preset::Default => {
+                let mut ga = GaConfig::matlab_defaults(n_params);
+                ga.population = 40;
+                ga.elite = 2;
+                ga.stall_generations = 10;
+                ga.function_tolerance = 1e-4;
+                ga.stall_rule = StallRule::Relative;
+                ga.max_generations = 60;
+                Plan {
+                    preset,
+                    objective: CostKind::PATH,
+                    integration: Integration::DEFAULT,
+                    ga: Some(ga),
+                    polish: true,
+                    box_rule: BoxRule::PerRow(0.10),
+                }
+            }
+        }
+    }
+
+    /// The same plan with another GA seed.
+    pub fn seed(mut self, seed: u64) -> Self {
+        if let Some(ga) = &mut self.ga {
+            ga.seed = seed;
+        }
+        self
+    }
+}
+
+/// The fitting problem: a model structure, training runs and an objective.
+#[derive(Debug)]
+pub struct CalibrationProblem<'a> {
+    model: &'a Model,
+    runs: &'a [Run],
+    objective: CostKind,
+    bounds: Bounds,
+}
+
+impl<'a> CalibrationProblem<'a> {
+    /// A problem over `runs`. Checks wheel counts.
+    pub fn new(model: &'a Model, runs: &'a [Run], objective: CostKind, bounds: Bounds) -> Result<Self, CalibrateError> {
+        if runs.is_empty() {
+            return Err(CalibrateError::NoRuns);
+        }
+        cost::check_runs(model, runs)?;
+        Ok(Self { model, runs, objective, bounds })
+    }
+}
+
+impl Problem for CalibrationProblem<'_> {
+    fn bounds(&self) -> &Bounds {
+        &self.bounds
+    }
+    /// The objective; `f64::INFINITY` where the parameters make no valid model (e.g. singular geometry).
+    fn cost(&self, x: &[f64]) -> f64 {
+        match self.model.resolve(x) {
+            Ok(res) => cost::cost_resolved(&res, self.runs, self.objective),
+            Err(_) => f64::INFINITY,
+        }
+    }
+}
+
+impl LeastSquares for CalibrationProblem<'_> {
+    /// Stacked residuals whose squared norm is the squared path cost (or mean squared end-pose error).
+    fn residuals(&self, x: &[f64]) -> Vec<f64> {
+        match self.model.resolve(x) {
+            Ok(res) => cost::residual_vector(&res, self.runs, self.objective),
+            Err(_) => vec![f64::NAN; 3 * self.runs.len()],
+        }
+    }
+}
+
+/// The GA search box around `start` for `model`.
+pub fn search_box(model: &Model, start: &[f64], rule: BoxRule) -> Result<Bounds, OptimizeError> {
+    let specs = model.params();
+    let nb = model.n_base();
+    let mut lower = Vec::with_capacity(specs.len());
+    let mut upper = Vec::with_capacity(specs.len());
+    for (i, s) in specs.iter().enumerate() {
+        let v = start[i];
+        let half = if i >= nb {
+            // Effects: their own bounds, widened to contain the start.
+            lower.push(s.lower.min(v));
+            upper.push(s.upper.max(v));
+            continue;
+        } else {
+            match (rule, &model.kinematics) {
+                (BoxRule::PerValue(f), _) => f * v.abs(),
+                (BoxRule::PerRow(f), Kinematics::Ik { design }) => {
+                    let n = design.n_wheels();
+                    let row = i / n;
+                    f * start[row * n..(row + 1) * n].iter().fold(0.0f64, |m, x| m.max(x.abs()))
+                }
+                (BoxRule::PerRow(f), Kinematics::Geometry { design }) => {
+                    let n = design.n_wheels();
+                    if i >= 2 * n { f } else { f * v.abs() }
+                }
+            }
+        };
+        lower.push(v - half);
+        upper.push(v + half);
+    }
+    Bounds::new(lower, upper)
+}
+
+/// The outcome of a calibration.
+#[derive(Clone, Debug)]
+pub struct Calibration {
+    /// The fitted model (with the plan's integration).
+    pub fitted: FittedModel,
+    /// The start model (with the plan's integration): the design, or a previous fit.
+    pub start: FittedModel,
+    /// Objective minimised.
+    pub objective: CostKind,
+    /// Objective at the start.
+    pub objective_start: f64,
+    /// Objective at the fit.
+    pub objective_fitted: f64,
+    /// Eq. 6 end-pose cost on the training runs at the start.
+    pub end_pose_start: f64,
+    /// Eq. 6 end-pose cost on the training runs at the fit.
+    pub end_pose_fitted: f64,
+    /// Cost evaluations (GA + polish).
+    pub evaluations: usize,
+    /// Wall time. s.
+    pub seconds: f64,
+    /// The GA's search box.
+    pub bounds: Bounds,
+    /// Parameters the GA left on a bound of its box (a trapped fit).
+    pub at_bound: Vec<String>,
+    /// Parameters the polish moved outside the GA box (the box was too small).
+    pub outside_box: Vec<String>,
+    /// The GA's result, when it ran.
+    pub ga: Option<Solution>,
+    /// The polish's result, when it ran.
+    pub polish: Option<Solution>,
+}
+
+impl Calibration {
+    /// Relative improvement of the Eq. 6 training cost. %.
+    pub fn improvement_pct(&self) -> f64 {
+        100.0 * (1.0 - self.end_pose_fitted / self.end_pose_start)
+    }
+}
+
+/// Fit `start`'s parameters to `train` following `plan`.
+pub fn calibrate(
+    start: &FittedModel,
+    train: &[Run],
+    plan: &Plan,
+    observer: &mut dyn Observer,
+) -> Result<Calibration, CalibrateError> {
+    let t0 = Instant::now();
+    let model = start.model.clone().with_integration(plan.integration);
+    let start_fm = FittedModel::new(model.clone(), start.params.clone())?;
+    let bounds = search_box(&model, &start.params, plan.box_rule)?;
+    let problem = CalibrationProblem::new(&model, train, plan.objective, bounds.clone())?;
+    let objective_start = problem.cost(&start.params);
+    let mut x = start.params.clone();
+    let mut evaluations = 1;
+    let mut ga_solution = None;
+    if let Some(cfg) = &plan.ga {
+        let mut ga = Ga { config: cfg.clone() };
+        let s = ga.minimize(&problem, &x, observer)?;
+        evaluations += s.evaluations;
+        if s.cost <= objective_start {
+            x = s.params.clone();
+        }
+        ga_solution = Some(s);
+    }
+    let names: Vec<String> = model.params().into_iter().map(|p| p.name).collect();
+    let at_bound = names
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| {
+            let (lo, hi) = (bounds.lower[i], bounds.upper[i]);
+            let tol = 1e-9 * (hi - lo).abs().max(1e-12);
+            hi > lo && plan.ga.is_some() && (x[i] - lo <= tol || hi - x[i] <= tol)
+        })
+        .map(|(_, n)| n.clone())
+        .collect();
+    let mut polish_solution = None;
+    if plan.polish {
+        let mut lm = LevenbergMarquardt { config: LmConfig::default() };
+        let s = lm.minimize(&problem, &x, observer)?;
+        evaluations += s.evaluations;
+        if s.cost <= problem.cost(&x) {
+            x = s.params.clone();
+        }
+        polish_solution = Some(s);
+    }
+    let outside_box = names
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| x[i] < bounds.lower[i] || x[i] > bounds.upper[i])
+        .map(|(_, n)| n.clone())
+        .collect();
+    let fitted = FittedModel::new(model.clone(), x)?;
+    let objective_fitted = problem.cost(&fitted.params);
+    let end_pose_start = cost::cost(&model, &start.params, train, CostKind::EndPose)?;
+    let end_pose_fitted = cost::cost(&model, &fitted.params, train, CostKind::EndPose)?;
+    Ok(Calibration {
+        fitted,
+        start: start_fm,
+        objective: plan.objective,
+        objective_start,
+        objective_fitted,
+        end_pose_start,
+        end_pose_fitted,
+        evaluations,
+        seconds: t0.elapsed().as_secs_f64(),
+        bounds,
+        at_bound,
+        outside_box,
+        ga: ga_solution,
+        polish: polish_solution,
+    })
+}

@@ -1,0 +1,95 @@
+//! Problems: what the optimizers minimise. A [`Problem`] has bounds and a cost; a [`LeastSquares`] problem
+//! also has residuals whose squared norm is monotone in the cost, and a Jacobian (central differences by
+//! default).
+
+use crate::error::OptimizeError;
+use nalgebra::DMatrix;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// A box: one `[lower, upper]` interval per parameter (`lower == upper` fixes a parameter; infinite bounds
+/// are allowed).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Bounds {
+    /// Lower bounds.
+    pub lower: Vec<f64>,
+    /// Upper bounds.
+    pub upper: Vec<f64>,
+}
+
+impl Bounds {
+    /// Checks sizes and order.
+    pub fn new(lower: Vec<f64>, upper: Vec<f64>) -> Result<Self, OptimizeError> {
+        if lower.len() != upper.len() {
+            return Err(OptimizeError::DimensionMismatch { start: lower.len(), bounds: upper.len() });
+        }
+        for (i, (&l, &u)) in lower.iter().zip(&upper).enumerate() {
+            if l.is_nan() || u.is_nan() || l > u {
+                return Err(OptimizeError::BadBounds { index: i, lower: l, upper: u });
+            }
+        }
+        Ok(Self { lower, upper })
+    }
+    /// Number of parameters.
+    pub fn len(&self) -> usize {
+        self.lower.len()
+    }
+    /// True when there are no parameters.
+    pub fn is_empty(&self) -> bool {
+        self.lower.is_empty()
+    }
+    /// True when `x` lies inside (bounds included).
+    pub fn contains(&self, x: &[f64]) -> bool {
+        x.len() == self.len() && x.iter().enumerate().all(|(i, v)| *v >= self.lower[i] && *v <= self.upper[i])
+    }
+    /// `x` clamped into the box.
+    pub fn clamp(&self, x: &[f64]) -> Vec<f64> {
+        x.iter().enumerate().map(|(i, v)| v.clamp(self.lower[i], self.upper[i])).collect()
+    }
+    /// True when parameter `i` is fixed.
+    pub fn is_fixed(&self, i: usize) -> bool {
+        self.lower[i] == self.upper[i]
+    }
+    /// Width of parameter `i`'s interval.
+    pub fn width(&self, i: usize) -> f64 {
+        self.upper[i] - self.lower[i]
+    }
+}
+
+/// A bounded minimisation problem.
+pub trait Problem: Sync {
+    /// The bounds; their length is the dimension.
+    fn bounds(&self) -> &Bounds;
+    /// The cost at `x`. Pure; may return `f64::INFINITY` where `x` is infeasible.
+    fn cost(&self, x: &[f64]) -> f64;
+    /// Costs of many points, evaluated in parallel and returned in order (the only parallel spot).
+    fn costs(&self, xs: &[Vec<f64>]) -> Vec<f64> {
+        xs.par_iter().map(|x| self.cost(x)).collect()
+    }
+}
+
+/// A problem with residuals, for Levenberg–Marquardt.
+pub trait LeastSquares: Problem {
+    /// Residual vector at `x`; its squared norm must be monotone in [`Problem::cost`].
+    fn residuals(&self, x: &[f64]) -> Vec<f64>;
+    /// Jacobian of the residuals (rows: residuals, columns: parameters). Default: central differences with
+    /// step `h_i = 1e-6 · max(|x_i|, 1e-3)`, columns in parallel (deterministic: collected in order).
+    fn jacobian(&self, x: &[f64]) -> DMatrix<f64> {
+        let n = x.len();
+        let cols: Vec<Vec<f64>> = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let h = 1e-6 * x[i].abs().max(1e-3);
+                let mut xp = x.to_vec();
+                let mut xm = x.to_vec();
+                xp[i] += h;
+                xm[i] -= h;
+                let rp = self.residuals(&xp);
+                let rm = self.residuals(&xm);
+                rp.iter().zip(&rm).map(|(a, b)| (a - b) / (2.0 * h)).collect()
+            })
+            .collect();
+        let m = cols.first().map_or(0, Vec::len);
+        DMatrix::from_fn(m, n, |r, c| cols[c].get(r).copied().unwrap_or(f64::NAN))
+    }
+}
