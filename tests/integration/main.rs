@@ -1,1 +1,4 @@
-//! integration tests
+//! End-to-end tests through the library: simulate → train → eval, determinism, diagnosis.
+mod common;
+mod determinism;
+mod recover;

@@ -4,5 +4,8 @@
 //! command built on them.
 #![deny(missing_docs)]
 
+pub mod atomic;
+pub mod cli;
+pub mod cmd;
 pub mod dataset;
 pub mod model_file;

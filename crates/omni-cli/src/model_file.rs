@@ -198,7 +198,10 @@ impl ModelFile {
                 match entry.params.get(&s.name) {
                     Some(v) => params.push(*v),
                     None => {
-                        return Err(format!("effects[{i}] ({}): missing parameter {:?} ({})", entry.id, s.name, s.unit));
+                        return Err(format!(
+                            "effects[{i}] ({}): missing parameter {:?} ({})",
+                            entry.id, s.name, s.unit
+                        ));
                     }
                 }
             }

@@ -21,11 +21,11 @@
 //! optimistic.
 
 use crate::calibrate::CalibrateError;
+use crate::calibrate::CalibrationProblem;
 use crate::lm::{LevenbergMarquardt, LmConfig};
 use crate::observe::NoopObserver;
 use crate::optimizer::Optimizer;
 use crate::problem::{Bounds, LeastSquares};
-use crate::calibrate::CalibrationProblem;
 use nalgebra::{DMatrix, DVector};
 use omni_kin::cost::{self, CostKind};
 use omni_kin::effect::Effect;
@@ -281,10 +281,14 @@ pub fn noise_floor(runs: &[Run]) -> Option<NoiseFloor> {
     let mut used = 0;
     for r in runs {
         let t = r.wheel_t_s();
-        let moving: Vec<usize> = (0..r.n_samples()).filter(|&k| r.wheel_sample(k).iter().any(|w| w.abs() > STILL_RAD_S)).collect();
+        let moving: Vec<usize> =
+            (0..r.n_samples()).filter(|&k| r.wheel_sample(k).iter().any(|w| w.abs() > STILL_RAD_S)).collect();
         let (Some(&first), Some(&last)) = (moving.first(), moving.last()) else { continue };
         let (t_start, t_end) = (t[first] - 0.05, t[last] + 0.05);
-        for window in [r.truth().iter().filter(|p| p.t_s < t_start).collect::<Vec<_>>(), r.truth().iter().filter(|p| p.t_s > t_end).collect()] {
+        for window in [
+            r.truth().iter().filter(|p| p.t_s < t_start).collect::<Vec<_>>(),
+            r.truth().iter().filter(|p| p.t_s > t_end).collect(),
+        ] {
             if window.len() < 2 {
                 continue;
             }
@@ -312,7 +316,13 @@ pub fn noise_floor(runs: &[Run]) -> Option<NoiseFloor> {
 fn group_label(r: &Run) -> String {
     match r.command() {
         Some(c) => {
-            let turn = if c.omega_rad_s > 1e-9 { "ω>0" } else if c.omega_rad_s < -1e-9 { "ω<0" } else { "ω=0" };
+            let turn = if c.omega_rad_s > 1e-9 {
+                "ω>0"
+            } else if c.omega_rad_s < -1e-9 {
+                "ω<0"
+            } else {
+                "ω=0"
+            };
             format!("α={:.0}° {turn}", c.alpha_rad.to_degrees().rem_euclid(360.0))
         }
         None => "all".into(),
@@ -362,8 +372,16 @@ fn compare(
             let n = v.len() as f64;
             let mean = [0, 1, 2].map(|i| v.iter().map(|e| e[i]).sum::<f64>() / n);
             let bias = mean.iter().map(|m| m * m).sum::<f64>().sqrt();
-            let scatter = (v.iter().map(|e| (0..3).map(|i| (e[i] - mean[i]).powi(2)).sum::<f64>()).sum::<f64>() / n).sqrt();
-            GroupReport { group, runs: v.len(), mean_end_error: mean, bias, scatter, systematic: bias > 2.0 * scatter / n.sqrt() }
+            let scatter =
+                (v.iter().map(|e| (0..3).map(|i| (e[i] - mean[i]).powi(2)).sum::<f64>()).sum::<f64>() / n).sqrt();
+            GroupReport {
+                group,
+                runs: v.len(),
+                mean_end_error: mean,
+                bias,
+                scatter,
+                systematic: bias > 2.0 * scatter / n.sqrt(),
+            }
         })
         .collect();
     let growth = Growth {

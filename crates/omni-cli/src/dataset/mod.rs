@@ -2,7 +2,10 @@
 //!
 //! Every error names the file and, where it applies, the line, topic, message, run and field.
 
-use omni_kin::{KinError, Run};
+pub mod csv;
+pub mod optiodom;
+
+use omni_kin::{KinError, RobotGeometry, Run};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -15,6 +18,89 @@ pub struct Dataset {
     pub skipped: Vec<Skipped>,
     /// Things the user should know (e.g. "velocity empty: differentiated position").
     pub notes: Vec<String>,
+    /// The design geometry the data declares (OptiOdom metadata), if any.
+    pub robot: Option<RobotGeometry>,
+}
+
+/// How to load.
+#[derive(Clone, Debug, Default)]
+pub struct LoadOptions {
+    /// Skip runs that fail (listed in [`Dataset::skipped`]) instead of stopping.
+    pub skip_invalid: bool,
+    /// Encoder ticks per wheel revolution for CSV tick columns (overrides the file).
+    pub ticks_per_rev: Option<f64>,
+}
+
+/// Supported inputs, for messages.
+pub const SUPPORTED: &str = ".csv (omnical run), .mcap (ROS 2 bag), or a folder of them / an OptiOdom set folder";
+
+/// Load runs from files and folders, in the order given (folders: files sorted by name).
+pub fn load(paths: &[PathBuf], opts: &LoadOptions) -> Result<Dataset, DatasetError> {
+    let mut ds = Dataset::default();
+    for p in paths {
+        load_path(p, opts, &mut ds)?;
+    }
+    if ds.runs.is_empty() {
+        let what = paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ");
+        return Err(match ds.skipped.first() {
+            Some(s) => DatasetError::file(
+                Path::new(&what),
+                format!("no valid runs ({} skipped; first: {}: {})", ds.skipped.len(), s.source, s.reason),
+            ),
+            None => DatasetError::file(Path::new(&what), format!("no runs found (expected {SUPPORTED})")),
+        });
+    }
+    Ok(ds)
+}
+
+fn keep_or_fail(ds: &mut Dataset, opts: &LoadOptions, source: &Path, e: DatasetError) -> Result<(), DatasetError> {
+    if opts.skip_invalid {
+        ds.skipped.push(Skipped { source: source.display().to_string(), reason: e.to_string() });
+        Ok(())
+    } else {
+        Err(e)
+    }
+}
+
+fn load_path(p: &Path, opts: &LoadOptions, ds: &mut Dataset) -> Result<(), DatasetError> {
+    let meta = std::fs::metadata(p).map_err(|e| DatasetError::io(p, e))?;
+    if meta.is_dir() {
+        if optiodom::metadata_file(p).is_some() {
+            let mut skipped = Vec::new();
+            let (runs, robot) = optiodom::read_set(p, |e| {
+                if opts.skip_invalid {
+                    skipped.push(Skipped { source: p.display().to_string(), reason: e.to_string() });
+                    Ok(())
+                } else {
+                    Err(e)
+                }
+            })?;
+            ds.skipped.extend(skipped);
+            ds.runs.extend(runs);
+            ds.robot = Some(robot);
+            return Ok(());
+        }
+        let mut entries: Vec<PathBuf> = std::fs::read_dir(p)
+            .map_err(|e| DatasetError::io(p, e))?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|q| q.is_dir() || q.extension().is_some_and(|e| e == "csv" || e == "mcap"))
+            .collect();
+        entries.sort();
+        for e in entries {
+            load_path(&e, opts, ds)?;
+        }
+        return Ok(());
+    }
+    match p.extension().and_then(|e| e.to_str()) {
+        Some("csv") => match csv::read_run(p, opts.ticks_per_rev) {
+            Ok(r) => ds.runs.push(r),
+            Err(e) => keep_or_fail(ds, opts, p, e)?,
+        },
+        // MCAP: wired in by the mcap branch.
+        Some("mcap") => keep_or_fail(ds, opts, p, DatasetError::file(p, "MCAP support is not built in yet"))?,
+        _ => return Err(DatasetError::file(p, format!("unsupported input (expected {SUPPORTED})"))),
+    }
+    Ok(())
 }
 
 /// An input that was skipped, and why.

@@ -273,7 +273,8 @@ impl<P: Problem + ?Sized> Optimizer<P> for Ga {
             let mut p = parents.into_iter();
             for _ in 0..n_cross {
                 let (a, c) = (p.next().unwrap_or(order[0]), p.next().unwrap_or(order[0]));
-                let child = (0..dim).map(|i| if rng.random_range(0.0..1.0) < 0.5 { pop[a][i] } else { pop[c][i] }).collect();
+                let child =
+                    (0..dim).map(|i| if rng.random_range(0.0..1.0) < 0.5 { pop[a][i] } else { pop[c][i] }).collect();
                 next.push(child);
                 next_costs.push(None);
             }
@@ -290,7 +291,8 @@ impl<P: Problem + ?Sized> Optimizer<P> for Ga {
                 next.push(child);
                 next_costs.push(None);
             }
-            let fresh: Vec<Vec<f64>> = next.iter().zip(&next_costs).filter(|(_, c)| c.is_none()).map(|(x, _)| x.clone()).collect();
+            let fresh: Vec<Vec<f64>> =
+                next.iter().zip(&next_costs).filter(|(_, c)| c.is_none()).map(|(x, _)| x.clone()).collect();
             let fresh_costs = problem.costs(&fresh);
             evaluations += fresh.len();
             let mut fc = fresh_costs.into_iter();
@@ -406,7 +408,10 @@ mod tests {
             })
         };
         let (a, b) = (run(1), run(4));
-        assert_eq!(a.params.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), b.params.iter().map(|v| v.to_bits()).collect::<Vec<_>>());
+        assert_eq!(
+            a.params.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            b.params.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
         assert_eq!(a.cost.to_bits(), b.cost.to_bits());
     }
 

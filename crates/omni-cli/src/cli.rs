@@ -1,0 +1,252 @@
+//! Command-line interface: argument parsing and the subcommands. Each subcommand loads, calls the library,
+//! and formats; no science happens here.
+
+use crate::cmd;
+use clap::{Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+/// Calibrate omnidirectional robot kinematics from logs, and find out why the model still misses.
+#[derive(Debug, Parser)]
+#[command(name = "omnical", version, about, long_about = None)]
+pub struct Cli {
+    /// Worker threads (default: all cores). Results do not depend on it.
+    #[arg(long, global = true)]
+    pub threads: Option<usize>,
+    /// Print only the final summary.
+    #[arg(long, short, global = true)]
+    pub quiet: bool,
+    /// The subcommand.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Dataset file format for writing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Format {
+    /// omnical CSV, one file per run (docs/formats.md).
+    Csv,
+    /// ROS 2 MCAP bag, one file per run.
+    Mcap,
+}
+
+/// Which base model to fit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ModelKind {
+    /// Every entry of the IK matrix (the paper).
+    Ik,
+    /// Wheel radii, distances and angles (the paper's ref. [17]).
+    Geometry,
+}
+
+/// Calibration recipe.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum PresetArg {
+    /// The paper's method, reproduced: Eq. 6 end-pose cost, Eq. 1 Euler at 10 ms, MATLAB-default GA, ±10 % box.
+    Paper,
+    /// Ours: path cost, exact arcs, short GA then Levenberg–Marquardt.
+    Default,
+}
+
+/// Cost to report.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum CostArg {
+    /// The paper's Eq. 6: mean end-pose error (m and rad mixed).
+    EndPose,
+    /// RMS error over every ground-truth pose (1 m/rad).
+    Path,
+}
+
+/// Options shared by commands that read runs.
+#[derive(Debug, clap::Args)]
+pub struct DataArgs {
+    /// Wheel joint names in wheel order (MCAP JointState), comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "wheel_a,wheel_b,wheel_c")]
+    pub joints: Vec<String>,
+    /// MCAP topic of the wheel JointState (default: the only one).
+    #[arg(long)]
+    pub joints_topic: Option<String>,
+    /// MCAP topic of the ground truth (default: the only map/world-frame pose source).
+    #[arg(long)]
+    pub gt_topic: Option<String>,
+    /// Cut MCAP files into runs where the robot stands still at least this long. s.
+    #[arg(long)]
+    pub split: Option<f64>,
+    /// Skip runs that fail to load (they are listed) instead of stopping.
+    #[arg(long)]
+    pub skip_invalid: bool,
+    /// Encoder ticks per wheel revolution, for CSV files with tick columns.
+    #[arg(long)]
+    pub ticks_per_rev: Option<f64>,
+}
+
+/// Subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Simulate the paper's flower benchmark on a true robot that differs from the design.
+    Simulate {
+        /// Output folder: writes train/, validation/, truth.json and truth_model.toml.
+        #[arg(long)]
+        out: PathBuf,
+        /// Seed (training uses it, validation seed + 1).
+        #[arg(long, default_value_t = 7)]
+        seed: u64,
+        /// Repetitions of each of the 36 commands.
+        #[arg(long, default_value_t = 5)]
+        runs_per_command: usize,
+        /// Duration of each command. s.
+        #[arg(long, default_value_t = 10.0)]
+        duration: f64,
+        /// Inject an effect into the true robot: NAME=V1,V2,… in the effect's parameter order
+        /// (`sample_timing=DROP_PROBABILITY,JITTER_S`). Repeatable.
+        #[arg(long = "effect", value_name = "NAME=VALUES")]
+        effects: Vec<String>,
+        /// True robot: `paper` (Eq. 9) or a model file.
+        #[arg(long, default_value = "paper")]
+        truth: String,
+        /// Output format.
+        #[arg(long, value_enum, default_value_t = Format::Csv)]
+        format: Format,
+        /// No encoder quantisation and no noise.
+        #[arg(long)]
+        noise_free: bool,
+    },
+    /// Evaluate a model on runs: Eq. 6 cost and per-run end-pose errors.
+    Eval {
+        /// `design` (the data's design model, or the paper's Eq. 7) or a model file.
+        #[arg(long, default_value = "design")]
+        model: String,
+        /// Run files or folders.
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+        /// Data options.
+        #[command(flatten)]
+        data: DataArgs,
+    },
+    /// Fit a model to training runs.
+    Train {
+        /// Training run files or folders.
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// Base model to fit.
+        #[arg(long, value_enum, default_value_t = ModelKind::Ik)]
+        model: ModelKind,
+        /// Start from this model file instead of the design.
+        #[arg(long)]
+        start: Option<PathBuf>,
+        /// Recipe.
+        #[arg(long, value_enum, default_value_t = PresetArg::Default)]
+        preset: PresetArg,
+        /// GA seed.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Add effects to fit (catalogue ids). Repeatable.
+        #[arg(long = "effect", value_name = "NAME")]
+        effects: Vec<String>,
+        /// Write the fitted model here (TOML; read back by `--model FILE`).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Print a JSON summary instead of text.
+        #[arg(long)]
+        json: bool,
+        /// Data options.
+        #[command(flatten)]
+        data: DataArgs,
+    },
+    /// Compare a model with measurements, find where it fails, and name the missing physical effect.
+    Diagnose {
+        /// Model file (from `train --out`) or `design`.
+        #[arg(long)]
+        model: String,
+        /// Training runs (the ones the model was fitted on).
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// Held-out runs (default: 2-fold cross-validation over repetitions).
+        #[arg(long, num_args = 1..)]
+        validate: Vec<PathBuf>,
+        /// Add effects one at a time while the held-out cost falls, and print the error ladder.
+        #[arg(long)]
+        auto: bool,
+        /// Candidate effects (default: the whole catalogue), comma-separated.
+        #[arg(long, value_delimiter = ',')]
+        candidates: Vec<String>,
+        /// Minimum relative fall of the held-out path cost to recommend an effect.
+        #[arg(long, default_value_t = 0.05)]
+        min_gain: f64,
+        /// Write the final model (with effects added by --auto) here.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Print JSON (top-level `verdict`, `ranking`, `ladder`, …).
+        #[arg(long)]
+        json: bool,
+        /// Data options.
+        #[command(flatten)]
+        data: DataArgs,
+    },
+    /// The whole story on built-in simulated data with a hidden effect: simulate, train, diagnose, add the
+    /// effect, retrain, print the error ladder.
+    Demo {
+        /// Also write the models and the diagnosis here.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Repetitions of each of the 36 commands.
+        #[arg(long, default_value_t = 2)]
+        runs_per_command: usize,
+        /// The hidden effect, NAME=VALUES as for `simulate --effect`.
+        #[arg(long, default_value = "time_offset=0.06")]
+        hidden: String,
+    },
+}
+
+/// Runs a parsed command line.
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    if let Some(n) = cli.threads {
+        rayon::ThreadPoolBuilder::new().num_threads(n).build_global()?;
+    }
+    match cli.command {
+        Command::Simulate { out, seed, runs_per_command, duration, effects, truth, format, noise_free } => {
+            cmd::simulate::run(&cmd::simulate::Args {
+                out,
+                seed,
+                runs_per_command,
+                duration_s: duration,
+                effects,
+                truth,
+                format,
+                noise_free,
+                quiet: cli.quiet,
+            })
+        }
+        Command::Eval { model, runs, json, data } => cmd::eval::run(&model, &runs, json, &data),
+        Command::Train { runs, model, start, preset, seed, effects, out, json, data } => {
+            cmd::train::run(&cmd::train::Args {
+                runs,
+                model,
+                start,
+                preset,
+                seed,
+                effects,
+                out,
+                json,
+                data,
+                quiet: cli.quiet,
+            })
+        }
+        Command::Diagnose { model, runs, validate, auto, candidates, min_gain, out, json, data } => {
+            cmd::diagnose::run(&cmd::diagnose::Args {
+                model,
+                runs,
+                validate,
+                auto,
+                json,
+                candidates,
+                min_gain,
+                out,
+                data,
+            })
+        }
+        Command::Demo { out, runs_per_command, hidden } => cmd::demo::run(out, runs_per_command, &hidden),
+    }
+}

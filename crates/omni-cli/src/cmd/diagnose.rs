@@ -1,0 +1,122 @@
+//! `omnical diagnose`: compare, locate, and name the missing effect; `--auto` climbs the error ladder.
+
+use super::{load_runs, resolve_model};
+use crate::cli::DataArgs;
+use crate::{atomic, model_file};
+use anyhow::Context;
+use omni_ga::diagnose::{DiagnoseOptions, Diagnosis, diagnose};
+use omni_kin::{FittedModel, Model};
+use std::path::PathBuf;
+
+/// Arguments of `omnical diagnose`.
+#[derive(Debug)]
+pub struct Args {
+    /// Model file (or `design`).
+    pub model: String,
+    /// Training runs.
+    pub runs: Vec<PathBuf>,
+    /// Held-out runs.
+    pub validate: Vec<PathBuf>,
+    /// Climb the ladder.
+    pub auto: bool,
+    /// JSON output.
+    pub json: bool,
+    /// Restrict candidates.
+    pub candidates: Vec<String>,
+    /// Minimum held-out gain.
+    pub min_gain: f64,
+    /// Write the final model (with added effects) here.
+    pub out: Option<PathBuf>,
+    /// Data options.
+    pub data: DataArgs,
+}
+
+/// The design model matching a fitted model's base (same wheels), at nominal parameters.
+pub fn design_for(model: &FittedModel) -> FittedModel {
+    let base =
+        Model { kinematics: model.model.kinematics.clone(), effects: Vec::new(), integration: model.model.integration };
+    FittedModel::nominal(base)
+}
+
+/// Runs `omnical diagnose`.
+pub fn run(a: &Args) -> anyhow::Result<()> {
+    let ds = load_runs(&a.runs, &a.data)?;
+    let model = resolve_model(&a.model, &ds)?;
+    let val = if a.validate.is_empty() { None } else { Some(load_runs(&a.validate, &a.data)?.runs) };
+    let mut opts = DiagnoseOptions { auto: a.auto, min_gain: a.min_gain, ..DiagnoseOptions::default() };
+    if !a.candidates.is_empty() {
+        opts.candidates = a.candidates.clone();
+    }
+    let design = design_for(&model);
+    let d = diagnose(&model, &design, &ds.runs, val.as_deref(), &opts)?;
+    if let (Some(out), Some(fm)) = (&a.out, &d.final_model) {
+        let text = model_file::to_toml(fm, None).map_err(anyhow::Error::msg)?;
+        atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))?;
+    }
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&d)?);
+    } else {
+        print_diagnosis(&d);
+    }
+    Ok(())
+}
+
+/// Human-readable diagnosis.
+pub fn print_diagnosis(d: &Diagnosis) {
+    println!("1. compare (held out: {})", d.held_out);
+    println!(
+        "   design: path {:.4} m, Eq. 6 {:.4} (train) | path {:.4} m, Eq. 6 {:.4} (held out)",
+        d.design_costs.train_path,
+        d.design_costs.train_end_pose,
+        d.design_costs.held_out_path,
+        d.design_costs.held_out_end_pose
+    );
+    println!(
+        "   model:  path {:.4} m, Eq. 6 {:.4} (train) | path {:.4} m, Eq. 6 {:.4} (held out)",
+        d.costs.train_path, d.costs.train_end_pose, d.costs.held_out_path, d.costs.held_out_end_pose
+    );
+    println!("2. where it fails");
+    for f in &d.findings {
+        println!("   - {f}");
+    }
+    if let Some(nf) = &d.noise_floor {
+        println!(
+            "   noise floor: {:.4} m position, {:.4} rad heading at standstill → path RMS ≈ {:.4} m ({} poses)",
+            nf.position_m, nf.heading_rad, nf.path_rms, nf.samples
+        );
+    }
+    println!("3. which effect is missing (held-out gain of a refit; first-order share of the residual)");
+    println!("   {:<20} {:>9} {:>11} {:>9}  parameters", "effect", "gain %", "1st-order %", "separable");
+    for c in &d.ranking {
+        let params: Vec<String> = if c.absorbed {
+            c.implied.iter().map(|p| format!("{}={:.4} {}", p.name, p.value, p.unit)).collect()
+        } else {
+            c.params
+                .iter()
+                .map(|p| match p.std_error {
+                    Some(se) => format!("{}={:.4}±{:.4} {}", p.name, p.value, se, p.unit),
+                    None => format!("{}={:.4} {}", p.name, p.value, p.unit),
+                })
+                .collect()
+        };
+        println!(
+            "   {:<20} {:>9.1} {:>11.1} {:>9}  {}{}",
+            c.effect,
+            100.0 * c.held_out_gain,
+            100.0 * c.first_order_explained,
+            if c.absorbed { "absorbed".to_string() } else { format!("{:.2}", c.separability) },
+            if c.absorbed { "equivalent " } else { "" },
+            params.join(", ")
+        );
+    }
+    if d.ladder.len() > 2 {
+        println!("4. error ladder (path RMS m / Eq. 6)");
+        for r in &d.ladder {
+            println!(
+                "   {:<24} train {:.4} / {:.4}   held out {:.4} / {:.4}",
+                r.label, r.costs.train_path, r.costs.train_end_pose, r.costs.held_out_path, r.costs.held_out_end_pose
+            );
+        }
+    }
+    println!("verdict: {}", d.verdict_text);
+}

@@ -1,0 +1,131 @@
+//! `omnical train`: fit a model to training runs.
+
+use super::{design_ik, load_runs};
+use crate::cli::{DataArgs, ModelKind, PresetArg};
+use crate::{atomic, model_file};
+use anyhow::Context;
+use omni_ga::calibrate::{Calibration, Plan, Preset, calibrate};
+use omni_ga::observe::NoopObserver;
+use omni_kin::{EffectKind, FittedModel, Model, RobotGeometry};
+use serde_json::json;
+use std::path::PathBuf;
+
+/// Arguments of `omnical train`.
+#[derive(Debug)]
+pub struct Args {
+    /// Training runs.
+    pub runs: Vec<PathBuf>,
+    /// Base model.
+    pub model: ModelKind,
+    /// Start model file.
+    pub start: Option<PathBuf>,
+    /// Recipe.
+    pub preset: PresetArg,
+    /// GA seed.
+    pub seed: u64,
+    /// Effect ids to fit.
+    pub effects: Vec<String>,
+    /// Output model file.
+    pub out: Option<PathBuf>,
+    /// JSON summary.
+    pub json: bool,
+    /// Data options.
+    pub data: DataArgs,
+    /// Less output.
+    pub quiet: bool,
+}
+
+/// The fit summary as JSON (also written into the model file's `[fit]` table).
+pub fn summary(c: &Calibration, preset: &str, seed: u64, runs: usize) -> anyhow::Result<serde_json::Value> {
+    Ok(json!({
+        "preset": preset,
+        "seed": seed,
+        "runs": runs,
+        "objective": c.objective.name(),
+        "cost_design": c.end_pose_start,
+        "cost_fitted": c.end_pose_fitted,
+        "improvement_pct": c.improvement_pct(),
+        "objective_design": c.objective_start,
+        "objective_fitted": c.objective_fitted,
+        "matrix": c.fitted.ik()?.rows(),
+        "params": c.fitted.model.params().iter().zip(&c.fitted.params)
+            .map(|(s, v)| json!({"name": s.name, "unit": s.unit, "value": v})).collect::<Vec<_>>(),
+        "evaluations": c.evaluations,
+        "seconds": c.seconds,
+        "at_bound": c.at_bound,
+        "outside_box": c.outside_box,
+    }))
+}
+
+/// Runs `omnical train`.
+pub fn run(a: &Args) -> anyhow::Result<()> {
+    let ds = load_runs(&a.runs, &a.data)?;
+    let mut start = match &a.start {
+        Some(p) => model_file::read(p).context("reading --start")?,
+        None => match a.model {
+            ModelKind::Ik => FittedModel::nominal(Model::ik(design_ik(&ds)?)),
+            ModelKind::Geometry => {
+                FittedModel::nominal(Model::geometry(ds.robot.clone().unwrap_or_else(RobotGeometry::apr02)))
+            }
+        },
+    };
+    for id in &a.effects {
+        start = start
+            .with_effect(EffectKind::from_id(id, start.model.n_wheels()).with_context(|| format!("--effect {id}"))?);
+    }
+    let (preset, preset_name) = match a.preset {
+        PresetArg::Paper => (Preset::Paper, "paper"),
+        PresetArg::Default => (Preset::Default, "default"),
+    };
+    let plan = Plan::preset(preset, start.model.n_params()).seed(a.seed);
+    let c = calibrate(&start, &ds.runs, &plan, &mut NoopObserver)?;
+    let s = summary(&c, preset_name, a.seed, ds.runs.len())?;
+    if let Some(out) = &a.out {
+        let fit: toml::Table = toml::Table::try_from(&s).context("fit summary")?;
+        let text = model_file::to_toml(&c.fitted, Some(fit)).map_err(anyhow::Error::msg)?;
+        atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))?;
+    }
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&s)?);
+        return Ok(());
+    }
+    print_summary(&c, preset_name, ds.runs.len());
+    if let Some(out) = &a.out {
+        println!("model written to {}", out.display());
+    }
+    Ok(())
+}
+
+/// Human-readable fit summary on stdout.
+pub fn print_summary(c: &Calibration, preset: &str, runs: usize) {
+    println!("preset {preset}: {runs} training runs, objective {}", c.objective.name());
+    println!(
+        "cost (Eq. 6)  design {:.5}  fitted {:.5}  improvement {:.1} %",
+        c.end_pose_start,
+        c.end_pose_fitted,
+        c.improvement_pct()
+    );
+    println!("objective     design {:.5}  fitted {:.5}", c.objective_start, c.objective_fitted);
+    if let Ok(m) = c.fitted.ik() {
+        println!("fitted IK matrix (rows vx m/s, vy m/s, ω rad/s per wheel rad/s):");
+        for r in m.rows() {
+            println!("  [{}]", r.iter().map(|v| format!("{v:>14.10}")).collect::<Vec<_>>().join(" "));
+        }
+    }
+    let nb = c.fitted.model.n_base();
+    let specs = c.fitted.model.params();
+    if matches!(c.fitted.model.kinematics, omni_kin::Kinematics::Geometry { .. }) || specs.len() > nb {
+        for (i, s) in specs.iter().enumerate() {
+            if i >= nb || matches!(c.fitted.model.kinematics, omni_kin::Kinematics::Geometry { .. }) {
+                println!("  {:<28} {:>14.6} {}", s.name, c.fitted.params[i], s.unit);
+            }
+        }
+    }
+    println!("{} evaluations, {:.2} s", c.evaluations, c.seconds);
+    if !c.at_bound.is_empty() {
+        println!("warning: ended on a bound of the GA box: {}", c.at_bound.join(", "));
+    }
+    if !c.outside_box.is_empty() {
+        println!("note: the polish left the GA box (the box was too small) for: {}", c.outside_box.join(", "));
+    }
+}

@@ -1,0 +1,296 @@
+//! The omnical CSV run format: one file per run (see `docs/formats.md`).
+//!
+//! ```text
+//! # omnical run v1
+//! # name: train/run-003
+//! # command_v_m_s: 0.2
+//! # command_alpha_rad: 0.5235987755982988
+//! # command_omega_rad_s: 0.35
+//! # repetition: 0
+//! # wheel_start_rad: 0.1,2.3,4.0
+//! # ticks_per_rev: 49152
+//! t_s,wheel_a_rad_s,wheel_b_rad_s,wheel_c_rad_s,x_m,y_m,theta_rad,odom_x_m,odom_y_m,odom_theta_rad
+//! ```
+//! A row is a wheel sample when its wheel cells are filled and a ground-truth pose when its pose cells are
+//! filled (either or both). Wheel columns are `<joint>_rad_s` or `<joint>_ticks` (counts since the previous
+//! sample; rad/s = ticks · 2π / ticks_per_rev / Δt, the first sample using the second's Δt). Headings are
+//! unwrapped on load.
+
+use super::DatasetError;
+use crate::atomic;
+use omni_kin::{Command, Pose2, Run, RunData, StampedPose};
+use std::collections::BTreeMap;
+use std::f64::consts::PI;
+use std::path::Path;
+
+const POSE: [&str; 3] = ["x_m", "y_m", "theta_rad"];
+const ODOM: [&str; 3] = ["odom_x_m", "odom_y_m", "odom_theta_rad"];
+
+/// Make a heading sequence continuous (no jumps over ±π).
+pub fn unwrap_headings(poses: &mut [StampedPose]) {
+    for i in 1..poses.len() {
+        let prev = poses[i - 1].pose.theta_rad;
+        let mut th = poses[i].pose.theta_rad;
+        while th - prev > PI {
+            th -= 2.0 * PI;
+        }
+        while th - prev < -PI {
+            th += 2.0 * PI;
+        }
+        poses[i].pose.theta_rad = th;
+    }
+}
+
+fn parse_num(path: &Path, line: usize, col: &str, cell: &str) -> Result<f64, DatasetError> {
+    cell.trim()
+        .parse::<f64>()
+        .map_err(|_| DatasetError::at(path, format!("line {line}, column {col}"), format!("{cell:?} is not a number")))
+}
+
+/// Read one omnical CSV run. `ticks_per_rev` overrides the file's.
+pub fn read_run(path: &Path, ticks_per_rev: Option<f64>) -> Result<Run, DatasetError> {
+    let bytes = std::fs::read(path).map_err(|e| DatasetError::io(path, e))?;
+    let text = String::from_utf8(bytes).map_err(|_| DatasetError::file(path, "is not UTF-8 text"))?;
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+    // Metadata comments before the header.
+    let mut meta: BTreeMap<String, (usize, String)> = BTreeMap::new();
+    let mut body_start = 0;
+    let mut header_line = 1;
+    for (i, line) in text.split_inclusive('\n').enumerate() {
+        let l = line.trim_end_matches(['\r', '\n']);
+        if let Some(c) = l.strip_prefix('#') {
+            if let Some((k, v)) = c.split_once(':') {
+                meta.insert(k.trim().to_string(), (i + 1, v.trim().to_string()));
+            }
+            body_start += line.len();
+            header_line = i + 2;
+        } else if l.trim().is_empty() {
+            body_start += line.len();
+            header_line = i + 2;
+        } else {
+            break;
+        }
+    }
+    let meta_num = |key: &str| -> Result<Option<f64>, DatasetError> {
+        match meta.get(key) {
+            Some((line, v)) => parse_num(path, *line, key, v).map(Some),
+            None => Ok(None),
+        }
+    };
+    let mut reader =
+        csv::ReaderBuilder::new().has_headers(true).flexible(false).from_reader(text[body_start..].as_bytes());
+    let headers: Vec<String> = reader
+        .headers()
+        .map_err(|e| DatasetError::at(path, format!("line {header_line}"), e.to_string()))?
+        .iter()
+        .map(|h| h.trim().to_string())
+        .collect();
+    let find = |name: &str| headers.iter().position(|h| h == name);
+    let t_col = find("t_s").ok_or_else(|| {
+        DatasetError::at(
+            path,
+            format!("line {header_line}"),
+            format!("missing column t_s (columns: {})", headers.join(",")),
+        )
+    })?;
+    let rad_cols: Vec<usize> = (0..headers.len()).filter(|&i| headers[i].ends_with("_rad_s")).collect();
+    let tick_cols: Vec<usize> = (0..headers.len()).filter(|&i| headers[i].ends_with("_ticks")).collect();
+    let (wheel_cols, ticks) = match (rad_cols.is_empty(), tick_cols.is_empty()) {
+        (false, true) => (rad_cols, false),
+        (true, false) => (tick_cols, true),
+        (true, true) => {
+            return Err(DatasetError::at(
+                path,
+                format!("line {header_line}"),
+                "no wheel columns: expected <joint>_rad_s or <joint>_ticks columns",
+            ));
+        }
+        (false, false) => {
+            return Err(DatasetError::at(path, format!("line {header_line}"), "mixes _rad_s and _ticks wheel columns"));
+        }
+    };
+    let tpr = match (ticks, ticks_per_rev.or(meta_num("ticks_per_rev")?)) {
+        (true, None) => {
+            return Err(DatasetError::file(
+                path,
+                "wheel columns are ticks but no ticks_per_rev is given (add '# ticks_per_rev: N' or --ticks-per-rev)",
+            ));
+        }
+        (_, v) => v.unwrap_or(1.0),
+    };
+    let pose_cols: Vec<Option<usize>> = POSE.iter().map(|n| find(n)).collect();
+    if pose_cols.iter().any(Option::is_none) {
+        let missing: Vec<&str> = POSE.iter().zip(&pose_cols).filter(|(_, c)| c.is_none()).map(|(n, _)| *n).collect();
+        return Err(DatasetError::at(
+            path,
+            format!("line {header_line}"),
+            format!("missing column {}", missing.join(", ")),
+        ));
+    }
+    let pose_cols: Vec<usize> = pose_cols.into_iter().flatten().collect();
+    let odom_cols: Vec<Option<usize>> = ODOM.iter().map(|n| find(n)).collect();
+    let odom_cols: Option<Vec<usize>> = odom_cols.into_iter().collect();
+
+    let n_w = wheel_cols.len();
+    let (mut wheel_t, mut wheel, mut truth, mut odom) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    // `group` = the cells of a column group in this row: all empty → None; all filled → values; else error.
+    let group = |rec: &csv::StringRecord, cols: &[usize], line: usize| -> Result<Option<Vec<f64>>, DatasetError> {
+        let cells: Vec<&str> = cols.iter().map(|&c| rec.get(c).unwrap_or("").trim()).collect();
+        let filled = cells.iter().filter(|c| !c.is_empty()).count();
+        if filled == 0 {
+            return Ok(None);
+        }
+        if filled < cells.len() {
+            let empty: Vec<&str> =
+                cols.iter().zip(&cells).filter(|(_, c)| c.is_empty()).map(|(&i, _)| headers[i].as_str()).collect();
+            return Err(DatasetError::at(
+                path,
+                format!("line {line}"),
+                format!("partly filled row: {} empty", empty.join(", ")),
+            ));
+        }
+        cols.iter()
+            .zip(&cells)
+            .map(|(&i, c)| parse_num(path, line, &headers[i], c))
+            .collect::<Result<Vec<_>, _>>()
+            .map(Some)
+    };
+    for (i, rec) in reader.records().enumerate() {
+        let line = header_line + 1 + i;
+        let rec = rec.map_err(|e| DatasetError::at(path, format!("line {line}"), e.to_string()))?;
+        if rec.iter().all(|c| c.trim().is_empty()) {
+            continue;
+        }
+        let t = parse_num(path, line, "t_s", rec.get(t_col).unwrap_or(""))?;
+        if let Some(w) = group(&rec, &wheel_cols, line)? {
+            wheel_t.push(t);
+            wheel.extend(w);
+        }
+        if let Some(p) = group(&rec, &pose_cols, line)? {
+            truth.push(StampedPose { t_s: t, pose: Pose2::new(p[0], p[1], p[2]) });
+        }
+        if let Some(oc) = &odom_cols
+            && let Some(p) = group(&rec, oc, line)?
+        {
+            odom.push(StampedPose { t_s: t, pose: Pose2::new(p[0], p[1], p[2]) });
+        }
+    }
+    if ticks && wheel_t.len() >= 2 {
+        let k = 2.0 * PI / tpr;
+        for s in 0..wheel_t.len() {
+            let dt = if s == 0 { wheel_t[1] - wheel_t[0] } else { wheel_t[s] - wheel_t[s - 1] };
+            for v in &mut wheel[s * n_w..(s + 1) * n_w] {
+                *v = *v * k / dt;
+            }
+        }
+    }
+    unwrap_headings(&mut truth);
+    let command = match (meta_num("command_v_m_s")?, meta_num("command_alpha_rad")?, meta_num("command_omega_rad_s")?) {
+        (Some(v), Some(a), Some(w)) => Some(Command { v_m_s: v, alpha_rad: a, omega_rad_s: w }),
+        (None, None, None) => None,
+        _ => {
+            return Err(DatasetError::file(
+                path,
+                "command needs all of command_v_m_s, command_alpha_rad, command_omega_rad_s",
+            ));
+        }
+    };
+    let repetition = match meta.get("repetition") {
+        Some((line, v)) => Some(v.parse::<u32>().map_err(|_| {
+            DatasetError::at(path, format!("line {line}"), format!("repetition {v:?} is not a whole number"))
+        })?),
+        None => None,
+    };
+    let wheel_start_rad = match meta.get("wheel_start_rad") {
+        Some((line, v)) => {
+            v.split(',').map(|c| parse_num(path, *line, "wheel_start_rad", c)).collect::<Result<Vec<_>, _>>()?
+        }
+        None => Vec::new(),
+    };
+    let name = meta.get("name").map(|(_, v)| v.clone()).unwrap_or_else(|| {
+        path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| path.display().to_string())
+    });
+    Run::new(RunData {
+        name,
+        wheel_t_s: wheel_t,
+        wheel_rad_s: wheel,
+        n_wheels: n_w,
+        truth,
+        command,
+        repetition,
+        recorded_odometry: odom,
+        wheel_start_rad,
+    })
+    .map_err(|source| DatasetError::Run { path: path.to_path_buf(), source })
+}
+
+/// Write a run in the omnical CSV format (rad/s columns, shortest round-trip floats), atomically.
+pub fn write_run(path: &Path, run: &Run, wheel_names: &[String]) -> Result<(), DatasetError> {
+    let n_w = run.n_wheels();
+    let names: Vec<String> =
+        (0..n_w).map(|i| wheel_names.get(i).cloned().unwrap_or_else(|| format!("wheel_{i}"))).collect();
+    atomic::with_atomic_writer(path, |w| {
+        writeln!(w, "# omnical run v1")?;
+        writeln!(w, "# name: {}", run.name())?;
+        if let Some(c) = run.command() {
+            writeln!(w, "# command_v_m_s: {}", c.v_m_s)?;
+            writeln!(w, "# command_alpha_rad: {}", c.alpha_rad)?;
+            writeln!(w, "# command_omega_rad_s: {}", c.omega_rad_s)?;
+        }
+        if let Some(r) = run.repetition() {
+            writeln!(w, "# repetition: {r}")?;
+        }
+        if !run.wheel_start_rad().is_empty() {
+            let v: Vec<String> = run.wheel_start_rad().iter().map(|v| v.to_string()).collect();
+            writeln!(w, "# wheel_start_rad: {}", v.join(","))?;
+        }
+        let has_odom = !run.recorded_odometry().is_empty();
+        let mut header = vec!["t_s".to_string()];
+        header.extend(names.iter().map(|n| format!("{n}_rad_s")));
+        header.extend(POSE.iter().map(|s| s.to_string()));
+        if has_odom {
+            header.extend(ODOM.iter().map(|s| s.to_string()));
+        }
+        writeln!(w, "{}", header.join(","))?;
+        // Merge wheel samples, truth and odometry by time (odometry shares the wheel stamps when recorded).
+        let (t, truth, odom) = (run.wheel_t_s(), run.truth(), run.recorded_odometry());
+        let (mut i, mut j, mut k) = (0, 0, 0);
+        let empty3 = ",,";
+        while i < t.len() || j < truth.len() {
+            let tw = t.get(i).copied().unwrap_or(f64::INFINITY);
+            let tg = truth.get(j).map_or(f64::INFINITY, |p| p.t_s);
+            let time = tw.min(tg);
+            let mut row = time.to_string();
+            if tw == time {
+                for v in run.wheel_sample(i) {
+                    row.push(',');
+                    row.push_str(&v.to_string());
+                }
+                i += 1;
+            } else {
+                row.push_str(&",".repeat(n_w));
+            }
+            if tg == time {
+                let p = truth[j].pose;
+                row.push_str(&format!(",{},{},{}", p.x_m, p.y_m, p.theta_rad));
+                j += 1;
+            } else {
+                row.push(',');
+                row.push_str(empty3);
+            }
+            if has_odom {
+                if k < odom.len() && odom[k].t_s == time {
+                    let p = odom[k].pose;
+                    row.push_str(&format!(",{},{},{}", p.x_m, p.y_m, p.theta_rad));
+                    k += 1;
+                } else {
+                    row.push(',');
+                    row.push_str(empty3);
+                }
+            }
+            writeln!(w, "{row}")?;
+        }
+        Ok(())
+    })
+    .map_err(|e| DatasetError::io(path, e))
+}
