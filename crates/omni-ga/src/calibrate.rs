@@ -18,7 +18,9 @@ use crate::observe::Observer;
 use crate::optimizer::{Optimizer, Solution};
 use crate::problem::{Bounds, LeastSquares, Problem};
 use omni_kin::cost::{self, CostKind};
+use nalgebra::DMatrix;
 use omni_kin::{FittedModel, Integration, KinError, Kinematics, Model, Run};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 use thiserror::Error;
@@ -156,6 +158,32 @@ impl LeastSquares for CalibrationProblem<'_> {
             Ok(res) => cost::residual_vector(&res, self.runs, self.objective),
             Err(_) => vec![f64::NAN; 3 * self.runs.len()],
         }
+    }
+
+    /// Central differences (step `1e-6 · max(|x_i|, 1e-3)`), except forward differences for a parameter
+    /// sitting on the lower end of its physical range (e.g. backlash at 0, whose model uses `|b|`), where a
+    /// central difference would see a symmetric kink and report zero sensitivity.
+    fn jacobian(&self, x: &[f64]) -> DMatrix<f64> {
+        let specs = self.model.params();
+        let r0 = self.residuals(x);
+        let cols: Vec<Vec<f64>> = (0..x.len())
+            .into_par_iter()
+            .map(|i| {
+                let h = 1e-6 * x[i].abs().max(1e-3);
+                let one_sided = specs.get(i).is_some_and(|s| s.lower == x[i] && s.upper > s.lower);
+                let mut xp = x.to_vec();
+                xp[i] += h;
+                let rp = self.residuals(&xp);
+                if one_sided {
+                    return rp.iter().zip(&r0).map(|(a, b)| (a - b) / h).collect();
+                }
+                let mut xm = x.to_vec();
+                xm[i] -= h;
+                let rm = self.residuals(&xm);
+                rp.iter().zip(&rm).map(|(a, b)| (a - b) / (2.0 * h)).collect()
+            })
+            .collect();
+        DMatrix::from_fn(r0.len(), x.len(), |r, c| cols[c].get(r).copied().unwrap_or(f64::NAN))
     }
 }
 

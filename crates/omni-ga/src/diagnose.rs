@@ -25,7 +25,7 @@ use crate::calibrate::CalibrationProblem;
 use crate::lm::{LevenbergMarquardt, LmConfig};
 use crate::observe::NoopObserver;
 use crate::optimizer::Optimizer;
-use crate::problem::{Bounds, LeastSquares};
+use crate::problem::{Bounds, LeastSquares, Problem};
 use nalgebra::{DMatrix, DVector};
 use omni_kin::cost::{self, CostKind};
 use omni_kin::effect::Effect;
@@ -226,11 +226,21 @@ pub fn costs_of(f: &FittedModel, train: &[Run], held_out: &[Run], every: usize) 
 /// Refit all parameters of `start` on `train` by Levenberg–Marquardt on the path residuals.
 pub fn refit(start: &FittedModel, train: &[Run], every: usize) -> Result<FittedModel, CalibrateError> {
     let n = start.params.len();
+    // Parameters whose null value is the lower end of their range (backlash b ≥ 0) start 2 % inside it,
+    // where the model is differentiable.
+    let mut x0 = start.params.clone();
+    for (i, s) in start.model.params().iter().enumerate() {
+        if x0[i] == s.lower && s.upper > s.lower && i >= start.model.n_base() {
+            x0[i] = s.lower + 0.02 * (s.upper - s.lower);
+        }
+    }
     let bounds = Bounds::new(vec![f64::NEG_INFINITY; n], vec![f64::INFINITY; n])?;
     let problem = CalibrationProblem::new(&start.model, train, path_kind(every), bounds)?;
     let mut lm = LevenbergMarquardt { config: LmConfig::default() };
-    let s = lm.minimize(&problem, &start.params, &mut NoopObserver)?;
-    Ok(FittedModel::new(start.model.clone(), s.params)?)
+    let s = lm.minimize(&problem, &x0, &mut NoopObserver)?;
+    // LM never returns worse than its start; also never worse than the given parameters.
+    let params = if problem.cost(&s.params) <= problem.cost(&start.params) { s.params } else { start.params.clone() };
+    Ok(FittedModel::new(start.model.clone(), params)?)
 }
 
 /// Projection residual: ‖(I − Q Qᵀ) v‖ for an orthonormal basis Q.
@@ -415,16 +425,18 @@ fn first_order(
     let r_all = orth_residual(&q_all, &r);
     let rr = r.norm_squared().max(1e-300);
     let explained = ((rm.norm_squared() - r_all.norm_squared()) / rr).clamp(0.0, 1.0);
+    // Columns with no sensitivity at all (the runs do not excite the effect) say nothing about
+    // separability; if every column is such, the effect is unexcited, not absorbed (NaN).
     let mut separability = f64::INFINITY;
     for c in 0..je.ncols() {
         let col = je.column(c).into_owned();
         let norm = col.norm();
-        if norm > 0.0 {
+        if norm > 1e-12 * j.norm().max(1e-300) {
             separability = separability.min(orth_residual(&qm, &col).norm() / norm);
         }
     }
     if !separability.is_finite() {
-        separability = 0.0;
+        separability = f64::NAN;
     }
     // Implied effect values: min ‖J_e e − J_m Δx‖, Δx = fit − design (same base structure only).
     let mut implied = Vec::new();

@@ -20,11 +20,12 @@ use std::time::Instant;
 /// Solver settings.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LmConfig {
-    /// Evaluation budget (approximately; the crate counts in units of `n + 1`). Default 2000.
+    /// Budget of residual evaluations (the crate counts in units of `n + 1`; each also needs a Jacobian,
+    /// `2n` residual evaluations by central differences). Default 60.
     pub max_evaluations: usize,
-    /// Relative reduction of the sum of squares that counts as converged. Default 1e-10.
+    /// Relative reduction of the sum of squares that counts as converged. Default 1e-9.
     pub ftol: f64,
-    /// Relative step that counts as converged. Default 1e-10.
+    /// Relative step that counts as converged. Default 1e-9.
     pub xtol: f64,
     /// Gradient orthogonality that counts as converged. Default 1e-12.
     pub gtol: f64,
@@ -32,7 +33,7 @@ pub struct LmConfig {
 
 impl Default for LmConfig {
     fn default() -> Self {
-        Self { max_evaluations: 2000, ftol: 1e-10, xtol: 1e-10, gtol: 1e-12 }
+        Self { max_evaluations: 60, ftol: 1e-9, xtol: 1e-9, gtol: 1e-12 }
     }
 }
 
