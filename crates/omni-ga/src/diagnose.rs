@@ -11,7 +11,8 @@
 //! 2. **Refit** model + effect on the training runs (Levenberg–Marquardt from the current fit) and judge
 //!    it on held-out runs (the validation set, or 2-fold cross-validation over repetitions). Candidates are
 //!    ranked by the relative fall of the held-out path cost; the verdict is the best one if it falls by at
-//!    least `min_gain` (default 5 %).
+//!    least `min_gain` (default 5 %) and removes most (≥ 50 %) of the held-out error variance above the
+//!    noise floor (otherwise it is reported as helping only in part, and no verdict is claimed).
 //! 3. **Noise floor**: the scatter of ground-truth poses while the robot stands still (rests at the start
 //!    and end of runs). A held-out error well above it (3×) means something physical is still missing.
 //!
@@ -46,6 +47,9 @@ pub struct DiagnoseOptions {
     pub max_added: usize,
     /// Use every k-th ground-truth pose for residuals. Default 1.
     pub every: usize,
+    /// Share of the excess error variance (above the noise floor) an effect must remove to be named with
+    /// confidence ("explains most of it"). Default 0.5.
+    pub min_excess_closed: f64,
 }
 
 impl Default for DiagnoseOptions {
@@ -56,6 +60,7 @@ impl Default for DiagnoseOptions {
             auto: false,
             max_added: 3,
             every: 1,
+            min_excess_closed: 0.5,
         }
     }
 }
@@ -137,6 +142,9 @@ pub struct Candidate {
     pub refit: Option<Costs>,
     /// Relative fall of the held-out path cost (positive = better).
     pub held_out_gain: f64,
+    /// Share of the held-out excess variance over the noise floor that the effect removes:
+    /// `(before² − after²) / (before² − floor²)` (NaN without a noise floor).
+    pub excess_closed: f64,
     /// Fitted effect parameters with standard errors.
     pub params: Vec<ParamValue>,
 }
@@ -210,6 +218,17 @@ pub struct Diagnosis {
 
 fn path_kind(every: usize) -> CostKind {
     CostKind::Path { every, heading_weight_m_per_rad: 1.0 }
+}
+
+/// An effect helps enough to be added: separable and the held-out path cost falls by `min_gain`.
+fn passes(c: &Candidate, opts: &DiagnoseOptions) -> bool {
+    !c.absorbed && c.held_out_gain >= opts.min_gain
+}
+
+/// An effect is named with confidence when it also removes at least `min_excess_closed` of the held-out
+/// error variance above the noise floor (always, when no floor could be estimated).
+fn confident(c: &Candidate, opts: &DiagnoseOptions) -> bool {
+    c.excess_closed.is_nan() || c.excess_closed >= opts.min_excess_closed
 }
 
 /// Costs of a fitted model on train and held-out runs.
@@ -513,6 +532,7 @@ pub fn diagnose(
                 implied: if absorbed { implied } else { Vec::new() },
                 refit: None,
                 held_out_gain: 0.0,
+                excess_closed: f64::NAN,
                 params: Vec::new(),
             };
             if !absorbed {
@@ -520,6 +540,10 @@ pub fn diagnose(
                 if let Ok(fit) = refit(&ext, &fit_runs, every) {
                     let c = costs_of(&fit, &fit_runs, &held_runs, every)?;
                     cand.held_out_gain = 1.0 - c.held_out_path / current_costs.held_out_path.max(1e-300);
+                    if let Some(nf) = &noise {
+                        let (b, a, f) = (current_costs.held_out_path, c.held_out_path, nf.path_rms);
+                        cand.excess_closed = (b * b - a * a) / (b * b - f * f).max(1e-300);
+                    }
                     // Standard errors of the effect parameters at the refit.
                     let n = fit.params.len();
                     let b = Bounds::new(vec![f64::NEG_INFINITY; n], vec![f64::INFINITY; n])?;
@@ -543,7 +567,7 @@ pub fn diagnose(
             ranking.push(cand);
         }
         ranking.sort_by(|a, b| b.held_out_gain.total_cmp(&a.held_out_gain));
-        let best = ranking.first().filter(|c| !c.absorbed && c.held_out_gain >= opts.min_gain).cloned();
+        let best = ranking.first().filter(|c| passes(c, opts)).cloned();
         if first_ranking.is_none() {
             first_ranking = Some(ranking.clone());
         }
@@ -562,7 +586,7 @@ pub fn diagnose(
         }
     }
     let ranking = first_ranking.unwrap_or_default();
-    let verdict = ranking.first().filter(|c| !c.absorbed && c.held_out_gain >= opts.min_gain).map(|c| c.effect.clone());
+    let verdict = ranking.first().filter(|c| passes(c, opts) && confident(c, opts)).map(|c| c.effect.clone());
 
     let mut findings = Vec::new();
     let mut worst: Vec<&RunReport> = runs.iter().collect();
@@ -607,7 +631,15 @@ pub fn diagnose(
                 c.refit.as_ref().map(|r| r.held_out_path).unwrap_or(f64::NAN)
             )
         }
-        None => "no catalogued effect explains the remaining error".into(),
+        None => match ranking.first().filter(|c| passes(c, opts)) {
+            Some(c) => format!(
+                "no catalogued effect explains most of the remaining error ({} helps: held-out path cost −{:.1} %, but it removes only {:.0} % of the error above the noise floor)",
+                c.effect,
+                100.0 * c.held_out_gain,
+                100.0 * c.excess_closed
+            ),
+            None => "no catalogued effect explains the remaining error".into(),
+        },
     };
     if let Some(nf) = &noise {
         let ratio = final_costs.held_out_path / nf.path_rms.max(1e-12);
