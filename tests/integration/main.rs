@@ -1,4 +1,5 @@
 //! End-to-end tests through the library: simulate → train → eval, determinism, diagnosis.
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers panic on failure by design
 mod common;
 mod determinism;
 mod hidden_effect;

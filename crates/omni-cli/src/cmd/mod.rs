@@ -14,8 +14,7 @@ use std::path::{Path, PathBuf};
 
 /// Load runs from files/folders, printing what was skipped or noticed on stderr.
 pub fn load_runs(paths: &[PathBuf], data: &DataArgs) -> anyhow::Result<Dataset> {
-    let opts =
-        LoadOptions { skip_invalid: data.skip_invalid, ticks_per_rev: data.ticks_per_rev, ..LoadOptions::default() };
+    let opts = LoadOptions { skip_invalid: data.skip_invalid, ticks_per_rev: data.ticks_per_rev };
     let ds = dataset::load(paths, &opts)?;
     for n in &ds.notes {
         eprintln!("note: {n}");

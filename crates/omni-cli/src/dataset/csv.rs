@@ -78,7 +78,7 @@ pub fn read_run(path: &Path, ticks_per_rev: Option<f64>) -> Result<Run, DatasetE
         }
     };
     let mut reader =
-        csv::ReaderBuilder::new().has_headers(true).flexible(false).from_reader(text[body_start..].as_bytes());
+        csv::ReaderBuilder::new().has_headers(true).flexible(false).from_reader(&text.as_bytes()[body_start..]);
     let headers: Vec<String> = reader
         .headers()
         .map_err(|e| DatasetError::at(path, format!("line {header_line}"), e.to_string()))?

@@ -171,8 +171,8 @@ mod tests {
         let s3 = 3f64.sqrt() / 3.0;
         let expect = [[-s3 * r, s3 * r, 0.0], [-r / 3.0, -r / 3.0, 2.0 * r / 3.0], [-r / (3.0 * l); 3]];
         for (row, e) in expect.iter().enumerate() {
-            for c in 0..3 {
-                assert!((ik.get(row, c) - e[c]).abs() < 1e-12, "m{}{}", row + 1, c + 1);
+            for (c, want) in e.iter().enumerate() {
+                assert!((ik.get(row, c) - want).abs() < 1e-12, "m{}{}", row + 1, c + 1);
             }
         }
     }

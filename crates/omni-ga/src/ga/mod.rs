@@ -107,7 +107,7 @@ impl GaConfig {
         if !(self.initial_spread > 0.0 && self.initial_spread <= 1.0) {
             return bad("initial_spread", "must be within (0, 1]");
         }
-        if !(self.mutation_scale > 0.0) || self.stall_generations == 0 {
+        if self.mutation_scale.is_nan() || self.mutation_scale <= 0.0 || self.stall_generations == 0 {
             return bad("mutation_scale / stall_generations", "must be > 0");
         }
         Ok(())

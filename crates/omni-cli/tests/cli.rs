@@ -1,0 +1,97 @@
+//! The `omnical` binary end to end, in a temporary folder: exit codes, messages, files.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn omnical(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir).output().expect("run omnical")
+}
+
+fn shared_data() -> Option<std::path::PathBuf> {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/optiodom-omni3-square");
+    p.exists().then_some(p)
+}
+
+#[test]
+fn simulate_train_eval_round_trip() {
+    let dir = tempfile::tempdir().unwrap();
+    let out =
+        omnical(&["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "4", "--seed", "3"], dir.path());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let truth: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("sim/truth.json")).unwrap()).unwrap();
+    let (design, oracle) =
+        (truth["design_cost"]["train"].as_f64().unwrap(), truth["oracle_cost"]["train"].as_f64().unwrap());
+    assert!(oracle * 5.0 < design, "oracle {oracle} design {design}");
+    assert_eq!(std::fs::read_dir(dir.path().join("sim/train")).unwrap().count(), 36);
+
+    let out = omnical(&["train", "sim/train", "--out", "fit.toml", "--json"], dir.path());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let s: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for key in ["cost_design", "cost_fitted", "evaluations", "seconds"] {
+        assert!(s[key].is_number(), "missing {key}");
+    }
+    assert_eq!(s["matrix"].as_array().unwrap().len(), 3);
+    let fitted = s["cost_fitted"].as_f64().unwrap();
+
+    // The model file reads back exactly: eval on the training runs gives the same Eq. 6 cost.
+    let out = omnical(&["eval", "--model", "fit.toml", "sim/train", "--json"], dir.path());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let e: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(e["cost"].as_f64().unwrap(), fitted);
+    assert_eq!(e["runs"].as_array().unwrap().len(), 36);
+}
+
+#[test]
+fn bad_input_names_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("bad.csv"), "t_s,wheel_a_rad_s,x_m,y_m,theta_rad\n0,1,0,0,0\n0.01,abc,,,\n")
+        .unwrap();
+    let out = omnical(&["eval", "bad.csv"], dir.path());
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(
+        String::from_utf8_lossy(&out.stderr).trim(),
+        "error: bad.csv: line 3, column wheel_a_rad_s: \"abc\" is not a number"
+    );
+
+    let out = omnical(&["eval", "missing.csv"], dir.path());
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).starts_with("error: missing.csv: No such file"));
+
+    std::fs::write(dir.path().join("m.toml"), "format = \"omnical-model/1\"\nkinematics = \"ik\"\n").unwrap();
+    std::fs::write(
+        dir.path().join("ok.csv"),
+        "t_s,wheel_a_rad_s,wheel_b_rad_s,wheel_c_rad_s,x_m,y_m,theta_rad\n0,0,0,0,0,0,0\n1,0,0,0,0,0,0\n",
+    )
+    .unwrap();
+    let out = omnical(&["eval", "--model", "m.toml", "ok.csv"], dir.path());
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("m.toml"), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+#[test]
+fn design_model_on_real_optiodom_runs() {
+    let Some(data) = shared_data() else {
+        eprintln!("note: shared OptiOdom data not found; skipped");
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let set = data.join("221220201934");
+    let out = omnical(&["eval", "--model", "design", set.to_str().unwrap(), "--json"], dir.path());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let e: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let runs = e["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 11);
+    let cost = e["cost"].as_f64().unwrap();
+    // Measured: 0.1856 (Eq. 6 over the 11 runs of this set); the robot's position errors stay < 0.5 m.
+    assert!((cost - 0.1856).abs() < 0.001, "cost {cost}");
+    for r in runs {
+        assert!(r["dx_m"].as_f64().unwrap().hypot(r["dy_m"].as_f64().unwrap()) < 0.5);
+    }
+    // Training lowers the cost.
+    let out = omnical(&["train", set.to_str().unwrap(), "--json"], dir.path());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let s: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(s["cost_fitted"].as_f64().unwrap() < 0.5 * s["cost_design"].as_f64().unwrap());
+}
