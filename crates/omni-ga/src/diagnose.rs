@@ -618,7 +618,11 @@ pub fn diagnose(
     }
     for c in ranking.iter().filter(|c| c.absorbed) {
         let vals: Vec<String> = c.implied.iter().map(|p| format!("{} = {:.4} {}", p.name, p.value, p.unit)).collect();
-        findings.push(format!("{}: absorbed by the model (equivalent {})", c.effect, vals.join(", ")));
+        findings.push(format!(
+            "{}: indistinguishable from the model on these runs (absorbed by it, or not excited: equivalent {})",
+            c.effect,
+            vals.join(", ")
+        ));
     }
     let final_costs = ladder.last().map(|r| r.costs.clone()).unwrap_or(costs.clone());
     let mut verdict_text = match &verdict {
