@@ -242,9 +242,19 @@ pub fn costs_of(f: &FittedModel, train: &[Run], held_out: &[Run], every: usize) 
     })
 }
 
+/// The path-residual problem of `model` over `runs`, with no bounds (the diagnosis explores freely).
+fn unbounded<'a>(
+    model: &'a omni_kin::Model,
+    runs: &'a [Run],
+    every: usize,
+) -> Result<CalibrationProblem<'a>, CalibrateError> {
+    let n = model.n_params();
+    let bounds = Bounds::new(vec![f64::NEG_INFINITY; n], vec![f64::INFINITY; n])?;
+    CalibrationProblem::new(model, runs, path_kind(every), bounds)
+}
+
 /// Refit all parameters of `start` on `train` by Levenberg–Marquardt on the path residuals.
 pub fn refit(start: &FittedModel, train: &[Run], every: usize) -> Result<FittedModel, CalibrateError> {
-    let n = start.params.len();
     // Parameters whose null value is the lower end of their range (backlash b ≥ 0) start 2 % inside it,
     // where the model is differentiable.
     let mut x0 = start.params.clone();
@@ -253,8 +263,7 @@ pub fn refit(start: &FittedModel, train: &[Run], every: usize) -> Result<FittedM
             x0[i] = s.lower + 0.02 * (s.upper - s.lower);
         }
     }
-    let bounds = Bounds::new(vec![f64::NEG_INFINITY; n], vec![f64::INFINITY; n])?;
-    let problem = CalibrationProblem::new(&start.model, train, path_kind(every), bounds)?;
+    let problem = unbounded(&start.model, train, every)?;
     let mut lm = LevenbergMarquardt { config: LmConfig::default() };
     let s = lm.minimize(&problem, &x0, &mut NoopObserver)?;
     // LM never returns worse than its start; also never worse than the given parameters.
@@ -432,8 +441,7 @@ fn first_order(
     let ext = current.with_effect(effect.clone());
     let n = ext.params.len();
     let nm = current.params.len();
-    let bounds = Bounds::new(vec![f64::NEG_INFINITY; n], vec![f64::INFINITY; n])?;
-    let problem = CalibrationProblem::new(&ext.model, train, path_kind(every), bounds)?;
+    let problem = unbounded(&ext.model, train, every)?;
     let r = DVector::from_vec(problem.residuals(&ext.params));
     let j = problem.jacobian(&ext.params);
     let jm = j.columns(0, nm).into_owned();
@@ -546,8 +554,7 @@ pub fn diagnose(
                     }
                     // Standard errors of the effect parameters at the refit.
                     let n = fit.params.len();
-                    let b = Bounds::new(vec![f64::NEG_INFINITY; n], vec![f64::INFINITY; n])?;
-                    let p = CalibrationProblem::new(&fit.model, &fit_runs, path_kind(every), b)?;
+                    let p = unbounded(&fit.model, &fit_runs, every)?;
                     let se = standard_errors(&p.jacobian(&fit.params), &p.residuals(&fit.params));
                     let r = fit.model.effect_ranges().last().cloned().unwrap_or(n..n);
                     cand.params = effect
