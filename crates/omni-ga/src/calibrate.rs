@@ -5,7 +5,7 @@
 //! |---|---|---|
 //! | objective | Eq. 6 end-pose cost | path cost (every ground-truth pose, 1 m/rad) |
 //! | odometry | Eq. 1, Euler, 10 ms fixed step | exact arcs, each run's median step |
-//! | search | MATLAB-default GA, 200 individuals, stall 50 generations, tol 1e-6 divided by max(1, \|best\|) | small GA (40 × ≤ 60 generations, scale-aware stall rule) then Levenberg–Marquardt |
+//! | search | MATLAB-default GA, 200 individuals, stall 50 generations, tol 1e-6 divided by max(1, \|best\|) | small GA (24 × ≤ 30 generations, scale-aware stall rule) then Levenberg–Marquardt |
 //! | bounds | ±10 % of each design value (pins zero entries, e.g. m12 = 0, as Eq. 9) | GA: ±10 % of each row's largest magnitude; the polish is unbounded |
 //!
 //! Every fit reports the parameters that ended on a GA bound and those the polish moved outside the box,
@@ -91,12 +91,12 @@ impl Plan {
             },
             Preset::Default => {
                 let mut ga = GaConfig::matlab_defaults(n_params);
-                ga.population = 40;
+                ga.population = 24;
                 ga.elite = 2;
-                ga.stall_generations = 10;
+                ga.stall_generations = 8;
                 ga.function_tolerance = 1e-4;
                 ga.stall_rule = StallRule::Relative;
-                ga.max_generations = 60;
+                ga.max_generations = 30;
                 Plan {
                     preset,
                     objective: CostKind::PATH,
