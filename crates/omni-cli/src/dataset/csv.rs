@@ -252,14 +252,15 @@ pub fn write_run(path: &Path, run: &Run, wheel_names: &[String]) -> Result<(), D
             header.extend(ODOM.iter().map(|s| s.to_string()));
         }
         writeln!(w, "{}", header.join(","))?;
-        // Merge wheel samples, truth and odometry by time (odometry shares the wheel stamps when recorded).
+        // Merge wheel samples, truth and odometry by time: one row per distinct stamp.
         let (t, truth, odom) = (run.wheel_t_s(), run.truth(), run.recorded_odometry());
         let (mut i, mut j, mut k) = (0, 0, 0);
-        let empty3 = ",,";
-        while i < t.len() || j < truth.len() {
+        let pose_cells = |p: &Pose2| format!(",{},{},{}", p.x_m, p.y_m, p.theta_rad);
+        while i < t.len() || j < truth.len() || k < odom.len() {
             let tw = t.get(i).copied().unwrap_or(f64::INFINITY);
             let tg = truth.get(j).map_or(f64::INFINITY, |p| p.t_s);
-            let time = tw.min(tg);
+            let to = odom.get(k).map_or(f64::INFINITY, |p| p.t_s);
+            let time = tw.min(tg).min(to);
             let mut row = time.to_string();
             if tw == time {
                 for v in run.wheel_sample(i) {
@@ -271,21 +272,17 @@ pub fn write_run(path: &Path, run: &Run, wheel_names: &[String]) -> Result<(), D
                 row.push_str(&",".repeat(n_w));
             }
             if tg == time {
-                let p = truth[j].pose;
-                row.push_str(&format!(",{},{},{}", p.x_m, p.y_m, p.theta_rad));
+                row.push_str(&pose_cells(&truth[j].pose));
                 j += 1;
             } else {
-                row.push(',');
-                row.push_str(empty3);
+                row.push_str(",,,");
             }
             if has_odom {
-                if k < odom.len() && odom[k].t_s == time {
-                    let p = odom[k].pose;
-                    row.push_str(&format!(",{},{},{}", p.x_m, p.y_m, p.theta_rad));
+                if to == time {
+                    row.push_str(&pose_cells(&odom[k].pose));
                     k += 1;
                 } else {
-                    row.push(',');
-                    row.push_str(empty3);
+                    row.push_str(",,,");
                 }
             }
             writeln!(w, "{row}")?;
@@ -357,7 +354,10 @@ mod tests {
             ],
             command: Some(Command { v_m_s: 0.2, alpha_rad: 0.523, omega_rad_s: -0.35 }),
             repetition: Some(4),
-            recorded_odometry: vec![],
+            recorded_odometry: vec![
+                StampedPose { t_s: 0.05, pose: Pose2::new(0.01, 0.0, 0.001) },
+                StampedPose { t_s: 0.7, pose: Pose2::new(0.2, -0.1, 0.5) },
+            ],
             wheel_start_rad: vec![0.25, 6.0],
         };
         let run = Run::new(d).unwrap();
