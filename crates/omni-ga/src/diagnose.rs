@@ -652,17 +652,22 @@ pub fn diagnose(
             None => "no catalogued effect explains the remaining error".into(),
         },
     };
+    // The error that would remain: after the recommended effect (or the ladder's last rung).
+    let remaining = match (&verdict, opts.auto) {
+        (Some(_), false) => ranking[0].refit.as_ref().map_or(final_costs.held_out_path, |c| c.held_out_path),
+        _ => final_costs.held_out_path,
+    };
     if let Some(nf) = &noise {
-        let ratio = final_costs.held_out_path / nf.path_rms.max(1e-12);
+        let ratio = remaining / nf.path_rms.max(1e-12);
         if ratio > 3.0 {
             verdict_text.push_str(&format!(
-                "; the remaining held-out error ({:.4} m) is {:.1}× the measurement noise floor ({:.4} m): something physical is still missing",
-                final_costs.held_out_path, ratio, nf.path_rms
+                "; the remaining held-out error ({remaining:.4} m) is {ratio:.1}× the measurement noise floor ({:.4} m): something physical is still missing",
+                nf.path_rms
             ));
         } else {
             verdict_text.push_str(&format!(
-                "; the remaining held-out error ({:.4} m) is within {:.1}× the noise floor ({:.4} m)",
-                final_costs.held_out_path, ratio, nf.path_rms
+                "; the remaining held-out error ({remaining:.4} m) is close to the measurement noise floor ({:.4} m, ratio {ratio:.1})",
+                nf.path_rms
             ));
         }
     }
