@@ -2,6 +2,8 @@
 //!
 //! Every error names the file and, where it applies, the line, topic, message, run and field.
 
+pub mod mcap;
+
 use omni_kin::{KinError, Run};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
