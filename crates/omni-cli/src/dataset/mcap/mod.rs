@@ -163,5 +163,3 @@ pub fn write_run(path: &Path, run: &Run, w: &WriteOptions) -> Result<(), Dataset
     write::write_run(path, run, w)
 }
 
-#[cfg(test)]
-mod tests;

@@ -33,24 +33,6 @@ pub(super) struct TfMessage {
     pub transforms: Vec<TransformStamped>,
 }
 
-/// The schema text, as rosbag2 writes it.
-#[cfg(test)]
-pub(super) fn schema() -> String {
-    use super::common::{HEADER_DEF, MsgDef, QUATERNION_DEF, TIME_DEF, VECTOR3_DEF, schema_text};
-    const TRANSFORM_STAMPED: MsgDef = MsgDef {
-        name: "geometry_msgs/TransformStamped",
-        text: "std_msgs/Header header\nstring child_frame_id\ngeometry_msgs/Transform transform\n",
-    };
-    const TRANSFORM: MsgDef = MsgDef {
-        name: "geometry_msgs/Transform",
-        text: "geometry_msgs/Vector3 translation\ngeometry_msgs/Quaternion rotation\n",
-    };
-    schema_text(
-        "geometry_msgs/TransformStamped[] transforms\n",
-        &[&TRANSFORM_STAMPED, &HEADER_DEF, &TIME_DEF, &TRANSFORM, &VECTOR3_DEF, &QUATERNION_DEF],
-    )
-}
-
 /// One parent → child pair over time.
 #[derive(Debug)]
 pub(super) struct Pair {

@@ -28,16 +28,6 @@ pub(super) fn schema() -> String {
     schema_text(TWIST_DEF.text, &[&VECTOR3_DEF])
 }
 
-/// The TwistStamped schema text, as rosbag2 writes it.
-#[cfg(test)]
-pub(super) fn stamped_schema() -> String {
-    use super::common::{HEADER_DEF, TIME_DEF};
-    schema_text(
-        "std_msgs/Header header\ngeometry_msgs/Twist twist\n",
-        &[&HEADER_DEF, &TIME_DEF, &TWIST_DEF, &VECTOR3_DEF],
-    )
-}
-
 /// The non-zero commands of one topic.
 #[derive(Debug, Default)]
 pub(super) struct Commands {
