@@ -68,6 +68,12 @@ pub struct DataArgs {
     /// MCAP topic of the ground truth (default: the only map/world-frame pose source).
     #[arg(long)]
     pub gt_topic: Option<String>,
+    /// Parent frame of the ground truth in a TF topic (MCAP), e.g. `map`.
+    #[arg(long)]
+    pub gt_parent_frame: Option<String>,
+    /// Child frame of the ground truth in a TF topic (MCAP), e.g. `base_link`.
+    #[arg(long)]
+    pub gt_child_frame: Option<String>,
     /// Cut MCAP files into runs where the robot stands still at least this long. s.
     #[arg(long)]
     pub split: Option<f64>,
@@ -104,7 +110,7 @@ pub enum Command {
         #[arg(long, default_value = "paper")]
         truth: String,
         /// Output format.
-        #[arg(long, value_enum, default_value_t = Format::Csv)]
+        #[arg(long, value_enum, default_value_t = Format::Mcap)]
         format: Format,
         /// No encoder quantisation and no noise.
         #[arg(long)]

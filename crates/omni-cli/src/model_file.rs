@@ -37,12 +37,12 @@ pub const FORMAT: &str = "omnical-model/1";
 #[derive(Debug, Error)]
 pub enum ModelFileError {
     /// The file could not be read or written.
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Io {
         /// The file.
         path: String,
-        /// The OS error.
-        source: std::io::Error,
+        /// The OS error (its text is in this message, so it is not chained again).
+        error: std::io::Error,
     },
     /// The file is not valid TOML of the expected shape.
     #[error("{path}: {message}")]
@@ -220,7 +220,8 @@ impl ModelFile {
 /// Read a model file; `design` and `paper` name the paper's APR-02 design model (Eq. 7).
 pub fn read(path: &Path) -> Result<FittedModel, ModelFileError> {
     let name = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|source| ModelFileError::Io { path: name.clone(), source })?;
+    let text =
+        std::fs::read_to_string(path).map_err(|source| ModelFileError::Io { path: name.clone(), error: source })?;
     parse(&text).map_err(|e| match e {
         ParseFailure::Toml(message) => ModelFileError::Parse { path: name.clone(), message },
         ParseFailure::Model(message) => ModelFileError::Invalid { path: name.clone(), message },

@@ -14,10 +14,32 @@ use std::path::{Path, PathBuf};
 
 /// Load runs from files/folders, printing what was skipped or noticed on stderr.
 pub fn load_runs(paths: &[PathBuf], data: &DataArgs) -> anyhow::Result<Dataset> {
-    let opts = LoadOptions { skip_invalid: data.skip_invalid, ticks_per_rev: data.ticks_per_rev };
+    let mcap = dataset::mcap::McapOptions {
+        wheel_joints: data.joints.clone(),
+        joints_topic: data.joints_topic.clone(),
+        truth_topic: data.gt_topic.clone(),
+        truth_parent_frame: data.gt_parent_frame.clone(),
+        truth_child_frame: data.gt_child_frame.clone(),
+        split: data.split,
+        skip_invalid: data.skip_invalid,
+    };
+    let opts = LoadOptions { skip_invalid: data.skip_invalid, ticks_per_rev: data.ticks_per_rev, mcap };
     let ds = dataset::load(paths, &opts)?;
+    // The same note from many files is printed once, with a count.
+    let mut seen: Vec<(String, String, usize)> = Vec::new();
     for n in &ds.notes {
-        eprintln!("note: {n}");
+        let key = n.split_once(": ").map_or(n.as_str(), |(_, rest)| rest).to_string();
+        match seen.iter_mut().find(|(k, _, _)| *k == key) {
+            Some(entry) => entry.2 += 1,
+            None => seen.push((key, n.clone(), 1)),
+        }
+    }
+    for (_, first, count) in &seen {
+        if *count > 1 {
+            eprintln!("note: {first} (and {} more files)", count - 1);
+        } else {
+            eprintln!("note: {first}");
+        }
     }
     for s in &ds.skipped {
         eprintln!("skipped {}: {}", s.source, s.reason);

@@ -221,7 +221,7 @@ pub fn read_run(path: &Path, ticks_per_rev: Option<f64>) -> Result<Run, DatasetE
         recorded_odometry: odom,
         wheel_start_rad,
     })
-    .map_err(|source| DatasetError::Run { path: path.to_path_buf(), source })
+    .map_err(|source| DatasetError::Run { path: path.to_path_buf(), error: source })
 }
 
 /// Write a run in the omnical CSV format (rad/s columns, shortest round-trip floats), atomically.

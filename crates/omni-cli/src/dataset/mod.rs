@@ -3,6 +3,7 @@
 //! Every error names the file and, where it applies, the line, topic, message, run and field.
 
 pub mod csv;
+pub mod mcap;
 pub mod optiodom;
 
 use omni_kin::{KinError, RobotGeometry, Run};
@@ -29,6 +30,8 @@ pub struct LoadOptions {
     pub skip_invalid: bool,
     /// Encoder ticks per wheel revolution for CSV tick columns (overrides the file).
     pub ticks_per_rev: Option<f64>,
+    /// How to read MCAP bags (topics, joint names, frames, splitting).
+    pub mcap: mcap::McapOptions,
 }
 
 /// Supported inputs, for messages.
@@ -96,8 +99,17 @@ fn load_path(p: &Path, opts: &LoadOptions, ds: &mut Dataset) -> Result<(), Datas
             Ok(r) => ds.runs.push(r),
             Err(e) => keep_or_fail(ds, opts, p, e)?,
         },
-        // MCAP: wired in by the mcap branch.
-        Some("mcap") => keep_or_fail(ds, opts, p, DatasetError::file(p, "MCAP support is not built in yet"))?,
+        Some("mcap") => {
+            let mo = mcap::McapOptions { skip_invalid: opts.skip_invalid, ..opts.mcap.clone() };
+            match mcap::read_file(p, &mo) {
+                Ok(r) => {
+                    ds.runs.extend(r.runs);
+                    ds.notes.extend(r.notes);
+                    ds.skipped.extend(r.skipped.into_iter().map(|(source, reason)| Skipped { source, reason }));
+                }
+                Err(e) => keep_or_fail(ds, opts, p, e)?,
+            }
+        }
         _ => return Err(DatasetError::file(p, format!("unsupported input (expected {SUPPORTED})"))),
     }
     Ok(())
@@ -116,12 +128,12 @@ pub struct Skipped {
 #[derive(Debug, Error)]
 pub enum DatasetError {
     /// The file could not be read or written.
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Io {
         /// The file.
         path: PathBuf,
-        /// The OS error.
-        source: std::io::Error,
+        /// The OS error (its text is in this message, so it is not chained again).
+        error: std::io::Error,
     },
     /// A problem at a place in a file: a CSV line, an MCAP topic and message, a metadata key.
     #[error("{path}: {location}: {message}")]
@@ -142,12 +154,12 @@ pub enum DatasetError {
         message: String,
     },
     /// The data parsed but does not form a valid run.
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Run {
         /// The file.
         path: PathBuf,
         /// The validation error (names run, sample and field).
-        source: KinError,
+        error: KinError,
     },
 }
 
@@ -162,6 +174,6 @@ impl DatasetError {
     }
     /// An I/O error on a file.
     pub fn io(path: &Path, source: std::io::Error) -> Self {
-        Self::Io { path: path.to_path_buf(), source }
+        Self::Io { path: path.to_path_buf(), error: source }
     }
 }

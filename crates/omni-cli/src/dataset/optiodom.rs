@@ -157,7 +157,7 @@ fn read_run(path: &Path, set: &str, rad_per_tick: f64) -> Result<Run, DatasetErr
         truth,
         ..RunData::default()
     })
-    .map_err(|source| DatasetError::Run { path: path.to_path_buf(), source })
+    .map_err(|source| DatasetError::Run { path: path.to_path_buf(), error: source })
 }
 
 #[cfg(test)]

@@ -1,0 +1,662 @@
+//! Reading a bag: one pass over the messages in file order, decoding every channel of a known type as it
+//! comes; then choosing the topics, and building the runs.
+//!
+//! A channel's first problem (an undecodable message, NaN, stamps going backwards, an unsupported encoding)
+//! is kept with the channel and reported only if that channel is used, so a broken topic nobody asked for
+//! does not stop the read.
+
+use super::common::{NS_PER_S, decode, seconds_since};
+use super::joint_state::{self, JointSeries, JointState};
+use super::odometry::{self, ODOM_FRAME, Odometry};
+use super::pose_stamped::{self, PoseStamped, PoseWithCovarianceStamped};
+use super::poses::{PoseSeries, start_heading_in_half_turn};
+use super::tf::{self, TfMessage, TfPairs};
+use super::twist::{self, Commands, TwistStamped};
+use super::{McapOptions, McapRead, split};
+use crate::dataset::DatasetError;
+use mcap::read::{Options, RawMessageStream};
+use omni_kin::{Run, RunData, StampedPose};
+use std::path::Path;
+
+/// Schema encodings whose type names this reader knows. `ros2idl` names the same types with the same CDR
+/// layout as `ros2msg` (rosbag2 writes it for types defined in `.idl` files).
+const SCHEMA_ENCODINGS: [&str; 2] = ["ros2msg", "ros2idl"];
+/// The only message encoding this reader decodes.
+const MESSAGE_ENCODING: &str = "cdr";
+/// Frames that are the robot's own (REP-105): a pose in them is not a ground truth.
+const ROBOT_FRAMES: [&str; 3] = [ODOM_FRAME, "base_link", "base_footprint"];
+/// The types a ground truth can come from.
+const TRUTH_TYPES: &str = "geometry_msgs/msg/PoseStamped, geometry_msgs/msg/PoseWithCovarianceStamped, \
+                           nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage";
+
+/// The message types this reader decodes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum MsgType {
+    JointState,
+    PoseStamped,
+    PoseWithCovarianceStamped,
+    Odometry,
+    Tf,
+    Twist,
+    TwistStamped,
+    Other,
+}
+
+impl MsgType {
+    fn of(schema: &str) -> Self {
+        match schema {
+            joint_state::NAME => Self::JointState,
+            pose_stamped::NAME => Self::PoseStamped,
+            pose_stamped::WITH_COVARIANCE_NAME => Self::PoseWithCovarianceStamped,
+            odometry::NAME => Self::Odometry,
+            tf::NAME => Self::Tf,
+            twist::NAME => Self::Twist,
+            twist::STAMPED_NAME => Self::TwistStamped,
+            _ => Self::Other,
+        }
+    }
+}
+
+/// What a channel has gathered.
+#[derive(Debug)]
+enum Content {
+    Joints(JointSeries),
+    Poses(PoseSeries),
+    Tf(TfPairs),
+    Commands(Commands),
+    Nothing,
+}
+
+/// One topic of the file.
+#[derive(Debug)]
+struct Channel {
+    topic: String,
+    /// Schema name, `""` without a schema.
+    schema: String,
+    msg_type: MsgType,
+    /// Messages seen.
+    messages: usize,
+    content: Content,
+    /// The first problem: the message index (`None` for the channel as a whole) and what is wrong. The
+    /// channel takes nothing after it.
+    problem: Option<(Option<usize>, String)>,
+}
+
+impl Channel {
+    fn new(ch: &mcap::Channel<'_>) -> Self {
+        let (schema, schema_encoding) = ch.schema.as_ref().map_or(("", ""), |s| (s.name.as_str(), s.encoding.as_str()));
+        let msg_type = MsgType::of(schema);
+        let content = match msg_type {
+            MsgType::JointState => Content::Joints(JointSeries::default()),
+            MsgType::PoseStamped | MsgType::PoseWithCovarianceStamped | MsgType::Odometry => {
+                Content::Poses(PoseSeries::default())
+            }
+            MsgType::Tf => Content::Tf(TfPairs::default()),
+            MsgType::Twist | MsgType::TwistStamped => Content::Commands(Commands::default()),
+            MsgType::Other => Content::Nothing,
+        };
+        let problem = (msg_type != MsgType::Other
+            && !(SCHEMA_ENCODINGS.contains(&schema_encoding) && ch.message_encoding == MESSAGE_ENCODING))
+            .then(|| {
+                (
+                    None,
+                    format!(
+                        "schema encoding {schema_encoding:?} with message encoding {:?} is not supported \
+                         (expected schema encoding \"ros2msg\" and message encoding \"cdr\", as rosbag2 records)",
+                        ch.message_encoding
+                    ),
+                )
+            });
+        Self { topic: ch.topic.clone(), schema: schema.to_string(), msg_type, messages: 0, content, problem }
+    }
+
+    /// Takes the next message.
+    fn take(&mut self, data: &[u8], log_time_ns: u64, wheel_joints: &[String]) {
+        let index = self.messages;
+        self.messages += 1;
+        if self.problem.is_some() {
+            return;
+        }
+        let result = match &mut self.content {
+            Content::Joints(s) => decode::<JointState>(data).and_then(|m| s.push(m, wheel_joints)),
+            Content::Poses(s) => match self.msg_type {
+                MsgType::PoseStamped => decode::<PoseStamped>(data).and_then(|m| {
+                    s.check_frame(m.header.frame_id.frame(), None)?;
+                    let p = &m.pose;
+                    s.push(m.header.stamp.ns(), &p.position, &p.orientation, &pose_stamped::FIELDS)
+                }),
+                MsgType::PoseWithCovarianceStamped => decode::<PoseWithCovarianceStamped>(data).and_then(|m| {
+                    s.check_frame(m.header.frame_id.frame(), None)?;
+                    let p = &m.pose.pose;
+                    s.push(m.header.stamp.ns(), &p.position, &p.orientation, &pose_stamped::WITH_COVARIANCE_FIELDS)
+                }),
+                _ => decode::<Odometry>(data).and_then(|m| {
+                    s.check_frame(m.header.frame_id.frame(), Some(m.child_frame_id.frame()))?;
+                    let p = &m.pose.pose;
+                    s.push(m.header.stamp.ns(), &p.position, &p.orientation, &pose_stamped::WITH_COVARIANCE_FIELDS)
+                }),
+            },
+            Content::Tf(pairs) => decode::<TfMessage>(data).map(|m| pairs.push(index, &m)),
+            Content::Commands(c) => match self.msg_type {
+                MsgType::TwistStamped => {
+                    decode::<TwistStamped>(data).and_then(|m| c.push(m.header.stamp.ns(), &m.twist))
+                }
+                _ => decode(data).and_then(|t| c.push(i64::try_from(log_time_ns).unwrap_or(i64::MAX), &t)),
+            },
+            Content::Nothing => Ok(()),
+        };
+        if let Err(e) = result {
+            self.problem = Some((Some(index), e));
+        }
+    }
+
+    /// The frame of the first pose, for pose channels.
+    fn frame(&self) -> Option<&str> {
+        match &self.content {
+            Content::Poses(s) => s.frame.as_deref(),
+            _ => None,
+        }
+    }
+
+    /// Whether this is the robot's own wheel odometry (REP-105: Odometry in frame `odom`).
+    fn is_wheel_odometry(&self) -> bool {
+        self.msg_type == MsgType::Odometry && self.frame() == Some(ODOM_FRAME)
+    }
+
+    /// `/topic (type, N messages, frame "f")`.
+    fn describe(&self) -> String {
+        let schema = if self.schema.is_empty() { "no schema" } else { &self.schema };
+        let plural = if self.messages == 1 { "" } else { "s" };
+        let mut s = format!("{} ({schema}, {} message{plural}", self.topic, self.messages);
+        if let Some(f) = self.frame() {
+            s.push_str(&format!(", frame {f:?}"));
+        }
+        if self.is_wheel_odometry() {
+            s.push_str(": the robot's own odometry");
+        }
+        s.push(')');
+        s
+    }
+
+    /// `/topic (type, frame "f")`, for lists of candidates.
+    fn candidate(&self) -> String {
+        match self.frame() {
+            Some(f) => format!("{} ({}, frame {f:?})", self.topic, self.schema),
+            None => format!("{} ({})", self.topic, self.schema),
+        }
+    }
+}
+
+/// Where the ground truth comes from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Truth {
+    /// A pose channel.
+    Poses(usize),
+    /// A channel's TF pair.
+    Tf(usize, usize),
+}
+
+/// The file being read and its channels, for choosing topics and building errors.
+struct Bag<'a> {
+    path: &'a Path,
+    channels: Vec<Channel>,
+}
+
+/// `topic "/x"`.
+fn topic_location(topic: &str) -> String {
+    format!("topic {topic:?}")
+}
+
+impl Bag<'_> {
+    /// Every topic, sorted, with type and count.
+    fn listing(&self) -> String {
+        let mut all: Vec<&Channel> = self.channels.iter().collect();
+        all.sort_by(|a, b| a.topic.cmp(&b.topic));
+        let list: Vec<String> = all.iter().map(|c| c.describe()).collect();
+        if list.is_empty() { "none".into() } else { list.join(", ") }
+    }
+
+    /// The channel of an explicitly chosen topic.
+    fn find(&self, topic: &str, flag: &str) -> Result<usize, DatasetError> {
+        self.channels.iter().position(|c| c.topic == topic).ok_or_else(|| {
+            DatasetError::file(self.path, format!("{flag} {topic}: no such topic; topics: {}", self.listing()))
+        })
+    }
+
+    /// The channel's problem as an error, if it has one.
+    fn check(&self, i: usize) -> Result<(), DatasetError> {
+        let c = &self.channels[i];
+        match &c.problem {
+            None => Ok(()),
+            Some((None, what)) => Err(DatasetError::at(self.path, topic_location(&c.topic), what.clone())),
+            Some((Some(k), what)) => {
+                Err(DatasetError::at(self.path, format!("topic {:?}, message {k}", c.topic), what.clone()))
+            }
+        }
+    }
+
+    fn joints(&self, opts: &McapOptions) -> Result<usize, DatasetError> {
+        if let Some(topic) = &opts.joints_topic {
+            let i = self.find(topic, "--joints-topic")?;
+            let c = &self.channels[i];
+            if c.msg_type != MsgType::JointState {
+                return Err(DatasetError::at(
+                    self.path,
+                    topic_location(topic),
+                    format!("type {} is not {} (wheel speeds)", schema_or_none(&c.schema), joint_state::NAME),
+                ));
+            }
+            return Ok(i);
+        }
+        let candidates: Vec<usize> =
+            (0..self.channels.len()).filter(|&i| self.channels[i].msg_type == MsgType::JointState).collect();
+        if let [i] = candidates[..] {
+            return Ok(i);
+        }
+        if candidates.is_empty() {
+            return Err(DatasetError::file(
+                self.path,
+                format!("no {} topic for the wheel speeds; topics: {}", joint_state::NAME, self.listing()),
+            ));
+        }
+        let with_wheels: Vec<usize> = candidates
+            .iter()
+            .copied()
+            .filter(|&i| matches!(&self.channels[i].content, Content::Joints(s) if s.len() > 0))
+            .collect();
+        if let [i] = with_wheels[..] {
+            return Ok(i);
+        }
+        let list: Vec<String> = candidates.iter().map(|&i| self.channels[i].describe()).collect();
+        Err(DatasetError::file(
+            self.path,
+            format!(
+                "cannot tell which {} topic has the wheel joints ({}): {}; choose one with --joints-topic",
+                joint_state::NAME,
+                opts.wheel_joints.join(", "),
+                list.join(", ")
+            ),
+        ))
+    }
+
+    /// Why channel `i` cannot be the ground truth under `opts`, if it cannot.
+    fn truth_mismatch(&self, i: usize, opts: &McapOptions) -> Option<String> {
+        let c = &self.channels[i];
+        let Content::Poses(s) = &c.content else { return None };
+        let frame = s.frame.as_deref()?;
+        if c.is_wheel_odometry() {
+            return Some(format!(
+                "is the robot's own wheel odometry (frame {ODOM_FRAME:?}, REP-105): the model under test, never \
+                 ground truth; choose a map, world or motion-capture source"
+            ));
+        }
+        if let Some(p) = &opts.truth_parent_frame
+            && p != frame
+        {
+            return Some(format!("has frame {frame:?}, but --gt-parent-frame is {p:?}"));
+        }
+        if let (Some(want), Some(child)) = (&opts.truth_child_frame, &s.child)
+            && want != child
+        {
+            return Some(format!("has child frame {child:?}, but --gt-child-frame is {want:?}"));
+        }
+        None
+    }
+
+    fn truth(&self, opts: &McapOptions) -> Result<Truth, DatasetError> {
+        let (parent, child) = (opts.truth_parent_frame.as_deref(), opts.truth_child_frame.as_deref());
+        if let Some(topic) = &opts.truth_topic {
+            let i = self.find(topic, "--gt-topic")?;
+            let c = &self.channels[i];
+            return match (&c.content, c.msg_type) {
+                (Content::Tf(pairs), _) => {
+                    self.check(i)?;
+                    let found = pairs.candidates(parent, child);
+                    match found[..] {
+                        [k] => Ok(Truth::Tf(i, k)),
+                        _ => {
+                            let all: Vec<String> = pairs
+                                .pairs
+                                .iter()
+                                .map(|p| format!("{} → {} ({} poses)", p.parent, p.child, p.poses.t_ns.len()))
+                                .collect();
+                            let what = if found.is_empty() { "no transform" } else { "several transforms" };
+                            Err(DatasetError::at(
+                                self.path,
+                                topic_location(topic),
+                                format!(
+                                    "{what} could be the ground truth (transforms: {}); choose one with \
+                                     --gt-parent-frame and --gt-child-frame",
+                                    if all.is_empty() { "none".into() } else { all.join(", ") }
+                                ),
+                            ))
+                        }
+                    }
+                }
+                (Content::Poses(_), _) => match self.truth_mismatch(i, opts) {
+                    Some(why) => Err(DatasetError::at(self.path, topic_location(topic), why)),
+                    None => Ok(Truth::Poses(i)),
+                },
+                _ => Err(DatasetError::at(
+                    self.path,
+                    topic_location(topic),
+                    format!("type {} cannot be ground truth (supported: {TRUTH_TYPES})", schema_or_none(&c.schema)),
+                )),
+            };
+        }
+        let mut found: Vec<(Truth, String)> = Vec::new();
+        for (i, c) in self.channels.iter().enumerate() {
+            if c.messages == 0 {
+                continue;
+            }
+            match &c.content {
+                Content::Poses(_) => {
+                    let robot_frame = c.frame().is_some_and(|f| ROBOT_FRAMES.contains(&f));
+                    if !robot_frame && self.truth_mismatch(i, opts).is_none() {
+                        found.push((Truth::Poses(i), c.candidate()));
+                    }
+                }
+                Content::Tf(pairs) => {
+                    for k in pairs.candidates(parent, child) {
+                        let p = &pairs.pairs[k];
+                        found.push((Truth::Tf(i, k), format!("{} ({} → {})", c.topic, p.parent, p.child)));
+                    }
+                }
+                _ => {}
+            }
+        }
+        match &found[..] {
+            [(t, _)] => Ok(*t),
+            [] => Err(DatasetError::file(
+                self.path,
+                format!(
+                    "no ground truth: no {TRUTH_TYPES} source outside the robot's frames ({}){}; topics: {}",
+                    ROBOT_FRAMES.join(", "),
+                    match (parent, child) {
+                        (None, None) => String::new(),
+                        _ => format!(
+                            " matching --gt-parent-frame {:?} --gt-child-frame {:?}",
+                            parent.unwrap_or("(any)"),
+                            child.unwrap_or("(any)")
+                        ),
+                    },
+                    self.listing()
+                ),
+            )),
+            _ => {
+                let list: Vec<&str> = found.iter().map(|(_, d)| d.as_str()).collect();
+                Err(DatasetError::file(
+                    self.path,
+                    format!(
+                        "several ground-truth sources: {}; choose one with --gt-topic (for a TF topic, also \
+                         --gt-parent-frame and --gt-child-frame)",
+                        list.join(", ")
+                    ),
+                ))
+            }
+        }
+    }
+
+    /// The robot's recorded wheel odometry: `/odom` if it is one, else the only one.
+    fn recorded_odometry(&self, notes: &mut Vec<String>) -> Option<usize> {
+        let all: Vec<usize> = (0..self.channels.len()).filter(|&i| self.channels[i].is_wheel_odometry()).collect();
+        let chosen = match all[..] {
+            [] => return None,
+            [i] => i,
+            _ => match all.iter().find(|&&i| self.channels[i].topic == "/odom") {
+                Some(&i) => i,
+                None => {
+                    let list: Vec<&str> = all.iter().map(|&i| self.channels[i].topic.as_str()).collect();
+                    notes.push(format!(
+                        "{}: several wheel-odometry topics ({}): none kept as recorded odometry",
+                        self.path.display(),
+                        list.join(", ")
+                    ));
+                    return None;
+                }
+            },
+        };
+        self.usable(chosen, "recorded odometry", notes)
+    }
+
+    /// The command topic: `/cmd_vel` if it is one, else the only one.
+    fn commands(&self, notes: &mut Vec<String>) -> Option<usize> {
+        let is_cmd = |c: &Channel| matches!(c.msg_type, MsgType::Twist | MsgType::TwistStamped);
+        let all: Vec<usize> = (0..self.channels.len()).filter(|&i| is_cmd(&self.channels[i])).collect();
+        let chosen = match all[..] {
+            [] => return None,
+            [i] => i,
+            _ => match all.iter().find(|&&i| self.channels[i].topic == "/cmd_vel") {
+                Some(&i) => i,
+                None => {
+                    let list: Vec<&str> = all.iter().map(|&i| self.channels[i].topic.as_str()).collect();
+                    notes.push(format!(
+                        "{}: several command topics ({}): no command kept",
+                        self.path.display(),
+                        list.join(", ")
+                    ));
+                    return None;
+                }
+            },
+        };
+        let chosen = self.usable(chosen, "the command", notes)?;
+        if self.channels[chosen].msg_type == MsgType::Twist {
+            notes.push(format!(
+                "{}: topic {:?} ({}) has no header: command times are log times",
+                self.path.display(),
+                self.channels[chosen].topic,
+                twist::NAME
+            ));
+        }
+        Some(chosen)
+    }
+
+    /// `Some(i)` if channel `i` has no problem; otherwise a note that `what` is left out.
+    fn usable(&self, i: usize, what: &str, notes: &mut Vec<String>) -> Option<usize> {
+        match self.check(i) {
+            Ok(()) => Some(i),
+            Err(e) => {
+                notes.push(format!("{e} ({what} is left out)"));
+                None
+            }
+        }
+    }
+
+    /// Moves a channel's content out.
+    fn take(&mut self, i: usize) -> Content {
+        std::mem::replace(&mut self.channels[i].content, Content::Nothing)
+    }
+}
+
+fn schema_or_none(schema: &str) -> &str {
+    if schema.is_empty() { "(no schema)" } else { schema }
+}
+
+/// An MCAP reading error, in words.
+fn mcap_error(path: &Path, e: mcap::McapError) -> DatasetError {
+    use mcap::McapError as E;
+    let what = match e {
+        E::UnexpectedEof | E::BadMagic | E::BadFooter => {
+            "the file is truncated: it ends in the middle of a record, before the MCAP end marker (was the \
+             recording interrupted?)"
+                .to_string()
+        }
+        E::BadChunkCrc { saved, calculated } => {
+            format!("the file is corrupted: a chunk's CRC is {calculated:08x}, but {saved:08x} was recorded")
+        }
+        e => format!("the file is damaged: {e}"),
+    };
+    DatasetError::file(path, what)
+}
+
+/// Decodes every channel of the file.
+fn scan<'a>(path: &'a Path, buf: &[u8], wheel_joints: &[String]) -> Result<Bag<'a>, DatasetError> {
+    if !buf.starts_with(mcap::MAGIC) {
+        return Err(DatasetError::file(path, "not an MCAP file (it does not start with the MCAP magic bytes)"));
+    }
+    let mut channels = Vec::new();
+    let mut ids: Vec<u16> = Vec::new();
+    // The summary lists every channel, also those without messages. A damaged summary is ignored here: the
+    // pass over the messages below reports what is wrong with the file.
+    if let Ok(Some(summary)) = mcap::Summary::read(buf) {
+        let mut all: Vec<_> = summary.channels.values().collect();
+        all.sort_by_key(|c| c.id);
+        for c in all {
+            ids.push(c.id);
+            channels.push(Channel::new(c));
+        }
+    }
+    let mut stream =
+        RawMessageStream::new_with_options(buf, Options::ValidateChunkCrcs.into()).map_err(|e| mcap_error(path, e))?;
+    while let Some(m) = stream.next() {
+        let m = m.map_err(|e| mcap_error(path, e))?;
+        let id = m.header.channel_id;
+        let i = match ids.iter().position(|&c| c == id) {
+            Some(i) => i,
+            None => {
+                let c = stream.get_channel(id).ok_or_else(|| {
+                    DatasetError::file(
+                        path,
+                        format!("a message refers to channel {id}, which the file does not define"),
+                    )
+                })?;
+                ids.push(id);
+                channels.push(Channel::new(&c));
+                channels.len() - 1
+            }
+        };
+        channels[i].take(&m.data, m.header.log_time, wheel_joints);
+    }
+    Ok(Bag { path, channels })
+}
+
+/// Reads one bag. See the module docs of [`super`].
+pub(super) fn read_file(path: &Path, opts: &McapOptions) -> Result<McapRead, DatasetError> {
+    let buf = std::fs::read(path).map_err(|e| DatasetError::io(path, e))?;
+    let mut bag = scan(path, &buf, &opts.wheel_joints)?;
+    let mut notes = Vec::new();
+
+    let j = bag.joints(opts)?;
+    bag.check(j)?;
+    let truth_src = bag.truth(opts)?;
+    let truth_ch = match truth_src {
+        Truth::Poses(i) | Truth::Tf(i, _) => i,
+    };
+    bag.check(truth_ch)?;
+    let odom = bag.recorded_odometry(&mut notes).filter(|&i| i != truth_ch);
+    let cmd = bag.commands(&mut notes);
+
+    // Wheels.
+    let joints_topic = bag.channels[j].topic.clone();
+    let Content::Joints(series) = bag.take(j) else { unreachable!("joints() returns JointState channels") };
+    let Some(&first_ns) = series.t_ns.first() else {
+        return Err(DatasetError::at(path, topic_location(&joints_topic), "has no messages (empty run)"));
+    };
+    let origin_s = first_ns.div_euclid(NS_PER_S);
+    let t_s: Vec<f64> = series.t_ns.iter().map(|&t| seconds_since(t, origin_s)).collect();
+    let wheels = series
+        .finish(&opts.wheel_joints, &t_s)
+        .map_err(|(k, what)| DatasetError::at(path, format!("topic {joints_topic:?}, message {k}"), what))?;
+    if let Some(without) = wheels.differentiated {
+        notes.push(format!(
+            "{}: topic {joints_topic:?}: {without} of {} messages have no velocity: wheel speeds are differences \
+             of position over header.stamp",
+            path.display(),
+            t_s.len()
+        ));
+    }
+
+    // Ground truth, trimmed to the wheel data's span.
+    let truth_topic = bag.channels[truth_ch].topic.clone();
+    let poses = match (truth_src, bag.take(truth_ch)) {
+        (Truth::Tf(_, k), Content::Tf(mut pairs)) => {
+            let pair = pairs.pairs.swap_remove(k);
+            if let Some((m, what)) = pair.problem {
+                return Err(DatasetError::at(path, format!("topic {truth_topic:?}, message {m}"), what));
+            }
+            pair.poses
+        }
+        (_, Content::Poses(p)) => p,
+        _ => unreachable!("truth() returns pose channels or TF pairs"),
+    };
+    let all_truth = poses.stamped(origin_s);
+    let (w0, w1) = (t_s[0], t_s[t_s.len() - 1]);
+    let truth: Vec<StampedPose> = all_truth.iter().copied().filter(|p| (w0..=w1).contains(&p.t_s)).collect();
+    if truth.is_empty() {
+        let span = match (all_truth.first(), all_truth.last()) {
+            (Some(a), Some(b)) => format!("spans {}..{} s", a.t_s, b.t_s),
+            _ => "has no poses".to_string(),
+        };
+        return Err(DatasetError::file(
+            path,
+            format!(
+                "wheel data on {joints_topic:?} spans {w0}..{w1} s but the ground truth on {truth_topic:?} {span}: \
+                 no ground-truth pose lies within the wheel data"
+            ),
+        ));
+    }
+    let dropped = all_truth.len() - truth.len();
+    if dropped > 0 {
+        notes.push(format!(
+            "{}: topic {truth_topic:?}: dropped {dropped} ground-truth poses outside the wheel data's time span \
+             ({w0}..{w1} s)",
+            path.display()
+        ));
+    }
+    let odometry: Vec<StampedPose> = match odom.map(|i| bag.take(i)) {
+        Some(Content::Poses(p)) => p.stamped(origin_s),
+        _ => Vec::new(),
+    };
+    let commands = match cmd.map(|i| bag.take(i)) {
+        Some(Content::Commands(c)) => Some(c),
+        _ => None,
+    };
+
+    // Runs.
+    let n_wheels = opts.wheel_joints.len();
+    let stem = path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned());
+    let pieces = match opts.split {
+        Some(min_s) => split::pieces(&t_s, &wheels.rad_s, n_wheels, &truth, min_s),
+        None => vec![(0, t_s.len() - 1)],
+    };
+    let mut out = McapRead { runs: Vec::new(), notes, skipped: Vec::new(), origin_s };
+    let last_piece = pieces.len() - 1;
+    for (p, &(lo, hi)) in pieces.iter().enumerate() {
+        let name = if opts.split.is_some() { format!("{stem}#{}", p + 1) } else { stem.clone() };
+        let span = t_s[lo]..=t_s[hi];
+        let within = |poses: &[StampedPose]| {
+            let mut v: Vec<StampedPose> = poses.iter().copied().filter(|q| span.contains(&q.t_s)).collect();
+            start_heading_in_half_turn(&mut v);
+            v
+        };
+        // Commands tile the whole time line: the first run also takes those before it, the last those after.
+        let from_ns = if p == 0 { i64::MIN } else { wheels.t_ns[lo] };
+        let to_ns = if p == last_piece { i64::MAX } else { wheels.t_ns[hi] };
+        let data = RunData {
+            name: name.clone(),
+            wheel_t_s: t_s[lo..=hi].to_vec(),
+            wheel_rad_s: wheels.rad_s[lo * n_wheels..(hi + 1) * n_wheels].to_vec(),
+            n_wheels,
+            truth: within(&truth),
+            command: commands.as_ref().and_then(|c| c.first_in(from_ns, to_ns)),
+            repetition: None,
+            recorded_odometry: within(&odometry),
+            wheel_start_rad: wheels
+                .position
+                .as_ref()
+                .map(|pos| pos[lo * n_wheels..(lo + 1) * n_wheels].to_vec())
+                .unwrap_or_default(),
+        };
+        match Run::new(data) {
+            Ok(run) => out.runs.push(run),
+            Err(source) => {
+                let e = DatasetError::Run { path: path.to_path_buf(), error: source };
+                if !opts.skip_invalid {
+                    return Err(e);
+                }
+                out.skipped.push((name, e.to_string()));
+            }
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,212 @@
+//! Writing a run as a ROS 2 bag (one bare `.mcap`), laid out as rosbag2 records one: profile `ros2`,
+//! `ros2msg` schemas with their dependencies, little-endian CDR messages, zstd chunks with CRCs, a summary
+//! with chunk and message indexes. Messages are written in time order; log time = header stamp.
+
+use super::WriteOptions;
+use super::common::{Header, Pose, RosString, Time, Twist, encode};
+use super::joint_state::{self, JointState};
+use super::odometry::{self, BASE_FRAME, ODOM_FRAME, Odometry, TwistWithCovariance};
+use super::pose_stamped::{self, PoseStamped, PoseWithCovariance};
+use super::twist::{self, twist_of};
+use crate::dataset::DatasetError;
+use omni_kin::{Run, StampedPose};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// The topics written, in channel order.
+pub(super) const JOINTS_TOPIC: &str = "/joint_states";
+/// Ground truth.
+pub(super) const TRUTH_TOPIC: &str = "/ground_truth/pose";
+/// The command.
+pub(super) const COMMAND_TOPIC: &str = "/cmd_vel";
+/// The robot's own (design) odometry.
+pub(super) const ODOM_TOPIC: &str = "/odom";
+/// The world frame of the ground truth.
+pub(super) const TRUTH_FRAME: &str = "map";
+
+/// One message waiting to be written: log time (ns), channel slot, CDR bytes.
+type Pending = (u64, usize, Vec<u8>);
+
+/// Collects the messages of one file.
+struct Messages<'a> {
+    path: &'a Path,
+    origin_s: i64,
+    out: Vec<Pending>,
+}
+
+impl Messages<'_> {
+    /// The stamp of `t_s` seconds after the origin, rounded to the nanosecond.
+    fn stamp(&self, t_s: f64) -> Result<Time, DatasetError> {
+        let ns = self.origin_s.checked_mul(super::common::NS_PER_S).and_then(|o| {
+            let dt = (t_s * 1e9).round();
+            (dt.abs() < 9e18).then(|| o.checked_add(dt as i64)).flatten()
+        });
+        ns.filter(|&ns| ns >= 0).and_then(Time::from_ns).ok_or_else(|| {
+            DatasetError::file(
+                self.path,
+                format!("time {t_s} s after the origin {} s is not a valid ROS 2 stamp", self.origin_s),
+            )
+        })
+    }
+
+    fn push<T: Serialize>(&mut self, stamp: Time, slot: usize, msg: &T) -> Result<(), DatasetError> {
+        let bytes = encode(msg).map_err(|e| DatasetError::file(self.path, e))?;
+        // `stamp` was checked to be non-negative.
+        self.out.push((u64::try_from(stamp.ns()).unwrap_or_default(), slot, bytes));
+        Ok(())
+    }
+}
+
+fn header(stamp: Time, frame: &str) -> Header {
+    Header { stamp, frame_id: RosString(frame.to_string()) }
+}
+
+/// Body-frame twists of a pose sequence by backward differences (the first takes the second's).
+fn body_twists(poses: &[StampedPose]) -> Vec<Twist> {
+    let mut out: Vec<Twist> = poses
+        .windows(2)
+        .map(|w| {
+            let (a, b) = (w[0].pose, w[1].pose);
+            let dt = w[1].t_s - w[0].t_s;
+            let (s, c) = a.theta_rad.sin_cos();
+            let (dx, dy) = (b.x_m - a.x_m, b.y_m - a.y_m);
+            let mut t = Twist::default();
+            t.linear.x = (c * dx + s * dy) / dt;
+            t.linear.y = (-s * dx + c * dy) / dt;
+            t.angular.z = (b.theta_rad - a.theta_rad) / dt;
+            t
+        })
+        .collect();
+    if let Some(&first) = out.first() {
+        out.insert(0, first);
+    }
+    out.resize(poses.len(), Twist::default());
+    out
+}
+
+/// Writes the file's messages. Channel slots: 0 joints, 1 truth, 2 command, 3 odometry.
+fn messages(path: &Path, run: &Run, w: &WriteOptions) -> Result<Vec<Pending>, DatasetError> {
+    let n = run.n_wheels();
+    let mut m = Messages { path, origin_s: w.origin_s, out: Vec::new() };
+    let names: Vec<RosString> = w.wheel_joints.iter().map(|s| RosString(s.clone())).collect();
+    let mut position = if run.wheel_start_rad().is_empty() { vec![0.0; n] } else { run.wheel_start_rad().to_vec() };
+    let t = run.wheel_t_s();
+    for k in 0..run.n_samples() {
+        let v = run.wheel_sample(k);
+        if k > 0 {
+            let dt = t[k] - t[k - 1];
+            position.iter_mut().zip(v).for_each(|(p, v)| *p += v * dt);
+        }
+        let msg = JointState {
+            header: header(m.stamp(t[k])?, ""),
+            name: names.clone(),
+            position: position.clone(),
+            velocity: v.to_vec(),
+            effort: Vec::new(),
+        };
+        m.push(msg.header.stamp, 0, &msg)?;
+    }
+    for p in run.truth() {
+        let msg = PoseStamped { header: header(m.stamp(p.t_s)?, TRUTH_FRAME), pose: planar(p) };
+        m.push(msg.header.stamp, 1, &msg)?;
+    }
+    if let Some(c) = run.command() {
+        m.push(m.stamp(t[0])?, 2, &twist_of(&c))?;
+        m.push(m.stamp(t[t.len() - 1])?, 2, &Twist::default())?;
+    }
+    if let Some(odom) = &w.design_odometry {
+        for (p, tw) in odom.iter().zip(body_twists(odom)) {
+            let msg = Odometry {
+                header: header(m.stamp(p.t_s)?, ODOM_FRAME),
+                child_frame_id: RosString(BASE_FRAME.to_string()),
+                pose: PoseWithCovariance { pose: planar(p), covariance: Default::default() },
+                twist: TwistWithCovariance { twist: tw, covariance: Default::default() },
+            };
+            m.push(msg.header.stamp, 3, &msg)?;
+        }
+    }
+    // Time order; at equal times, channel order (joints first), and message order within a channel.
+    m.out.sort_by_key(|&(t, slot, _)| (t, slot));
+    Ok(m.out)
+}
+
+fn planar(p: &StampedPose) -> Pose {
+    Pose::planar(p.pose.x_m, p.pose.y_m, p.pose.theta_rad)
+}
+
+/// A temporary name beside `path`, unique within this process.
+fn temp_path(path: &Path) -> PathBuf {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let name = path.file_name().map_or_else(|| "bag".into(), |n| n.to_string_lossy().into_owned());
+    let k = COUNTER.fetch_add(1, Ordering::Relaxed);
+    path.with_file_name(format!(".{name}.{}-{k}.tmp", std::process::id()))
+}
+
+/// Writes `run` to `path` atomically (a temporary file beside it, then a rename).
+pub(super) fn write_run(path: &Path, run: &Run, w: &WriteOptions) -> Result<(), DatasetError> {
+    if w.wheel_joints.len() != run.n_wheels() {
+        return Err(DatasetError::file(
+            path,
+            format!(
+                "run {} has {} wheels but {} wheel joint names were given",
+                run.name(),
+                run.n_wheels(),
+                w.wheel_joints.len()
+            ),
+        ));
+    }
+    let pending = messages(path, run, w)?;
+    let tmp = temp_path(path);
+    let result = write_file(&tmp, run, w, &pending)
+        .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| DatasetError::io(path, e)));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+fn write_file(tmp: &Path, run: &Run, w: &WriteOptions, pending: &[Pending]) -> Result<(), DatasetError> {
+    let mcap_err = |e: mcap::McapError| DatasetError::file(tmp, format!("cannot write MCAP: {e}"));
+    let file = File::create(tmp).map_err(|e| DatasetError::io(tmp, e))?;
+    let mut out = mcap::WriteOptions::new()
+        .profile("ros2")
+        .library(concat!("omnical-", env!("CARGO_PKG_VERSION")))
+        .compression(Some(mcap::Compression::Zstd))
+        .compression_threads(0)
+        .create(BufWriter::new(file))
+        .map_err(mcap_err)?;
+    let qos = BTreeMap::from([("offered_qos_profiles".to_string(), String::new())]);
+    let mut channel_ids = Vec::new();
+    for (name, text, topic, used) in [
+        (joint_state::NAME, joint_state::schema(), JOINTS_TOPIC, true),
+        (pose_stamped::NAME, pose_stamped::schema(), TRUTH_TOPIC, true),
+        (twist::NAME, twist::schema(), COMMAND_TOPIC, run.command().is_some()),
+        (odometry::NAME, odometry::schema(), ODOM_TOPIC, w.design_odometry.is_some()),
+    ] {
+        let id = if used {
+            let schema = out.add_schema(name, "ros2msg", text.as_bytes()).map_err(mcap_err)?;
+            out.add_channel(schema, topic, "cdr", &qos).map_err(mcap_err)?
+        } else {
+            0
+        };
+        channel_ids.push(id);
+    }
+    let mut sequence = vec![0u32; channel_ids.len()];
+    for (log_time, slot, bytes) in pending {
+        sequence[*slot] += 1;
+        let header = mcap::records::MessageHeader {
+            channel_id: channel_ids[*slot],
+            sequence: sequence[*slot],
+            log_time: *log_time,
+            publish_time: *log_time,
+        };
+        out.write_to_known_channel(&header, bytes).map_err(mcap_err)?;
+    }
+    out.finish().map_err(mcap_err)?;
+    let file = out.into_inner().into_inner().map_err(|e| DatasetError::io(tmp, e.into_error()))?;
+    file.sync_all().map_err(|e| DatasetError::io(tmp, e))
+}

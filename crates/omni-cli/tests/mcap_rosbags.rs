@@ -1,0 +1,398 @@
+//! The MCAP reader and writer against a real ROS 2 bag client: Python `rosbags` writes the fixture bags
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+//! (`tests/mcap/make_bags.py`, with the values it wrote in `expected.json`), and reads back what we write.
+//!
+//! The interpreter is `$OMNICAL_PYTHON` (default `python3`). Without `rosbags`, `mcap` and `numpy` there,
+//! each test prints a skip note and passes; CI installs them.
+
+use omni_cli::dataset::mcap::{McapOptions, McapRead, WriteOptions, read_file, write_run};
+use omni_kin::{Command as RunCommand, Pose2, Run, RunData, StampedPose};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+
+fn python() -> String {
+    std::env::var("OMNICAL_PYTHON").unwrap_or_else(|_| "python3".into())
+}
+
+fn script() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/mcap/make_bags.py")
+}
+
+/// The generated bags and their expected values, or `None` (after a skip note) without rosbags.
+fn fixtures() -> Option<&'static (PathBuf, Value)> {
+    static FIXTURES: OnceLock<Option<(PathBuf, Value)>> = OnceLock::new();
+    FIXTURES
+        .get_or_init(|| {
+            let ok = Command::new(python())
+                .args(["-c", "import rosbags, mcap, numpy"])
+                .output()
+                .is_ok_and(|o| o.status.success());
+            if !ok {
+                eprintln!(
+                    "SKIPPED: {} cannot import rosbags, mcap and numpy (pip install rosbags mcap numpy, or point \
+                     OMNICAL_PYTHON at a Python that has them)",
+                    python()
+                );
+                return None;
+            }
+            let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("mcap_rosbags");
+            let _ = std::fs::remove_dir_all(&dir);
+            let out = Command::new(python()).arg(script()).arg(&dir).output().unwrap();
+            assert!(out.status.success(), "make_bags.py failed: {}", String::from_utf8_lossy(&out.stderr));
+            let expected = serde_json::from_str(&std::fs::read_to_string(dir.join("expected.json")).unwrap()).unwrap();
+            Some((dir, expected))
+        })
+        .as_ref()
+}
+
+macro_rules! fixtures_or_skip {
+    () => {
+        match fixtures() {
+            Some((dir, expected)) => (dir, expected),
+            None => return,
+        }
+    };
+}
+
+fn floats(v: &Value) -> Vec<f64> {
+    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+}
+
+fn close(got: &[f64], want: &[f64], tol: f64, what: &str) {
+    assert_eq!(got.len(), want.len(), "{what}: lengths differ");
+    for (i, (g, w)) in got.iter().zip(want).enumerate() {
+        assert!((g - w).abs() <= tol, "{what}[{i}]: got {g}, expected {w}");
+    }
+}
+
+/// `[[t, x, y, theta], ...]` against poses.
+fn close_poses(got: &[StampedPose], want: &Value, what: &str) {
+    let want: Vec<Vec<f64>> = want.as_array().unwrap().iter().map(floats).collect();
+    assert_eq!(got.len(), want.len(), "{what}: lengths differ");
+    for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+        let g = [g.t_s, g.pose.x_m, g.pose.y_m, g.pose.theta_rad];
+        close(&g, w, 1e-12, &format!("{what}[{i}] (t, x, y, theta)"));
+    }
+}
+
+/// Checks a run against one expected entry (keys that are absent are not checked).
+fn check_run(run: &Run, want: &Value) {
+    close(run.wheel_t_s(), &floats(&want["wheel_t_s"]), 1e-12, "wheel_t_s");
+    close(run.wheel_rad_s(), &floats(&want["wheel_rad_s"]), 1e-12, "wheel_rad_s");
+    close_poses(run.truth(), &want["truth"], "truth");
+    if let Some(s) = want.get("wheel_start_rad") {
+        close(run.wheel_start_rad(), &floats(s), 1e-15, "wheel_start_rad");
+    }
+    if let Some(c) = want.get("command") {
+        let c = floats(c);
+        let got = run.command().unwrap();
+        close(&[got.v_m_s, got.alpha_rad, got.omega_rad_s], &c, 1e-12, "command (v, alpha, omega)");
+    }
+    if let Some(o) = want.get("recorded_odometry") {
+        close_poses(run.recorded_odometry(), o, "recorded_odometry");
+    }
+}
+
+fn read(dir: &Path, name: &str, opts: &McapOptions) -> Result<McapRead, String> {
+    read_file(&dir.join(format!("{name}.mcap")), opts).map_err(|e| e.to_string())
+}
+
+fn read_ok(dir: &Path, name: &str) -> McapRead {
+    read(dir, name, &McapOptions::default()).unwrap()
+}
+
+/// The error reading `name`, without the leading `<path>: `.
+fn error(dir: &Path, name: &str, opts: &McapOptions) -> String {
+    let e = read(dir, name, opts).unwrap_err();
+    let prefix = format!("{}: ", dir.join(format!("{name}.mcap")).display());
+    e.strip_prefix(&prefix).unwrap_or_else(|| panic!("{e:?} does not start with the path")).to_string()
+}
+
+#[test]
+fn normal_and_zstd_bags_give_the_values_written() {
+    let (dir, expected) = fixtures_or_skip!();
+    for name in ["normal", "zstd"] {
+        let r = read_ok(dir, name);
+        assert_eq!(r.origin_s, 1_700_000_000);
+        assert_eq!(r.runs.len(), 1);
+        assert_eq!(r.runs[0].name(), name);
+        check_run(&r.runs[0], &expected[name]);
+        // The heading crosses ±π and is unwrapped: it ends near -2.5 + 2 * 3 = 3.5 rad.
+        assert!((r.runs[0].end().pose.theta_rad - 3.5).abs() < 1e-9);
+        let path = dir.join(format!("{name}.mcap"));
+        assert_eq!(
+            r.notes,
+            [
+                format!(
+                    "{}: topic \"/cmd_vel\" (geometry_msgs/msg/Twist) has no header: command times are log times",
+                    path.display()
+                ),
+                format!(
+                    "{}: topic \"/mocap/pose\": dropped 4 ground-truth poses outside the wheel data's time span \
+                     (0.25..3.25 s)",
+                    path.display()
+                ),
+            ]
+        );
+        assert_eq!(expected[name]["truth_dropped"], 4);
+    }
+}
+
+#[test]
+fn split_cuts_at_the_standstill() {
+    let (dir, expected) = fixtures_or_skip!();
+    let want = &expected["split"];
+    let r = read(dir, "split", &McapOptions { split: Some(1.0), ..Default::default() }).unwrap();
+    let names: Vec<&str> = r.runs.iter().map(|r| r.name()).collect();
+    assert_eq!(names, ["split#1", "split#2"]);
+    for (run, w) in r.runs.iter().zip(want["runs"].as_array().unwrap()) {
+        check_run(run, w);
+    }
+    let still = floats(&want["standstill_s"]);
+    let cut = r.runs[0].wheel_t_s().last().unwrap();
+    assert!(still[0] < *cut && *cut < still[1]);
+    assert_eq!(r.runs[1].wheel_t_s()[0], *cut);
+    // A standstill shorter than asked for is no cut; without `split` the file is one run.
+    let r = read(dir, "split", &McapOptions { split: Some(2.5), ..Default::default() }).unwrap();
+    assert_eq!(r.runs.iter().map(|r| r.name()).collect::<Vec<_>>(), ["split#1"]);
+    let r = read_ok(dir, "split");
+    assert_eq!(r.runs.iter().map(|r| r.name()).collect::<Vec<_>>(), ["split"]);
+    assert_eq!(r.runs[0].command(), Some(RunCommand { v_m_s: 0.2, alpha_rad: 0.0, omega_rad_s: 0.5 }));
+    assert!(r.notes.is_empty(), "{:?}", r.notes);
+}
+
+#[test]
+fn skip_invalid_collects_a_bad_piece() {
+    let (dir, expected) = fixtures_or_skip!();
+    let path = dir.join("split_gap.mcap");
+    let reason =
+        format!("{}: run split_gap#2: ground-truth poses has 1 entries, at least 2 are needed", path.display());
+    let opts = McapOptions { split: Some(1.0), ..Default::default() };
+    assert_eq!(read(dir, "split_gap", &opts).unwrap_err(), reason);
+    let r = read(dir, "split_gap", &McapOptions { skip_invalid: true, ..opts }).unwrap();
+    assert_eq!(r.runs.len(), 1);
+    check_run(&r.runs[0], &expected["split_gap"]["runs"][0]);
+    assert_eq!(r.skipped, [("split_gap#2".to_string(), reason)]);
+}
+
+#[test]
+fn position_only_joint_states_are_differentiated() {
+    let (dir, expected) = fixtures_or_skip!();
+    let want = &expected["position_only"];
+    let r = read_ok(dir, "position_only");
+    let run = &r.runs[0];
+    close(run.wheel_rad_s(), &floats(&want["wheel_rad_s"]), 1e-12, "wheel_rad_s");
+    // And they are the speeds the positions were integrated from (after the first sample).
+    close(&run.wheel_rad_s()[3..], &floats(&want["wheel_rad_s_true"])[3..], 1e-9, "true speeds");
+    close(run.wheel_start_rad(), &floats(&want["wheel_start_rad"]), 0.0, "wheel_start_rad");
+    assert_eq!(
+        r.notes,
+        [format!(
+            "{}: topic \"/joint_states\": 201 of 201 messages have no velocity: wheel speeds are differences of \
+             position over header.stamp",
+            dir.join("position_only.mcap").display()
+        )]
+    );
+}
+
+#[test]
+fn ground_truth_from_tf_pose_with_covariance_and_odometry() {
+    let (dir, expected) = fixtures_or_skip!();
+    for name in ["tf", "pose_cov", "odom_truth"] {
+        let r = read_ok(dir, name);
+        check_run(&r.runs[0], &expected[name]);
+    }
+    // The world-frame Odometry is the truth; the odom-frame one is the recorded odometry (x twice the truth's).
+    let r = read_ok(dir, "odom_truth");
+    let (odom, truth) = (r.runs[0].recorded_odometry(), r.runs[0].truth());
+    assert_eq!(odom.len(), 21);
+    assert!((odom[20].pose.x_m - 2.0 * truth[20].pose.x_m).abs() < 1e-12 && truth[20].pose.x_m > 0.25);
+    // TF frames chosen explicitly (a leading `/` in a frame id is ignored).
+    let opts = McapOptions {
+        truth_topic: Some("/tf".into()),
+        truth_parent_frame: Some("world".into()),
+        truth_child_frame: Some("robot_mocap".into()),
+        ..Default::default()
+    };
+    check_run(&read(dir, "tf", &opts).unwrap().runs[0], &expected["tf"]);
+    let opts = McapOptions { truth_child_frame: Some("base_link".into()), ..opts };
+    assert_eq!(
+        error(dir, "tf", &opts),
+        "topic \"/tf\": no transform could be the ground truth (transforms: map → odom (51 poses), odom → base_link \
+         (51 poses), world → robot_mocap (20 poses)); choose one with --gt-parent-frame and --gt-child-frame"
+    );
+    let opts = McapOptions { truth_parent_frame: Some("world".into()), ..Default::default() };
+    assert_eq!(
+        error(dir, "pose_cov", &opts),
+        "no ground truth: no geometry_msgs/msg/PoseStamped, geometry_msgs/msg/PoseWithCovarianceStamped, \
+         nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage source outside the robot's frames (odom, base_link, \
+         base_footprint) matching --gt-parent-frame \"world\" --gt-child-frame \"(any)\"; topics: /joint_states \
+         (sensor_msgs/msg/JointState, 101 messages), /mocap/pose_cov (geometry_msgs/msg/PoseWithCovarianceStamped, \
+         21 messages, frame \"mocap\")"
+    );
+}
+
+#[test]
+fn errors_name_file_topic_message_and_field() {
+    let (dir, _) = fixtures_or_skip!();
+    let d = McapOptions::default();
+    let cases: [(&str, McapOptions, &str); 12] = [
+        ("not_mcap", d.clone(), "not an MCAP file (it does not start with the MCAP magic bytes)"),
+        (
+            "no_truth",
+            d.clone(),
+            "no ground truth: no geometry_msgs/msg/PoseStamped, geometry_msgs/msg/PoseWithCovarianceStamped, \
+             nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage source outside the robot's frames (odom, base_link, \
+             base_footprint); topics: /chatter (std_msgs/msg/String, 1 message), /joint_states \
+             (sensor_msgs/msg/JointState, 101 messages), /odom (nav_msgs/msg/Odometry, 1 message, frame \"odom\": \
+             the robot's own odometry)",
+        ),
+        (
+            "no_truth",
+            McapOptions { truth_topic: Some("/chatter".into()), ..d.clone() },
+            "topic \"/chatter\": type std_msgs/msg/String cannot be ground truth (supported: \
+             geometry_msgs/msg/PoseStamped, geometry_msgs/msg/PoseWithCovarianceStamped, nav_msgs/msg/Odometry, \
+             tf2_msgs/msg/TFMessage)",
+        ),
+        (
+            "no_truth",
+            McapOptions { truth_topic: Some("/odom".into()), ..d.clone() },
+            "topic \"/odom\": is the robot's own wheel odometry (frame \"odom\", REP-105): the model under test, \
+             never ground truth; choose a map, world or motion-capture source",
+        ),
+        (
+            "no_truth",
+            McapOptions { joints_topic: Some("/chatter".into()), ..d.clone() },
+            "topic \"/chatter\": type std_msgs/msg/String is not sensor_msgs/msg/JointState (wheel speeds)",
+        ),
+        (
+            "no_truth",
+            McapOptions { truth_topic: Some("/mocap".into()), ..d.clone() },
+            "--gt-topic /mocap: no such topic; topics: /chatter (std_msgs/msg/String, 1 message), /joint_states \
+             (sensor_msgs/msg/JointState, 101 messages), /odom (nav_msgs/msg/Odometry, 1 message, frame \"odom\": \
+             the robot's own odometry)",
+        ),
+        (
+            "missing_joint",
+            d.clone(),
+            "topic \"/joint_states\", message 5: wheel joint \"wheel_c\" is missing (names: wheel_a, wheel_b)",
+        ),
+        ("nan_velocity", d.clone(), "topic \"/joint_states\", message 7: field velocity[1] (joint \"wheel_b\") is NaN"),
+        ("nan_pose", d.clone(), "topic \"/mocap/pose\", message 3: field pose.position.x is NaN"),
+        (
+            "backwards",
+            d.clone(),
+            "topic \"/joint_states\", message 10: header.stamp 1700000000.325000000 is not after the previous \
+             message's 1700000000.340000000 (stamps must increase)",
+        ),
+        ("empty", d.clone(), "topic \"/joint_states\": has no messages (empty run)"),
+        (
+            "json_encoding",
+            d.clone(),
+            "topic \"/joint_states\": schema encoding \"ros2msg\" with message encoding \"json\" is not supported \
+             (expected schema encoding \"ros2msg\" and message encoding \"cdr\", as rosbag2 records)",
+        ),
+    ];
+    for (name, opts, want) in cases {
+        assert_eq!(error(dir, name, &opts), want, "{name}");
+    }
+    assert_eq!(
+        error(dir, "ambiguous", &d),
+        "several ground-truth sources: /mocap/pose (geometry_msgs/msg/PoseStamped, frame \"map\"), /vicon/pose \
+         (geometry_msgs/msg/PoseStamped, frame \"map\"); choose one with --gt-topic (for a TF topic, also \
+         --gt-parent-frame and --gt-child-frame)"
+    );
+    let r = read(dir, "ambiguous", &McapOptions { truth_topic: Some("/mocap/pose".into()), ..d.clone() }).unwrap();
+    assert_eq!(r.runs[0].truth().len(), 21);
+    // The arm's JointState topic has no wheel joints; it fails only when chosen.
+    assert_eq!(
+        error(dir, "normal", &McapOptions { joints_topic: Some("/arm/joint_states".into()), ..d.clone() }),
+        "topic \"/arm/joint_states\", message 0: wheel joint \"wheel_a\" is missing (names: shoulder, elbow)"
+    );
+}
+
+#[test]
+fn truncated_bag_is_an_error() {
+    let (dir, _) = fixtures_or_skip!();
+    let bytes = std::fs::read(dir.join("zstd.mcap")).unwrap();
+    let cut = dir.join("truncated.mcap");
+    std::fs::write(&cut, &bytes[..bytes.len() * 3 / 5]).unwrap();
+    assert_eq!(
+        error(dir, "truncated", &McapOptions::default()),
+        "the file is truncated: it ends in the middle of a record, before the MCAP end marker (was the recording \
+         interrupted?)"
+    );
+}
+
+/// A run like `omnical simulate` makes: 3 wheels, 2 s at 100 Hz from t = 0, truth at 20 Hz, a command.
+fn simulated_run() -> Run {
+    let n = 201;
+    let wheel_t_s: Vec<f64> = (0..n).map(|k| k as f64 * 0.01).collect();
+    let wheel_rad_s = wheel_t_s.iter().flat_map(|t| [1.0 + t, -0.5 * t, 2.0 * (3.0 * t).sin()]).collect();
+    let truth = (0..41).map(|k| k as f64 * 0.05).map(|t| StampedPose { t_s: t, pose: Pose2::new(t, 0.1 * t, 2.0 * t) });
+    Run::new(RunData {
+        name: "sim".into(),
+        wheel_t_s,
+        wheel_rad_s,
+        n_wheels: 3,
+        truth: truth.collect(),
+        command: Some(RunCommand { v_m_s: 0.25, alpha_rad: 0.5, omega_rad_s: -0.75 }),
+        wheel_start_rad: vec![0.5, -0.25, 3.0],
+        ..Default::default()
+    })
+    .unwrap()
+}
+
+#[test]
+fn rosbags_and_mcap_read_what_we_write() {
+    let (dir, _) = fixtures_or_skip!();
+    let run = simulated_run();
+    let odom: Vec<StampedPose> = run
+        .truth()
+        .iter()
+        .map(|p| StampedPose { t_s: p.t_s, pose: Pose2::new(p.pose.x_m * 1.1, p.pose.y_m, p.pose.theta_rad) })
+        .collect();
+    let path = dir.join("ours.mcap");
+    let w = WriteOptions { design_odometry: Some(odom), origin_s: 1_700_000_000, ..Default::default() };
+    write_run(&path, &run, &w).unwrap();
+    let out = Command::new(python()).arg(script()).arg("--check").arg(&path).output().unwrap();
+    assert!(out.status.success(), "make_bags.py --check failed: {}", String::from_utf8_lossy(&out.stderr));
+    let seen: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(seen["profile"], "ros2");
+    assert_eq!(seen["chunk_compression"], serde_json::json!(["zstd"]));
+    let topics = &seen["topics"];
+    for (topic, schema, count) in [
+        ("/joint_states", "sensor_msgs/msg/JointState", 201),
+        ("/ground_truth/pose", "geometry_msgs/msg/PoseStamped", 41),
+        ("/cmd_vel", "geometry_msgs/msg/Twist", 2),
+        ("/odom", "nav_msgs/msg/Odometry", 41),
+    ] {
+        assert_eq!(topics[topic]["schema"], schema, "{topic}");
+        assert_eq!(topics[topic]["schema_encoding"], "ros2msg", "{topic}");
+        assert_eq!(topics[topic]["message_encoding"], "cdr", "{topic}");
+        assert_eq!(topics[topic]["count"], count, "{topic}");
+        assert_eq!(seen["schemas_match_rosbags"][schema], true, "{schema}: schema text differs from rosbags'");
+    }
+    assert_eq!(topics.as_object().unwrap().len(), 4);
+    // Values as rosbags decodes them.
+    let js = &seen["messages"]["/joint_states"];
+    let last = &js[200];
+    assert_eq!((last[0].as_i64(), last[1].as_i64()), (Some(1_700_000_002), Some(0)));
+    assert_eq!(last[2], serde_json::json!(["wheel_a", "wheel_b", "wheel_c"]));
+    close(&floats(&last[3]), run.wheel_sample(200), 0.0, "velocity");
+    let start = floats(&js[0][4]);
+    close(&start, run.wheel_start_rad(), 0.0, "position at the first sample");
+    let gt = &seen["messages"]["/ground_truth/pose"][40];
+    assert_eq!(gt[2], "map");
+    close(&[gt[3].as_f64().unwrap(), gt[4].as_f64().unwrap()], &[2.0, 0.2], 1e-15, "truth x, y");
+    // The quaternion of yaw 4 rad: (z, w) = (sin 2, cos 2).
+    let yaw = 2.0 * gt[5].as_f64().unwrap().atan2(gt[6].as_f64().unwrap());
+    assert!((yaw - 4.0).abs() < 1e-12, "yaw {yaw}");
+    let cmd = &seen["messages"]["/cmd_vel"];
+    close(&floats(&cmd[0])[1..], &[0.25 * 0.5f64.cos(), 0.25 * 0.5f64.sin(), -0.75], 1e-15, "command");
+    close(&floats(&cmd[1])[1..], &[0.0, 0.0, 0.0], 0.0, "final zero command");
+    let od = &seen["messages"]["/odom"][0];
+    assert_eq!((od[2].as_str(), od[3].as_str()), (Some("odom"), Some("base_link")));
+}
