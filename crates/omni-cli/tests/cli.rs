@@ -41,6 +41,20 @@ fn simulate_train_eval_round_trip() {
     let e: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(e["cost"].as_f64().unwrap(), fitted);
     assert_eq!(e["runs"].as_array().unwrap().len(), 36);
+
+    // The same simulation written as CSV gives the same costs as the MCAP bags.
+    let out = omnical(
+        &["simulate", "--out", "csv", "--format", "csv", "--runs-per-command", "1", "--duration", "4", "--seed", "3"],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let cost_of = |path: &str| {
+        let out = omnical(&["eval", "--model", "fit.toml", path, "--json"], dir.path());
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()["cost"].as_f64().unwrap()
+    };
+    let (mcap, csv) = (cost_of("sim/validation"), cost_of("csv/validation"));
+    assert!((mcap - csv).abs() <= 1e-12 * csv, "MCAP {mcap} vs CSV {csv}");
 }
 
 #[test]
