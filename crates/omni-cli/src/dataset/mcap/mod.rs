@@ -162,4 +162,3 @@ pub fn read_file(path: &Path, opts: &McapOptions) -> Result<McapRead, DatasetErr
 pub fn write_run(path: &Path, run: &Run, w: &WriteOptions) -> Result<(), DatasetError> {
     write::write_run(path, run, w)
 }
-
