@@ -1,12 +1,16 @@
 //! The MCAP reader and writer against a real ROS 2 bag client: Python `rosbags` writes the fixture bags
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 //! (`tests/mcap/make_bags.py`, with the values it wrote in `expected.json`), and reads back what we write.
 //!
 //! The interpreter is `$OMNICAL_PYTHON` (default `python3`). Without `rosbags`, `mcap` and `numpy` there,
 //! each test prints a skip note and passes; CI installs them.
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test code: a failed unwrap is a failed test
 
+#[path = "mcap/helpers.rs"]
+mod helpers;
+
+use helpers::{check_run, close, design_odometry, floats, simulated_run};
 use omni_cli::dataset::mcap::{McapOptions, McapRead, WriteOptions, read_file, write_run};
-use omni_kin::{Command as RunCommand, Pose2, Run, RunData, StampedPose};
+use omni_kin::Command as RunCommand;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -54,45 +58,6 @@ macro_rules! fixtures_or_skip {
             None => return,
         }
     };
-}
-
-fn floats(v: &Value) -> Vec<f64> {
-    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
-}
-
-fn close(got: &[f64], want: &[f64], tol: f64, what: &str) {
-    assert_eq!(got.len(), want.len(), "{what}: lengths differ");
-    for (i, (g, w)) in got.iter().zip(want).enumerate() {
-        assert!((g - w).abs() <= tol, "{what}[{i}]: got {g}, expected {w}");
-    }
-}
-
-/// `[[t, x, y, theta], ...]` against poses.
-fn close_poses(got: &[StampedPose], want: &Value, what: &str) {
-    let want: Vec<Vec<f64>> = want.as_array().unwrap().iter().map(floats).collect();
-    assert_eq!(got.len(), want.len(), "{what}: lengths differ");
-    for (i, (g, w)) in got.iter().zip(&want).enumerate() {
-        let g = [g.t_s, g.pose.x_m, g.pose.y_m, g.pose.theta_rad];
-        close(&g, w, 1e-12, &format!("{what}[{i}] (t, x, y, theta)"));
-    }
-}
-
-/// Checks a run against one expected entry (keys that are absent are not checked).
-fn check_run(run: &Run, want: &Value) {
-    close(run.wheel_t_s(), &floats(&want["wheel_t_s"]), 1e-12, "wheel_t_s");
-    close(run.wheel_rad_s(), &floats(&want["wheel_rad_s"]), 1e-12, "wheel_rad_s");
-    close_poses(run.truth(), &want["truth"], "truth");
-    if let Some(s) = want.get("wheel_start_rad") {
-        close(run.wheel_start_rad(), &floats(s), 1e-15, "wheel_start_rad");
-    }
-    if let Some(c) = want.get("command") {
-        let c = floats(c);
-        let got = run.command().unwrap();
-        close(&[got.v_m_s, got.alpha_rad, got.omega_rad_s], &c, 1e-12, "command (v, alpha, omega)");
-    }
-    if let Some(o) = want.get("recorded_odometry") {
-        close_poses(run.recorded_odometry(), o, "recorded_odometry");
-    }
 }
 
 fn read(dir: &Path, name: &str, opts: &McapOptions) -> Result<McapRead, String> {
@@ -326,36 +291,13 @@ fn truncated_bag_is_an_error() {
     );
 }
 
-/// A run like `omnical simulate` makes: 3 wheels, 2 s at 100 Hz from t = 0, truth at 20 Hz, a command.
-fn simulated_run() -> Run {
-    let n = 201;
-    let wheel_t_s: Vec<f64> = (0..n).map(|k| k as f64 * 0.01).collect();
-    let wheel_rad_s = wheel_t_s.iter().flat_map(|t| [1.0 + t, -0.5 * t, 2.0 * (3.0 * t).sin()]).collect();
-    let truth = (0..41).map(|k| k as f64 * 0.05).map(|t| StampedPose { t_s: t, pose: Pose2::new(t, 0.1 * t, 2.0 * t) });
-    Run::new(RunData {
-        name: "sim".into(),
-        wheel_t_s,
-        wheel_rad_s,
-        n_wheels: 3,
-        truth: truth.collect(),
-        command: Some(RunCommand { v_m_s: 0.25, alpha_rad: 0.5, omega_rad_s: -0.75 }),
-        wheel_start_rad: vec![0.5, -0.25, 3.0],
-        ..Default::default()
-    })
-    .unwrap()
-}
-
 #[test]
 fn rosbags_and_mcap_read_what_we_write() {
     let (dir, _) = fixtures_or_skip!();
-    let run = simulated_run();
-    let odom: Vec<StampedPose> = run
-        .truth()
-        .iter()
-        .map(|p| StampedPose { t_s: p.t_s, pose: Pose2::new(p.pose.x_m * 1.1, p.pose.y_m, p.pose.theta_rad) })
-        .collect();
+    let run = simulated_run("sim", 2.0);
     let path = dir.join("ours.mcap");
-    let w = WriteOptions { design_odometry: Some(odom), origin_s: 1_700_000_000, ..Default::default() };
+    let w =
+        WriteOptions { design_odometry: Some(design_odometry(&run)), origin_s: 1_700_000_000, ..Default::default() };
     write_run(&path, &run, &w).unwrap();
     let out = Command::new(python()).arg(script()).arg("--check").arg(&path).output().unwrap();
     assert!(out.status.success(), "make_bags.py --check failed: {}", String::from_utf8_lossy(&out.stderr));
@@ -365,9 +307,9 @@ fn rosbags_and_mcap_read_what_we_write() {
     let topics = &seen["topics"];
     for (topic, schema, count) in [
         ("/joint_states", "sensor_msgs/msg/JointState", 201),
-        ("/ground_truth/pose", "geometry_msgs/msg/PoseStamped", 41),
+        ("/ground_truth/pose", "geometry_msgs/msg/PoseStamped", 51),
         ("/cmd_vel", "geometry_msgs/msg/Twist", 2),
-        ("/odom", "nav_msgs/msg/Odometry", 41),
+        ("/odom", "nav_msgs/msg/Odometry", 51),
     ] {
         assert_eq!(topics[topic]["schema"], schema, "{topic}");
         assert_eq!(topics[topic]["schema_encoding"], "ros2msg", "{topic}");
@@ -384,12 +326,12 @@ fn rosbags_and_mcap_read_what_we_write() {
     close(&floats(&last[3]), run.wheel_sample(200), 0.0, "velocity");
     let start = floats(&js[0][4]);
     close(&start, run.wheel_start_rad(), 0.0, "position at the first sample");
-    let gt = &seen["messages"]["/ground_truth/pose"][40];
+    let gt = &seen["messages"]["/ground_truth/pose"][50];
     assert_eq!(gt[2], "map");
-    close(&[gt[3].as_f64().unwrap(), gt[4].as_f64().unwrap()], &[2.0, 0.2], 1e-15, "truth x, y");
-    // The quaternion of yaw 4 rad: (z, w) = (sin 2, cos 2).
+    close(&[gt[3].as_f64().unwrap(), gt[4].as_f64().unwrap()], &[2f64.sin(), 0.2], 1e-15, "truth x, y");
+    // The quaternion of yaw 1 rad: (z, w) = (sin 0.5, cos 0.5).
     let yaw = 2.0 * gt[5].as_f64().unwrap().atan2(gt[6].as_f64().unwrap());
-    assert!((yaw - 4.0).abs() < 1e-12, "yaw {yaw}");
+    assert!((yaw - 1.0).abs() < 1e-12, "yaw {yaw}");
     let cmd = &seen["messages"]["/cmd_vel"];
     close(&floats(&cmd[0])[1..], &[0.25 * 0.5f64.cos(), 0.25 * 0.5f64.sin(), -0.75], 1e-15, "command");
     close(&floats(&cmd[1])[1..], &[0.0, 0.0, 0.0], 0.0, "final zero command");

@@ -14,7 +14,7 @@ use super::tf::{self, TfMessage, TfPairs};
 use super::twist::{self, Commands, TwistStamped};
 use super::{McapOptions, McapRead, split};
 use crate::dataset::DatasetError;
-use mcap::read::{Options, RawMessageStream};
+use mcap::sans_io::LinearReaderOptions;
 use omni_kin::{Run, RunData, StampedPose};
 use std::path::Path;
 
@@ -25,6 +25,9 @@ const SCHEMA_ENCODINGS: [&str; 2] = ["ros2msg", "ros2idl"];
 const MESSAGE_ENCODING: &str = "cdr";
 /// Frames that are the robot's own (REP-105): a pose in them is not a ground truth.
 const ROBOT_FRAMES: [&str; 3] = [ODOM_FRAME, "base_link", "base_footprint"];
+/// The smallest and largest cap on one record's length (the cap is 64 × the file size between them).
+const MIN_RECORD_LIMIT: usize = 64 << 20;
+const MAX_RECORD_LIMIT: usize = 4 << 30;
 /// The types a ground truth can come from.
 const TRUTH_TYPES: &str = "geometry_msgs/msg/PoseStamped, geometry_msgs/msg/PoseWithCovarianceStamped, \
                            nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage";
@@ -506,26 +509,22 @@ fn scan<'a>(path: &'a Path, buf: &[u8], wheel_joints: &[String]) -> Result<Bag<'
             channels.push(Channel::new(c));
         }
     }
-    let mut stream =
-        RawMessageStream::new_with_options(buf, Options::ValidateChunkCrcs.into()).map_err(|e| mcap_error(path, e))?;
-    while let Some(m) = stream.next() {
+    // A cap on record lengths: a corrupted length then fails cleanly instead of overflowing inside the
+    // mcap crate (its default is no limit).
+    let limit = buf.len().saturating_mul(64).clamp(MIN_RECORD_LIMIT, MAX_RECORD_LIMIT);
+    let options = LinearReaderOptions::default().with_validate_chunk_crcs(true).with_record_length_limit(limit);
+    for m in mcap::io::MessageReader::new_with_options(std::io::Cursor::new(buf), options) {
         let m = m.map_err(|e| mcap_error(path, e))?;
-        let id = m.header.channel_id;
+        let id = m.channel.id;
         let i = match ids.iter().position(|&c| c == id) {
             Some(i) => i,
             None => {
-                let c = stream.get_channel(id).ok_or_else(|| {
-                    DatasetError::file(
-                        path,
-                        format!("a message refers to channel {id}, which the file does not define"),
-                    )
-                })?;
                 ids.push(id);
-                channels.push(Channel::new(&c));
+                channels.push(Channel::new(&m.channel));
                 channels.len() - 1
             }
         };
-        channels[i].take(&m.data, m.header.log_time, wheel_joints);
+        channels[i].take(&m.data, m.log_time, wheel_joints);
     }
     Ok(Bag { path, channels })
 }
@@ -533,7 +532,11 @@ fn scan<'a>(path: &'a Path, buf: &[u8], wheel_joints: &[String]) -> Result<Bag<'
 /// Reads one bag. See the module docs of [`super`].
 pub(super) fn read_file(path: &Path, opts: &McapOptions) -> Result<McapRead, DatasetError> {
     let buf = std::fs::read(path).map_err(|e| DatasetError::io(path, e))?;
-    let mut bag = scan(path, &buf, &opts.wheel_joints)?;
+    // mcap 0.26 can still panic on some damaged files (an integer overflow on a record longer than its
+    // uncompressed chunk, in builds with overflow checks): a damaged file is an error, never a crash.
+    let mut bag = std::panic::catch_unwind(|| scan(path, &buf, &opts.wheel_joints)).unwrap_or_else(|_| {
+        Err(DatasetError::file(path, "the file is damaged: the MCAP reader failed on it (see the message above)"))
+    })?;
     let mut notes = Vec::new();
 
     let j = bag.joints(opts)?;
