@@ -16,11 +16,10 @@ use crate::ga::{Ga, GaConfig, StallRule};
 use crate::lm::{LevenbergMarquardt, LmConfig};
 use crate::observe::Observer;
 use crate::optimizer::{Optimizer, Solution};
-use crate::problem::{Bounds, LeastSquares, Problem};
+use crate::problem::{Bounds, LeastSquares, Problem, finite_difference_jacobian};
 use nalgebra::DMatrix;
 use omni_kin::cost::{self, CostKind};
 use omni_kin::{FittedModel, Integration, KinError, Kinematics, Model, Run};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 use thiserror::Error;
@@ -165,25 +164,8 @@ impl LeastSquares for CalibrationProblem<'_> {
     /// central difference would see a symmetric kink and report zero sensitivity.
     fn jacobian(&self, x: &[f64]) -> DMatrix<f64> {
         let specs = self.model.params();
-        let r0 = self.residuals(x);
-        let cols: Vec<Vec<f64>> = (0..x.len())
-            .into_par_iter()
-            .map(|i| {
-                let h = 1e-6 * x[i].abs().max(1e-3);
-                let one_sided = specs.get(i).is_some_and(|s| s.lower == x[i] && s.upper > s.lower);
-                let mut xp = x.to_vec();
-                xp[i] += h;
-                let rp = self.residuals(&xp);
-                if one_sided {
-                    return rp.iter().zip(&r0).map(|(a, b)| (a - b) / h).collect();
-                }
-                let mut xm = x.to_vec();
-                xm[i] -= h;
-                let rm = self.residuals(&xm);
-                rp.iter().zip(&rm).map(|(a, b)| (a - b) / (2.0 * h)).collect()
-            })
-            .collect();
-        DMatrix::from_fn(r0.len(), x.len(), |r, c| cols[c].get(r).copied().unwrap_or(f64::NAN))
+        let at_range_end = |i: usize| specs.get(i).is_some_and(|s| s.lower == x[i] && s.upper > s.lower);
+        finite_difference_jacobian(x, |y| self.residuals(y), at_range_end)
     }
 }
 

@@ -72,24 +72,41 @@ pub trait Problem: Sync {
 pub trait LeastSquares: Problem {
     /// Residual vector at `x`; its squared norm must be monotone in [`Problem::cost`].
     fn residuals(&self, x: &[f64]) -> Vec<f64>;
-    /// Jacobian of the residuals (rows: residuals, columns: parameters). Default: central differences with
-    /// step `h_i = 1e-6 · max(|x_i|, 1e-3)`, columns in parallel (deterministic: collected in order).
+    /// Jacobian of the residuals (rows: residuals, columns: parameters). Default: central differences
+    /// ([`finite_difference_jacobian`]).
     fn jacobian(&self, x: &[f64]) -> DMatrix<f64> {
-        let n = x.len();
-        let cols: Vec<Vec<f64>> = (0..n)
-            .into_par_iter()
-            .map(|i| {
-                let h = 1e-6 * x[i].abs().max(1e-3);
-                let mut xp = x.to_vec();
-                let mut xm = x.to_vec();
-                xp[i] += h;
-                xm[i] -= h;
-                let rp = self.residuals(&xp);
-                let rm = self.residuals(&xm);
-                rp.iter().zip(&rm).map(|(a, b)| (a - b) / (2.0 * h)).collect()
-            })
-            .collect();
-        let m = cols.first().map_or(0, Vec::len);
-        DMatrix::from_fn(m, n, |r, c| cols[c].get(r).copied().unwrap_or(f64::NAN))
+        finite_difference_jacobian(x, |y| self.residuals(y), |_| false)
     }
+}
+
+/// Finite-difference Jacobian of `residuals` at `x`: central differences with step
+/// `h_i = 1e-6 · max(|x_i|, 1e-3)`, or forward differences for the parameters where `forward(i)` is true
+/// (e.g. one sitting on the end of its physical range). Columns are computed in parallel and collected in
+/// order (deterministic).
+pub fn finite_difference_jacobian<R, F>(x: &[f64], residuals: R, forward: F) -> DMatrix<f64>
+where
+    R: Fn(&[f64]) -> Vec<f64> + Sync,
+    F: Fn(usize) -> bool + Sync,
+{
+    let r0 = if (0..x.len()).any(&forward) { Some(residuals(x)) } else { None };
+    let cols: Vec<Vec<f64>> = (0..x.len())
+        .into_par_iter()
+        .map(|i| {
+            let h = 1e-6 * x[i].abs().max(1e-3);
+            let mut xp = x.to_vec();
+            xp[i] += h;
+            let rp = residuals(&xp);
+            match (&r0, forward(i)) {
+                (Some(r0), true) => rp.iter().zip(r0).map(|(a, b)| (a - b) / h).collect(),
+                _ => {
+                    let mut xm = x.to_vec();
+                    xm[i] -= h;
+                    let rm = residuals(&xm);
+                    rp.iter().zip(&rm).map(|(a, b)| (a - b) / (2.0 * h)).collect()
+                }
+            }
+        })
+        .collect();
+    let m = cols.first().map_or(0, Vec::len);
+    DMatrix::from_fn(m, x.len(), |r, c| cols[c].get(r).copied().unwrap_or(f64::NAN))
 }
