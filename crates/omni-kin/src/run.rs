@@ -51,8 +51,9 @@ pub struct RunData {
     pub wheel_start_rad: Vec<f64>,
 }
 
-/// A validated run. Immutable once built.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// A validated run. Immutable once built; only [`Run::new`] makes one (no `Deserialize`, so nothing can
+/// skip the checks).
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Run {
     name: String,
     n_wheels: usize,
@@ -63,6 +64,8 @@ pub struct Run {
     repetition: Option<u32>,
     recorded_odometry: Vec<StampedPose>,
     wheel_start_rad: Vec<f64>,
+    /// Median wheel-sample interval, computed once (the integrator needs it on every evaluation). s.
+    median_dt_s: f64,
 }
 
 fn check_stamps(run: &str, what: &'static str, t: impl Iterator<Item = f64>) -> Result<(), KinError> {
@@ -155,7 +158,11 @@ impl Run {
                 why: "has a non-finite value".into(),
             });
         }
+        let mut dts: Vec<f64> = d.wheel_t_s.windows(2).map(|w| w[1] - w[0]).collect();
+        dts.sort_by(f64::total_cmp);
+        let median_dt_s = dts[dts.len() / 2];
         Ok(Self {
+            median_dt_s,
             name: d.name,
             n_wheels: d.n_wheels,
             wheel_t_s: d.wheel_t_s,
@@ -237,9 +244,7 @@ impl Run {
     }
     /// Median wheel-sample interval. s.
     pub fn median_dt_s(&self) -> f64 {
-        let mut d: Vec<f64> = self.wheel_t_s.windows(2).map(|w| w[1] - w[0]).collect();
-        d.sort_by(f64::total_cmp);
-        d[d.len() / 2]
+        self.median_dt_s
     }
     /// Ground-truth path length. m.
     pub fn path_length_m(&self) -> f64 {
