@@ -534,9 +534,8 @@ pub(super) fn read_file(path: &Path, opts: &McapOptions) -> Result<McapRead, Dat
     let buf = std::fs::read(path).map_err(|e| DatasetError::io(path, e))?;
     // mcap 0.26 can still panic on some damaged files (an integer overflow on a record longer than its
     // uncompressed chunk, in builds with overflow checks): a damaged file is an error, never a crash.
-    let mut bag = std::panic::catch_unwind(|| scan(path, &buf, &opts.wheel_joints)).unwrap_or_else(|_| {
-        Err(DatasetError::file(path, "the file is damaged: the MCAP reader failed on it (see the message above)"))
-    })?;
+    let mut bag = std::panic::catch_unwind(|| scan(path, &buf, &opts.wheel_joints))
+        .unwrap_or_else(|_| Err(DatasetError::file(path, "the file is damaged: the MCAP reader panicked on it")))?;
     let mut notes = Vec::new();
 
     let j = bag.joints(opts)?;
