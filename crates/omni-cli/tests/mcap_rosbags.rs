@@ -318,6 +318,12 @@ fn rosbags_and_mcap_read_what_we_write() {
         assert_eq!(seen["schemas_match_rosbags"][schema], true, "{schema}: schema text differs from rosbags'");
     }
     assert_eq!(topics.as_object().unwrap().len(), 4);
+    // With mcap-ros2-support installed: every message decodes through our schema text, as in Foxglove.
+    if let Some(n) = seen.get("decoded_from_schema_text") {
+        assert_eq!(n, 201 + 51 + 2 + 51);
+    } else {
+        eprintln!("note: mcap-ros2-support is not installed: schema texts not parsed by a ROS 2 decoder");
+    }
     // Values as rosbags decodes them.
     let js = &seen["messages"]["/joint_states"];
     let last = &js[200];

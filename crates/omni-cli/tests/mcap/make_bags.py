@@ -14,7 +14,8 @@ second of the first JointState stamp, computed as `(sec - ORIGIN_S) + nanosec * 
 does), wheel speeds in the order wheel_a, wheel_b, wheel_c (rad/s), poses as [t_s, x_m, y_m, theta_rad] with
 the heading unwrapped.
 
-Needs: pip install rosbags mcap numpy
+Needs: pip install rosbags mcap numpy (and, for --check to also decode through the schema text as Foxglove
+does, mcap-ros2-support)
 """
 
 import json
@@ -428,6 +429,14 @@ def check(path):
                                           'count': summary.statistics.channel_message_counts[ch.id]}
             report['schemas_match_rosbags'][sc.name] = sc.data.decode() == TS.generate_msgdef(sc.name, ros_version=2)[0]
         report['chunk_compression'] = sorted({c.compression for c in summary.chunk_indexes})
+    try:  # Foxglove's own decoder, which parses the schema text as Foxglove does (pip install mcap-ros2-support)
+        from mcap_ros2.decoder import DecoderFactory
+    except ImportError:
+        pass
+    else:
+        with open(path, 'rb') as f:
+            decoded = make_reader(f, decoder_factories=[DecoderFactory()]).iter_decoded_messages()
+            report['decoded_from_schema_text'] = sum(1 for _ in decoded)
     msgs = {}
     with AnyReader([Path(path)], default_typestore=TS) as reader:
         for conn, log_ns, raw in reader.messages():

@@ -402,47 +402,13 @@ impl Bag<'_> {
 
     /// The robot's recorded wheel odometry: `/odom` if it is one, else the only one.
     fn recorded_odometry(&self, notes: &mut Vec<String>) -> Option<usize> {
-        let all: Vec<usize> = (0..self.channels.len()).filter(|&i| self.channels[i].is_wheel_odometry()).collect();
-        let chosen = match all[..] {
-            [] => return None,
-            [i] => i,
-            _ => match all.iter().find(|&&i| self.channels[i].topic == "/odom") {
-                Some(&i) => i,
-                None => {
-                    let list: Vec<&str> = all.iter().map(|&i| self.channels[i].topic.as_str()).collect();
-                    notes.push(format!(
-                        "{}: several wheel-odometry topics ({}): none kept as recorded odometry",
-                        self.path.display(),
-                        list.join(", ")
-                    ));
-                    return None;
-                }
-            },
-        };
-        self.usable(chosen, "recorded odometry", notes)
+        self.optional(Channel::is_wheel_odometry, "/odom", "recorded odometry", notes)
     }
 
     /// The command topic: `/cmd_vel` if it is one, else the only one.
     fn commands(&self, notes: &mut Vec<String>) -> Option<usize> {
         let is_cmd = |c: &Channel| matches!(c.msg_type, MsgType::Twist | MsgType::TwistStamped);
-        let all: Vec<usize> = (0..self.channels.len()).filter(|&i| is_cmd(&self.channels[i])).collect();
-        let chosen = match all[..] {
-            [] => return None,
-            [i] => i,
-            _ => match all.iter().find(|&&i| self.channels[i].topic == "/cmd_vel") {
-                Some(&i) => i,
-                None => {
-                    let list: Vec<&str> = all.iter().map(|&i| self.channels[i].topic.as_str()).collect();
-                    notes.push(format!(
-                        "{}: several command topics ({}): no command kept",
-                        self.path.display(),
-                        list.join(", ")
-                    ));
-                    return None;
-                }
-            },
-        };
-        let chosen = self.usable(chosen, "the command", notes)?;
+        let chosen = self.optional(is_cmd, "/cmd_vel", "the command", notes)?;
         if self.channels[chosen].msg_type == MsgType::Twist {
             notes.push(format!(
                 "{}: topic {:?} ({}) has no header: command times are log times",
@@ -452,6 +418,35 @@ impl Bag<'_> {
             ));
         }
         Some(chosen)
+    }
+
+    /// An optional source (`what`) among the channels that are `wanted`: the one named `preferred`, else the
+    /// only one. Several without the preferred one, or a problem on the chosen one, leave it out with a note.
+    fn optional(
+        &self,
+        wanted: impl Fn(&Channel) -> bool,
+        preferred: &str,
+        what: &str,
+        notes: &mut Vec<String>,
+    ) -> Option<usize> {
+        let all: Vec<usize> = (0..self.channels.len()).filter(|&i| wanted(&self.channels[i])).collect();
+        let chosen = match all[..] {
+            [] => return None,
+            [i] => i,
+            _ => match all.iter().find(|&&i| self.channels[i].topic == preferred) {
+                Some(&i) => i,
+                None => {
+                    let list: Vec<&str> = all.iter().map(|&i| self.channels[i].topic.as_str()).collect();
+                    notes.push(format!(
+                        "{}: {what} could come from several topics ({}), none of them {preferred}: {what} is left out",
+                        self.path.display(),
+                        list.join(", ")
+                    ));
+                    return None;
+                }
+            },
+        };
+        self.usable(chosen, what, notes)
     }
 
     /// `Some(i)` if channel `i` has no problem; otherwise a note that `what` is left out.
@@ -534,9 +529,8 @@ pub(super) fn read_file(path: &Path, opts: &McapOptions) -> Result<McapRead, Dat
     let buf = std::fs::read(path).map_err(|e| DatasetError::io(path, e))?;
     // mcap 0.26 can still panic on some damaged files (an integer overflow on a record longer than its
     // uncompressed chunk, in builds with overflow checks): a damaged file is an error, never a crash.
-    let mut bag = std::panic::catch_unwind(|| scan(path, &buf, &opts.wheel_joints)).unwrap_or_else(|_| {
-        Err(DatasetError::file(path, "the file is damaged: the MCAP reader failed on it (see the message above)"))
-    })?;
+    let mut bag = std::panic::catch_unwind(|| scan(path, &buf, &opts.wheel_joints))
+        .unwrap_or_else(|_| Err(DatasetError::file(path, "the file is damaged: the MCAP reader panicked on it")))?;
     let mut notes = Vec::new();
 
     let j = bag.joints(opts)?;
@@ -662,4 +656,48 @@ pub(super) fn read_file(path: &Path, opts: &McapOptions) -> Result<McapRead, Dat
         }
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn channel(topic: &str, msg_type: MsgType, frame: Option<&str>, problem: Option<&str>) -> Channel {
+        let content = match msg_type {
+            MsgType::Odometry => Content::Poses(PoseSeries { frame: frame.map(String::from), ..Default::default() }),
+            _ => Content::Commands(Commands::default()),
+        };
+        Channel {
+            topic: topic.into(),
+            schema: String::new(),
+            msg_type,
+            messages: 3,
+            content,
+            problem: problem.map(|p| (Some(2), p.to_string())),
+        }
+    }
+
+    #[test]
+    fn optional_sources_are_left_out_with_a_note() {
+        let path = Path::new("a.mcap");
+        let odom = |t: &str| channel(t, MsgType::Odometry, Some(ODOM_FRAME), None);
+        let bag = Bag { path, channels: vec![odom("/robot1/odom"), odom("/robot2/odom")] };
+        let mut notes = Vec::new();
+        assert_eq!(bag.recorded_odometry(&mut notes), None);
+        assert_eq!(
+            notes,
+            ["a.mcap: recorded odometry could come from several topics (/robot1/odom, /robot2/odom), none of them \
+              /odom: recorded odometry is left out"]
+        );
+        let bag = Bag { path, channels: vec![odom("/robot1/odom"), odom("/odom")] };
+        assert_eq!(bag.recorded_odometry(&mut Vec::new()), Some(1));
+
+        let bag = Bag {
+            path,
+            channels: vec![channel("/cmd_vel", MsgType::TwistStamped, None, Some("field linear.x is NaN"))],
+        };
+        let mut notes = Vec::new();
+        assert_eq!(bag.commands(&mut notes), None);
+        assert_eq!(notes, ["a.mcap: topic \"/cmd_vel\", message 2: field linear.x is NaN (the command is left out)"]);
+    }
 }
