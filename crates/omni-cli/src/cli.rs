@@ -34,7 +34,7 @@ pub enum Format {
 pub enum ModelKind {
     /// Every entry of the IK matrix (the paper).
     Ik,
-    /// Wheel radii, distances and angles (the paper's ref. [17]).
+    /// Wheel radii, distances and angles (the paper's ref. \[17\]).
     Geometry,
 }
 

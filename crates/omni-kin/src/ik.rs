@@ -66,7 +66,7 @@ impl IkMatrix {
         }
     }
 
-    /// The paper's Eq. 8: the parametric calibration of ref. [17].
+    /// The paper's Eq. 8: the parametric calibration of ref. \[17\].
     pub fn paper_parametric() -> Self {
         Self {
             n_wheels: 3,

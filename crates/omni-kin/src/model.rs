@@ -23,7 +23,7 @@ pub enum Kinematics {
         /// Design matrix (the start and centre of the search).
         design: IkMatrix,
     },
-    /// The parametric model of the paper's ref. [17]: per wheel r_i, R_i, δ_i.
+    /// The parametric model of the paper's ref. \[17\]: per wheel r_i, R_i, δ_i.
     Geometry {
         /// Design geometry.
         design: RobotGeometry,
