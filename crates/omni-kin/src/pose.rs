@@ -15,6 +15,22 @@ pub fn wrap_angle(a_rad: f64) -> f64 {
     w
 }
 
+/// Make a heading sequence continuous: each heading moves by whole turns to lie within π of the previous
+/// one. Already-continuous sequences are left bit-identical.
+pub fn unwrap_headings(poses: &mut [StampedPose]) {
+    for i in 1..poses.len() {
+        let prev = poses[i - 1].pose.theta_rad;
+        let mut th = poses[i].pose.theta_rad;
+        while th - prev > PI {
+            th -= 2.0 * PI;
+        }
+        while th - prev < -PI {
+            th += 2.0 * PI;
+        }
+        poses[i].pose.theta_rad = th;
+    }
+}
+
 /// A planar pose: position in metres and heading in radians. Used as `world_from_body`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Pose2 {

@@ -18,6 +18,7 @@
 
 use super::DatasetError;
 use crate::atomic;
+pub use omni_kin::pose::unwrap_headings;
 use omni_kin::{Command, Pose2, Run, RunData, StampedPose};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -25,21 +26,6 @@ use std::path::Path;
 
 const POSE: [&str; 3] = ["x_m", "y_m", "theta_rad"];
 const ODOM: [&str; 3] = ["odom_x_m", "odom_y_m", "odom_theta_rad"];
-
-/// Make a heading sequence continuous (no jumps over ±π).
-pub fn unwrap_headings(poses: &mut [StampedPose]) {
-    for i in 1..poses.len() {
-        let prev = poses[i - 1].pose.theta_rad;
-        let mut th = poses[i].pose.theta_rad;
-        while th - prev > PI {
-            th -= 2.0 * PI;
-        }
-        while th - prev < -PI {
-            th += 2.0 * PI;
-        }
-        poses[i].pose.theta_rad = th;
-    }
-}
 
 fn parse_num(path: &Path, line: usize, col: &str, cell: &str) -> Result<f64, DatasetError> {
     cell.trim()

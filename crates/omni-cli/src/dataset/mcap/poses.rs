@@ -6,7 +6,7 @@
 //! pose of each run lies in (−π, π].
 
 use super::common::{Quaternion, Stamp, Vector3, pose_problem, seconds_since};
-use omni_kin::pose::wrap_angle;
+use omni_kin::pose::{unwrap_headings, wrap_angle};
 use omni_kin::{Pose2, StampedPose};
 use std::f64::consts::PI;
 
@@ -73,20 +73,14 @@ impl PoseSeries {
 
     /// The poses in seconds since `origin_s`, heading unwrapped.
     pub fn stamped(&self, origin_s: i64) -> Vec<StampedPose> {
-        let mut theta = 0.0;
-        let mut prev_yaw = None;
-        self.t_ns
+        let mut poses: Vec<StampedPose> = self
+            .t_ns
             .iter()
             .zip(&self.xy_yaw)
-            .map(|(&t, &[x, y, yaw])| {
-                theta = match prev_yaw {
-                    None => yaw,
-                    Some(p) => theta + wrap_angle(yaw - p),
-                };
-                prev_yaw = Some(yaw);
-                StampedPose { t_s: seconds_since(t, origin_s), pose: Pose2::new(x, y, theta) }
-            })
-            .collect()
+            .map(|(&t, &[x, y, yaw])| StampedPose { t_s: seconds_since(t, origin_s), pose: Pose2::new(x, y, yaw) })
+            .collect();
+        unwrap_headings(&mut poses);
+        poses
     }
 }
 
