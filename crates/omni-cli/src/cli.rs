@@ -191,12 +191,57 @@ pub enum Command {
         #[command(flatten)]
         data: DataArgs,
     },
+    /// Write an HTML report (inline SVG figures): costs, error ladder, trajectory overlays, errors by command,
+    /// error growth, and the diagnosis ranking.
+    Report {
+        /// Model file (from `train --out`) or `design`.
+        #[arg(long)]
+        model: String,
+        /// Training runs (the ones the model was fitted on).
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// Held-out runs: the figures use them (default: the training runs, 2-fold cross-validation in the
+        /// diagnosis).
+        #[arg(long, num_args = 1..)]
+        validate: Vec<PathBuf>,
+        /// The HTML file to write.
+        #[arg(long, default_value = "report.html")]
+        out: PathBuf,
+        /// Also write each figure as PNG into this folder.
+        #[arg(long, value_name = "DIR")]
+        png: Option<PathBuf>,
+        /// Skip the diagnosis (faster; no ranking, ladder of the given model only).
+        #[arg(long)]
+        no_diagnose: bool,
+        /// Data options.
+        #[command(flatten)]
+        data: DataArgs,
+    },
+    /// Export trajectories: TUM files (ground truth, design and calibrated odometry) for evo, and MCAP bags
+    /// with the calibrated odometry on `/omnical/odometry` for Foxglove.
+    Export {
+        /// Model file (from `train --out`) or `design`.
+        #[arg(long)]
+        model: String,
+        /// Run files or folders.
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// Write `<run>.gt.tum`, `<run>.design.tum` and `<run>.calibrated.tum` into this folder.
+        #[arg(long, value_name = "DIR")]
+        tum: Option<PathBuf>,
+        /// Write one MCAP bag per run into this folder, with the calibrated odometry added.
+        #[arg(long, value_name = "DIR")]
+        mcap: Option<PathBuf>,
+        /// Data options.
+        #[command(flatten)]
+        data: DataArgs,
+    },
     /// The whole story on built-in simulated data with a hidden effect: simulate, train, diagnose, add the
     /// effect, retrain, print the error ladder.
     Demo {
-        /// Also write the models and the diagnosis here.
-        #[arg(long)]
-        out: Option<PathBuf>,
+        /// Write the models, the diagnosis and the HTML report (report.html) here.
+        #[arg(long, default_value = "omnical-demo")]
+        out: PathBuf,
         /// Repetitions of each of the 36 commands.
         #[arg(long, default_value_t = 2)]
         runs_per_command: usize,
@@ -253,6 +298,21 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 data,
             })
         }
-        Command::Demo { out, runs_per_command, hidden } => cmd::demo::run(out, runs_per_command, &hidden),
+        Command::Report { model, runs, validate, out, png, no_diagnose, data } => {
+            cmd::report::run(&cmd::report::Args {
+                model,
+                runs,
+                validate,
+                out,
+                png,
+                no_diagnose,
+                data,
+                quiet: cli.quiet,
+            })
+        }
+        Command::Export { model, runs, tum, mcap, data } => {
+            cmd::export::run(&cmd::export::Args { model, runs, tum, mcap, data })
+        }
+        Command::Demo { out, runs_per_command, hidden } => cmd::demo::run(&out, runs_per_command, &hidden, cli.quiet),
     }
 }

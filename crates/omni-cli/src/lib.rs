@@ -9,3 +9,5 @@ pub mod cli;
 pub mod cmd;
 pub mod dataset;
 pub mod model_file;
+pub mod progress;
+pub mod report;

@@ -1,38 +1,45 @@
 //! `omnical demo`: the whole story on built-in simulated data with a hidden effect — simulate, train,
-//! diagnose, add the effect, retrain — printing the error ladder.
+//! diagnose, add the effect, retrain — printing the error ladder — and write the HTML report.
 
 use super::diagnose::{design_for, print_diagnosis};
 use super::simulate::apply_effect_spec;
 use super::train::print_summary;
-use crate::{atomic, model_file};
+use crate::report::{self, ReportInput};
+use crate::{atomic, model_file, progress};
 use anyhow::Context;
 use omni_ga::calibrate::{Plan, Preset, calibrate};
 use omni_ga::diagnose::{DiagnoseOptions, diagnose};
-use omni_ga::observe::NoopObserver;
 use omni_kin::simulate::{SimConfig, simulate};
 use omni_kin::{FittedModel, IkMatrix, Model};
-use std::path::PathBuf;
+use std::path::Path;
 
 /// Runs `omnical demo`.
-pub fn run(out: Option<PathBuf>, runs_per_command: usize, hidden: &str) -> anyhow::Result<()> {
+pub fn run(dir: &Path, runs_per_command: usize, hidden: &str, quiet: bool) -> anyhow::Result<()> {
     let mut truth = FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated()));
     let mut config = SimConfig { runs_per_command, seed: 7, ..SimConfig::default() };
     apply_effect_spec(hidden, &mut truth, &mut config)?;
     println!("== simulate: true robot = the paper's Eq. 9 matrix + a hidden effect ({hidden})");
+    let spinner = progress::spinner("simulating", quiet);
     let train = simulate(&config, &truth, "train/")?;
     let val = simulate(&SimConfig { seed: 8, ..config.clone() }, &truth, "validation/")?;
+    spinner.finish_and_clear();
     println!("   {} training and {} validation runs", train.len(), val.len());
     println!("== train: fit the 9-entry IK matrix (preset default)");
     let start = FittedModel::nominal(Model::ik(IkMatrix::paper_design()));
     let plan = Plan::preset(Preset::Default, 9).seed(0);
-    let fit = calibrate(&start, &train, &plan, &mut NoopObserver)?;
+    let mut bar = progress::ProgressObserver::new(plan.ga.as_ref().map_or(0, |g| g.max_generations), quiet);
+    let fit = calibrate(&start, &train, &plan, &mut bar)?;
+    bar.finish();
     print_summary(&fit, "default", train.len());
     println!("== diagnose: which physical effect is missing? (--auto: add effects while held-out error falls)");
     let opts = DiagnoseOptions { auto: true, ..DiagnoseOptions::default() };
-    let d = diagnose(&fit.fitted, &design_for(&fit.fitted), &train, Some(&val), &opts)?;
+    let spinner = progress::spinner("diagnosing: refitting each candidate effect", quiet);
+    let design = design_for(&fit.fitted);
+    let d = diagnose(&fit.fitted, &design, &train, Some(&val), &opts)?;
+    spinner.finish_and_clear();
     print_diagnosis(&d);
-    if let Some(dir) = out {
-        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         let write = |name: &str, fm: &FittedModel| -> anyhow::Result<()> {
             let text = model_file::to_toml(fm, None).map_err(anyhow::Error::msg)?;
             atomic::write_atomic(&dir.join(name), text.as_bytes()).with_context(|| format!("writing {name}"))
@@ -43,7 +50,23 @@ pub fn run(out: Option<PathBuf>, runs_per_command: usize, hidden: &str) -> anyho
             write("fitted_with_effects.toml", f)?;
         }
         atomic::write_atomic(&dir.join("diagnosis.json"), serde_json::to_string_pretty(&d)?.as_bytes())?;
-        println!("wrote {}", dir.display());
     }
+    println!("== report");
+    let spinner = progress::spinner("drawing the report", quiet);
+    let input = ReportInput {
+        title: format!("omnical demo: Eq. 9 robot with a hidden {hidden}"),
+        models: report::models_for(&design, &fit.fitted, Some(&d)),
+        train: &train,
+        held_out: &val,
+        diagnosis: Some(&d),
+        sources: vec![format!(
+            "simulated: 36 flower commands × {runs_per_command} (train seed 7, validation seed 8), hidden {hidden}"
+        )],
+    };
+    let html = dir.join("report.html");
+    let w = report::write(&input, &html, None)?;
+    spinner.finish_and_clear();
+    super::report::print_written(&w, &html);
+    println!("models and diagnosis.json written to {}", dir.display());
     Ok(())
 }

@@ -3,6 +3,8 @@
 pub mod demo;
 pub mod diagnose;
 pub mod eval;
+pub mod export;
+pub mod report;
 pub mod simulate;
 pub mod train;
 

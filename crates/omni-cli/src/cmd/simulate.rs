@@ -79,6 +79,7 @@ fn write_split(dir: &Path, runs: &[Run], format: Format, wheel_names: &[String])
                     design_odometry: Some(r.recorded_odometry().to_vec()),
                     // Simulated clocks start at 0 s (wheel data from −0.5 s): put them at a plausible epoch.
                     origin_s: SIM_EPOCH_S,
+                    ..Default::default()
                 };
                 dataset::mcap::write_run(&dir.join(format!("{stem}.mcap")), r, &w)?
             }

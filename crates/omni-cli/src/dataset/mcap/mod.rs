@@ -133,13 +133,21 @@ pub struct WriteOptions {
     pub wheel_joints: Vec<String>,
     /// The robot's own odometry (the design model's), published on `/odom`. Default none.
     pub design_odometry: Option<Vec<StampedPose>>,
+    /// Odometry of a calibrated model, published on `/omnical/odometry` (`omnical export --mcap`). Default
+    /// none.
+    pub calibrated_odometry: Option<Vec<StampedPose>>,
     /// Stamps are this many seconds plus the run's `t_s`. s. Default 0 (sim time).
     pub origin_s: i64,
 }
 
 impl Default for WriteOptions {
     fn default() -> Self {
-        Self { wheel_joints: DEFAULT_WHEEL_JOINTS.map(String::from).to_vec(), design_odometry: None, origin_s: 0 }
+        Self {
+            wheel_joints: DEFAULT_WHEEL_JOINTS.map(String::from).to_vec(),
+            design_odometry: None,
+            calibrated_odometry: None,
+            origin_s: 0,
+        }
     }
 }
 

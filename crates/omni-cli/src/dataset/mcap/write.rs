@@ -25,6 +25,8 @@ pub(super) const TRUTH_TOPIC: &str = "/ground_truth/pose";
 pub(super) const COMMAND_TOPIC: &str = "/cmd_vel";
 /// The robot's own (design) odometry.
 pub(super) const ODOM_TOPIC: &str = "/odom";
+/// The calibrated odometry (`omnical export --mcap`).
+pub(super) const CALIBRATED_TOPIC: &str = "/omnical/odometry";
 /// The world frame of the ground truth.
 pub(super) const TRUTH_FRAME: &str = "map";
 
@@ -88,7 +90,8 @@ fn body_twists(poses: &[StampedPose]) -> Vec<Twist> {
     out
 }
 
-/// Writes the file's messages. Channel slots: 0 joints, 1 truth, 2 command, 3 odometry.
+/// Writes the file's messages. Channel slots: 0 joints, 1 truth, 2 command, 3 odometry, 4 calibrated
+/// odometry.
 fn messages(path: &Path, run: &Run, w: &WriteOptions) -> Result<Vec<Pending>, DatasetError> {
     let n = run.n_wheels();
     let mut m = Messages { path, origin_s: w.origin_s, out: Vec::new() };
@@ -118,7 +121,8 @@ fn messages(path: &Path, run: &Run, w: &WriteOptions) -> Result<Vec<Pending>, Da
         m.push(m.stamp(t[0])?, 2, &twist_of(&c))?;
         m.push(m.stamp(t[t.len() - 1])?, 2, &Twist::default())?;
     }
-    if let Some(odom) = &w.design_odometry {
+    for (slot, odom) in [(3, &w.design_odometry), (4, &w.calibrated_odometry)] {
+        let Some(odom) = odom else { continue };
         for (p, tw) in odom.iter().zip(body_twists(odom)) {
             let msg = Odometry {
                 header: header(m.stamp(p.t_s)?, ODOM_FRAME),
@@ -126,7 +130,7 @@ fn messages(path: &Path, run: &Run, w: &WriteOptions) -> Result<Vec<Pending>, Da
                 pose: PoseWithCovariance { pose: planar(p), covariance: Default::default() },
                 twist: TwistWithCovariance { twist: tw, covariance: Default::default() },
             };
-            m.push(msg.header.stamp, 3, &msg)?;
+            m.push(msg.header.stamp, slot, &msg)?;
         }
     }
     // Time order; at equal times, channel order (joints first), and message order within a channel.
@@ -186,6 +190,7 @@ fn write_file(tmp: &Path, run: &Run, w: &WriteOptions, pending: &[Pending]) -> R
         (pose_stamped::NAME, pose_stamped::schema(), TRUTH_TOPIC, true),
         (twist::NAME, twist::schema(), COMMAND_TOPIC, run.command().is_some()),
         (odometry::NAME, odometry::schema(), ODOM_TOPIC, w.design_odometry.is_some()),
+        (odometry::NAME, odometry::schema(), CALIBRATED_TOPIC, w.calibrated_odometry.is_some()),
     ] {
         let id = if used {
             let schema = out.add_schema(name, "ros2msg", text.as_bytes()).map_err(mcap_err)?;

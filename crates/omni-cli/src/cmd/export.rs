@@ -1,0 +1,101 @@
+//! `omnical export`: trajectories for other tools — TUM files for evo, MCAP bags with the calibrated
+//! odometry for Foxglove.
+
+use super::diagnose::design_for;
+use super::{load_runs, resolve_model};
+use crate::atomic;
+use crate::cli::DataArgs;
+use crate::dataset::mcap::{WriteOptions, write_run};
+use crate::report::tum;
+use anyhow::Context;
+use omni_kin::odometry::{self, Selection};
+use omni_kin::{FittedModel, Run, StampedPose};
+use std::path::{Path, PathBuf};
+
+/// Arguments of `omnical export`.
+#[derive(Debug)]
+pub struct Args {
+    /// Model file (or `design`).
+    pub model: String,
+    /// Runs.
+    pub runs: Vec<PathBuf>,
+    /// TUM output folder.
+    pub tum: Option<PathBuf>,
+    /// MCAP output folder.
+    pub mcap: Option<PathBuf>,
+    /// Wheel joint names for the MCAP output.
+    pub data: DataArgs,
+}
+
+/// The odometry of the measured point: every wheel-sample step plus the exact predictions at the
+/// ground-truth stamps (so tools that match poses by time find an exact match), in time order.
+pub fn odometry_poses(model: &FittedModel, run: &Run) -> anyhow::Result<Vec<StampedPose>> {
+    let res = model.model.resolve(&model.params).with_context(|| format!("run {}", run.name()))?;
+    let dense = odometry::integrate(&res, run);
+    let mut poses: Vec<StampedPose> =
+        dense.t_s.iter().zip(&dense.poses).map(|(&t_s, &pose)| StampedPose { t_s, pose }).collect();
+    let at_truth = odometry::residuals(&res, run, Selection::Path(1));
+    poses.retain(|p| !at_truth.iter().any(|r| (r.t_s - p.t_s).abs() < 1e-9));
+    poses.extend(at_truth.iter().map(|r| StampedPose { t_s: r.t_s, pose: r.predicted }));
+    poses.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
+    Ok(poses)
+}
+
+/// Runs `omnical export`.
+pub fn run(a: &Args) -> anyhow::Result<()> {
+    if a.tum.is_none() && a.mcap.is_none() {
+        anyhow::bail!("nothing to export: give --tum DIR and/or --mcap DIR");
+    }
+    let ds = load_runs(&a.runs, &a.data)?;
+    let model = resolve_model(&a.model, &ds)?;
+    let design = design_for(&model);
+    if let Some(dir) = &a.tum {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        for run in &ds.runs {
+            write_tum(dir, run, &design, &model, &a.model)?;
+        }
+        println!(
+            "wrote {} runs × 3 TUM files (ground truth, design, calibrated) to {}; e.g. evo_ape tum {}",
+            ds.runs.len(),
+            dir.display(),
+            ds.runs.first().map_or_else(String::new, |r| {
+                let s = tum::file_stem(r.name());
+                format!("{0}/{s}.gt.tum {0}/{s}.calibrated.tum", dir.display())
+            })
+        );
+    }
+    if let Some(dir) = &a.mcap {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        for run in &ds.runs {
+            let opts = WriteOptions {
+                wheel_joints: a.data.joints.clone(),
+                design_odometry: (!run.recorded_odometry().is_empty()).then(|| run.recorded_odometry().to_vec()),
+                calibrated_odometry: Some(odometry_poses(&model, run)?),
+                ..WriteOptions::default()
+            };
+            let path = dir.join(format!("{}.mcap", tum::file_stem(run.name())));
+            write_run(&path, run, &opts)?;
+        }
+        println!(
+            "wrote {} MCAP files to {} (topics /joint_states, /ground_truth/pose, /omnical/odometry, …)",
+            ds.runs.len(),
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+fn write_tum(dir: &Path, run: &Run, design: &FittedModel, model: &FittedModel, spec: &str) -> anyhow::Result<()> {
+    let stem = tum::file_stem(run.name());
+    let files = [
+        ("gt", format!("run {}: ground truth", run.name()), run.truth().to_vec()),
+        ("design", format!("run {}: odometry of the design model", run.name()), odometry_poses(design, run)?),
+        ("calibrated", format!("run {}: odometry of {spec}", run.name()), odometry_poses(model, run)?),
+    ];
+    for (kind, comment, poses) in files {
+        let path = dir.join(format!("{stem}.{kind}.tum"));
+        let text = tum::to_tum(&format!("{comment}\ntimestamp tx ty tz qx qy qz qw (s, m, unit quaternion)"), &poses);
+        atomic::write_atomic(&path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,80 @@
+//! `omnical report`: the HTML report of a model on runs (diagnosis included unless `--no-diagnose`).
+
+use super::diagnose::design_for;
+use super::{load_runs, resolve_model};
+use crate::cli::DataArgs;
+use crate::progress;
+use crate::report::{self, ReportInput};
+use omni_ga::diagnose::{DiagnoseOptions, diagnose};
+use std::path::PathBuf;
+
+/// Arguments of `omnical report`.
+#[derive(Debug)]
+pub struct Args {
+    /// Model file (or `design`).
+    pub model: String,
+    /// Training runs.
+    pub runs: Vec<PathBuf>,
+    /// Held-out runs.
+    pub validate: Vec<PathBuf>,
+    /// HTML output.
+    pub out: PathBuf,
+    /// PNG folder.
+    pub png: Option<PathBuf>,
+    /// Skip the diagnosis.
+    pub no_diagnose: bool,
+    /// Data options.
+    pub data: DataArgs,
+    /// No progress display.
+    pub quiet: bool,
+}
+
+/// Runs `omnical report`.
+pub fn run(a: &Args) -> anyhow::Result<()> {
+    let ds = load_runs(&a.runs, &a.data)?;
+    let model = resolve_model(&a.model, &ds)?;
+    let val = if a.validate.is_empty() { Vec::new() } else { load_runs(&a.validate, &a.data)?.runs };
+    let design = design_for(&model);
+    let diagnosis = if a.no_diagnose {
+        None
+    } else {
+        let spinner = progress::spinner("diagnosing: refitting each candidate effect", a.quiet);
+        let opts = DiagnoseOptions { auto: true, ..DiagnoseOptions::default() };
+        let held_out = if val.is_empty() { None } else { Some(val.as_slice()) };
+        let d = diagnose(&model, &design, &ds.runs, held_out, &opts)?;
+        spinner.finish_and_clear();
+        Some(d)
+    };
+    let mut sources: Vec<String> = a.runs.iter().map(|p| format!("train: {}", p.display())).collect();
+    sources.extend(a.validate.iter().map(|p| format!("validation: {}", p.display())));
+    sources.push(format!("model: {}", a.model));
+    let input = ReportInput {
+        title: format!("omnical report: {}", a.model),
+        models: report::models_for(&design, &model, diagnosis.as_ref()),
+        train: &ds.runs,
+        held_out: &val,
+        diagnosis: diagnosis.as_ref(),
+        sources,
+    };
+    let spinner = progress::spinner("drawing the report", a.quiet);
+    let w = report::write(&input, &a.out, a.png.as_deref())?;
+    spinner.finish_and_clear();
+    print_written(&w, &a.out);
+    Ok(())
+}
+
+/// One line per model and the files written.
+pub fn print_written(w: &report::Written, html: &std::path::Path) {
+    println!("{:<36} {:>16} {:>16}", "model", "held-out path m", "held-out Eq. 6");
+    for m in &w.report.models {
+        println!("{:<36} {:>16.5} {:>16.5}", m.label, m.costs.held_out_path, m.costs.held_out_end_pose);
+    }
+    println!("report written to {} ({} figures: {})", html.display(), w.figures.len(), w.figures.join(", "));
+    if let Some(first) = w.png.first() {
+        println!(
+            "{} PNG figures in {}",
+            w.png.len(),
+            first.parent().map_or_else(String::new, |p| p.display().to_string())
+        );
+    }
+}

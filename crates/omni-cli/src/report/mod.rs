@@ -1,0 +1,334 @@
+//! The HTML report: what the models predict against what was measured, figure by figure.
+//!
+//! [`Report::build`] computes everything from plain data (models and runs; the diagnosis when there is
+//! one) — per-run errors, overlay paths, error growth, per-command maps — and [`html::render`] turns it into
+//! one self-contained HTML file with inline SVG figures (no scripts, no network fetches). [`png`] renders
+//! the same SVG figures to PNG files.
+//!
+//! Which runs: every figure uses the *held-out* runs (the validation set when given, otherwise the
+//! training runs, said so in the report), because a model is judged where it was not fitted.
+
+pub mod figures;
+pub mod html;
+pub mod png;
+pub mod tum;
+
+use omni_ga::diagnose::{Costs, Diagnosis};
+use omni_kin::cost::{self, CostKind};
+use omni_kin::odometry::{self, Selection};
+use omni_kin::{FittedModel, KinError, Pose2, Run};
+use serde::Serialize;
+
+/// Heading weight of the path cost. m/rad.
+const HEADING_WEIGHT_M_PER_RAD: f64 = 1.0;
+/// Bins of the error-growth curves.
+const GROWTH_BINS: usize = 20;
+
+/// A model shown in the report.
+#[derive(Clone, Debug)]
+pub struct Labelled {
+    /// `design`, `fitted matrix`, `+ time_offset`, …
+    pub label: String,
+    /// The model and its parameters.
+    pub model: FittedModel,
+}
+
+/// Everything the report is made from.
+#[derive(Clone, Debug)]
+pub struct ReportInput<'a> {
+    /// Title line.
+    pub title: String,
+    /// Models, from the design (first) to the best one (last). At least one.
+    pub models: Vec<Labelled>,
+    /// Training runs.
+    pub train: &'a [Run],
+    /// Held-out runs (may be empty: the figures then use the training runs).
+    pub held_out: &'a [Run],
+    /// The diagnosis of the fitted model, when one was run.
+    pub diagnosis: Option<&'a Diagnosis>,
+    /// Where the data came from (shown in the summary).
+    pub sources: Vec<String>,
+}
+
+/// One model's numbers.
+#[derive(Clone, Debug, Serialize)]
+pub struct ModelSummary {
+    /// Label.
+    pub label: String,
+    /// Costs on training and held-out runs (path RMS m, Eq. 6).
+    pub costs: Costs,
+    /// IK matrix rows (vx m/s, vy m/s, ω rad/s per wheel rad/s), when it has one.
+    pub matrix: Option<Vec<Vec<f64>>>,
+    /// Parameters beyond the IK matrix entries: (name, value, unit).
+    pub params: Vec<(String, f64, String)>,
+}
+
+/// One held-out run's errors under each model.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunErrors {
+    /// Run name.
+    pub name: String,
+    /// Commanded translation direction. rad.
+    pub alpha_rad: Option<f64>,
+    /// Commanded yaw rate. rad/s.
+    pub omega_rad_s: Option<f64>,
+    /// End position error per model. m.
+    pub end_position_m: Vec<f64>,
+    /// End heading error per model. rad.
+    pub end_heading_rad: Vec<f64>,
+    /// Path RMS per model (heading at 1 m/rad). m.
+    pub path_rms_m: Vec<f64>,
+}
+
+/// A path drawn in an overlay.
+#[derive(Clone, Debug, Serialize)]
+pub struct PathLine {
+    /// `ground truth` or a model label.
+    pub label: String,
+    /// (x, y) in the world frame. m.
+    pub xy_m: Vec<(f64, f64)>,
+}
+
+/// Ground truth and each model's odometry for one run.
+#[derive(Clone, Debug, Serialize)]
+pub struct Overlay {
+    /// Why this run: `worst` or `typical`.
+    pub role: String,
+    /// Run name.
+    pub run: String,
+    /// Ground truth first, then one line per model.
+    pub lines: Vec<PathLine>,
+}
+
+/// Mean errors against the fraction of run time, per model.
+#[derive(Clone, Debug, Serialize)]
+pub struct GrowthCurves {
+    /// Bin centres (0…1).
+    pub fraction: Vec<f64>,
+    /// Mean position error per model and bin. m.
+    pub position_m: Vec<Vec<f64>>,
+    /// Mean |heading error| per model and bin. rad.
+    pub heading_rad: Vec<Vec<f64>>,
+}
+
+/// The report's content, ready to draw.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    /// Title.
+    pub title: String,
+    /// Data sources.
+    pub sources: Vec<String>,
+    /// Number of training runs.
+    pub train_runs: usize,
+    /// Number of held-out runs shown (0 when the figures fall back to training runs).
+    pub held_out_runs: usize,
+    /// What the figures' runs are: `validation runs` or `training runs (no validation set given)`.
+    pub figure_runs: String,
+    /// Per model.
+    pub models: Vec<ModelSummary>,
+    /// Per figure run.
+    pub runs: Vec<RunErrors>,
+    /// Worst and typical runs of the fitted model.
+    pub overlays: Vec<Overlay>,
+    /// Error growth along the runs.
+    pub growth: GrowthCurves,
+    /// Noise floor path RMS, when the diagnosis estimated one. m.
+    pub noise_floor_m: Option<f64>,
+    /// Error ladder (label, held-out path RMS m, held-out Eq. 6), from the diagnosis or the models.
+    pub ladder: Vec<(String, f64, f64)>,
+}
+
+impl Report {
+    /// Computes the report's content. Fails only when a model cannot be evaluated on the runs (wrong wheel
+    /// count, singular geometry).
+    pub fn build(input: &ReportInput<'_>) -> Result<Report, KinError> {
+        let fig_runs = if input.held_out.is_empty() { input.train } else { input.held_out };
+        let figure_runs = if input.held_out.is_empty() {
+            "training runs (no validation set given)".to_string()
+        } else {
+            "validation runs".to_string()
+        };
+        let path = CostKind::Path { every: 1, heading_weight_m_per_rad: HEADING_WEIGHT_M_PER_RAD };
+        let mut models = Vec::with_capacity(input.models.len());
+        for m in &input.models {
+            cost::check_runs(&m.model.model, input.train)?;
+            cost::check_runs(&m.model.model, fig_runs)?;
+            let c = |runs: &[Run], k| cost::cost(&m.model.model, &m.model.params, runs, k);
+            let costs = Costs {
+                train_path: c(input.train, path)?,
+                held_out_path: c(fig_runs, path)?,
+                train_end_pose: c(input.train, CostKind::EndPose)?,
+                held_out_end_pose: c(fig_runs, CostKind::EndPose)?,
+            };
+            let specs = m.model.model.params();
+            let nb = if matches!(m.model.model.kinematics, omni_kin::Kinematics::Ik { .. }) {
+                m.model.model.n_base()
+            } else {
+                0
+            };
+            let params =
+                specs.iter().zip(&m.model.params).skip(nb).map(|(s, v)| (s.name.clone(), *v, s.unit.to_string()));
+            models.push(ModelSummary {
+                label: m.label.clone(),
+                costs,
+                matrix: m.model.ik().ok().map(|k| k.rows()),
+                params: params.collect(),
+            });
+        }
+
+        let mut runs = Vec::with_capacity(fig_runs.len());
+        let mut growth_sum = vec![vec![(0.0, 0.0, 0usize); GROWTH_BINS]; input.models.len()];
+        for run in fig_runs {
+            let mut e = RunErrors {
+                name: run.name().to_string(),
+                alpha_rad: run.command().map(|c| c.alpha_rad),
+                omega_rad_s: run.command().map(|c| c.omega_rad_s),
+                end_position_m: Vec::new(),
+                end_heading_rad: Vec::new(),
+                path_rms_m: Vec::new(),
+            };
+            let (t0, t1) = (run.start().t_s, run.end().t_s);
+            for (mi, m) in input.models.iter().enumerate() {
+                let res = m.model.model.resolve(&m.model.params)?;
+                let r = odometry::residuals(&res, run, Selection::Path(1));
+                let mut sq = 0.0;
+                for x in &r {
+                    let pos = x.error.position_m();
+                    sq += pos * pos + (HEADING_WEIGHT_M_PER_RAD * x.error.dtheta_rad).powi(2);
+                    let f = if t1 > t0 { (x.t_s - t0) / (t1 - t0) } else { 0.0 };
+                    let b = ((f * GROWTH_BINS as f64) as usize).min(GROWTH_BINS - 1);
+                    let cell = &mut growth_sum[mi][b];
+                    cell.0 += pos;
+                    cell.1 += x.error.dtheta_rad.abs();
+                    cell.2 += 1;
+                }
+                let last = r.last().map(|x| x.error).unwrap_or_default();
+                e.end_position_m.push(last.position_m());
+                e.end_heading_rad.push(last.dtheta_rad.abs());
+                e.path_rms_m.push(if r.is_empty() { 0.0 } else { (sq / r.len() as f64).sqrt() });
+            }
+            runs.push(e);
+        }
+        let mean = |v: f64, n: usize| if n == 0 { f64::NAN } else { v / n as f64 };
+        let growth = GrowthCurves {
+            fraction: (0..GROWTH_BINS).map(|b| (b as f64 + 0.5) / GROWTH_BINS as f64).collect(),
+            position_m: growth_sum.iter().map(|g| g.iter().map(|c| mean(c.0, c.2)).collect()).collect(),
+            heading_rad: growth_sum.iter().map(|g| g.iter().map(|c| mean(c.1, c.2)).collect()).collect(),
+        };
+
+        // Worst and typical held-out runs of the fitted model (the second one; the design when alone).
+        let judge = input.models.len().min(2) - 1;
+        let mut order: Vec<usize> = (0..runs.len()).collect();
+        order.sort_by(|&a, &b| runs[a].end_position_m[judge].total_cmp(&runs[b].end_position_m[judge]));
+        let mut overlays = Vec::new();
+        if let Some(&worst) = order.last() {
+            overlays.push(overlay("worst", &fig_runs[worst], &input.models)?);
+            let typical = order[order.len() / 2];
+            if typical != worst {
+                overlays.push(overlay("typical", &fig_runs[typical], &input.models)?);
+            }
+        }
+
+        let ladder = match input.diagnosis {
+            Some(d) if !d.ladder.is_empty() => {
+                d.ladder.iter().map(|r| (r.label.clone(), r.costs.held_out_path, r.costs.held_out_end_pose)).collect()
+            }
+            _ => models.iter().map(|m| (m.label.clone(), m.costs.held_out_path, m.costs.held_out_end_pose)).collect(),
+        };
+        Ok(Report {
+            title: input.title.clone(),
+            sources: input.sources.clone(),
+            train_runs: input.train.len(),
+            held_out_runs: input.held_out.len(),
+            figure_runs,
+            models,
+            runs,
+            overlays,
+            growth,
+            noise_floor_m: input.diagnosis.and_then(|d| d.noise_floor.as_ref().map(|n| n.path_rms)),
+            ladder,
+        })
+    }
+}
+
+fn overlay(role: &str, run: &Run, models: &[Labelled]) -> Result<Overlay, KinError> {
+    let mut lines = vec![PathLine {
+        label: "ground truth".into(),
+        xy_m: run.truth().iter().map(|p| (p.pose.x_m, p.pose.y_m)).collect(),
+    }];
+    for m in models {
+        let res = m.model.model.resolve(&m.model.params)?;
+        let tr = odometry::integrate(&res, run);
+        lines.push(PathLine { label: m.label.clone(), xy_m: thin(&tr.poses) });
+    }
+    Ok(Overlay { role: role.into(), run: run.name().into(), lines })
+}
+
+/// At most ~600 points per line (the SVG stays small), always keeping the last one.
+fn thin(poses: &[Pose2]) -> Vec<(f64, f64)> {
+    let step = poses.len().div_ceil(600).max(1);
+    let mut v: Vec<(f64, f64)> = poses.iter().step_by(step).map(|p| (p.x_m, p.y_m)).collect();
+    if let Some(last) = poses.last()
+        && !(poses.len() - 1).is_multiple_of(step)
+    {
+        v.push((last.x_m, last.y_m));
+    }
+    v
+}
+
+/// What [`write`] produced.
+#[derive(Clone, Debug)]
+pub struct Written {
+    /// The computed content.
+    pub report: Report,
+    /// Ids of the figures in the page.
+    pub figures: Vec<String>,
+    /// PNG files written (with `png_dir`).
+    pub png: Vec<std::path::PathBuf>,
+}
+
+/// Builds the report, writes the HTML page to `html_path` (atomically) and, with `png_dir`, each figure as
+/// PNG.
+pub fn write(
+    input: &ReportInput<'_>,
+    html_path: &std::path::Path,
+    png_dir: Option<&std::path::Path>,
+) -> anyhow::Result<Written> {
+    use anyhow::Context;
+    let report = Report::build(input).context("evaluating the models for the report")?;
+    let (figs, notes) = figures::all(&report, input.diagnosis).context("drawing the figures")?;
+    let page = html::render(&report, &figs, &notes, input.diagnosis);
+    if let Some(dir) = html_path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    crate::atomic::write_atomic(html_path, page.as_bytes())
+        .with_context(|| format!("writing {}", html_path.display()))?;
+    let png = match png_dir {
+        Some(dir) => png::write_all(&figs, dir)?,
+        None => Vec::new(),
+    };
+    Ok(Written { report, figures: figs.into_iter().map(|f| f.id).collect(), png })
+}
+
+/// The models a report shows for a fitted model and its diagnosis: the design, the model itself, and the
+/// model with the effects the diagnosis added (when it added any).
+pub fn models_for(design: &FittedModel, fitted: &FittedModel, diagnosis: Option<&Diagnosis>) -> Vec<Labelled> {
+    let base = match fitted.model.kinematics {
+        omni_kin::Kinematics::Ik { .. } => "fitted matrix",
+        omni_kin::Kinematics::Geometry { .. } => "fitted geometry",
+    };
+    let with_effects = |m: &FittedModel, base: &str| {
+        let ids: Vec<&str> = m.model.effects.iter().map(omni_kin::effect::Effect::id).collect();
+        if ids.is_empty() { base.to_string() } else { format!("{base} + {}", ids.join(" + ")) }
+    };
+    let mut v = vec![
+        Labelled { label: "design".into(), model: design.clone() },
+        Labelled { label: with_effects(fitted, base), model: fitted.clone() },
+    ];
+    if let Some(f) = diagnosis.and_then(|d| d.final_model.as_ref())
+        && f.model.effects.len() > fitted.model.effects.len()
+    {
+        v.push(Labelled { label: with_effects(f, base), model: f.clone() });
+    }
+    v
+}
