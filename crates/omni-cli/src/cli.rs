@@ -12,7 +12,7 @@ pub struct Cli {
     /// Worker threads (default: all cores). Results do not depend on it.
     #[arg(long, global = true)]
     pub threads: Option<usize>,
-    /// Print only the final summary.
+    /// Hide progress bars (they are also hidden when stderr is not a terminal); summaries still print.
     #[arg(long, short, global = true)]
     pub quiet: bool,
     /// The subcommand.

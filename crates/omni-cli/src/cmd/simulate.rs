@@ -107,8 +107,10 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let mut summary = serde_json::Map::new();
     for (split, seed) in [("train", a.seed), ("validation", a.seed.wrapping_add(1))] {
         let cfg = SimConfig { seed, ..config.clone() };
+        let spinner = crate::progress::spinner(format!("simulating and writing {split} runs"), a.quiet);
         let runs = simulate(&cfg, &truth, &format!("{split}/"))?;
         write_split(&a.out.join(split), &runs, a.format, &wheel_names)?;
+        spinner.finish_and_clear();
         let costs: Vec<(String, f64)> = [CostKind::EndPose, CostKind::PATH]
             .iter()
             .flat_map(|&k| {
@@ -123,16 +125,15 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             .map(|(n, c)| (n.clone(), json!(c)))
             .chain([("seed".to_string(), json!(seed)), ("runs".to_string(), json!(runs.len()))])
             .collect();
-        if !a.quiet {
-            eprintln!(
-                "{split}: {} runs, design cost {:.4}, oracle cost {:.4} (Eq. 6; path: {:.4} vs {:.4})",
-                runs.len(),
-                costs[0].1,
-                costs[1].1,
-                costs[2].1,
-                costs[3].1
-            );
-        }
+        // The summary prints whatever --quiet says (it only hides progress).
+        println!(
+            "{split}: {} runs, design cost {:.4}, oracle cost {:.4} (Eq. 6; path: {:.4} vs {:.4})",
+            runs.len(),
+            costs[0].1,
+            costs[1].1,
+            costs[2].1,
+            costs[3].1
+        );
         summary.insert(split.into(), serde_json::Value::Object(entry));
     }
     let truth_toml = model_file::to_toml(&truth, None).map_err(anyhow::Error::msg)?;

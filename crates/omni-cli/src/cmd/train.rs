@@ -2,10 +2,9 @@
 
 use super::{design_ik, load_runs};
 use crate::cli::{DataArgs, ModelKind, PresetArg};
-use crate::{atomic, model_file};
+use crate::{atomic, model_file, progress};
 use anyhow::Context;
 use omni_ga::calibrate::{Calibration, Plan, Preset, calibrate};
-use omni_ga::observe::NoopObserver;
 use omni_kin::{EffectKind, FittedModel, Model, RobotGeometry};
 use serde_json::json;
 use std::path::PathBuf;
@@ -78,7 +77,9 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         PresetArg::Default => (Preset::Default, "default"),
     };
     let plan = Plan::preset(preset, start.model.n_params()).seed(a.seed);
-    let c = calibrate(&start, &ds.runs, &plan, &mut NoopObserver)?;
+    let mut bar = progress::ProgressObserver::new(plan.ga.as_ref().map_or(0, |g| g.max_generations), a.quiet);
+    let c = calibrate(&start, &ds.runs, &plan, &mut bar)?;
+    bar.finish();
     let s = summary(&c, preset_name, a.seed, ds.runs.len())?;
     if let Some(out) = &a.out {
         let fit: toml::Table = toml::Table::try_from(&s).context("fit summary")?;

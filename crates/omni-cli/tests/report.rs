@@ -1,0 +1,197 @@
+//! `omnical report` and `omnical export` end to end: the report of a simulated robot with a hidden effect,
+//! its PNG figures, TUM files checked by evo, and MCAP bags with the calibrated odometry.
+//!
+//! The evo check uses `evo_ape` beside `$OMNICAL_PYTHON` (CI installs evo from requirements-dev.txt);
+//! without it that test prints a skip note and passes.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use omni_cli::dataset::{self, LoadOptions};
+use omni_kin::odometry::{self, Selection};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::OnceLock;
+
+fn omnical(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir).output().expect("run omnical")
+}
+
+fn ok(out: &Output) -> String {
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8(out.stdout.clone()).unwrap()
+}
+
+/// A small simulated robot with a 60 ms wheel-clock lag, and the matrix fitted to it (shared by the tests).
+fn fitted() -> &'static (tempfile::TempDir, PathBuf) {
+    static DATA: OnceLock<(tempfile::TempDir, PathBuf)> = OnceLock::new();
+    DATA.get_or_init(|| {
+        let dir = tempfile::tempdir().unwrap();
+        ok(&omnical(
+            &["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "6", "--effect", "time_offset=0.06"],
+            dir.path(),
+        ));
+        ok(&omnical(&["train", "sim/train", "--out", "fit.toml", "-q"], dir.path()));
+        let root = dir.path().to_path_buf();
+        (dir, root)
+    })
+}
+
+/// Value of `label`'s held-out path RMS in `omnical report`'s table.
+fn held_out_path(stdout: &str, label: &str) -> f64 {
+    let line = stdout.lines().find(|l| l.starts_with(&format!("{label} "))).unwrap_or_else(|| panic!("{stdout}"));
+    line[label.len()..].split_whitespace().next().unwrap().parse().unwrap()
+}
+
+#[test]
+fn report_shows_every_figure_and_the_error_falling_with_the_hidden_effect() {
+    let (_keep, root) = fitted();
+    let out = omnical(
+        &[
+            "report",
+            "--model",
+            "fit.toml",
+            "sim/train",
+            "--validate",
+            "sim/validation",
+            "--out",
+            "out/report.html",
+            "--png",
+            "out/png",
+        ],
+        root,
+    );
+    let stdout = ok(&out);
+    let design = held_out_path(&stdout, "design");
+    let matrix = held_out_path(&stdout, "fitted matrix");
+    let with_effect = held_out_path(&stdout, "fitted matrix + time_offset");
+    assert!(matrix < 0.2 * design, "{stdout}");
+    assert!(with_effect < 0.7 * matrix, "the hidden clock lag should be found and help: {stdout}");
+
+    let html = std::fs::read_to_string(root.join("out/report.html")).unwrap();
+    let ids = ["ladder", "overlay-worst", "overlay-typical", "flower", "heat-map", "growth", "ranking"];
+    for id in ids {
+        assert!(html.contains(&format!("data-figure=\"{id}\"")), "figure {id} missing");
+        let png = std::fs::read(root.join(format!("out/png/{id}.png"))).unwrap();
+        assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{id}.png is not a PNG");
+        assert!(png.len() > 10_000, "{id}.png is nearly empty ({} bytes)", png.len());
+    }
+    assert_eq!(html.matches("<figure ").count(), ids.len());
+    assert_eq!(html.matches("<svg").count(), ids.len());
+    // Self-contained: no scripts, no external resources.
+    for bad in ["<script", "src=", "href=\"http", "url(http", "@import"] {
+        assert!(!html.contains(bad), "report contains {bad}");
+    }
+    assert!(html.contains("Verdict.") && html.contains("add time_offset"), "verdict missing");
+    assert!(html.contains("time_offset.tau_s"), "fitted effect parameter missing");
+}
+
+#[test]
+fn report_without_diagnosis_or_commands_leaves_those_figures_out_and_says_so() {
+    let Some(data) = shared_data() else {
+        eprintln!("SKIPPED: ../shared/data/optiodom-omni3-square not found");
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let set = data.join("221220201934");
+    let out = omnical(
+        &["report", "--model", "design", set.to_str().unwrap(), "--no-diagnose", "--out", "r.html"],
+        dir.path(),
+    );
+    let stdout = ok(&out);
+    assert!(stdout.contains("(4 figures: ladder, overlay-worst, overlay-typical, growth)"), "{stdout}");
+    let html = std::fs::read_to_string(dir.path().join("r.html")).unwrap();
+    assert!(html.contains("carry no (v, α, ω) command"), "note on missing commands");
+    assert!(html.contains("No diagnosis was run"), "note on missing diagnosis");
+    assert!(!html.contains("data-figure=\"ranking\""));
+    assert!(html.contains("data-figure=\"growth\""));
+    // The OptiOdom design cost of this set (README): Eq. 6 = 0.1856.
+    assert!(stdout.lines().any(|l| l.starts_with("design") && l.trim_end().ends_with("0.18560")), "{stdout}");
+}
+
+fn shared_data() -> Option<PathBuf> {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/optiodom-omni3-square");
+    p.exists().then_some(p)
+}
+
+/// `evo_ape` beside `$OMNICAL_PYTHON`, when evo is installed there.
+fn evo_ape() -> Option<PathBuf> {
+    let python = PathBuf::from(std::env::var_os("OMNICAL_PYTHON")?);
+    let ape = python.parent()?.join("evo_ape");
+    ape.exists().then_some(ape)
+}
+
+#[test]
+fn tum_export_agrees_with_evo_ape() {
+    let (_keep, root) = fitted();
+    let out = omnical(&["export", "--model", "fit.toml", "sim/validation/03-r0.mcap", "--tum", "tum"], root);
+    ok(&out);
+    for kind in ["gt", "design", "calibrated"] {
+        let text = std::fs::read_to_string(root.join(format!("tum/03-r0.{kind}.tum"))).unwrap();
+        let rows: Vec<&str> = text.lines().filter(|l| !l.starts_with('#')).collect();
+        assert!(rows.len() > 10, "{kind}: {} poses", rows.len());
+        assert!(rows.iter().all(|r| r.split(' ').count() == 8), "{kind}: not 8 columns");
+    }
+    // Our own position RMS over the ground-truth stamps, from the library.
+    let ds = dataset::load(&[root.join("sim/validation/03-r0.mcap")], &LoadOptions::default()).unwrap();
+    let model = omni_cli::model_file::read(&root.join("fit.toml")).unwrap();
+    let res = model.model.resolve(&model.params).unwrap();
+    let r = odometry::residuals(&res, &ds.runs[0], Selection::Path(1));
+    // Path residuals leave out the start pose, where odometry starts (error 0); evo compares it too.
+    assert_eq!(r[0].truth_index, 1);
+    let n = ds.runs[0].truth().len() as f64;
+    let ours = (r.iter().map(|x| x.error.position_m().powi(2)).sum::<f64>() / n).sqrt();
+    assert!(ours > 1e-4, "position RMS {ours}");
+
+    let Some(ape) = evo_ape() else {
+        eprintln!("SKIPPED: evo_ape not found beside $OMNICAL_PYTHON (pip install evo)");
+        return;
+    };
+    let out = Command::new(&ape)
+        .args(["tum", "03-r0.gt.tum", "03-r0.calibrated.tum", "--no_warnings"])
+        .current_dir(root.join("tum"))
+        .env("MPLBACKEND", "Agg")
+        .output()
+        .unwrap();
+    let text = ok(&out);
+    let rmse: f64 = text
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("rmse"))
+        .unwrap_or_else(|| panic!("no rmse in evo output: {text}"))
+        .trim()
+        .parse()
+        .unwrap();
+    // evo prints 6 decimals.
+    assert!((rmse - ours).abs() < 2e-6, "evo_ape rmse {rmse} m vs ours {ours} m");
+}
+
+#[test]
+fn mcap_export_adds_the_calibrated_odometry_topic() {
+    let (_keep, root) = fitted();
+    ok(&omnical(&["export", "--model", "fit.toml", "sim/validation/07-r0.mcap", "--mcap", "bags"], root));
+    let bytes = std::fs::read(root.join("bags/07-r0.mcap")).unwrap();
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    let topics: Vec<(&str, &str)> = summary
+        .channels
+        .values()
+        .map(|c| (c.topic.as_str(), c.schema.as_ref().map_or("", |s| s.name.as_str())))
+        .collect();
+    assert!(topics.contains(&("/omnical/odometry", "nav_msgs/msg/Odometry")), "{topics:?}");
+    assert!(topics.contains(&("/joint_states", "sensor_msgs/msg/JointState")), "{topics:?}");
+    let calibrated_id = summary.channels.values().find(|c| c.topic == "/omnical/odometry").unwrap().id;
+    let count = summary.stats.as_ref().unwrap().channel_message_counts[&calibrated_id];
+    // One pose per wheel step over the ground-truth span (6 s at 100 Hz) plus the ground-truth stamps.
+    assert!((600..=800).contains(&count), "{count} calibrated odometry messages");
+    // The bag still reads as a run, with the same ground truth.
+    let back = dataset::load(&[root.join("bags/07-r0.mcap")], &LoadOptions::default()).unwrap();
+    let orig = dataset::load(&[root.join("sim/validation/07-r0.mcap")], &LoadOptions::default()).unwrap();
+    assert_eq!(back.runs[0].truth().len(), orig.runs[0].truth().len());
+    let (a, b) = (back.runs[0].end().pose, orig.runs[0].end().pose);
+    assert!((a.x_m - b.x_m).abs() < 1e-12 && (a.y_m - b.y_m).abs() < 1e-12);
+}
+
+#[test]
+fn export_without_a_target_is_an_error() {
+    let (_keep, root) = fitted();
+    let out = omnical(&["export", "--model", "fit.toml", "sim/validation/07-r0.mcap"], root);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("nothing to export: give --tum DIR and/or --mcap DIR"));
+}
