@@ -17,10 +17,12 @@
 //! Results are deterministic: groups are evaluated in parallel, collected in order and summed in run
 //! order, so they do not depend on the thread count. With FMA the last bits differ from a CPU without it.
 
+use crate::cost::CostKind;
 use crate::model::{Resolved, Scheme};
 use crate::odometry::Selection;
 use crate::pose::{Pose2, PoseError, wrap_angle};
 use crate::run::Run;
+use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 /// Runs per lane group.
@@ -239,6 +241,112 @@ impl PreparedRuns {
             out.extend_from_slice(&ends[..lanes]);
         }
         Some(out)
+    }
+
+    /// The cost `kind` (as [`crate::cost::cost_resolved`]): the Eq. 6 end-pose cost with any selection, the
+    /// path cost when these runs were prepared for `Selection::Path(every)` of the same `every`. `None` when
+    /// `res` or `kind` needs the general walk.
+    pub fn cost(&self, res: &Resolved<'_>, kind: CostKind) -> Option<f64> {
+        match kind {
+            CostKind::EndPose => {
+                let e = self.end_pose_errors(res)?;
+                Some(crate::cost::mean_end_pose_error(&e))
+            }
+            CostKind::Path { every, heading_weight_m_per_rad: w } => {
+                if self.selection != Selection::Path(every) {
+                    return None;
+                }
+                let per: Vec<f64> = self.errors(res)?.iter().map(|e| mse(e, w)).collect();
+                if per.is_empty() {
+                    return Some(0.0);
+                }
+                Some((per.iter().sum::<f64>() / per.len() as f64).sqrt())
+            }
+        }
+    }
+
+    /// The stacked residual vector of [`crate::cost::residual_vector`]. `None` when `res` or `kind` needs
+    /// the general walk.
+    pub fn residual_vector(&self, res: &Resolved<'_>, kind: CostKind) -> Option<Vec<f64>> {
+        let w = self.heading_weight(kind)?;
+        let errors = self.errors(res)?;
+        let n_runs = self.n_runs.max(1) as f64;
+        let mut out = Vec::with_capacity(3 * errors.iter().map(Vec::len).sum::<usize>());
+        for e in &errors {
+            let scale = 1.0 / (n_runs * e.len().max(1) as f64).sqrt();
+            for e in e {
+                out.extend([e.dx_m * scale, e.dy_m * scale, w * e.dtheta_rad * scale]);
+            }
+        }
+        Some(out)
+    }
+
+    /// Residual vector (as [`Self::residual_vector`]) and its Jacobian with respect to the IK matrix
+    /// entries (columns in row-major order `m11 … m3N`), by forward-mode differentiation of the step
+    /// recurrence (closed forms, no finite differences). The sensor pose is held fixed. `None` when `res`
+    /// or `kind` needs the general walk.
+    pub fn residuals_and_ik_jacobian(&self, res: &Resolved<'_>, kind: CostKind) -> Option<(Vec<f64>, DMatrix<f64>)> {
+        let w = self.heading_weight(kind)?;
+        if !self.supports(res) {
+            return None;
+        }
+        let m = res.ik.entries();
+        let n = self.n_wheels;
+        let arc = res.scheme == Scheme::ExactArc;
+        let per_group: Vec<Option<Vec<Vec<Row>>>> = self
+            .groups
+            .par_iter()
+            .map(|g| {
+                let bound: f64 = (0..n).map(|j| m[2 * n + j].abs() * g.u_max[j]).sum();
+                if bound > MAX_STEP_ANGLE_RAD || !bound.is_finite() {
+                    return None;
+                }
+                Some(
+                    (0..g.lanes)
+                        .map(|lane| match (n, arc) {
+                            (3, true) => jacobian_lane::<3, true>(g, lane, m, res.sensor_from_body, self.selection),
+                            (3, false) => jacobian_lane::<3, false>(g, lane, m, res.sensor_from_body, self.selection),
+                            (4, true) => jacobian_lane::<4, true>(g, lane, m, res.sensor_from_body, self.selection),
+                            _ => jacobian_lane::<4, false>(g, lane, m, res.sensor_from_body, self.selection),
+                        })
+                        .collect(),
+                )
+            })
+            .collect();
+        let mut runs = Vec::with_capacity(self.n_runs);
+        for g in per_group {
+            runs.extend(g?);
+        }
+        let n_rows = 3 * runs.iter().map(Vec::len).sum::<usize>();
+        let n_cols = 3 * n;
+        let n_runs = self.n_runs.max(1) as f64;
+        let mut r = Vec::with_capacity(n_rows);
+        let mut jac = DMatrix::zeros(n_rows, n_cols);
+        let mut row = 0;
+        for rows in &runs {
+            let scale = 1.0 / (n_runs * rows.len().max(1) as f64).sqrt();
+            for q in rows {
+                let weights = [scale, scale, w * scale];
+                for (i, wi) in weights.iter().enumerate() {
+                    r.push(q.error[i] * wi);
+                    for c in 0..n_cols {
+                        jac[(row, c)] = q.d[i][c] * wi;
+                    }
+                    row += 1;
+                }
+            }
+        }
+        Some((r, jac))
+    }
+
+    fn heading_weight(&self, kind: CostKind) -> Option<f64> {
+        match (kind, self.selection) {
+            (CostKind::EndPose, Selection::End) => Some(1.0),
+            (CostKind::Path { every, heading_weight_m_per_rad }, Selection::Path(k)) if k == every => {
+                Some(heading_weight_m_per_rad)
+            }
+            _ => None,
+        }
     }
 
     fn group_errors(&self, g: &Group, res: &Resolved<'_>) -> Option<Vec<Vec<PoseError>>> {
@@ -547,6 +655,146 @@ fn kernel<O: LaneOps, const N: usize, const ARC: bool>(
     std::array::from_fn(|l| measured_error(lanes[l], sensor, &g.end[l]))
 }
 
+/// Mean squared path error of one run's errors (weighted heading), as [`crate::cost::run_path_mse`].
+fn mse(e: &[PoseError], w: f64) -> f64 {
+    let sum: f64 = e
+        .iter()
+        .map(|e| {
+            let th = w * e.dtheta_rad;
+            e.dx_m * e.dx_m + e.dy_m * e.dy_m + th * th
+        })
+        .sum();
+    sum / e.len().max(1) as f64
+}
+
+/// One predicted pose's error `(dx, dy, dθ)` and its derivatives with respect to the IK entries (up to
+/// 4 wheels: 12 columns).
+#[derive(Clone, Copy, Debug)]
+struct Row {
+    error: [f64; 3],
+    d: [[f64; 12]; 3],
+}
+
+/// Forward-mode sums along a walk, per wheel `j` (see [`jacobian_lane`]).
+#[derive(Clone, Copy, Debug)]
+struct Tangents<const N: usize> {
+    /// Σ u_j (p_x, p_y): world displacement per unit body-x displacement, weighted by the increment.
+    d: [[f64; 2]; N],
+    /// Σ u_j R B'(a) b: the change of the arc's shape with its angle.
+    g: [[f64; 2]; N],
+    /// Σ u_j (= ∂θ/∂m3j).
+    u: [f64; N],
+    /// Σ u_j x_after, Σ u_j y_after.
+    p: [[f64; 2]; N],
+}
+
+/// Derivatives of `sin(a)/a` and `(1 − cos a)/a`.
+#[inline(always)]
+fn arc_factor_slopes(a: f64) -> (f64, f64) {
+    let a2 = a * a;
+    let ds = a * (2.0 * S1 + a2 * (4.0 * S2 + a2 * (6.0 * S3 + a2 * 8.0 * S4)));
+    let dc = C0 + a2 * (3.0 * C1 + a2 * (5.0 * C2 + a2 * (7.0 * C3 + a2 * 9.0 * C4)));
+    (ds, dc)
+}
+
+/// One step of a lane with its tangents.
+#[inline(always)]
+fn step_with_tangents<const N: usize, const ARC: bool>(
+    st: LaneState,
+    t: &mut Tangents<N>,
+    m: &[f64],
+    u: &[f64],
+) -> LaneState {
+    let (dx, dy, a) = displacement::<N>(m, u);
+    let (sinc, cosc) = arc_factors(a);
+    let (sb, cb) = if ARC { (sinc, cosc) } else { (1.0, 0.0) };
+    let (px, py) = (st.c * sb - st.s * cb, st.s * sb + st.c * cb);
+    let (gx, gy) = if ARC {
+        let (ds, dc) = arc_factor_slopes(a);
+        let (bx, by) = (ds * dx - dc * dy, dc * dx + ds * dy);
+        (st.c * bx - st.s * by, st.s * bx + st.c * by)
+    } else {
+        (0.0, 0.0)
+    };
+    let next = step_lane::<ARC>(st, dx, dy, a);
+    for j in 0..N {
+        let uj = u[j];
+        t.d[j][0] += uj * px;
+        t.d[j][1] += uj * py;
+        t.g[j][0] += uj * gx;
+        t.g[j][1] += uj * gy;
+        t.u[j] += uj;
+        t.p[j][0] += uj * next.x;
+        t.p[j][1] += uj * next.y;
+    }
+    next
+}
+
+/// The measured pose's error and derivatives at lane state `st` with tangents `t`.
+///
+/// With `Θ_j = Σ u_j` the heading's derivative, a step's world displacement `Δ = R(θ) B(a) b` moves by
+/// `Θ_j J Δ` through the heading, so `∂x/∂m3j = −Σ_k Θ_jk Δy_k + g_jx = −(y Θ_j − Σ u_j y_after) + g_jx` (and
+/// likewise for y); the first two rows act on `b` only: `∂(x, y)/∂m1j = d_j`, `∂(x, y)/∂m2j = J d_j`.
+fn tangent_row<const N: usize>(st: LaneState, t: &Tangents<N>, sensor: Pose2, truth: &Pose2) -> Row {
+    let e = measured_error(st, sensor, truth);
+    let mut d = [[0.0; 12]; 3];
+    // The sensor's lever arm turns with the heading.
+    let (lx, ly) = (-st.s * sensor.x_m - st.c * sensor.y_m, st.c * sensor.x_m - st.s * sensor.y_m);
+    for j in 0..N {
+        d[0][j] = t.d[j][0];
+        d[1][j] = t.d[j][1];
+        d[0][N + j] = -t.d[j][1];
+        d[1][N + j] = t.d[j][0];
+        let th = t.u[j];
+        d[0][2 * N + j] = -(st.y * th - t.p[j][1]) + t.g[j][0] + th * lx;
+        d[1][2 * N + j] = (st.x * th - t.p[j][0]) + t.g[j][1] + th * ly;
+        d[2][2 * N + j] = th;
+    }
+    Row { error: [e.dx_m, e.dy_m, e.dtheta_rad], d }
+}
+
+/// The rows of one lane (one run): its queries in slot order, or its end pose.
+fn jacobian_lane<const N: usize, const ARC: bool>(
+    g: &Group,
+    lane: usize,
+    m: &[f64],
+    sensor: Pose2,
+    selection: Selection,
+) -> Vec<Row> {
+    let body = g.start[lane].compose(&sensor.inverse());
+    let (s, c) = body.theta_rad.sin_cos();
+    let mut st = LaneState { x: body.x_m, y: body.y_m, th: body.theta_rad, c, s };
+    let mut t = Tangents::<N> { d: [[0.0; 2]; N], g: [[0.0; 2]; N], u: [0.0; N], p: [[0.0; 2]; N] };
+    let mine: Vec<(usize, &Query)> = g.queries.iter().enumerate().filter(|(_, q)| q.lane == lane).collect();
+    let first_slot = mine.iter().map(|(_, q)| q.slot).min().unwrap_or(0);
+    let mut rows = vec![Row { error: [0.0; 3], d: [[0.0; 12]; 3] }; mine.len()];
+    let mut next = 0;
+    let mut u = [0.0; N];
+    for k in 0..=g.steps {
+        while next < mine.len() && mine[next].1.step == k {
+            let (qi, q) = mine[next];
+            let mut tq = t;
+            let sq = step_with_tangents::<N, ARC>(st, &mut tq, m, &g.query_u[qi * N..(qi + 1) * N]);
+            rows[q.slot - first_slot] = tangent_row(sq, &tq, sensor, &q.truth);
+            next += 1;
+        }
+        if k == g.steps {
+            break;
+        }
+        for (j, v) in u.iter_mut().enumerate() {
+            *v = g.u[k * N + j][lane];
+        }
+        st = step_with_tangents::<N, ARC>(st, &mut t, m, &u);
+        if k % RESYNC_STEPS == RESYNC_STEPS - 1 {
+            (st.s, st.c) = st.th.sin_cos();
+        }
+    }
+    match selection {
+        Selection::End => vec![tangent_row(st, &t, sensor, &g.end[lane])],
+        Selection::Path(_) => rows,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -632,5 +880,51 @@ mod tests {
         // A step angle beyond the polynomials' range.
         let fast = Model::ik(IkMatrix::new(3, vec![0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 50.0, 50.0, 50.0]).unwrap());
         assert!(prepared.errors(&fast.resolve(&fast.nominal()).unwrap()).is_none());
+    }
+
+    #[test]
+    fn ik_jacobian_matches_central_differences() {
+        let runs: Vec<Run> = paper_size().into_iter().step_by(15).collect();
+        for (integration, kind, sel) in [
+            (Integration::PAPER, CostKind::EndPose, Selection::End),
+            (Integration::DEFAULT, CostKind::EndPose, Selection::End),
+            (Integration::DEFAULT, CostKind::PATH, Selection::Path(1)),
+            (Integration::PAPER, CostKind::Path { every: 3, heading_weight_m_per_rad: 0.5 }, Selection::Path(3)),
+        ] {
+            let model = Model::ik(IkMatrix::paper_design())
+                .with_integration(integration)
+                .with_effect(EffectKind::from_id("sensor_offset", 3).unwrap());
+            let fixed = match integration.step {
+                crate::model::StepMode::Fixed { dt_s } => dt_s,
+                crate::model::StepMode::Stamps => unreachable!(),
+            };
+            let prepared = PreparedRuns::new(&runs, fixed, sel);
+            let mut x = IkMatrix::paper_calibrated().entries().to_vec();
+            x.extend([0.02, -0.01]);
+            let res = model.resolve(&x).unwrap();
+            let (r, j) = prepared.residuals_and_ik_jacobian(&res, kind).unwrap();
+            let fast = prepared.residual_vector(&res, kind).unwrap();
+            assert!(r.iter().zip(&fast).all(|(a, b)| (a - b).abs() < 1e-12), "residuals differ");
+            assert_eq!(j.ncols(), 9);
+            let mut worst = 0.0f64;
+            for c in 0..9 {
+                let h = 1e-6 * x[c].abs().max(0.05);
+                let mut xp = x.clone();
+                xp[c] += h;
+                let mut xm = x.clone();
+                xm[c] -= h;
+                let rp = prepared.residual_vector(&model.resolve(&xp).unwrap(), kind).unwrap();
+                let rm = prepared.residual_vector(&model.resolve(&xm).unwrap(), kind).unwrap();
+                // Relative to the column's largest entry: tiny entries carry the differences' rounding noise.
+                let col_max = (0..r.len()).map(|i| j[(i, c)].abs()).fold(0.0f64, f64::max);
+                assert!(col_max > 1e-3, "column {c} is flat");
+                for i in 0..r.len() {
+                    let fd = (rp[i] - rm[i]) / (2.0 * h);
+                    let err = (fd - j[(i, c)]).abs() / col_max;
+                    worst = worst.max(err);
+                }
+            }
+            assert!(worst < 1e-6, "{integration:?} {kind:?}: worst relative gap {worst:e}");
+        }
     }
 }
