@@ -717,8 +717,7 @@ fn step_with_tangents<const N: usize, const ARC: bool>(
         (0.0, 0.0)
     };
     let next = step_lane::<ARC>(st, dx, dy, a);
-    for j in 0..N {
-        let uj = u[j];
+    for (j, &uj) in u.iter().enumerate().take(N) {
         t.d[j][0] += uj * px;
         t.d[j][1] += uj * py;
         t.g[j][0] += uj * gx;
