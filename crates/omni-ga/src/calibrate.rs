@@ -204,7 +204,7 @@ impl Problem for CalibrationProblem<'_> {
             Ok(res) => self
                 .prepared
                 .as_ref()
-                .and_then(|p| p.cost(&res, self.objective))
+                .and_then(|p| p.cost(&res, self.runs, self.objective))
                 .unwrap_or_else(|| cost::cost_resolved(&res, self.runs, self.objective)),
             Err(_) => f64::INFINITY,
         }
@@ -218,7 +218,7 @@ impl LeastSquares for CalibrationProblem<'_> {
             Ok(res) => self
                 .prepared
                 .as_ref()
-                .and_then(|p| p.residual_vector(&res, self.objective))
+                .and_then(|p| p.residual_vector(&res, self.runs, self.objective))
                 .unwrap_or_else(|| cost::residual_vector(&res, self.runs, self.objective)),
             Err(_) => vec![f64::NAN; 3 * self.runs.len()],
         }

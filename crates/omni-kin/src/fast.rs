@@ -18,6 +18,7 @@
 //! order, so they do not depend on the thread count. With FMA the last bits differ from a CPU without it.
 
 use crate::cost::CostKind;
+use crate::effect::{Effect, WheelContext};
 use crate::model::{Resolved, Scheme};
 use crate::odometry::Selection;
 use crate::pose::{Pose2, PoseError, wrap_angle};
@@ -48,6 +49,14 @@ struct Query {
 /// Four runs interleaved.
 #[derive(Clone, Debug)]
 struct Group {
+    /// Index of the group's first run.
+    first_run: usize,
+    /// Per lane: steps and where they come from (to redo the increments from rewritten wheel speeds).
+    sources: Vec<(usize, StepSource)>,
+    /// Per query (in `queries` order): sample and fraction.
+    query_source: Vec<(usize, f64)>,
+    /// Step length of each lane. s.
+    h: Lanes,
     /// Real runs in the group (the other lanes are padding with zero increments).
     lanes: usize,
     /// Steps (the longest run's; shorter runs are padded with zero increments).
@@ -78,12 +87,21 @@ pub struct PreparedRuns {
     groups: Vec<Group>,
 }
 
-/// A query of one run: before step `.0`, a partial step of increments `.1`, predicting truth pose `.2`.
-type RunQuery = (usize, Vec<f64>, usize);
+/// A query of one run: before step `.0`, a partial step of increments `.1`, predicting truth pose `.2`,
+/// taken from sample `.3` with fraction `.4`.
+type RunQuery = (usize, Vec<f64>, usize, usize, f64);
+
+/// Where a run's steps come from: the first sample (steps take consecutive samples) and the steps whose
+/// fraction of the step length is not 1.
+#[derive(Clone, Debug, Default)]
+struct StepSource {
+    first_sample: usize,
+    partial: Vec<(usize, f64)>,
+}
 
 /// Wheel-angle increments of one run's steps, and its queries, exactly as [`crate::odometry`]'s walk
 /// takes them with no clock lag and fixed steps.
-fn run_steps(run: &Run, fixed_dt_s: Option<f64>, queries: &[usize]) -> (Vec<f64>, Vec<RunQuery>) {
+fn run_steps(run: &Run, fixed_dt_s: Option<f64>, queries: &[usize]) -> (Vec<f64>, Vec<RunQuery>, StepSource) {
     let n_w = run.n_wheels();
     let t = run.wheel_t_s();
     let wheels = run.wheel_rad_s();
@@ -97,6 +115,7 @@ fn run_steps(run: &Run, fixed_dt_s: Option<f64>, queries: &[usize]) -> (Vec<f64>
     let mut out = Vec::with_capacity(queries.len());
     let mut q = 0;
     let first = t.partition_point(|&tk| tk <= start);
+    let mut source = StepSource { first_sample: first, partial: Vec::new() };
     let mut cursor = start;
     let scaled = |k: usize, f: f64| -> Vec<f64> { wheels[k * n_w..(k + 1) * n_w].iter().map(|w| f * h * w).collect() };
     for k in first..n {
@@ -107,25 +126,27 @@ fn run_steps(run: &Run, fixed_dt_s: Option<f64>, queries: &[usize]) -> (Vec<f64>
         let steps = u.len() / n_w;
         while q < queries.len() && truth[queries[q]].t_s <= s_k {
             let f = ((truth[queries[q]].t_s - from) / len).clamp(0.0, 1.0);
-            out.push((steps, scaled(k, f), queries[q]));
+            out.push((steps, scaled(k, f), queries[q], k, f));
             q += 1;
         }
+        let f =
+            if s_k >= g_last { ((g_last - from) / len).clamp(0.0, 1.0) } else { ((s_k - from) / len).clamp(0.0, 1.0) };
+        if f != 1.0 {
+            source.partial.push((steps, f));
+        }
+        u.extend(scaled(k, f));
         if s_k >= g_last {
-            let f = ((g_last - from) / len).clamp(0.0, 1.0);
-            u.extend(scaled(k, f));
             break;
         }
-        let f = ((s_k - from) / len).clamp(0.0, 1.0);
-        u.extend(scaled(k, f));
         cursor = s_k;
     }
     // Validated runs cover the ground truth, so every query was met; keep the slots filled regardless.
     let steps = u.len() / n_w;
     while q < queries.len() {
-        out.push((steps, vec![0.0; n_w], queries[q]));
+        out.push((steps, vec![0.0; n_w], queries[q], 0, 0.0));
         q += 1;
     }
-    (u, out)
+    (u, out, source)
 }
 
 impl PreparedRuns {
@@ -135,7 +156,8 @@ impl PreparedRuns {
         let n_wheels = runs.first().map_or(0, Run::n_wheels);
         let groups = runs
             .par_chunks(LANES)
-            .map(|chunk| {
+            .enumerate()
+            .map(|(gi, chunk)| {
                 let per: Vec<_> = chunk
                     .iter()
                     .map(|r| {
@@ -146,10 +168,10 @@ impl PreparedRuns {
                         run_steps(r, fixed_dt_s, &idx)
                     })
                     .collect();
-                let steps = per.iter().map(|(u, _)| u.len() / n_wheels.max(1)).max().unwrap_or(0);
+                let steps = per.iter().map(|(u, _, _)| u.len() / n_wheels.max(1)).max().unwrap_or(0);
                 let mut u = vec![[0.0; LANES]; steps * n_wheels];
                 let mut u_max = vec![0.0f64; n_wheels];
-                for (lane, (ur, _)) in per.iter().enumerate() {
+                for (lane, (ur, _, _)) in per.iter().enumerate() {
                     for (i, &v) in ur.iter().enumerate() {
                         let (k, j) = (i / n_wheels, i % n_wheels);
                         u[k * n_wheels + j][lane] = v;
@@ -166,22 +188,44 @@ impl PreparedRuns {
                 let mut query_u = Vec::new();
                 let mut query_count = [0; LANES];
                 let mut slot = 0;
-                for (lane, ((_, qs), r)) in per.iter().zip(chunk).enumerate() {
+                let mut query_source = Vec::new();
+                for (lane, ((_, qs, _), r)) in per.iter().zip(chunk).enumerate() {
                     query_count[lane] = qs.len();
-                    for (step, qu, ti) in qs {
-                        queries.push((Query { step: *step, lane, slot, truth: r.truth()[*ti].pose }, qu.clone()));
+                    for (step, qu, ti, sample, f) in qs {
+                        let q = Query { step: *step, lane, slot, truth: r.truth()[*ti].pose };
+                        queries.push((q, qu.clone(), (*sample, *f)));
                         slot += 1;
                     }
                 }
-                queries.sort_by_key(|(q, _)| (q.step, q.lane));
+                queries.sort_by_key(|(q, _, _)| (q.step, q.lane));
                 let queries = queries
                     .into_iter()
-                    .map(|(q, qu)| {
+                    .map(|(q, qu, src)| {
                         query_u.extend(qu);
+                        query_source.push(src);
                         q
                     })
                     .collect();
-                Group { lanes: chunk.len(), steps, u, u_max, start, end, queries, query_u, query_count }
+                let sources = per.into_iter().map(|(ur, _, src)| (ur.len() / n_wheels.max(1), src)).collect();
+                let mut h = [0.0; LANES];
+                for (lane, r) in chunk.iter().enumerate() {
+                    h[lane] = fixed_dt_s.unwrap_or(r.median_dt_s());
+                }
+                Group {
+                    first_run: gi * LANES,
+                    lanes: chunk.len(),
+                    steps,
+                    u,
+                    u_max,
+                    start,
+                    end,
+                    queries,
+                    query_u,
+                    query_count,
+                    sources,
+                    query_source,
+                    h,
+                }
             })
             .collect();
         Self { n_runs: runs.len(), n_wheels, fixed_dt_s, selection, groups }
@@ -197,12 +241,12 @@ impl PreparedRuns {
         self.selection
     }
 
-    /// True when `res` can use these prepared runs (same fixed step, no clock lag, no wheel- or
-    /// twist-stage effects, no measured stamps, 3 or 4 wheels).
+    /// True when `res` can use these prepared runs (same fixed step, no clock lag, no twist-stage effects,
+    /// no measured stamps, 3 or 4 wheels). Wheel-stage effects are applied to the runs' wheel speeds
+    /// before the increments are redone, on each evaluation.
     pub fn supports(&self, res: &Resolved<'_>) -> bool {
         !res.stamps
             && res.clock_lag_s == 0.0
-            && res.wheel_effects.is_empty()
             && res.twist_effects.is_empty()
             && res.fixed_dt_s == self.fixed_dt_s
             && res.ik.n_wheels() == self.n_wheels
@@ -211,12 +255,12 @@ impl PreparedRuns {
 
     /// Predicted-minus-measured errors at the selected ground-truth poses, one `Vec` per run in run order
     /// (for [`Selection::End`], one error per run). `None` when `res` needs the general walk.
-    pub fn errors(&self, res: &Resolved<'_>) -> Option<Vec<Vec<PoseError>>> {
+    pub fn errors(&self, res: &Resolved<'_>, runs: &[Run]) -> Option<Vec<Vec<PoseError>>> {
         if !self.supports(res) {
             return None;
         }
         let per_group: Vec<Option<Vec<Vec<PoseError>>>> =
-            self.groups.par_iter().map(|g| self.group_errors(g, res)).collect();
+            self.groups.par_iter().map(|g| self.group_errors(g, res, runs)).collect();
         let mut out = Vec::with_capacity(self.n_runs);
         for g in per_group {
             out.extend(g?);
@@ -226,14 +270,14 @@ impl PreparedRuns {
 
     /// The Eq. 6 terms: the end-pose error of every run, in run order (any selection). `None` when `res`
     /// needs the general walk.
-    pub fn end_pose_errors(&self, res: &Resolved<'_>) -> Option<Vec<PoseError>> {
+    pub fn end_pose_errors(&self, res: &Resolved<'_>, runs: &[Run]) -> Option<Vec<PoseError>> {
         if !self.supports(res) {
             return None;
         }
         let per_group: Vec<Option<([PoseError; LANES], usize)>> = self
             .groups
             .par_iter()
-            .map(|g| self.walk_group(g, res, &mut |_, _| {}).map(|ends| (ends, g.lanes)))
+            .map(|g| self.walk_group(g, res, runs, &mut |_, _| {}).map(|ends| (ends, g.lanes)))
             .collect();
         let mut out = Vec::with_capacity(self.n_runs);
         for g in per_group {
@@ -246,17 +290,17 @@ impl PreparedRuns {
     /// The cost `kind` (as [`crate::cost::cost_resolved`]): the Eq. 6 end-pose cost with any selection, the
     /// path cost when these runs were prepared for `Selection::Path(every)` of the same `every`. `None` when
     /// `res` or `kind` needs the general walk.
-    pub fn cost(&self, res: &Resolved<'_>, kind: CostKind) -> Option<f64> {
+    pub fn cost(&self, res: &Resolved<'_>, runs: &[Run], kind: CostKind) -> Option<f64> {
         match kind {
             CostKind::EndPose => {
-                let e = self.end_pose_errors(res)?;
+                let e = self.end_pose_errors(res, runs)?;
                 Some(crate::cost::mean_end_pose_error(&e))
             }
             CostKind::Path { every, heading_weight_m_per_rad: w } => {
                 if self.selection != Selection::Path(every) {
                     return None;
                 }
-                let per: Vec<f64> = self.errors(res)?.iter().map(|e| mse(e, w)).collect();
+                let per: Vec<f64> = self.errors(res, runs)?.iter().map(|e| mse(e, w)).collect();
                 if per.is_empty() {
                     return Some(0.0);
                 }
@@ -267,9 +311,9 @@ impl PreparedRuns {
 
     /// The stacked residual vector of [`crate::cost::residual_vector`]. `None` when `res` or `kind` needs
     /// the general walk.
-    pub fn residual_vector(&self, res: &Resolved<'_>, kind: CostKind) -> Option<Vec<f64>> {
+    pub fn residual_vector(&self, res: &Resolved<'_>, runs: &[Run], kind: CostKind) -> Option<Vec<f64>> {
         let w = self.heading_weight(kind)?;
-        let errors = self.errors(res)?;
+        let errors = self.errors(res, runs)?;
         let n_runs = self.n_runs.max(1) as f64;
         let mut out = Vec::with_capacity(3 * errors.iter().map(Vec::len).sum::<usize>());
         for e in &errors {
@@ -287,7 +331,7 @@ impl PreparedRuns {
     /// or `kind` needs the general walk.
     pub fn residuals_and_ik_jacobian(&self, res: &Resolved<'_>, kind: CostKind) -> Option<(Vec<f64>, DMatrix<f64>)> {
         let w = self.heading_weight(kind)?;
-        if !self.supports(res) {
+        if !self.supports(res) || !res.wheel_effects.is_empty() {
             return None;
         }
         let m = res.ik.entries();
@@ -349,15 +393,73 @@ impl PreparedRuns {
         }
     }
 
-    fn group_errors(&self, g: &Group, res: &Resolved<'_>) -> Option<Vec<Vec<PoseError>>> {
+    /// The group with its increments redone from wheel speeds rewritten by `res`'s wheel-stage effects
+    /// (as the general walk applies them: sample stamps, fixed steps, the runs' start angles).
+    fn with_wheel_effects(&self, g: &Group, res: &Resolved<'_>, runs: &[Run]) -> Option<Group> {
+        let n = self.n_wheels;
+        let mut u = vec![[0.0; LANES]; g.steps * n];
+        let mut u_max = vec![0.0f64; n];
+        let mut query_u = vec![0.0; g.query_u.len()];
+        for (lane, (steps, src)) in g.sources.iter().enumerate() {
+            let run = runs.get(g.first_run + lane)?;
+            let h = g.h[lane];
+            let dt = vec![h; run.n_samples()];
+            let ctx =
+                WheelContext { n_wheels: n, t_s: run.wheel_t_s(), dt_s: &dt, start_angle_rad: run.wheel_start_rad() };
+            let mut w = run.wheel_rad_s().to_vec();
+            for (e, p) in &res.wheel_effects {
+                e.wheel_rates(p, &ctx, &mut w);
+            }
+            let mut partial = src.partial.iter().peekable();
+            for i in 0..*steps {
+                let f = match partial.peek() {
+                    Some(&&(k, f)) if k == i => {
+                        partial.next();
+                        f
+                    }
+                    _ => 1.0,
+                };
+                let sample = src.first_sample + i;
+                for j in 0..n {
+                    let v = f * h * w[sample * n + j];
+                    u[i * n + j][lane] = v;
+                    u_max[j] = u_max[j].max(v.abs());
+                }
+            }
+            for (qi, q) in g.queries.iter().enumerate().filter(|(_, q)| q.lane == lane) {
+                let _ = q;
+                let (sample, f) = g.query_source[qi];
+                for j in 0..n {
+                    query_u[qi * n + j] = f * h * w.get(sample * n + j).copied().unwrap_or(0.0);
+                }
+            }
+        }
+        Some(Group {
+            first_run: g.first_run,
+            sources: Vec::new(),
+            query_source: Vec::new(),
+            h: g.h,
+            lanes: g.lanes,
+            steps: g.steps,
+            u,
+            u_max,
+            start: g.start,
+            end: g.end,
+            queries: g.queries.clone(),
+            query_u,
+            query_count: g.query_count,
+        })
+    }
+
+    fn group_errors(&self, g: &Group, res: &Resolved<'_>, runs: &[Run]) -> Option<Vec<Vec<PoseError>>> {
         match self.selection {
             Selection::End => {
-                let ends = self.walk_group(g, res, &mut |_, _| {})?;
+                let ends = self.walk_group(g, res, runs, &mut |_, _| {})?;
                 Some(ends[..g.lanes].iter().map(|e| vec![*e]).collect())
             }
             Selection::Path(_) => {
                 let mut flat = vec![PoseError::default(); g.queries.len()];
-                self.walk_group(g, res, &mut |slot, e| flat[slot] = e)?;
+                self.walk_group(g, res, runs, &mut |slot, e| flat[slot] = e)?;
                 let mut out = Vec::with_capacity(g.lanes);
                 let mut at = 0;
                 for lane in 0..g.lanes {
@@ -374,8 +476,16 @@ impl PreparedRuns {
         &self,
         g: &Group,
         res: &Resolved<'_>,
+        runs: &[Run],
         on_query: &mut dyn FnMut(usize, PoseError),
     ) -> Option<[PoseError; LANES]> {
+        let rewritten;
+        let g = if res.wheel_effects.is_empty() {
+            g
+        } else {
+            rewritten = self.with_wheel_effects(g, res, runs)?;
+            &rewritten
+        };
         let m = res.ik.entries();
         let n = self.n_wheels;
         let bound: f64 = (0..n).map(|j| m[2 * n + j].abs() * g.u_max[j]).sum();
@@ -816,9 +926,10 @@ mod tests {
             crate::model::StepMode::Stamps => unreachable!(),
         };
         let prepared = PreparedRuns::new(runs, fixed, selection);
-        let fast = prepared.errors(&res).unwrap();
-        let ends = prepared.end_pose_errors(&res).unwrap();
+        let fast = prepared.errors(&res, runs).unwrap();
+        let ends = prepared.end_pose_errors(&res, runs).unwrap();
         let (mut gap, mut count) = (0.0f64, 0);
+        let runs: &[Run] = runs;
         for ((run, f), end) in runs.iter().zip(&fast).zip(&ends) {
             let literal = odometry::residuals(&res, run, selection);
             assert_eq!(literal.len(), f.len());
@@ -864,21 +975,41 @@ mod tests {
     }
 
     #[test]
+    fn agrees_with_wheel_stage_effects() {
+        let runs: Vec<Run> = paper_size().into_iter().take(10).collect();
+        for (id, values) in [
+            ("wheel_asymmetry", vec![0.05, -0.03, 0.02]),
+            ("speed_scale", vec![0.01, -0.02, 0.015]),
+            ("accel_slip", vec![0.05, 0.02, -0.03]),
+            ("backlash", vec![0.02, 0.01, 0.03]),
+            ("wheel_eccentricity", vec![0.02, -0.01, 0.01, 0.015, 0.0, -0.02]),
+        ] {
+            let model = Model::ik(IkMatrix::paper_design()).with_effect(EffectKind::from_id(id, 3).unwrap());
+            let mut p = model.nominal();
+            p[9..].copy_from_slice(&values);
+            for selection in [Selection::End, Selection::Path(1)] {
+                let (gap, _) = max_gap(&model, &p, &runs, selection);
+                assert!(gap < 1e-9, "{id} {selection:?}: gap {gap:e}");
+            }
+        }
+    }
+
+    #[test]
     fn declines_what_it_cannot_do() {
         let runs: Vec<Run> = paper_size().into_iter().take(5).collect();
         let prepared = PreparedRuns::new(&runs, None, Selection::End);
         let lagged = Model::ik(IkMatrix::paper_design()).with_effect(EffectKind::from_id("time_offset", 3).unwrap());
         let mut p = lagged.nominal();
-        assert!(prepared.errors(&lagged.resolve(&p).unwrap()).is_some(), "no lag at τ = 0");
+        assert!(prepared.errors(&lagged.resolve(&p).unwrap(), &runs).is_some(), "no lag at τ = 0");
         p[9] = 0.01;
-        assert!(prepared.errors(&lagged.resolve(&p).unwrap()).is_none());
-        let wheel = Model::ik(IkMatrix::paper_design()).with_effect(EffectKind::from_id("backlash", 3).unwrap());
-        assert!(prepared.errors(&wheel.resolve(&wheel.nominal()).unwrap()).is_none());
+        assert!(prepared.errors(&lagged.resolve(&p).unwrap(), &runs).is_none());
+        let twist = Model::ik(IkMatrix::paper_design()).with_effect(EffectKind::from_id("rotation_slip", 3).unwrap());
+        assert!(prepared.errors(&twist.resolve(&twist.nominal()).unwrap(), &runs).is_none());
         let paper_step = Model::ik(IkMatrix::paper_design()).with_integration(Integration::PAPER);
-        assert!(prepared.errors(&paper_step.resolve(&paper_step.nominal()).unwrap()).is_none(), "other step");
+        assert!(prepared.errors(&paper_step.resolve(&paper_step.nominal()).unwrap(), &runs).is_none(), "other step");
         // A step angle beyond the polynomials' range.
         let fast = Model::ik(IkMatrix::new(3, vec![0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 50.0, 50.0, 50.0]).unwrap());
-        assert!(prepared.errors(&fast.resolve(&fast.nominal()).unwrap()).is_none());
+        assert!(prepared.errors(&fast.resolve(&fast.nominal()).unwrap(), &runs).is_none());
     }
 
     #[test]
@@ -902,7 +1033,7 @@ mod tests {
             x.extend([0.02, -0.01]);
             let res = model.resolve(&x).unwrap();
             let (r, j) = prepared.residuals_and_ik_jacobian(&res, kind).unwrap();
-            let fast = prepared.residual_vector(&res, kind).unwrap();
+            let fast = prepared.residual_vector(&res, &runs, kind).unwrap();
             assert!(r.iter().zip(&fast).all(|(a, b)| (a - b).abs() < 1e-12), "residuals differ");
             assert_eq!(j.ncols(), 9);
             let mut worst = 0.0f64;
@@ -912,8 +1043,8 @@ mod tests {
                 xp[c] += h;
                 let mut xm = x.clone();
                 xm[c] -= h;
-                let rp = prepared.residual_vector(&model.resolve(&xp).unwrap(), kind).unwrap();
-                let rm = prepared.residual_vector(&model.resolve(&xm).unwrap(), kind).unwrap();
+                let rp = prepared.residual_vector(&model.resolve(&xp).unwrap(), &runs, kind).unwrap();
+                let rm = prepared.residual_vector(&model.resolve(&xm).unwrap(), &runs, kind).unwrap();
                 // Relative to the column's largest entry: tiny entries carry the differences' rounding noise.
                 let col_max = (0..r.len()).map(|i| j[(i, c)].abs()).fold(0.0f64, f64::max);
                 assert!(col_max > 1e-3, "column {c} is flat");
