@@ -955,6 +955,7 @@ mod tests {
                 let p = model.nominal();
                 for selection in [Selection::End, Selection::Path(1), Selection::Path(4)] {
                     let (gap, count) = max_gap(&model, &p, &runs, selection);
+                    eprintln!("{:?} {selection:?}: largest gap {gap:.1e} m", integration.scheme);
                     assert!(gap < 1e-9, "{integration:?} {selection:?}: gap {gap:e} m");
                     assert!(count >= 180);
                 }
