@@ -82,7 +82,9 @@ fn benches(c: &mut Criterion) {
             && let Ok(problem) = CalibrationProblem::new(&model, &runs, plan.objective, bounds)
         {
             g.bench_function("LM polish from the GA result (analytic Jacobian)", |b| {
-                b.iter(|| black_box(LevenbergMarquardt::default().minimize(&problem, &ga.params, &mut NoopObserver).ok()))
+                b.iter(|| {
+                    black_box(LevenbergMarquardt::default().minimize(&problem, &ga.params, &mut NoopObserver).ok())
+                })
             });
         }
     }
