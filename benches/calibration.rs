@@ -1,52 +1,106 @@
-//! Speed figures: odometry per run, cost over the paper-size set (180 runs), one GA generation, and the
-//! `default` calibration. Run with `cargo bench --bench calibration`; figures go to benches/README.md.
+//! Speed figures (issue 7): odometry per run, one model's cost over the paper-size set (180 runs) through
+//! the literal walk and the fast kernel on 1 and 2 threads, one GA generation, the LM polish from a GA
+//! result, the `default` and `paper` calibrations and a whole-catalogue diagnosis. Run with
+//! `cargo bench --bench calibration`; figures go to benches/README.md.
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use omnical::ga::calibrate::{CalibrationProblem, Plan, Preset, calibrate, search_box};
-use omnical::ga::{NoopObserver, Problem};
+use omnical::ga::calibrate::{BoxRule, CalibrationProblem, Plan, Preset, calibrate, search_box};
+use omnical::ga::diagnose::{DiagnoseOptions, diagnose};
+use omnical::ga::{LevenbergMarquardt, NoopObserver, Optimizer, Problem};
 use omnical::kin::cost::{CostKind, cost_resolved};
+use omnical::kin::fast::PreparedRuns;
 use omnical::kin::odometry::end_pose_error;
 use omnical::kin::simulate::{SimConfig, simulate};
-use omnical::kin::{FittedModel, IkMatrix, Model, Run};
+use omnical::kin::{FittedModel, IkMatrix, Integration, Model, Run, Selection};
 use std::hint::black_box;
 
-fn paper_size() -> Vec<Run> {
+fn paper_size(seed: u64, prefix: &str) -> Vec<Run> {
     let truth = FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated()));
-    simulate(&SimConfig { seed: 1, ..SimConfig::default() }, &truth, "train/").unwrap_or_default()
+    simulate(&SimConfig { seed, ..SimConfig::default() }, &truth, prefix).unwrap_or_default()
+}
+
+fn pool(threads: usize) -> Option<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new().num_threads(threads).build().ok()
 }
 
 fn benches(c: &mut Criterion) {
-    let runs = paper_size();
+    let runs = paper_size(1, "train/");
+    let validation = paper_size(2, "validation/");
     let samples: usize = runs.iter().map(Run::n_samples).sum();
     let design = FittedModel::paper_design();
-    let res = design.model.resolve(&design.params).ok();
-    let Some(res) = res else { return };
+    let Ok(res) = design.model.resolve(&design.params) else { return };
+    let paper_model = Model::ik(IkMatrix::paper_design()).with_integration(Integration::PAPER);
+    let paper_params = paper_model.nominal();
+    let Ok(paper_res) = paper_model.resolve(&paper_params) else { return };
 
     let mut g = c.benchmark_group("odometry");
     g.throughput(Throughput::Elements(runs[0].n_samples() as u64));
-    g.bench_function("one run, end pose", |b| b.iter(|| black_box(end_pose_error(&res, &runs[0]))));
+    g.bench_function("one run, end pose, literal walk", |b| b.iter(|| black_box(end_pose_error(&res, &runs[0]))));
     g.finish();
 
     let mut g = c.benchmark_group("cost over 180 runs");
     g.throughput(Throughput::Elements(samples as u64));
-    g.bench_function("end pose (Eq. 6)", |b| b.iter(|| black_box(cost_resolved(&res, &runs, CostKind::EndPose))));
-    g.bench_function("path", |b| b.iter(|| black_box(cost_resolved(&res, &runs, CostKind::PATH))));
+    g.bench_function("end pose (Eq. 6), literal walk", |b| {
+        b.iter(|| black_box(cost_resolved(&res, &runs, CostKind::EndPose)))
+    });
+    g.bench_function("path, literal walk", |b| b.iter(|| black_box(cost_resolved(&res, &runs, CostKind::PATH))));
+    let end_paper = PreparedRuns::new(&runs, Some(0.01), Selection::End);
+    let end_default = PreparedRuns::new(&runs, None, Selection::End);
+    let path_default = PreparedRuns::new(&runs, None, Selection::Path(1));
+    for threads in [1, 2] {
+        let Some(pool) = pool(threads) else { continue };
+        g.bench_function(format!("fast, Eq. 6, Eq. 1 Euler 10 ms, {threads} thread(s)"), |b| {
+            pool.install(|| b.iter(|| black_box(end_paper.cost(&paper_res, &runs, CostKind::EndPose))))
+        });
+        g.bench_function(format!("fast, Eq. 6, exact arcs, {threads} thread(s)"), |b| {
+            pool.install(|| b.iter(|| black_box(end_default.cost(&res, &runs, CostKind::EndPose))))
+        });
+        g.bench_function(format!("fast, path, exact arcs, {threads} thread(s)"), |b| {
+            pool.install(|| b.iter(|| black_box(path_default.cost(&res, &runs, CostKind::PATH))))
+        });
+    }
     g.finish();
 
     let mut g = c.benchmark_group("calibration");
     g.sample_size(10);
     let start = FittedModel::nominal(Model::ik(IkMatrix::paper_design()));
-    let model = start.model.clone();
-    if let Ok(bounds) = search_box(&model, &start.params, omnical::ga::calibrate::BoxRule::PerValue(0.1))
-        && let Ok(problem) = CalibrationProblem::new(&model, &runs, CostKind::EndPose, bounds)
+    if let Ok(bounds) = search_box(&paper_model, &paper_params, BoxRule::PerValue(0.1))
+        && let Ok(problem) = CalibrationProblem::new(&paper_model, &runs, CostKind::EndPose, bounds)
     {
         let pop: Vec<Vec<f64>> =
-            (0..200).map(|i| start.params.iter().map(|v| v * (1.0 + 1e-4 * i as f64)).collect()).collect();
-        g.bench_function("one GA generation (200 individuals, Eq. 6)", |b| b.iter(|| black_box(problem.costs(&pop))));
+            (0..200).map(|i| paper_params.iter().map(|v| v * (1.0 + 1e-4 * i as f64)).collect()).collect();
+        g.bench_function("one GA generation (200 individuals, Eq. 6, paper)", |b| {
+            b.iter(|| black_box(problem.costs(&pop)))
+        });
     }
     let plan = Plan::preset(Preset::Default, 9);
+    // The polish alone, from the default preset's GA result.
+    if let Ok(cal) = calibrate(&start, &runs, &plan, &mut NoopObserver)
+        && let Some(ga) = &cal.ga
+    {
+        let model = start.model.clone().with_integration(plan.integration);
+        if let Ok(bounds) = search_box(&model, &start.params, plan.box_rule)
+            && let Ok(problem) = CalibrationProblem::new(&model, &runs, plan.objective, bounds)
+        {
+            g.bench_function("LM polish from the GA result (analytic Jacobian)", |b| {
+                b.iter(|| {
+                    black_box(LevenbergMarquardt::default().minimize(&problem, &ga.params, &mut NoopObserver).ok())
+                })
+            });
+        }
+    }
     g.bench_function("train --preset default", |b| {
         b.iter(|| black_box(calibrate(&start, &runs, &plan, &mut NoopObserver).ok()))
     });
+    let paper = Plan::preset(Preset::Paper, 9);
+    g.bench_function("train --preset paper", |b| {
+        b.iter(|| black_box(calibrate(&start, &runs, &paper, &mut NoopObserver).ok()))
+    });
+    if let Ok(fit) = calibrate(&start, &runs, &plan, &mut NoopObserver) {
+        let opts = DiagnoseOptions::default();
+        g.bench_function("diagnose, whole catalogue, 180 + 180 runs", |b| {
+            b.iter(|| black_box(diagnose(&fit.fitted, &design, &runs, Some(&validation), &opts).ok()))
+        });
+    }
     g.finish();
 }
 

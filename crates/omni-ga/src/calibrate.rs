@@ -16,10 +16,11 @@ use crate::ga::{Ga, GaConfig, StallRule};
 use crate::lm::{LevenbergMarquardt, LmConfig};
 use crate::observe::Observer;
 use crate::optimizer::{Optimizer, Solution};
-use crate::problem::{Bounds, LeastSquares, Problem, finite_difference_jacobian};
+use crate::problem::{Bounds, LeastSquares, Problem, finite_difference_columns, finite_difference_jacobian};
 use nalgebra::DMatrix;
 use omni_kin::cost::{self, CostKind};
-use omni_kin::{FittedModel, Integration, KinError, Kinematics, Model, Run};
+use omni_kin::fast::PreparedRuns;
+use omni_kin::{FittedModel, Integration, KinError, Kinematics, Model, Run, Selection, StepMode};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 use thiserror::Error;
@@ -118,12 +119,17 @@ impl Plan {
 }
 
 /// The fitting problem: a model structure, training runs and an objective.
+///
+/// With fixed-step odometry the runs are prepared once ([`PreparedRuns`]) and costs, residuals and the
+/// IK part of the Jacobian go through the fast kernel; parameter vectors it cannot serve (a clock lag,
+/// wheel- or twist-stage effects) fall back to the general walk.
 #[derive(Debug)]
 pub struct CalibrationProblem<'a> {
     model: &'a Model,
     runs: &'a [Run],
     objective: CostKind,
     bounds: Bounds,
+    prepared: Option<PreparedRuns>,
 }
 
 impl<'a> CalibrationProblem<'a> {
@@ -133,7 +139,58 @@ impl<'a> CalibrationProblem<'a> {
             return Err(CalibrateError::NoRuns);
         }
         cost::check_runs(model, runs)?;
-        Ok(Self { model, runs, objective, bounds })
+        let prepared = match model.integration.step {
+            StepMode::Fixed { dt_s } if matches!(model.n_wheels(), 3 | 4) => {
+                let selection = match objective {
+                    CostKind::EndPose => Selection::End,
+                    CostKind::Path { every, .. } => Selection::Path(every),
+                };
+                Some(PreparedRuns::new(runs, dt_s, selection))
+            }
+            _ => None,
+        };
+        Ok(Self { model, runs, objective, bounds, prepared })
+    }
+
+    /// The residuals and their Jacobian: the IK (or geometry) columns analytically through the fast
+    /// kernel, the effect columns by finite differences. `None` when the fast kernel cannot serve `x`.
+    fn analytic(&self, x: &[f64]) -> Option<(Vec<f64>, DMatrix<f64>)> {
+        let prepared = self.prepared.as_ref()?;
+        let res = self.model.resolve(x).ok()?;
+        let (r, j_ik) = prepared.residuals_and_ik_jacobian(&res, self.objective)?;
+        let nb = self.model.n_base();
+        let n = x.len();
+        let mut j = DMatrix::zeros(r.len(), n);
+        match &self.model.kinematics {
+            Kinematics::Ik { .. } => j.columns_mut(0, nb).copy_from(&j_ik),
+            Kinematics::Geometry { .. } => {
+                // Chain rule through the (cheap) map from geometry to IK matrix, by central differences.
+                let mut dm = DMatrix::zeros(j_ik.ncols(), nb);
+                for c in 0..nb {
+                    let h = 1e-7 * x[c].abs().max(1e-3);
+                    let (mut xp, mut xm) = (x[..nb].to_vec(), x[..nb].to_vec());
+                    xp[c] += h;
+                    xm[c] -= h;
+                    let mp = self.model.kinematics.ik(&xp).ok()?;
+                    let mm = self.model.kinematics.ik(&xm).ok()?;
+                    for (i, (a, b)) in mp.entries().iter().zip(mm.entries()).enumerate() {
+                        dm[(i, c)] = (a - b) / (2.0 * h);
+                    }
+                }
+                j.columns_mut(0, nb).copy_from(&(j_ik * dm));
+            }
+        }
+        if n > nb {
+            let specs = self.model.params();
+            let at_range_end = |i: usize| specs.get(i).is_some_and(|s| s.lower == x[i] && s.upper > s.lower);
+            let cols = finite_difference_columns(x, nb..n, |y| self.residuals(y), at_range_end);
+            for (c, col) in (nb..n).zip(cols) {
+                for (i, v) in col.into_iter().enumerate().take(r.len()) {
+                    j[(i, c)] = v;
+                }
+            }
+        }
+        Some((r, j))
     }
 }
 
@@ -144,7 +201,11 @@ impl Problem for CalibrationProblem<'_> {
     /// The objective; `f64::INFINITY` where the parameters make no valid model (e.g. singular geometry).
     fn cost(&self, x: &[f64]) -> f64 {
         match self.model.resolve(x) {
-            Ok(res) => cost::cost_resolved(&res, self.runs, self.objective),
+            Ok(res) => self
+                .prepared
+                .as_ref()
+                .and_then(|p| p.cost(&res, self.runs, self.objective))
+                .unwrap_or_else(|| cost::cost_resolved(&res, self.runs, self.objective)),
             Err(_) => f64::INFINITY,
         }
     }
@@ -154,15 +215,24 @@ impl LeastSquares for CalibrationProblem<'_> {
     /// Stacked residuals whose squared norm is the squared path cost (or mean squared end-pose error).
     fn residuals(&self, x: &[f64]) -> Vec<f64> {
         match self.model.resolve(x) {
-            Ok(res) => cost::residual_vector(&res, self.runs, self.objective),
+            Ok(res) => self
+                .prepared
+                .as_ref()
+                .and_then(|p| p.residual_vector(&res, self.runs, self.objective))
+                .unwrap_or_else(|| cost::residual_vector(&res, self.runs, self.objective)),
             Err(_) => vec![f64::NAN; 3 * self.runs.len()],
         }
     }
 
-    /// Central differences (step `1e-6 · max(|x_i|, 1e-3)`), except forward differences for a parameter
-    /// sitting on the lower end of its physical range (e.g. backlash at 0, whose model uses `|b|`), where a
-    /// central difference would see a symmetric kink and report zero sensitivity.
+    /// Analytic (forward-mode) columns for the IK matrix or geometry when the fast kernel serves `x`;
+    /// otherwise, and for effect parameters, central differences (step `1e-6 · max(|x_i|, 1e-3)`), except
+    /// forward differences for a parameter sitting on the lower end of its physical range (e.g. backlash at
+    /// 0, whose model uses `|b|`), where a central difference would see a symmetric kink and report zero
+    /// sensitivity.
     fn jacobian(&self, x: &[f64]) -> DMatrix<f64> {
+        if let Some((_, j)) = self.analytic(x) {
+            return j;
+        }
         let specs = self.model.params();
         let at_range_end = |i: usize| specs.get(i).is_some_and(|s| s.lower == x[i] && s.upper > s.lower);
         finite_difference_jacobian(x, |y| self.residuals(y), at_range_end)

@@ -88,9 +88,24 @@ where
     R: Fn(&[f64]) -> Vec<f64> + Sync,
     F: Fn(usize) -> bool + Sync,
 {
-    let r0 = if (0..x.len()).any(&forward) { Some(residuals(x)) } else { None };
-    let cols: Vec<Vec<f64>> = (0..x.len())
-        .into_par_iter()
+    let cols = finite_difference_columns(x, 0..x.len(), residuals, forward);
+    let m = cols.first().map_or(0, Vec::len);
+    DMatrix::from_fn(m, x.len(), |r, c| cols[c].get(r).copied().unwrap_or(f64::NAN))
+}
+
+/// The columns `cols` of [`finite_difference_jacobian`], in order.
+pub fn finite_difference_columns<R, F>(
+    x: &[f64],
+    cols: std::ops::Range<usize>,
+    residuals: R,
+    forward: F,
+) -> Vec<Vec<f64>>
+where
+    R: Fn(&[f64]) -> Vec<f64> + Sync,
+    F: Fn(usize) -> bool + Sync,
+{
+    let r0 = if cols.clone().any(&forward) { Some(residuals(x)) } else { None };
+    cols.into_par_iter()
         .map(|i| {
             let h = 1e-6 * x[i].abs().max(1e-3);
             let mut xp = x.to_vec();
@@ -106,7 +121,5 @@ where
                 }
             }
         })
-        .collect();
-    let m = cols.first().map_or(0, Vec::len);
-    DMatrix::from_fn(m, x.len(), |r, c| cols[c].get(r).copied().unwrap_or(f64::NAN))
+        .collect()
 }

@@ -12,6 +12,7 @@
 pub mod cost;
 pub mod effect;
 pub mod error;
+pub mod fast;
 pub mod geometry;
 pub mod ik;
 pub mod model;
