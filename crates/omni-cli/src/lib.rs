@@ -8,4 +8,5 @@ pub mod atomic;
 pub mod cli;
 pub mod cmd;
 pub mod dataset;
+pub mod entry;
 pub mod model_file;
