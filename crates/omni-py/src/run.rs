@@ -29,12 +29,12 @@ impl PyRun {
     /// measured point, M >= 2, inside the wheel samples' time span. command: (v_m_s, alpha_rad,
     /// omega_rad_s) when known. wheel_start_rad: (W,) wheel angles at the first sample [rad], when known.
     #[new]
-    #[pyo3(signature = (t_s, wheel_rad_s, truth, *, name = "run".to_string(), command = None, repetition = None, wheel_start_rad = None))]
+    #[pyo3(signature = (t_s, wheel_rad_s, truth, *, name = "run", command = None, repetition = None, wheel_start_rad = None))]
     fn new(
         t_s: &Bound<'_, PyAny>,
         wheel_rad_s: &Bound<'_, PyAny>,
         truth: &Bound<'_, PyAny>,
-        name: String,
+        name: &str,
         command: Option<(f64, f64, f64)>,
         repetition: Option<u32>,
         wheel_start_rad: Option<&Bound<'_, PyAny>>,
@@ -54,7 +54,7 @@ impl PyRun {
             None => Vec::new(),
         };
         let data = RunData {
-            name,
+            name: name.to_string(),
             wheel_t_s,
             wheel_rad_s: wheels,
             n_wheels,

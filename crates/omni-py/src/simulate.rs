@@ -11,7 +11,7 @@ use pyo3::prelude::*;
 /// (default: the paper's Eq. 9 matrix; give a model with effects to hide them in the data). Returns the
 /// runs, named ``{prefix}{command:02}-r{repetition}``. Deterministic for a ``seed``; the GIL is released.
 #[pyfunction]
-#[pyo3(signature = (truth = None, *, runs_per_command = 1, duration_s = 4.0, seed = 0, noise_free = false, prefix = "run/".to_string(), sample_drop_probability = 0.0, sample_jitter_s = 0.0))]
+#[pyo3(signature = (truth = None, *, runs_per_command = 1, duration_s = 4.0, seed = 0, noise_free = false, prefix = "run/", sample_drop_probability = 0.0, sample_jitter_s = 0.0))]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate(
     py: Python<'_>,
@@ -20,7 +20,7 @@ pub fn simulate(
     duration_s: f64,
     seed: u64,
     noise_free: bool,
-    prefix: String,
+    prefix: &str,
     sample_drop_probability: f64,
     sample_jitter_s: f64,
 ) -> PyResult<Vec<PyRun>> {
@@ -37,7 +37,7 @@ pub fn simulate(
         config = config.noise_free();
     }
     let errors = crate::effect::EffectErrors::new(adapters);
-    let runs = py.detach(|| rs_simulate(&config, &truth, &prefix));
+    let runs = py.detach(|| rs_simulate(&config, &truth, prefix));
     let runs = errors.check(runs)?.py()?;
     Ok(runs.into_iter().map(|inner| PyRun { inner }).collect())
 }
