@@ -8,6 +8,7 @@ pub mod atomic;
 pub mod cli;
 pub mod cmd;
 pub mod dataset;
+pub mod entry;
 pub mod model_file;
 pub mod progress;
 pub mod report;

@@ -15,7 +15,7 @@ use crate::error::OptimizeError;
 use crate::ga::{Ga, GaConfig, StallRule};
 use crate::lm::{LevenbergMarquardt, LmConfig};
 use crate::observe::Observer;
-use crate::optimizer::{Optimizer, Solution};
+use crate::optimizer::{Optimizer, Solution, Termination};
 use crate::problem::{Bounds, LeastSquares, Problem, finite_difference_columns, finite_difference_jacobian};
 use nalgebra::DMatrix;
 use omni_kin::cost::{self, CostKind};
@@ -349,7 +349,9 @@ pub fn calibrate(
         .map(|(_, n)| n.clone())
         .collect();
     let mut polish_solution = None;
-    if plan.polish {
+    // An observer that stopped the GA (Ctrl-C, a progress callback) wants the best so far, not a polish.
+    let stopped = ga_solution.as_ref().is_some_and(|s: &Solution| s.termination == Termination::Stopped);
+    if plan.polish && !stopped {
         let mut lm = LevenbergMarquardt { config: LmConfig::default() };
         let s = lm.minimize(&problem, &x, observer)?;
         evaluations += s.evaluations;

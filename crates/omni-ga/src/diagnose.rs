@@ -50,6 +50,10 @@ pub struct DiagnoseOptions {
     /// Share of the excess error variance (above the noise floor) an effect must remove to be named with
     /// confidence ("explains most of it"). Default 0.5.
     pub min_excess_closed: f64,
+    /// User effects (`EffectKind::Custom`, e.g. from Python) tried as candidates after `candidates`, by
+    /// their ids. Default none.
+    #[serde(skip)]
+    pub custom: Vec<EffectKind>,
 }
 
 impl Default for DiagnoseOptions {
@@ -61,6 +65,7 @@ impl Default for DiagnoseOptions {
             max_added: 3,
             every: 1,
             min_excess_closed: 0.5,
+            custom: Vec::new(),
         }
     }
 }
@@ -480,6 +485,14 @@ fn first_order(
     Ok((explained, separability, implied))
 }
 
+/// A candidate by id: a user effect from `opts.custom`, else the built-in catalogue's.
+fn candidate_effect(id: &str, n_wheels: usize, opts: &DiagnoseOptions) -> Result<EffectKind, omni_kin::KinError> {
+    match opts.custom.iter().find(|e| e.id() == id) {
+        Some(e) => Ok(e.clone()),
+        None => EffectKind::from_id(id, n_wheels),
+    }
+}
+
 /// Diagnose `model` on `train`, holding out `validation` (or cross-validating over repetitions).
 pub fn diagnose(
     model: &FittedModel,
@@ -520,11 +533,12 @@ pub fn diagnose(
     loop {
         let present: Vec<String> = current.model.effects.iter().map(|e| e.id().replace("_yaw", "")).collect();
         let mut ranking = Vec::new();
-        for id in &opts.candidates {
+        let ids = opts.candidates.iter().cloned().chain(opts.custom.iter().map(|e| e.id().to_string()));
+        for id in &ids.collect::<Vec<_>>() {
             if present.iter().any(|p| p == id) {
                 continue;
             }
-            let effect = EffectKind::from_id(id, current.model.n_wheels())?;
+            let effect = candidate_effect(id, current.model.n_wheels(), opts)?;
             let (explained, separability, implied) = if effect.params().is_empty() {
                 (f64::NAN, 1.0, Vec::new())
             } else {
@@ -580,7 +594,7 @@ pub fn diagnose(
         }
         match best {
             Some(b) if opts.auto && added.len() < opts.max_added => {
-                let effect = EffectKind::from_id(&b.effect, current.model.n_wheels())?;
+                let effect = candidate_effect(&b.effect, current.model.n_wheels(), opts)?;
                 current = refit(&current.with_effect(effect), &fit_runs, every)?;
                 current_costs = costs_of(&current, &fit_runs, &held_runs, every)?;
                 ladder.push(Rung { label: format!("+ {}", b.effect), costs: current_costs.clone() });

@@ -1,0 +1,318 @@
+"""Type stubs of the compiled module ``omnical._omnical`` (checked by ``python -m mypy.stubtest omnical``).
+
+Shapes: N wheel samples, W wheels, M ground-truth poses, K residual poses (M - 1), R runs, P parameters.
+Units: m, s, rad, rad/s (ROS REP-103).
+"""
+
+from collections.abc import Callable, Iterable, Sequence
+from os import PathLike
+from typing import Any, Optional, Union, final
+
+import numpy as np
+import numpy.typing as npt
+
+_F64 = npt.NDArray[np.float64]
+_Path = Union[str, PathLike[str]]
+_Runs = Union["Dataset", "Run", Iterable["Run"]]
+_EffectArg = Any  # a catalogue id (str) or a Python effect object (see omnical.Effect)
+
+__all__ = [
+    "CATALOGUE",
+    "Calibration",
+    "CalibrationError",
+    "Dataset",
+    "DatasetError",
+    "Diagnosis",
+    "Evaluation",
+    "Model",
+    "ModelFileError",
+    "OmnicalError",
+    "Run",
+    "RunResiduals",
+    "__version__",
+    "cli_main",
+    "diagnose",
+    "effect_catalogue",
+    "evaluate",
+    "integrate",
+    "load",
+    "load_model",
+    "simulate",
+    "train",
+]
+
+__version__: str
+CATALOGUE: list[str]
+
+class OmnicalError(Exception): ...
+class DatasetError(OmnicalError): ...
+class ModelFileError(OmnicalError): ...
+class CalibrationError(OmnicalError): ...
+
+@final
+class Run:
+    """One run: wheel-speed samples, ground-truth poses, the command. Validated on construction."""
+
+    def __new__(
+        cls,
+        t_s: npt.ArrayLike,
+        wheel_rad_s: npt.ArrayLike,
+        truth: npt.ArrayLike,
+        *,
+        name: str = "run",
+        command: Optional[tuple[float, float, float]] = None,
+        repetition: Optional[int] = None,
+        wheel_start_rad: Optional[npt.ArrayLike] = None,
+    ) -> Run:
+        """t_s (N,) [s]; wheel_rad_s (N, W) [rad/s]; truth (M, 4): t_s [s], x_m [m], y_m [m], theta_rad [rad];
+        command (v_m_s, alpha_rad, omega_rad_s); wheel_start_rad (W,) [rad]."""
+    @property
+    def name(self) -> str: ...
+    @property
+    def n_wheels(self) -> int: ...
+    @property
+    def n_samples(self) -> int: ...
+    @property
+    def t_s(self) -> _F64:
+        """(N,) wheel-sample stamps [s]."""
+    @property
+    def wheel_rad_s(self) -> _F64:
+        """(N, W) wheel speeds [rad/s]."""
+    @property
+    def truth(self) -> _F64:
+        """(M, 4) ground truth: t_s [s], x_m [m], y_m [m], theta_rad [rad]."""
+    @property
+    def recorded_odometry(self) -> _F64:
+        """(K, 4) the robot's own odometry, columns as ``truth``."""
+    @property
+    def command(self) -> Optional[tuple[float, float, float]]:
+        """(v_m_s, alpha_rad, omega_rad_s) or None."""
+    @property
+    def repetition(self) -> Optional[int]: ...
+
+@final
+class Dataset:
+    """Runs loaded from files; a sequence of Run."""
+
+    @property
+    def runs(self) -> list[Run]: ...
+    @property
+    def notes(self) -> list[str]: ...
+    @property
+    def skipped(self) -> list[tuple[str, str]]:
+        """(source, reason) per skipped input."""
+    @property
+    def design(self) -> Model:
+        """The design model the data declares (else the paper's Eq. 7)."""
+    def __len__(self) -> int: ...
+    def __getitem__(self, key: int, /) -> Run: ...
+
+@final
+class Model:
+    """Base kinematics (``ik`` matrix or ``geometry``) plus effects, with parameter values. Immutable."""
+
+    @staticmethod
+    def design(*, kinematics: str = "ik") -> Model:
+        """The paper's APR-02 design model (Eq. 7); ``kinematics`` is ``"ik"`` or ``"geometry"``."""
+    @staticmethod
+    def paper() -> Model:
+        """The paper's calibrated matrix (Eq. 9)."""
+    @staticmethod
+    def from_matrix(matrix: npt.ArrayLike, *, design: Optional[npt.ArrayLike] = None) -> Model:
+        """An ``ik`` model from a (3, W) matrix [m/s, m/s, rad/s per rad/s]."""
+    @property
+    def kinematics(self) -> str: ...
+    @property
+    def n_wheels(self) -> int: ...
+    @property
+    def matrix(self) -> _F64:
+        """(3, W) IK matrix: rows vx [m/s], vy [m/s], omega [rad/s] per wheel speed [rad/s]."""
+    @property
+    def design_matrix(self) -> _F64:
+        """(3, W) IK matrix at the design parameters."""
+    @property
+    def effects(self) -> list[str]: ...
+    @property
+    def param_names(self) -> list[str]: ...
+    @property
+    def param_values(self) -> _F64:
+        """(P,) parameter values in ``param_names`` order."""
+    @property
+    def params(self) -> dict[str, float]: ...
+    @property
+    def param_specs(self) -> list[dict[str, Any]]:
+        """name, unit, null, lower, upper per parameter."""
+    def get(self, name: str) -> float: ...
+    def with_effect(self, effect: _EffectArg, **values: float) -> Model: ...
+    def with_params(self, values: dict[str, float]) -> Model: ...
+    def to_toml(self) -> str: ...
+    def save(self, path: _Path) -> None: ...
+
+@final
+class Calibration:
+    """The outcome of ``train``."""
+
+    @property
+    def model(self) -> Model: ...
+    @property
+    def start(self) -> Model: ...
+    @property
+    def matrix(self) -> _F64:
+        """(3, W) fitted IK matrix."""
+    @property
+    def effects(self) -> list[str]: ...
+    @property
+    def params(self) -> dict[str, float]: ...
+    @property
+    def costs(self) -> dict[str, float]:
+        """cost_start, cost_fitted (Eq. 6), objective_start, objective_fitted, improvement_pct."""
+    @property
+    def history(self) -> list[dict[str, Any]]:
+        """optimizer, iteration, best_cost, mean_cost, evaluations, elapsed_s per iteration."""
+    @property
+    def objective(self) -> str: ...
+    @property
+    def objective_start(self) -> float: ...
+    @property
+    def objective_fitted(self) -> float: ...
+    @property
+    def cost_start(self) -> float: ...
+    @property
+    def cost_fitted(self) -> float: ...
+    @property
+    def evaluations(self) -> int: ...
+    @property
+    def seconds(self) -> float: ...
+    @property
+    def at_bound(self) -> list[str]: ...
+    @property
+    def outside_box(self) -> list[str]: ...
+    @property
+    def interrupted(self) -> bool: ...
+    @property
+    def stopped(self) -> bool: ...
+
+@final
+class RunResiduals:
+    """One run's residuals at its ground-truth poses after the first."""
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def path_rms(self) -> float: ...
+    @property
+    def t_s(self) -> _F64:
+        """(K,) [s]."""
+    @property
+    def truth_index(self) -> list[int]: ...
+    @property
+    def predicted(self) -> _F64:
+        """(K, 3) x_m [m], y_m [m], theta_rad [rad]."""
+    @property
+    def error(self) -> _F64:
+        """(K, 3) dx_m [m], dy_m [m], dtheta_rad [rad]."""
+    @property
+    def end_error(self) -> _F64:
+        """(3,) end-pose error (the run's Eq. 6 term)."""
+
+@final
+class Evaluation:
+    """Costs of a model on runs."""
+
+    @property
+    def cost(self) -> float:
+        """Eq. 6: mean end-pose error."""
+    @property
+    def path_cost(self) -> float:
+        """RMS over every ground-truth pose [m, 1 m/rad]."""
+    @property
+    def runs(self) -> list[RunResiduals]: ...
+    @property
+    def names(self) -> list[str]: ...
+    @property
+    def end_errors(self) -> _F64:
+        """(R, 3) dx_m, dy_m, dtheta_rad."""
+
+@final
+class Diagnosis:
+    """The outcome of ``diagnose``."""
+
+    @property
+    def verdict(self) -> Optional[str]: ...
+    @property
+    def verdict_text(self) -> str: ...
+    @property
+    def held_out(self) -> str: ...
+    @property
+    def costs(self) -> dict[str, float]: ...
+    @property
+    def design_costs(self) -> dict[str, float]: ...
+    @property
+    def ranking(self) -> list[dict[str, Any]]: ...
+    @property
+    def ladder(self) -> list[dict[str, Any]]: ...
+    @property
+    def findings(self) -> list[str]: ...
+    @property
+    def noise_floor(self) -> Optional[dict[str, Any]]: ...
+    @property
+    def final_model(self) -> Optional[Model]: ...
+    def to_dict(self) -> dict[str, Any]: ...
+
+def load(
+    *paths: _Path,
+    joints: Optional[Sequence[str]] = None,
+    joints_topic: Optional[str] = None,
+    gt_topic: Optional[str] = None,
+    gt_parent_frame: Optional[str] = None,
+    gt_child_frame: Optional[str] = None,
+    split_s: Optional[float] = None,
+    skip_invalid: bool = False,
+    ticks_per_rev: Optional[float] = None,
+) -> Dataset:
+    """Load runs from .csv, .mcap, folders of them or OptiOdom set folders."""
+
+def load_model(path: _Path, *, effects: Sequence[Any] = ...) -> Model:
+    """Read a model file (TOML); ``effects``: Python effects it names."""
+
+def effect_catalogue(*, n_wheels: int = 3) -> list[dict[str, Any]]: ...
+def simulate(
+    truth: Optional[Model] = None,
+    *,
+    runs_per_command: int = 1,
+    duration_s: float = 4.0,
+    seed: int = 0,
+    noise_free: bool = False,
+    prefix: str = "run/",
+    sample_drop_probability: float = 0.0,
+    sample_jitter_s: float = 0.0,
+) -> list[Run]:
+    """The flower benchmark (36 commands x runs_per_command) on the true robot ``truth``."""
+
+def train(
+    runs: _Runs,
+    *,
+    model: Optional[Model] = None,
+    effects: Sequence[_EffectArg] = ...,
+    preset: str = "default",
+    seed: int = 0,
+    progress: Optional[Callable[[dict[str, Any]], Optional[bool]]] = None,
+) -> Calibration:
+    """Fit a model to training runs; Ctrl-C keeps the best so far."""
+
+def evaluate(runs: _Runs, model: Optional[Model] = None) -> Evaluation: ...
+def integrate(run: Run, model: Optional[Model] = None) -> _F64:
+    """(N, 4) t_s [s], x_m [m], y_m [m], theta_rad [rad]."""
+
+def diagnose(
+    model: Model,
+    runs: _Runs,
+    *,
+    validation: Optional[_Runs] = None,
+    candidates: Optional[Sequence[_EffectArg]] = None,
+    auto: bool = False,
+    min_gain: float = 0.05,
+    every: int = 1,
+) -> Diagnosis: ...
+def cli_main(argv: list[str]) -> int:
+    """Run the omnical command line; returns the exit status."""

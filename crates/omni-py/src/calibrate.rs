@@ -1,0 +1,267 @@
+//! `train`: fit a model to runs (the GA and Levenberg–Marquardt of omni-ga), with a progress callback and
+//! Ctrl-C that stops the GA and keeps the best so far.
+
+use crate::effect::{EffectErrors, effect_from};
+use crate::errors::{PyResultExt, value_error};
+use crate::model::{PyModel, model_or};
+use crate::run::runs_from;
+use numpy::PyArray2;
+use omni_ga::calibrate::{Calibration, Plan, Preset, calibrate};
+use omni_ga::observe::{Control, Iteration, Observer};
+use omni_kin::FittedModel;
+use pyo3::exceptions::{PyKeyboardInterrupt, PyUserWarning};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// One iteration as recorded for `Calibration.history` and passed to the progress callback.
+#[derive(Clone, Debug)]
+struct Step {
+    optimizer: &'static str,
+    iteration: usize,
+    best_cost: f64,
+    mean_cost: f64,
+    evaluations: usize,
+    elapsed_s: f64,
+}
+
+impl Step {
+    fn dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("optimizer", self.optimizer)?;
+        d.set_item("iteration", self.iteration)?;
+        d.set_item("best_cost", self.best_cost)?;
+        d.set_item("mean_cost", self.mean_cost)?;
+        d.set_item("evaluations", self.evaluations)?;
+        d.set_item("elapsed_s", self.elapsed_s)?;
+        Ok(d)
+    }
+}
+
+/// Takes the GIL once per iteration (a GA generation evaluates a whole population, so this is cheap): checks
+/// Ctrl-C, calls the progress callback, and stops when a Python effect has raised.
+struct PyObserver<'a> {
+    progress: Option<Py<PyAny>>,
+    errors: &'a EffectErrors,
+    history: Vec<Step>,
+    interrupted: bool,
+    stopped_by_callback: bool,
+    failure: Option<PyErr>,
+}
+
+impl Observer for PyObserver<'_> {
+    fn on_iteration(&mut self, it: &Iteration) -> Control {
+        let step = Step {
+            optimizer: it.optimizer,
+            iteration: it.iteration,
+            best_cost: it.best_cost,
+            mean_cost: it.mean_cost,
+            evaluations: it.evaluations,
+            elapsed_s: it.elapsed_s,
+        };
+        self.history.push(step.clone());
+        if self.interrupted || self.stopped_by_callback || self.failure.is_some() || self.errors.any() {
+            return Control::Stop;
+        }
+        Python::attach(|py| {
+            let outcome = py.check_signals().and_then(|()| match &self.progress {
+                Some(cb) => {
+                    let r = cb.call1(py, (step.dict(py)?,))?;
+                    // Returning False stops; None or anything else goes on.
+                    Ok(r.bind(py).is_instance_of::<pyo3::types::PyBool>() && !r.bind(py).is_truthy()?)
+                }
+                None => Ok(false),
+            });
+            match outcome {
+                Ok(false) => Control::Continue,
+                Ok(true) => {
+                    self.stopped_by_callback = true;
+                    Control::Stop
+                }
+                Err(e) if e.is_instance_of::<PyKeyboardInterrupt>(py) => {
+                    self.interrupted = true;
+                    Control::Stop
+                }
+                Err(e) => {
+                    self.failure = Some(e);
+                    Control::Stop
+                }
+            }
+        })
+    }
+}
+
+/// The outcome of ``train``: the fitted model, its costs, and how the search went.
+#[pyclass(frozen, name = "Calibration", module = "omnical._omnical")]
+pub struct PyCalibration {
+    model: Py<PyModel>,
+    start: Py<PyModel>,
+    /// Objective minimised: ``"path"`` (RMS over every ground-truth pose, m with 1 m/rad) or ``"end_pose"``
+    /// (the paper's Eq. 6).
+    #[pyo3(get)]
+    objective: String,
+    /// Objective at the start model.
+    #[pyo3(get)]
+    objective_start: f64,
+    /// Objective at the fit.
+    #[pyo3(get)]
+    objective_fitted: f64,
+    /// The paper's Eq. 6 end-pose cost on the training runs at the start (m and rad mixed).
+    #[pyo3(get)]
+    cost_start: f64,
+    /// Eq. 6 cost on the training runs at the fit.
+    #[pyo3(get)]
+    cost_fitted: f64,
+    /// Cost evaluations (GA + polish).
+    #[pyo3(get)]
+    evaluations: usize,
+    /// Wall time [s].
+    #[pyo3(get)]
+    seconds: f64,
+    /// Parameters the GA left on a bound of its box (a trapped fit).
+    #[pyo3(get)]
+    at_bound: Vec<String>,
+    /// Parameters the polish moved outside the GA box.
+    #[pyo3(get)]
+    outside_box: Vec<String>,
+    /// Ctrl-C (KeyboardInterrupt) stopped the search; the model is the best found so far.
+    #[pyo3(get)]
+    interrupted: bool,
+    /// The progress callback returned False; the model is the best found so far.
+    #[pyo3(get)]
+    stopped: bool,
+    steps: Vec<Step>,
+}
+
+#[pymethods]
+impl PyCalibration {
+    /// The fitted model.
+    #[getter]
+    fn model(&self, py: Python<'_>) -> Py<PyModel> {
+        self.model.clone_ref(py)
+    }
+    /// The start model (with the preset's integration settings).
+    #[getter]
+    fn start(&self, py: Python<'_>) -> Py<PyModel> {
+        self.start.clone_ref(py)
+    }
+    /// (3, W) fitted IK matrix: rows vx [m/s], vy [m/s], omega [rad/s] per wheel speed [rad/s].
+    #[getter]
+    fn matrix<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let m = self.model.get().inner.ik().py()?;
+        crate::arrays::to_matrix(py, 3, m.n_wheels(), m.entries().to_vec())
+    }
+    /// Effect ids of the fitted model.
+    #[getter]
+    fn effects(&self) -> Vec<String> {
+        use omni_kin::effect::Effect;
+        self.model.get().inner.model.effects.iter().map(|e| e.id().to_string()).collect()
+    }
+    /// Fitted parameters by qualified name.
+    #[getter]
+    fn params(&self) -> std::collections::BTreeMap<String, f64> {
+        let f = &self.model.get().inner;
+        f.model.params().into_iter().map(|p| p.name).zip(f.params.iter().copied()).collect()
+    }
+    /// Costs as a dict: cost_start, cost_fitted (Eq. 6), objective_start, objective_fitted, improvement_pct.
+    #[getter]
+    fn costs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("cost_start", self.cost_start)?;
+        d.set_item("cost_fitted", self.cost_fitted)?;
+        d.set_item("objective_start", self.objective_start)?;
+        d.set_item("objective_fitted", self.objective_fitted)?;
+        d.set_item("improvement_pct", 100.0 * (1.0 - self.cost_fitted / self.cost_start))?;
+        Ok(d)
+    }
+    /// One dict per optimizer iteration: optimizer (``"ga"``/``"lm"``), iteration, best_cost, mean_cost,
+    /// evaluations, elapsed_s.
+    #[getter]
+    fn history<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        self.steps.iter().map(|s| s.dict(py)).collect()
+    }
+    fn __repr__(&self) -> String {
+        format!(
+            "Calibration(Eq. 6 cost {:.5} -> {:.5}, {} evaluations, {:.2} s{})",
+            self.cost_start,
+            self.cost_fitted,
+            self.evaluations,
+            self.seconds,
+            if self.interrupted { ", interrupted" } else { "" }
+        )
+    }
+}
+
+fn preset_from(name: &str) -> PyResult<Preset> {
+    match name {
+        "default" => Ok(Preset::Default),
+        "paper" => Ok(Preset::Paper),
+        other => Err(value_error(format!("preset {other:?}: expected \"default\" or \"paper\""))),
+    }
+}
+
+/// Fit a model to training runs.
+///
+/// The start is ``model`` (default: the data's design model, else the paper's Eq. 7) plus ``effects``
+/// (catalogue ids or Python effects). ``preset="default"`` (path cost, short GA + Levenberg–Marquardt) or
+/// ``"paper"`` (the paper's Eq. 6 GA). ``progress(dict)`` is called after each iteration; returning False
+/// stops. Ctrl-C stops the GA and returns the best so far (``interrupted`` is True). The GIL is released
+/// while the search runs.
+#[pyfunction]
+#[pyo3(signature = (runs, *, model = None, effects = Vec::new(), preset = "default", seed = 0, progress = None))]
+pub fn train(
+    py: Python<'_>,
+    runs: &Bound<'_, PyAny>,
+    model: Option<&Bound<'_, PyAny>>,
+    effects: Vec<Bound<'_, PyAny>>,
+    preset: &str,
+    seed: u64,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<PyCalibration> {
+    let preset = preset_from(preset)?;
+    let (runs, design) = runs_from(runs, "runs")?;
+    let (mut start, mut adapters) = model_or(model, || design.unwrap_or_else(FittedModel::paper_design))?;
+    for e in &effects {
+        let (kind, adapter) = effect_from(e, start.model.n_wheels())?;
+        start = start.with_effect(kind);
+        adapters.extend(adapter);
+    }
+    let plan = Plan::preset(preset, start.model.n_params()).seed(seed);
+    let errors = crate::effect::EffectErrors::new(adapters.iter().cloned());
+    let mut observer = PyObserver {
+        progress,
+        errors: &errors,
+        history: Vec::new(),
+        interrupted: false,
+        stopped_by_callback: false,
+        failure: None,
+    };
+    let result: Result<Calibration, _> = py.detach(|| calibrate(&start, &runs, &plan, &mut observer));
+    if let Some(e) = observer.failure.take() {
+        return Err(e);
+    }
+    let c = errors.check(result)?.py()?;
+    if observer.interrupted {
+        PyErr::warn(
+            py,
+            &py.get_type::<PyUserWarning>(),
+            c"omnical.train: interrupted (Ctrl-C); returning the best parameters found so far",
+            1,
+        )?;
+    }
+    Ok(PyCalibration {
+        model: Py::new(py, PyModel::from_fitted(c.fitted.clone(), adapters.clone()))?,
+        start: Py::new(py, PyModel::from_fitted(c.start.clone(), adapters))?,
+        objective: c.objective.name().to_string(),
+        objective_start: c.objective_start,
+        objective_fitted: c.objective_fitted,
+        cost_start: c.end_pose_start,
+        cost_fitted: c.end_pose_fitted,
+        evaluations: c.evaluations,
+        seconds: c.seconds,
+        at_bound: c.at_bound,
+        outside_box: c.outside_box,
+        interrupted: observer.interrupted,
+        stopped: observer.stopped_by_callback,
+        steps: observer.history,
+    })
+}

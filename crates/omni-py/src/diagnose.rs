@@ -1,0 +1,185 @@
+//! `diagnose`: compare a model with the measurements, find where it fails, and rank which effect is
+//! missing (built-in catalogue and Python effects alike). Results are records (dicts), NaN kept as NaN.
+
+use crate::effect::{EffectErrors, effect_from};
+use crate::errors::PyResultExt;
+use crate::model::{PyModel, design_for, model_or};
+use crate::run::runs_from;
+use omni_ga::diagnose::{Candidate, Costs, DiagnoseOptions, Diagnosis, ParamValue, diagnose as rs_diagnose};
+use omni_kin::FittedModel;
+use omni_kin::effect::Effect;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+fn costs_dict<'py>(py: Python<'py>, c: &Costs) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("train_path", c.train_path)?;
+    d.set_item("held_out_path", c.held_out_path)?;
+    d.set_item("train_end_pose", c.train_end_pose)?;
+    d.set_item("held_out_end_pose", c.held_out_end_pose)?;
+    Ok(d)
+}
+
+fn values<'py>(py: Python<'py>, v: &[ParamValue]) -> PyResult<Vec<Bound<'py, PyDict>>> {
+    v.iter()
+        .map(|p| {
+            let d = PyDict::new(py);
+            d.set_item("name", &p.name)?;
+            d.set_item("value", p.value)?;
+            d.set_item("unit", &p.unit)?;
+            d.set_item("std_error", p.std_error)?;
+            Ok(d)
+        })
+        .collect()
+}
+
+fn candidate_dict<'py>(py: Python<'py>, c: &Candidate) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("effect", &c.effect)?;
+    d.set_item("physics", &c.physics)?;
+    d.set_item("held_out_gain", c.held_out_gain)?;
+    d.set_item("first_order_explained", c.first_order_explained)?;
+    d.set_item("separability", c.separability)?;
+    d.set_item("absorbed", c.absorbed)?;
+    d.set_item("excess_closed", c.excess_closed)?;
+    d.set_item("params", values(py, &c.params)?)?;
+    d.set_item("implied", values(py, &c.implied)?)?;
+    d.set_item("refit", c.refit.as_ref().map(|r| costs_dict(py, r)).transpose()?)?;
+    Ok(d)
+}
+
+/// The outcome of ``diagnose``.
+#[pyclass(frozen, name = "Diagnosis", module = "omnical._omnical")]
+pub struct PyDiagnosis {
+    inner: Diagnosis,
+    final_model: Option<Py<PyModel>>,
+}
+
+#[pymethods]
+impl PyDiagnosis {
+    /// The effect to add, or None when nothing helps enough.
+    #[getter]
+    fn verdict(&self) -> Option<String> {
+        self.inner.verdict.clone()
+    }
+    /// The verdict in words (as the CLI prints it).
+    #[getter]
+    fn verdict_text(&self) -> String {
+        self.inner.verdict_text.clone()
+    }
+    /// How held-out costs were obtained.
+    #[getter]
+    fn held_out(&self) -> String {
+        self.inner.held_out.clone()
+    }
+    /// Costs of the model as given: train_path, held_out_path [m], train_end_pose, held_out_end_pose (Eq. 6).
+    #[getter]
+    fn costs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        costs_dict(py, &self.inner.costs)
+    }
+    /// Costs of the design model (same keys).
+    #[getter]
+    fn design_costs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        costs_dict(py, &self.inner.design_costs)
+    }
+    /// Candidates, best held-out gain first: one dict each (effect, physics, held_out_gain (fraction),
+    /// first_order_explained, separability, absorbed, excess_closed, params, implied, refit).
+    #[getter]
+    fn ranking<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        self.inner.ranking.iter().map(|c| candidate_dict(py, c)).collect()
+    }
+    /// The error ladder: dicts with label and the costs keys, design → model → + effects (``auto``).
+    #[getter]
+    fn ladder<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        self.inner
+            .ladder
+            .iter()
+            .map(|r| {
+                let d = costs_dict(py, &r.costs)?;
+                d.set_item("label", &r.label)?;
+                Ok(d)
+            })
+            .collect()
+    }
+    /// Where the model fails, in words.
+    #[getter]
+    fn findings(&self) -> Vec<String> {
+        self.inner.findings.clone()
+    }
+    /// Measurement noise at standstill (position_m, heading_rad, path_rms, samples), or None.
+    #[getter]
+    fn noise_floor<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        self.inner
+            .noise_floor
+            .as_ref()
+            .map(|n| {
+                let d = PyDict::new(py);
+                d.set_item("position_m", n.position_m)?;
+                d.set_item("heading_rad", n.heading_rad)?;
+                d.set_item("path_rms", n.path_rms)?;
+                d.set_item("samples", n.samples)?;
+                Ok(d)
+            })
+            .transpose()
+    }
+    /// The final model: the input plus the effects ``auto`` added.
+    #[getter]
+    fn final_model(&self, py: Python<'_>) -> Option<Py<PyModel>> {
+        self.final_model.as_ref().map(|m| m.clone_ref(py))
+    }
+    /// Everything as plain data (the CLI's ``--json``; NaN becomes None there).
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let text = serde_json::to_string(&self.inner).map_err(|e| crate::errors::value_error(e.to_string()))?;
+        py.import("json")?.call_method1("loads", (text,))
+    }
+    fn __repr__(&self) -> String {
+        let verdict = self.inner.verdict.as_ref().map_or("None".to_string(), |v| format!("'{v}'"));
+        format!("Diagnosis(verdict={verdict}, {} candidates)", self.inner.ranking.len())
+    }
+}
+
+/// Diagnose a model on training runs: compare with the design, locate the error, refit each candidate
+/// effect and rank them by the fall of the held-out path cost.
+///
+/// ``validation``: held-out runs (default: 2-fold cross-validation over repetitions). ``candidates``:
+/// catalogue ids and/or Python effects (default: the whole catalogue). ``auto``: add effects one at a time
+/// while the held-out cost falls (the error ladder). The GIL is released.
+#[pyfunction]
+#[pyo3(signature = (model, runs, *, validation = None, candidates = None, auto = false, min_gain = 0.05, every = 1))]
+#[allow(clippy::too_many_arguments)]
+pub fn diagnose(
+    py: Python<'_>,
+    model: &Bound<'_, PyAny>,
+    runs: &Bound<'_, PyAny>,
+    validation: Option<&Bound<'_, PyAny>>,
+    candidates: Option<Vec<Bound<'_, PyAny>>>,
+    auto: bool,
+    min_gain: f64,
+    every: usize,
+) -> PyResult<PyDiagnosis> {
+    let (train, _) = runs_from(runs, "runs")?;
+    let validation = validation.map(|v| runs_from(v, "validation")).transpose()?.map(|(r, _)| r);
+    let (fm, mut adapters) = model_or(Some(model), FittedModel::paper_design)?;
+    let mut opts = DiagnoseOptions { auto, min_gain, every, ..DiagnoseOptions::default() };
+    if let Some(cands) = candidates {
+        opts.candidates.clear();
+        for c in &cands {
+            match effect_from(c, fm.model.n_wheels())? {
+                (_, Some(adapter)) => {
+                    opts.custom.push(omni_kin::EffectKind::Custom(adapter.clone()));
+                    adapters.push(adapter);
+                }
+                (kind, None) => opts.candidates.push(kind.id().to_string()),
+            }
+        }
+    }
+    let errors = EffectErrors::new(adapters.iter().cloned());
+    let design = design_for(&fm);
+    let d = py.detach(|| rs_diagnose(&fm, &design, &train, validation.as_deref(), &opts));
+    let d = errors.check(d)?.py()?;
+    let final_model = match &d.final_model {
+        Some(f) => Some(Py::new(py, PyModel::from_fitted(f.clone(), adapters))?),
+        None => None,
+    };
+    Ok(PyDiagnosis { inner: d, final_model })
+}

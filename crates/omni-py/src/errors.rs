@@ -1,0 +1,102 @@
+//! Rust errors as Python exceptions, in one place. Messages are the Rust `Display` text, unchanged.
+//!
+//! | Rust | Python |
+//! |---|---|
+//! | bad shape, NaN, non-increasing stamps, unknown name (`KinError`, binding checks) | `ValueError` |
+//! | a file that does not exist | `FileNotFoundError` |
+//! | other I/O | `OSError` |
+//! | `DatasetError` (a file that does not parse or does not make runs) | `omnical.DatasetError` |
+//! | `ModelFileError` (parse / invalid contents) | `omnical.ModelFileError` |
+//! | `OptimizeError` (an optimizer refused its inputs) | `omnical.CalibrationError` |
+//!
+//! All omnical-specific exceptions derive from `omnical.OmnicalError`.
+
+use omni_cli::dataset::DatasetError as RsDatasetError;
+use omni_cli::model_file::ModelFileError as RsModelFileError;
+use omni_ga::OptimizeError;
+use omni_ga::calibrate::CalibrateError;
+use omni_kin::KinError;
+use pyo3::exceptions::{PyException, PyFileNotFoundError, PyOSError, PyValueError};
+use pyo3::{PyErr, create_exception};
+
+create_exception!(omnical, OmnicalError, PyException, "Base class of omnical's own exceptions.");
+create_exception!(
+    omnical,
+    DatasetError,
+    OmnicalError,
+    "A data file could not be read as runs (the message names the file, place and field)."
+);
+create_exception!(omnical, ModelFileError, OmnicalError, "A model file is not valid TOML or not a valid model.");
+create_exception!(omnical, CalibrationError, OmnicalError, "An optimizer refused its inputs or settings.");
+
+/// Conversion of a Rust error into the matching Python exception.
+pub trait ToPyErr {
+    /// The exception, carrying the Rust message.
+    fn to_py_err(self) -> PyErr;
+}
+
+/// `?`-friendly conversion: `result.py()?`.
+pub trait PyResultExt<T> {
+    /// Maps the error with [`ToPyErr`].
+    fn py(self) -> pyo3::PyResult<T>;
+}
+
+impl<T, E: ToPyErr> PyResultExt<T> for Result<T, E> {
+    fn py(self) -> pyo3::PyResult<T> {
+        self.map_err(ToPyErr::to_py_err)
+    }
+}
+
+fn io_error(message: String, error: &std::io::Error) -> PyErr {
+    match error.kind() {
+        std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
+        _ => PyOSError::new_err(message),
+    }
+}
+
+impl ToPyErr for KinError {
+    fn to_py_err(self) -> PyErr {
+        PyValueError::new_err(self.to_string())
+    }
+}
+
+impl ToPyErr for OptimizeError {
+    fn to_py_err(self) -> PyErr {
+        CalibrationError::new_err(self.to_string())
+    }
+}
+
+impl ToPyErr for CalibrateError {
+    fn to_py_err(self) -> PyErr {
+        match self {
+            CalibrateError::Kin(e) => e.to_py_err(),
+            CalibrateError::Optimize(e) => e.to_py_err(),
+            CalibrateError::NoRuns => PyValueError::new_err(self.to_string()),
+        }
+    }
+}
+
+impl ToPyErr for RsDatasetError {
+    fn to_py_err(self) -> PyErr {
+        let message = self.to_string();
+        match &self {
+            RsDatasetError::Io { error, .. } => io_error(message, error),
+            _ => DatasetError::new_err(message),
+        }
+    }
+}
+
+impl ToPyErr for RsModelFileError {
+    fn to_py_err(self) -> PyErr {
+        let message = self.to_string();
+        match &self {
+            RsModelFileError::Io { error, .. } => io_error(message, error),
+            _ => ModelFileError::new_err(message),
+        }
+    }
+}
+
+/// A `ValueError` with this message (bad shapes, bad option values).
+pub fn value_error(message: impl Into<String>) -> PyErr {
+    PyValueError::new_err(message.into())
+}

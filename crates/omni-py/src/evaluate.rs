@@ -1,0 +1,152 @@
+//! `evaluate` (costs and per-run residuals as arrays) and `integrate` (one run's odometry path).
+
+use crate::arrays::{to_matrix, to_vector};
+use crate::errors::PyResultExt;
+use crate::model::model_or;
+use crate::run::{PyRun, runs_from};
+use numpy::{PyArray1, PyArray2};
+use omni_kin::cost::{self, CostKind};
+use omni_kin::odometry::{self, Residual, Selection};
+use omni_kin::{FittedModel, PoseError};
+use pyo3::prelude::*;
+use rayon::prelude::*;
+
+/// One run's residuals at every ground-truth pose after the first.
+#[pyclass(frozen, name = "RunResiduals", module = "omnical._omnical")]
+pub struct PyRunResiduals {
+    /// Run name.
+    #[pyo3(get)]
+    name: String,
+    /// RMS of the pose errors over the path [m, with 1 m/rad for heading].
+    #[pyo3(get)]
+    path_rms: f64,
+    residuals: Vec<Residual>,
+    end: PoseError,
+}
+
+#[pymethods]
+impl PyRunResiduals {
+    /// (K,) times of the ground-truth poses [s].
+    #[getter]
+    fn t_s<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        to_vector(py, self.residuals.iter().map(|r| r.t_s).collect())
+    }
+    /// (K,) indices of those poses in the run's ``truth``.
+    #[getter]
+    fn truth_index(&self) -> Vec<usize> {
+        self.residuals.iter().map(|r| r.truth_index).collect()
+    }
+    /// (K, 3) predicted poses of the measured point: x_m [m], y_m [m], theta_rad [rad].
+    #[getter]
+    fn predicted<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let d = self.residuals.iter().flat_map(|r| [r.predicted.x_m, r.predicted.y_m, r.predicted.theta_rad]);
+        to_matrix(py, self.residuals.len(), 3, d.collect())
+    }
+    /// (K, 3) predicted minus measured: dx_m [m], dy_m [m], dtheta_rad [rad] (world frame, heading wrapped).
+    #[getter]
+    fn error<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let d = self.residuals.iter().flat_map(|r| [r.error.dx_m, r.error.dy_m, r.error.dtheta_rad]);
+        to_matrix(py, self.residuals.len(), 3, d.collect())
+    }
+    /// (3,) end-pose error dx_m, dy_m, dtheta_rad (the run's term of Eq. 6).
+    #[getter]
+    fn end_error<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        to_vector(py, vec![self.end.dx_m, self.end.dy_m, self.end.dtheta_rad])
+    }
+    fn __repr__(&self) -> String {
+        format!("RunResiduals({:?}, {} poses, path RMS {:.4})", self.name, self.residuals.len(), self.path_rms)
+    }
+}
+
+/// Costs of a model on runs, and each run's residuals.
+#[pyclass(frozen, name = "Evaluation", module = "omnical._omnical")]
+pub struct PyEvaluation {
+    /// The paper's Eq. 6: mean end-pose error (m and rad mixed).
+    #[pyo3(get)]
+    cost: f64,
+    /// RMS error over every ground-truth pose [m, with 1 m/rad].
+    #[pyo3(get)]
+    path_cost: f64,
+    runs: Vec<Py<PyRunResiduals>>,
+}
+
+#[pymethods]
+impl PyEvaluation {
+    /// Per-run residuals, in run order.
+    #[getter]
+    fn runs(&self, py: Python<'_>) -> Vec<Py<PyRunResiduals>> {
+        self.runs.iter().map(|r| r.clone_ref(py)).collect()
+    }
+    /// Run names, in run order.
+    #[getter]
+    fn names(&self) -> Vec<String> {
+        self.runs.iter().map(|r| r.get().name.clone()).collect()
+    }
+    /// (R, 3) end-pose errors of all runs: dx_m, dy_m, dtheta_rad.
+    #[getter]
+    fn end_errors<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let d = self.runs.iter().flat_map(|r| {
+            let e = r.get().end;
+            [e.dx_m, e.dy_m, e.dtheta_rad]
+        });
+        to_matrix(py, self.runs.len(), 3, d.collect())
+    }
+    fn __repr__(&self) -> String {
+        format!("Evaluation(Eq. 6 cost {:.5}, path cost {:.5}, {} runs)", self.cost, self.path_cost, self.runs.len())
+    }
+}
+
+/// Evaluate a model on runs: the Eq. 6 cost, the path cost, and per-run residuals as arrays. ``model``
+/// defaults to the data's design model (else the paper's Eq. 7). The GIL is released.
+#[pyfunction]
+#[pyo3(signature = (runs, model = None))]
+pub fn evaluate(py: Python<'_>, runs: &Bound<'_, PyAny>, model: Option<&Bound<'_, PyAny>>) -> PyResult<PyEvaluation> {
+    let (runs, design) = runs_from(runs, "runs")?;
+    let (fm, adapters) = model_or(model, || design.unwrap_or_else(FittedModel::paper_design))?;
+    let errors = crate::effect::EffectErrors::new(adapters);
+    let out = py.detach(|| -> Result<_, omni_kin::KinError> {
+        cost::check_runs(&fm.model, &runs)?;
+        let res = fm.model.resolve(&fm.params)?;
+        let per: Vec<(Vec<Residual>, PoseError)> = runs
+            .par_iter()
+            .map(|r| (odometry::residuals(&res, r, Selection::Path(1)), odometry::end_pose_error(&res, r)))
+            .collect();
+        let ends: Vec<PoseError> = per.iter().map(|(_, e)| *e).collect();
+        let c = cost::mean_end_pose_error(&ends);
+        let path = cost::cost_resolved(&res, &runs, CostKind::PATH);
+        Ok((per, c, path))
+    });
+    let (per, c, path) = errors.check(out)?.py()?;
+    let runs = runs
+        .iter()
+        .zip(per)
+        .map(|(r, (residuals, end))| {
+            let n = residuals.len().max(1) as f64;
+            let path_rms = (residuals.iter().map(|e| e.error.norm().powi(2)).sum::<f64>() / n).sqrt();
+            Py::new(py, PyRunResiduals { name: r.name().to_string(), path_rms, residuals, end })
+        })
+        .collect::<PyResult<_>>()?;
+    Ok(PyEvaluation { cost: c, path_cost: path, runs })
+}
+
+/// Integrate one run's wheel speeds through a model, from its first ground-truth pose. Returns (N, 4):
+/// t_s [s], x_m [m], y_m [m], theta_rad [rad] of the measured point at the sample times.
+#[pyfunction]
+#[pyo3(signature = (run, model = None))]
+pub fn integrate<'py>(
+    py: Python<'py>,
+    run: &Bound<'py, PyRun>,
+    model: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let run = run.get().inner.clone();
+    let (fm, adapters) = model_or(model, FittedModel::paper_design)?;
+    let errors = crate::effect::EffectErrors::new(adapters);
+    let traj = py.detach(|| -> Result<_, omni_kin::KinError> {
+        cost::check_runs(&fm.model, std::slice::from_ref(&run))?;
+        let res = fm.model.resolve(&fm.params)?;
+        Ok(odometry::integrate(&res, &run))
+    });
+    let traj = errors.check(traj)?.py()?;
+    let d = traj.t_s.iter().zip(&traj.poses).flat_map(|(t, p)| [*t, p.x_m, p.y_m, p.theta_rad]).collect();
+    to_matrix(py, traj.t_s.len(), 4, d)
+}

@@ -1,0 +1,135 @@
+"""simulate, evaluate, integrate, train, diagnose: shapes, keywords, callbacks, errors."""
+
+from __future__ import annotations
+
+import os
+import signal
+
+import numpy as np
+import pytest
+
+import omnical
+
+
+def test_simulate_is_deterministic_and_named(truth: omnical.Model) -> None:
+    a = omnical.simulate(truth, runs_per_command=1, duration_s=1.0, seed=3, prefix="x/")
+    b = omnical.simulate(truth, runs_per_command=1, duration_s=1.0, seed=3, prefix="x/")
+    c = omnical.simulate(truth, runs_per_command=1, duration_s=1.0, seed=4, prefix="x/")
+    assert len(a) == 36 and a[0].name == "x/00-r0" and a[0].command is not None
+    np.testing.assert_array_equal(a[5].wheel_rad_s, b[5].wheel_rad_s)
+    assert not np.array_equal(a[5].wheel_rad_s, c[5].wheel_rad_s)
+    quiet = omnical.simulate(runs_per_command=1, duration_s=1.0, noise_free=True)
+    assert omnical.evaluate(quiet, omnical.Model.paper()).cost < omnical.evaluate(quiet).cost
+    with pytest.raises(ValueError, match="simulator duration_s: must be > 0"):
+        omnical.simulate(duration_s=-1.0)
+    with pytest.raises(ValueError, match="at least one command and one repetition"):
+        omnical.simulate(runs_per_command=0)
+
+
+def test_evaluate_returns_residual_arrays(runs: list[omnical.Run]) -> None:
+    ev = omnical.evaluate(runs, omnical.Model.design())
+    assert ev.end_errors.shape == (36, 3) and len(ev.runs) == 36 and ev.names[0] == runs[0].name
+    r = ev.runs[0]
+    k = runs[0].truth.shape[0] - 1
+    assert r.t_s.shape == (k,) and r.predicted.shape == (k, 3) and r.error.shape == (k, 3)
+    assert r.truth_index == list(range(1, k + 1))
+    np.testing.assert_array_equal(r.end_error, ev.end_errors[0])
+    np.testing.assert_allclose(ev.cost, np.mean(np.linalg.norm(ev.end_errors, axis=1)), rtol=1e-12)
+    assert ev.path_cost > 0 and r.path_rms > 0
+    assert omnical.evaluate(runs).cost == ev.cost  # default: the design model
+    assert omnical.evaluate(runs[0]).names == [runs[0].name]
+
+
+def test_evaluate_rejects_wrong_inputs(runs: list[omnical.Run]) -> None:
+    four = omnical.Model.from_matrix(np.ones((3, 4)))
+    with pytest.raises(ValueError, match="has 3 wheels but the model has 4"):
+        omnical.evaluate(runs, four)
+    with pytest.raises(TypeError, match="runs must be a Dataset, a Run or an iterable of Run, got int"):
+        omnical.evaluate(3)
+    with pytest.raises(TypeError, match="model must be an omnical.Model"):
+        omnical.evaluate(runs, "design")
+
+
+def test_integrate(runs: list[omnical.Run]) -> None:
+    path = omnical.integrate(runs[0], omnical.Model.design())
+    assert path.ndim == 2 and path.shape[1] == 4
+    np.testing.assert_allclose(path[0], runs[0].truth[0])
+    assert path[-1, 0] == runs[0].truth[-1, 0]
+
+
+def test_train_returns_a_model_and_costs(runs: list[omnical.Run]) -> None:
+    seen: list[dict] = []
+    fit = omnical.train(runs, seed=0, progress=seen.append)
+    assert isinstance(fit.model, omnical.Model)
+    assert fit.matrix.shape == (3, 3) and fit.matrix.dtype == np.float64
+    assert fit.costs["cost_fitted"] < 0.5 * fit.costs["cost_start"]
+    assert fit.cost_fitted == fit.costs["cost_fitted"] and fit.objective == "path"
+    assert fit.effects == [] and set(fit.params) == {f"m{r}{c}" for r in (1, 2, 3) for c in (1, 2, 3)}
+    assert seen and seen[0]["optimizer"] == "ga" and seen[0]["iteration"] == 1
+    assert [h["iteration"] for h in fit.history][: len(seen)] == [s["iteration"] for s in seen]
+    assert not fit.interrupted and not fit.stopped and fit.evaluations > 0
+    again = omnical.train(runs, seed=0)
+    np.testing.assert_array_equal(again.matrix, fit.matrix)  # deterministic for a seed
+
+
+def test_train_with_an_effect_recovers_it(runs: list[omnical.Run]) -> None:
+    fit = omnical.train(runs, effects=["time_offset"], seed=0)
+    assert fit.effects == ["time_offset"]
+    assert abs(fit.params["time_offset.tau_s"] - 0.06) < 0.01
+    assert fit.start.effects == ["time_offset"]
+
+
+def test_progress_false_stops_and_keeps_the_best(runs: list[omnical.Run]) -> None:
+    fit = omnical.train(runs, seed=0, progress=lambda it: it["iteration"] < 2)
+    assert fit.stopped and not fit.interrupted
+    assert max(h["iteration"] for h in fit.history) == 2
+    assert fit.cost_fitted <= fit.cost_start
+
+
+def test_ctrl_c_stops_training_and_keeps_the_best(runs: list[omnical.Run]) -> None:
+    def press_ctrl_c(it: dict) -> None:
+        if it["iteration"] == 2:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    with pytest.warns(UserWarning, match="interrupted"):
+        fit = omnical.train(runs, seed=0, progress=press_ctrl_c)
+    assert fit.interrupted
+    assert all(h["optimizer"] == "ga" for h in fit.history)  # no polish after Ctrl-C
+    assert fit.matrix.shape == (3, 3) and fit.cost_fitted <= fit.cost_start
+
+
+def test_progress_exception_propagates(runs: list[omnical.Run]) -> None:
+    def boom(it: dict) -> None:
+        raise RuntimeError("from the callback")
+
+    with pytest.raises(RuntimeError, match="from the callback"):
+        omnical.train(runs, progress=boom)
+
+
+def test_train_bad_arguments(runs: list[omnical.Run]) -> None:
+    with pytest.raises(ValueError, match='preset "fast": expected "default" or "paper"'):
+        omnical.train(runs, preset="fast")
+    with pytest.raises(ValueError, match="no training runs"):
+        omnical.train([])
+    with pytest.raises(ValueError, match='unknown effect "nope"'):
+        omnical.train(runs, effects=["nope"])
+    with pytest.raises(TypeError):
+        omnical.train(runs, 0)  # type: ignore[misc]  # seed is keyword-only
+
+
+def test_diagnose_ranks_the_hidden_effect(runs: list[omnical.Run], validation: list[omnical.Run]) -> None:
+    fit = omnical.train(runs, seed=0)
+    d = omnical.diagnose(fit.model, runs, validation=validation, candidates=["time_offset", "sensor_offset"])
+    assert d.verdict == "time_offset" and d.verdict_text.startswith("add time_offset")
+    top = d.ranking[0]
+    assert top["effect"] == "time_offset" and top["held_out_gain"] > 0.2
+    assert top["params"][0]["name"] == "tau_s" and abs(top["params"][0]["value"] - 0.06) < 0.01
+    assert {"train_path", "held_out_path", "train_end_pose", "held_out_end_pose"} <= set(d.costs)
+    assert d.held_out == "validation set" and [r["label"] for r in d.ladder] == ["design", "model"]
+    assert isinstance(d.findings, list) and d.noise_floor is not None
+    assert d.final_model is not None and d.final_model.effects == []
+    assert d.to_dict()["verdict"] == "time_offset"
+    auto = omnical.diagnose(fit.model, runs, validation=validation, candidates=["time_offset"], auto=True)
+    assert auto.final_model.effects == ["time_offset"] and auto.ladder[-1]["label"] == "+ time_offset"
+    with pytest.raises(ValueError, match='unknown effect "nope"'):
+        omnical.diagnose(fit.model, runs, candidates=["nope"])

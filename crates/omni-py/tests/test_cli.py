@@ -1,0 +1,43 @@
+"""The `omnical` console command installed with the wheel, and the exception hierarchy."""
+
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+
+import omnical
+from conftest import omnical_command
+
+
+def test_console_command_runs_the_cli(sim_dir: Path, tmp_path: Path) -> None:
+    help_ = subprocess.run([*omnical_command(), "--help"], capture_output=True, text=True)
+    assert help_.returncode == 0 and "simulate" in help_.stdout
+    out = tmp_path / "fit.toml"
+    train = subprocess.run(
+        [*omnical_command(), "train", str(sim_dir / "csv" / "train"), "--out", str(out)],
+        capture_output=True,
+        text=True,
+    )
+    assert train.returncode == 0, train.stderr
+    assert "fitted IK matrix" in train.stdout
+    assert omnical.load_model(out).kinematics == "ik"  # the CLI's model file reads in Python
+
+
+def test_console_command_errors_exit_2(tmp_path: Path) -> None:
+    r = subprocess.run([*omnical_command(), "eval", str(tmp_path / "missing.csv")], capture_output=True, text=True)
+    assert r.returncode == 2 and r.stderr.startswith("error: ") and "missing.csv" in r.stderr
+    usage = subprocess.run([*omnical_command(), "frobnicate"], capture_output=True, text=True)
+    assert usage.returncode == 2 and "unrecognized subcommand" in usage.stderr
+
+
+def test_exception_hierarchy() -> None:
+    for e in (omnical.DatasetError, omnical.ModelFileError, omnical.CalibrationError):
+        assert issubclass(e, omnical.OmnicalError)
+    assert issubclass(omnical.OmnicalError, Exception)
+    assert omnical.OmnicalError.__module__ == "omnical"
+
+
+def test_public_api_is_exported() -> None:
+    for name in omnical.__all__:
+        assert hasattr(omnical, name), name
+    assert omnical.__version__ == "0.1.0"
