@@ -19,6 +19,7 @@ mod effect;
 mod errors;
 mod evaluate;
 mod model;
+mod report;
 mod run;
 mod simulate;
 
@@ -36,6 +37,8 @@ mod _omnical {
     use crate::evaluate::{PyEvaluation, PyRunResiduals, evaluate, integrate};
     #[pymodule_export]
     use crate::model::{PyModel, effect_catalogue, load_model};
+    #[pymodule_export]
+    use crate::report::report;
     #[pymodule_export]
     use crate::run::{PyDataset, PyRun, load};
     #[pymodule_export]

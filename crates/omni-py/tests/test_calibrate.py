@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import signal
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -133,3 +134,19 @@ def test_diagnose_ranks_the_hidden_effect(runs: list[omnical.Run], validation: l
     assert auto.final_model.effects == ["time_offset"] and auto.ladder[-1]["label"] == "+ time_offset"
     with pytest.raises(ValueError, match='unknown effect "nope"'):
         omnical.diagnose(fit.model, runs, candidates=["nope"])
+
+
+def test_report_writes_every_figure(
+    runs: list[omnical.Run], validation: list[omnical.Run], tmp_path: Path
+) -> None:
+    fit = omnical.train(runs, seed=0)
+    out = tmp_path / "r.html"
+    ids = omnical.report(fit.model, runs, validation=validation, out=out, png_dir=tmp_path / "png")
+    assert ids == ["ladder", "overlay-worst", "overlay-typical", "flower", "heat-map", "growth", "ranking"]
+    html = out.read_text(encoding="utf-8")
+    assert html.count("<figure ") == 7 and "<script" not in html and "add time_offset" in html
+    assert sorted(p.name for p in (tmp_path / "png").iterdir()) == sorted(f"{i}.png" for i in ids)
+    quick = omnical.report(fit.model, runs, out=tmp_path / "q.html", diagnose=False)
+    assert "ranking" not in quick and "ladder" in quick
+    with pytest.raises(TypeError, match="model must be an omnical.Model"):
+        omnical.report("fit.toml", runs, out=tmp_path / "x.html")  # type: ignore[arg-type]

@@ -45,6 +45,7 @@ from ._omnical import (
     integrate,
     load,
     load_model,
+    report,
     simulate,
     train,
 )
@@ -71,6 +72,7 @@ __all__ = [
     "integrate",
     "load",
     "load_model",
+    "report",
     "simulate",
     "train",
 ]

@@ -314,5 +314,17 @@ def diagnose(
     min_gain: float = 0.05,
     every: int = 1,
 ) -> Diagnosis: ...
+def report(
+    model: Model,
+    runs: _Runs,
+    *,
+    out: Union[str, PathLike[str]],
+    validation: Optional[_Runs] = None,
+    png_dir: Optional[Union[str, PathLike[str]]] = None,
+    diagnose: bool = True,
+    title: Optional[str] = None,
+) -> list[str]:
+    """Write the HTML report (inline SVG figures) of ``model`` on ``runs`` to ``out``; with ``png_dir``
+    also each figure as PNG. Returns the figure ids (``ladder``, ``overlay-worst``, ...)."""
 def cli_main(argv: list[str]) -> int:
     """Run the omnical command line; returns the exit status."""
