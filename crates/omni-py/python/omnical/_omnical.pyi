@@ -37,6 +37,7 @@ __all__ = [
     "integrate",
     "load",
     "load_model",
+    "report",
     "simulate",
     "train",
 ]
