@@ -276,7 +276,7 @@ fn thin(poses: &[Pose2]) -> Vec<(f64, f64)> {
     v
 }
 
-/// What [`write`] produced.
+/// What [`write()`] produced.
 #[derive(Clone, Debug)]
 pub struct Written {
     /// The computed content.
