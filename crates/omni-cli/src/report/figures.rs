@@ -585,7 +585,7 @@ pub fn ranking(d: &Diagnosis) -> anyhow::Result<Figure> {
             let i = n - 1 - k;
             let col = if c.absorbed {
                 RGBColor(190, 190, 190)
-            } else if d.verdict.as_deref() == Some(c.effect.as_str()) || k == 0 && c.held_out_gain > 0.0 {
+            } else if d.verdict.as_deref() == Some(c.effect.as_str()) {
                 RGBColor(44, 160, 44)
             } else {
                 RGBColor(31, 119, 180)
