@@ -56,6 +56,41 @@ pub enum CostArg {
     Path,
 }
 
+/// What a fit does along directions the training runs do not constrain.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum UnexcitedArg {
+    /// Keep the start (design) values there: truncated update (default preset).
+    Hold,
+    /// Let the optimizer move them (paper preset).
+    Move,
+}
+
+/// Overrides of a preset's objective and its handling of unconstrained directions.
+#[derive(Debug, Default, clap::Args)]
+pub struct FitArgs {
+    /// Objective (default: the preset's; paper: end-pose, default: path).
+    #[arg(long, value_enum)]
+    pub objective: Option<CostArg>,
+    /// Path objective: use every k-th ground-truth pose (odometry is evaluated at its stamp).
+    #[arg(long, default_value_t = 1, value_name = "K")]
+    pub every: usize,
+    /// Path objective: weight of heading errors against position errors. m/rad.
+    #[arg(long, default_value_t = 1.0, value_name = "M_PER_RAD")]
+    pub heading_weight: f64,
+    /// Directions the runs do not constrain: hold them at the start or let them move (default: the
+    /// preset's; paper: move, default: hold).
+    #[arg(long, value_enum)]
+    pub unexcited: Option<UnexcitedArg>,
+    /// A direction is unconstrained when its standard error exceeds this fraction of the parameters'
+    /// scale.
+    #[arg(long, default_value_t = 0.05, value_name = "FRACTION")]
+    pub max_std_error: f64,
+    /// A direction is unconstrained when its singular value (scaled Jacobian) is below this fraction of
+    /// the largest.
+    #[arg(long, default_value_t = 0.01, value_name = "FRACTION")]
+    pub min_excitation: f64,
+}
+
 /// Options shared by commands that read runs.
 #[derive(Debug, clap::Args)]
 pub struct DataArgs {
@@ -157,6 +192,9 @@ pub enum Command {
         /// Print a JSON summary instead of text.
         #[arg(long)]
         json: bool,
+        /// Objective and unconstrained directions.
+        #[command(flatten)]
+        fit: FitArgs,
         /// Data options.
         #[command(flatten)]
         data: DataArgs,
@@ -271,7 +309,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             })
         }
         Command::Eval { model, runs, json, data } => cmd::eval::run(&model, &runs, json, &data),
-        Command::Train { runs, model, start, preset, seed, effects, out, json, data } => {
+        Command::Train { runs, model, start, preset, seed, effects, out, json, fit, data } => {
             cmd::train::run(&cmd::train::Args {
                 runs,
                 model,
@@ -281,6 +319,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 effects,
                 out,
                 json,
+                fit,
                 data,
                 quiet: cli.quiet,
             })

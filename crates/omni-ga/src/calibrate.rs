@@ -13,6 +13,7 @@
 
 use crate::error::OptimizeError;
 use crate::ga::{Ga, GaConfig, StallRule};
+use crate::identify::{self, Identifiability, IdentifyOptions, WeakDirection};
 use crate::lm::{LevenbergMarquardt, LmConfig};
 use crate::observe::Observer;
 use crate::optimizer::{Optimizer, Solution, Termination};
@@ -60,6 +61,21 @@ pub enum BoxRule {
     PerRow(f64),
 }
 
+/// What a fit does along directions of parameter space the training runs do not constrain
+/// ([`crate::identify`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Unexcited {
+    /// Truncated update (default preset): after the GA, the parameters are projected back onto the start
+    /// along every unconstrained direction, and the polish moves only within the constrained subspace, so
+    /// the fit keeps the start (design) values where the data cannot tell, and is never worse than the
+    /// start on motions the training runs did not contain.
+    #[default]
+    Hold,
+    /// Move freely (the paper's GA): unconstrained directions end wherever the search left them.
+    Move,
+}
+
 /// A calibration recipe.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Plan {
@@ -75,6 +91,12 @@ pub struct Plan {
     pub polish: bool,
     /// Search box of the GA.
     pub box_rule: BoxRule,
+    /// What to do along unconstrained directions.
+    #[serde(default)]
+    pub unexcited: Unexcited,
+    /// When a direction counts as unconstrained.
+    #[serde(default)]
+    pub identify: IdentifyOptions,
 }
 
 impl Plan {
@@ -88,6 +110,8 @@ impl Plan {
                 ga: Some(GaConfig::matlab_defaults(n_params)),
                 polish: false,
                 box_rule: BoxRule::PerValue(0.10),
+                unexcited: Unexcited::Move,
+                identify: IdentifyOptions::default(),
             },
             Preset::Default => {
                 let mut ga = GaConfig::matlab_defaults(n_params);
@@ -104,6 +128,8 @@ impl Plan {
                     ga: Some(ga),
                     polish: true,
                     box_rule: BoxRule::PerRow(0.10),
+                    unexcited: Unexcited::Hold,
+                    identify: IdentifyOptions::default(),
                 }
             }
         }
@@ -150,6 +176,50 @@ impl<'a> CalibrationProblem<'a> {
             _ => None,
         };
         Ok(Self { model, runs, objective, bounds, prepared })
+    }
+
+    /// Residual rows of each run, in run order (3 per selected ground-truth pose).
+    pub fn run_rows(&self) -> Vec<usize> {
+        self.runs
+            .iter()
+            .map(|r| match self.objective {
+                CostKind::EndPose => 3,
+                CostKind::Path { every, .. } => 3 * Selection::Path(every).indices(r.truth().len()).len(),
+            })
+            .collect()
+    }
+
+    /// The residuals and their Jacobian at `x` (fast path when it applies).
+    pub fn residuals_and_jacobian(&self, x: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
+        self.analytic(x).unwrap_or_else(|| (self.residuals(x), self.jacobian(x)))
+    }
+
+    /// What the runs constrain at `x` ([`identify::analyse`] on this problem's residuals).
+    pub fn identifiability(&self, x: &[f64], opts: &IdentifyOptions) -> Identifiability {
+        let (r, j) = self.residuals_and_jacobian(x);
+        identify::analyse(self.model, x, &j, &r, &self.run_rows(), Some(&self.wheel_moment()), opts)
+    }
+
+    /// Mean `w wᵀ` of the training runs' wheel speeds (rad²/s²), every sample weighted equally.
+    pub fn wheel_moment(&self) -> DMatrix<f64> {
+        let n = self.model.n_wheels();
+        let mut s = DMatrix::zeros(n, n);
+        let mut count = 0usize;
+        for run in self.runs {
+            for k in 0..run.n_samples() {
+                let w = run.wheel_sample(k);
+                for a in 0..n {
+                    for b in 0..n {
+                        s[(a, b)] += w[a] * w[b];
+                    }
+                }
+            }
+            count += run.n_samples();
+        }
+        if count > 0 {
+            s /= count as f64;
+        }
+        s
     }
 
     /// The residuals and their Jacobian: the IK (or geometry) columns analytically through the fast
@@ -239,6 +309,60 @@ impl LeastSquares for CalibrationProblem<'_> {
     }
 }
 
+/// A least-squares problem restricted to `origin + basis · z` (the truncated update's subspace).
+struct Subspace<'p, P: LeastSquares> {
+    inner: &'p P,
+    origin: Vec<f64>,
+    /// `n × k`, parameter units.
+    basis: DMatrix<f64>,
+    bounds: Bounds,
+}
+
+impl<'p, P: LeastSquares> Subspace<'p, P> {
+    fn new(inner: &'p P, origin: Vec<f64>, basis: DMatrix<f64>) -> Result<Self, OptimizeError> {
+        let k = basis.ncols();
+        let bounds = Bounds::new(vec![f64::NEG_INFINITY; k], vec![f64::INFINITY; k])?;
+        Ok(Self { inner, origin, basis, bounds })
+    }
+    fn point(&self, z: &[f64]) -> Vec<f64> {
+        let dz = &self.basis * nalgebra::DVector::from_column_slice(z);
+        self.origin.iter().zip(dz.iter()).map(|(o, d)| o + d).collect()
+    }
+}
+
+impl<P: LeastSquares> Problem for Subspace<'_, P> {
+    fn bounds(&self) -> &Bounds {
+        &self.bounds
+    }
+    fn cost(&self, z: &[f64]) -> f64 {
+        self.inner.cost(&self.point(z))
+    }
+}
+
+impl<P: LeastSquares> LeastSquares for Subspace<'_, P> {
+    fn residuals(&self, z: &[f64]) -> Vec<f64> {
+        self.inner.residuals(&self.point(z))
+    }
+    fn jacobian(&self, z: &[f64]) -> DMatrix<f64> {
+        self.inner.jacobian(&self.point(z)) * &self.basis
+    }
+}
+
+/// The truncated update: `x` with its component along the unconstrained directions `weak` (scaled space,
+/// orthonormal columns) reset to `start`'s, and a basis (parameter units) of the constrained subspace.
+fn hold_unexcited(x: &[f64], start: &[f64], scales: &[f64], weak: &DMatrix<f64>) -> (Vec<f64>, DMatrix<f64>) {
+    let n = x.len();
+    let d = nalgebra::DVector::from_fn(n, |i, _| (x[i] - start[i]) / scales[i]);
+    let kept = &d - weak * (weak.transpose() * &d);
+    let projected = (0..n).map(|i| start[i] + scales[i] * kept[i]).collect();
+    // Orthonormal complement of `weak`: eigenvectors of I − W Wᵀ with eigenvalue 1.
+    let p = DMatrix::identity(n, n) - weak * weak.transpose();
+    let eig = p.symmetric_eigen();
+    let cols: Vec<usize> = (0..n).filter(|&i| eig.eigenvalues[i] > 0.5).collect();
+    let basis = DMatrix::from_fn(n, cols.len(), |r, c| eig.eigenvectors[(r, cols[c])] * scales[r]);
+    (projected, basis)
+}
+
 /// The GA search box around `start` for `model`.
 pub fn search_box(model: &Model, start: &[f64], rule: BoxRule) -> Result<Bounds, OptimizeError> {
     let specs = model.params();
@@ -303,6 +427,10 @@ pub struct Calibration {
     pub ga: Option<Solution>,
     /// The polish's result, when it ran.
     pub polish: Option<Solution>,
+    /// What the training runs constrain, at the fit.
+    pub identifiability: Identifiability,
+    /// Directions held at the start by the truncated update ([`Unexcited::Hold`]), as found after the GA.
+    pub held: Vec<WeakDirection>,
 }
 
 impl Calibration {
@@ -351,14 +479,41 @@ pub fn calibrate(
     let mut polish_solution = None;
     // An observer that stopped the GA (Ctrl-C, a progress callback) wants the best so far, not a polish.
     let stopped = ga_solution.as_ref().is_some_and(|s: &Solution| s.termination == Termination::Stopped);
+    // Truncated update: find what the runs do not constrain (at the GA's point) and hold it at the start.
+    let mut held = Vec::new();
+    let mut subspace = None;
+    if plan.unexcited == Unexcited::Hold && !stopped {
+        let id = problem.identifiability(&x, &plan.identify);
+        if !id.weak.is_empty() {
+            let (projected, basis) = hold_unexcited(&x, &start.params, &id.scales(), &id.weak_basis());
+            x = projected;
+            subspace = Some(basis);
+            held = id.weak;
+        }
+    }
     if plan.polish && !stopped {
         let mut lm = LevenbergMarquardt { config: LmConfig::default() };
-        let s = lm.minimize(&problem, &x, observer)?;
-        evaluations += s.evaluations;
-        if s.cost <= problem.cost(&x) {
-            x = s.params.clone();
+        match subspace {
+            Some(basis) => {
+                let k = basis.ncols();
+                let sub = Subspace::new(&problem, x.clone(), basis)?;
+                let s = lm.minimize(&sub, &vec![0.0; k], observer)?;
+                evaluations += s.evaluations;
+                let xs = sub.point(&s.params);
+                if s.cost <= problem.cost(&x) {
+                    x = xs.clone();
+                }
+                polish_solution = Some(Solution { params: xs, ..s });
+            }
+            None => {
+                let s = lm.minimize(&problem, &x, observer)?;
+                evaluations += s.evaluations;
+                if s.cost <= problem.cost(&x) {
+                    x = s.params.clone();
+                }
+                polish_solution = Some(s);
+            }
         }
-        polish_solution = Some(s);
     }
     let outside_box = names
         .iter()
@@ -368,6 +523,7 @@ pub fn calibrate(
         .collect();
     let fitted = FittedModel::new(model.clone(), x)?;
     let objective_fitted = problem.cost(&fitted.params);
+    let identifiability = problem.identifiability(&fitted.params, &plan.identify);
     let end_pose_start = cost::cost(&model, &start.params, train, CostKind::EndPose)?;
     let end_pose_fitted = cost::cost(&model, &fitted.params, train, CostKind::EndPose)?;
     Ok(Calibration {
@@ -385,5 +541,7 @@ pub fn calibrate(
         outside_box,
         ga: ga_solution,
         polish: polish_solution,
+        identifiability,
+        held,
     })
 }

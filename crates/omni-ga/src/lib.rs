@@ -14,6 +14,7 @@ pub mod calibrate;
 pub mod diagnose;
 pub mod error;
 pub mod ga;
+pub mod identify;
 pub mod lm;
 pub mod observe;
 pub mod optimizer;
