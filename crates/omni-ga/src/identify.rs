@@ -15,8 +15,9 @@
 //!   they are in odometry. It needs several runs per parameter; with fewer than `2p` runs the iid estimate
 //!   is used (and said).
 //! - **Unconstrained directions**: `v_k` whose standard error (in fraction of scale) exceeds
-//!   `max_std_error` (default 1 %: the data cannot pin that combination of parameters to better than the
-//!   size of a typical calibration correction), or whose `s_k` is numerically zero. Each is named by the
+//!   `max_std_error` (default 5 % of scale: the data cannot pin that combination to better than the size of
+//!   a typical calibration correction), or whose `s_k` is below `min_excitation · s_max` (default 1 %: the
+//!   residuals respond to it 100× less than to the best-excited direction, whatever the noise). Each is named by the
 //!   parameters that carry it ("m21 and m22 move together"); for the base kinematics, the direction is
 //!   mapped to a change of the IK matrix `ΔM`, whose dominant wheel-speed pattern `u` (`ΔM ≈ a uᵀ`) is
 //!   the pattern the runs hardly contain, and whose motion under the design matrix (`M₀ u`) says which
@@ -57,6 +58,9 @@ pub enum CovarianceKind {
     PerRun,
     /// Independent residuals (too few runs for the robust estimate).
     Iid,
+    /// A stated noise level: the Jacobian's rows are already divided by each residual's noise standard
+    /// deviation, so the covariance is `(JᵀJ)⁻¹` (planning, before any data).
+    Stated,
 }
 
 /// One parameter's uncertainty.
@@ -188,13 +192,38 @@ pub fn analyse(
     wheel_moment: Option<&DMatrix<f64>>,
     opts: &IdentifyOptions,
 ) -> Identifiability {
+    analyse_core(model, params, j, Some((r, run_rows)), wheel_moment, opts)
+}
+
+/// The expected identifiability for a stated noise level: `j_whitened`'s rows are the residuals'
+/// sensitivities divided by each residual's noise standard deviation, so the covariance is
+/// `(JᵀJ)⁻¹` ([`CovarianceKind::Stated`]).
+pub fn expected(
+    model: &Model,
+    params: &[f64],
+    j_whitened: &DMatrix<f64>,
+    wheel_moment: Option<&DMatrix<f64>>,
+    opts: &IdentifyOptions,
+) -> Identifiability {
+    analyse_core(model, params, j_whitened, None, wheel_moment, opts)
+}
+
+fn analyse_core(
+    model: &Model,
+    params: &[f64],
+    j: &DMatrix<f64>,
+    residuals: Option<(&[f64], &[usize])>,
+    wheel_moment: Option<&DMatrix<f64>>,
+    opts: &IdentifyOptions,
+) -> Identifiability {
     let (m, n) = (j.nrows(), j.ncols());
+    let (r, run_rows): (&[f64], &[usize]) = residuals.unwrap_or((&[], &[]));
     let specs = model.params();
     let scales = param_scales(model);
     let js = DMatrix::from_fn(m, n, |i, c| j[(i, c)] * scales[c]);
     let rr: f64 = r.iter().map(|v| v * v).sum();
     let dof = m.saturating_sub(n).max(1) as f64;
-    let s2 = rr / dof;
+    let s2 = if residuals.is_some() { rr / dof } else { 1.0 };
     // The residual vector's squared norm is a mean over runs of the mean squared pose error (three
     // components), as `CalibrationProblem` stacks it.
     let residual_rms = (rr / 3.0).sqrt();
@@ -220,7 +249,13 @@ pub fn analyse(
         row += k;
     }
     let groups = scores.len();
-    let kind = if groups >= n + 2 { CovarianceKind::PerRun } else { CovarianceKind::Iid };
+    let kind = if residuals.is_none() {
+        CovarianceKind::Stated
+    } else if groups >= n + 2 {
+        CovarianceKind::PerRun
+    } else {
+        CovarianceKind::Iid
+    };
     let cr1 = if groups > 1 { groups as f64 / (groups - 1) as f64 * (m as f64 - 1.0) / dof } else { 1.0 };
 
     // Covariances in scaled space over the non-null directions: C = V S⁻² (Vᵀ B V) S⁻² Vᵀ.
@@ -237,7 +272,7 @@ pub fn analyse(
     let iid_dir = DMatrix::from_diagonal(&inv_s2.map(|x| x * s2));
     let chosen_dir = match kind {
         CovarianceKind::PerRun => &robust_dir,
-        CovarianceKind::Iid => &iid_dir,
+        CovarianceKind::Iid | CovarianceKind::Stated => &iid_dir,
     };
 
     // Unconstrained directions.

@@ -13,6 +13,7 @@
 pub mod calibrate;
 pub mod diagnose;
 pub mod error;
+pub mod excitation;
 pub mod ga;
 pub mod identify;
 pub mod lm;

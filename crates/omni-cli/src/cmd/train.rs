@@ -197,6 +197,7 @@ pub fn print_identifiability(c: &Calibration) {
         match id.covariance_kind {
             omni_ga::identify::CovarianceKind::PerRun => "per run (robust to correlated errors along a path)",
             omni_ga::identify::CovarianceKind::Iid => "iid (too few runs for the per-run estimate)",
+            omni_ga::identify::CovarianceKind::Stated => "from the stated noise",
         }
     );
     let se: Vec<String> = id
