@@ -479,22 +479,27 @@ pub fn calibrate(
     let mut polish_solution = None;
     // An observer that stopped the GA (Ctrl-C, a progress callback) wants the best so far, not a polish.
     let stopped = ga_solution.as_ref().is_some_and(|s: &Solution| s.termination == Termination::Stopped);
-    // Truncated update: find what the runs do not constrain (at the GA's point) and hold it at the start.
+    if plan.polish && !stopped {
+        let mut lm = LevenbergMarquardt { config: LmConfig::default() };
+        let s = lm.minimize(&problem, &x, observer)?;
+        evaluations += s.evaluations;
+        if s.cost <= problem.cost(&x) {
+            x = s.params.clone();
+        }
+        polish_solution = Some(s);
+    }
+    // Truncated update: find what the runs do not constrain, at the (unrestricted) fit, where the
+    // residuals measure noise rather than the start's misfit; hold it at the start and re-polish within
+    // the constrained subspace.
     let mut held = Vec::new();
-    let mut subspace = None;
     if plan.unexcited == Unexcited::Hold && !stopped {
         let id = problem.identifiability(&x, &plan.identify);
         if !id.weak.is_empty() {
             let (projected, basis) = hold_unexcited(&x, &start.params, &id.scales(), &id.weak_basis());
             x = projected;
-            subspace = Some(basis);
             held = id.weak;
-        }
-    }
-    if plan.polish && !stopped {
-        let mut lm = LevenbergMarquardt { config: LmConfig::default() };
-        match subspace {
-            Some(basis) => {
+            if plan.polish {
+                let mut lm = LevenbergMarquardt { config: LmConfig::default() };
                 let k = basis.ncols();
                 let sub = Subspace::new(&problem, x.clone(), basis)?;
                 let s = lm.minimize(&sub, &vec![0.0; k], observer)?;
@@ -504,14 +509,6 @@ pub fn calibrate(
                     x = xs.clone();
                 }
                 polish_solution = Some(Solution { params: xs, ..s });
-            }
-            None => {
-                let s = lm.minimize(&problem, &x, observer)?;
-                evaluations += s.evaluations;
-                if s.cost <= problem.cost(&x) {
-                    x = s.params.clone();
-                }
-                polish_solution = Some(s);
             }
         }
     }

@@ -22,8 +22,8 @@
 //! optimistic.
 
 use crate::calibrate::CalibrateError;
-use crate::identify::{Identifiability, IdentifyOptions};
 use crate::calibrate::CalibrationProblem;
+use crate::identify::{Identifiability, IdentifyOptions};
 use crate::lm::{LevenbergMarquardt, LmConfig};
 use crate::observe::NoopObserver;
 use crate::optimizer::Optimizer;
