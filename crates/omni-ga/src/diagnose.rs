@@ -312,6 +312,9 @@ fn basis(m: &DMatrix<f64>) -> DMatrix<f64> {
     if m.ncols() == 0 {
         return DMatrix::zeros(m.nrows(), 0);
     }
+    if !m.iter().all(|v| v.is_finite()) {
+        return DMatrix::zeros(m.nrows(), 0);
+    }
     let svd = m.clone().svd(true, false);
     let Some(u) = svd.u else { return DMatrix::zeros(m.nrows(), 0) };
     let smax = svd.singular_values.iter().fold(0.0f64, |a, &b| a.max(b));
@@ -587,7 +590,8 @@ fn first_order(
         let nb = current.model.n_base();
         let dx = DVector::from_fn(nm, |i, _| if i < nb { current.params[i] - design.params[i] } else { 0.0 });
         let target = &jm * dx;
-        if let Ok(sol) = je.clone().svd(true, true).solve(&target, 1e-12) {
+        let finite = je.iter().chain(target.iter()).all(|v| v.is_finite());
+        if let Some(Ok(sol)) = finite.then(|| je.clone().svd(true, true).solve(&target, 1e-12)) {
             for (s, v) in effect.params().iter().zip(sol.iter()) {
                 implied.push(ParamValue { name: s.name.clone(), value: *v, unit: s.unit.clone(), std_error: None });
             }

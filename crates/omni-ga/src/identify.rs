@@ -229,10 +229,33 @@ fn analyse_core(
     let residual_rms = (rr / 3.0).sqrt();
 
     // SVD of the scaled Jacobian: V columns are directions, s their singular values (sorted below).
-    let svd = js.clone().svd(false, true);
-    let (sv, v) = match svd.v_t {
-        Some(vt) => (svd.singular_values.clone(), vt.transpose()),
-        None => (DVector::zeros(n), DMatrix::identity(n, n)),
+    // Non-finite sensitivities or residuals (a failed effect hook, a singular model) say nothing; an SVD
+    // of them may not converge. Everything is then reported undetermined, and nothing is held.
+    let finite = js.iter().all(|v| v.is_finite()) && r.iter().all(|v| v.is_finite());
+    let svd = if finite { js.clone().try_svd(false, true, f64::EPSILON, 10_000) } else { None };
+    let Some((sv, v)) = svd.and_then(|svd| svd.v_t.map(|vt| (svd.singular_values.clone(), vt.transpose()))) else {
+        return Identifiability {
+            runs: run_rows.len(),
+            residuals: m,
+            residual_rms: f64::NAN,
+            covariance_kind: CovarianceKind::Iid,
+            condition_number: f64::NAN,
+            relative_singular_values: Vec::new(),
+            params: specs
+                .iter()
+                .enumerate()
+                .map(|(i, s)| ParamUncertainty {
+                    name: s.name.clone(),
+                    unit: s.unit.clone(),
+                    value: params[i],
+                    scale: scales[i],
+                    std_error: None,
+                    std_error_iid: None,
+                })
+                .collect(),
+            covariance: Vec::new(),
+            weak: Vec::new(),
+        };
     };
     let mut order: Vec<usize> = (0..sv.len()).collect();
     order.sort_by(|&a, &b| sv[b].total_cmp(&sv[a]));
@@ -433,7 +456,7 @@ fn wheel_pattern(
     };
     let (Some(mp), Some(mm)) = (step(1.0), step(-1.0)) else { return (None, None, None) };
     let dm = DMatrix::from_fn(3, nw, |r, c| (mp[r * nw + c] - mm[r * nw + c]) / (2.0 * h));
-    let svd = dm.svd(true, true);
+    let Some(svd) = dm.try_svd(true, true, f64::EPSILON, 10_000) else { return (None, None, None) };
     let Some(vt) = svd.v_t else { return (None, None, None) };
     let k = (0..svd.singular_values.len()).max_by(|&a, &b| svd.singular_values[a].total_cmp(&svd.singular_values[b]));
     let Some(k) = k else { return (None, None, None) };
@@ -548,6 +571,16 @@ mod tests {
     use omni_kin::IkMatrix;
 
     /// A linear toy: residuals r = J x − y with a chosen J; the analysis must find the null direction.
+    #[test]
+    fn non_finite_input_is_undetermined_not_a_hang() {
+        let model = Model::ik(IkMatrix::paper_design());
+        let mut j = DMatrix::from_fn(30, 9, |r, c| ((r * 9 + c) as f64).sin());
+        j[(3, 4)] = f64::NAN;
+        let id = analyse(&model, &model.nominal(), &j, &[0.0; 30], &[30], None, &IdentifyOptions::default());
+        assert!(id.weak.is_empty() && id.params.iter().all(|p| p.std_error.is_none()));
+        assert!(id.condition_number.is_nan());
+    }
+
     #[test]
     fn finds_a_null_direction_and_names_it() {
         let model = Model::ik(IkMatrix::paper_design());
