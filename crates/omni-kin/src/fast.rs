@@ -77,6 +77,20 @@ struct Group {
     query_count: [usize; LANES],
 }
 
+/// Runs whose Jacobian rows [`PreparedRuns::ik_jacobian_blocks`] holds at once (a multiple of [`LANES`]).
+pub const BLOCK_RUNS: usize = 256;
+
+/// One run's part of the least-squares system, as [`PreparedRuns::ik_jacobian_blocks`] visits it.
+#[derive(Clone, Copy, Debug)]
+pub struct IkBlock<'a> {
+    /// Index of the run.
+    pub run: usize,
+    /// The run's residuals: its rows of [`PreparedRuns::residual_vector`].
+    pub residuals: &'a [f64],
+    /// Their Jacobian with respect to the IK matrix entries (columns in row-major order `m11 … m3N`).
+    pub jacobian: &'a DMatrix<f64>,
+}
+
 /// Runs prepared for fast repeated evaluation at one step rule and one selection of ground-truth poses.
 #[derive(Clone, Debug)]
 pub struct PreparedRuns {
@@ -328,59 +342,85 @@ impl PreparedRuns {
     /// Residual vector (as [`Self::residual_vector`]) and its Jacobian with respect to the IK matrix
     /// entries (columns in row-major order `m11 … m3N`), by forward-mode differentiation of the step
     /// recurrence (closed forms, no finite differences). The sensor pose is held fixed. `None` when `res`
-    /// or `kind` needs the general walk.
+    /// or `kind` needs the general walk. The blocks of [`Self::ik_jacobian_blocks`], stacked.
     pub fn residuals_and_ik_jacobian(&self, res: &Resolved<'_>, kind: CostKind) -> Option<(Vec<f64>, DMatrix<f64>)> {
+        let poses = match self.selection {
+            Selection::End => self.n_runs,
+            Selection::Path(_) => self.groups.iter().map(|g| g.queries.len()).sum(),
+        };
+        let n_rows = 3 * poses;
+        let mut r = Vec::with_capacity(n_rows);
+        let mut jac = DMatrix::zeros(n_rows, 3 * self.n_wheels);
+        self.ik_jacobian_blocks(res, kind, &mut |b| {
+            let row = r.len();
+            r.extend_from_slice(b.residuals);
+            jac.rows_mut(row, b.residuals.len()).copy_from(b.jacobian);
+        })?;
+        Some((r, jac))
+    }
+
+    /// Visits, in run order, each run's residuals (its rows of [`Self::residual_vector`]) and their
+    /// Jacobian with respect to the IK matrix entries, as [`Self::residuals_and_ik_jacobian`] but holding
+    /// only [`BLOCK_RUNS`] runs' rows at a time: the memory does not grow with the number of runs. The
+    /// runs of a batch are differentiated in parallel and visited sequentially, so sums over the blocks
+    /// are deterministic. `None` (before any visit) when `res` or `kind` needs the general walk.
+    pub fn ik_jacobian_blocks(
+        &self,
+        res: &Resolved<'_>,
+        kind: CostKind,
+        visit: &mut dyn FnMut(IkBlock<'_>),
+    ) -> Option<()> {
         let w = self.heading_weight(kind)?;
         if !self.supports(res) || !res.wheel_effects.is_empty() {
             return None;
         }
         let m = res.ik.entries();
         let n = self.n_wheels;
-        let arc = res.scheme == Scheme::ExactArc;
-        let per_group: Vec<Option<Vec<Vec<Row>>>> = self
-            .groups
-            .par_iter()
-            .map(|g| {
-                let bound: f64 = (0..n).map(|j| m[2 * n + j].abs() * g.u_max[j]).sum();
-                if bound > MAX_STEP_ANGLE_RAD || !bound.is_finite() {
-                    return None;
-                }
-                Some(
-                    (0..g.lanes)
-                        .map(|lane| match (n, arc) {
-                            (3, true) => jacobian_lane::<3, true>(g, lane, m, res.sensor_from_body, self.selection),
-                            (3, false) => jacobian_lane::<3, false>(g, lane, m, res.sensor_from_body, self.selection),
-                            (4, true) => jacobian_lane::<4, true>(g, lane, m, res.sensor_from_body, self.selection),
-                            _ => jacobian_lane::<4, false>(g, lane, m, res.sensor_from_body, self.selection),
-                        })
-                        .collect(),
-                )
-            })
-            .collect();
-        let mut runs = Vec::with_capacity(self.n_runs);
-        for g in per_group {
-            runs.extend(g?);
+        let within_range = |g: &Group| {
+            let bound: f64 = (0..n).map(|j| m[2 * n + j].abs() * g.u_max[j]).sum();
+            bound <= MAX_STEP_ANGLE_RAD && bound.is_finite()
+        };
+        if !self.groups.iter().all(within_range) {
+            return None;
         }
-        let n_rows = 3 * runs.iter().map(Vec::len).sum::<usize>();
+        let arc = res.scheme == Scheme::ExactArc;
+        let sensor = res.sensor_from_body;
         let n_cols = 3 * n;
         let n_runs = self.n_runs.max(1) as f64;
-        let mut r = Vec::with_capacity(n_rows);
-        let mut jac = DMatrix::zeros(n_rows, n_cols);
-        let mut row = 0;
-        for rows in &runs {
-            let scale = 1.0 / (n_runs * rows.len().max(1) as f64).sqrt();
-            for q in rows {
-                let weights = [scale, scale, w * scale];
-                for (i, wi) in weights.iter().enumerate() {
-                    r.push(q.error[i] * wi);
-                    for c in 0..n_cols {
-                        jac[(row, c)] = q.d[i][c] * wi;
+        let mut r = Vec::new();
+        for batch in self.groups.chunks(BLOCK_RUNS / LANES) {
+            let rows: Vec<Vec<Vec<Row>>> = batch
+                .par_iter()
+                .map(|g| {
+                    (0..g.lanes)
+                        .map(|lane| match (n, arc) {
+                            (3, true) => jacobian_lane::<3, true>(g, lane, m, sensor, self.selection),
+                            (3, false) => jacobian_lane::<3, false>(g, lane, m, sensor, self.selection),
+                            (4, true) => jacobian_lane::<4, true>(g, lane, m, sensor, self.selection),
+                            _ => jacobian_lane::<4, false>(g, lane, m, sensor, self.selection),
+                        })
+                        .collect()
+                })
+                .collect();
+            for (g, lanes) in batch.iter().zip(&rows) {
+                for (lane, rows) in lanes.iter().enumerate() {
+                    let scale = 1.0 / (n_runs * rows.len().max(1) as f64).sqrt();
+                    let weights = [scale, scale, w * scale];
+                    r.clear();
+                    let mut jac = DMatrix::zeros(3 * rows.len(), n_cols);
+                    for (k, q) in rows.iter().enumerate() {
+                        for (i, wi) in weights.iter().enumerate() {
+                            r.push(q.error[i] * wi);
+                            for c in 0..n_cols {
+                                jac[(3 * k + i, c)] = q.d[i][c] * wi;
+                            }
+                        }
                     }
-                    row += 1;
+                    visit(IkBlock { run: g.first_run + lane, residuals: &r, jacobian: &jac });
                 }
             }
         }
-        Some((r, jac))
+        Some(())
     }
 
     fn heading_weight(&self, kind: CostKind) -> Option<f64> {
@@ -1011,6 +1051,34 @@ mod tests {
         // A step angle beyond the polynomials' range.
         let fast = Model::ik(IkMatrix::new(3, vec![0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 50.0, 50.0, 50.0]).unwrap());
         assert!(prepared.errors(&fast.resolve(&fast.nominal()).unwrap(), &runs).is_none());
+    }
+
+    #[test]
+    fn jacobian_blocks_come_in_run_order_across_batches() {
+        let runs: Vec<Run> = paper_size().into_iter().cycle().take(BLOCK_RUNS + 2 * LANES + 1).collect();
+        let model = Model::ik(IkMatrix::paper_design());
+        let fixed = match model.integration.step {
+            crate::model::StepMode::Fixed { dt_s } => dt_s,
+            crate::model::StepMode::Stamps => unreachable!(),
+        };
+        let prepared = PreparedRuns::new(&runs, fixed, Selection::Path(1));
+        let x = IkMatrix::paper_calibrated().entries().to_vec();
+        let res = model.resolve(&x).unwrap();
+        let full = prepared.residual_vector(&res, &runs, CostKind::PATH).unwrap();
+        let (mut next, mut row) = (0, 0);
+        prepared
+            .ik_jacobian_blocks(&res, CostKind::PATH, &mut |b| {
+                assert_eq!(b.run, next);
+                let rows = 3 * (runs[b.run].truth().len() - 1);
+                assert_eq!((b.residuals.len(), b.jacobian.nrows(), b.jacobian.ncols()), (rows, rows, 9));
+                for (a, f) in b.residuals.iter().zip(&full[row..row + rows]) {
+                    assert!((a - f).abs() < 1e-15, "run {}: {a} vs {f}", b.run);
+                }
+                next += 1;
+                row += rows;
+            })
+            .unwrap();
+        assert_eq!((next, row), (runs.len(), full.len()));
     }
 
     #[test]
