@@ -249,7 +249,7 @@ impl<'a> CalibrationProblem<'a> {
         let dm = self.ik_from_geometry(x, ik_entries)?;
         let (nb, n) = (self.model.n_base(), x.len());
         let mut effects: Option<Vec<Vec<f64>>> = None;
-        prepared.ik_jacobian_blocks(&res, self.objective, &mut |b| {
+        prepared.ik_jacobian_blocks(&res, self.runs, self.objective, &mut |b| {
             let row_offset = self.row_offsets[b.run];
             let rows = b.residuals.len();
             let mut j = DMatrix::zeros(rows, n);
@@ -273,7 +273,7 @@ impl<'a> CalibrationProblem<'a> {
     fn analytic(&self, x: &[f64]) -> Option<(Vec<f64>, DMatrix<f64>)> {
         let prepared = self.prepared.as_ref()?;
         let res = self.model.resolve(x).ok()?;
-        let (r, j_ik) = prepared.residuals_and_ik_jacobian(&res, self.objective)?;
+        let (r, j_ik) = prepared.residuals_and_ik_jacobian(&res, self.runs, self.objective)?;
         let nb = self.model.n_base();
         let n = x.len();
         let mut j = DMatrix::zeros(r.len(), n);

@@ -6,7 +6,10 @@
 //! displacement is `M u_k` — 3 × N multiply-adds — for both Eq. 1 (Euler) and exact arcs. The heading's
 //! cosine and sine are advanced by a rotation whose `sin a`, `cos a` come from short polynomials in the step
 //! angle `a` (exact to < 1e-16 for `|a| ≤ 0.1` rad; the cosine and sine are re-taken from the summed heading
-//! every 1024 steps). Runs are interleaved four to a lane group (struct of arrays), so the step loop runs
+//! every 1024 steps). The increments are kept up to [`KEPT_INCREMENTS_MAX_BYTES`] (8 B per wheel and
+//! sample); for larger datasets each walk redoes a lane group's increments from the runs' own wheel
+//! columns (the same products, so the same numbers) instead of holding a second copy of the dataset.
+//! Runs are interleaved four to a lane group (struct of arrays), so the step loop runs
 //! four runs at once in SIMD lanes; on x86-64 CPUs with AVX2 and FMA (checked at run time through `pulp`,
 //! no `-C target-cpu` needed) the loop is compiled for them, otherwise plainly.
 //!
@@ -25,6 +28,7 @@ use crate::pose::{Pose2, PoseError, wrap_angle};
 use crate::run::Run;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
+use std::borrow::Cow;
 
 /// Runs per lane group.
 pub const LANES: usize = 4;
@@ -99,7 +103,16 @@ pub struct PreparedRuns {
     fixed_dt_s: Option<f64>,
     selection: Selection,
     groups: Vec<Group>,
+    /// Whether the groups keep their increments ([`KEPT_INCREMENTS_MAX_BYTES`]); otherwise each walk redoes
+    /// them from the runs' wheel speeds.
+    increments_kept: bool,
 }
+
+/// Largest size of the increments [`PreparedRuns::new`] keeps (8 B per wheel and sample: 64 MB holds
+/// 2.8 M samples of 3 wheels, 13 × the paper-size set). Beyond, each walk of a lane group redoes its
+/// increments from the runs' wheel speeds (the same products, so the same numbers) into a buffer of
+/// the group's size: no copy of the dataset, at some speed.
+pub const KEPT_INCREMENTS_MAX_BYTES: usize = 64 << 20;
 
 /// A query of one run: before step `.0`, a partial step of increments `.1`, predicting truth pose `.2`,
 /// taken from sample `.3` with fraction `.4`.
@@ -165,9 +178,23 @@ fn run_steps(run: &Run, fixed_dt_s: Option<f64>, queries: &[usize]) -> (Vec<f64>
 
 impl PreparedRuns {
     /// Prepares `runs` (all with the same wheel count) for fixed steps of `fixed_dt_s` (`None`: each run's
-    /// median interval) and the ground-truth poses of `selection`.
+    /// median interval) and the ground-truth poses of `selection`. The increments are kept when they take
+    /// at most [`KEPT_INCREMENTS_MAX_BYTES`].
     pub fn new(runs: &[Run], fixed_dt_s: Option<f64>, selection: Selection) -> Self {
+        Self::with_increment_budget(runs, fixed_dt_s, selection, KEPT_INCREMENTS_MAX_BYTES)
+    }
+
+    /// [`Self::new`], keeping the increments only when they take at most `max_bytes` (8 B per wheel and
+    /// sample); `0` never keeps them. The results do not depend on it.
+    pub fn with_increment_budget(
+        runs: &[Run],
+        fixed_dt_s: Option<f64>,
+        selection: Selection,
+        max_bytes: usize,
+    ) -> Self {
         let n_wheels = runs.first().map_or(0, Run::n_wheels);
+        let bytes = runs.iter().map(|r| r.wheel_rad_s().len() * std::mem::size_of::<f64>()).sum::<usize>();
+        let increments_kept = bytes <= max_bytes;
         let groups = runs
             .par_chunks(LANES)
             .enumerate()
@@ -229,7 +256,7 @@ impl PreparedRuns {
                     first_run: gi * LANES,
                     lanes: chunk.len(),
                     steps,
-                    u,
+                    u: if increments_kept { u } else { Vec::new() },
                     u_max,
                     start,
                     end,
@@ -242,7 +269,7 @@ impl PreparedRuns {
                 }
             })
             .collect();
-        Self { n_runs: runs.len(), n_wheels, fixed_dt_s, selection, groups }
+        Self { n_runs: runs.len(), n_wheels, fixed_dt_s, selection, groups, increments_kept }
     }
 
     /// Number of runs.
@@ -343,7 +370,12 @@ impl PreparedRuns {
     /// entries (columns in row-major order `m11 … m3N`), by forward-mode differentiation of the step
     /// recurrence (closed forms, no finite differences). The sensor pose is held fixed. `None` when `res`
     /// or `kind` needs the general walk. The blocks of [`Self::ik_jacobian_blocks`], stacked.
-    pub fn residuals_and_ik_jacobian(&self, res: &Resolved<'_>, kind: CostKind) -> Option<(Vec<f64>, DMatrix<f64>)> {
+    pub fn residuals_and_ik_jacobian(
+        &self,
+        res: &Resolved<'_>,
+        runs: &[Run],
+        kind: CostKind,
+    ) -> Option<(Vec<f64>, DMatrix<f64>)> {
         let poses = match self.selection {
             Selection::End => self.n_runs,
             Selection::Path(_) => self.groups.iter().map(|g| g.queries.len()).sum(),
@@ -351,7 +383,7 @@ impl PreparedRuns {
         let n_rows = 3 * poses;
         let mut r = Vec::with_capacity(n_rows);
         let mut jac = DMatrix::zeros(n_rows, 3 * self.n_wheels);
-        self.ik_jacobian_blocks(res, kind, &mut |b| {
+        self.ik_jacobian_blocks(res, runs, kind, &mut |b| {
             let row = r.len();
             r.extend_from_slice(b.residuals);
             jac.rows_mut(row, b.residuals.len()).copy_from(b.jacobian);
@@ -367,11 +399,12 @@ impl PreparedRuns {
     pub fn ik_jacobian_blocks(
         &self,
         res: &Resolved<'_>,
+        runs: &[Run],
         kind: CostKind,
         visit: &mut dyn FnMut(IkBlock<'_>),
     ) -> Option<()> {
         let w = self.heading_weight(kind)?;
-        if !self.supports(res) || !res.wheel_effects.is_empty() {
+        if !self.supports(res) || !res.wheel_effects.is_empty() || runs.len() != self.n_runs {
             return None;
         }
         let m = res.ik.entries();
@@ -389,19 +422,24 @@ impl PreparedRuns {
         let n_runs = self.n_runs.max(1) as f64;
         let mut r = Vec::new();
         for batch in self.groups.chunks(BLOCK_RUNS / LANES) {
-            let rows: Vec<Vec<Vec<Row>>> = batch
+            let rows: Option<Vec<Vec<Vec<Row>>>> = batch
                 .par_iter()
                 .map(|g| {
-                    (0..g.lanes)
-                        .map(|lane| match (n, arc) {
-                            (3, true) => jacobian_lane::<3, true>(g, lane, m, sensor, self.selection),
-                            (3, false) => jacobian_lane::<3, false>(g, lane, m, sensor, self.selection),
-                            (4, true) => jacobian_lane::<4, true>(g, lane, m, sensor, self.selection),
-                            _ => jacobian_lane::<4, false>(g, lane, m, sensor, self.selection),
-                        })
-                        .collect()
+                    let g = &*self.group(g, res, runs)?;
+                    Some(
+                        (0..g.lanes)
+                            .map(|lane| match (n, arc) {
+                                (3, true) => jacobian_lane::<3, true>(g, lane, m, sensor, self.selection),
+                                (3, false) => jacobian_lane::<3, false>(g, lane, m, sensor, self.selection),
+                                (4, true) => jacobian_lane::<4, true>(g, lane, m, sensor, self.selection),
+                                _ => jacobian_lane::<4, false>(g, lane, m, sensor, self.selection),
+                            })
+                            .collect(),
+                    )
                 })
                 .collect();
+            // Only fails for runs other than the prepared ones, which the length check above excludes.
+            let rows = rows?;
             for (g, lanes) in batch.iter().zip(&rows) {
                 for (lane, rows) in lanes.iter().enumerate() {
                     let scale = 1.0 / (n_runs * rows.len().max(1) as f64).sqrt();
@@ -433,9 +471,20 @@ impl PreparedRuns {
         }
     }
 
-    /// The group with its increments redone from wheel speeds rewritten by `res`'s wheel-stage effects
+    /// `g` itself when its increments are kept and `res` has no wheel-stage effects; otherwise the group
+    /// with its increments redone from the runs' wheel speeds — rewritten by `res`'s wheel-stage effects
     /// (as the general walk applies them: sample stamps, fixed steps, the runs' start angles).
-    fn with_wheel_effects(&self, g: &Group, res: &Resolved<'_>, runs: &[Run]) -> Option<Group> {
+    fn group<'g>(&self, g: &'g Group, res: &Resolved<'_>, runs: &[Run]) -> Option<Cow<'g, Group>> {
+        if self.increments_kept && res.wheel_effects.is_empty() {
+            Some(Cow::Borrowed(g))
+        } else {
+            self.rebuilt(g, res, runs).map(Cow::Owned)
+        }
+    }
+
+    /// The group with its increments redone from the runs' wheel speeds, rewritten by `res`'s wheel-stage
+    /// effects if it has any (the same products as [`PreparedRuns::new`]'s, so the same numbers).
+    fn rebuilt(&self, g: &Group, res: &Resolved<'_>, runs: &[Run]) -> Option<Group> {
         let n = self.n_wheels;
         let mut u = vec![[0.0; LANES]; g.steps * n];
         let mut u_max = vec![0.0f64; n];
@@ -443,13 +492,24 @@ impl PreparedRuns {
         for (lane, (steps, src)) in g.sources.iter().enumerate() {
             let run = runs.get(g.first_run + lane)?;
             let h = g.h[lane];
-            let dt = vec![h; run.n_samples()];
-            let ctx =
-                WheelContext { n_wheels: n, t_s: run.wheel_t_s(), dt_s: &dt, start_angle_rad: run.wheel_start_rad() };
-            let mut w = run.wheel_rad_s().to_vec();
-            for (e, p) in &res.wheel_effects {
-                e.wheel_rates(p, &ctx, &mut w);
-            }
+            let rewritten;
+            let w = if res.wheel_effects.is_empty() {
+                run.wheel_rad_s()
+            } else {
+                let dt = vec![h; run.n_samples()];
+                let ctx = WheelContext {
+                    n_wheels: n,
+                    t_s: run.wheel_t_s(),
+                    dt_s: &dt,
+                    start_angle_rad: run.wheel_start_rad(),
+                };
+                let mut w = run.wheel_rad_s().to_vec();
+                for (e, p) in &res.wheel_effects {
+                    e.wheel_rates(p, &ctx, &mut w);
+                }
+                rewritten = w;
+                &rewritten
+            };
             let mut partial = src.partial.iter().peekable();
             for i in 0..*steps {
                 let f = match partial.peek() {
@@ -519,13 +579,8 @@ impl PreparedRuns {
         runs: &[Run],
         on_query: &mut dyn FnMut(usize, PoseError),
     ) -> Option<[PoseError; LANES]> {
-        let rewritten;
-        let g = if res.wheel_effects.is_empty() {
-            g
-        } else {
-            rewritten = self.with_wheel_effects(g, res, runs)?;
-            &rewritten
-        };
+        let g = self.group(g, res, runs)?;
+        let g = &*g;
         let m = res.ik.entries();
         let n = self.n_wheels;
         let bound: f64 = (0..n).map(|j| m[2 * n + j].abs() * g.u_max[j]).sum();
@@ -1054,6 +1109,41 @@ mod tests {
     }
 
     #[test]
+    fn redone_increments_give_the_same_bits_as_kept_ones() {
+        let runs: Vec<Run> = paper_size().into_iter().take(23).collect();
+        for (effect, values) in [(None, vec![]), (Some("speed_scale"), vec![0.01, -0.02, 0.015])] {
+            let mut model = Model::ik(IkMatrix::paper_design()).with_integration(Integration::DEFAULT);
+            if let Some(id) = effect {
+                model = model.with_effect(EffectKind::from_id(id, 3).unwrap());
+            }
+            let mut p = IkMatrix::paper_calibrated().entries().to_vec();
+            p.extend(&values);
+            let res = model.resolve(&p).unwrap();
+            for (sel, kind) in [(Selection::End, CostKind::EndPose), (Selection::Path(1), CostKind::PATH)] {
+                let kept = PreparedRuns::new(&runs, None, sel);
+                let redone = PreparedRuns::with_increment_budget(&runs, None, sel, 0);
+                assert!(kept.increments_kept && !redone.increments_kept);
+                let bits = |e: Vec<Vec<PoseError>>| -> Vec<u64> {
+                    e.iter().flatten().flat_map(|e| [e.dx_m, e.dy_m, e.dtheta_rad].map(f64::to_bits)).collect()
+                };
+                assert_eq!(bits(kept.errors(&res, &runs).unwrap()), bits(redone.errors(&res, &runs).unwrap()));
+                let ends = |p: &PreparedRuns| bits(vec![p.end_pose_errors(&res, &runs).unwrap()]);
+                assert_eq!(ends(&kept), ends(&redone));
+                assert_eq!(
+                    kept.cost(&res, &runs, kind).unwrap().to_bits(),
+                    redone.cost(&res, &runs, kind).unwrap().to_bits()
+                );
+                if effect.is_none() {
+                    let (rk, jk) = kept.residuals_and_ik_jacobian(&res, &runs, kind).unwrap();
+                    let (rr, jr) = redone.residuals_and_ik_jacobian(&res, &runs, kind).unwrap();
+                    assert_eq!(rk, rr);
+                    assert_eq!(jk, jr);
+                }
+            }
+        }
+    }
+
+    #[test]
     fn jacobian_blocks_come_in_run_order_across_batches() {
         let runs: Vec<Run> = paper_size().into_iter().cycle().take(BLOCK_RUNS + 2 * LANES + 1).collect();
         let model = Model::ik(IkMatrix::paper_design());
@@ -1067,7 +1157,7 @@ mod tests {
         let full = prepared.residual_vector(&res, &runs, CostKind::PATH).unwrap();
         let (mut next, mut row) = (0, 0);
         prepared
-            .ik_jacobian_blocks(&res, CostKind::PATH, &mut |b| {
+            .ik_jacobian_blocks(&res, &runs, CostKind::PATH, &mut |b| {
                 assert_eq!(b.run, next);
                 let rows = 3 * (runs[b.run].truth().len() - 1);
                 assert_eq!((b.residuals.len(), b.jacobian.nrows(), b.jacobian.ncols()), (rows, rows, 9));
@@ -1101,7 +1191,7 @@ mod tests {
             let mut x = IkMatrix::paper_calibrated().entries().to_vec();
             x.extend([0.02, -0.01]);
             let res = model.resolve(&x).unwrap();
-            let (r, j) = prepared.residuals_and_ik_jacobian(&res, kind).unwrap();
+            let (r, j) = prepared.residuals_and_ik_jacobian(&res, &runs, kind).unwrap();
             let fast = prepared.residual_vector(&res, &runs, kind).unwrap();
             assert!(r.iter().zip(&fast).all(|(a, b)| (a - b).abs() < 1e-12), "residuals differ");
             assert_eq!(j.ncols(), 9);
