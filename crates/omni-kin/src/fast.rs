@@ -28,7 +28,7 @@ use crate::pose::{Pose2, PoseError, wrap_angle};
 use crate::run::Run;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
-use std::borrow::Cow;
+use std::cell::RefCell;
 
 /// Runs per lane group.
 pub const LANES: usize = 4;
@@ -38,6 +38,11 @@ pub const MAX_STEP_ANGLE_RAD: f64 = 0.1;
 const RESYNC_STEPS: usize = 1024;
 
 type Lanes = [f64; LANES];
+
+thread_local! {
+    /// Each thread's buffer for increments redone on a walk (datasets beyond [`KEPT_INCREMENTS_MAX_BYTES`]).
+    static SCRATCH: RefCell<Vec<Lanes>> = const { RefCell::new(Vec::new()) };
+}
 
 /// One ground-truth pose to predict: after `step` steps of `lane`, a partial step `u` (`n_wheels` entries
 /// in [`Group::query_u`]).
@@ -425,17 +430,16 @@ impl PreparedRuns {
             let rows: Option<Vec<Vec<Vec<Row>>>> = batch
                 .par_iter()
                 .map(|g| {
-                    let g = &*self.group(g, res, runs)?;
-                    Some(
+                    self.with_increments(g, runs, |u| {
                         (0..g.lanes)
                             .map(|lane| match (n, arc) {
-                                (3, true) => jacobian_lane::<3, true>(g, lane, m, sensor, self.selection),
-                                (3, false) => jacobian_lane::<3, false>(g, lane, m, sensor, self.selection),
-                                (4, true) => jacobian_lane::<4, true>(g, lane, m, sensor, self.selection),
-                                _ => jacobian_lane::<4, false>(g, lane, m, sensor, self.selection),
+                                (3, true) => jacobian_lane::<3, true>(g, u, lane, m, sensor, self.selection),
+                                (3, false) => jacobian_lane::<3, false>(g, u, lane, m, sensor, self.selection),
+                                (4, true) => jacobian_lane::<4, true>(g, u, lane, m, sensor, self.selection),
+                                _ => jacobian_lane::<4, false>(g, u, lane, m, sensor, self.selection),
                             })
-                            .collect(),
-                    )
+                            .collect()
+                    })
                 })
                 .collect();
             // Only fails for runs other than the prepared ones, which the length check above excludes.
@@ -471,20 +475,57 @@ impl PreparedRuns {
         }
     }
 
-    /// `g` itself when its increments are kept and `res` has no wheel-stage effects; otherwise the group
-    /// with its increments redone from the runs' wheel speeds — rewritten by `res`'s wheel-stage effects
-    /// (as the general walk applies them: sample stamps, fixed steps, the runs' start angles).
-    fn group<'g>(&self, g: &'g Group, res: &Resolved<'_>, runs: &[Run]) -> Option<Cow<'g, Group>> {
-        if self.increments_kept && res.wheel_effects.is_empty() {
-            Some(Cow::Borrowed(g))
-        } else {
-            self.rebuilt(g, res, runs).map(Cow::Owned)
+    /// Calls `f` with the increments of group `g`: the kept ones, or ones redone from the runs' wheel speeds
+    /// (`u = f h w`, the products [`PreparedRuns::new`] takes, so the same numbers) into this thread's
+    /// buffer. `None` when `runs` are not the prepared runs.
+    fn with_increments<R>(&self, g: &Group, runs: &[Run], f: impl FnOnce(&[Lanes]) -> R) -> Option<R> {
+        if self.increments_kept {
+            return Some(f(&g.u));
         }
+        SCRATCH.with(|cell| {
+            let mut u = cell.take();
+            let out = self.redo_increments(g, runs, &mut u).map(|()| f(&u));
+            cell.replace(u);
+            out
+        })
     }
 
-    /// The group with its increments redone from the runs' wheel speeds, rewritten by `res`'s wheel-stage
-    /// effects if it has any (the same products as [`PreparedRuns::new`]'s, so the same numbers).
-    fn rebuilt(&self, g: &Group, res: &Resolved<'_>, runs: &[Run]) -> Option<Group> {
+    /// Writes group `g`'s increments into `u` (`steps × n_wheels` lane vectors), a step's four lanes at a
+    /// time.
+    fn redo_increments(&self, g: &Group, runs: &[Run], u: &mut Vec<Lanes>) -> Option<()> {
+        let n = self.n_wheels;
+        let total = g.steps * n;
+        // Each lane's wheel speeds over its steps (none for padding lanes).
+        let mut w: [&[f64]; LANES] = [&[]; LANES];
+        for (lane, (steps, src)) in g.sources.iter().enumerate() {
+            let speeds = runs.get(g.first_run + lane)?.wheel_rad_s();
+            w[lane] = speeds.get(src.first_sample * n..(src.first_sample + steps) * n)?;
+        }
+        let h = g.h;
+        u.clear();
+        u.reserve(total);
+        // Whole steps: f = 1, and (1 · h) · w = h · w exactly.
+        let common = w.iter().map(|s| s.len()).min().unwrap_or(0);
+        let [a, b, c, d] = w.map(|s| &s[..common]);
+        for (((a, b), c), d) in a.iter().zip(b).zip(c).zip(d) {
+            u.push([h[0] * a, h[1] * b, h[2] * c, h[3] * d]);
+        }
+        for i in common..total {
+            u.push(std::array::from_fn(|l| w[l].get(i).map_or(0.0, |v| h[l] * v)));
+        }
+        for (lane, (_, src)) in g.sources.iter().enumerate() {
+            for &(k, f) in &src.partial {
+                for j in 0..n {
+                    u[k * n + j][lane] = f * h[lane] * w[lane][k * n + j];
+                }
+            }
+        }
+        Some(())
+    }
+
+    /// The group with its increments redone from wheel speeds rewritten by `res`'s wheel-stage effects
+    /// (as the general walk applies them: sample stamps, fixed steps, the runs' start angles).
+    fn with_wheel_effects(&self, g: &Group, res: &Resolved<'_>, runs: &[Run]) -> Option<Group> {
         let n = self.n_wheels;
         let mut u = vec![[0.0; LANES]; g.steps * n];
         let mut u_max = vec![0.0f64; n];
@@ -492,24 +533,13 @@ impl PreparedRuns {
         for (lane, (steps, src)) in g.sources.iter().enumerate() {
             let run = runs.get(g.first_run + lane)?;
             let h = g.h[lane];
-            let rewritten;
-            let w = if res.wheel_effects.is_empty() {
-                run.wheel_rad_s()
-            } else {
-                let dt = vec![h; run.n_samples()];
-                let ctx = WheelContext {
-                    n_wheels: n,
-                    t_s: run.wheel_t_s(),
-                    dt_s: &dt,
-                    start_angle_rad: run.wheel_start_rad(),
-                };
-                let mut w = run.wheel_rad_s().to_vec();
-                for (e, p) in &res.wheel_effects {
-                    e.wheel_rates(p, &ctx, &mut w);
-                }
-                rewritten = w;
-                &rewritten
-            };
+            let dt = vec![h; run.n_samples()];
+            let ctx =
+                WheelContext { n_wheels: n, t_s: run.wheel_t_s(), dt_s: &dt, start_angle_rad: run.wheel_start_rad() };
+            let mut w = run.wheel_rad_s().to_vec();
+            for (e, p) in &res.wheel_effects {
+                e.wheel_rates(p, &ctx, &mut w);
+            }
             let mut partial = src.partial.iter().peekable();
             for i in 0..*steps {
                 let f = match partial.peek() {
@@ -579,8 +609,13 @@ impl PreparedRuns {
         runs: &[Run],
         on_query: &mut dyn FnMut(usize, PoseError),
     ) -> Option<[PoseError; LANES]> {
-        let g = self.group(g, res, runs)?;
-        let g = &*g;
+        let rewritten;
+        let (g, kept) = if res.wheel_effects.is_empty() {
+            (g, self.increments_kept)
+        } else {
+            rewritten = self.with_wheel_effects(g, res, runs)?;
+            (&rewritten, true)
+        };
         let m = res.ik.entries();
         let n = self.n_wheels;
         let bound: f64 = (0..n).map(|j| m[2 * n + j].abs() * g.u_max[j]).sum();
@@ -589,12 +624,13 @@ impl PreparedRuns {
         }
         let arc = res.scheme == Scheme::ExactArc;
         let sensor = res.sensor_from_body;
-        Some(match (n, arc) {
-            (3, true) => dispatch::<3, true>(g, m, sensor, on_query),
-            (3, false) => dispatch::<3, false>(g, m, sensor, on_query),
-            (4, true) => dispatch::<4, true>(g, m, sensor, on_query),
-            _ => dispatch::<4, false>(g, m, sensor, on_query),
-        })
+        let mut walk = |u: &[Lanes]| match (n, arc) {
+            (3, true) => dispatch::<3, true>(g, u, m, sensor, on_query),
+            (3, false) => dispatch::<3, false>(g, u, m, sensor, on_query),
+            (4, true) => dispatch::<4, true>(g, u, m, sensor, on_query),
+            _ => dispatch::<4, false>(g, u, m, sensor, on_query),
+        };
+        if kept { Some(walk(&g.u)) } else { self.with_increments(g, runs, walk) }
     }
 }
 
@@ -754,17 +790,19 @@ fn measured_error(st: LaneState, sensor: Pose2, truth: &Pose2) -> PoseError {
     }
 }
 
+/// Walks group `g` with increments `u` (its own or redone).
 fn dispatch<const N: usize, const ARC: bool>(
     g: &Group,
+    u: &[Lanes],
     m: &[f64],
     sensor: Pose2,
     on_query: &mut dyn FnMut(usize, PoseError),
 ) -> [PoseError; LANES] {
     #[cfg(target_arch = "x86_64")]
     if let Some(simd) = pulp::x86::V3::try_new() {
-        return simd.vectorize(|| kernel::<_, N, ARC>(simd, g, m, sensor, on_query));
+        return simd.vectorize(|| kernel::<_, N, ARC>(simd, g, u, m, sensor, on_query));
     }
-    kernel::<_, N, ARC>(Portable, g, m, sensor, on_query)
+    kernel::<_, N, ARC>(Portable, g, u, m, sensor, on_query)
 }
 
 /// The lane states of a group, unpacked.
@@ -778,6 +816,7 @@ fn unpack<O: LaneOps>(o: O, v: &[O::V; 5]) -> [LaneState; LANES] {
 fn kernel<O: LaneOps, const N: usize, const ARC: bool>(
     o: O,
     g: &Group,
+    u: &[Lanes],
     m: &[f64],
     sensor: Pose2,
     on_query: &mut dyn FnMut(usize, PoseError),
@@ -810,7 +849,7 @@ fn kernel<O: LaneOps, const N: usize, const ARC: bool>(
         }
         *next_query = g.queries.get(*qi).map_or(usize::MAX, |q| q.step);
     };
-    for (k, uk) in g.u[..g.steps * N].chunks_exact(N).enumerate() {
+    for (k, uk) in u[..g.steps * N].chunks_exact(N).enumerate() {
         if k == next_query {
             answer(&mut qi, &mut next_query, &[x, y, th, c, s]);
         }
@@ -960,6 +999,7 @@ fn tangent_row<const N: usize>(st: LaneState, t: &Tangents<N>, sensor: Pose2, tr
 /// The rows of one lane (one run): its queries in slot order, or its end pose.
 fn jacobian_lane<const N: usize, const ARC: bool>(
     g: &Group,
+    increments: &[Lanes],
     lane: usize,
     m: &[f64],
     sensor: Pose2,
@@ -986,7 +1026,7 @@ fn jacobian_lane<const N: usize, const ARC: bool>(
             break;
         }
         for (j, v) in u.iter_mut().enumerate() {
-            *v = g.u[k * N + j][lane];
+            *v = increments[k * N + j][lane];
         }
         st = step_with_tangents::<N, ARC>(st, &mut t, m, &u);
         if k % RESYNC_STEPS == RESYNC_STEPS - 1 {
