@@ -3,4 +3,5 @@
 mod common;
 mod determinism;
 mod hidden_effect;
+mod identifiability;
 mod recover;

@@ -56,6 +56,50 @@ pub enum CostArg {
     Path,
 }
 
+/// What a fit does along directions the training runs do not constrain.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum UnexcitedArg {
+    /// Keep the start (design) values there: truncated update (default preset).
+    Hold,
+    /// Let the optimizer move them (paper preset).
+    Move,
+}
+
+/// Overrides of a preset's objective and its handling of unconstrained directions.
+#[derive(Debug, Default, clap::Args)]
+pub struct FitArgs {
+    /// Objective (default: the preset's; paper: end-pose, default: path).
+    #[arg(long, value_enum)]
+    pub objective: Option<CostArg>,
+    /// Path objective: use every k-th ground-truth pose (odometry is evaluated at its stamp).
+    #[arg(long, default_value_t = 1, value_name = "K")]
+    pub every: usize,
+    /// Path objective: weight of heading errors against position errors. m/rad.
+    #[arg(long, default_value_t = 1.0, value_name = "M_PER_RAD")]
+    pub heading_weight: f64,
+    /// Directions the runs do not constrain: hold them at the start or let them move (default: the
+    /// preset's; paper: move, default: hold).
+    #[arg(long, value_enum)]
+    pub unexcited: Option<UnexcitedArg>,
+    /// A direction is unconstrained when its standard error exceeds this fraction of the parameters'
+    /// scale.
+    #[arg(long, default_value_t = 0.05, value_name = "FRACTION")]
+    pub max_std_error: f64,
+    /// A direction is unconstrained when its singular value (scaled Jacobian) is below this fraction of
+    /// the largest.
+    #[arg(long, default_value_t = 0.01, value_name = "FRACTION")]
+    pub min_excitation: f64,
+}
+
+/// Which run set `plan` proposes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum RunSetArg {
+    /// D-optimal greedy pick from a library of commands (several speeds, both turn directions).
+    Greedy,
+    /// The paper's 36 flower commands.
+    Flower,
+}
+
 /// Options shared by commands that read runs.
 #[derive(Debug, clap::Args)]
 pub struct DataArgs {
@@ -157,6 +201,9 @@ pub enum Command {
         /// Print a JSON summary instead of text.
         #[arg(long)]
         json: bool,
+        /// Objective and unconstrained directions.
+        #[command(flatten)]
+        fit: FitArgs,
         /// Data options.
         #[command(flatten)]
         data: DataArgs,
@@ -236,6 +283,55 @@ pub enum Command {
         #[command(flatten)]
         data: DataArgs,
     },
+    /// Propose calibration runs that excite every parameter of a model (and its effects), with the
+    /// standard errors they would give for a stated ground-truth noise.
+    Plan {
+        /// Base model to plan for.
+        #[arg(long, value_enum, default_value_t = ModelKind::Ik)]
+        model: ModelKind,
+        /// Effects to plan for (catalogue ids). Repeatable.
+        #[arg(long = "effect", value_name = "NAME")]
+        effects: Vec<String>,
+        /// Take the robot's geometry from these runs (default: APR-02, the paper's robot).
+        #[arg(long = "robot-from", value_name = "RUNS", num_args = 1..)]
+        robot_from: Vec<PathBuf>,
+        /// Which set: a D-optimal pick from a library of commands, or the paper's 36 flower commands.
+        #[arg(long, value_enum, default_value_t = RunSetArg::Greedy)]
+        set: RunSetArg,
+        /// Distinct commands to pick (greedy).
+        #[arg(long, default_value_t = 12)]
+        runs: usize,
+        /// Repetitions of each command.
+        #[arg(long, default_value_t = 1)]
+        repetitions: usize,
+        /// Translation speed of the commands. m/s.
+        #[arg(long, default_value_t = 0.2, value_name = "M_S")]
+        speed: f64,
+        /// Turn rate of the commands. rad/s.
+        #[arg(long, default_value_t = 0.35, value_name = "RAD_S")]
+        omega: f64,
+        /// How long each command is held. s.
+        #[arg(long, default_value_t = 10.0, value_name = "S")]
+        duration: f64,
+        /// Ground-truth rate. Hz.
+        #[arg(long, default_value_t = 4.0, value_name = "HZ")]
+        truth_rate: f64,
+        /// Ground-truth position noise per axis. m.
+        #[arg(long, default_value_t = 0.002, value_name = "M")]
+        truth_noise_m: f64,
+        /// Ground-truth heading noise. rad.
+        #[arg(long, default_value_t = 0.003, value_name = "RAD")]
+        truth_noise_rad: f64,
+        /// Write the planned commands as CSV here (v_m_s, alpha_deg, omega_rad_s, repetitions).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
+        /// Data options (for --robot-from).
+        #[command(flatten)]
+        data: DataArgs,
+    },
     /// The whole story on built-in simulated data with a hidden effect: simulate, train, diagnose, add the
     /// effect, retrain, print the error ladder.
     Demo {
@@ -271,7 +367,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             })
         }
         Command::Eval { model, runs, json, data } => cmd::eval::run(&model, &runs, json, &data),
-        Command::Train { runs, model, start, preset, seed, effects, out, json, data } => {
+        Command::Train { runs, model, start, preset, seed, effects, out, json, fit, data } => {
             cmd::train::run(&cmd::train::Args {
                 runs,
                 model,
@@ -281,6 +377,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 effects,
                 out,
                 json,
+                fit,
                 data,
                 quiet: cli.quiet,
             })
@@ -313,6 +410,39 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Export { model, runs, tum, mcap, data } => {
             cmd::export::run(&cmd::export::Args { model, runs, tum, mcap, data })
         }
+        Command::Plan {
+            model,
+            effects,
+            robot_from,
+            set,
+            runs,
+            repetitions,
+            speed,
+            omega,
+            duration,
+            truth_rate,
+            truth_noise_m,
+            truth_noise_rad,
+            out,
+            json,
+            data,
+        } => cmd::plan::run(&cmd::plan::Args {
+            model,
+            effects,
+            robot_from,
+            set,
+            runs,
+            repetitions,
+            speed_m_s: speed,
+            omega_rad_s: omega,
+            duration_s: duration,
+            truth_rate_hz: truth_rate,
+            truth_noise_m,
+            truth_noise_rad,
+            out,
+            json,
+            data,
+        }),
         Command::Demo { out, runs_per_command, hidden } => cmd::demo::run(&out, runs_per_command, &hidden, cli.quiet),
     }
 }

@@ -82,6 +82,10 @@ fn report_shows_every_figure_and_the_error_falling_with_the_hidden_effect() {
     }
     assert!(html.contains("Verdict.") && html.contains("add time_offset"), "verdict missing");
     assert!(html.contains("time_offset.tau_s"), "fitted effect parameter missing");
+    assert!(
+        html.contains("What the runs can calibrate") && html.contains("condition number"),
+        "identifiability missing"
+    );
 }
 
 #[test]

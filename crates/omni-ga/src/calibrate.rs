@@ -7,12 +7,14 @@
 //! | odometry | Eq. 1, Euler, 10 ms fixed step | exact arcs, each run's median step |
 //! | search | MATLAB-default GA, 200 individuals, stall 50 generations, tol 1e-6 divided by max(1, \|best\|) | small GA (24 × ≤ 30 generations, scale-aware stall rule) then Levenberg–Marquardt |
 //! | bounds | ±10 % of each design value (pins zero entries, e.g. m12 = 0, as Eq. 9) | GA: ±10 % of each row's largest magnitude; the polish is unbounded |
+//! | unconstrained directions ([`crate::identify`]) | move freely | held at the start: truncated update ([`Unexcited::Hold`]) |
 //!
 //! Every fit reports the parameters that ended on a GA bound and those the polish moved outside the box,
 //! so a trapped fit is never silent. The polish never returns a higher objective than its start.
 
 use crate::error::OptimizeError;
 use crate::ga::{Ga, GaConfig, StallRule};
+use crate::identify::{self, Identifiability, IdentifyOptions, WeakDirection};
 use crate::lm::{LevenbergMarquardt, LmConfig};
 use crate::observe::Observer;
 use crate::optimizer::{Optimizer, Solution, Termination};
@@ -62,6 +64,21 @@ pub enum BoxRule {
     PerRow(f64),
 }
 
+/// What a fit does along directions of parameter space the training runs do not constrain
+/// ([`crate::identify`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Unexcited {
+    /// Truncated update (default preset): after the GA, the parameters are projected back onto the start
+    /// along every unconstrained direction, and the polish moves only within the constrained subspace, so
+    /// the fit keeps the start (design) values where the data cannot tell, and is never worse than the
+    /// start on motions the training runs did not contain.
+    #[default]
+    Hold,
+    /// Move freely (the paper's GA): unconstrained directions end wherever the search left them.
+    Move,
+}
+
 /// A calibration recipe.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Plan {
@@ -77,6 +94,12 @@ pub struct Plan {
     pub polish: bool,
     /// Search box of the GA.
     pub box_rule: BoxRule,
+    /// What to do along unconstrained directions.
+    #[serde(default)]
+    pub unexcited: Unexcited,
+    /// When a direction counts as unconstrained.
+    #[serde(default)]
+    pub identify: IdentifyOptions,
 }
 
 impl Plan {
@@ -90,6 +113,8 @@ impl Plan {
                 ga: Some(GaConfig::matlab_defaults(n_params)),
                 polish: false,
                 box_rule: BoxRule::PerValue(0.10),
+                unexcited: Unexcited::Move,
+                identify: IdentifyOptions::default(),
             },
             Preset::Default => {
                 let mut ga = GaConfig::matlab_defaults(n_params);
@@ -106,6 +131,8 @@ impl Plan {
                     ga: Some(ga),
                     polish: true,
                     box_rule: BoxRule::PerRow(0.10),
+                    unexcited: Unexcited::Hold,
+                    identify: IdentifyOptions::default(),
                 }
             }
         }
@@ -268,6 +295,44 @@ impl<'a> CalibrationProblem<'a> {
         })
     }
 
+    /// Residual rows of each run, in run order (3 per selected ground-truth pose).
+    pub fn run_rows(&self) -> Vec<usize> {
+        self.row_offsets.windows(2).map(|w| w[1] - w[0]).collect()
+    }
+
+    /// The residuals and their Jacobian at `x` (fast path when it applies).
+    pub fn residuals_and_jacobian(&self, x: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
+        self.analytic(x).unwrap_or_else(|| (self.residuals(x), self.jacobian(x)))
+    }
+
+    /// What the runs constrain at `x` ([`identify::analyse`] on this problem's residuals).
+    pub fn identifiability(&self, x: &[f64], opts: &IdentifyOptions) -> Identifiability {
+        let (r, j) = self.residuals_and_jacobian(x);
+        identify::analyse(self.model, x, &j, &r, &self.run_rows(), Some(&self.wheel_moment()), opts)
+    }
+
+    /// Mean `w wᵀ` of the training runs' wheel speeds (rad²/s²), every sample weighted equally.
+    pub fn wheel_moment(&self) -> DMatrix<f64> {
+        let n = self.model.n_wheels();
+        let mut s = DMatrix::zeros(n, n);
+        let mut count = 0usize;
+        for run in self.runs {
+            for k in 0..run.n_samples() {
+                let w = run.wheel_sample(k);
+                for a in 0..n {
+                    for b in 0..n {
+                        s[(a, b)] += w[a] * w[b];
+                    }
+                }
+            }
+            count += run.n_samples();
+        }
+        if count > 0 {
+            s /= count as f64;
+        }
+        s
+    }
+
     /// The residuals and their Jacobian: the IK (or geometry) columns analytically through the fast
     /// kernel, the effect columns by finite differences. `None` when the fast kernel cannot serve `x`.
     fn analytic(&self, x: &[f64]) -> Option<(Vec<f64>, DMatrix<f64>)> {
@@ -350,6 +415,74 @@ impl LeastSquares for CalibrationProblem<'_> {
     }
 }
 
+/// A least-squares problem restricted to `origin + basis · z` (the truncated update's subspace).
+struct Subspace<'p, P: LeastSquares> {
+    inner: &'p P,
+    origin: Vec<f64>,
+    /// `n × k`, parameter units.
+    basis: DMatrix<f64>,
+    bounds: Bounds,
+}
+
+impl<'p, P: LeastSquares> Subspace<'p, P> {
+    fn new(inner: &'p P, origin: Vec<f64>, basis: DMatrix<f64>) -> Result<Self, OptimizeError> {
+        let k = basis.ncols();
+        let bounds = Bounds::new(vec![f64::NEG_INFINITY; k], vec![f64::INFINITY; k])?;
+        Ok(Self { inner, origin, basis, bounds })
+    }
+    fn point(&self, z: &[f64]) -> Vec<f64> {
+        let dz = &self.basis * nalgebra::DVector::from_column_slice(z);
+        self.origin.iter().zip(dz.iter()).map(|(o, d)| o + d).collect()
+    }
+}
+
+impl<P: LeastSquares> Problem for Subspace<'_, P> {
+    fn bounds(&self) -> &Bounds {
+        &self.bounds
+    }
+    fn cost(&self, z: &[f64]) -> f64 {
+        self.inner.cost(&self.point(z))
+    }
+}
+
+impl<P: LeastSquares> LeastSquares for Subspace<'_, P> {
+    fn residuals(&self, z: &[f64]) -> Vec<f64> {
+        self.inner.residuals(&self.point(z))
+    }
+    fn jacobian(&self, z: &[f64]) -> DMatrix<f64> {
+        self.inner.jacobian(&self.point(z)) * &self.basis
+    }
+    fn residual_count(&self, z: &[f64]) -> usize {
+        self.inner.residual_count(&self.point(z))
+    }
+    /// The inner problem's normal equations (blockwise for a `CalibrationProblem`) projected on the basis
+    /// `B`: `BᵀJᵀJB`, `BᵀJᵀr`.
+    fn normal_equations(&self, z: &[f64]) -> NormalEquations {
+        let ne = self.inner.normal_equations(&self.point(z));
+        NormalEquations {
+            jtj: self.basis.tr_mul(&ne.jtj) * &self.basis,
+            jtr: self.basis.tr_mul(&ne.jtr),
+            rtr: ne.rtr,
+            rows: ne.rows,
+        }
+    }
+}
+
+/// The truncated update: `x` with its component along the unconstrained directions `weak` (scaled space,
+/// orthonormal columns) reset to `start`'s, and a basis (parameter units) of the constrained subspace.
+fn hold_unexcited(x: &[f64], start: &[f64], scales: &[f64], weak: &DMatrix<f64>) -> (Vec<f64>, DMatrix<f64>) {
+    let n = x.len();
+    let d = nalgebra::DVector::from_fn(n, |i, _| (x[i] - start[i]) / scales[i]);
+    let kept = &d - weak * (weak.transpose() * &d);
+    let projected = (0..n).map(|i| start[i] + scales[i] * kept[i]).collect();
+    // Orthonormal complement of `weak`: eigenvectors of I − W Wᵀ with eigenvalue 1.
+    let p = DMatrix::identity(n, n) - weak * weak.transpose();
+    let eig = p.symmetric_eigen();
+    let cols: Vec<usize> = (0..n).filter(|&i| eig.eigenvalues[i] > 0.5).collect();
+    let basis = DMatrix::from_fn(n, cols.len(), |r, c| eig.eigenvectors[(r, cols[c])] * scales[r]);
+    (projected, basis)
+}
+
 /// The GA search box around `start` for `model`.
 pub fn search_box(model: &Model, start: &[f64], rule: BoxRule) -> Result<Bounds, OptimizeError> {
     let specs = model.params();
@@ -414,6 +547,10 @@ pub struct Calibration {
     pub ga: Option<Solution>,
     /// The polish's result, when it ran.
     pub polish: Option<Solution>,
+    /// What the training runs constrain, at the fit.
+    pub identifiability: Identifiability,
+    /// Directions held at the start by the truncated update ([`Unexcited::Hold`]), as found after the GA.
+    pub held: Vec<WeakDirection>,
 }
 
 impl Calibration {
@@ -471,6 +608,30 @@ pub fn calibrate(
         }
         polish_solution = Some(s);
     }
+    // Truncated update: find what the runs do not constrain, at the (unrestricted) fit, where the
+    // residuals measure noise rather than the start's misfit; hold it at the start and re-polish within
+    // the constrained subspace.
+    let mut held = Vec::new();
+    if plan.unexcited == Unexcited::Hold && !stopped {
+        let id = problem.identifiability(&x, &plan.identify);
+        if !id.weak.is_empty() {
+            let (projected, basis) = hold_unexcited(&x, &start.params, &id.scales(), &id.weak_basis());
+            x = projected;
+            held = id.weak;
+            if plan.polish {
+                let mut lm = LevenbergMarquardt { config: LmConfig::default() };
+                let k = basis.ncols();
+                let sub = Subspace::new(&problem, x.clone(), basis)?;
+                let s = lm.minimize(&sub, &vec![0.0; k], observer)?;
+                evaluations += s.evaluations;
+                let xs = sub.point(&s.params);
+                if s.cost <= problem.cost(&x) {
+                    x = xs.clone();
+                }
+                polish_solution = Some(Solution { params: xs, ..s });
+            }
+        }
+    }
     let outside_box = names
         .iter()
         .enumerate()
@@ -479,6 +640,7 @@ pub fn calibrate(
         .collect();
     let fitted = FittedModel::new(model.clone(), x)?;
     let objective_fitted = problem.cost(&fitted.params);
+    let identifiability = problem.identifiability(&fitted.params, &plan.identify);
     let end_pose_start = cost::cost(&model, &start.params, train, CostKind::EndPose)?;
     let end_pose_fitted = cost::cost(&model, &fitted.params, train, CostKind::EndPose)?;
     Ok(Calibration {
@@ -496,5 +658,34 @@ pub fn calibrate(
         outside_box,
         ga: ga_solution,
         polish: polish_solution,
+        identifiability,
+        held,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use omni_kin::IkMatrix;
+    use omni_kin::simulate::{SimConfig, simulate};
+
+    #[test]
+    fn subspace_normal_equations_are_the_projected_ones() {
+        let truth = FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated()));
+        let cfg = SimConfig { duration_s: 2.0, runs_per_command: 1, ..SimConfig::default() };
+        let runs: Vec<Run> = simulate(&cfg, &truth, "t/").unwrap().into_iter().step_by(4).collect();
+        let model = Model::ik(IkMatrix::paper_design()).with_integration(Integration::DEFAULT);
+        let x = IkMatrix::paper_calibrated().entries().to_vec();
+        let bounds = search_box(&model, &x, BoxRule::PerRow(0.1)).unwrap();
+        let problem = CalibrationProblem::new(&model, &runs, CostKind::PATH, bounds).unwrap();
+        let basis = DMatrix::from_fn(9, 2, |r, c| if r % 2 == c { 0.01 } else { 0.002 * r as f64 });
+        let sub = Subspace::new(&problem, x, basis).unwrap();
+        let z = [0.3, -0.2];
+        let ne = sub.normal_equations(&z);
+        let full = NormalEquations::from_rows(&sub.residuals(&z), &sub.jacobian(&z));
+        assert_eq!(sub.residual_count(&z), full.rows);
+        assert!((ne.jtj - &full.jtj).abs().max() <= 1e-10 * full.jtj.abs().max());
+        assert!((ne.jtr - &full.jtr).abs().max() <= 1e-10 * full.jtr.abs().max());
+        assert!((ne.rtr - full.rtr).abs() <= 1e-12 * full.rtr);
+    }
 }

@@ -23,13 +23,14 @@
 
 use crate::calibrate::CalibrateError;
 use crate::calibrate::CalibrationProblem;
+use crate::identify::{Identifiability, IdentifyOptions};
 use crate::lm::{LevenbergMarquardt, LmConfig};
 use crate::observe::NoopObserver;
 use crate::optimizer::Optimizer;
 use crate::problem::{Bounds, LeastSquares, Problem};
 use nalgebra::{DMatrix, DVector};
 use omni_kin::cost::{self, CostKind};
-use omni_kin::effect::Effect;
+use omni_kin::effect::{Effect, Stage};
 use omni_kin::odometry::{self, Selection};
 use omni_kin::{EffectKind, FittedModel, Run};
 use serde::{Deserialize, Serialize};
@@ -152,6 +153,9 @@ pub struct Candidate {
     pub excess_closed: f64,
     /// Fitted effect parameters with standard errors.
     pub params: Vec<ParamValue>,
+    /// Why the training runs cannot tell this effect (not ranked), when they cannot.
+    #[serde(default)]
+    pub not_excited: Option<String>,
 }
 
 /// A named value with unit and optional standard error.
@@ -165,6 +169,17 @@ pub struct ParamValue {
     pub unit: String,
     /// Standard error (same unit), when estimated.
     pub std_error: Option<f64>,
+}
+
+/// A candidate judged on whole kinds of path it was not fitted on.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct KindOut {
+    /// Effect id.
+    pub effect: String,
+    /// Per kind left out: (kind, path RMS without the effect, with it). m.
+    pub folds: Vec<(String, f64, f64)>,
+    /// Relative fall of the path cost over all left-out kinds (positive = better).
+    pub gain: f64,
 }
 
 /// One rung of the error ladder.
@@ -216,6 +231,14 @@ pub struct Diagnosis {
     pub noise_floor: Option<NoiseFloor>,
     /// Error ladder: design → model → + effects (with `auto`).
     pub ladder: Vec<Rung>,
+    /// What the training runs constrain in the model as given (path residuals).
+    pub identifiability: Option<Identifiability>,
+    /// Scatter of the end-pose error between repeats of the same command (RMS over groups of ≥ 2 runs),
+    /// in Eq. 6 units: the part of the error no deterministic effect can remove. `None` without repeats.
+    pub repeatability_floor: Option<f64>,
+    /// The verdict's effect validated on kinds of path left out of its fit (straight, turning left,
+    /// turning right), when the runs have several kinds.
+    pub kind_out: Option<KindOut>,
     /// The final model (the input, plus effects added by `auto`).
     #[serde(skip)]
     pub final_model: Option<FittedModel>,
@@ -227,7 +250,7 @@ fn path_kind(every: usize) -> CostKind {
 
 /// An effect helps enough to be added: separable and the held-out path cost falls by `min_gain`.
 fn passes(c: &Candidate, opts: &DiagnoseOptions) -> bool {
-    !c.absorbed && c.held_out_gain >= opts.min_gain
+    !c.absorbed && c.not_excited.is_none() && c.held_out_gain >= opts.min_gain
 }
 
 /// An effect is named with confidence when it also removes at least `min_excess_closed` of the held-out
@@ -306,6 +329,95 @@ pub fn standard_errors(j: &DMatrix<f64>, r: &[f64]) -> Option<Vec<f64>> {
     let jtj = j.transpose() * j;
     let inv = jtj.try_inverse()?;
     Some((0..p).map(|i| (s2 * inv[(i, i)]).max(0.0).sqrt()).collect())
+}
+
+/// Whether the runs can tell a wheel-stage effect: every wheel must turn both ways (≥ 5 % of its moving
+/// samples each way) and at several distinct speeds (90th/10th percentile of |speed| ≥ 1.5). `None` when
+/// they can, else the reason.
+pub fn wheel_excitation_gap(runs: &[Run], wheel_names: &[String]) -> Option<String> {
+    const MOVING_RAD_S: f64 = 0.05;
+    let n = wheel_names.len();
+    let mut gaps = Vec::new();
+    for w in 0..n {
+        let mut speeds: Vec<f64> = Vec::new();
+        let (mut pos, mut neg) = (0usize, 0usize);
+        for r in runs {
+            for k in 0..r.n_samples() {
+                let v = r.wheel_sample(k).get(w).copied().unwrap_or(0.0);
+                if v > MOVING_RAD_S {
+                    pos += 1;
+                } else if v < -MOVING_RAD_S {
+                    neg += 1;
+                } else {
+                    continue;
+                }
+                speeds.push(v.abs());
+            }
+        }
+        let moving = (pos + neg).max(1) as f64;
+        if (pos as f64) < 0.05 * moving || (neg as f64) < 0.05 * moving {
+            gaps.push(format!("{} turns one way only ({:.0} % forward)", wheel_names[w], 100.0 * pos as f64 / moving));
+            continue;
+        }
+        speeds.sort_by(f64::total_cmp);
+        let q = |f: f64| speeds[((speeds.len() - 1) as f64 * f) as usize];
+        if q(0.9) < 1.5 * q(0.1) {
+            gaps.push(format!("{} runs at one speed only (|ω| {:.2}–{:.2} rad/s)", wheel_names[w], q(0.1), q(0.9)));
+        }
+    }
+    (!gaps.is_empty()).then(|| gaps.join("; "))
+}
+
+/// The kind of path a run follows, from its command: `straight`, `turning left`, `turning right`.
+fn path_kind_of(r: &Run) -> Option<&'static str> {
+    r.command().map(|c| {
+        if c.omega_rad_s > 1e-9 {
+            "turning left"
+        } else if c.omega_rad_s < -1e-9 {
+            "turning right"
+        } else {
+            "straight"
+        }
+    })
+}
+
+/// Repeat scatter of the end-pose error (see [`Diagnosis::repeatability_floor`]).
+fn repeatability_floor(groups: &[GroupReport]) -> Option<f64> {
+    let (mut sum, mut count) = (0.0, 0usize);
+    for g in groups.iter().filter(|g| g.runs >= 2) {
+        let n = g.runs as f64;
+        sum += g.scatter * g.scatter * n / (n - 1.0);
+        count += 1;
+    }
+    (count > 0).then(|| (sum / count as f64).sqrt())
+}
+
+/// Fit `model + effect` on all kinds but one and compare path costs on the kind left out.
+fn kind_out(
+    model: &FittedModel,
+    effect: &EffectKind,
+    runs: &[Run],
+    every: usize,
+) -> Result<Option<KindOut>, CalibrateError> {
+    let mut kinds: Vec<&'static str> = runs.iter().filter_map(path_kind_of).collect();
+    kinds.sort();
+    kinds.dedup();
+    if kinds.len() < 2 || runs.iter().any(|r| path_kind_of(r).is_none()) {
+        return Ok(None);
+    }
+    let (mut before, mut after) = (0.0, 0.0);
+    let mut folds = Vec::new();
+    for kind in kinds {
+        let (test, fit): (Vec<Run>, Vec<Run>) = runs.iter().cloned().partition(|r| path_kind_of(r) == Some(kind));
+        let base = refit(model, &fit, every)?;
+        let with = refit(&model.with_effect(effect.clone()), &fit, every)?;
+        let b = cost::cost(&base.model, &base.params, &test, path_kind(every))?;
+        let a = cost::cost(&with.model, &with.params, &test, path_kind(every))?;
+        before += b * b;
+        after += a * a;
+        folds.push((kind.to_string(), b, a));
+    }
+    Ok(Some(KindOut { effect: effect.id().to_string(), folds, gain: 1.0 - (after / before.max(1e-300)).sqrt() }))
 }
 
 fn split_held_out(train: &[Run]) -> (Vec<Run>, Vec<Run>) {
@@ -556,8 +668,12 @@ pub fn diagnose(
                 held_out_gain: 0.0,
                 excess_closed: f64::NAN,
                 params: Vec::new(),
+                not_excited: None,
             };
-            if !absorbed {
+            if effect.stage() == Stage::Wheel {
+                cand.not_excited = wheel_excitation_gap(&fit_runs, &current.model.kinematics.wheel_names());
+            }
+            if !absorbed && cand.not_excited.is_none() {
                 let ext = current.with_effect(effect.clone());
                 if let Ok(fit) = refit(&ext, &fit_runs, every) {
                     let c = costs_of(&fit, &fit_runs, &held_runs, every)?;
@@ -607,7 +723,20 @@ pub fn diagnose(
         }
     }
     let ranking = first_ranking.unwrap_or_default();
-    let verdict = ranking.first().filter(|c| passes(c, opts) && confident(c, opts)).map(|c| c.effect.clone());
+    let mut verdict = ranking.first().filter(|c| passes(c, opts) && confident(c, opts)).map(|c| c.effect.clone());
+    // The winner must also help on kinds of path it was not fitted on, when the runs have several.
+    let kind_check = match &verdict {
+        Some(v) => kind_out(model, &candidate_effect(v, model.model.n_wheels(), opts)?, train, every)?,
+        None => None,
+    };
+    let kind_failed = kind_check.as_ref().is_some_and(|k| k.gain < 0.0);
+    if kind_failed {
+        verdict = None;
+    }
+    let identifiability = unbounded(&model.model, &fit_runs, every)
+        .ok()
+        .map(|p| p.identifiability(&model.params, &IdentifyOptions::default()));
+    let repeat_floor = repeatability_floor(&groups);
 
     let mut findings = Vec::new();
     let mut worst: Vec<&RunReport> = runs.iter().collect();
@@ -645,6 +774,23 @@ pub fn diagnose(
             vals.join(", ")
         ));
     }
+    for c in ranking.iter().filter(|c| c.not_excited.is_some()) {
+        findings.push(format!(
+            "{}: not tested, the training runs do not excite it ({})",
+            c.effect,
+            c.not_excited.clone().unwrap_or_default()
+        ));
+    }
+    if let Some(id) = &identifiability {
+        for w in id.warnings() {
+            findings.push(format!("the model itself: {w}"));
+        }
+    }
+    if let Some(f) = repeat_floor {
+        findings.push(format!(
+            "repeatability floor: end-pose errors scatter by {f:.4} between repeats of the same command (no deterministic effect removes that part)"
+        ));
+    }
     let final_costs = ladder.last().map(|r| r.costs.clone()).unwrap_or(costs.clone());
     let mut verdict_text = match &verdict {
         Some(v) => {
@@ -666,6 +812,13 @@ pub fn diagnose(
             None => "no catalogued effect explains the remaining error".into(),
         },
     };
+    if let (true, Some(k)) = (kind_failed, &kind_check) {
+        verdict_text = format!(
+            "{} helps on repeats of the training paths but not on new kinds of path (left-out kinds: path cost {:+.1} %), so it is not recommended",
+            k.effect,
+            -100.0 * k.gain
+        );
+    }
     // The error that would remain: after the recommended effect (or the ladder's last rung).
     let remaining = match (&verdict, opts.auto) {
         (Some(_), false) => ranking[0].refit.as_ref().map_or(final_costs.held_out_path, |c| c.held_out_path),
@@ -698,6 +851,9 @@ pub fn diagnose(
         ranking,
         noise_floor: noise,
         ladder,
+        identifiability,
+        repeatability_floor: repeat_floor,
+        kind_out: kind_check,
         final_model: Some(current),
     })
 }

@@ -13,7 +13,9 @@
 pub mod calibrate;
 pub mod diagnose;
 pub mod error;
+pub mod excitation;
 pub mod ga;
+pub mod identify;
 pub mod lm;
 pub mod observe;
 pub mod optimizer;

@@ -85,6 +85,19 @@ pub fn print_diagnosis(d: &Diagnosis) {
             nf.position_m, nf.heading_rad, nf.path_rms, nf.samples
         );
     }
+    if let Some(id) = &d.identifiability {
+        let worst = id
+            .params
+            .iter()
+            .filter_map(|p| p.std_error.map(|s| (p.name.as_str(), s / p.scale)))
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        println!(
+            "   identifiability: condition number {:.3e} (scaled){}{}",
+            id.condition_number,
+            worst.map_or(String::new(), |(n, s)| format!(", largest standard error {n} ({:.3} % of scale)", 100.0 * s)),
+            if id.weak.is_empty() { String::new() } else { format!(", {} unconstrained direction(s)", id.weak.len()) }
+        );
+    }
     println!("3. which effect is missing (held-out gain of a refit; first-order share of the residual)");
     println!("   {:<20} {:>9} {:>11} {:>9}  parameters", "effect", "gain %", "1st-order %", "separable");
     for c in &d.ranking {
@@ -99,6 +112,16 @@ pub fn print_diagnosis(d: &Diagnosis) {
                 })
                 .collect()
         };
+        if let Some(why) = &c.not_excited {
+            println!(
+                "   {:<20} {:>9} {:>11.1} {:>9}  not excited: {why}",
+                c.effect,
+                "-",
+                100.0 * c.first_order_explained,
+                "-"
+            );
+            continue;
+        }
         println!(
             "   {:<20} {:>9.1} {:>11.1} {:>9}  {}{}",
             c.effect,
@@ -107,6 +130,15 @@ pub fn print_diagnosis(d: &Diagnosis) {
             if c.absorbed { "absorbed".to_string() } else { format!("{:.2}", c.separability) },
             if c.absorbed { "equivalent " } else { "" },
             params.join(", ")
+        );
+    }
+    if let Some(k) = &d.kind_out {
+        let folds: Vec<String> = k.folds.iter().map(|(kind, b, a)| format!("{kind} {b:.4} → {a:.4} m")).collect();
+        println!(
+            "   {} on kinds of path left out of its fit: {} (path cost {:+.1} %)",
+            k.effect,
+            folds.join(", "),
+            -100.0 * k.gain
         );
     }
     if d.ladder.len() > 2 {

@@ -1,10 +1,11 @@
 //! `omnical train`: fit a model to training runs.
 
 use super::{design_ik, load_runs};
-use crate::cli::{DataArgs, ModelKind, PresetArg};
+use crate::cli::{CostArg, DataArgs, FitArgs, ModelKind, PresetArg, UnexcitedArg};
 use crate::{atomic, model_file, progress};
 use anyhow::Context;
-use omni_ga::calibrate::{Calibration, Plan, Preset, calibrate};
+use omni_ga::calibrate::{Calibration, Plan, Preset, Unexcited, calibrate};
+use omni_kin::cost::CostKind;
 use omni_kin::{EffectKind, FittedModel, Model, RobotGeometry};
 use serde_json::json;
 use std::path::PathBuf;
@@ -28,6 +29,8 @@ pub struct Args {
     pub out: Option<PathBuf>,
     /// JSON summary.
     pub json: bool,
+    /// Objective and unconstrained directions.
+    pub fit: FitArgs,
     /// Data options.
     pub data: DataArgs,
     /// Less output.
@@ -53,7 +56,59 @@ pub fn summary(c: &Calibration, preset: &str, seed: u64, runs: usize) -> anyhow:
         "seconds": c.seconds,
         "at_bound": c.at_bound,
         "outside_box": c.outside_box,
+        "held_at_start": c.held.iter().map(|w| &w.text).collect::<Vec<_>>(),
+        "warnings": c.identifiability.warnings(),
+        "identifiability": c.identifiability,
     }))
+}
+
+/// JSON made fit for TOML, which has no null: null fields are dropped, null array items become "none".
+fn toml_safe(v: serde_json::Value) -> serde_json::Value {
+    use serde_json::Value;
+    match v {
+        Value::Object(m) => {
+            Value::Object(m.into_iter().filter(|(_, v)| !v.is_null()).map(|(k, v)| (k, toml_safe(v))).collect())
+        }
+        Value::Array(a) => Value::Array(
+            a.into_iter().map(|v| if v.is_null() { Value::String("none".into()) } else { toml_safe(v) }).collect(),
+        ),
+        v => v,
+    }
+}
+
+/// A preset's plan with the command line's overrides.
+pub fn apply_fit_args(mut plan: Plan, f: &FitArgs) -> anyhow::Result<Plan> {
+    if f.every == 0 {
+        anyhow::bail!("--every must be ≥ 1 (1 = every ground-truth pose)");
+    }
+    if !(f.heading_weight.is_finite() && f.heading_weight >= 0.0) {
+        anyhow::bail!("--heading-weight must be a finite number ≥ 0 (m/rad), got {}", f.heading_weight);
+    }
+    if !(f.max_std_error.is_finite() && f.max_std_error > 0.0) {
+        anyhow::bail!("--max-std-error must be a finite fraction > 0, got {}", f.max_std_error);
+    }
+    match f.objective {
+        Some(CostArg::EndPose) => plan.objective = CostKind::EndPose,
+        Some(CostArg::Path) => {
+            plan.objective = CostKind::Path { every: f.every, heading_weight_m_per_rad: f.heading_weight }
+        }
+        None => {
+            if let CostKind::Path { .. } = plan.objective {
+                plan.objective = CostKind::Path { every: f.every, heading_weight_m_per_rad: f.heading_weight };
+            }
+        }
+    }
+    match f.unexcited {
+        Some(UnexcitedArg::Hold) => plan.unexcited = Unexcited::Hold,
+        Some(UnexcitedArg::Move) => plan.unexcited = Unexcited::Move,
+        None => {}
+    }
+    if !(f.min_excitation.is_finite() && (0.0..1.0).contains(&f.min_excitation)) {
+        anyhow::bail!("--min-excitation must be a fraction in [0, 1), got {}", f.min_excitation);
+    }
+    plan.identify.max_std_error = f.max_std_error;
+    plan.identify.min_excitation = f.min_excitation;
+    Ok(plan)
 }
 
 /// Runs `omnical train`.
@@ -76,13 +131,13 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         PresetArg::Paper => (Preset::Paper, "paper"),
         PresetArg::Default => (Preset::Default, "default"),
     };
-    let plan = Plan::preset(preset, start.model.n_params()).seed(a.seed);
+    let plan = apply_fit_args(Plan::preset(preset, start.model.n_params()).seed(a.seed), &a.fit)?;
     let mut bar = progress::ProgressObserver::new(plan.ga.as_ref().map_or(0, |g| g.max_generations), a.quiet);
     let c = calibrate(&start, &ds.runs, &plan, &mut bar)?;
     bar.finish();
     let s = summary(&c, preset_name, a.seed, ds.runs.len())?;
     if let Some(out) = &a.out {
-        let fit: toml::Table = toml::Table::try_from(&s).context("fit summary")?;
+        let fit: toml::Table = toml::Table::try_from(toml_safe(s.clone())).context("fit summary")?;
         let text = model_file::to_toml(&c.fitted, Some(fit)).map_err(anyhow::Error::msg)?;
         atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))?;
     }
@@ -128,5 +183,41 @@ pub fn print_summary(c: &Calibration, preset: &str, runs: usize) {
     }
     if !c.outside_box.is_empty() {
         println!("note: the polish left the GA box (the box was too small) for: {}", c.outside_box.join(", "));
+    }
+    print_identifiability(c);
+}
+
+/// Standard errors, condition number, and a warning per unconstrained direction.
+pub fn print_identifiability(c: &Calibration) {
+    let id = &c.identifiability;
+    println!(
+        "identifiability: condition number {:.3e} (scaled), residual RMS {:.4} m, standard errors {}",
+        id.condition_number,
+        id.residual_rms,
+        match id.covariance_kind {
+            omni_ga::identify::CovarianceKind::PerRun => "per run (robust to correlated errors along a path)",
+            omni_ga::identify::CovarianceKind::Iid => "iid (too few runs for the per-run estimate)",
+            omni_ga::identify::CovarianceKind::Stated => "from the stated noise",
+        }
+    );
+    let se: Vec<String> = id
+        .params
+        .iter()
+        .map(|p| match p.std_error {
+            Some(s) => format!("{} ±{:.2e} {}", p.name, s, p.unit),
+            None => format!("{} undetermined", p.name),
+        })
+        .collect();
+    for chunk in se.chunks(3) {
+        println!("  {}", chunk.join(" · "));
+    }
+    for w in id.warnings() {
+        println!("warning: {w}");
+    }
+    if !c.held.is_empty() {
+        println!(
+            "note: {} direction(s) held at the start values (truncated update; `--unexcited move` lets them move)",
+            c.held.len()
+        );
     }
 }

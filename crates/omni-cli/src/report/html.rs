@@ -162,6 +162,45 @@ fn findings(h: &mut String, d: &Diagnosis) {
         );
     }
     h.push_str("</ul>\n");
+    identifiability(h, d);
+}
+
+/// What the training runs constrain: standard errors, condition number, unconstrained directions.
+fn identifiability(h: &mut String, d: &Diagnosis) {
+    let Some(id) = &d.identifiability else { return };
+    let _ = writeln!(
+        h,
+        "<h2 id=\"identifiability\">What the runs can calibrate</h2>\n<p class=\"note\">Standard errors of the \
+         model's parameters on the training runs ({}), condition number of the scaled Jacobian {:.3e}.</p>\n\
+         <table><tr><th class=\"l\">parameter</th><th>value</th><th>standard error</th><th>% of scale</th></tr>",
+        match id.covariance_kind {
+            omni_ga::identify::CovarianceKind::PerRun => "per-run estimate, robust to errors correlated along a path",
+            _ => "assuming independent residuals",
+        },
+        id.condition_number
+    );
+    for p in &id.params {
+        let (se, pct) = match p.std_error {
+            Some(se) => (format!("±{se:.3e} {}", escape(&p.unit)), format!("{:.3}", 100.0 * se / p.scale)),
+            None => ("undetermined".to_string(), "–".to_string()),
+        };
+        let _ = writeln!(
+            h,
+            "<tr><td class=\"l\">{}</td><td>{:.6}</td><td>{se}</td><td>{pct}</td></tr>",
+            escape(&p.name),
+            p.value
+        );
+    }
+    h.push_str("</table>\n");
+    if id.weak.is_empty() {
+        h.push_str("<p>Every direction of parameter space is constrained by these runs.</p>\n");
+    } else {
+        h.push_str("<ul>\n");
+        for w in id.warnings() {
+            let _ = writeln!(h, "<li class=\"warn\">{}</li>", escape(&w));
+        }
+        h.push_str("</ul>\n");
+    }
 }
 
 fn ranking_table(h: &mut String, d: &Diagnosis) {

@@ -1,0 +1,178 @@
+//! `omnical plan`: propose calibration runs that excite every parameter.
+
+use super::load_runs;
+use crate::atomic;
+use crate::cli::{DataArgs, ModelKind, RunSetArg};
+use anyhow::Context;
+use omni_ga::excitation::{self, PlanRequest, RunPlan, RunSet};
+use omni_kin::simulate::SimConfig;
+use omni_kin::{EffectKind, FittedModel, Model, RobotGeometry};
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+/// Arguments of `omnical plan`.
+#[derive(Debug)]
+pub struct Args {
+    /// Base model.
+    pub model: ModelKind,
+    /// Effect ids.
+    pub effects: Vec<String>,
+    /// Runs whose robot geometry to use.
+    pub robot_from: Vec<PathBuf>,
+    /// Which set.
+    pub set: RunSetArg,
+    /// Distinct commands (greedy).
+    pub runs: usize,
+    /// Repetitions of each.
+    pub repetitions: usize,
+    /// m/s.
+    pub speed_m_s: f64,
+    /// rad/s.
+    pub omega_rad_s: f64,
+    /// s.
+    pub duration_s: f64,
+    /// Hz.
+    pub truth_rate_hz: f64,
+    /// m.
+    pub truth_noise_m: f64,
+    /// rad.
+    pub truth_noise_rad: f64,
+    /// CSV output.
+    pub out: Option<PathBuf>,
+    /// JSON output.
+    pub json: bool,
+    /// Data options.
+    pub data: DataArgs,
+}
+
+/// Runs `omnical plan`.
+pub fn run(a: &Args) -> anyhow::Result<()> {
+    let robot = if a.robot_from.is_empty() {
+        RobotGeometry::apr02()
+    } else {
+        let ds = load_runs(&a.robot_from, &a.data)?;
+        ds.robot.clone().with_context(|| {
+            format!(
+                "--robot-from {}: these runs do not describe the robot's geometry (wheel radii, distances, angles); \
+                 plan needs it to turn commands into wheel speeds",
+                a.robot_from.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(" ")
+            )
+        })?
+    };
+    let mut model = match a.model {
+        ModelKind::Ik => FittedModel::nominal(Model::ik(robot.twist_from_wheels()?)),
+        ModelKind::Geometry => FittedModel::nominal(Model::geometry(robot.clone())),
+    };
+    for id in &a.effects {
+        model = model
+            .with_effect(EffectKind::from_id(id, model.model.n_wheels()).with_context(|| format!("--effect {id}"))?);
+    }
+    let req = PlanRequest {
+        speed_m_s: a.speed_m_s,
+        omega_rad_s: a.omega_rad_s,
+        duration_s: a.duration_s,
+        truth_rate_hz: a.truth_rate_hz,
+        truth_noise_m: a.truth_noise_m,
+        truth_noise_rad: a.truth_noise_rad,
+        runs: a.runs,
+        repetitions: a.repetitions,
+        set: match a.set {
+            RunSetArg::Greedy => RunSet::Greedy,
+            RunSetArg::Flower => RunSet::Flower,
+        },
+        ..PlanRequest::default()
+    };
+    let sim = SimConfig { design: robot, ..SimConfig::default() };
+    let plan = excitation::plan(&model, &sim, &req)?;
+    // The paper's flower set beside a greedy plan, for comparison.
+    let flower = match req.set {
+        RunSet::Greedy => Some(excitation::plan(&model, &sim, &PlanRequest { set: RunSet::Flower, ..req.clone() })?),
+        RunSet::Flower => None,
+    };
+    if let Some(out) = &a.out {
+        atomic::write_atomic(out, plan_csv(&plan).as_bytes()).with_context(|| format!("writing {}", out.display()))?;
+    }
+    if a.json {
+        let v = serde_json::json!({"plan": plan, "flower": flower});
+        println!("{}", serde_json::to_string_pretty(&v)?);
+        return Ok(());
+    }
+    print_plan(&plan, flower.as_ref(), &req);
+    if let Some(out) = &a.out {
+        println!("plan written to {}", out.display());
+    }
+    Ok(())
+}
+
+/// The planned commands as CSV.
+pub fn plan_csv(plan: &RunPlan) -> String {
+    let mut s = String::from("v_m_s,alpha_deg,omega_rad_s,repetitions\n");
+    for r in &plan.runs {
+        let _ = writeln!(
+            s,
+            "{},{},{},{}",
+            r.command.v_m_s,
+            r.command.alpha_rad.to_degrees().round(),
+            r.command.omega_rad_s,
+            r.repetitions
+        );
+    }
+    s
+}
+
+fn worst_relative_se(plan: &RunPlan) -> Option<f64> {
+    plan.expected.params.iter().map(|p| p.std_error.map(|s| s / p.scale)).try_fold(0.0f64, |m, s| s.map(|s| m.max(s)))
+}
+
+fn print_plan(plan: &RunPlan, flower: Option<&RunPlan>, req: &PlanRequest) {
+    let name = match plan.set {
+        RunSet::Greedy => "D-optimal pick",
+        RunSet::Flower => "the paper's flower set",
+    };
+    println!(
+        "{name}: {} runs of {:.0} s ({} distinct commands), ground truth at {} Hz with σ {} m / {} rad",
+        plan.total_runs,
+        req.duration_s,
+        plan.runs.len(),
+        req.truth_rate_hz,
+        req.truth_noise_m,
+        req.truth_noise_rad
+    );
+    println!("  {:>8} {:>8} {:>10} {:>5}", "v m/s", "α °", "ω rad/s", "reps");
+    for r in &plan.runs {
+        println!(
+            "  {:>8.3} {:>8.0} {:>10.3} {:>5}",
+            r.command.v_m_s,
+            r.command.alpha_rad.to_degrees(),
+            r.command.omega_rad_s,
+            r.repetitions
+        );
+    }
+    let id = &plan.expected;
+    println!("expected standard errors (ground-truth noise only; wheel noise makes real ones larger):");
+    for p in &id.params {
+        match p.std_error {
+            Some(se) => println!("  {:<26} ±{:.3e} {:<4} ({:.3} % of scale)", p.name, se, p.unit, 100.0 * se / p.scale),
+            None => println!("  {:<26} undetermined", p.name),
+        }
+    }
+    println!("condition number {:.3e} (scaled)", id.condition_number);
+    for w in id.warnings() {
+        println!("warning: {w}");
+    }
+    if let Some(f) = flower {
+        match (worst_relative_se(plan), worst_relative_se(f)) {
+            (Some(a), Some(b)) => println!(
+                "for comparison, the paper's flower set ({} runs): worst standard error {:.3} % of scale vs {:.3} % here",
+                f.total_runs,
+                100.0 * b,
+                100.0 * a
+            ),
+            (Some(_), None) => println!(
+                "for comparison, the paper's flower set ({} runs) leaves some parameters undetermined",
+                f.total_runs
+            ),
+            _ => {}
+        }
+    }
+}
