@@ -198,7 +198,7 @@ impl PreparedRuns {
         max_bytes: usize,
     ) -> Self {
         let n_wheels = runs.first().map_or(0, Run::n_wheels);
-        let bytes = runs.iter().map(|r| r.wheel_rad_s().len() * std::mem::size_of::<f64>()).sum::<usize>();
+        let bytes = runs.iter().map(|r| std::mem::size_of_val(r.wheel_rad_s())).sum::<usize>();
         let increments_kept = bytes <= max_bytes;
         let groups = runs
             .par_chunks(LANES)
