@@ -83,3 +83,49 @@ fn standard_errors_match_the_spread_of_repeated_fits() {
         );
     }
 }
+
+/// Runs that drive one way only cannot tell a sign-dependent wheel effect: diagnose says so instead of
+/// ranking it; a repeatability floor is reported beside the noise floor.
+#[test]
+fn diagnose_refuses_effects_the_runs_do_not_excite() {
+    use omnical::ga::diagnose::{DiagnoseOptions, diagnose, wheel_excitation_gap};
+    let truth = paper_truth();
+    let forward: Vec<_> = flower_commands().into_iter().filter(|c| c.omega_rad_s == 0.0).take(1).collect();
+    let base = SimConfig { commands: forward, runs_per_command: 4, duration_s: 4.0, seed: 5, ..SimConfig::default() };
+    let train = simulate(&base, &truth, "fwd/").unwrap();
+    let names: Vec<String> = ["wheel_a", "wheel_b", "wheel_c"].map(String::from).to_vec();
+    let gap = wheel_excitation_gap(&train, &names).expect("one command: every wheel turns one way");
+    assert!(gap.contains("turns one way only"), "{gap}");
+    let opts =
+        DiagnoseOptions { candidates: vec!["wheel_asymmetry".into(), "time_offset".into()], ..Default::default() };
+    let d = diagnose(&design(), &design(), &train, None, &opts).unwrap();
+    let c = d.ranking.iter().find(|c| c.effect == "wheel_asymmetry").unwrap();
+    assert!(c.not_excited.as_deref().is_some_and(|w| w.contains("turns one way only")), "{:?}", c.not_excited);
+    assert_ne!(d.verdict.as_deref(), Some("wheel_asymmetry"));
+    assert!(d.findings.iter().any(|f| f.starts_with("wheel_asymmetry: not tested")), "{:?}", d.findings);
+    let floor = d.repeatability_floor.expect("four repeats of one command");
+    assert!(floor > 0.0 && floor < 0.05, "repeatability floor {floor}");
+    // A single straight command leaves the model itself poorly constrained, and the diagnosis says so.
+    let id = d.identifiability.expect("identifiability");
+    assert!(!id.weak.is_empty());
+    assert!(d.findings.iter().any(|f| f.starts_with("the model itself:")));
+}
+
+/// The flower subset with all three kinds of path: a real effect passes the left-out-kind check.
+#[test]
+fn a_real_effect_helps_on_left_out_kinds_of_path() {
+    use omnical::ga::diagnose::{DiagnoseOptions, diagnose};
+    use omnical::kin::EffectKind;
+    let mut truth = paper_truth().with_effect(EffectKind::from_id("time_offset", 3).unwrap());
+    let n = truth.params.len();
+    truth.params[n - 1] = 0.06;
+    let (train, val) = crate::common::dataset(&truth, &small_config(9, 3, 2, 6.0));
+    let plan = Plan::preset(Preset::Default, 9).seed(1);
+    let fitted = calibrate(&design(), &train, &plan, &mut NoopObserver).unwrap().fitted;
+    let opts = DiagnoseOptions { candidates: vec!["time_offset".into(), "rotation_slip".into()], ..Default::default() };
+    let d = diagnose(&fitted, &design(), &train, Some(&val), &opts).unwrap();
+    assert_eq!(d.verdict.as_deref(), Some("time_offset"), "{}", d.verdict_text);
+    let k = d.kind_out.expect("straight and turning runs");
+    assert_eq!(k.folds.len(), 3, "{:?}", k.folds);
+    assert!(k.gain > 0.3, "left-out kinds: {:?}", k.folds);
+}

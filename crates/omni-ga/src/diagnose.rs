@@ -336,9 +336,8 @@ pub fn standard_errors(j: &DMatrix<f64>, r: &[f64]) -> Option<Vec<f64>> {
 /// they can, else the reason.
 pub fn wheel_excitation_gap(runs: &[Run], wheel_names: &[String]) -> Option<String> {
     const MOVING_RAD_S: f64 = 0.05;
-    let n = wheel_names.len();
     let mut gaps = Vec::new();
-    for w in 0..n {
+    for (w, name) in wheel_names.iter().enumerate() {
         let mut speeds: Vec<f64> = Vec::new();
         let (mut pos, mut neg) = (0usize, 0usize);
         for r in runs {
@@ -356,13 +355,13 @@ pub fn wheel_excitation_gap(runs: &[Run], wheel_names: &[String]) -> Option<Stri
         }
         let moving = (pos + neg).max(1) as f64;
         if (pos as f64) < 0.05 * moving || (neg as f64) < 0.05 * moving {
-            gaps.push(format!("{} turns one way only ({:.0} % forward)", wheel_names[w], 100.0 * pos as f64 / moving));
+            gaps.push(format!("{name} turns one way only ({:.0} % forward)", 100.0 * pos as f64 / moving));
             continue;
         }
         speeds.sort_by(f64::total_cmp);
         let q = |f: f64| speeds[((speeds.len() - 1) as f64 * f) as usize];
         if q(0.9) < 1.5 * q(0.1) {
-            gaps.push(format!("{} runs at one speed only (|ω| {:.2}–{:.2} rad/s)", wheel_names[w], q(0.1), q(0.9)));
+            gaps.push(format!("{name} runs at one speed only (|ω| {:.2}–{:.2} rad/s)", q(0.1), q(0.9)));
         }
     }
     (!gaps.is_empty()).then(|| gaps.join("; "))

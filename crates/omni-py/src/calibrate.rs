@@ -129,6 +129,13 @@ pub struct PyCalibration {
     /// The progress callback returned False; the model is the best found so far.
     #[pyo3(get)]
     stopped: bool,
+    /// One line per direction of parameter space the training runs do not constrain (empty: all are).
+    #[pyo3(get)]
+    warnings: Vec<String>,
+    /// Directions held at the start values by the truncated update (their descriptions).
+    #[pyo3(get)]
+    held: Vec<String>,
+    identifiability: String,
     steps: Vec<Step>,
 }
 
@@ -172,6 +179,13 @@ impl PyCalibration {
         d.set_item("objective_fitted", self.objective_fitted)?;
         d.set_item("improvement_pct", 100.0 * (1.0 - self.cost_fitted / self.cost_start))?;
         Ok(d)
+    }
+    /// What the training runs constrain, as plain data: per-parameter standard errors (``params``: name,
+    /// unit, value, scale, std_error [unit] or None when undetermined, std_error_iid), ``condition_number``
+    /// (None when infinite), ``covariance_kind``, ``residual_rms`` [m], ``weak`` directions.
+    #[getter]
+    fn identifiability<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        py.import("json")?.call_method1("loads", (self.identifiability.as_str(),))
     }
     /// One dict per optimizer iteration: optimizer (``"ga"``/``"lm"``), iteration, best_cost, mean_cost,
     /// evaluations, elapsed_s.
@@ -262,6 +276,9 @@ pub fn train(
         outside_box: c.outside_box,
         interrupted: observer.interrupted,
         stopped: observer.stopped_by_callback,
+        warnings: c.identifiability.warnings(),
+        held: c.held.iter().map(|w| w.text.clone()).collect(),
+        identifiability: serde_json::to_string(&c.identifiability).map_err(|e| value_error(e.to_string()))?,
         steps: observer.history,
     })
 }

@@ -71,6 +71,21 @@ def test_train_returns_a_model_and_costs(runs: list[omnical.Run]) -> None:
     assert not fit.interrupted and not fit.stopped and fit.evaluations > 0
     again = omnical.train(runs, seed=0)
     np.testing.assert_array_equal(again.matrix, fit.matrix)  # deterministic for a seed
+    # The flower runs constrain every entry: standard errors for all nine, no warnings, nothing held.
+    ident = fit.identifiability
+    assert fit.warnings == [] and fit.held == [] and ident["weak"] == []
+    assert [p["name"] for p in ident["params"]] == list(fit.params)
+    assert all(0 < p["std_error"] < 0.01 * p["scale"] for p in ident["params"])
+    assert ident["covariance_kind"] == "per_run" and ident["condition_number"] > 1
+
+
+def test_train_warns_about_unexcited_directions(truth: omnical.Model) -> None:
+    straight = [r for r in omnical.simulate(truth, runs_per_command=1, duration_s=3.0, seed=5)
+                if r.command is not None and r.command[2] == 0.0]
+    fit = omnical.train(straight, seed=0)
+    assert len(fit.held) == 3 and len(fit.warnings) == 3
+    assert all("rotating on the spot" in w for w in fit.warnings)
+    assert sum(p["std_error"] is None for p in fit.identifiability["params"]) >= 3
 
 
 def test_train_with_an_effect_recovers_it(runs: list[omnical.Run]) -> None:

@@ -76,6 +76,29 @@ fn toml_safe(v: serde_json::Value) -> serde_json::Value {
     }
 }
 
+/// The paper's Eq. 1 integrates fixed 10 ms steps, one per wheel sample: on runs sampled at another rate
+/// every displacement is scaled by the ratio. Says so when the runs' median interval is more than 10 %
+/// away from the plan's step.
+pub fn fixed_step_mismatch(plan: &Plan, runs: &[omni_kin::Run]) -> Option<String> {
+    let omni_kin::StepMode::Fixed { dt_s: Some(step) } = plan.integration.step else { return None };
+    let mut dts: Vec<f64> = runs.iter().map(|r| r.median_dt_s()).collect();
+    dts.sort_by(f64::total_cmp);
+    let median = *dts.get(dts.len() / 2)?;
+    ((median / step - 1.0).abs() > 0.1).then(|| {
+        format!(
+            "the {} preset integrates fixed {:.0} ms steps (Eq. 1), but these runs are sampled every {:.0} ms: \
+             odometry is off by a factor {:.2}; use --preset default (each run's own step)",
+            match plan.preset {
+                Preset::Paper => "paper",
+                Preset::Default => "default",
+            },
+            1e3 * step,
+            1e3 * median,
+            step / median
+        )
+    })
+}
+
 /// A preset's plan with the command line's overrides.
 pub fn apply_fit_args(mut plan: Plan, f: &FitArgs) -> anyhow::Result<Plan> {
     if f.every == 0 {
@@ -132,6 +155,9 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         PresetArg::Default => (Preset::Default, "default"),
     };
     let plan = apply_fit_args(Plan::preset(preset, start.model.n_params()).seed(a.seed), &a.fit)?;
+    if let Some(w) = fixed_step_mismatch(&plan, &ds.runs) {
+        eprintln!("warning: {w}");
+    }
     let mut bar = progress::ProgressObserver::new(plan.ga.as_ref().map_or(0, |g| g.max_generations), a.quiet);
     let c = calibrate(&start, &ds.runs, &plan, &mut bar)?;
     bar.finish();

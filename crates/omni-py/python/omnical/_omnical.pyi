@@ -165,6 +165,16 @@ class Calibration:
     @property
     def params(self) -> dict[str, float]: ...
     @property
+    def warnings(self) -> list[str]:
+        """One line per direction of parameter space the training runs do not constrain."""
+    @property
+    def held(self) -> list[str]:
+        """Directions held at the start values by the truncated update."""
+    @property
+    def identifiability(self) -> dict[str, Any]:
+        """Standard errors (``params``), ``condition_number``, ``covariance_kind``, ``residual_rms`` [m],
+        ``weak`` directions."""
+    @property
     def costs(self) -> dict[str, float]:
         """cost_start, cost_fitted (Eq. 6), objective_start, objective_fitted, improvement_pct."""
     @property
