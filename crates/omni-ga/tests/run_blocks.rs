@@ -1,6 +1,7 @@
 //! `CalibrationProblem`'s per-run blocks are `residuals()` and `jacobian()` cut by run, and its normal
 //! equations are their `JᵀJ`, `Jᵀr`, `rᵀr` — on every route: the fast kernel (IK or geometry, with and
 //! without effect parameters) and the general walk.
+#![allow(clippy::unwrap_used)] // test code: a failed unwrap is a failed test
 
 use omni_ga::calibrate::{BoxRule, CalibrationProblem, search_box};
 use omni_ga::{LeastSquares, NormalEquations};
