@@ -1,11 +1,11 @@
 //! Speed figures (issue 7): odometry per run, one model's cost over the paper-size set (180 runs) through
 //! the literal walk and the fast kernel on 1 and 2 threads, one GA generation, the LM polish from a GA
-//! result, the `default` and `paper` calibrations and a whole-catalogue diagnosis. Run with
+//! result (by the crate's QR and on the normal equations), the `default` and `paper` calibrations and a whole-catalogue diagnosis. Run with
 //! `cargo bench --bench calibration`; figures go to benches/README.md.
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use omnical::ga::calibrate::{BoxRule, CalibrationProblem, Plan, Preset, calibrate, search_box};
 use omnical::ga::diagnose::{DiagnoseOptions, diagnose};
-use omnical::ga::{LevenbergMarquardt, NoopObserver, Optimizer, Problem};
+use omnical::ga::{LevenbergMarquardt, LmConfig, NoopObserver, Optimizer, Problem};
 use omnical::kin::cost::{CostKind, cost_resolved};
 use omnical::kin::fast::PreparedRuns;
 use omnical::kin::odometry::end_pose_error;
@@ -46,10 +46,15 @@ fn benches(c: &mut Criterion) {
     let end_paper = PreparedRuns::new(&runs, Some(0.01), Selection::End);
     let end_default = PreparedRuns::new(&runs, None, Selection::End);
     let path_default = PreparedRuns::new(&runs, None, Selection::Path(1));
+    // Increments redone on every walk, as for datasets beyond `KEPT_INCREMENTS_MAX_BYTES`.
+    let end_paper_redone = PreparedRuns::with_increment_budget(&runs, Some(0.01), Selection::End, 0);
     for threads in [1, 2] {
         let Some(pool) = pool(threads) else { continue };
         g.bench_function(format!("fast, Eq. 6, Eq. 1 Euler 10 ms, {threads} thread(s)"), |b| {
             pool.install(|| b.iter(|| black_box(end_paper.cost(&paper_res, &runs, CostKind::EndPose))))
+        });
+        g.bench_function(format!("fast, Eq. 6, Eq. 1 Euler 10 ms, increments redone, {threads} thread(s)"), |b| {
+            pool.install(|| b.iter(|| black_box(end_paper_redone.cost(&paper_res, &runs, CostKind::EndPose))))
         });
         g.bench_function(format!("fast, Eq. 6, exact arcs, {threads} thread(s)"), |b| {
             pool.install(|| b.iter(|| black_box(end_default.cost(&res, &runs, CostKind::EndPose))))
@@ -84,6 +89,14 @@ fn benches(c: &mut Criterion) {
             g.bench_function("LM polish from the GA result (analytic Jacobian)", |b| {
                 b.iter(|| {
                     black_box(LevenbergMarquardt::default().minimize(&problem, &ga.params, &mut NoopObserver).ok())
+                })
+            });
+            // The same on the normal equations (the route of problems above 200,000 residuals).
+            let normal = LmConfig { normal_equations_above: 0, ..LmConfig::default() };
+            g.bench_function("LM polish from the GA result, normal equations", |b| {
+                b.iter(|| {
+                    let mut lm = LevenbergMarquardt { config: normal.clone() };
+                    black_box(lm.minimize(&problem, &ga.params, &mut NoopObserver).ok())
                 })
             });
         }

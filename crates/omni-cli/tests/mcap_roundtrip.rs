@@ -73,6 +73,34 @@ fn written_runs_read_back_equal() {
 }
 
 #[test]
+fn recorded_odometry_can_be_left_out() {
+    let run = simulated_run("sim-008", 3.0);
+    let w = WriteOptions { design_odometry: Some(design_odometry(&run)), ..Default::default() };
+    let (dir, path, with) = round_trip(&run, &w);
+    assert!(!with.runs[0].recorded_odometry().is_empty());
+    let without = read_file(&path, &McapOptions { recorded_odometry: false, ..Default::default() }).unwrap();
+    let back = &without.runs[0];
+    assert!(back.recorded_odometry().is_empty());
+    // Nothing else changes.
+    assert_eq!(back.wheel_rad_s(), with.runs[0].wheel_rad_s());
+    assert_eq!(back.truth(), with.runs[0].truth());
+    assert_eq!(without.notes, with.notes);
+    // Through `dataset::load`, also for CSV.
+    let mut d = run.clone().into_data();
+    d.recorded_odometry = design_odometry(&run);
+    let csv = dir.path().join("sim-008.csv");
+    omni_cli::dataset::csv::write_run(&csv, &Run::new(d).unwrap(), &["a".into(), "b".into(), "c".into()]).unwrap();
+    let paths = [path, csv];
+    let kept = omni_cli::dataset::load(&paths, &Default::default()).unwrap();
+    assert!(kept.runs.iter().all(|r| !r.recorded_odometry().is_empty()));
+    let opts = omni_cli::dataset::LoadOptions { recorded_odometry: false, ..Default::default() };
+    let ds = omni_cli::dataset::load(&paths, &opts).unwrap();
+    assert_eq!(ds.runs.len(), 2);
+    assert!(ds.runs.iter().all(|r| r.recorded_odometry().is_empty()));
+    assert_eq!(ds.runs[1].wheel_rad_s(), kept.runs[1].wheel_rad_s());
+}
+
+#[test]
 fn a_run_without_command_odometry_or_start_angles() {
     let mut d = simulated_run("bare", 1.0).into_data();
     (d.command, d.wheel_start_rad) = (None, Vec::new());

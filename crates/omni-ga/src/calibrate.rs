@@ -18,7 +18,9 @@ use crate::identify::{self, Identifiability, IdentifyOptions, WeakDirection};
 use crate::lm::{LevenbergMarquardt, LmConfig};
 use crate::observe::Observer;
 use crate::optimizer::{Optimizer, Solution, Termination};
-use crate::problem::{Bounds, LeastSquares, Problem, finite_difference_columns, finite_difference_jacobian};
+use crate::problem::{
+    Bounds, LeastSquares, NormalEquations, Problem, finite_difference_columns, finite_difference_jacobian,
+};
 use nalgebra::DMatrix;
 use omni_kin::cost::{self, CostKind};
 use omni_kin::fast::PreparedRuns;
@@ -150,6 +152,10 @@ impl Plan {
 /// With fixed-step odometry the runs are prepared once ([`PreparedRuns`]) and costs, residuals and the
 /// IK part of the Jacobian go through the fast kernel; parameter vectors it cannot serve (a clock lag,
 /// wheel- or twist-stage effects) fall back to the general walk.
+///
+/// Its residuals are grouped by run; [`Self::for_each_run_block`] visits each run's residuals with their
+/// Jacobian rows, and the normal equations are accumulated from those blocks, so the Levenberg–Marquardt
+/// polish of a large dataset never holds the whole Jacobian.
 #[derive(Debug)]
 pub struct CalibrationProblem<'a> {
     model: &'a Model,
@@ -157,6 +163,22 @@ pub struct CalibrationProblem<'a> {
     objective: CostKind,
     bounds: Bounds,
     prepared: Option<PreparedRuns>,
+    /// Where each run's residuals start in [`LeastSquares::residuals`]; one more entry: the total.
+    row_offsets: Vec<usize>,
+}
+
+/// One run's part of the least-squares system, as [`CalibrationProblem::for_each_run_block`] visits it.
+#[derive(Clone, Copy, Debug)]
+pub struct RunBlock<'a> {
+    /// Index of the run.
+    pub run: usize,
+    /// Its residuals: rows `row_offset..row_offset + residuals.len()` of [`LeastSquares::residuals`].
+    pub residuals: &'a [f64],
+    /// Where they start in the stacked residual vector.
+    pub row_offset: usize,
+    /// Their Jacobian with respect to every parameter (`residuals.len() × n_params`): the same rows as
+    /// [`LeastSquares::jacobian`].
+    pub jacobian: &'a DMatrix<f64>,
 }
 
 impl<'a> CalibrationProblem<'a> {
@@ -176,18 +198,106 @@ impl<'a> CalibrationProblem<'a> {
             }
             _ => None,
         };
-        Ok(Self { model, runs, objective, bounds, prepared })
+        let selection = match objective {
+            CostKind::EndPose => Selection::End,
+            CostKind::Path { every, .. } => Selection::Path(every),
+        };
+        let mut row_offsets = Vec::with_capacity(runs.len() + 1);
+        let mut rows = 0;
+        row_offsets.push(rows);
+        for r in runs {
+            rows += 3 * selection.indices(r.truth().len()).len();
+            row_offsets.push(rows);
+        }
+        Ok(Self { model, runs, objective, bounds, prepared, row_offsets })
+    }
+
+    /// Visits each run's residuals and Jacobian rows ([`RunBlock`]), in run order: the numbers of
+    /// [`LeastSquares::residuals`] and [`LeastSquares::jacobian`], cut by run (the residuals to rounding:
+    /// the fast kernel's differentiating walk is scalar, its cost walk uses FMA). Where the fast kernel serves
+    /// `x`, only a few hundred runs' rows are held at a time (plus, for effect parameters, their
+    /// finite-difference columns over all runs); otherwise the whole Jacobian is built first and cut.
+    /// Parameters that make no valid model give NaN blocks.
+    pub fn for_each_run_block(&self, x: &[f64], visit: &mut dyn FnMut(RunBlock<'_>)) {
+        if self.analytic_blocks(x, visit).is_some() {
+            return;
+        }
+        let n = x.len();
+        let r = self.residuals(x);
+        let total = self.row_offsets.last().copied().unwrap_or(0);
+        let j = if r.len() == total { self.jacobian(x) } else { DMatrix::from_element(total, n, f64::NAN) };
+        let r = if r.len() == total { r } else { vec![f64::NAN; total] };
+        for (run, w) in self.row_offsets.windows(2).enumerate() {
+            let jacobian = j.rows(w[0], w[1] - w[0]).into_owned();
+            visit(RunBlock { run, residuals: &r[w[0]..w[1]], row_offset: w[0], jacobian: &jacobian });
+        }
+    }
+
+    /// The IK matrix's derivatives with respect to the geometry parameters (IK entries × base parameters),
+    /// by central differences of the (cheap) map from geometry to IK matrix; `None` for an IK model.
+    fn ik_from_geometry(&self, x: &[f64], ik_entries: usize) -> Option<Option<DMatrix<f64>>> {
+        let Kinematics::Geometry { .. } = &self.model.kinematics else {
+            return Some(None);
+        };
+        let nb = self.model.n_base();
+        let mut dm = DMatrix::zeros(ik_entries, nb);
+        for c in 0..nb {
+            let h = 1e-7 * x[c].abs().max(1e-3);
+            let (mut xp, mut xm) = (x[..nb].to_vec(), x[..nb].to_vec());
+            xp[c] += h;
+            xm[c] -= h;
+            let mp = self.model.kinematics.ik(&xp).ok()?;
+            let mm = self.model.kinematics.ik(&xm).ok()?;
+            for (i, (a, b)) in mp.entries().iter().zip(mm.entries()).enumerate() {
+                dm[(i, c)] = (a - b) / (2.0 * h);
+            }
+        }
+        Some(Some(dm))
+    }
+
+    /// The effect parameters' Jacobian columns over all residuals (finite differences; see
+    /// [`LeastSquares::jacobian`]).
+    fn effect_columns(&self, x: &[f64]) -> Vec<Vec<f64>> {
+        let (nb, n) = (self.model.n_base(), x.len());
+        if n <= nb {
+            return Vec::new();
+        }
+        let specs = self.model.params();
+        let at_range_end = |i: usize| specs.get(i).is_some_and(|s| s.lower == x[i] && s.upper > s.lower);
+        finite_difference_columns(x, nb..n, |y| self.residuals(y), at_range_end)
+    }
+
+    /// [`Self::for_each_run_block`] through the fast kernel; `None` (before any visit) when it cannot
+    /// serve `x`.
+    fn analytic_blocks(&self, x: &[f64], visit: &mut dyn FnMut(RunBlock<'_>)) -> Option<()> {
+        let prepared = self.prepared.as_ref()?;
+        let res = self.model.resolve(x).ok()?;
+        let ik_entries = res.ik.entries().len();
+        let dm = self.ik_from_geometry(x, ik_entries)?;
+        let (nb, n) = (self.model.n_base(), x.len());
+        let mut effects: Option<Vec<Vec<f64>>> = None;
+        prepared.ik_jacobian_blocks(&res, self.runs, self.objective, &mut |b| {
+            let row_offset = self.row_offsets[b.run];
+            let rows = b.residuals.len();
+            let mut j = DMatrix::zeros(rows, n);
+            match &dm {
+                None => j.columns_mut(0, nb).copy_from(b.jacobian),
+                Some(dm) => j.columns_mut(0, nb).copy_from(&(b.jacobian * dm)),
+            }
+            // The effect columns come from whole residual vectors: computed once, at the first block.
+            let cols = effects.get_or_insert_with(|| self.effect_columns(x));
+            for (c, col) in (nb..n).zip(cols.iter()) {
+                for (i, v) in col.iter().skip(row_offset).take(rows).enumerate() {
+                    j[(i, c)] = *v;
+                }
+            }
+            visit(RunBlock { run: b.run, residuals: b.residuals, row_offset, jacobian: &j });
+        })
     }
 
     /// Residual rows of each run, in run order (3 per selected ground-truth pose).
     pub fn run_rows(&self) -> Vec<usize> {
-        self.runs
-            .iter()
-            .map(|r| match self.objective {
-                CostKind::EndPose => 3,
-                CostKind::Path { every, .. } => 3 * Selection::Path(every).indices(r.truth().len()).len(),
-            })
-            .collect()
+        self.row_offsets.windows(2).map(|w| w[1] - w[0]).collect()
     }
 
     /// The residuals and their Jacobian at `x` (fast path when it applies).
@@ -228,7 +338,7 @@ impl<'a> CalibrationProblem<'a> {
     fn analytic(&self, x: &[f64]) -> Option<(Vec<f64>, DMatrix<f64>)> {
         let prepared = self.prepared.as_ref()?;
         let res = self.model.resolve(x).ok()?;
-        let (r, j_ik) = prepared.residuals_and_ik_jacobian(&res, self.objective)?;
+        let (r, j_ik) = prepared.residuals_and_ik_jacobian(&res, self.runs, self.objective)?;
         let nb = self.model.n_base();
         let n = x.len();
         let mut j = DMatrix::zeros(r.len(), n);
@@ -236,29 +346,13 @@ impl<'a> CalibrationProblem<'a> {
             Kinematics::Ik { .. } => j.columns_mut(0, nb).copy_from(&j_ik),
             Kinematics::Geometry { .. } => {
                 // Chain rule through the (cheap) map from geometry to IK matrix, by central differences.
-                let mut dm = DMatrix::zeros(j_ik.ncols(), nb);
-                for c in 0..nb {
-                    let h = 1e-7 * x[c].abs().max(1e-3);
-                    let (mut xp, mut xm) = (x[..nb].to_vec(), x[..nb].to_vec());
-                    xp[c] += h;
-                    xm[c] -= h;
-                    let mp = self.model.kinematics.ik(&xp).ok()?;
-                    let mm = self.model.kinematics.ik(&xm).ok()?;
-                    for (i, (a, b)) in mp.entries().iter().zip(mm.entries()).enumerate() {
-                        dm[(i, c)] = (a - b) / (2.0 * h);
-                    }
-                }
+                let dm = self.ik_from_geometry(x, j_ik.ncols())??;
                 j.columns_mut(0, nb).copy_from(&(j_ik * dm));
             }
         }
-        if n > nb {
-            let specs = self.model.params();
-            let at_range_end = |i: usize| specs.get(i).is_some_and(|s| s.lower == x[i] && s.upper > s.lower);
-            let cols = finite_difference_columns(x, nb..n, |y| self.residuals(y), at_range_end);
-            for (c, col) in (nb..n).zip(cols) {
-                for (i, v) in col.into_iter().enumerate().take(r.len()) {
-                    j[(i, c)] = v;
-                }
+        for (c, col) in (nb..n).zip(self.effect_columns(x)) {
+            for (i, v) in col.into_iter().enumerate().take(r.len()) {
+                j[(i, c)] = v;
             }
         }
         Some((r, j))
@@ -308,6 +402,17 @@ impl LeastSquares for CalibrationProblem<'_> {
         let at_range_end = |i: usize| specs.get(i).is_some_and(|s| s.lower == x[i] && s.upper > s.lower);
         finite_difference_jacobian(x, |y| self.residuals(y), at_range_end)
     }
+
+    fn residual_count(&self, _x: &[f64]) -> usize {
+        self.row_offsets.last().copied().unwrap_or(0)
+    }
+
+    /// Accumulated run by run ([`Self::for_each_run_block`]), in run order.
+    fn normal_equations(&self, x: &[f64]) -> NormalEquations {
+        let mut ne = NormalEquations::zeros(x.len());
+        self.for_each_run_block(x, &mut |b| ne.add_rows(b.residuals, b.jacobian));
+        ne
+    }
 }
 
 /// A least-squares problem restricted to `origin + basis · z` (the truncated update's subspace).
@@ -346,6 +451,20 @@ impl<P: LeastSquares> LeastSquares for Subspace<'_, P> {
     }
     fn jacobian(&self, z: &[f64]) -> DMatrix<f64> {
         self.inner.jacobian(&self.point(z)) * &self.basis
+    }
+    fn residual_count(&self, z: &[f64]) -> usize {
+        self.inner.residual_count(&self.point(z))
+    }
+    /// The inner problem's normal equations (blockwise for a `CalibrationProblem`) projected on the basis
+    /// `B`: `BᵀJᵀJB`, `BᵀJᵀr`.
+    fn normal_equations(&self, z: &[f64]) -> NormalEquations {
+        let ne = self.inner.normal_equations(&self.point(z));
+        NormalEquations {
+            jtj: self.basis.tr_mul(&ne.jtj) * &self.basis,
+            jtr: self.basis.tr_mul(&ne.jtr),
+            rtr: ne.rtr,
+            rows: ne.rows,
+        }
     }
 }
 
@@ -542,4 +661,31 @@ pub fn calibrate(
         identifiability,
         held,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use omni_kin::IkMatrix;
+    use omni_kin::simulate::{SimConfig, simulate};
+
+    #[test]
+    fn subspace_normal_equations_are_the_projected_ones() {
+        let truth = FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated()));
+        let cfg = SimConfig { duration_s: 2.0, runs_per_command: 1, ..SimConfig::default() };
+        let runs: Vec<Run> = simulate(&cfg, &truth, "t/").unwrap().into_iter().step_by(4).collect();
+        let model = Model::ik(IkMatrix::paper_design()).with_integration(Integration::DEFAULT);
+        let x = IkMatrix::paper_calibrated().entries().to_vec();
+        let bounds = search_box(&model, &x, BoxRule::PerRow(0.1)).unwrap();
+        let problem = CalibrationProblem::new(&model, &runs, CostKind::PATH, bounds).unwrap();
+        let basis = DMatrix::from_fn(9, 2, |r, c| if r % 2 == c { 0.01 } else { 0.002 * r as f64 });
+        let sub = Subspace::new(&problem, x, basis).unwrap();
+        let z = [0.3, -0.2];
+        let ne = sub.normal_equations(&z);
+        let full = NormalEquations::from_rows(&sub.residuals(&z), &sub.jacobian(&z));
+        assert_eq!(sub.residual_count(&z), full.rows);
+        assert!((ne.jtj - &full.jtj).abs().max() <= 1e-10 * full.jtj.abs().max());
+        assert!((ne.jtr - &full.jtr).abs().max() <= 1e-10 * full.jtr.abs().max());
+        assert!((ne.rtr - full.rtr).abs() <= 1e-12 * full.rtr);
+    }
 }

@@ -26,4 +26,4 @@ pub use ga::{Ga, GaConfig, StallRule};
 pub use lm::{LevenbergMarquardt, LmConfig};
 pub use observe::{Control, FnObserver, Iteration, NoopObserver, Observer};
 pub use optimizer::{Optimizer, Solution, Termination};
-pub use problem::{Bounds, LeastSquares, Problem};
+pub use problem::{Bounds, LeastSquares, NormalEquations, Problem};

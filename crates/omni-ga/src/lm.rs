@@ -1,10 +1,22 @@
-//! Levenberg–Marquardt polish, adapting the `levenberg-marquardt` crate (MINPACK's algorithm) to
-//! [`LeastSquares`] problems.
+//! Levenberg–Marquardt polish of [`LeastSquares`] problems, two ways:
+//!
+//! - up to [`LmConfig::normal_equations_above`] residuals, the `levenberg-marquardt` crate (MINPACK's
+//!   algorithm: a pivoted QR of the whole Jacobian each iteration);
+//! - beyond, Marquardt's method on the normal equations: `JᵀJ` and `Jᵀr` come from
+//!   [`LeastSquares::normal_equations`] (accumulated block by block by problems with many residuals), and
+//!   each step solves the `n × n` system
+//!   $$\left(\hat A + \mu I\right) y = -D^{-1} J^\top r,\quad \hat A = D^{-1} J^\top J D^{-1},\quad \delta = D^{-1} y$$
+//!   by Cholesky, with `D²` the largest diagonal of `JᵀJ` seen so far (MINPACK's scaling). A step is kept
+//!   when it lowers `rᵀr`; `μ` follows Nielsen's rule (shrunk by `max(1/3, 1 − (2ρ − 1)³)` on a kept step
+//!   with gain ratio `ρ`, doubled-and-growing on a rejected one). Memory: `n × n`, whatever the number of
+//!   residuals; forming `JᵀJ` squares the condition number, harmless for the few well-scaled parameters
+//!   of a calibration.
 //!
 //! Unbounded: the calibration layer decides what leaving the GA's box means (it reports it). Guarantee:
 //! the returned cost is never higher than the cost at `start` — when the solver fails, returns a worse
 //! point or meets a non-finite residual, the start is returned with [`Termination::NoImprovement`].
-//! `evaluations` counts residual and Jacobian evaluations as the crate reports them. The observer is called
+//! `evaluations` counts residual and Jacobian evaluations (as the crate reports them; on the normal
+//! equations, each residual vector and each set of normal equations counts one). The observer is called
 //! once, after the solve.
 
 use crate::error::OptimizeError;
@@ -29,13 +41,33 @@ pub struct LmConfig {
     pub xtol: f64,
     /// Gradient orthogonality that counts as converged. Default 1e-12.
     pub gtol: f64,
+    /// Number of residuals above which the polish solves the normal equations instead of handing the whole
+    /// Jacobian to the crate (see the module docs). Default 200,000 (a 14 MB Jacobian at 9 parameters; the
+    /// paper-size path objective has 24,000 residuals).
+    #[serde(default = "default_normal_equations_above")]
+    pub normal_equations_above: usize,
+}
+
+fn default_normal_equations_above() -> usize {
+    200_000
 }
 
 impl Default for LmConfig {
     fn default() -> Self {
-        Self { max_evaluations: 60, ftol: 1e-9, xtol: 1e-9, gtol: 1e-12 }
+        Self {
+            max_evaluations: 60,
+            ftol: 1e-9,
+            xtol: 1e-9,
+            gtol: 1e-12,
+            normal_equations_above: default_normal_equations_above(),
+        }
     }
 }
+
+/// Initial damping of the normal-equations solver, relative to the scaled `JᵀJ`'s unit diagonal.
+const INITIAL_DAMPING: f64 = 1e-3;
+/// Damping beyond which the normal-equations solver gives up (the step would be nil).
+const MAX_DAMPING: f64 = 1e16;
 
 /// The Levenberg–Marquardt optimizer.
 #[derive(Clone, Debug, Default)]
@@ -70,6 +102,114 @@ impl<P: LeastSquares + ?Sized> LeastSquaresProblem<f64, Dyn, Dyn> for Adapter<'_
     }
 }
 
+impl LevenbergMarquardt {
+    /// The crate's solver (QR of the whole Jacobian). Returns the point it ends at and its evaluations.
+    fn solve_with_crate<P: LeastSquares + ?Sized>(&self, problem: &P, start: &[f64]) -> (Vec<f64>, usize) {
+        let n = start.len().max(1);
+        let patience = (self.config.max_evaluations / (n + 1)).max(1);
+        let solver = Solver::new()
+            .with_ftol(self.config.ftol)
+            .with_xtol(self.config.xtol)
+            .with_gtol(self.config.gtol)
+            .with_patience(patience);
+        let (adapter, report) = solver.minimize(Adapter { problem, x: DVector::from_column_slice(start) });
+        (adapter.x.iter().copied().collect(), report.number_of_evaluations)
+    }
+
+    /// Marquardt's method on the normal equations (see the module docs). Returns the last kept point (the
+    /// start when no step lowered `rᵀr`) and the evaluations: at most `max_evaluations` residual vectors,
+    /// plus one set of normal equations per kept step.
+    fn solve_normal_equations<P: LeastSquares + ?Sized>(&self, problem: &P, start: &[f64]) -> (Vec<f64>, usize) {
+        let cfg = &self.config;
+        let n = start.len();
+        let mut x = DVector::from_column_slice(start);
+        let mut ne = problem.normal_equations(start);
+        let mut evaluations = 1;
+        let mut trials = 0;
+        if !ne.is_finite() || n == 0 {
+            return (start.to_vec(), evaluations);
+        }
+        let mut scale = DVector::from_fn(n, |i, _| ne.jtj[(i, i)]);
+        let mut mu = INITIAL_DAMPING;
+        let mut nu = 2.0;
+        while trials < cfg.max_evaluations {
+            let f = ne.rtr;
+            // Converged when the residuals are orthogonal to every column of J (MINPACK's gtol test).
+            let cosine = (0..n)
+                .filter(|&i| ne.jtj[(i, i)] > 0.0)
+                .map(|i| ne.jtr[i].abs() / (ne.jtj[(i, i)] * f).sqrt())
+                .fold(0.0f64, f64::max);
+            if f == 0.0 || cosine <= cfg.gtol {
+                break;
+            }
+            let top = scale.max();
+            if top <= 0.0 {
+                break; // J = 0: nothing moves the residuals.
+            }
+            let d = scale.map(|v| v.max(f64::EPSILON * top).sqrt());
+            let b = DVector::from_fn(n, |i, _| -ne.jtr[i] / d[i]);
+            let mut a = DMatrix::from_fn(n, n, |i, j| ne.jtj[(i, j)] / (d[i] * d[j]));
+            for i in 0..n {
+                a[(i, i)] += mu;
+            }
+            let Some(y) = a.cholesky().map(|c| c.solve(&b)) else {
+                // Not positive definite at this damping (rounding on a near-singular JᵀJ): damp more.
+                mu *= nu;
+                nu *= 2.0;
+                if mu > MAX_DAMPING {
+                    break;
+                }
+                continue;
+            };
+            let step = DVector::from_fn(n, |i, _| y[i] / d[i]);
+            let scaled_x = x.component_mul(&d).norm();
+            let small_step = y.norm() <= cfg.xtol * scaled_x.max(cfg.xtol);
+            let x_new = &x + &step;
+            let r_new = problem.residuals(x_new.as_slice());
+            evaluations += 1;
+            trials += 1;
+            let f_new = if r_new.iter().all(|v| v.is_finite()) {
+                r_new.iter().map(|v| v * v).sum::<f64>()
+            } else {
+                f64::INFINITY
+            };
+            drop(r_new);
+            // Predicted decrease of rᵀr by the linear model: yᵀb + μ yᵀy.
+            let predicted = y.dot(&b) + mu * y.dot(&y);
+            if f_new < f && predicted > 0.0 {
+                let rho = (f - f_new) / predicted;
+                let converged = f - f_new <= cfg.ftol * f || small_step;
+                let next = problem.normal_equations(x_new.as_slice());
+                evaluations += 1;
+                if !next.is_finite() {
+                    x = x_new;
+                    break;
+                }
+                x = x_new;
+                ne = next;
+                for i in 0..n {
+                    scale[i] = scale[i].max(ne.jtj[(i, i)]);
+                }
+                mu *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
+                nu = 2.0;
+                if converged {
+                    break;
+                }
+            } else {
+                if small_step {
+                    break;
+                }
+                mu *= nu;
+                nu *= 2.0;
+                if mu > MAX_DAMPING {
+                    break;
+                }
+            }
+        }
+        (x.iter().copied().collect(), evaluations)
+    }
+}
+
 impl<P: LeastSquares + ?Sized> Optimizer<P> for LevenbergMarquardt {
     fn name(&self) -> &'static str {
         "lm"
@@ -80,17 +220,13 @@ impl<P: LeastSquares + ?Sized> Optimizer<P> for LevenbergMarquardt {
         let t0 = Instant::now();
         observer.on_start("lm", start.len());
         let start_cost = problem.cost(start);
-        let n = start.len().max(1);
-        let patience = (self.config.max_evaluations / (n + 1)).max(1);
-        let solver = Solver::new()
-            .with_ftol(self.config.ftol)
-            .with_xtol(self.config.xtol)
-            .with_gtol(self.config.gtol)
-            .with_patience(patience);
-        let (adapter, report) = solver.minimize(Adapter { problem, x: DVector::from_column_slice(start) });
-        let x: Vec<f64> = adapter.x.iter().copied().collect();
+        let (x, evaluations) = if problem.residual_count(start) > self.config.normal_equations_above {
+            self.solve_normal_equations(problem, start)
+        } else {
+            self.solve_with_crate(problem, start)
+        };
         let cost = if x.iter().all(|v| v.is_finite()) { problem.cost(&x) } else { f64::INFINITY };
-        let evaluations = report.number_of_evaluations + 2;
+        let evaluations = evaluations + 2;
         let improved = cost.is_finite() && cost <= start_cost;
         let solution = Solution {
             params: if improved { x } else { start.to_vec() },
@@ -169,6 +305,63 @@ mod tests {
             for c in 0..3 {
                 assert!((j[(r, c)] - analytic[c]).abs() <= 1e-6 * analytic[c].abs().max(1.0));
             }
+        }
+    }
+
+    /// Always the normal-equations solver.
+    fn on_normal_equations() -> LevenbergMarquardt {
+        LevenbergMarquardt { config: LmConfig { normal_equations_above: 0, ..LmConfig::default() } }
+    }
+
+    #[test]
+    fn normal_equations_fit_a_nonlinear_curve() {
+        let s = on_normal_equations().minimize(&decay(false), &[1.0, 0.5, 0.0], &mut NoopObserver).unwrap();
+        for (got, want) in s.params.iter().zip([2.5, 1.3, 0.4]) {
+            assert!((got - want).abs() < 1e-6, "{:?}", s.params);
+        }
+        assert_eq!(s.termination, Termination::LocalMinimum);
+        let opt = [2.5, 1.3, 0.4];
+        let s = on_normal_equations().minimize(&decay(false), &opt, &mut NoopObserver).unwrap();
+        assert!(s.cost <= decay(false).cost(&opt));
+        let s = on_normal_equations().minimize(&decay(true), &[1.0, 1.0, 1.0], &mut NoopObserver).unwrap();
+        assert_eq!(s.termination, Termination::NoImprovement);
+        assert_eq!(s.params, vec![1.0, 1.0, 1.0]);
+    }
+
+    #[test]
+    fn normal_equations_default_matches_the_jacobian() {
+        let p = decay(false);
+        let x = [2.0, 1.0, 0.1];
+        let (r, j) = (p.residuals(&x), p.jacobian(&x));
+        let ne = p.normal_equations(&x);
+        assert_eq!(ne.rows, 40);
+        assert!((ne.jtj.clone() - j.transpose() * &j).abs().max() < 1e-12);
+        assert!((ne.jtr.clone() - j.transpose() * DVector::from_vec(r.clone())).abs().max() < 1e-12);
+        assert!((ne.rtr - r.iter().map(|v| v * v).sum::<f64>()).abs() < 1e-12);
+    }
+
+    /// On a calibration (the default preset's objective and integration, 36 short runs), the
+    /// normal-equations polish lands where the crate's does.
+    #[test]
+    fn both_solvers_polish_a_calibration_alike() {
+        use crate::calibrate::{BoxRule, CalibrationProblem, search_box};
+        use omni_kin::simulate::{SimConfig, simulate};
+        use omni_kin::{FittedModel, IkMatrix, Integration, Model};
+        let truth = FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated()));
+        let runs = simulate(&SimConfig { duration_s: 3.0, runs_per_command: 1, ..SimConfig::default() }, &truth, "t/")
+            .unwrap();
+        let model = Model::ik(IkMatrix::paper_design()).with_integration(Integration::DEFAULT);
+        let start = model.nominal();
+        let bounds = search_box(&model, &start, BoxRule::PerRow(0.1)).unwrap();
+        let problem = CalibrationProblem::new(&model, &runs, omni_kin::CostKind::PATH, bounds).unwrap();
+        let by_crate = LevenbergMarquardt::default().minimize(&problem, &start, &mut NoopObserver).unwrap();
+        let by_normal = on_normal_equations().minimize(&problem, &start, &mut NoopObserver).unwrap();
+        let start_cost = problem.cost(&start);
+        assert!(by_crate.cost < 0.5 * start_cost, "{} → {}", start_cost, by_crate.cost);
+        let gap = (by_normal.cost - by_crate.cost).abs() / by_crate.cost;
+        assert!(gap < 1e-6, "crate {} vs normal equations {} ({gap:e})", by_crate.cost, by_normal.cost);
+        for (a, b) in by_crate.params.iter().zip(&by_normal.params) {
+            assert!((a - b).abs() < 1e-6 * a.abs().max(1.0), "{:?} vs {:?}", by_crate.params, by_normal.params);
         }
     }
 

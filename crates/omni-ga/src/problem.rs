@@ -3,7 +3,7 @@
 //! default).
 
 use crate::error::OptimizeError;
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector, DVectorView};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -76,6 +76,62 @@ pub trait LeastSquares: Problem {
     /// ([`finite_difference_jacobian`]).
     fn jacobian(&self, x: &[f64]) -> DMatrix<f64> {
         finite_difference_jacobian(x, |y| self.residuals(y), |_| false)
+    }
+    /// Number of residuals at `x` (the rows of [`Self::jacobian`]). Default: `residuals(x).len()`;
+    /// problems that know it without evaluating override it.
+    fn residual_count(&self, x: &[f64]) -> usize {
+        self.residuals(x).len()
+    }
+    /// The Gauss–Newton normal equations at `x`: `JᵀJ`, `Jᵀr` and `rᵀr`. Default: from
+    /// [`Self::residuals`] and [`Self::jacobian`]; problems with many residuals override it to accumulate
+    /// block by block without ever holding the whole Jacobian.
+    fn normal_equations(&self, x: &[f64]) -> NormalEquations {
+        NormalEquations::from_rows(&self.residuals(x), &self.jacobian(x))
+    }
+}
+
+/// The Gauss–Newton normal equations of a least-squares problem at a point: with `r` the residuals and
+/// `J` their Jacobian, `JᵀJ`, `Jᵀr` and `rᵀr`. Built by adding blocks of rows in a fixed order
+/// ([`Self::add_rows`]), so sums are deterministic.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NormalEquations {
+    /// `JᵀJ` (parameters × parameters).
+    pub jtj: DMatrix<f64>,
+    /// `Jᵀr` (one entry per parameter): the gradient of `½ rᵀr`.
+    pub jtr: DVector<f64>,
+    /// `rᵀr`: the sum of squared residuals.
+    pub rtr: f64,
+    /// Number of residuals added.
+    pub rows: usize,
+}
+
+impl NormalEquations {
+    /// Empty sums for `n` parameters.
+    pub fn zeros(n: usize) -> Self {
+        Self { jtj: DMatrix::zeros(n, n), jtr: DVector::zeros(n), rtr: 0.0, rows: 0 }
+    }
+
+    /// The normal equations of residuals `r` with Jacobian `j` (`r.len() × n`).
+    pub fn from_rows(r: &[f64], j: &DMatrix<f64>) -> Self {
+        let mut ne = Self::zeros(j.ncols());
+        ne.add_rows(r, j);
+        ne
+    }
+
+    /// Adds a block of rows: residuals `r` and their Jacobian `j` (`r.len() × n`).
+    pub fn add_rows(&mut self, r: &[f64], j: &DMatrix<f64>) {
+        debug_assert_eq!(r.len(), j.nrows());
+        debug_assert_eq!(j.ncols(), self.jtr.len());
+        let rv = DVectorView::from_slice(r, r.len());
+        self.jtj += j.tr_mul(j);
+        self.jtr += j.tr_mul(&rv);
+        self.rtr += rv.dot(&rv);
+        self.rows += r.len();
+    }
+
+    /// True when every sum is finite.
+    pub fn is_finite(&self) -> bool {
+        self.rtr.is_finite() && self.jtr.iter().all(|v| v.is_finite()) && self.jtj.iter().all(|v| v.is_finite())
     }
 }
 

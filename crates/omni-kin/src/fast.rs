@@ -6,7 +6,10 @@
 //! displacement is `M u_k` — 3 × N multiply-adds — for both Eq. 1 (Euler) and exact arcs. The heading's
 //! cosine and sine are advanced by a rotation whose `sin a`, `cos a` come from short polynomials in the step
 //! angle `a` (exact to < 1e-16 for `|a| ≤ 0.1` rad; the cosine and sine are re-taken from the summed heading
-//! every 1024 steps). Runs are interleaved four to a lane group (struct of arrays), so the step loop runs
+//! every 1024 steps). The increments are kept up to [`KEPT_INCREMENTS_MAX_BYTES`] (8 B per wheel and
+//! sample); for larger datasets each walk redoes a lane group's increments from the runs' own wheel
+//! columns (the same products, so the same numbers) instead of holding a second copy of the dataset.
+//! Runs are interleaved four to a lane group (struct of arrays), so the step loop runs
 //! four runs at once in SIMD lanes; on x86-64 CPUs with AVX2 and FMA (checked at run time through `pulp`,
 //! no `-C target-cpu` needed) the loop is compiled for them, otherwise plainly.
 //!
@@ -25,6 +28,7 @@ use crate::pose::{Pose2, PoseError, wrap_angle};
 use crate::run::Run;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
+use std::cell::RefCell;
 
 /// Runs per lane group.
 pub const LANES: usize = 4;
@@ -34,6 +38,11 @@ pub const MAX_STEP_ANGLE_RAD: f64 = 0.1;
 const RESYNC_STEPS: usize = 1024;
 
 type Lanes = [f64; LANES];
+
+thread_local! {
+    /// Each thread's buffer for increments redone on a walk (datasets beyond [`KEPT_INCREMENTS_MAX_BYTES`]).
+    static SCRATCH: RefCell<Vec<Lanes>> = const { RefCell::new(Vec::new()) };
+}
 
 /// One ground-truth pose to predict: after `step` steps of `lane`, a partial step `u` (`n_wheels` entries
 /// in [`Group::query_u`]).
@@ -77,6 +86,20 @@ struct Group {
     query_count: [usize; LANES],
 }
 
+/// Runs whose Jacobian rows [`PreparedRuns::ik_jacobian_blocks`] holds at once (a multiple of [`LANES`]).
+pub const BLOCK_RUNS: usize = 256;
+
+/// One run's part of the least-squares system, as [`PreparedRuns::ik_jacobian_blocks`] visits it.
+#[derive(Clone, Copy, Debug)]
+pub struct IkBlock<'a> {
+    /// Index of the run.
+    pub run: usize,
+    /// The run's residuals: its rows of [`PreparedRuns::residual_vector`].
+    pub residuals: &'a [f64],
+    /// Their Jacobian with respect to the IK matrix entries (columns in row-major order `m11 … m3N`).
+    pub jacobian: &'a DMatrix<f64>,
+}
+
 /// Runs prepared for fast repeated evaluation at one step rule and one selection of ground-truth poses.
 #[derive(Clone, Debug)]
 pub struct PreparedRuns {
@@ -85,7 +108,16 @@ pub struct PreparedRuns {
     fixed_dt_s: Option<f64>,
     selection: Selection,
     groups: Vec<Group>,
+    /// Whether the groups keep their increments ([`KEPT_INCREMENTS_MAX_BYTES`]); otherwise each walk redoes
+    /// them from the runs' wheel speeds.
+    increments_kept: bool,
 }
+
+/// Largest size of the increments [`PreparedRuns::new`] keeps (8 B per wheel and sample: 64 MB holds
+/// 2.8 M samples of 3 wheels, 13 × the paper-size set). Beyond, each walk of a lane group redoes its
+/// increments from the runs' wheel speeds (the same products, so the same numbers) into a buffer of
+/// the group's size: no copy of the dataset, at some speed.
+pub const KEPT_INCREMENTS_MAX_BYTES: usize = 64 << 20;
 
 /// A query of one run: before step `.0`, a partial step of increments `.1`, predicting truth pose `.2`,
 /// taken from sample `.3` with fraction `.4`.
@@ -151,9 +183,23 @@ fn run_steps(run: &Run, fixed_dt_s: Option<f64>, queries: &[usize]) -> (Vec<f64>
 
 impl PreparedRuns {
     /// Prepares `runs` (all with the same wheel count) for fixed steps of `fixed_dt_s` (`None`: each run's
-    /// median interval) and the ground-truth poses of `selection`.
+    /// median interval) and the ground-truth poses of `selection`. The increments are kept when they take
+    /// at most [`KEPT_INCREMENTS_MAX_BYTES`].
     pub fn new(runs: &[Run], fixed_dt_s: Option<f64>, selection: Selection) -> Self {
+        Self::with_increment_budget(runs, fixed_dt_s, selection, KEPT_INCREMENTS_MAX_BYTES)
+    }
+
+    /// [`Self::new`], keeping the increments only when they take at most `max_bytes` (8 B per wheel and
+    /// sample); `0` never keeps them. The results do not depend on it.
+    pub fn with_increment_budget(
+        runs: &[Run],
+        fixed_dt_s: Option<f64>,
+        selection: Selection,
+        max_bytes: usize,
+    ) -> Self {
         let n_wheels = runs.first().map_or(0, Run::n_wheels);
+        let bytes = runs.iter().map(|r| std::mem::size_of_val(r.wheel_rad_s())).sum::<usize>();
+        let increments_kept = bytes <= max_bytes;
         let groups = runs
             .par_chunks(LANES)
             .enumerate()
@@ -215,7 +261,7 @@ impl PreparedRuns {
                     first_run: gi * LANES,
                     lanes: chunk.len(),
                     steps,
-                    u,
+                    u: if increments_kept { u } else { Vec::new() },
                     u_max,
                     start,
                     end,
@@ -228,7 +274,7 @@ impl PreparedRuns {
                 }
             })
             .collect();
-        Self { n_runs: runs.len(), n_wheels, fixed_dt_s, selection, groups }
+        Self { n_runs: runs.len(), n_wheels, fixed_dt_s, selection, groups, increments_kept }
     }
 
     /// Number of runs.
@@ -328,59 +374,95 @@ impl PreparedRuns {
     /// Residual vector (as [`Self::residual_vector`]) and its Jacobian with respect to the IK matrix
     /// entries (columns in row-major order `m11 … m3N`), by forward-mode differentiation of the step
     /// recurrence (closed forms, no finite differences). The sensor pose is held fixed. `None` when `res`
-    /// or `kind` needs the general walk.
-    pub fn residuals_and_ik_jacobian(&self, res: &Resolved<'_>, kind: CostKind) -> Option<(Vec<f64>, DMatrix<f64>)> {
+    /// or `kind` needs the general walk. The blocks of [`Self::ik_jacobian_blocks`], stacked.
+    pub fn residuals_and_ik_jacobian(
+        &self,
+        res: &Resolved<'_>,
+        runs: &[Run],
+        kind: CostKind,
+    ) -> Option<(Vec<f64>, DMatrix<f64>)> {
+        let poses = match self.selection {
+            Selection::End => self.n_runs,
+            Selection::Path(_) => self.groups.iter().map(|g| g.queries.len()).sum(),
+        };
+        let n_rows = 3 * poses;
+        let mut r = Vec::with_capacity(n_rows);
+        let mut jac = DMatrix::zeros(n_rows, 3 * self.n_wheels);
+        self.ik_jacobian_blocks(res, runs, kind, &mut |b| {
+            let row = r.len();
+            r.extend_from_slice(b.residuals);
+            jac.rows_mut(row, b.residuals.len()).copy_from(b.jacobian);
+        })?;
+        Some((r, jac))
+    }
+
+    /// Visits, in run order, each run's residuals (its rows of [`Self::residual_vector`]) and their
+    /// Jacobian with respect to the IK matrix entries, as [`Self::residuals_and_ik_jacobian`] but holding
+    /// only [`BLOCK_RUNS`] runs' rows at a time: the memory does not grow with the number of runs. The
+    /// runs of a batch are differentiated in parallel and visited sequentially, so sums over the blocks
+    /// are deterministic. `None` (before any visit) when `res` or `kind` needs the general walk.
+    pub fn ik_jacobian_blocks(
+        &self,
+        res: &Resolved<'_>,
+        runs: &[Run],
+        kind: CostKind,
+        visit: &mut dyn FnMut(IkBlock<'_>),
+    ) -> Option<()> {
         let w = self.heading_weight(kind)?;
-        if !self.supports(res) || !res.wheel_effects.is_empty() {
+        if !self.supports(res) || !res.wheel_effects.is_empty() || runs.len() != self.n_runs {
             return None;
         }
         let m = res.ik.entries();
         let n = self.n_wheels;
-        let arc = res.scheme == Scheme::ExactArc;
-        let per_group: Vec<Option<Vec<Vec<Row>>>> = self
-            .groups
-            .par_iter()
-            .map(|g| {
-                let bound: f64 = (0..n).map(|j| m[2 * n + j].abs() * g.u_max[j]).sum();
-                if bound > MAX_STEP_ANGLE_RAD || !bound.is_finite() {
-                    return None;
-                }
-                Some(
-                    (0..g.lanes)
-                        .map(|lane| match (n, arc) {
-                            (3, true) => jacobian_lane::<3, true>(g, lane, m, res.sensor_from_body, self.selection),
-                            (3, false) => jacobian_lane::<3, false>(g, lane, m, res.sensor_from_body, self.selection),
-                            (4, true) => jacobian_lane::<4, true>(g, lane, m, res.sensor_from_body, self.selection),
-                            _ => jacobian_lane::<4, false>(g, lane, m, res.sensor_from_body, self.selection),
-                        })
-                        .collect(),
-                )
-            })
-            .collect();
-        let mut runs = Vec::with_capacity(self.n_runs);
-        for g in per_group {
-            runs.extend(g?);
+        let within_range = |g: &Group| {
+            let bound: f64 = (0..n).map(|j| m[2 * n + j].abs() * g.u_max[j]).sum();
+            bound <= MAX_STEP_ANGLE_RAD && bound.is_finite()
+        };
+        if !self.groups.iter().all(within_range) {
+            return None;
         }
-        let n_rows = 3 * runs.iter().map(Vec::len).sum::<usize>();
+        let arc = res.scheme == Scheme::ExactArc;
+        let sensor = res.sensor_from_body;
         let n_cols = 3 * n;
         let n_runs = self.n_runs.max(1) as f64;
-        let mut r = Vec::with_capacity(n_rows);
-        let mut jac = DMatrix::zeros(n_rows, n_cols);
-        let mut row = 0;
-        for rows in &runs {
-            let scale = 1.0 / (n_runs * rows.len().max(1) as f64).sqrt();
-            for q in rows {
-                let weights = [scale, scale, w * scale];
-                for (i, wi) in weights.iter().enumerate() {
-                    r.push(q.error[i] * wi);
-                    for c in 0..n_cols {
-                        jac[(row, c)] = q.d[i][c] * wi;
+        let mut r = Vec::new();
+        for batch in self.groups.chunks(BLOCK_RUNS / LANES) {
+            let rows: Option<Vec<Vec<Vec<Row>>>> = batch
+                .par_iter()
+                .map(|g| {
+                    self.with_increments(g, runs, |u| {
+                        (0..g.lanes)
+                            .map(|lane| match (n, arc) {
+                                (3, true) => jacobian_lane::<3, true>(g, u, lane, m, sensor, self.selection),
+                                (3, false) => jacobian_lane::<3, false>(g, u, lane, m, sensor, self.selection),
+                                (4, true) => jacobian_lane::<4, true>(g, u, lane, m, sensor, self.selection),
+                                _ => jacobian_lane::<4, false>(g, u, lane, m, sensor, self.selection),
+                            })
+                            .collect()
+                    })
+                })
+                .collect();
+            // Only fails for runs other than the prepared ones, which the length check above excludes.
+            let rows = rows?;
+            for (g, lanes) in batch.iter().zip(&rows) {
+                for (lane, rows) in lanes.iter().enumerate() {
+                    let scale = 1.0 / (n_runs * rows.len().max(1) as f64).sqrt();
+                    let weights = [scale, scale, w * scale];
+                    r.clear();
+                    let mut jac = DMatrix::zeros(3 * rows.len(), n_cols);
+                    for (k, q) in rows.iter().enumerate() {
+                        for (i, wi) in weights.iter().enumerate() {
+                            r.push(q.error[i] * wi);
+                            for c in 0..n_cols {
+                                jac[(3 * k + i, c)] = q.d[i][c] * wi;
+                            }
+                        }
                     }
-                    row += 1;
+                    visit(IkBlock { run: g.first_run + lane, residuals: &r, jacobian: &jac });
                 }
             }
         }
-        Some((r, jac))
+        Some(())
     }
 
     fn heading_weight(&self, kind: CostKind) -> Option<f64> {
@@ -391,6 +473,54 @@ impl PreparedRuns {
             }
             _ => None,
         }
+    }
+
+    /// Calls `f` with the increments of group `g`: the kept ones, or ones redone from the runs' wheel speeds
+    /// (`u = f h w`, the products [`PreparedRuns::new`] takes, so the same numbers) into this thread's
+    /// buffer. `None` when `runs` are not the prepared runs.
+    fn with_increments<R>(&self, g: &Group, runs: &[Run], f: impl FnOnce(&[Lanes]) -> R) -> Option<R> {
+        if self.increments_kept {
+            return Some(f(&g.u));
+        }
+        SCRATCH.with(|cell| {
+            let mut u = cell.take();
+            let out = self.redo_increments(g, runs, &mut u).map(|()| f(&u));
+            cell.replace(u);
+            out
+        })
+    }
+
+    /// Writes group `g`'s increments into `u` (`steps × n_wheels` lane vectors), a step's four lanes at a
+    /// time.
+    fn redo_increments(&self, g: &Group, runs: &[Run], u: &mut Vec<Lanes>) -> Option<()> {
+        let n = self.n_wheels;
+        let total = g.steps * n;
+        // Each lane's wheel speeds over its steps (none for padding lanes).
+        let mut w: [&[f64]; LANES] = [&[]; LANES];
+        for (lane, (steps, src)) in g.sources.iter().enumerate() {
+            let speeds = runs.get(g.first_run + lane)?.wheel_rad_s();
+            w[lane] = speeds.get(src.first_sample * n..(src.first_sample + steps) * n)?;
+        }
+        let h = g.h;
+        u.clear();
+        u.reserve(total);
+        // Whole steps: f = 1, and (1 · h) · w = h · w exactly.
+        let common = w.iter().map(|s| s.len()).min().unwrap_or(0);
+        let [a, b, c, d] = w.map(|s| &s[..common]);
+        for (((a, b), c), d) in a.iter().zip(b).zip(c).zip(d) {
+            u.push([h[0] * a, h[1] * b, h[2] * c, h[3] * d]);
+        }
+        for i in common..total {
+            u.push(std::array::from_fn(|l| w[l].get(i).map_or(0.0, |v| h[l] * v)));
+        }
+        for (lane, (_, src)) in g.sources.iter().enumerate() {
+            for &(k, f) in &src.partial {
+                for j in 0..n {
+                    u[k * n + j][lane] = f * h[lane] * w[lane][k * n + j];
+                }
+            }
+        }
+        Some(())
     }
 
     /// The group with its increments redone from wheel speeds rewritten by `res`'s wheel-stage effects
@@ -480,11 +610,11 @@ impl PreparedRuns {
         on_query: &mut dyn FnMut(usize, PoseError),
     ) -> Option<[PoseError; LANES]> {
         let rewritten;
-        let g = if res.wheel_effects.is_empty() {
-            g
+        let (g, kept) = if res.wheel_effects.is_empty() {
+            (g, self.increments_kept)
         } else {
             rewritten = self.with_wheel_effects(g, res, runs)?;
-            &rewritten
+            (&rewritten, true)
         };
         let m = res.ik.entries();
         let n = self.n_wheels;
@@ -494,12 +624,13 @@ impl PreparedRuns {
         }
         let arc = res.scheme == Scheme::ExactArc;
         let sensor = res.sensor_from_body;
-        Some(match (n, arc) {
-            (3, true) => dispatch::<3, true>(g, m, sensor, on_query),
-            (3, false) => dispatch::<3, false>(g, m, sensor, on_query),
-            (4, true) => dispatch::<4, true>(g, m, sensor, on_query),
-            _ => dispatch::<4, false>(g, m, sensor, on_query),
-        })
+        let mut walk = |u: &[Lanes]| match (n, arc) {
+            (3, true) => dispatch::<3, true>(g, u, m, sensor, on_query),
+            (3, false) => dispatch::<3, false>(g, u, m, sensor, on_query),
+            (4, true) => dispatch::<4, true>(g, u, m, sensor, on_query),
+            _ => dispatch::<4, false>(g, u, m, sensor, on_query),
+        };
+        if kept { Some(walk(&g.u)) } else { self.with_increments(g, runs, walk) }
     }
 }
 
@@ -659,17 +790,19 @@ fn measured_error(st: LaneState, sensor: Pose2, truth: &Pose2) -> PoseError {
     }
 }
 
+/// Walks group `g` with increments `u` (its own or redone).
 fn dispatch<const N: usize, const ARC: bool>(
     g: &Group,
+    u: &[Lanes],
     m: &[f64],
     sensor: Pose2,
     on_query: &mut dyn FnMut(usize, PoseError),
 ) -> [PoseError; LANES] {
     #[cfg(target_arch = "x86_64")]
     if let Some(simd) = pulp::x86::V3::try_new() {
-        return simd.vectorize(|| kernel::<_, N, ARC>(simd, g, m, sensor, on_query));
+        return simd.vectorize(|| kernel::<_, N, ARC>(simd, g, u, m, sensor, on_query));
     }
-    kernel::<_, N, ARC>(Portable, g, m, sensor, on_query)
+    kernel::<_, N, ARC>(Portable, g, u, m, sensor, on_query)
 }
 
 /// The lane states of a group, unpacked.
@@ -683,6 +816,7 @@ fn unpack<O: LaneOps>(o: O, v: &[O::V; 5]) -> [LaneState; LANES] {
 fn kernel<O: LaneOps, const N: usize, const ARC: bool>(
     o: O,
     g: &Group,
+    u: &[Lanes],
     m: &[f64],
     sensor: Pose2,
     on_query: &mut dyn FnMut(usize, PoseError),
@@ -715,7 +849,7 @@ fn kernel<O: LaneOps, const N: usize, const ARC: bool>(
         }
         *next_query = g.queries.get(*qi).map_or(usize::MAX, |q| q.step);
     };
-    for (k, uk) in g.u[..g.steps * N].chunks_exact(N).enumerate() {
+    for (k, uk) in u[..g.steps * N].chunks_exact(N).enumerate() {
         if k == next_query {
             answer(&mut qi, &mut next_query, &[x, y, th, c, s]);
         }
@@ -865,6 +999,7 @@ fn tangent_row<const N: usize>(st: LaneState, t: &Tangents<N>, sensor: Pose2, tr
 /// The rows of one lane (one run): its queries in slot order, or its end pose.
 fn jacobian_lane<const N: usize, const ARC: bool>(
     g: &Group,
+    increments: &[Lanes],
     lane: usize,
     m: &[f64],
     sensor: Pose2,
@@ -891,7 +1026,7 @@ fn jacobian_lane<const N: usize, const ARC: bool>(
             break;
         }
         for (j, v) in u.iter_mut().enumerate() {
-            *v = g.u[k * N + j][lane];
+            *v = increments[k * N + j][lane];
         }
         st = step_with_tangents::<N, ARC>(st, &mut t, m, &u);
         if k % RESYNC_STEPS == RESYNC_STEPS - 1 {
@@ -1014,6 +1149,69 @@ mod tests {
     }
 
     #[test]
+    fn redone_increments_give_the_same_bits_as_kept_ones() {
+        let runs: Vec<Run> = paper_size().into_iter().take(23).collect();
+        for (effect, values) in [(None, vec![]), (Some("speed_scale"), vec![0.01, -0.02, 0.015])] {
+            let mut model = Model::ik(IkMatrix::paper_design()).with_integration(Integration::DEFAULT);
+            if let Some(id) = effect {
+                model = model.with_effect(EffectKind::from_id(id, 3).unwrap());
+            }
+            let mut p = IkMatrix::paper_calibrated().entries().to_vec();
+            p.extend(&values);
+            let res = model.resolve(&p).unwrap();
+            for (sel, kind) in [(Selection::End, CostKind::EndPose), (Selection::Path(1), CostKind::PATH)] {
+                let kept = PreparedRuns::new(&runs, None, sel);
+                let redone = PreparedRuns::with_increment_budget(&runs, None, sel, 0);
+                assert!(kept.increments_kept && !redone.increments_kept);
+                let bits = |e: Vec<Vec<PoseError>>| -> Vec<u64> {
+                    e.iter().flatten().flat_map(|e| [e.dx_m, e.dy_m, e.dtheta_rad].map(f64::to_bits)).collect()
+                };
+                assert_eq!(bits(kept.errors(&res, &runs).unwrap()), bits(redone.errors(&res, &runs).unwrap()));
+                let ends = |p: &PreparedRuns| bits(vec![p.end_pose_errors(&res, &runs).unwrap()]);
+                assert_eq!(ends(&kept), ends(&redone));
+                assert_eq!(
+                    kept.cost(&res, &runs, kind).unwrap().to_bits(),
+                    redone.cost(&res, &runs, kind).unwrap().to_bits()
+                );
+                if effect.is_none() {
+                    let (rk, jk) = kept.residuals_and_ik_jacobian(&res, &runs, kind).unwrap();
+                    let (rr, jr) = redone.residuals_and_ik_jacobian(&res, &runs, kind).unwrap();
+                    assert_eq!(rk, rr);
+                    assert_eq!(jk, jr);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn jacobian_blocks_come_in_run_order_across_batches() {
+        let runs: Vec<Run> = paper_size().into_iter().cycle().take(BLOCK_RUNS + 2 * LANES + 1).collect();
+        let model = Model::ik(IkMatrix::paper_design());
+        let fixed = match model.integration.step {
+            crate::model::StepMode::Fixed { dt_s } => dt_s,
+            crate::model::StepMode::Stamps => unreachable!(),
+        };
+        let prepared = PreparedRuns::new(&runs, fixed, Selection::Path(1));
+        let x = IkMatrix::paper_calibrated().entries().to_vec();
+        let res = model.resolve(&x).unwrap();
+        let full = prepared.residual_vector(&res, &runs, CostKind::PATH).unwrap();
+        let (mut next, mut row) = (0, 0);
+        prepared
+            .ik_jacobian_blocks(&res, &runs, CostKind::PATH, &mut |b| {
+                assert_eq!(b.run, next);
+                let rows = 3 * (runs[b.run].truth().len() - 1);
+                assert_eq!((b.residuals.len(), b.jacobian.nrows(), b.jacobian.ncols()), (rows, rows, 9));
+                for (a, f) in b.residuals.iter().zip(&full[row..row + rows]) {
+                    assert!((a - f).abs() < 1e-15, "run {}: {a} vs {f}", b.run);
+                }
+                next += 1;
+                row += rows;
+            })
+            .unwrap();
+        assert_eq!((next, row), (runs.len(), full.len()));
+    }
+
+    #[test]
     fn ik_jacobian_matches_central_differences() {
         let runs: Vec<Run> = paper_size().into_iter().step_by(15).collect();
         for (integration, kind, sel) in [
@@ -1033,7 +1231,7 @@ mod tests {
             let mut x = IkMatrix::paper_calibrated().entries().to_vec();
             x.extend([0.02, -0.01]);
             let res = model.resolve(&x).unwrap();
-            let (r, j) = prepared.residuals_and_ik_jacobian(&res, kind).unwrap();
+            let (r, j) = prepared.residuals_and_ik_jacobian(&res, &runs, kind).unwrap();
             let fast = prepared.residual_vector(&res, &runs, kind).unwrap();
             assert!(r.iter().zip(&fast).all(|(a, b)| (a - b).abs() < 1e-12), "residuals differ");
             assert_eq!(j.ncols(), 9);

@@ -84,7 +84,7 @@ fn check_stamps(run: &str, what: &'static str, t: impl Iterator<Item = f64>) -> 
 
 impl Run {
     /// Validates and builds a run.
-    pub fn new(d: RunData) -> Result<Self, KinError> {
+    pub fn new(mut d: RunData) -> Result<Self, KinError> {
         let run = d.name.as_str();
         if d.n_wheels == 0 {
             return Err(KinError::Invalid { what: format!("run {run}"), why: "has no wheel columns".into() });
@@ -161,6 +161,12 @@ impl Run {
         let mut dts: Vec<f64> = d.wheel_t_s.windows(2).map(|w| w[1] - w[0]).collect();
         dts.sort_by(f64::total_cmp);
         let median_dt_s = dts[dts.len() / 2];
+        // A run lives as long as its dataset: give back what the reader's growing buffers over-allocated
+        // (up to half of a pushed `Vec`).
+        d.wheel_t_s.shrink_to_fit();
+        d.wheel_rad_s.shrink_to_fit();
+        d.truth.shrink_to_fit();
+        d.recorded_odometry.shrink_to_fit();
         Ok(Self {
             median_dt_s,
             name: d.name,
@@ -188,6 +194,13 @@ impl Run {
             recorded_odometry: self.recorded_odometry,
             wheel_start_rad: self.wheel_start_rad,
         }
+    }
+
+    /// The same run without its recorded odometry, for callers that never read it (it takes as much
+    /// memory as the wheel data).
+    pub fn without_recorded_odometry(mut self) -> Self {
+        self.recorded_odometry = Vec::new();
+        self
     }
 
     /// Run name.

@@ -2,7 +2,7 @@
 //! odometry for Foxglove.
 
 use super::diagnose::design_for;
-use super::{load_runs, resolve_model};
+use super::{load_runs_with_odometry, resolve_model};
 use crate::atomic;
 use crate::cli::DataArgs;
 use crate::dataset::mcap::{WriteOptions, write_run};
@@ -46,7 +46,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     if a.tum.is_none() && a.mcap.is_none() {
         anyhow::bail!("nothing to export: give --tum DIR and/or --mcap DIR");
     }
-    let ds = load_runs(&a.runs, &a.data)?;
+    let ds = load_runs_with_odometry(&a.runs, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
     let design = design_for(&model);
     if let Some(dir) = &a.tum {

@@ -15,8 +15,19 @@ use anyhow::Context;
 use omni_kin::{FittedModel, IkMatrix, Model};
 use std::path::{Path, PathBuf};
 
-/// Load runs from files/folders, printing what was skipped or noticed on stderr.
+/// Load runs from files/folders, printing what was skipped or noticed on stderr. The runs' recorded
+/// odometry is left out (no command but `export` shows it, and it would take as much memory as the wheel
+/// data).
 pub fn load_runs(paths: &[PathBuf], data: &DataArgs) -> anyhow::Result<Dataset> {
+    load(paths, data, false)
+}
+
+/// [`load_runs`], keeping the runs' recorded odometry.
+pub fn load_runs_with_odometry(paths: &[PathBuf], data: &DataArgs) -> anyhow::Result<Dataset> {
+    load(paths, data, true)
+}
+
+fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::Result<Dataset> {
     let mcap = dataset::mcap::McapOptions {
         wheel_joints: data.joints.clone(),
         joints_topic: data.joints_topic.clone(),
@@ -25,8 +36,10 @@ pub fn load_runs(paths: &[PathBuf], data: &DataArgs) -> anyhow::Result<Dataset> 
         truth_child_frame: data.gt_child_frame.clone(),
         split: data.split,
         skip_invalid: data.skip_invalid,
+        recorded_odometry,
     };
-    let opts = LoadOptions { skip_invalid: data.skip_invalid, ticks_per_rev: data.ticks_per_rev, mcap };
+    let opts =
+        LoadOptions { skip_invalid: data.skip_invalid, ticks_per_rev: data.ticks_per_rev, mcap, recorded_odometry };
     let ds = dataset::load(paths, &opts)?;
     // The same note from many files is printed once, with a count.
     let mut seen: Vec<(String, String, usize)> = Vec::new();

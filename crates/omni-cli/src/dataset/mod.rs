@@ -24,7 +24,7 @@ pub struct Dataset {
 }
 
 /// How to load.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct LoadOptions {
     /// Skip runs that fail (listed in [`Dataset::skipped`]) instead of stopping.
     pub skip_invalid: bool,
@@ -32,6 +32,16 @@ pub struct LoadOptions {
     pub ticks_per_rev: Option<f64>,
     /// How to read MCAP bags (topics, joint names, frames, splitting).
     pub mcap: mcap::McapOptions,
+    /// Keep the robot's recorded odometry (MCAP `/odom`, CSV odometry columns) in the runs; overrides
+    /// [`mcap::McapOptions::recorded_odometry`]. Calibration never reads it and it takes as much memory as
+    /// the wheel data. Default true.
+    pub recorded_odometry: bool,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        Self { skip_invalid: false, ticks_per_rev: None, mcap: mcap::McapOptions::default(), recorded_odometry: true }
+    }
 }
 
 /// Supported inputs, for messages.
@@ -96,11 +106,16 @@ fn load_path(p: &Path, opts: &LoadOptions, ds: &mut Dataset) -> Result<(), Datas
     }
     match p.extension().and_then(|e| e.to_str()) {
         Some("csv") => match csv::read_run(p, opts.ticks_per_rev) {
-            Ok(r) => ds.runs.push(r),
+            Ok(r) if opts.recorded_odometry => ds.runs.push(r),
+            Ok(r) => ds.runs.push(r.without_recorded_odometry()),
             Err(e) => keep_or_fail(ds, opts, p, e)?,
         },
         Some("mcap") => {
-            let mo = mcap::McapOptions { skip_invalid: opts.skip_invalid, ..opts.mcap.clone() };
+            let mo = mcap::McapOptions {
+                skip_invalid: opts.skip_invalid,
+                recorded_odometry: opts.recorded_odometry,
+                ..opts.mcap.clone()
+            };
             match mcap::read_file(p, &mo) {
                 Ok(r) => {
                     ds.runs.extend(r.runs);

@@ -95,6 +95,10 @@ pub struct McapOptions {
     pub split: Option<f64>,
     /// Collect runs that fail validation in [`McapRead::skipped`] instead of failing. Default false.
     pub skip_invalid: bool,
+    /// Keep the robot's recorded odometry in [`Run::recorded_odometry`]. Calibration never reads it and it
+    /// takes as much memory as the wheel data (a pose per `/odom` message), so commands that do not show
+    /// it turn this off. Default true.
+    pub recorded_odometry: bool,
 }
 
 impl Default for McapOptions {
@@ -107,6 +111,7 @@ impl Default for McapOptions {
             truth_child_frame: None,
             split: None,
             skip_invalid: false,
+            recorded_odometry: true,
         }
     }
 }

@@ -540,7 +540,8 @@ pub(super) fn read_file(path: &Path, opts: &McapOptions) -> Result<McapRead, Dat
         Truth::Poses(i) | Truth::Tf(i, _) => i,
     };
     bag.check(truth_ch)?;
-    let odom = bag.recorded_odometry(&mut notes).filter(|&i| i != truth_ch);
+    let odom = if opts.recorded_odometry { bag.recorded_odometry(&mut notes) } else { None };
+    let odom = odom.filter(|&i| i != truth_ch);
     let cmd = bag.commands(&mut notes);
 
     // Wheels.
