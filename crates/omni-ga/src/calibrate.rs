@@ -307,8 +307,9 @@ impl<'a> CalibrationProblem<'a> {
 
     /// What the runs constrain at `x` ([`identify::analyse`] on this problem's residuals).
     pub fn identifiability(&self, x: &[f64], opts: &IdentifyOptions) -> Identifiability {
-        let (r, j) = self.residuals_and_jacobian(x);
-        identify::analyse(self.model, x, &j, &r, &self.run_rows(), Some(&self.wheel_moment()), opts)
+        let mut moments = identify::Moments::new(x.len());
+        self.for_each_run_block(x, &mut |b| moments.add_run(b.jacobian, b.residuals));
+        identify::analyse(self.model, x, &moments, Some(&self.wheel_moment()), opts)
     }
 
     /// Mean `w wᵀ` of the training runs' wheel speeds (rad²/s²), every sample weighted equally.

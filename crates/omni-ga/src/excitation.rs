@@ -165,15 +165,12 @@ pub fn plan(model: &FittedModel, sim: &SimConfig, req: &PlanRequest) -> Result<R
         RunSet::Flower => (0..runs.len()).collect(),
         RunSet::Greedy => greedy(&blocks, &scales, req.runs),
     };
-    // Whitened Jacobian rows of the picked runs (each repeated), for the expected analysis.
-    let mut rows: Vec<Vec<f64>> = Vec::new();
+    // Information of the picked runs (each repeated), for the expected analysis.
+    let mut info = DMatrix::zeros(n, n);
     for &g in &picked {
-        for _ in 0..req.repetitions {
-            rows.extend(blocks[g].rows.iter().cloned());
-        }
+        info += &blocks[g].info * req.repetitions as f64;
     }
-    let j = DMatrix::from_fn(rows.len(), n, |r, c| rows[r][c]);
-    let expected = identify::expected(&model.model, &x, &j, None, &req.identify);
+    let expected = identify::expected(&model.model, &x, &info, None, &req.identify);
     let mut planned: Vec<PlannedRun> = Vec::new();
     for &g in &picked {
         match planned.iter_mut().find(|p| p.command == commands[g]) {
@@ -196,9 +193,9 @@ fn differentiable_start(model: &FittedModel) -> Vec<f64> {
     x
 }
 
-/// One candidate's whitened Jacobian rows and information matrix (scaled parameters).
+/// One candidate's information matrix, in parameter units and scaled.
 struct Block {
-    rows: Vec<Vec<f64>>,
+    info: DMatrix<f64>,
     info_scaled: DMatrix<f64>,
 }
 
@@ -211,24 +208,21 @@ fn information_blocks(
     let n = x.len();
     let bounds = Bounds::new(vec![f64::NEG_INFINITY; n], vec![f64::INFINITY; n])?;
     let problem = CalibrationProblem::new(&model.model, runs, CostKind::PATH, bounds)?;
-    let (_, j) = problem.residuals_and_jacobian(x);
     let scales = identify::param_scales(&model.model);
     let g = runs.len() as f64;
     let mut out = Vec::with_capacity(runs.len());
-    let mut row = 0;
-    for rows in problem.run_rows() {
+    problem.for_each_run_block(x, &mut |b| {
+        let rows = b.residuals.len();
         // Undo the cost's 1/sqrt(runs · poses) scaling, then whiten by the noise of each component.
         let unscale = (g * (rows / 3) as f64).sqrt();
-        let block: Vec<Vec<f64>> = (0..rows)
-            .map(|k| {
-                let sigma = if k % 3 == 2 { req.truth_noise_rad } else { req.truth_noise_m };
-                (0..n).map(|c| j[(row + k, c)] * unscale / sigma).collect()
-            })
-            .collect();
-        let js = DMatrix::from_fn(rows, n, |r, c| block[r][c] * scales[c]);
-        out.push(Block { rows: block, info_scaled: js.transpose() * js });
-        row += rows;
-    }
+        let jw = DMatrix::from_fn(rows, n, |r, c| {
+            let sigma = if r % 3 == 2 { req.truth_noise_rad } else { req.truth_noise_m };
+            b.jacobian[(r, c)] * unscale / sigma
+        });
+        let info = jw.transpose() * &jw;
+        let info_scaled = DMatrix::from_fn(n, n, |a, c| info[(a, c)] * scales[a] * scales[c]);
+        out.push(Block { info, info_scaled });
+    });
     Ok(out)
 }
 

@@ -40,13 +40,14 @@ pub struct IdentifyOptions {
     /// the noise: the runs move the residuals along it 100× less than along the best-excited direction.
     /// Default 0.01.
     pub min_excitation: f64,
-    /// Singular values below `rcond · s_max` are treated as zero (not excited at all). Default 1e-9.
+    /// Singular values below `rcond · s_max` are treated as zero (not excited at all). Default 1e-7 (the
+    /// analysis works on `JᵀJ`, whose eigenvalues are the squares).
     pub rcond: f64,
 }
 
 impl Default for IdentifyOptions {
     fn default() -> Self {
-        Self { max_std_error: 0.05, min_excitation: 0.01, rcond: 1e-9 }
+        Self { max_std_error: 0.05, min_excitation: 0.01, rcond: 1e-7 }
     }
 }
 
@@ -179,63 +180,108 @@ pub fn param_scales(model: &Model) -> Vec<f64> {
         .collect()
 }
 
-/// Analyse the Jacobian `j` and residuals `r` of `model` at `params`; `run_rows[g]` is the number of
-/// residual rows of run `g` (in order; they must sum to `r.len()`); `wheel_moment` is the runs' mean
-/// `w wᵀ` of the wheel speeds (rad²/s², `N × N`), used to say whether a wheel pattern is missing from the
-/// runs or present but unseen by the residuals.
+/// What the analysis needs from the residuals `r` and their Jacobian `J`, accumulated run by run so the
+/// full Jacobian never has to be held: `JᵀJ`, each run's score `J_gᵀ r_g`, `rᵀr` and the row count.
+#[derive(Clone, Debug)]
+pub struct Moments {
+    /// `JᵀJ` (parameter units).
+    pub jtj: DMatrix<f64>,
+    /// Per run, `J_gᵀ r_g`.
+    pub scores: Vec<DVector<f64>>,
+    /// `rᵀr`.
+    pub rtr: f64,
+    /// Residual rows.
+    pub rows: usize,
+    /// Every entry seen was finite.
+    pub finite: bool,
+}
+
+impl Moments {
+    /// Empty, for `n` parameters.
+    pub fn new(n: usize) -> Self {
+        Self { jtj: DMatrix::zeros(n, n), scores: Vec::new(), rtr: 0.0, rows: 0, finite: true }
+    }
+
+    /// Add one run's Jacobian rows and residuals.
+    pub fn add_run(&mut self, j: &DMatrix<f64>, r: &[f64]) {
+        self.finite &= j.iter().all(|v| v.is_finite()) && r.iter().all(|v| v.is_finite());
+        if !self.finite {
+            return;
+        }
+        self.jtj += j.transpose() * j;
+        self.scores.push(j.transpose() * DVector::from_column_slice(r));
+        self.rtr += r.iter().map(|v| v * v).sum::<f64>();
+        self.rows += r.len();
+    }
+
+    /// From a stacked Jacobian and residuals; `run_rows[g]` rows per run, in order.
+    pub fn from_dense(j: &DMatrix<f64>, r: &[f64], run_rows: &[usize]) -> Self {
+        let mut m = Self::new(j.ncols());
+        let mut row = 0;
+        for &k in run_rows {
+            let k = k.min(j.nrows().saturating_sub(row)).min(r.len().saturating_sub(row));
+            m.add_run(&j.rows(row, k).into_owned(), &r[row..row + k]);
+            row += k;
+        }
+        m
+    }
+}
+
+/// Analyse `model` at `params` from the residuals' [`Moments`]; `wheel_moment` is the runs' mean `w wᵀ`
+/// of the wheel speeds (rad²/s², `N × N`), used to say whether a wheel pattern is missing from the runs
+/// or present but unseen by the residuals.
 pub fn analyse(
     model: &Model,
     params: &[f64],
-    j: &DMatrix<f64>,
-    r: &[f64],
-    run_rows: &[usize],
+    moments: &Moments,
     wheel_moment: Option<&DMatrix<f64>>,
     opts: &IdentifyOptions,
 ) -> Identifiability {
-    analyse_core(model, params, j, Some((r, run_rows)), wheel_moment, opts)
+    analyse_core(model, params, &moments.jtj, Some(moments), wheel_moment, opts)
 }
 
-/// The expected identifiability for a stated noise level: `j_whitened`'s rows are the residuals'
-/// sensitivities divided by each residual's noise standard deviation, so the covariance is
-/// `(JᵀJ)⁻¹` ([`CovarianceKind::Stated`]).
+/// The expected identifiability for a stated noise level: `info` is `JᵀJ` of the residuals' sensitivities
+/// each divided by its noise standard deviation, so the covariance is `info⁻¹`
+/// ([`CovarianceKind::Stated`]).
 pub fn expected(
     model: &Model,
     params: &[f64],
-    j_whitened: &DMatrix<f64>,
+    info: &DMatrix<f64>,
     wheel_moment: Option<&DMatrix<f64>>,
     opts: &IdentifyOptions,
 ) -> Identifiability {
-    analyse_core(model, params, j_whitened, None, wheel_moment, opts)
+    analyse_core(model, params, info, None, wheel_moment, opts)
 }
 
 fn analyse_core(
     model: &Model,
     params: &[f64],
-    j: &DMatrix<f64>,
-    residuals: Option<(&[f64], &[usize])>,
+    jtj: &DMatrix<f64>,
+    moments: Option<&Moments>,
     wheel_moment: Option<&DMatrix<f64>>,
     opts: &IdentifyOptions,
 ) -> Identifiability {
-    let (m, n) = (j.nrows(), j.ncols());
-    let (r, run_rows): (&[f64], &[usize]) = residuals.unwrap_or((&[], &[]));
+    let n = jtj.ncols();
+    let m = moments.map_or(0, |mo| mo.rows);
+    let groups = moments.map_or(0, |mo| mo.scores.len());
     let specs = model.params();
     let scales = param_scales(model);
-    let js = DMatrix::from_fn(m, n, |i, c| j[(i, c)] * scales[c]);
-    let rr: f64 = r.iter().map(|v| v * v).sum();
+    let rr = moments.map_or(0.0, |mo| mo.rtr);
     let dof = m.saturating_sub(n).max(1) as f64;
-    let s2 = if residuals.is_some() { rr / dof } else { 1.0 };
+    let s2 = if moments.is_some() { rr / dof } else { 1.0 };
     // The residual vector's squared norm is a mean over runs of the mean squared pose error (three
     // components), as `CalibrationProblem` stacks it.
     let residual_rms = (rr / 3.0).sqrt();
 
-    // SVD of the scaled Jacobian: V columns are directions, s their singular values (sorted below).
-    // Non-finite sensitivities or residuals (a failed effect hook, a singular model) say nothing; an SVD
-    // of them may not converge. Everything is then reported undetermined, and nothing is held.
-    let finite = js.iter().all(|v| v.is_finite()) && r.iter().all(|v| v.is_finite());
-    let svd = if finite { js.clone().try_svd(false, true, f64::EPSILON, 10_000) } else { None };
-    let Some((sv, v)) = svd.and_then(|svd| svd.v_t.map(|vt| (svd.singular_values.clone(), vt.transpose()))) else {
+    // Scaled information D JᵀJ D = V S² Vᵀ: V's columns are directions, S the scaled Jacobian's singular
+    // values. Non-finite sensitivities or residuals (a failed effect hook, a singular model) say nothing,
+    // and an eigen-solver may not converge on them: everything is then reported undetermined, nothing held.
+    let jtj_s = DMatrix::from_fn(n, n, |a, b| jtj[(a, b)] * scales[a] * scales[b]);
+    let finite = moments.is_none_or(|mo| mo.finite) && jtj_s.iter().all(|v| v.is_finite());
+    let eig = if finite { jtj_s.clone().try_symmetric_eigen(f64::EPSILON, 10_000) } else { None };
+    let Some((sv, v)) = eig.map(|e| (e.eigenvalues.map(|l| l.max(0.0).sqrt()), e.eigenvectors)) else {
         return Identifiability {
-            runs: run_rows.len(),
+            runs: groups,
             residuals: m,
             residual_rms: f64::NAN,
             covariance_kind: CovarianceKind::Iid,
@@ -262,17 +308,11 @@ fn analyse_core(
     let smax = order.first().map_or(0.0, |&k| sv[k]);
     let relative: Vec<f64> = order.iter().map(|&k| if smax > 0.0 { sv[k] / smax } else { 0.0 }).collect();
 
-    // Per-run score vectors g_g = J_sgᵀ r_g for the sandwich.
-    let mut scores: Vec<DVector<f64>> = Vec::with_capacity(run_rows.len());
-    let mut row = 0;
-    for &k in run_rows {
-        let k = k.min(m - row.min(m));
-        let g = js.rows(row, k).transpose() * DVector::from_column_slice(&r[row..row + k]);
-        scores.push(g);
-        row += k;
-    }
-    let groups = scores.len();
-    let kind = if residuals.is_none() {
+    // Per-run scores in scaled space, g_g = D J_gᵀ r_g, for the sandwich.
+    let scores: Vec<DVector<f64>> = moments
+        .map(|mo| mo.scores.iter().map(|g| DVector::from_fn(n, |i, _| g[i] * scales[i])).collect())
+        .unwrap_or_default();
+    let kind = if moments.is_none() {
         CovarianceKind::Stated
     } else if groups >= n + 2 {
         CovarianceKind::PerRun
@@ -576,7 +616,8 @@ mod tests {
         let model = Model::ik(IkMatrix::paper_design());
         let mut j = DMatrix::from_fn(30, 9, |r, c| ((r * 9 + c) as f64).sin());
         j[(3, 4)] = f64::NAN;
-        let id = analyse(&model, &model.nominal(), &j, &[0.0; 30], &[30], None, &IdentifyOptions::default());
+        let moments = Moments::from_dense(&j, &[0.0; 30], &[30]);
+        let id = analyse(&model, &model.nominal(), &moments, None, &IdentifyOptions::default());
         assert!(id.weak.is_empty() && id.params.iter().all(|p| p.std_error.is_none()));
         assert!(id.condition_number.is_nan());
     }
@@ -592,7 +633,8 @@ mod tests {
             if c >= 6 { (r as f64 * 0.11).cos() } else { x }
         });
         let r: Vec<f64> = (0..m).map(|i| 1e-4 * ((i * 7 % 11) as f64 - 5.0)).collect();
-        let id = analyse(&model, &model.nominal(), &j, &r, &[20, 20, 20], None, &IdentifyOptions::default());
+        let moments = Moments::from_dense(&j, &r, &[20, 20, 20]);
+        let id = analyse(&model, &model.nominal(), &moments, None, &IdentifyOptions::default());
         assert_eq!(id.weak.len(), 2, "{:?}", id.weak.iter().map(|w| &w.text).collect::<Vec<_>>());
         for w in &id.weak {
             assert!(w.std_error.is_none());
