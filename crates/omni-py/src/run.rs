@@ -216,7 +216,7 @@ pub fn load(
     if let Some(j) = joints {
         mcap.wheel_joints = j;
     }
-    let opts = LoadOptions { skip_invalid, ticks_per_rev, mcap };
+    let opts = LoadOptions { skip_invalid, ticks_per_rev, mcap, ..LoadOptions::default() };
     let ds = py.detach(|| dataset::load(&paths, &opts)).py()?;
     let design = design_of(ds.robot.as_ref());
     Ok(PyDataset {

@@ -25,7 +25,12 @@ pub fn load_runs(paths: &[PathBuf], data: &DataArgs) -> anyhow::Result<Dataset> 
         split: data.split,
         skip_invalid: data.skip_invalid,
     };
-    let opts = LoadOptions { skip_invalid: data.skip_invalid, ticks_per_rev: data.ticks_per_rev, mcap };
+    let opts = LoadOptions {
+        skip_invalid: data.skip_invalid,
+        ticks_per_rev: data.ticks_per_rev,
+        mcap,
+        max_file_bytes: data.max_file_mb.saturating_mul(1 << 20),
+    };
     let ds = dataset::load(paths, &opts)?;
     // The same note from many files is printed once, with a count.
     let mut seen: Vec<(String, String, usize)> = Vec::new();

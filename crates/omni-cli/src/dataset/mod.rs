@@ -23,8 +23,11 @@ pub struct Dataset {
     pub robot: Option<RobotGeometry>,
 }
 
+/// The default cap on one input file's size (`--max-file-mb`). Bytes: 1 GiB.
+pub const DEFAULT_MAX_FILE_BYTES: u64 = 1 << 30;
+
 /// How to load.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct LoadOptions {
     /// Skip runs that fail (listed in [`Dataset::skipped`]) instead of stopping.
     pub skip_invalid: bool,
@@ -32,6 +35,21 @@ pub struct LoadOptions {
     pub ticks_per_rev: Option<f64>,
     /// How to read MCAP bags (topics, joint names, frames, splitting).
     pub mcap: mcap::McapOptions,
+    /// Refuse a CSV or MCAP file larger than this: each is read into memory whole (MCAP chunks are then
+    /// decompressed one at a time), so the cap keeps a huge or mistaken input from exhausting memory.
+    /// Bytes. Default [`DEFAULT_MAX_FILE_BYTES`].
+    pub max_file_bytes: u64,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        Self {
+            skip_invalid: false,
+            ticks_per_rev: None,
+            mcap: mcap::McapOptions::default(),
+            max_file_bytes: DEFAULT_MAX_FILE_BYTES,
+        }
+    }
 }
 
 /// Supported inputs, for messages.
@@ -94,7 +112,19 @@ fn load_path(p: &Path, opts: &LoadOptions, ds: &mut Dataset) -> Result<(), Datas
         }
         return Ok(());
     }
-    match p.extension().and_then(|e| e.to_str()) {
+    let ext = p.extension().and_then(|e| e.to_str());
+    if matches!(ext, Some("csv" | "mcap")) && meta.len() > opts.max_file_bytes {
+        return Err(DatasetError::file(
+            p,
+            format!(
+                "the file is {:.1} MiB, above the limit of {:.1} MiB per input file (files are read into memory \
+                 whole); raise the limit with --max-file-mb if the machine has the memory",
+                meta.len() as f64 / MIB,
+                opts.max_file_bytes as f64 / MIB
+            ),
+        ));
+    }
+    match ext {
         Some("csv") => match csv::read_run(p, opts.ticks_per_rev) {
             Ok(r) => ds.runs.push(r),
             Err(e) => keep_or_fail(ds, opts, p, e)?,
@@ -114,6 +144,8 @@ fn load_path(p: &Path, opts: &LoadOptions, ds: &mut Dataset) -> Result<(), Datas
     }
     Ok(())
 }
+
+const MIB: f64 = (1u64 << 20) as f64;
 
 /// An input that was skipped, and why.
 #[derive(Debug, Clone)]

@@ -15,7 +15,7 @@ use super::twist::{self, Commands, TwistStamped};
 use super::{McapOptions, McapRead, split};
 use crate::dataset::DatasetError;
 use mcap::sans_io::LinearReaderOptions;
-use omni_kin::{Run, RunData, StampedPose};
+use omni_kin::{KinError, Run, RunData, StampedPose};
 use std::path::Path;
 
 /// Schema encodings whose type names this reader knows. `ros2idl` names the same types with the same CDR
@@ -527,9 +527,14 @@ fn scan<'a>(path: &'a Path, buf: &[u8], wheel_joints: &[String]) -> Result<Bag<'
 /// Reads one bag. See the module docs of [`super`].
 pub(super) fn read_file(path: &Path, opts: &McapOptions) -> Result<McapRead, DatasetError> {
     let buf = std::fs::read(path).map_err(|e| DatasetError::io(path, e))?;
+    read_bytes(path, &buf, opts)
+}
+
+/// Reads one bag from its bytes; `path` only names it in messages and runs.
+pub(super) fn read_bytes(path: &Path, buf: &[u8], opts: &McapOptions) -> Result<McapRead, DatasetError> {
     // mcap 0.26 can still panic on some damaged files (an integer overflow on a record longer than its
     // uncompressed chunk, in builds with overflow checks): a damaged file is an error, never a crash.
-    let mut bag = std::panic::catch_unwind(|| scan(path, &buf, &opts.wheel_joints))
+    let mut bag = std::panic::catch_unwind(|| scan(path, buf, &opts.wheel_joints))
         .unwrap_or_else(|_| Err(DatasetError::file(path, "the file is damaged: the MCAP reader panicked on it")))?;
     let mut notes = Vec::new();
 
@@ -647,7 +652,17 @@ pub(super) fn read_file(path: &Path, opts: &McapOptions) -> Result<McapRead, Dat
         match Run::new(data) {
             Ok(run) => out.runs.push(run),
             Err(source) => {
-                let e = DatasetError::Run { path: path.to_path_buf(), error: source };
+                let e = match &source {
+                    // A bad wheel sample is the JointState message of the same index.
+                    KinError::NonFinite { what: "wheel sample", index, .. }
+                    | KinError::NotIncreasing { what: "wheel sample", index, .. }
+                    | KinError::Implausible { what: "wheel sample", index, .. } => DatasetError::at(
+                        path,
+                        format!("topic {joints_topic:?}, message {}", lo + index),
+                        source.to_string(),
+                    ),
+                    _ => DatasetError::Run { path: path.to_path_buf(), error: source },
+                };
                 if !opts.skip_invalid {
                     return Err(e);
                 }
