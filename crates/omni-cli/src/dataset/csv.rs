@@ -19,6 +19,7 @@
 use super::DatasetError;
 use crate::atomic;
 pub use omni_kin::pose::unwrap_headings;
+use omni_kin::run::MAX_HEADING_RAD;
 use omni_kin::{Command, KinError, Pose2, Run, RunData, StampedPose};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -79,6 +80,13 @@ pub fn parse_run(path: &Path, bytes: &[u8], ticks_per_rev: Option<f64>) -> Resul
         .iter()
         .map(|h| h.trim().to_string())
         .collect();
+    if headers.iter().all(|h| h.is_empty()) {
+        return Err(DatasetError::at(
+            path,
+            format!("line {header_line}"),
+            "no header row (expected t_s, wheel columns <joint>_rad_s or <joint>_ticks, x_m, y_m, theta_rad)",
+        ));
+    }
     let find = |name: &str| headers.iter().position(|h| h == name);
     let t_col = find("t_s").ok_or_else(|| {
         DatasetError::at(
@@ -153,7 +161,15 @@ pub fn parse_run(path: &Path, bytes: &[u8], ticks_per_rev: Option<f64>) -> Resul
     };
     for (i, rec) in reader.records().enumerate() {
         let line = header_line + 1 + i;
-        let rec = rec.map_err(|e| DatasetError::at(path, format!("line {line}"), e.to_string()))?;
+        let rec = rec.map_err(|e| {
+            let what = match e.kind() {
+                csv::ErrorKind::UnequalLengths { expected_len, len, .. } => {
+                    format!("the row has {len} cells but the header has {expected_len}")
+                }
+                _ => e.to_string(),
+            };
+            DatasetError::at(path, format!("line {line}"), what)
+        })?;
         if rec.iter().all(|c| c.trim().is_empty()) {
             continue;
         }
@@ -164,6 +180,14 @@ pub fn parse_run(path: &Path, bytes: &[u8], ticks_per_rev: Option<f64>) -> Resul
             wheel_lines.push(line);
         }
         if let Some(p) = group(&rec, &pose_cols, line)? {
+            // Checked before unwrapping, which would turn a huge heading into an arbitrary one.
+            if p[2].abs() > MAX_HEADING_RAD {
+                return Err(DatasetError::at(
+                    path,
+                    format!("line {line}, column theta_rad"),
+                    format!("{} rad is beyond the plausible limit ±{MAX_HEADING_RAD} rad", p[2]),
+                ));
+            }
             truth.push(StampedPose { t_s: t, pose: Pose2::new(p[0], p[1], p[2]) });
             truth_lines.push(line);
         }
