@@ -520,11 +520,14 @@ fn mcap_error(path: &Path, e: mcap::McapError) -> DatasetError {
     DatasetError::file(path, what)
 }
 
-/// The top-level record at `pos`: opcode and body, if it lies within the file.
-fn record_at(buf: &[u8], pos: usize) -> Option<(u8, &[u8])> {
+/// The top-level record at `pos`: opcode, body (cut at the end of the file: the mcap reader streams a
+/// chunk's records before it has the whole chunk) and whether the body is whole.
+fn record_at(buf: &[u8], pos: usize) -> Option<(u8, &[u8], bool)> {
     let op = *buf.get(pos)?;
-    let len = usize::try_from(u64::from_le_bytes(buf.get(pos + 1..pos + 9)?.try_into().ok()?)).ok()?;
-    Some((op, buf.get(pos + 9..(pos + 9).checked_add(len)?)?))
+    let len = u64::from_le_bytes(buf.get(pos + 1..pos + 9)?.try_into().ok()?);
+    let start = pos + 9;
+    let end = usize::try_from(len).ok().and_then(|n| start.checked_add(n)).filter(|&e| e <= buf.len());
+    Some((op, &buf[start.min(buf.len())..end.unwrap_or(buf.len())], end.is_some()))
 }
 
 /// Checks that the records inside each uncompressed chunk fit in it. mcap 0.26 subtracts an inner record's
@@ -536,7 +539,7 @@ fn check_chunks(buf: &[u8]) -> Result<(), String> {
     const FOOTER: u8 = 0x02;
     let u64_at = |b: &[u8], at: usize| -> Option<u64> { Some(u64::from_le_bytes(b.get(at..at + 8)?.try_into().ok()?)) };
     let mut pos = mcap::MAGIC.len();
-    while let Some((op, body)) = record_at(buf, pos) {
+    while let Some((op, body, whole)) = record_at(buf, pos) {
         if op == FOOTER {
             break;
         }
@@ -550,29 +553,38 @@ fn check_chunks(buf: &[u8]) -> Result<(), String> {
             if name_len == 0
                 && let Some(records_len) = u64_at(body, name_end)
             {
-                let avail = body.len().saturating_sub(name_end + 8);
-                let records = usize::try_from(records_len)
-                    .ok()
-                    .filter(|&n| n <= avail)
-                    .and_then(|n| body.get(name_end + 8..name_end + 8 + n))
-                    .ok_or_else(|| {
-                        format!("the chunk at byte {pos} claims {records_len} bytes of records but holds {avail}")
-                    })?;
-                let mut at = 0;
-                while at < records.len() {
-                    let left = records.len() - at;
-                    let len = u64_at(records, at + 1).filter(|_| left >= 9).ok_or_else(|| {
-                        format!("the chunk at byte {pos} ends inside the header of a record ({left} bytes left)")
-                    })?;
-                    if len > (left - 9) as u64 {
+                // Checked against the declared length, which the mcap reader counts down; bytes missing at
+                // the end of a cut file are left to it (it reports the truncation).
+                let records = body.get(name_end + 8..).unwrap_or_default();
+                if whole && records_len > records.len() as u64 {
+                    return Err(format!(
+                        "the chunk at byte {pos} claims {records_len} bytes of records but holds {}",
+                        records.len()
+                    ));
+                }
+                let mut at: u64 = 0;
+                while at < records_len {
+                    let left = records_len - at;
+                    if left < 9 {
+                        return Err(format!(
+                            "the chunk at byte {pos} ends inside the header of a record ({left} bytes left)"
+                        ));
+                    }
+                    let Some(len) = usize::try_from(at).ok().and_then(|a| u64_at(records, a + 1)) else {
+                        break;
+                    };
+                    if len > left - 9 {
                         return Err(format!(
                             "a record in the chunk at byte {pos} claims {len} bytes but the chunk has {} left",
                             left - 9
                         ));
                     }
-                    at += 9 + len as usize;
+                    at += 9 + len;
                 }
             }
+        }
+        if !whole {
+            break;
         }
         pos += 9 + body.len();
     }
