@@ -40,6 +40,12 @@ for t in "${TARGETS[@]}"; do
   echo "== fuzz $t for ${SECONDS_PER_TARGET} s"
   cargo fuzz run -s none "$t" "corpus/$t" "${seeds[@]}" -- \
     -max_total_time="$SECONDS_PER_TARGET" -rss_limit_mb=2048 -timeout=10 -max_len=262144 \
-    -print_final_stats=1 2>&1 | tee "target/fuzz-$t.log" | grep -E '^(#[0-9]+ +(INITED|DONE)|Done|stat::|==|SUMMARY|.*panicked)' || true
-  echo "corpus/$t: $(ls "corpus/$t" | wc -l) inputs; crashes: $(ls "artifacts/$t" 2>/dev/null | wc -l)"
+    -print_final_stats=1 2>&1 | tee "target/fuzz-$t.log" | grep -E '(INITED|DONE) +cov|^(Done|stat::|==|SUMMARY)|panicked' || true
+  crashes=$(ls "artifacts/$t" 2>/dev/null | wc -l)
+  echo "corpus/$t: $(ls "corpus/$t" | wc -l) inputs; crashes: $crashes"
+  found=$((${found:-0} + crashes))
 done
+if [ "${found:-0}" -gt 0 ]; then
+  echo "fuzzing found ${found} crashing inputs: see fuzz/artifacts/" >&2
+  exit 1
+fi

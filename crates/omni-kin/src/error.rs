@@ -62,7 +62,7 @@ pub enum KinError {
         value: f64,
     },
     /// A finite value beyond what any real recording holds (a corrupted or misscaled field).
-    #[error("run {run}: {what} {index} has {field} = {value}, beyond the plausible limit ±{limit} {unit}")]
+    #[error("run {run}: {what} {index} has {field} = {value}, beyond the plausible limit ±{limit}")]
     Implausible {
         /// Run name.
         run: String,
@@ -74,10 +74,8 @@ pub enum KinError {
         field: String,
         /// The value.
         value: f64,
-        /// The limit on its magnitude.
+        /// The limit on its magnitude, in the field's unit (named by its suffix: `_s`, `_rad_s`, `_m`, `_rad`).
         limit: f64,
-        /// The unit of value and limit.
-        unit: &'static str,
     },
     /// Time stamps do not strictly increase.
     #[error(

@@ -87,10 +87,9 @@ fn implausible(
     field: impl Into<String>,
     value: f64,
     limit: f64,
-    unit: &'static str,
 ) -> Result<(), KinError> {
     if value.abs() > limit {
-        return Err(KinError::Implausible { run: run.into(), what, index, field: field.into(), value, limit, unit });
+        return Err(KinError::Implausible { run: run.into(), what, index, field: field.into(), value, limit });
     }
     Ok(())
 }
@@ -101,7 +100,7 @@ fn check_stamps(run: &str, what: &'static str, t: impl Iterator<Item = f64>) -> 
         if !t.is_finite() {
             return Err(KinError::NonFinite { run: run.into(), what, index: i, field: "t_s".into(), value: t });
         }
-        implausible(run, what, i, "t_s", t, MAX_T_S, "s")?;
+        implausible(run, what, i, "t_s", t, MAX_T_S)?;
         if t <= prev {
             return Err(KinError::NotIncreasing { run: run.into(), what, index: i, t_s: t, prev_s: prev });
         }
@@ -142,14 +141,14 @@ impl Run {
         }
         for (i, v) in d.wheel_rad_s.iter().enumerate() {
             let field = format!("wheel_rad_s[{}]", i % d.n_wheels);
-            implausible(run, "wheel sample", i / d.n_wheels, field, *v, MAX_WHEEL_RAD_S, "rad/s")?;
+            implausible(run, "wheel sample", i / d.n_wheels, field, *v, MAX_WHEEL_RAD_S)?;
         }
         check_stamps(run, "ground-truth pose", d.truth.iter().map(|p| p.t_s))?;
         for (i, p) in d.truth.iter().enumerate() {
-            for (field, value, limit, unit) in [
-                ("x_m", p.pose.x_m, MAX_POSITION_M, "m"),
-                ("y_m", p.pose.y_m, MAX_POSITION_M, "m"),
-                ("theta_rad", p.pose.theta_rad, MAX_HEADING_RAD, "rad"),
+            for (field, value, limit) in [
+                ("x_m", p.pose.x_m, MAX_POSITION_M),
+                ("y_m", p.pose.y_m, MAX_POSITION_M),
+                ("theta_rad", p.pose.theta_rad, MAX_HEADING_RAD),
             ] {
                 if !value.is_finite() {
                     return Err(KinError::NonFinite {
@@ -160,7 +159,7 @@ impl Run {
                         value,
                     });
                 }
-                implausible(run, "ground-truth pose", i, field, value, limit, unit)?;
+                implausible(run, "ground-truth pose", i, field, value, limit)?;
             }
         }
         let (w0, w1) = (d.wheel_t_s[0], d.wheel_t_s[d.wheel_t_s.len() - 1]);
