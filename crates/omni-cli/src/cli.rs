@@ -127,6 +127,9 @@ pub struct DataArgs {
     /// Encoder ticks per wheel revolution, for CSV files with tick columns.
     #[arg(long)]
     pub ticks_per_rev: Option<f64>,
+    /// Refuse input files (CSV, MCAP) larger than this; each is read into memory whole. MiB.
+    #[arg(long, value_name = "MIB", default_value_t = 1024)]
+    pub max_file_mb: u64,
 }
 
 /// Subcommands.

@@ -7,7 +7,7 @@ use std::ffi::OsString;
 
 /// Parses `args` (the program name first, as `std::env::args_os`) and runs the command. Returns the exit
 /// status: 0 on success and for `--help`/`--version` and a closed pipe, 2 on errors (printed on stderr as
-/// `error: {e:#}`), clap's own status for usage errors.
+/// `error: {e:#}`), 130 after Ctrl-C stopped a training, clap's own status for usage errors.
 pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
     let cli = match Cli::try_parse_from(args) {
         Ok(cli) => cli,
@@ -25,6 +25,10 @@ pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
                 c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
             }) {
                 return 0;
+            }
+            if e.downcast_ref::<crate::interrupt::Interrupted>().is_some() {
+                eprintln!("omnical: {e:#}");
+                return crate::interrupt::EXIT_INTERRUPTED;
             }
             eprintln!("error: {e:#}");
             2

@@ -269,6 +269,51 @@ mod tests {
         assert_eq!(back.params, g.params);
     }
 
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+        /// Any model (matrix or geometry, any subset of effects, any parameter values, any integration)
+        /// written to a file and read back gives the same parameters bit for bit and writes the same text.
+        #[test]
+        fn model_files_round_trip_exactly(
+            geometry in proptest::bool::ANY,
+            effects in proptest::sample::subsequence(omni_kin::effect::CATALOGUE.to_vec(), 0..4),
+            values in proptest::collection::vec(
+                proptest::prop_oneof![
+                    -1.0f64..1.0,
+                    proptest::num::f64::NORMAL | proptest::num::f64::SUBNORMAL | proptest::num::f64::ZERO,
+                ],
+                64,
+            ),
+            euler in proptest::bool::ANY,
+            dt in proptest::option::of(0.001f64..0.1),
+        ) {
+            let base = if geometry { Model::geometry(RobotGeometry::apr02()) } else { Model::ik(IkMatrix::paper_design()) };
+            let integration = omni_kin::Integration {
+                step: omni_kin::StepMode::Fixed { dt_s: dt },
+                scheme: if euler { omni_kin::Scheme::Euler } else { omni_kin::Scheme::ExactArc },
+            };
+            let mut f = FittedModel::nominal(base.with_integration(integration));
+            for id in &effects {
+                f = f.with_effect(EffectKind::from_id(id, 3).unwrap());
+            }
+            // Geometry parameters must stay physical: perturb them relatively; others take any value.
+            let nb = f.model.n_base();
+            for (i, p) in f.params.iter_mut().enumerate() {
+                *p = if geometry && i < nb { *p * (1.0 + 0.1 * values[i].clamp(-1.0, 1.0)) } else { values[i] };
+            }
+            let f = FittedModel::new(f.model.clone(), f.params.clone()).unwrap();
+            let dir = tempfile::tempdir().unwrap();
+            let path = dir.path().join("m.toml");
+            let text = to_toml(&f, None).unwrap();
+            crate::atomic::write_atomic(&path, text.as_bytes()).unwrap();
+            let back = read(&path).unwrap();
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            proptest::prop_assert_eq!(bits(&back.params), bits(&f.params));
+            proptest::prop_assert_eq!(to_toml(&back, None).unwrap(), text);
+        }
+    }
+
     #[test]
     fn bad_effect_parameter_is_named() {
         let f = FittedModel::nominal(Model::ik(IkMatrix::paper_design()))

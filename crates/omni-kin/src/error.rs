@@ -61,6 +61,22 @@ pub enum KinError {
         /// The value.
         value: f64,
     },
+    /// A finite value beyond what any real recording holds (a corrupted or misscaled field).
+    #[error("run {run}: {what} {index} has {field} = {value}, beyond the plausible limit ±{limit}")]
+    Implausible {
+        /// Run name.
+        run: String,
+        /// `wheel sample` or `ground-truth pose`.
+        what: &'static str,
+        /// Index of the sample or pose (0-based).
+        index: usize,
+        /// Field, e.g. `t_s` or `wheel_rad_s[2]`.
+        field: String,
+        /// The value.
+        value: f64,
+        /// The limit on its magnitude, in the field's unit (named by its suffix: `_s`, `_rad_s`, `_m`, `_rad`).
+        limit: f64,
+    },
     /// Time stamps do not strictly increase.
     #[error(
         "run {run}: {what} {index} has time {t_s} s, not after the previous {prev_s} s (stamps must strictly increase)"

@@ -16,16 +16,24 @@ pub fn wrap_angle(a_rad: f64) -> f64 {
 }
 
 /// Make a heading sequence continuous: each heading moves by whole turns to lie within π of the previous
-/// one. Already-continuous sequences are left bit-identical.
+/// one. Already-continuous sequences are left bit-identical; a jump of one turn is one subtraction of 2π.
+/// Constant time per pose whatever the jump (a huge or infinite heading is left for `Run::new` to reject).
 pub fn unwrap_headings(poses: &mut [StampedPose]) {
+    const TURN: f64 = 2.0 * PI;
     for i in 1..poses.len() {
         let prev = poses[i - 1].pose.theta_rad;
         let mut th = poses[i].pose.theta_rad;
-        while th - prev > PI {
-            th -= 2.0 * PI;
+        let jump = th - prev;
+        if !jump.is_finite() || jump.abs() <= PI {
+            continue;
         }
-        while th - prev < -PI {
-            th += 2.0 * PI;
+        if jump.abs() > 3.0 * PI {
+            th -= (jump / TURN).round() * TURN;
+        }
+        if th - prev > PI {
+            th -= TURN;
+        } else if th - prev < -PI {
+            th += TURN;
         }
         poses[i].pose.theta_rad = th;
     }
@@ -130,6 +138,25 @@ impl PoseError {
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+
+    #[test]
+    fn unwrap_takes_constant_time_and_keeps_small_jumps_bit_identical() {
+        let at = |th: &[f64]| -> Vec<StampedPose> {
+            th.iter().map(|&t| StampedPose { t_s: 0.0, pose: Pose2::new(0.0, 0.0, t) }).collect()
+        };
+        let got = |mut p: Vec<StampedPose>| -> Vec<f64> {
+            unwrap_headings(&mut p);
+            p.iter().map(|q| q.pose.theta_rad).collect()
+        };
+        // One turn: one subtraction, as before.
+        assert_eq!(got(at(&[3.1, -3.1])), [3.1, -3.1 + 2.0 * PI]);
+        // A thousand turns and more: whole turns removed at once, within π of the previous heading.
+        let far = got(at(&[0.5, 0.5 + 2000.0 * PI + 0.25]));
+        assert!((far[1] - 0.75).abs() < 1e-9, "{far:?}");
+        // Huge and infinite headings end (they are left for Run::new to reject), NaN is left alone.
+        let huge = got(at(&[0.0, 1e30, f64::INFINITY, f64::NAN, 1.0]));
+        assert!(huge[1].abs() < 1e30 * 2.0 && huge[2].is_infinite() && huge[3].is_nan() && huge[4] == 1.0);
+    }
 
     #[test]
     fn wrap_is_half_open() {

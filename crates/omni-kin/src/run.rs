@@ -2,7 +2,9 @@
 //!
 //! A `Run` is built only through [`Run::new`], which rejects what would make the cost meaningless (NaN,
 //! stamps that do not strictly increase, fewer than 2 samples or poses, wheel data that does not cover the
-//! ground truth), so the hot loop never has to check.
+//! ground truth), so the hot loop never has to check. It also rejects finite values no recording can hold
+//! (a corrupted or misscaled field would otherwise give a silently wrong fit): magnitudes above
+//! [`MAX_T_S`], [`MAX_WHEEL_RAD_S`], [`MAX_POSITION_M`] and [`MAX_HEADING_RAD`].
 
 use crate::error::KinError;
 use crate::pose::{Pose2, StampedPose};
@@ -68,12 +70,37 @@ pub struct Run {
     median_dt_s: f64,
 }
 
+/// The largest time stamp magnitude accepted (about the year 2286 as seconds since 1970). s.
+pub const MAX_T_S: f64 = 1.0e10;
+/// The largest wheel speed magnitude accepted (about 95 000 rpm). rad/s.
+pub const MAX_WHEEL_RAD_S: f64 = 1.0e4;
+/// The largest ground-truth coordinate magnitude accepted (ten times UTM's largest northing). m.
+pub const MAX_POSITION_M: f64 = 1.0e8;
+/// The largest (unwrapped) heading magnitude accepted: about 160 000 turns, where float64 still resolves
+/// 1e-10 rad. rad.
+pub const MAX_HEADING_RAD: f64 = 1.0e6;
+
+fn implausible(
+    run: &str,
+    what: &'static str,
+    index: usize,
+    field: impl Into<String>,
+    value: f64,
+    limit: f64,
+) -> Result<(), KinError> {
+    if value.abs() > limit {
+        return Err(KinError::Implausible { run: run.into(), what, index, field: field.into(), value, limit });
+    }
+    Ok(())
+}
+
 fn check_stamps(run: &str, what: &'static str, t: impl Iterator<Item = f64>) -> Result<(), KinError> {
     let mut prev = f64::NEG_INFINITY;
     for (i, t) in t.enumerate() {
         if !t.is_finite() {
             return Err(KinError::NonFinite { run: run.into(), what, index: i, field: "t_s".into(), value: t });
         }
+        implausible(run, what, i, "t_s", t, MAX_T_S)?;
         if t <= prev {
             return Err(KinError::NotIncreasing { run: run.into(), what, index: i, t_s: t, prev_s: prev });
         }
@@ -112,9 +139,17 @@ impl Run {
                 value: d.wheel_rad_s[i],
             });
         }
+        for (i, v) in d.wheel_rad_s.iter().enumerate() {
+            let field = format!("wheel_rad_s[{}]", i % d.n_wheels);
+            implausible(run, "wheel sample", i / d.n_wheels, field, *v, MAX_WHEEL_RAD_S)?;
+        }
         check_stamps(run, "ground-truth pose", d.truth.iter().map(|p| p.t_s))?;
         for (i, p) in d.truth.iter().enumerate() {
-            for (field, value) in [("x_m", p.pose.x_m), ("y_m", p.pose.y_m), ("theta_rad", p.pose.theta_rad)] {
+            for (field, value, limit) in [
+                ("x_m", p.pose.x_m, MAX_POSITION_M),
+                ("y_m", p.pose.y_m, MAX_POSITION_M),
+                ("theta_rad", p.pose.theta_rad, MAX_HEADING_RAD),
+            ] {
                 if !value.is_finite() {
                     return Err(KinError::NonFinite {
                         run: run.into(),
@@ -124,6 +159,7 @@ impl Run {
                         value,
                     });
                 }
+                implausible(run, "ground-truth pose", i, field, value, limit)?;
             }
         }
         let (w0, w1) = (d.wheel_t_s[0], d.wheel_t_s[d.wheel_t_s.len() - 1]);

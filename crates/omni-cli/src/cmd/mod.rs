@@ -38,8 +38,13 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
         skip_invalid: data.skip_invalid,
         recorded_odometry,
     };
-    let opts =
-        LoadOptions { skip_invalid: data.skip_invalid, ticks_per_rev: data.ticks_per_rev, mcap, recorded_odometry };
+    let opts = LoadOptions {
+        skip_invalid: data.skip_invalid,
+        ticks_per_rev: data.ticks_per_rev,
+        mcap,
+        recorded_odometry,
+        max_file_bytes: data.max_file_mb.saturating_mul(1 << 20),
+    };
     let ds = dataset::load(paths, &opts)?;
     // The same note from many files is printed once, with a count.
     let mut seen: Vec<(String, String, usize)> = Vec::new();

@@ -2,7 +2,7 @@
 
 use super::{design_ik, load_runs};
 use crate::cli::{CostArg, DataArgs, FitArgs, ModelKind, PresetArg, UnexcitedArg};
-use crate::{atomic, model_file, progress};
+use crate::{atomic, interrupt, model_file, progress};
 use anyhow::Context;
 use omni_ga::calibrate::{Calibration, Plan, Preset, Unexcited, calibrate};
 use omni_kin::cost::CostKind;
@@ -136,7 +136,13 @@ pub fn apply_fit_args(mut plan: Plan, f: &FitArgs) -> anyhow::Result<Plan> {
 
 /// Runs `omnical train`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
+    // Ctrl-C while loading ends the command; during the fit it stops the GA at its next generation and the
+    // best model so far is reported and written.
+    interrupt::install();
     let ds = load_runs(&a.runs, &a.data)?;
+    if interrupt::requested() {
+        return Err(interrupt::Interrupted.into());
+    }
     let mut start = match &a.start {
         Some(p) => model_file::read(p).context("reading --start")?,
         None => match a.model {
@@ -159,21 +165,41 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         eprintln!("warning: {w}");
     }
     let mut bar = progress::ProgressObserver::new(plan.ga.as_ref().map_or(0, |g| g.max_generations), a.quiet);
-    let c = calibrate(&start, &ds.runs, &plan, &mut bar)?;
+    if !a.quiet {
+        eprintln!(
+            "training on {} runs: preset {preset_name}, seed {} (Ctrl-C stops early and keeps the best so far)",
+            ds.runs.len(),
+            a.seed
+        );
+    }
+    let c = calibrate(&start, &ds.runs, &plan, &mut interrupt::StopOnInterrupt(&mut bar))?;
     bar.finish();
-    let s = summary(&c, preset_name, a.seed, ds.runs.len())?;
+    let interrupted = interrupt::requested();
+    let mut s = summary(&c, preset_name, a.seed, ds.runs.len())?;
+    if interrupted {
+        s["interrupted"] = json!(true);
+    }
     if let Some(out) = &a.out {
-        let fit: toml::Table = toml::Table::try_from(toml_safe(s.clone())).context("fit summary")?;
+        // Everything but the wall time: the same data, preset and seed give a byte-identical file.
+        let mut fit: toml::Table = toml::Table::try_from(toml_safe(s.clone())).context("fit summary")?;
+        fit.remove("seconds");
         let text = model_file::to_toml(&c.fitted, Some(fit)).map_err(anyhow::Error::msg)?;
         atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))?;
     }
     if a.json {
         println!("{}", serde_json::to_string_pretty(&s)?);
-        return Ok(());
+    } else {
+        if interrupted {
+            println!("interrupted (Ctrl-C): the best model found so far (the GA stopped early; no polish)");
+        }
+        print_summary(&c, preset_name, ds.runs.len());
+        if let Some(out) = &a.out {
+            let what = if interrupted { "best-so-far model" } else { "model" };
+            println!("{what} written to {}", out.display());
+        }
     }
-    print_summary(&c, preset_name, ds.runs.len());
-    if let Some(out) = &a.out {
-        println!("model written to {}", out.display());
+    if interrupted {
+        return Err(interrupt::Interrupted.into());
     }
     Ok(())
 }

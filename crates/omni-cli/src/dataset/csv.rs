@@ -19,7 +19,8 @@
 use super::DatasetError;
 use crate::atomic;
 pub use omni_kin::pose::unwrap_headings;
-use omni_kin::{Command, Pose2, Run, RunData, StampedPose};
+use omni_kin::run::MAX_HEADING_RAD;
+use omni_kin::{Command, KinError, Pose2, Run, RunData, StampedPose};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 use std::path::Path;
@@ -36,8 +37,16 @@ fn parse_num(path: &Path, line: usize, col: &str, cell: &str) -> Result<f64, Dat
 /// Read one omnical CSV run. `ticks_per_rev` overrides the file's.
 pub fn read_run(path: &Path, ticks_per_rev: Option<f64>) -> Result<Run, DatasetError> {
     let bytes = std::fs::read(path).map_err(|e| DatasetError::io(path, e))?;
-    let text = String::from_utf8(bytes).map_err(|_| DatasetError::file(path, "is not UTF-8 text"))?;
-    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+    parse_run(path, &bytes, ticks_per_rev)
+}
+
+/// Parse one omnical CSV run from its bytes; `path` only names the source in errors. `ticks_per_rev`
+/// overrides the file's.
+pub fn parse_run(path: &Path, bytes: &[u8], ticks_per_rev: Option<f64>) -> Result<Run, DatasetError> {
+    let text = std::str::from_utf8(bytes).map_err(|e| {
+        DatasetError::file(path, format!("is not UTF-8 text (invalid byte at offset {})", e.valid_up_to()))
+    })?;
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     // Metadata comments before the header.
     let mut meta: BTreeMap<String, (usize, String)> = BTreeMap::new();
     let mut body_start = 0;
@@ -71,6 +80,13 @@ pub fn read_run(path: &Path, ticks_per_rev: Option<f64>) -> Result<Run, DatasetE
         .iter()
         .map(|h| h.trim().to_string())
         .collect();
+    if headers.iter().all(|h| h.is_empty()) {
+        return Err(DatasetError::at(
+            path,
+            format!("line {header_line}"),
+            "no header row (expected t_s, wheel columns <joint>_rad_s or <joint>_ticks, x_m, y_m, theta_rad)",
+        ));
+    }
     let find = |name: &str| headers.iter().position(|h| h == name);
     let t_col = find("t_s").ok_or_else(|| {
         DatasetError::at(
@@ -119,6 +135,8 @@ pub fn read_run(path: &Path, ticks_per_rev: Option<f64>) -> Result<Run, DatasetE
 
     let n_w = wheel_cols.len();
     let (mut wheel_t, mut wheel, mut truth, mut odom) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    // The line of each wheel sample and ground-truth pose, for locating `Run::new`'s errors.
+    let (mut wheel_lines, mut truth_lines) = (Vec::new(), Vec::new());
     // `group` = the cells of a column group in this row: all empty → None; all filled → values; else error.
     let group = |rec: &csv::StringRecord, cols: &[usize], line: usize| -> Result<Option<Vec<f64>>, DatasetError> {
         let cells: Vec<&str> = cols.iter().map(|&c| rec.get(c).unwrap_or("").trim()).collect();
@@ -143,7 +161,15 @@ pub fn read_run(path: &Path, ticks_per_rev: Option<f64>) -> Result<Run, DatasetE
     };
     for (i, rec) in reader.records().enumerate() {
         let line = header_line + 1 + i;
-        let rec = rec.map_err(|e| DatasetError::at(path, format!("line {line}"), e.to_string()))?;
+        let rec = rec.map_err(|e| {
+            let what = match e.kind() {
+                csv::ErrorKind::UnequalLengths { expected_len, len, .. } => {
+                    format!("the row has {len} cells but the header has {expected_len}")
+                }
+                _ => e.to_string(),
+            };
+            DatasetError::at(path, format!("line {line}"), what)
+        })?;
         if rec.iter().all(|c| c.trim().is_empty()) {
             continue;
         }
@@ -151,9 +177,19 @@ pub fn read_run(path: &Path, ticks_per_rev: Option<f64>) -> Result<Run, DatasetE
         if let Some(w) = group(&rec, &wheel_cols, line)? {
             wheel_t.push(t);
             wheel.extend(w);
+            wheel_lines.push(line);
         }
         if let Some(p) = group(&rec, &pose_cols, line)? {
+            // Checked before unwrapping, which would turn a huge heading into an arbitrary one.
+            if p[2].abs() > MAX_HEADING_RAD {
+                return Err(DatasetError::at(
+                    path,
+                    format!("line {line}, column theta_rad"),
+                    format!("{} rad is beyond the plausible limit ±{MAX_HEADING_RAD} rad", p[2]),
+                ));
+            }
             truth.push(StampedPose { t_s: t, pose: Pose2::new(p[0], p[1], p[2]) });
+            truth_lines.push(line);
         }
         if let Some(oc) = &odom_cols
             && let Some(p) = group(&rec, oc, line)?
@@ -207,7 +243,23 @@ pub fn read_run(path: &Path, ticks_per_rev: Option<f64>) -> Result<Run, DatasetE
         recorded_odometry: odom,
         wheel_start_rad,
     })
-    .map_err(|source| DatasetError::Run { path: path.to_path_buf(), error: source })
+    .map_err(|error| {
+        // A bad sample or pose is located by its line.
+        let at = match &error {
+            KinError::NonFinite { what, index, .. }
+            | KinError::NotIncreasing { what, index, .. }
+            | KinError::Implausible { what, index, .. } => match *what {
+                "wheel sample" => wheel_lines.get(*index),
+                "ground-truth pose" => truth_lines.get(*index),
+                _ => None,
+            },
+            _ => None,
+        };
+        match at {
+            Some(line) => DatasetError::at(path, format!("line {line}"), error.to_string()),
+            None => DatasetError::Run { path: path.to_path_buf(), error },
+        }
+    })
 }
 
 /// Write a run in the omnical CSV format (rad/s columns, shortest round-trip floats), atomically.

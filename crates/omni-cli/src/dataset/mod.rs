@@ -23,6 +23,9 @@ pub struct Dataset {
     pub robot: Option<RobotGeometry>,
 }
 
+/// The default cap on one input file's size (`--max-file-mb`). Bytes: 1 GiB.
+pub const DEFAULT_MAX_FILE_BYTES: u64 = 1 << 30;
+
 /// How to load.
 #[derive(Clone, Debug)]
 pub struct LoadOptions {
@@ -36,11 +39,21 @@ pub struct LoadOptions {
     /// [`mcap::McapOptions::recorded_odometry`]. Calibration never reads it and it takes as much memory as
     /// the wheel data. Default true.
     pub recorded_odometry: bool,
+    /// Refuse a CSV or MCAP file larger than this: each is read into memory whole (MCAP chunks are then
+    /// decompressed one at a time), so the cap keeps a huge or mistaken input from exhausting memory.
+    /// Bytes. Default [`DEFAULT_MAX_FILE_BYTES`].
+    pub max_file_bytes: u64,
 }
 
 impl Default for LoadOptions {
     fn default() -> Self {
-        Self { skip_invalid: false, ticks_per_rev: None, mcap: mcap::McapOptions::default(), recorded_odometry: true }
+        Self {
+            skip_invalid: false,
+            ticks_per_rev: None,
+            mcap: mcap::McapOptions::default(),
+            recorded_odometry: true,
+            max_file_bytes: DEFAULT_MAX_FILE_BYTES,
+        }
     }
 }
 
@@ -104,7 +117,19 @@ fn load_path(p: &Path, opts: &LoadOptions, ds: &mut Dataset) -> Result<(), Datas
         }
         return Ok(());
     }
-    match p.extension().and_then(|e| e.to_str()) {
+    let ext = p.extension().and_then(|e| e.to_str());
+    if matches!(ext, Some("csv" | "mcap")) && meta.len() > opts.max_file_bytes {
+        return Err(DatasetError::file(
+            p,
+            format!(
+                "the file is {:.1} MiB, above the limit of {:.1} MiB per input file (files are read into memory \
+                 whole); raise the limit with --max-file-mb if the machine has the memory",
+                meta.len() as f64 / MIB,
+                opts.max_file_bytes as f64 / MIB
+            ),
+        ));
+    }
+    match ext {
         Some("csv") => match csv::read_run(p, opts.ticks_per_rev) {
             Ok(r) if opts.recorded_odometry => ds.runs.push(r),
             Ok(r) => ds.runs.push(r.without_recorded_odometry()),
@@ -129,6 +154,8 @@ fn load_path(p: &Path, opts: &LoadOptions, ds: &mut Dataset) -> Result<(), Datas
     }
     Ok(())
 }
+
+const MIB: f64 = (1u64 << 20) as f64;
 
 /// An input that was skipped, and why.
 #[derive(Debug, Clone)]

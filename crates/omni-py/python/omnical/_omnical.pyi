@@ -338,4 +338,7 @@ def report(
     """Write the HTML report (inline SVG figures) of ``model`` on ``runs`` to ``out``; with ``png_dir``
     also each figure as PNG. Returns the figure ids (``ladder``, ``overlay-worst``, ...)."""
 def cli_main(argv: list[str]) -> int:
-    """Run the omnical command line; returns the exit status."""
+    """Run the omnical command line; returns the exit status. ``train`` installs a process-wide Ctrl-C
+    handler (a first Ctrl-C stops the search with the best model so far, exit status 130; a second one
+    exits the process), so call it from the ``omnical`` console command rather than an interactive
+    session."""

@@ -184,8 +184,14 @@ pub(super) fn pose_problem(
 
 /// Decodes one CDR message (4-byte encapsulation header, then the body; little- or big-endian).
 pub(super) fn decode<'de, T: Deserialize<'de>>(data: &[u8]) -> Result<T, String> {
-    cdr::deserialize_from(data, cdr::Bounded(data.len() as u64))
-        .map_err(|e| format!("cannot decode CDR ({e}); is the message type right?"))
+    cdr::deserialize_from(data, cdr::Bounded(data.len() as u64)).map_err(|e| match e {
+        cdr::Error::SizeLimit => format!(
+            "cannot decode CDR: the {}-byte message ends before its last field (cut short, or a length inside it \
+             is corrupted); is the message type right?",
+            data.len()
+        ),
+        e => format!("cannot decode CDR ({e}); is the message type right?"),
+    })
 }
 
 /// Encodes one message as little-endian CDR with its encapsulation header, as ROS 2 publishes it.

@@ -171,6 +171,12 @@ pub fn read_file(path: &Path, opts: &McapOptions) -> Result<McapRead, DatasetErr
     read::read_file(path, opts)
 }
 
+/// Reads the runs of one ROS 2 MCAP bag held in memory: as [`read_file`], with `path` only naming the bag
+/// in messages and runs (the file stem is the run name).
+pub fn read_bytes(path: &Path, bytes: &[u8], opts: &McapOptions) -> Result<McapRead, DatasetError> {
+    read::read_bytes(path, bytes, opts)
+}
+
 /// Writes one run as a ROS 2 MCAP bag, atomically (temporary file, then rename).
 pub fn write_run(path: &Path, run: &Run, w: &WriteOptions) -> Result<(), DatasetError> {
     write::write_run(path, run, w)

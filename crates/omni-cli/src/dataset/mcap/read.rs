@@ -15,7 +15,7 @@ use super::twist::{self, Commands, TwistStamped};
 use super::{McapOptions, McapRead, split};
 use crate::dataset::DatasetError;
 use mcap::sans_io::LinearReaderOptions;
-use omni_kin::{Run, RunData, StampedPose};
+use omni_kin::{KinError, Run, RunData, StampedPose};
 use std::path::Path;
 
 /// Schema encodings whose type names this reader knows. `ros2idl` names the same types with the same CDR
@@ -470,6 +470,28 @@ fn schema_or_none(schema: &str) -> &str {
     if schema.is_empty() { "(no schema)" } else { schema }
 }
 
+/// The name of an MCAP record opcode (MCAP specification, "Records").
+fn record_kind(opcode: u8) -> &'static str {
+    match opcode {
+        0x01 => "Header",
+        0x02 => "Footer",
+        0x03 => "Schema",
+        0x04 => "Channel",
+        0x05 => "Message",
+        0x06 => "Chunk",
+        0x07 => "Message Index",
+        0x08 => "Chunk Index",
+        0x09 => "Attachment",
+        0x0a => "Attachment Index",
+        0x0b => "Statistics",
+        0x0c => "Metadata",
+        0x0d => "Metadata Index",
+        0x0e => "Summary Offset",
+        0x0f => "Data End",
+        _ => "unknown",
+    }
+}
+
 /// An MCAP reading error, in words.
 fn mcap_error(path: &Path, e: mcap::McapError) -> DatasetError {
     use mcap::McapError as E;
@@ -482,9 +504,91 @@ fn mcap_error(path: &Path, e: mcap::McapError) -> DatasetError {
         E::BadChunkCrc { saved, calculated } => {
             format!("the file is corrupted: a chunk's CRC is {calculated:08x}, but {saved:08x} was recorded")
         }
+        E::RecordTooLarge { opcode, len } => format!(
+            "the file is corrupted: a {} record (opcode 0x{opcode:02x}) claims {len} bytes, more than the file \
+             holds",
+            record_kind(opcode)
+        ),
+        E::ChunkTooLarge(len) => {
+            format!("the file is corrupted: a chunk claims {len} bytes of records, more than the file holds")
+        }
+        E::Parse(_) => "the file is corrupted: the fields inside a record do not parse (a length or string in \
+                        it is damaged)"
+            .to_string(),
         e => format!("the file is damaged: {e}"),
     };
     DatasetError::file(path, what)
+}
+
+/// The top-level record at `pos`: opcode, body (cut at the end of the file: the mcap reader streams a
+/// chunk's records before it has the whole chunk) and whether the body is whole.
+fn record_at(buf: &[u8], pos: usize) -> Option<(u8, &[u8], bool)> {
+    let op = *buf.get(pos)?;
+    let len = u64::from_le_bytes(buf.get(pos + 1..pos + 9)?.try_into().ok()?);
+    let start = pos + 9;
+    let end = usize::try_from(len).ok().and_then(|n| start.checked_add(n)).filter(|&e| e <= buf.len());
+    Some((op, &buf[start.min(buf.len())..end.unwrap_or(buf.len())], end.is_some()))
+}
+
+/// Checks that the records inside each uncompressed chunk fit in it. mcap 0.26 subtracts an inner record's
+/// length from the chunk's remaining bytes unchecked (`sans_io/linear_reader.rs`): a corrupted length
+/// panics with overflow checks and reads past the chunk without them. Found by fuzzing
+/// (`tests/data/bad/fuzz/chunk_record_overrun.mcap`). Other damage is left to the mcap reader.
+fn check_chunks(buf: &[u8]) -> Result<(), String> {
+    const CHUNK: u8 = 0x06;
+    const FOOTER: u8 = 0x02;
+    let u64_at = |b: &[u8], at: usize| -> Option<u64> { Some(u64::from_le_bytes(b.get(at..at + 8)?.try_into().ok()?)) };
+    let mut pos = mcap::MAGIC.len();
+    while let Some((op, body, whole)) = record_at(buf, pos) {
+        if op == FOOTER {
+            break;
+        }
+        if op == CHUNK {
+            // start time, end time, uncompressed size (u64 each), uncompressed CRC (u32), compression (string),
+            // records (u64 length + bytes).
+            let Some(name_len) = body.get(28..32).and_then(|b| b.try_into().ok()).map(u32::from_le_bytes) else {
+                return Ok(());
+            };
+            let name_end = 32 + name_len as usize;
+            if name_len == 0
+                && let Some(records_len) = u64_at(body, name_end)
+            {
+                // Checked against the declared length, which the mcap reader counts down; bytes missing at
+                // the end of a cut file are left to it (it reports the truncation).
+                let records = body.get(name_end + 8..).unwrap_or_default();
+                if whole && records_len > records.len() as u64 {
+                    return Err(format!(
+                        "the chunk at byte {pos} claims {records_len} bytes of records but holds {}",
+                        records.len()
+                    ));
+                }
+                let mut at: u64 = 0;
+                while at < records_len {
+                    let left = records_len - at;
+                    if left < 9 {
+                        return Err(format!(
+                            "the chunk at byte {pos} ends inside the header of a record ({left} bytes left)"
+                        ));
+                    }
+                    let Some(len) = usize::try_from(at).ok().and_then(|a| u64_at(records, a + 1)) else {
+                        break;
+                    };
+                    if len > left - 9 {
+                        return Err(format!(
+                            "a record in the chunk at byte {pos} claims {len} bytes but the chunk has {} left",
+                            left - 9
+                        ));
+                    }
+                    at += 9 + len;
+                }
+            }
+        }
+        if !whole {
+            break;
+        }
+        pos += 9 + body.len();
+    }
+    Ok(())
 }
 
 /// Decodes every channel of the file.
@@ -492,6 +596,7 @@ fn scan<'a>(path: &'a Path, buf: &[u8], wheel_joints: &[String]) -> Result<Bag<'
     if !buf.starts_with(mcap::MAGIC) {
         return Err(DatasetError::file(path, "not an MCAP file (it does not start with the MCAP magic bytes)"));
     }
+    check_chunks(buf).map_err(|what| DatasetError::file(path, format!("the file is corrupted: {what}")))?;
     let mut channels = Vec::new();
     let mut ids: Vec<u16> = Vec::new();
     // The summary lists every channel, also those without messages. A damaged summary is ignored here: the
@@ -527,9 +632,14 @@ fn scan<'a>(path: &'a Path, buf: &[u8], wheel_joints: &[String]) -> Result<Bag<'
 /// Reads one bag. See the module docs of [`super`].
 pub(super) fn read_file(path: &Path, opts: &McapOptions) -> Result<McapRead, DatasetError> {
     let buf = std::fs::read(path).map_err(|e| DatasetError::io(path, e))?;
+    read_bytes(path, &buf, opts)
+}
+
+/// Reads one bag from its bytes; `path` only names it in messages and runs.
+pub(super) fn read_bytes(path: &Path, buf: &[u8], opts: &McapOptions) -> Result<McapRead, DatasetError> {
     // mcap 0.26 can still panic on some damaged files (an integer overflow on a record longer than its
     // uncompressed chunk, in builds with overflow checks): a damaged file is an error, never a crash.
-    let mut bag = std::panic::catch_unwind(|| scan(path, &buf, &opts.wheel_joints))
+    let mut bag = std::panic::catch_unwind(|| scan(path, buf, &opts.wheel_joints))
         .unwrap_or_else(|_| Err(DatasetError::file(path, "the file is damaged: the MCAP reader panicked on it")))?;
     let mut notes = Vec::new();
 
@@ -648,7 +758,17 @@ pub(super) fn read_file(path: &Path, opts: &McapOptions) -> Result<McapRead, Dat
         match Run::new(data) {
             Ok(run) => out.runs.push(run),
             Err(source) => {
-                let e = DatasetError::Run { path: path.to_path_buf(), error: source };
+                let e = match &source {
+                    // A bad wheel sample is the JointState message of the same index.
+                    KinError::NonFinite { what: "wheel sample", index, .. }
+                    | KinError::NotIncreasing { what: "wheel sample", index, .. }
+                    | KinError::Implausible { what: "wheel sample", index, .. } => DatasetError::at(
+                        path,
+                        format!("topic {joints_topic:?}, message {}", lo + index),
+                        source.to_string(),
+                    ),
+                    _ => DatasetError::Run { path: path.to_path_buf(), error: source },
+                };
                 if !opts.skip_invalid {
                     return Err(e);
                 }
