@@ -300,11 +300,6 @@ impl<'a> CalibrationProblem<'a> {
         self.row_offsets.windows(2).map(|w| w[1] - w[0]).collect()
     }
 
-    /// The residuals and their Jacobian at `x` (fast path when it applies).
-    pub fn residuals_and_jacobian(&self, x: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
-        self.analytic(x).unwrap_or_else(|| (self.residuals(x), self.jacobian(x)))
-    }
-
     /// What the runs constrain at `x` ([`identify::analyse`] on this problem's residuals).
     pub fn identifiability(&self, x: &[f64], opts: &IdentifyOptions) -> Identifiability {
         let mut moments = identify::Moments::new(x.len());

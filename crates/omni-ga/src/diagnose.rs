@@ -281,16 +281,21 @@ fn unbounded<'a>(
     CalibrationProblem::new(model, runs, path_kind(every), bounds)
 }
 
-/// Refit all parameters of `start` on `train` by Levenberg–Marquardt on the path residuals.
-pub fn refit(start: &FittedModel, train: &[Run], every: usize) -> Result<FittedModel, CalibrateError> {
-    // Parameters whose null value is the lower end of their range (backlash b ≥ 0) start 2 % inside it,
-    // where the model is differentiable.
-    let mut x0 = start.params.clone();
-    for (i, s) in start.model.params().iter().enumerate() {
-        if x0[i] == s.lower && s.upper > s.lower && i >= start.model.n_base() {
-            x0[i] = s.lower + 0.02 * (s.upper - s.lower);
+/// `model`'s parameters, with effect parameters whose value is the lower end of their range (backlash
+/// b ≥ 0 at its null value) moved 2 % inside it, where the model is differentiable.
+pub fn differentiable_start(model: &FittedModel) -> Vec<f64> {
+    let mut x = model.params.clone();
+    for (i, s) in model.model.params().iter().enumerate() {
+        if i >= model.model.n_base() && x[i] == s.lower && s.upper > s.lower {
+            x[i] = s.lower + 0.02 * (s.upper - s.lower);
         }
     }
+    x
+}
+
+/// Refit all parameters of `start` on `train` by Levenberg–Marquardt on the path residuals.
+pub fn refit(start: &FittedModel, train: &[Run], every: usize) -> Result<FittedModel, CalibrateError> {
+    let x0 = differentiable_start(start);
     let problem = unbounded(&start.model, train, every)?;
     let mut lm = LevenbergMarquardt { config: LmConfig::default() };
     let s = lm.minimize(&problem, &x0, &mut NoopObserver)?;

@@ -18,6 +18,7 @@
 //! see [`crate::identify`]).
 
 use crate::calibrate::{CalibrateError, CalibrationProblem};
+use crate::diagnose::differentiable_start;
 use crate::identify::{self, Identifiability, IdentifyOptions};
 use crate::problem::Bounds;
 use nalgebra::DMatrix;
@@ -179,18 +180,6 @@ pub fn plan(model: &FittedModel, sim: &SimConfig, req: &PlanRequest) -> Result<R
         }
     }
     Ok(RunPlan { set: req.set, total_runs: picked.len() * req.repetitions, runs: planned, expected })
-}
-
-/// Parameters at design/null values, moved 2 % inside a range whose end is the null value (backlash ≥ 0),
-/// where the model is differentiable.
-fn differentiable_start(model: &FittedModel) -> Vec<f64> {
-    let mut x = model.params.clone();
-    for (i, s) in model.model.params().iter().enumerate() {
-        if i >= model.model.n_base() && x[i] == s.lower && s.upper > s.lower {
-            x[i] = s.lower + 0.02 * (s.upper - s.lower);
-        }
-    }
-    x
 }
 
 /// One candidate's information matrix, in parameter units and scaled.
