@@ -2,7 +2,7 @@
 
 use super::load_runs;
 use crate::atomic;
-use crate::cli::{DataArgs, ModelKind, RunSetArg};
+use crate::cli::{DataArgs, ModelKind};
 use anyhow::Context;
 use omni_ga::excitation::{self, PlanRequest, RunPlan, RunSet};
 use omni_kin::simulate::SimConfig;
@@ -19,24 +19,8 @@ pub struct Args {
     pub effects: Vec<String>,
     /// Runs whose robot geometry to use.
     pub robot_from: Vec<PathBuf>,
-    /// Which set.
-    pub set: RunSetArg,
-    /// Distinct commands (greedy).
-    pub runs: usize,
-    /// Repetitions of each.
-    pub repetitions: usize,
-    /// m/s.
-    pub speed_m_s: f64,
-    /// rad/s.
-    pub omega_rad_s: f64,
-    /// s.
-    pub duration_s: f64,
-    /// Hz.
-    pub truth_rate_hz: f64,
-    /// m.
-    pub truth_noise_m: f64,
-    /// rad.
-    pub truth_noise_rad: f64,
+    /// What to plan for: set, runs, speeds, duration, ground-truth rate and noise.
+    pub request: PlanRequest,
     /// CSV output.
     pub out: Option<PathBuf>,
     /// JSON output.
@@ -67,23 +51,9 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         model = model
             .with_effect(EffectKind::from_id(id, model.model.n_wheels()).with_context(|| format!("--effect {id}"))?);
     }
-    let req = PlanRequest {
-        speed_m_s: a.speed_m_s,
-        omega_rad_s: a.omega_rad_s,
-        duration_s: a.duration_s,
-        truth_rate_hz: a.truth_rate_hz,
-        truth_noise_m: a.truth_noise_m,
-        truth_noise_rad: a.truth_noise_rad,
-        runs: a.runs,
-        repetitions: a.repetitions,
-        set: match a.set {
-            RunSetArg::Greedy => RunSet::Greedy,
-            RunSetArg::Flower => RunSet::Flower,
-        },
-        ..PlanRequest::default()
-    };
+    let req = &a.request;
     let sim = SimConfig { design: robot, ..SimConfig::default() };
-    let plan = excitation::plan(&model, &sim, &req)?;
+    let plan = excitation::plan(&model, &sim, req)?;
     // The paper's flower set beside a greedy plan, for comparison.
     let flower = match req.set {
         RunSet::Greedy => Some(excitation::plan(&model, &sim, &PlanRequest { set: RunSet::Flower, ..req.clone() })?),
@@ -97,7 +67,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
-    print_plan(&plan, flower.as_ref(), &req);
+    print_plan(&plan, flower.as_ref(), req);
     if let Some(out) = &a.out {
         println!("plan written to {}", out.display());
     }
