@@ -23,8 +23,11 @@
 //! `geometry` models store `[[wheels]]` (radius_m, distance_m, angle_rad, drive_offset_rad,
 //! roller_angle_rad) and `[[design_wheels]]` instead of the matrices.
 
+use omni_kin::choice::UnknownChoice;
 use omni_kin::effect::Effect;
-use omni_kin::{EffectKind, FittedModel, IkMatrix, Integration, Kinematics, Model, RobotGeometry, Wheel};
+use omni_kin::{
+    EffectKind, FittedModel, IkMatrix, Integration, Kinematics, KinematicsKind, Model, RobotGeometry, Wheel,
+};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -77,7 +80,7 @@ pub struct EffectEntry {
 pub struct ModelFile {
     /// Always [`FORMAT`].
     pub format: String,
-    /// `ik` or `geometry`.
+    /// `ik` or `geometry` ([`KinematicsKind`]).
     pub kinematics: String,
     /// Wheel (joint) names in column order.
     pub wheel_names: Vec<String>,
@@ -145,8 +148,12 @@ impl ModelFile {
         if self.format != FORMAT {
             return Err(format!("format is {:?}, expected {FORMAT:?}", self.format));
         }
-        let (kinematics, mut params) = match self.kinematics.as_str() {
-            "ik" => {
+        let kind: KinematicsKind = self
+            .kinematics
+            .parse()
+            .map_err(|e: UnknownChoice| format!("kinematics = {:?}: expected {}", e.got, e.expected))?;
+        let (kinematics, mut params) = match kind {
+            KinematicsKind::Ik => {
                 let m = self.matrix.as_ref().ok_or("kinematics = \"ik\" needs `matrix`")?;
                 let fitted = IkMatrix::from_rows(m).map_err(|e| format!("matrix: {e}"))?;
                 let design = match &self.design_matrix {
@@ -158,7 +165,7 @@ impl ModelFile {
                 }
                 (Kinematics::Ik { design }, fitted.entries().to_vec())
             }
-            "geometry" => {
+            KinematicsKind::Geometry => {
                 let w = self.wheels.as_ref().ok_or("kinematics = \"geometry\" needs `[[wheels]]`")?;
                 let d = self.design_wheels.clone().unwrap_or_else(|| w.clone());
                 let names = self.wheel_names.clone();
@@ -174,7 +181,6 @@ impl ModelFile {
                 p.extend(fitted.wheels.iter().map(|w| w.angle_rad));
                 (Kinematics::Geometry { design }, p)
             }
-            other => return Err(format!("kinematics = {other:?}: expected \"ik\" or \"geometry\"")),
         };
         let n_wheels = kinematics.n_wheels();
         if self.wheel_names.len() != n_wheels {

@@ -506,16 +506,13 @@ fn compare(
     for r in runs {
         let path = odometry::residuals(&res, r, Selection::Path(every));
         let dpath = odometry::residuals(&dres, r, Selection::Path(every));
-        let rms = |v: &[odometry::Residual]| {
-            (v.iter().map(|e| e.error.norm().powi(2)).sum::<f64>() / v.len().max(1) as f64).sqrt()
-        };
         let end = odometry::end_pose_error(&res, r);
         let dend = odometry::end_pose_error(&dres, r);
         reports.push(RunReport {
             name: r.name().into(),
             command: r.command().map(|c| c.label()),
-            path_rms: rms(&path),
-            design_path_rms: rms(&dpath),
+            path_rms: cost::path_rms(&path),
+            design_path_rms: cost::path_rms(&dpath),
             end_error: end.norm(),
             design_end_error: dend.norm(),
         });

@@ -10,9 +10,10 @@
 //! Runs are evaluated in parallel (rayon) and summed sequentially in run order, so a cost is bit-identical
 //! whatever the thread count.
 
+use crate::choice::Choice;
 use crate::error::KinError;
 use crate::model::{Model, Resolved};
-use crate::odometry::{self, Selection};
+use crate::odometry::{self, Residual, Selection};
 use crate::pose::PoseError;
 use crate::run::Run;
 use rayon::prelude::*;
@@ -34,14 +35,50 @@ pub enum CostKind {
 }
 
 impl CostKind {
+    /// The path cost's default pose step: every ground-truth pose.
+    pub const PATH_EVERY: usize = 1;
+    /// The path cost's default heading weight (as Eq. 6). m/rad.
+    pub const PATH_HEADING_WEIGHT_M_PER_RAD: f64 = 1.0;
     /// The path cost over every pose with heading weight 1 m/rad.
-    pub const PATH: CostKind = CostKind::Path { every: 1, heading_weight_m_per_rad: 1.0 };
+    pub const PATH: CostKind =
+        CostKind::Path { every: Self::PATH_EVERY, heading_weight_m_per_rad: Self::PATH_HEADING_WEIGHT_M_PER_RAD };
+
+    /// Which cost this is, without its settings.
+    pub fn cost_name(&self) -> CostName {
+        match self {
+            CostKind::EndPose => CostName::EndPose,
+            CostKind::Path { .. } => CostName::Path,
+        }
+    }
 
     /// Short name for tables: `end_pose` or `path`.
     pub fn name(&self) -> &'static str {
+        self.cost_name().id()
+    }
+}
+
+/// Which cost, without its settings: what the command line's `--objective` and tables name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CostName {
+    /// [`CostKind::EndPose`].
+    EndPose,
+    /// [`CostKind::Path`].
+    Path,
+}
+
+crate::choice!(CostName, "cost", {
+    EndPose => "end_pose": "The paper's Eq. 6: mean end-pose error (m and rad mixed)",
+    Path => "path": "RMS error over every ground-truth pose (1 m/rad)",
+});
+
+impl CostName {
+    /// The cost with these path settings (the end-pose cost has none): every `every`-th ground-truth
+    /// pose, heading weighted by `heading_weight_m_per_rad` (m/rad).
+    pub fn with_path_settings(self, every: usize, heading_weight_m_per_rad: f64) -> CostKind {
         match self {
-            CostKind::EndPose => "end_pose",
-            CostKind::Path { .. } => "path",
+            CostName::EndPose => CostKind::EndPose,
+            CostName::Path => CostKind::Path { every, heading_weight_m_per_rad },
         }
     }
 }
@@ -70,6 +107,12 @@ pub fn run_path_mse(res: &Resolved<'_>, run: &Run, every: usize, heading_weight:
         })
         .sum();
     sum / r.len().max(1) as f64
+}
+
+/// One run's path RMS from its residuals: `sqrt(mean |e|²)` over the poses, with `|e|² = dx² + dy² + dθ²`
+/// (heading 1 m/rad). m. 0 without residuals. What diagnosis and Python report per run.
+pub fn path_rms(residuals: &[Residual]) -> f64 {
+    (residuals.iter().map(|e| e.error.norm().powi(2)).sum::<f64>() / residuals.len().max(1) as f64).sqrt()
 }
 
 /// The cost of a resolved model over runs.

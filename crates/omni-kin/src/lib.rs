@@ -9,6 +9,7 @@
 //! Units follow ROS REP-103: metres, seconds, radians, rad/s; x forward, y left, yaw counter-clockwise.
 #![deny(missing_docs)]
 
+pub mod choice;
 pub mod cost;
 pub mod effect;
 pub mod error;
@@ -21,12 +22,13 @@ pub mod pose;
 pub mod run;
 pub mod simulate;
 
-pub use cost::CostKind;
+pub use choice::Choice;
+pub use cost::{CostKind, CostName};
 pub use effect::{Effect, EffectKind, ParamSpec, Stage};
 pub use error::KinError;
 pub use geometry::{RobotGeometry, Wheel};
 pub use ik::IkMatrix;
-pub use model::{FittedModel, Integration, Kinematics, Model, Scheme, StepMode};
+pub use model::{FittedModel, Integration, Kinematics, KinematicsKind, Model, Scheme, StepMode};
 pub use odometry::{Selection, Trajectory};
 pub use pose::{Pose2, PoseError, StampedPose, Twist2};
 pub use run::{Command, Run, RunData};

@@ -4,6 +4,7 @@
 //! Parameter names are `m11` … `m3N` (`ik`), `r_a`, `R_a`, `delta_a`, … (`geometry`), and
 //! `<effect id>.<name>` for effects, e.g. `time_offset.tau_s`.
 
+use crate::choice::Choice;
 use crate::effect::{Effect, EffectKind, ParamSpec, Stage};
 use crate::error::KinError;
 use crate::geometry::{RobotGeometry, Wheel, default_wheel_names};
@@ -41,9 +42,14 @@ impl Kinematics {
 
     /// `ik` or `geometry`.
     pub fn id(&self) -> &'static str {
+        self.kind().id()
+    }
+
+    /// Which kind of base kinematics this is.
+    pub fn kind(&self) -> KinematicsKind {
         match self {
-            Self::Ik { .. } => "ik",
-            Self::Geometry { .. } => "geometry",
+            Self::Ik { .. } => KinematicsKind::Ik,
+            Self::Geometry { .. } => KinematicsKind::Geometry,
         }
     }
 
@@ -116,6 +122,36 @@ impl Kinematics {
             Self::Geometry { design } => design.wheel_names.clone(),
             Self::Ik { design } => default_wheel_names(design.n_wheels()),
         }
+    }
+}
+
+/// Which base kinematics a model fits, without its design: what the command line's `--model`, a model
+/// file's `kinematics` and Python's `kinematics=` name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum KinematicsKind {
+    /// [`Kinematics::Ik`].
+    Ik,
+    /// [`Kinematics::Geometry`].
+    Geometry,
+}
+
+crate::choice!(KinematicsKind, "kinematics", default = Ik, {
+    Ik => "ik": "Every entry of the IK matrix (the paper)",
+    Geometry => "geometry": "Wheel radii, distances and angles (the paper's ref. [17])",
+});
+
+impl KinematicsKind {
+    /// The design model of this kind (nominal parameters, no effects, default integration) for `robot`:
+    /// its IK matrix (Eq. 3) or its geometry; without a robot, the paper's APR-02: the Eq. 7 matrix as
+    /// printed, or the APR-02 geometry.
+    pub fn design_model(self, robot: Option<&RobotGeometry>) -> Result<Model, KinError> {
+        Ok(match (self, robot) {
+            (Self::Ik, Some(g)) => Model::ik(g.twist_from_wheels()?),
+            (Self::Ik, None) => Model::ik(IkMatrix::paper_design()),
+            (Self::Geometry, Some(g)) => Model::geometry(g.clone()),
+            (Self::Geometry, None) => Model::geometry(RobotGeometry::apr02()),
+        })
     }
 }
 

@@ -121,8 +121,7 @@ pub fn evaluate(py: Python<'_>, runs: &Bound<'_, PyAny>, model: Option<&Bound<'_
         .iter()
         .zip(per)
         .map(|(r, (residuals, end))| {
-            let n = residuals.len().max(1) as f64;
-            let path_rms = (residuals.iter().map(|e| e.error.norm().powi(2)).sum::<f64>() / n).sqrt();
+            let path_rms = cost::path_rms(&residuals);
             Py::new(py, PyRunResiduals { name: r.name().to_string(), path_rms, residuals, end })
         })
         .collect::<PyResult<_>>()?;

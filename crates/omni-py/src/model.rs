@@ -6,8 +6,9 @@ use crate::effect::{EffectErrors, PyEffect, effect_from, stage_name};
 use crate::errors::{ModelFileError as PyModelFileError, PyResultExt, ToPyErr, value_error};
 use numpy::{PyArray1, PyArray2};
 use omni_cli::model_file::{self, ModelFile, ModelFileError};
+use omni_kin::choice::UnknownChoice;
 use omni_kin::effect::{Effect, ParamSpec};
-use omni_kin::{EffectKind, FittedModel, IkMatrix, Model, RobotGeometry};
+use omni_kin::{EffectKind, FittedModel, IkMatrix, KinematicsKind, Model};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::collections::BTreeMap;
@@ -71,12 +72,8 @@ impl PyModel {
     #[staticmethod]
     #[pyo3(signature = (*, kinematics = "ik"))]
     fn design(kinematics: &str) -> PyResult<Self> {
-        let m = match kinematics {
-            "ik" => FittedModel::paper_design(),
-            "geometry" => FittedModel::nominal(Model::geometry(RobotGeometry::apr02())),
-            other => return Err(value_error(format!("kinematics {other:?}: expected \"ik\" or \"geometry\""))),
-        };
-        Ok(Self::from_fitted(m, Vec::new()))
+        let kind: KinematicsKind = kinematics.parse().map_err(|e: UnknownChoice| value_error(e.to_string()))?;
+        Ok(Self::from_fitted(FittedModel::nominal(kind.design_model(None).py()?), Vec::new()))
     }
 
     /// The paper's calibrated APR-02 matrix (Eq. 9), around the Eq. 7 design.
@@ -274,11 +271,6 @@ pub fn effect_catalogue(py: Python<'_>, n_wheels: usize) -> PyResult<Vec<Bound<'
         out.push(d);
     }
     Ok(out)
-}
-
-/// The design model (same base kinematics and wheels, nominal parameters, no effects) of a model.
-pub fn design_for(model: &FittedModel) -> FittedModel {
-    omni_cli::cmd::diagnose::design_for(model)
 }
 
 /// A model argument: a `Model`, or None for `default`.

@@ -1,11 +1,10 @@
 //! `omnical export`: trajectories for other tools — TUM files for evo, MCAP bags with the calibrated
 //! odometry for Foxglove.
 
-use super::diagnose::design_for;
-use super::{load_runs_with_odometry, resolve_model};
+use super::{DataArgs, load_runs_with_odometry, resolve_model};
 use crate::atomic;
-use crate::cli::DataArgs;
 use crate::dataset::mcap::{WriteOptions, write_run};
+use crate::design::design_for;
 use crate::report::tum;
 use anyhow::Context;
 use omni_kin::odometry::{self, Selection};
@@ -13,17 +12,22 @@ use omni_kin::{FittedModel, Run, StampedPose};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `omnical export`.
-#[derive(Debug)]
+#[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Model file (or `design`).
+    /// Model file (from `train --out`) or `design`.
+    #[arg(long)]
     pub model: String,
-    /// Runs.
+    /// Run files or folders.
+    #[arg(required = true)]
     pub runs: Vec<PathBuf>,
-    /// TUM output folder.
+    /// Write `<run>.gt.tum`, `<run>.design.tum` and `<run>.calibrated.tum` into this folder.
+    #[arg(long, value_name = "DIR")]
     pub tum: Option<PathBuf>,
-    /// MCAP output folder.
+    /// Write one MCAP bag per run into this folder, with the calibrated odometry added.
+    #[arg(long, value_name = "DIR")]
     pub mcap: Option<PathBuf>,
-    /// Wheel joint names for the MCAP output.
+    /// Data options.
+    #[command(flatten)]
     pub data: DataArgs,
 }
 

@@ -9,11 +9,41 @@ pub mod report;
 pub mod simulate;
 pub mod train;
 
-use crate::cli::DataArgs;
 use crate::dataset::{self, Dataset, LoadOptions};
-use anyhow::Context;
-use omni_kin::{FittedModel, IkMatrix, Model};
-use std::path::{Path, PathBuf};
+use omni_kin::FittedModel;
+use std::path::PathBuf;
+
+/// Options shared by commands that read runs.
+#[derive(Debug, clap::Args)]
+pub struct DataArgs {
+    /// Wheel joint names in wheel order (MCAP JointState), comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = dataset::mcap::DEFAULT_WHEEL_JOINTS.join(","))]
+    pub joints: Vec<String>,
+    /// MCAP topic of the wheel JointState (default: the only one).
+    #[arg(long)]
+    pub joints_topic: Option<String>,
+    /// MCAP topic of the ground truth (default: the only map/world-frame pose source).
+    #[arg(long)]
+    pub gt_topic: Option<String>,
+    /// Parent frame of the ground truth in a TF topic (MCAP), e.g. `map`.
+    #[arg(long)]
+    pub gt_parent_frame: Option<String>,
+    /// Child frame of the ground truth in a TF topic (MCAP), e.g. `base_link`.
+    #[arg(long)]
+    pub gt_child_frame: Option<String>,
+    /// Cut MCAP files into runs where the robot stands still at least this long. s.
+    #[arg(long)]
+    pub split: Option<f64>,
+    /// Skip runs that fail to load (they are listed) instead of stopping.
+    #[arg(long)]
+    pub skip_invalid: bool,
+    /// Encoder ticks per wheel revolution, for CSV files with tick columns.
+    #[arg(long)]
+    pub ticks_per_rev: Option<f64>,
+    /// Refuse input files (CSV, MCAP) larger than this; each is read into memory whole. MiB.
+    #[arg(long, value_name = "MIB", default_value_t = dataset::DEFAULT_MAX_FILE_BYTES >> 20)]
+    pub max_file_mb: u64,
+}
 
 /// Load runs from files/folders, printing what was skipped or noticed on stderr. The runs' recorded
 /// odometry is left out (no command but `export` shows it, and it would take as much memory as the wheel
@@ -68,22 +98,7 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
     Ok(ds)
 }
 
-/// The design IK matrix of a dataset: the geometry it declares, else the paper's Eq. 7.
-pub fn design_ik(ds: &Dataset) -> anyhow::Result<IkMatrix> {
-    match &ds.robot {
-        Some(g) => Ok(g.twist_from_wheels()?),
-        None => Ok(IkMatrix::paper_design()),
-    }
-}
-
-/// `design` / `paper` or a model file.
+/// `design` / `paper` or a model file ([`crate::design::resolve`]), for the data's robot.
 pub fn resolve_model(spec: &str, ds: &Dataset) -> anyhow::Result<FittedModel> {
-    match spec {
-        "design" => Ok(match &ds.robot {
-            Some(g) => FittedModel::nominal(Model::geometry(g.clone())),
-            None => FittedModel::paper_design(),
-        }),
-        "paper" => Ok(FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated()))),
-        path => crate::model_file::read(Path::new(path)).context("reading the model"),
-    }
+    crate::design::resolve(spec, ds.robot.as_ref())
 }

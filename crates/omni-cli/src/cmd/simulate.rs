@@ -1,39 +1,57 @@
 //! `omnical simulate`: write a flower-benchmark dataset from a true robot with optional hidden effects.
 
-use crate::cli::Format;
-use crate::{atomic, dataset, model_file};
+use crate::{atomic, dataset, design, model_file};
 use anyhow::{Context, bail};
 use omni_kin::cost::{self, CostKind};
 use omni_kin::effect::Effect;
 use omni_kin::simulate::{SimConfig, simulate};
-use omni_kin::{EffectKind, FittedModel, IkMatrix, Model, Run};
+use omni_kin::{EffectKind, FittedModel, Run};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
 /// ROS time of the simulator's t = 0 in MCAP output (2023-11-14T22:13:20Z). s.
 pub const SIM_EPOCH_S: i64 = 1_700_000_000;
 
+/// Seed of the training split (validation: seed + 1), here and in `demo`.
+pub const DEFAULT_SEED: u64 = 7;
+
+/// Dataset file format for writing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Format {
+    /// omnical CSV, one file per run (docs/formats.md).
+    Csv,
+    /// ROS 2 MCAP bag, one file per run.
+    Mcap,
+}
+
 /// Arguments of `omnical simulate`.
-#[derive(Debug)]
+#[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Output folder.
+    /// Output folder: writes train/, validation/, truth.json and truth_model.toml.
+    #[arg(long)]
     pub out: PathBuf,
-    /// Seed.
+    /// Seed (training uses it, validation seed + 1).
+    #[arg(long, default_value_t = DEFAULT_SEED)]
     pub seed: u64,
-    /// Repetitions per command.
+    /// Repetitions of each of the 36 commands.
+    #[arg(long, default_value_t = SimConfig::default().runs_per_command)]
     pub runs_per_command: usize,
-    /// Command duration. s.
+    /// Duration of each command. s.
+    #[arg(long = "duration", value_name = "DURATION", default_value_t = SimConfig::default().duration_s)]
     pub duration_s: f64,
-    /// `NAME=V1,V2` effect specs.
+    /// Inject an effect into the true robot: NAME=V1,V2,… in the effect's parameter order
+    /// (`sample_timing=DROP_PROBABILITY,JITTER_S`). Repeatable.
+    #[arg(long = "effect", value_name = "NAME=VALUES")]
     pub effects: Vec<String>,
-    /// `paper` or a model file.
+    /// True robot: `paper` (Eq. 9) or a model file.
+    #[arg(long, default_value = "paper")]
     pub truth: String,
     /// Output format.
+    #[arg(long, value_enum, default_value_t = Format::Mcap)]
     pub format: Format,
-    /// No quantisation, no noise.
+    /// No encoder quantisation and no noise.
+    #[arg(long)]
     pub noise_free: bool,
-    /// Less output.
-    pub quiet: bool,
 }
 
 /// Parse `NAME=V1,V2,…` and add the effect to `truth` (or, for `sample_timing`, to the simulator config).
@@ -88,10 +106,10 @@ fn write_split(dir: &Path, runs: &[Run], format: Format, wheel_names: &[String])
     Ok(())
 }
 
-/// Runs `omnical simulate`.
-pub fn run(a: &Args) -> anyhow::Result<()> {
+/// Runs `omnical simulate`; `quiet` hides the progress display.
+pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     let mut truth = match a.truth.as_str() {
-        "paper" => FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated())),
+        "paper" => design::paper_calibrated(),
         path => model_file::read(Path::new(path)).context("reading --truth")?,
     };
     let mut config =
@@ -107,7 +125,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let mut summary = serde_json::Map::new();
     for (split, seed) in [("train", a.seed), ("validation", a.seed.wrapping_add(1))] {
         let cfg = SimConfig { seed, ..config.clone() };
-        let spinner = crate::progress::spinner(format!("simulating and writing {split} runs"), a.quiet);
+        let spinner = crate::progress::spinner(format!("simulating and writing {split} runs"), quiet);
         let runs = simulate(&cfg, &truth, &format!("{split}/"))?;
         write_split(&a.out.join(split), &runs, a.format, &wheel_names)?;
         spinner.finish_and_clear();

@@ -1,0 +1,70 @@
+//! One source of truth at the edges: the library's choices (preset, objective, …) carry the names that
+//! serde, the command line and Python use, and the command line's defaults are the library's.
+
+use clap::{CommandFactory, Parser};
+use omni_cli::cli::{Cli, Command};
+use omni_ga::calibrate::{Preset, Unexcited};
+use omni_ga::diagnose::DiagnoseOptions;
+use omni_ga::excitation::{PlanRequest, RunSet};
+use omni_ga::identify::IdentifyOptions;
+use omni_kin::{Choice, CostKind, CostName, KinematicsKind};
+
+/// Every id parses back, serde writes the same id, and the command line lists the ids (kebab-case) with
+/// their help lines, in the library's order.
+fn check<T: Choice + std::fmt::Debug + serde::Serialize + std::str::FromStr>(cmd: &str, flag: &str)
+where
+    T::Err: std::fmt::Debug,
+{
+    for &v in T::ALL {
+        assert_eq!(serde_json::to_string(&v).unwrap(), format!("{:?}", v.id()), "{v:?}");
+        assert_eq!(v.id().parse::<T>().unwrap(), v);
+        assert_eq!(v.flag_value().parse::<T>().unwrap(), v);
+    }
+    let cli = Cli::command();
+    let arg = cli.find_subcommand(cmd).unwrap().get_arguments().find(|a| a.get_id() == flag).unwrap();
+    let listed: Vec<(String, String)> = arg
+        .get_possible_values()
+        .iter()
+        .map(|p| (p.get_name().to_string(), p.get_help().map(|h| h.to_string()).unwrap_or_default()))
+        .collect();
+    let want: Vec<(String, String)> = T::ALL.iter().map(|v| (v.flag_value(), v.describe().to_string())).collect();
+    assert_eq!(listed, want, "{cmd} --{flag}");
+}
+
+#[test]
+fn choices_have_one_name_everywhere() {
+    check::<Preset>("train", "preset");
+    check::<KinematicsKind>("train", "model");
+    check::<KinematicsKind>("plan", "model");
+    check::<CostName>("train", "objective");
+    check::<Unexcited>("train", "unexcited");
+    check::<RunSet>("plan", "set");
+    assert_eq!(CostName::EndPose.flag_value(), "end-pose");
+    assert_eq!(CostKind::PATH.name(), "path");
+    assert_eq!("fast".parse::<Preset>().unwrap_err().to_string(), r#"preset "fast": expected "default" or "paper""#);
+    assert_eq!(
+        "wheels".parse::<KinematicsKind>().unwrap_err().to_string(),
+        r#"kinematics "wheels": expected "ik" or "geometry""#
+    );
+}
+
+#[test]
+fn command_line_defaults_are_the_library_defaults() {
+    let cli = Cli::try_parse_from(["omnical", "train", "runs/"]).unwrap();
+    let Command::Train(t) = cli.command else { panic!("train") };
+    assert_eq!(t.preset, Preset::default());
+    assert_eq!(t.model, KinematicsKind::default());
+    let id = IdentifyOptions::default();
+    assert_eq!((t.fit.max_std_error, t.fit.min_excitation), (id.max_std_error, id.min_excitation));
+    assert_eq!(t.fit.max_std_error, 0.05);
+    assert_eq!(CostKind::Path { every: t.fit.every, heading_weight_m_per_rad: t.fit.heading_weight }, CostKind::PATH);
+
+    let cli = Cli::try_parse_from(["omnical", "plan"]).unwrap();
+    let Command::Plan(p) = cli.command else { panic!("plan") };
+    let (got, want) = (p.request(), PlanRequest::default());
+    assert_eq!(serde_json::to_value(&got).unwrap(), serde_json::to_value(&want).unwrap());
+
+    let cli = Cli::try_parse_from(["omnical", "diagnose", "--model", "design", "runs/"]).unwrap();
+    let Command::Diagnose(d) = cli.command else { panic!("diagnose") };
+    assert_eq!(d.min_gain, DiagnoseOptions::default().min_gain);
+}
