@@ -66,9 +66,7 @@ fn install_closed_pipe_hook() {
     ONCE.call_once(|| {
         let previous = std::panic::take_hook();
         std::panic::set_hook(Box::new(move |info| {
-            let closed_pipe =
-                info.payload_as_str().is_some_and(|m| m.starts_with(CLOSED_PIPE_PANIC) && m.contains("Broken pipe"));
-            if !closed_pipe {
+            if !is_closed_pipe_panic(info.payload()) {
                 previous(info);
             }
         }));
