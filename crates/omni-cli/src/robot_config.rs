@@ -615,3 +615,23 @@ pub fn summary(c: &RobotConfig, dir: &Path) -> String {
     }
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_are_doubles_that_round_trip() {
+        assert_eq!(num(1.0), "1.0");
+        assert_eq!(num(-0.0854478398400646), "-0.0854478398400646");
+        assert_eq!(num(1e-7), "1e-7");
+        assert_eq!(num(0.1 + 0.2).parse::<f64>().unwrap(), 0.1 + 0.2);
+    }
+
+    #[test]
+    fn wrap_cuts_at_spaces() {
+        assert_eq!(wrap("aa bb cc dd", 5), ["aa bb", "cc dd"]);
+        assert_eq!(wrap("a verylongword b", 4), ["a", "verylongword", "b"]);
+        assert_eq!(wrap("", 10), [""]);
+    }
+}
