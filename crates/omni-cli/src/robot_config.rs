@@ -124,7 +124,10 @@ fn roller_angles(design: &FittedModel) -> Option<Vec<f64>> {
 fn accuracy(fm: &FittedModel, runs: &[Run]) -> anyhow::Result<Accuracy> {
     let res = fm.model.resolve(&fm.params)?;
     let errors = cost::end_pose_errors(&res, runs);
-    Ok(Accuracy { end_pose: cost::mean_end_pose_error(&errors), path_rms: cost::cost_resolved(&res, runs, CostKind::PATH) })
+    Ok(Accuracy {
+        end_pose: cost::mean_end_pose_error(&errors),
+        path_rms: cost::cost_resolved(&res, runs, CostKind::PATH),
+    })
 }
 
 fn effects_of(fm: &FittedModel) -> Vec<EffectSummary> {
@@ -143,11 +146,7 @@ fn effects_of(fm: &FittedModel) -> Vec<EffectSummary> {
 pub fn build(req: &Request<'_>) -> anyhow::Result<RobotConfig> {
     let model = req.model;
     let n = model.model.n_wheels();
-    anyhow::ensure!(
-        req.wheel_names.len() == n,
-        "{} wheel names for a model with {n} wheels",
-        req.wheel_names.len()
-    );
+    anyhow::ensure!(req.wheel_names.len() == n, "{} wheel names for a model with {n} wheels", req.wheel_names.len());
     cost::check_runs(&model.model, req.runs)?;
     let matrix = model.ik()?;
     let kind = match req.controller {
@@ -293,7 +292,8 @@ pub fn odometry_yaml(c: &RobotConfig) -> String {
     let _ = writeln!(s, "    format: \"omnical-odometry/1\"");
     let _ = writeln!(s, "    source_model: {}", quoted(&c.spec));
     let _ = writeln!(s, "    wheel_names: {}", quoted_list(&names));
-    let _ = writeln!(s, "    # row-major 3 × {}: rows vx (m/s), vy (m/s), ω (rad/s) per wheel speed (rad/s)", names.len());
+    let _ =
+        writeln!(s, "    # row-major 3 × {}: rows vx (m/s), vy (m/s), ω (rad/s) per wheel speed (rad/s)", names.len());
     let _ = writeln!(s, "    twist_from_wheels: [");
     for (r, unit) in ["vx, m/s", "vy, m/s", "ω, rad/s"].iter().enumerate() {
         let row: Vec<String> = c.matrix.row(r).iter().map(|v| num(*v)).collect();
@@ -330,7 +330,9 @@ pub fn odometry_header(c: &RobotConfig) -> String {
     let n = c.wheel_names.len();
     let mut s = String::from("/*\n");
     s.push_str(&formula_comment(c, " * "));
-    s.push_str(" * omnical_twist() applies the matrix; omnical_step() is one integration step (omnical's formula).\n */\n");
+    s.push_str(
+        " * omnical_twist() applies the matrix; omnical_step() is one integration step (omnical's formula).\n */\n",
+    );
     s.push_str("#ifndef OMNICAL_ODOMETRY_H\n#define OMNICAL_ODOMETRY_H\n\n#include <math.h>\n\n");
     let _ = writeln!(s, "#define OMNICAL_N_WHEELS {n}\n");
     let names: Vec<String> = c.wheel_names.iter().map(|w| quoted(w)).collect();
@@ -344,7 +346,11 @@ pub fn odometry_header(c: &RobotConfig) -> String {
     }
     s.push_str("};\n\n");
     if let StepMode::Fixed { dt_s: Some(dt) } = c.integration.step {
-        let _ = writeln!(s, "/* The fixed step each wheel sample is integrated over. s. */\n#define OMNICAL_STEP_S {}\n", num(dt));
+        let _ = writeln!(
+            s,
+            "/* The fixed step each wheel sample is integrated over. s. */\n#define OMNICAL_STEP_S {}\n",
+            num(dt)
+        );
     }
     s.push_str(C_FUNCTIONS_TWIST);
     s.push_str(match c.integration.scheme {
@@ -368,7 +374,8 @@ static inline void omnical_twist(const double wheel_rad_s[OMNICAL_N_WHEELS], dou
 
 ";
 
-const C_STEP_EULER: &str = "/* pose = (x m, y m, theta rad) advanced by a twist held for h s: Euler, heading at the step start. */
+const C_STEP_EULER: &str =
+    "/* pose = (x m, y m, theta rad) advanced by a twist held for h s: Euler, heading at the step start. */
 static inline void omnical_step(double pose[3], const double twist[3], double h) {
     const double s = sin(pose[2]), c = cos(pose[2]);
     pose[0] += h * (c * twist[0] - s * twist[1]);
@@ -377,7 +384,8 @@ static inline void omnical_step(double pose[3], const double twist[3], double h)
 }
 ";
 
-const C_STEP_EXACT_ARC: &str = "/* pose = (x m, y m, theta rad) advanced by a twist held for h s: exact arc on SE(2). */
+const C_STEP_EXACT_ARC: &str =
+    "/* pose = (x m, y m, theta rad) advanced by a twist held for h s: exact arc on SE(2). */
 static inline void omnical_step(double pose[3], const double twist[3], double h) {
     const double a = twist[2] * h;
     double ss, cc;
@@ -565,30 +573,58 @@ pub fn controller_yaml(c: &RobotConfig) -> String {
     match c.fit.model.params {
         ControllerParams::DiffDrive { wheel_separation_m, left_wheel_radius_m, right_wheel_radius_m } => {
             let (s0, r0) = match c.design_fit.as_ref().map(|d| d.model.params) {
-                Some(ControllerParams::DiffDrive { wheel_separation_m: s, left_wheel_radius_m: l, right_wheel_radius_m: r }) => {
-                    (s, (l + r) / 2.0)
-                }
+                Some(ControllerParams::DiffDrive {
+                    wheel_separation_m: s,
+                    left_wheel_radius_m: l,
+                    right_wheel_radius_m: r,
+                }) => (s, (l + r) / 2.0),
                 _ => (wheel_separation_m, (left_wheel_radius_m + right_wheel_radius_m) / 2.0),
             };
             let _ = writeln!(s, "    left_wheel_names: [{}]\n    right_wheel_names: [{}]", name(0), name(1));
-            let _ = writeln!(s, "    wheel_separation: {}  # design, m\n    wheel_radius: {}  # design, m", num(s0), num(r0));
-            let _ = writeln!(s, "    wheel_separation_multiplier: {}  # fitted {} m", num(wheel_separation_m / s0), num(wheel_separation_m));
-            let _ = writeln!(s, "    left_wheel_radius_multiplier: {}  # fitted {} m", num(left_wheel_radius_m / r0), num(left_wheel_radius_m));
-            let _ = writeln!(s, "    right_wheel_radius_multiplier: {}  # fitted {} m", num(right_wheel_radius_m / r0), num(right_wheel_radius_m));
+            let _ = writeln!(
+                s,
+                "    wheel_separation: {}  # design, m\n    wheel_radius: {}  # design, m",
+                num(s0),
+                num(r0)
+            );
+            let _ = writeln!(
+                s,
+                "    wheel_separation_multiplier: {}  # fitted {} m",
+                num(wheel_separation_m / s0),
+                num(wheel_separation_m)
+            );
+            let _ = writeln!(
+                s,
+                "    left_wheel_radius_multiplier: {}  # fitted {} m",
+                num(left_wheel_radius_m / r0),
+                num(left_wheel_radius_m)
+            );
+            let _ = writeln!(
+                s,
+                "    right_wheel_radius_multiplier: {}  # fitted {} m",
+                num(right_wheel_radius_m / r0),
+                num(right_wheel_radius_m)
+            );
         }
         ControllerParams::MecanumDrive { wheels_radius_m, lx_plus_ly_m } => {
             for (slot, key) in ["front_left", "front_right", "rear_left", "rear_right"].iter().enumerate() {
                 let _ = writeln!(s, "    {key}_wheel_command_joint_name: {}", name(slot));
             }
             let _ = writeln!(s, "    kinematics:\n      wheels_radius: {}  # m", num(wheels_radius_m));
-            let _ = writeln!(s, "      sum_of_robot_center_projection_on_X_Y_axis: {}  # lx + ly, m", num(lx_plus_ly_m));
+            let _ =
+                writeln!(s, "      sum_of_robot_center_projection_on_X_Y_axis: {}  # lx + ly, m", num(lx_plus_ly_m));
         }
         ControllerParams::OmniWheelDrive { wheel_radius_m, robot_radius_m, wheel_offset_rad } => {
             let names: Vec<String> = (0..c.wheel_names.len()).map(name).collect();
             let _ = writeln!(s, "    wheel_names: [{}]  # anticlockwise from wheel_offset", names.join(", "));
             let offset = omni_kin::pose::wrap_angle(wheel_offset_rad);
             let _ = writeln!(s, "    wheel_offset: {}  # rad ({:.3}°)", num(offset), offset.to_degrees());
-            let _ = writeln!(s, "    robot_radius: {}  # m\n    wheel_radius: {}  # m", num(robot_radius_m), num(wheel_radius_m));
+            let _ = writeln!(
+                s,
+                "    robot_radius: {}  # m\n    wheel_radius: {}  # m",
+                num(robot_radius_m),
+                num(wheel_radius_m)
+            );
         }
     }
     s

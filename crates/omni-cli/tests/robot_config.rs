@@ -231,8 +231,7 @@ fn write_runs(dir: &Path, truth: &FittedModel, names: &[String]) {
     for r in 0..12 {
         let coef: Vec<[f64; 3]> = (0..n).map(|_| [6.0 * next(), 3.0 * next(), 0.5 + next().abs()]).collect();
         let t: Vec<f64> = (0..=600).map(|k| k as f64 * 0.01).collect();
-        let w: Vec<f64> =
-            t.iter().flat_map(|&t| coef.iter().map(move |c| c[0] + c[1] * (c[2] * t).sin())).collect();
+        let w: Vec<f64> = t.iter().flat_map(|&t| coef.iter().map(move |c| c[0] + c[1] * (c[2] * t).sin())).collect();
         let origin = omni_kin::Pose2 { x_m: 0.0, y_m: 0.0, theta_rad: 0.0 };
         let mut data = RunData {
             name: format!("run-{r:02}"),
@@ -281,7 +280,16 @@ fn diff_drive_multipliers_reproduce_a_differential_drive_exactly() {
     write_runs(&dir.join("runs"), &fitted, &names);
     write_model(&dir.join("diff.toml"), &fitted);
     let out = omnical(
-        &["export", "--model", "diff.toml", "--robot-config", "rc", "runs", "--joints", "right_wheel_joint,left_wheel_joint"],
+        &[
+            "export",
+            "--model",
+            "diff.toml",
+            "--robot-config",
+            "rc",
+            "runs",
+            "--joints",
+            "right_wheel_joint,left_wheel_joint",
+        ],
         dir,
     );
     let rc = dir.join("rc");

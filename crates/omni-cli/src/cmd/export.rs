@@ -3,10 +3,10 @@
 
 use super::diagnose::design_for;
 use super::{load_runs_with_odometry, resolve_model};
-use crate::{atomic, robot_config};
 use crate::cli::DataArgs;
 use crate::dataset::mcap::{WriteOptions, write_run};
 use crate::report::tum;
+use crate::{atomic, robot_config};
 use anyhow::Context;
 use omni_kin::odometry::{self, Selection};
 use omni_kin::{FittedModel, Run, StampedPose};
