@@ -354,3 +354,26 @@ fn a_controller_that_cannot_drive_the_base_is_refused() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("mecanum_drive_controller") && err.contains("cannot drive a base with 3 wheels"), "{err}");
 }
+
+#[test]
+fn effects_a_matrix_cannot_carry_are_listed_as_warnings() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    simulate_apr02(dir);
+    let mut fitted = FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated()))
+        .with_effect(omni_kin::EffectKind::from_id("time_offset", 3).unwrap());
+    fitted.set("time_offset.tau_s", 0.04).unwrap();
+    write_model(&dir.join("lag.toml"), &fitted);
+    let out = omnical(&["export", "--model", "lag.toml", "--robot-config", "rc", "sim/validation"], dir);
+    let rc = dir.join("rc");
+    assert_eq!(written_matrix(&rc), IkMatrix::paper_calibrated());
+    let header = std::fs::read_to_string(rc.join("omnical_odometry.h")).unwrap();
+    assert!(header.contains(" * WARNING: the model also has effects a plain matrix cannot carry"), "{header}");
+    assert!(header.contains(" *   - time_offset: tau_s = 0.04 s"), "{header}");
+    let y = yaml(&rc.join("omnical_odometry.yaml"));
+    assert_eq!(strings(&y["/**"]["ros__parameters"]["effects_not_in_matrix"]), ["time_offset: tau_s = 0.04 s"]);
+    // The matrix alone is measured too (the simulated robot has no clock lag, so the lag costs accuracy).
+    let alone = out.lines().find(|l| l.contains("its matrix alone")).unwrap_or_else(|| panic!("{out}"));
+    assert_eq!(alone.split_whitespace().filter_map(|t| t.parse::<f64>().ok()).count(), 2, "{alone}");
+    assert!(out.contains("warning: the controller cannot carry the model's effects (time_offset)."), "{out}");
+}
