@@ -48,7 +48,7 @@ pub fn odometry_poses(model: &FittedModel, run: &Run) -> anyhow::Result<Vec<Stam
 /// Runs `omnical export`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
     if a.tum.is_none() && a.mcap.is_none() && a.robot_config.is_none() {
-        anyhow::bail!("nothing to export: give --tum DIR, --mcap DIR and/or --robot-config DIR");
+        anyhow::bail!("nothing to export: give --tum DIR and/or --mcap DIR (or --robot-config DIR)");
     }
     let ds = load_runs_with_odometry(&a.runs, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
