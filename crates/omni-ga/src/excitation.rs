@@ -37,7 +37,7 @@ pub enum RunSet {
     Greedy,
 }
 
-omni_kin::choice!(RunSet, "run set", default = Greedy, {
+omni_kin::choice!(RunSet, default = Greedy, {
     Greedy => "greedy": "D-optimal greedy pick from a library of commands (several speeds, both turn directions)",
     Flower => "flower": "The paper's 36 flower commands",
 });

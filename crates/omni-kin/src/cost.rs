@@ -10,7 +10,6 @@
 //! Runs are evaluated in parallel (rayon) and summed sequentially in run order, so a cost is bit-identical
 //! whatever the thread count.
 
-use crate::choice::Choice;
 use crate::error::KinError;
 use crate::model::{Model, Resolved};
 use crate::odometry::{self, Residual, Selection};
@@ -67,7 +66,7 @@ pub enum CostName {
     Path,
 }
 
-crate::choice!(CostName, "cost", {
+crate::choice!(CostName, {
     EndPose => "end_pose": "The paper's Eq. 6: mean end-pose error (m and rad mixed)",
     Path => "path": "RMS error over every ground-truth pose (1 m/rad)",
 });

@@ -10,12 +10,14 @@
 #![deny(missing_docs)]
 
 pub mod choice;
+pub mod controller;
 pub mod cost;
 pub mod effect;
 pub mod error;
 pub mod fast;
 pub mod geometry;
 pub mod ik;
+pub mod kinematics;
 pub mod model;
 pub mod odometry;
 pub mod pose;
@@ -28,7 +30,8 @@ pub use effect::{Effect, EffectKind, ParamSpec, Stage};
 pub use error::KinError;
 pub use geometry::{RobotGeometry, Wheel};
 pub use ik::IkMatrix;
-pub use model::{FittedModel, Integration, Kinematics, KinematicsKind, Model, Scheme, StepMode};
+pub use kinematics::{BaseKinematics, BaseRecord, KinematicsKind, UnexcitedBase};
+pub use model::{FittedModel, Integration, Kinematics, Model, Scheme, StepMode};
 pub use odometry::{Selection, Trajectory};
 pub use pose::{Pose2, PoseError, StampedPose, Twist2};
 pub use run::{Command, Run, RunData};

@@ -226,7 +226,7 @@ pub fn train(
     seed: u64,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<PyCalibration> {
-    let preset: Preset = preset.parse().map_err(|e: UnknownChoice| value_error(e.to_string()))?;
+    let preset: Preset = preset.parse().map_err(|e: UnknownChoice| value_error(format!("preset {e}")))?;
     let (runs, design) = runs_from(runs, "runs")?;
     let (mut start, mut adapters) = model_or(model, || design.unwrap_or_else(FittedModel::paper_design))?;
     for e in &effects {

@@ -6,7 +6,6 @@ use crate::effect::{EffectErrors, PyEffect, effect_from, stage_name};
 use crate::errors::{ModelFileError as PyModelFileError, PyResultExt, ToPyErr, value_error};
 use numpy::{PyArray1, PyArray2};
 use omni_cli::model_file::{self, ModelFile, ModelFileError};
-use omni_kin::choice::UnknownChoice;
 use omni_kin::effect::{Effect, ParamSpec};
 use omni_kin::{EffectKind, FittedModel, IkMatrix, KinematicsKind, Model};
 use pyo3::prelude::*;
@@ -72,8 +71,9 @@ impl PyModel {
     #[staticmethod]
     #[pyo3(signature = (*, kinematics = "ik"))]
     fn design(kinematics: &str) -> PyResult<Self> {
-        let kind: KinematicsKind = kinematics.parse().map_err(|e: UnknownChoice| value_error(e.to_string()))?;
-        Ok(Self::from_fitted(FittedModel::nominal(kind.design_model(None).py()?), Vec::new()))
+        let kind: KinematicsKind = kinematics.parse().map_err(|e| value_error(format!("kinematics {e}")))?;
+        let m = FittedModel::nominal(Model::design(kind, None).py()?);
+        Ok(Self::from_fitted(m, Vec::new()))
     }
 
     /// The paper's calibrated APR-02 matrix (Eq. 9), around the Eq. 7 design.
@@ -121,7 +121,7 @@ impl PyModel {
     #[getter]
     fn design_matrix<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let nominal = self.inner.model.nominal();
-        let m = self.inner.model.kinematics.ik(&nominal[..self.inner.model.n_base()]).py()?;
+        let m = self.inner.model.kinematics.twist_from_wheels(&nominal[..self.inner.model.n_base()]).py()?;
         to_matrix(py, 3, m.n_wheels(), m.entries().to_vec())
     }
     /// Effect ids, in pipeline order.

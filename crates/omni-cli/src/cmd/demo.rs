@@ -11,7 +11,7 @@ use anyhow::Context;
 use omni_ga::calibrate::{Plan, Preset, calibrate};
 use omni_ga::diagnose::{DiagnoseOptions, diagnose};
 use omni_kin::simulate::{SimConfig, simulate};
-use omni_kin::{Choice, FittedModel, IkMatrix, Model};
+use omni_kin::{FittedModel, IkMatrix, Model};
 use std::path::PathBuf;
 
 /// Arguments of `omnical demo`.

@@ -2,10 +2,10 @@
 //! odometry for Foxglove.
 
 use super::{DataArgs, load_runs_with_odometry, resolve_model};
-use crate::atomic;
 use crate::dataset::mcap::{WriteOptions, write_run};
 use crate::design::design_for;
 use crate::report::tum;
+use crate::{atomic, robot_config};
 use anyhow::Context;
 use omni_kin::odometry::{self, Selection};
 use omni_kin::{FittedModel, Run, StampedPose};
@@ -26,6 +26,16 @@ pub struct Args {
     /// Write one MCAP bag per run into this folder, with the calibrated odometry added.
     #[arg(long, value_name = "DIR")]
     pub mcap: Option<PathBuf>,
+    /// Write the calibration for the robot into this folder: the matrix as ROS 2 parameters
+    /// (omnical_odometry.yaml) and as a C header (omnical_odometry.h), and the parameters of the
+    /// matching ros2_controllers drive controller (ros2_controllers.yaml) from the nearest parametric fit,
+    /// with the accuracy it gives up on the runs (docs/applying.md).
+    #[arg(long, value_name = "DIR")]
+    pub robot_config: Option<PathBuf>,
+    /// Drive controller for --robot-config: diff_drive_controller, mecanum_drive_controller or
+    /// omni_wheel_drive_controller (default: the one that matches the base).
+    #[arg(long, value_name = "NAME")]
+    pub controller: Option<omni_kin::controller::ControllerKind>,
     /// Data options.
     #[command(flatten)]
     pub data: DataArgs,
@@ -47,8 +57,8 @@ pub fn odometry_poses(model: &FittedModel, run: &Run) -> anyhow::Result<Vec<Stam
 
 /// Runs `omnical export`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
-    if a.tum.is_none() && a.mcap.is_none() {
-        anyhow::bail!("nothing to export: give --tum DIR and/or --mcap DIR");
+    if a.tum.is_none() && a.mcap.is_none() && a.robot_config.is_none() {
+        anyhow::bail!("nothing to export: give --tum DIR and/or --mcap DIR (or --robot-config DIR)");
     }
     let ds = load_runs_with_odometry(&a.runs, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
@@ -86,7 +96,31 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             dir.display()
         );
     }
+    if let Some(dir) = &a.robot_config {
+        let request = robot_config::Request {
+            model: &model,
+            design: &design,
+            spec: &a.model,
+            runs: &ds.runs,
+            wheel_names: joint_names(&model, &a.data.joints),
+            controller: a.controller,
+        };
+        let config = robot_config::build(&request)?;
+        robot_config::write(dir, &config)?;
+        print!("{}", robot_config::summary(&config, dir));
+    }
     Ok(())
+}
+
+/// Joint names in the model's column order: the model's own, or `--joints` when the model only has the
+/// default names `wheel_a`, `wheel_b`, ….
+fn joint_names(model: &FittedModel, joints: &[String]) -> Vec<String> {
+    let names = model.model.kinematics.wheel_names();
+    if names == omni_kin::geometry::default_wheel_names(names.len()) && joints.len() == names.len() {
+        joints.to_vec()
+    } else {
+        names
+    }
 }
 
 fn write_tum(dir: &Path, run: &Run, design: &FittedModel, model: &FittedModel, spec: &str) -> anyhow::Result<()> {

@@ -6,7 +6,7 @@ use crate::cli::choice;
 use anyhow::Context;
 use omni_ga::excitation::{self, PlanRequest, RunPlan, RunSet};
 use omni_kin::simulate::SimConfig;
-use omni_kin::{EffectKind, FittedModel, KinematicsKind, RobotGeometry};
+use omni_kin::{EffectKind, FittedModel, KinematicsKind, Model, RobotGeometry};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -92,7 +92,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             )
         })?
     };
-    let mut model = FittedModel::nominal(a.model.design_model(Some(&robot))?);
+    let mut model = FittedModel::nominal(Model::design(a.model, Some(&robot))?);
     for id in &a.effects {
         model = model
             .with_effect(EffectKind::from_id(id, model.model.n_wheels()).with_context(|| format!("--effect {id}"))?);

@@ -7,7 +7,7 @@ use anyhow::Context;
 use omni_ga::calibrate::{Calibration, Plan, Preset, Unexcited, calibrate};
 use omni_ga::identify::IdentifyOptions;
 use omni_kin::cost::{CostKind, CostName};
-use omni_kin::{Choice, EffectKind, FittedModel, KinematicsKind};
+use omni_kin::{EffectKind, FittedModel, KinematicsKind, Model};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -164,7 +164,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     }
     let mut start = match &a.start {
         Some(p) => model_file::read(p).context("reading --start")?,
-        None => FittedModel::nominal(a.model.design_model(ds.robot.as_ref())?),
+        None => FittedModel::nominal(Model::design(a.model, ds.robot.as_ref())?),
     };
     for id in &a.effects {
         start = start
@@ -233,9 +233,11 @@ pub fn print_summary(c: &Calibration, preset: &str, runs: usize) {
     }
     let nb = c.fitted.model.n_base();
     let specs = c.fitted.model.params();
-    if matches!(c.fitted.model.kinematics, omni_kin::Kinematics::Geometry { .. }) || specs.len() > nb {
+    // The matrix above shows base parameters that are its entries; print the others.
+    let base_shown = c.fitted.model.kinematics.params_are_ik_entries();
+    if !base_shown || specs.len() > nb {
         for (i, s) in specs.iter().enumerate() {
-            if i >= nb || matches!(c.fitted.model.kinematics, omni_kin::Kinematics::Geometry { .. }) {
+            if i >= nb || !base_shown {
                 println!("  {:<28} {:>14.6} {}", s.name, c.fitted.params[i], s.unit);
             }
         }
