@@ -41,11 +41,10 @@ fn choices_have_one_name_everywhere() {
     check::<RunSet>("plan", "set");
     assert_eq!(CostName::EndPose.flag_value(), "end-pose");
     assert_eq!(CostKind::PATH.name(), "path");
-    assert_eq!("fast".parse::<Preset>().unwrap_err().to_string(), r#"preset "fast": expected "default" or "paper""#);
-    assert_eq!(
-        "wheels".parse::<KinematicsKind>().unwrap_err().to_string(),
-        r#"kinematics "wheels": expected "ik" or "geometry""#
-    );
+    // Messages list the default first; callers say what was chosen (`preset "fast": …`).
+    assert_eq!("fast".parse::<Preset>().unwrap_err().to_string(), r#""fast": expected "default" or "paper""#);
+    assert_eq!("x".parse::<RunSet>().unwrap_err().to_string(), r#""x": expected "greedy" or "flower""#);
+    assert_eq!("wheels".parse::<KinematicsKind>().unwrap_err().to_string(), r#""wheels": expected "ik" or "geometry""#);
 }
 
 #[test]
