@@ -185,18 +185,22 @@ impl RobotGeometry {
         DMatrix::from_fn(n, 3, |i, j| self.wheels[i].wheel_from_twist_row()[j])
     }
 
-    /// The IK matrix (3 × N, Eq. 3): body twist from wheel speeds. The exact inverse for three wheels, the
-    /// least-squares inverse for more.
+    /// The IK matrix (3 × N, Eq. 3): body twist from wheel speeds. The exact inverse for three wheels; for
+    /// more, the least-squares inverse in rim speeds (`G = diag(r) F`, rim speed m/s per twist:
+    /// `M = (GᵀG)⁻¹ Gᵀ diag(r)`), which weighs every wheel's arc length alike whatever its radius, as
+    /// OptiOdom's and the textbook mecanum models do (with equal radii it is `F`'s own least-squares inverse).
     pub fn twist_from_wheels(&self) -> Result<IkMatrix, KinError> {
         self.validate()?;
         let m = self.wheels_from_twist();
         let inv = if m.nrows() == 3 {
             m.try_inverse().ok_or(KinError::Singular { wheels: 3, rank: 2 })?
         } else {
-            let mt = m.transpose();
-            let normal = &mt * &m;
+            let radii = nalgebra::DVector::from_iterator(self.wheels.len(), self.wheels.iter().map(|w| w.radius_m));
+            let rim = DMatrix::from_diagonal(&radii) * &m;
+            let rt = rim.transpose();
+            let normal = &rt * &rim;
             let normal_inv = normal.try_inverse().ok_or(KinError::Singular { wheels: self.wheels.len(), rank: 2 })?;
-            normal_inv * mt
+            normal_inv * rt * DMatrix::from_diagonal(&radii)
         };
         let n = self.wheels.len();
         let mut entries = Vec::with_capacity(3 * n);
