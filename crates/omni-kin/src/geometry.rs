@@ -19,6 +19,12 @@ use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::FRAC_PI_2;
 
+/// Dimensions of a planar twist (vx, vy, ω): the rank an omnidirectional base's forward kinematics needs.
+pub const PLANAR_TWIST_DIMENSIONS: usize = 3;
+
+/// Singular values of the forward kinematics at or below this count as zero in [`RobotGeometry::rank`].
+const RANK_TOLERANCE: f64 = 1e-9;
+
 /// One wheel of the robot.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Wheel {
@@ -158,8 +164,22 @@ impl RobotGeometry {
         self.wheels.len()
     }
 
-    /// Checks every wheel, the names and that the wheels span every planar twist.
+    /// Checks every wheel, the names and that the wheels span every planar twist (rank
+    /// [`PLANAR_TWIST_DIMENSIONS`]): what an omnidirectional base needs.
     pub fn validate(&self) -> Result<(), KinError> {
+        self.validate_for(PLANAR_TWIST_DIMENSIONS)
+    }
+
+    /// Numerical rank of the forward kinematics [`Self::wheels_from_twist`] (singular values above
+    /// `1e-9`): how many independent twist directions the wheels drive (3 for an omnidirectional base, 2
+    /// for a differential drive).
+    pub fn rank(&self) -> usize {
+        self.wheels_from_twist().rank(RANK_TOLERANCE)
+    }
+
+    /// Checks every wheel, the names and that the wheels drive at least `needed` independent twist
+    /// directions ([`Self::rank`]); a base type states what it needs (3: every planar twist).
+    pub fn validate_for(&self, needed: usize) -> Result<(), KinError> {
         if self.wheel_names.len() != self.wheels.len() {
             return Err(KinError::Shape {
                 what: "wheel_names".into(),
@@ -170,10 +190,9 @@ impl RobotGeometry {
         for (i, w) in self.wheels.iter().enumerate() {
             w.validate(i)?;
         }
-        let m = self.wheels_from_twist();
-        let rank = m.rank(1e-9);
-        if rank < 3 {
-            return Err(KinError::Singular { wheels: self.wheels.len(), rank });
+        let rank = self.rank();
+        if rank < needed {
+            return Err(KinError::Singular { wheels: self.wheels.len(), rank, needed });
         }
         Ok(())
     }
@@ -188,19 +207,31 @@ impl RobotGeometry {
     /// The IK matrix (3 × N, Eq. 3): body twist from wheel speeds. The exact inverse for three wheels; for
     /// more, the least-squares inverse in rim speeds (`G = diag(r) F`, rim speed m/s per twist:
     /// `M = (GᵀG)⁻¹ Gᵀ diag(r)`), which weighs every wheel's arc length alike whatever its radius, as
-    /// OptiOdom's and the textbook mecanum models do (with equal radii it is `F`'s own least-squares inverse).
+    /// OptiOdom's and the textbook mecanum models do (with equal radii it is `F`'s own least-squares
+    /// inverse). Two wheels (a differential drive) drive two twist directions (rank 2 is enough): the
+    /// minimum-norm inverse `M = Gᵀ (G Gᵀ)⁻¹ diag(r)`, which on an axle along y has a zero `vy` row.
     pub fn twist_from_wheels(&self) -> Result<IkMatrix, KinError> {
-        self.validate()?;
+        let n = self.wheels.len();
+        let needed = if n == 2 { 2 } else { PLANAR_TWIST_DIMENSIONS };
+        self.validate_for(needed)?;
         let m = self.wheels_from_twist();
-        let inv = if m.nrows() == 3 {
-            m.try_inverse().ok_or(KinError::Singular { wheels: 3, rank: 2 })?
+        // The (pseudo-)inverse exists once the rank is enough; were it lost to rounding, say so as a rank
+        // one short.
+        let lost = KinError::Singular { wheels: n, rank: needed - 1, needed };
+        let inv = if n == 3 {
+            m.try_inverse().ok_or(lost)?
         } else {
-            let radii = nalgebra::DVector::from_iterator(self.wheels.len(), self.wheels.iter().map(|w| w.radius_m));
-            let rim = DMatrix::from_diagonal(&radii) * &m;
+            let radii =
+                DMatrix::from_diagonal(&nalgebra::DVector::from_iterator(n, self.wheels.iter().map(|w| w.radius_m)));
+            let rim = &radii * &m;
             let rt = rim.transpose();
-            let normal = &rt * &rim;
-            let normal_inv = normal.try_inverse().ok_or(KinError::Singular { wheels: self.wheels.len(), rank: 2 })?;
-            normal_inv * rt * DMatrix::from_diagonal(&radii)
+            if n == 2 {
+                let gram_inv = (&rim * &rt).try_inverse().ok_or(lost)?;
+                rt * gram_inv * radii
+            } else {
+                let normal_inv = (&rt * &rim).try_inverse().ok_or(lost)?;
+                normal_inv * rt * radii
+            }
         };
         let n = self.wheels.len();
         let mut entries = Vec::with_capacity(3 * n);
