@@ -36,6 +36,10 @@ pub enum ModelKind {
     Ik,
     /// Wheel radii, distances and angles (the paper's ref. \[17\]).
     Geometry,
+    /// A differential drive: both wheel radii and the separation.
+    Diff,
+    /// Four wheels on a rectangle (mecanum, omni X): per-wheel radius and the half-extents.
+    Mecanum,
 }
 
 impl From<ModelKind> for omni_kin::KinematicsKind {
@@ -43,6 +47,8 @@ impl From<ModelKind> for omni_kin::KinematicsKind {
         match k {
             ModelKind::Ik => Self::Ik,
             ModelKind::Geometry => Self::Geometry,
+            ModelKind::Diff => Self::Diff,
+            ModelKind::Mecanum => Self::Mecanum,
         }
     }
 }

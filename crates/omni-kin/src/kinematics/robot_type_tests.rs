@@ -7,8 +7,14 @@ use approx::assert_relative_eq;
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 
 /// A differential drive as robot.toml describes one: left wheel first, at +y.
-fn diff_left_first(r_left: f64, r_right: f64, b: f64) -> RobotGeometry {
-    let wheel = |r, angle, offset| Wheel { radius_m: r, distance_m: b / 2.0, angle_rad: angle, drive_offset_rad: offset, roller_angle_rad: 0.0 };
+pub(super) fn diff_left_first(r_left: f64, r_right: f64, b: f64) -> RobotGeometry {
+    let wheel = |r, angle, offset| Wheel {
+        radius_m: r,
+        distance_m: b / 2.0,
+        angle_rad: angle,
+        drive_offset_rad: offset,
+        roller_angle_rad: 0.0,
+    };
     RobotGeometry {
         wheel_names: vec!["left".into(), "right".into()],
         wheels: vec![wheel(r_left, FRAC_PI_2, PI), wheel(r_right, -FRAC_PI_2, 0.0)],
@@ -136,7 +142,12 @@ fn derivatives_are_exact() {
             let (ma, mb) = (k.twist_from_wheels(&a).unwrap(), k.twist_from_wheels(&b).unwrap());
             for (r, (x, y)) in ma.entries().iter().zip(mb.entries()).enumerate() {
                 let fd = (x - y) / (2.0 * h);
-                assert!((j[(r, c)] - fd).abs() <= 1e-7 * j.abs().max(), "{} d{r}/d{c}: {} vs {fd}", k.noun(), j[(r, c)]);
+                assert!(
+                    (j[(r, c)] - fd).abs() <= 1e-7 * j.abs().max(),
+                    "{} d{r}/d{c}: {} vs {fd}",
+                    k.noun(),
+                    j[(r, c)]
+                );
             }
         }
     }
@@ -168,4 +179,33 @@ fn records_round_trip_and_refuse_tampered_wheels() {
             format!("kinematics = \"{}\" needs `[[wheels]]`", k.id())
         );
     }
+}
+
+#[test]
+fn a_zero_design_row_is_held_at_zero_by_the_matrix_model() {
+    let design = DiffKinematics::new(diff_left_first(0.041, 0.043, 0.21)).unwrap();
+    let d: Vec<f64> = design.params().iter().map(|s| s.null).collect();
+    let k = Kinematics::Ik(MatrixKinematics { design: design.twist_from_wheels(&d).unwrap() });
+    let names: Vec<String> = k.params().into_iter().map(|s| s.name).collect();
+    assert_eq!(names, ["m11", "m12", "m31", "m32"], "no vy-row parameters");
+    assert!(!k.params_are_ik_entries());
+    let p = [0.02, 0.0215, -0.19, 0.2];
+    let m = k.twist_from_wheels(&p).unwrap();
+    assert_eq!(m.entries(), [0.02, 0.0215, 0.0, 0.0, -0.19, 0.2]);
+    let j = k.twist_from_wheels_jacobian(&p).unwrap();
+    assert_eq!((j.nrows(), j.ncols(), j.sum()), (6, 4, 4.0));
+    assert_eq!(j[(4, 2)], 1.0);
+    assert!(k.twist_from_wheels(&[0.0; 6]).is_err(), "a full-length vector is refused");
+    // Model files: the matrix as a whole; a non-zero entry in a zero design row is refused.
+    let rec = k.record(&p).unwrap();
+    assert_eq!(rec.matrix.as_ref().unwrap()[1], [0.0, 0.0]);
+    let (back, q) = Kinematics::from_record(KinematicsKind::Ik, &rec).unwrap();
+    assert_eq!((back, q), (k, p.to_vec()));
+    let mut bad = rec;
+    bad.matrix.as_mut().unwrap()[1][1] = 1e-3;
+    assert_eq!(
+        Kinematics::from_record(KinematicsKind::Ik, &bad).unwrap_err().to_string(),
+        "matrix: entry m22: 0.001 is not zero, but its row is zero throughout design_matrix (a motion \
+         the base cannot make)"
+    );
 }
