@@ -227,7 +227,13 @@ impl RobotGeometry {
             let rt = rim.transpose();
             if n == 2 {
                 let gram_inv = (&rim * &rt).try_inverse().ok_or(lost)?;
-                rt * gram_inv * radii
+                let mut inv = rt * gram_inv * radii;
+                // An axle along y cannot push sideways: its vy row is zero, exactly (not sin π's rounding),
+                // so that models see a structural zero.
+                if m.column(1).amax() <= 1e-12 * m.amax() {
+                    inv.row_mut(1).fill(0.0);
+                }
+                inv
             } else {
                 let normal_inv = (&rt * &rim).try_inverse().ok_or(lost)?;
                 normal_inv * rt * radii

@@ -72,6 +72,10 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
 pub fn resolve_model(spec: &str, ds: &Dataset) -> anyhow::Result<FittedModel> {
     match spec {
         "design" => Ok(match &ds.robot {
+            // A two-wheel base (OptiOdom's diff) has no omnidirectional geometry model: its own.
+            Some(g) if g.n_wheels() == 2 => {
+                FittedModel::nominal(Model::design(omni_kin::KinematicsKind::Diff, Some(g))?)
+            }
             Some(g) => FittedModel::nominal(Model::geometry(g.clone())),
             None => FittedModel::paper_design(),
         }),
