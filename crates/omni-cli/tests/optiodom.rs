@@ -374,3 +374,71 @@ fn omni4_mecanum_model_finds_radii_and_lx_plus_ly() {
     let text = held[0].as_str().unwrap();
     assert!(text.starts_with("lx and ly trade off") || text.starts_with("ly and lx trade off"), "{text}");
 }
+
+/// The shared OptiOdom folder of a robot type, if this machine has it (CI does not).
+fn shared(kind: &str) -> Option<std::path::PathBuf> {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../../../shared/data/optiodom-{kind}-square"));
+    if p.exists() {
+        Some(p)
+    } else {
+        eprintln!("SKIPPED: ../shared/data/optiodom-{kind}-square not found");
+        None
+    }
+}
+
+fn eval_cost(dir: &Path, model: &str, sets: &[&Path]) -> (f64, f64) {
+    let mut args = vec!["eval", "--model", model, "--json"];
+    args.extend(sets.iter().map(|p| p.to_str().unwrap()));
+    let out = omnical(&args, dir);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let e: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    (e["cost"].as_f64().unwrap(), e["path_cost"].as_f64().unwrap())
+}
+
+/// The real four-wheel robot (docs/real-robots.md): the design's Eq. 6 on set 080920201715, the fitted
+/// matrix on it and on the other set, and identifiability's finding: the runs hardly contain the wheels
+/// fighting each other, so the three matrix directions along that pattern are held at the design.
+#[test]
+fn real_omni4_runs_hold_the_fighting_pattern() {
+    let Some(data) = shared("omni4") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let (train_set, other) = (data.join("080920201715"), data.join("231220200521"));
+    let s = train(dir.path(), &[train_set.to_str().unwrap(), "--model", "ik", "--out", "ik.toml"]);
+    // Measured: design 0.39375, fitted 0.04480 (Eq. 6), 3 directions held.
+    assert!((s["cost_design"].as_f64().unwrap() - 0.39375).abs() < 1e-4, "{}", s["cost_design"]);
+    assert!(s["cost_fitted"].as_f64().unwrap() < 0.05, "{}", s["cost_fitted"]);
+    let weak = s["identifiability"]["weak"].as_array().unwrap();
+    assert_eq!(s["held_at_start"].as_array().unwrap().len(), 3, "{}", s["warnings"]);
+    for w in weak {
+        let u: Vec<f64> = w["wheel_pattern"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+        let want = [0.5, -0.5, -0.5, 0.5].map(|v| v * u[0].signum());
+        assert!(u.iter().zip(want).all(|(a, b)| (a - b).abs() < 0.05), "{u:?}");
+        assert!(w["text"].as_str().unwrap().contains("moves the robot nowhere"), "{}", w["text"]);
+    }
+    // Held out: the other set (another declared geometry, longer runs). Measured 0.1127 vs design 0.9840.
+    let (held_out, _) = eval_cost(dir.path(), "ik.toml", &[&other]);
+    let (design, _) = eval_cost(dir.path(), "design", &[&other]);
+    assert!(held_out < 0.2 * design, "held-out {held_out} vs design {design}");
+}
+
+/// The real differential drive: `--model diff` on one set finds a separation near 0.2007 m and radii
+/// near 41.9 mm, and beats the design on the three other sets.
+#[test]
+fn real_diff_runs_fit_the_axle() {
+    let Some(data) = shared("diff") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let sets: Vec<std::path::PathBuf> =
+        ["230620202042", "230620202144", "231220200029", "231220200040"].iter().map(|s| data.join(s)).collect();
+    let s = train(dir.path(), &[sets[0].to_str().unwrap(), "--model", "diff", "--out", "diff.toml"]);
+    // Measured: b 0.200672 m, r_right 0.041891 m, r_left 0.041925 m; Eq. 6 0.04623 → 0.00835.
+    assert!((param(&s, "b") - 0.2007).abs() < 5e-4, "{}", param(&s, "b"));
+    for r in ["r_right", "r_left"] {
+        assert!((param(&s, r) - 0.0419).abs() < 2e-4, "{r} {}", param(&s, r));
+    }
+    assert!(s["cost_fitted"].as_f64().unwrap() < 0.25 * s["cost_design"].as_f64().unwrap());
+    for other in &sets[1..] {
+        let (fitted, _) = eval_cost(dir.path(), "diff.toml", &[other]);
+        let (design, _) = eval_cost(dir.path(), "design", &[other]);
+        assert!(fitted < 0.7 * design, "{}: fitted {fitted} vs design {design}", other.display());
+    }
+}
