@@ -18,6 +18,7 @@ pub mod ik;
 pub mod model;
 pub mod odometry;
 pub mod pose;
+pub mod robot;
 pub mod run;
 pub mod simulate;
 
@@ -29,4 +30,5 @@ pub use ik::IkMatrix;
 pub use model::{FittedModel, Integration, Kinematics, Model, Scheme, StepMode};
 pub use odometry::{Selection, Trajectory};
 pub use pose::{Pose2, PoseError, StampedPose, Twist2};
+pub use robot::{BaseKind, RobotDescription};
 pub use run::{Command, Run, RunData};
