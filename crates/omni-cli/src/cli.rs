@@ -100,12 +100,25 @@ pub enum RunSetArg {
     Flower,
 }
 
+/// The robot the data was recorded on (docs/formats.md, "Robot description").
+#[derive(Debug, Default, clap::Args)]
+pub struct RobotArgs {
+    /// The robot description: a robot.toml file, or `apr02` for the paper's robot. Default: a robot.toml
+    /// beside the data (the first RUNS argument's folder) or in the working directory.
+    #[arg(long, value_name = "FILE|apr02")]
+    pub robot: Option<String>,
+}
+
 /// Options shared by commands that read runs.
 #[derive(Debug, clap::Args)]
 pub struct DataArgs {
-    /// Wheel joint names in wheel order (MCAP JointState), comma-separated.
-    #[arg(long, value_delimiter = ',', default_value = "wheel_a,wheel_b,wheel_c")]
-    pub joints: Vec<String>,
+    /// The robot description (design geometry, joint names, topics).
+    #[command(flatten)]
+    pub robot: RobotArgs,
+    /// Wheel joint names in wheel order (MCAP JointState), comma-separated. Default: the robot
+    /// description's joints, else wheel_a,wheel_b,wheel_c.
+    #[arg(long, value_delimiter = ',')]
+    pub joints: Option<Vec<String>>,
     /// MCAP topic of the wheel JointState (default: the only one).
     #[arg(long)]
     pub joints_topic: Option<String>,
@@ -153,9 +166,13 @@ pub enum Command {
         /// (`sample_timing=DROP_PROBABILITY,JITTER_S`). Repeatable.
         #[arg(long = "effect", value_name = "NAME=VALUES")]
         effects: Vec<String>,
-        /// True robot: `paper` (Eq. 9) or a model file.
+        /// True robot: `paper` (Eq. 9, APR-02 only), `design` (the robot's design) or a model file.
         #[arg(long, default_value = "paper")]
         truth: String,
+        /// The robot: its design drives the simulated controller and is written as robot.toml beside the
+        /// runs. Default: `apr02`, the paper's robot.
+        #[arg(long, value_name = "FILE|apr02", default_value = crate::robot_file::BUILTIN_APR02)]
+        robot: String,
         /// Output format.
         #[arg(long, value_enum, default_value_t = Format::Mcap)]
         format: Format,
@@ -295,7 +312,7 @@ pub enum Command {
         /// Effects to plan for (catalogue ids). Repeatable.
         #[arg(long = "effect", value_name = "NAME")]
         effects: Vec<String>,
-        /// Take the robot's geometry from these runs (default: APR-02, the paper's robot).
+        /// Take the robot's geometry from these runs (OptiOdom metadata), when there is no --robot.
         #[arg(long = "robot-from", value_name = "RUNS", num_args = 1..)]
         robot_from: Vec<PathBuf>,
         /// Which set: a D-optimal pick from a library of commands, or the paper's 36 flower commands.
@@ -356,7 +373,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         rayon::ThreadPoolBuilder::new().num_threads(n).build_global()?;
     }
     match cli.command {
-        Command::Simulate { out, seed, runs_per_command, duration, effects, truth, format, noise_free } => {
+        Command::Simulate { out, seed, runs_per_command, duration, effects, truth, robot, format, noise_free } => {
             cmd::simulate::run(&cmd::simulate::Args {
                 out,
                 seed,
@@ -364,6 +381,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 duration_s: duration,
                 effects,
                 truth,
+                robot,
                 format,
                 noise_free,
                 quiet: cli.quiet,

@@ -6,6 +6,9 @@
 //! (OptiOdom metadata), a `robot.toml` found beside the data. A command that needs the design and finds
 //! none refuses ([`no_design`]): there is no silent default robot.
 
+use crate::dataset::Dataset;
+use crate::dataset::mcap::McapOptions;
+use omni_kin::RobotGeometry;
 use omni_kin::robot::{BaseKind, RobotDescription, RobotError};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -156,6 +159,56 @@ pub fn resolve(flag: Option<&str>, runs: &[PathBuf]) -> Result<Option<RobotFile>
             Ok(Some(RobotFile { description: read(&shown)?, source: Source::Discovered(shown) }))
         }
         None => Ok(None),
+    }
+}
+
+/// Prints `robot: SOURCE` on stderr, once per source in this process (a command may load several sets).
+pub fn announce(source: &Source) {
+    static SHOWN: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+    let text = source.to_string();
+    let mut shown = SHOWN.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    if !shown.contains(&text) {
+        eprintln!("robot: {text}");
+        shown.push(text);
+    }
+}
+
+/// Fills what the command line left open from the robot description: the wheel joints (when
+/// `joints_open`; without a description, `wheel_a`, `wheel_b`, `wheel_c`), the topics and the frames.
+pub fn fill_mcap_options(mcap: &mut McapOptions, joints_open: bool, robot: Option<&RobotDescription>) {
+    if joints_open {
+        mcap.wheel_joints = robot.map_or_else(|| McapOptions::default().wheel_joints, RobotDescription::joints);
+    }
+    let Some(r) = robot else { return };
+    let fill = |slot: &mut Option<String>, from: &Option<String>| {
+        if slot.is_none() {
+            slot.clone_from(from);
+        }
+    };
+    fill(&mut mcap.joints_topic, &r.topics.joint_states);
+    fill(&mut mcap.truth_topic, &r.topics.ground_truth);
+    fill(&mut mcap.command_topic, &r.topics.command);
+    fill(&mut mcap.truth_parent_frame, &r.frames.ground_truth_parent);
+    fill(&mut mcap.truth_child_frame, &r.frames.ground_truth_child);
+}
+
+/// Where a command's design comes from.
+#[derive(Clone, Copy, Debug)]
+pub enum Design<'a> {
+    /// A robot description (`--robot`, or found beside the data).
+    File(&'a RobotFile),
+    /// The geometry the data declares (OptiOdom metadata).
+    Data(&'a RobotGeometry),
+}
+
+/// The design of a dataset's robot, in this order: `--robot`, the geometry the data declares, a
+/// `robot.toml` found beside the data. `None` when there is none of them.
+pub fn design(ds: &Dataset) -> Option<Design<'_>> {
+    match (&ds.robot_file, &ds.robot) {
+        (Some(f), _) if !matches!(f.source, Source::Discovered(_)) => Some(Design::File(f)),
+        (_, Some(g)) => Some(Design::Data(g)),
+        (Some(f), None) => Some(Design::File(f)),
+        (None, None) => None,
     }
 }
 

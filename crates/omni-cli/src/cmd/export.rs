@@ -2,7 +2,7 @@
 //! odometry for Foxglove.
 
 use super::diagnose::design_for;
-use super::{load_runs_with_odometry, resolve_model};
+use super::{load_runs_with_odometry, resolve_model, wheel_joints};
 use crate::atomic;
 use crate::cli::DataArgs;
 use crate::dataset::mcap::{WriteOptions, write_run};
@@ -68,7 +68,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         for run in &ds.runs {
             let opts = WriteOptions {
-                wheel_joints: a.data.joints.clone(),
+                wheel_joints: wheel_joints(&a.data, &ds),
                 design_odometry: (!run.recorded_odometry().is_empty()).then(|| run.recorded_odometry().to_vec()),
                 calibrated_odometry: Some(odometry_poses(&model, run)?),
                 ..WriteOptions::default()

@@ -1,12 +1,12 @@
 //! `omnical train`: fit a model to training runs.
 
-use super::{design_ik, load_runs};
+use super::{design_geometry, design_ik, load_runs};
 use crate::cli::{CostArg, DataArgs, FitArgs, ModelKind, PresetArg, UnexcitedArg};
 use crate::{atomic, interrupt, model_file, progress};
 use anyhow::Context;
 use omni_ga::calibrate::{Calibration, Plan, Preset, Unexcited, calibrate};
 use omni_kin::cost::CostKind;
-use omni_kin::{EffectKind, FittedModel, Model, RobotGeometry};
+use omni_kin::{EffectKind, FittedModel, Model};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -147,9 +147,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         Some(p) => model_file::read(p).context("reading --start")?,
         None => match a.model {
             ModelKind::Ik => FittedModel::nominal(Model::ik(design_ik(&ds)?)),
-            ModelKind::Geometry => {
-                FittedModel::nominal(Model::geometry(ds.robot.clone().unwrap_or_else(RobotGeometry::apr02)))
-            }
+            ModelKind::Geometry => FittedModel::nominal(Model::geometry(design_geometry(&ds)?)),
         },
     };
     for id in &a.effects {

@@ -91,6 +91,8 @@ pub struct McapOptions {
     /// The ground truth's tracked frame (`--gt-child-frame`): selects the TF pair, and must match an
     /// Odometry's `child_frame_id`. Default: any.
     pub truth_child_frame: Option<String>,
+    /// The command topic (Twist or TwistStamped). Default: `/cmd_vel`, else the only one.
+    pub command_topic: Option<String>,
     /// Cut the file into runs at standstills of at least this long. s. Default: one run per file.
     pub split: Option<f64>,
     /// Collect runs that fail validation in [`McapRead::skipped`] instead of failing. Default false.
@@ -109,6 +111,7 @@ impl Default for McapOptions {
             truth_topic: None,
             truth_parent_frame: None,
             truth_child_frame: None,
+            command_topic: None,
             split: None,
             skip_invalid: false,
             recorded_odometry: true,
