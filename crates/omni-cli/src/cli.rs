@@ -91,6 +91,27 @@ pub struct FitArgs {
     pub min_excitation: f64,
 }
 
+/// A base kind (`omnical init --kind`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum KindArg {
+    /// N ≥ 3 omni wheels.
+    Omni,
+    /// Four mecanum wheels.
+    Mecanum,
+    /// Differential drive.
+    Diff,
+}
+
+impl From<KindArg> for omni_kin::robot::BaseKind {
+    fn from(k: KindArg) -> Self {
+        match k {
+            KindArg::Omni => Self::Omni,
+            KindArg::Mecanum => Self::Mecanum,
+            KindArg::Diff => Self::Diff,
+        }
+    }
+}
+
 /// Which run set `plan` proposes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum RunSetArg {
@@ -352,6 +373,28 @@ pub enum Command {
         #[command(flatten)]
         data: DataArgs,
     },
+    /// Draft a robot description (robot.toml) from a recording and the robot's URDF: lists the recording's
+    /// topics, reads the wheels (continuous joints with a cylinder) and guesses the base kind; every guess is
+    /// a comment in the file.
+    Init {
+        /// The recording (ROS 2 MCAP).
+        recording: PathBuf,
+        /// The robot's URDF (default: the recording's /robot_description topic).
+        #[arg(long, value_name = "FILE")]
+        urdf: Option<PathBuf>,
+        /// The file to write.
+        #[arg(long, default_value = crate::robot_file::FILE_NAME)]
+        out: PathBuf,
+        /// The base kind, instead of the guess (2 wheels: diff; 4 named mecanum: mecanum; else omni).
+        #[arg(long, value_enum)]
+        kind: Option<KindArg>,
+        /// Replace an existing file.
+        #[arg(long)]
+        force: bool,
+        /// Refuse a recording larger than this; it is read into memory whole. MiB.
+        #[arg(long, value_name = "MIB", default_value_t = 1024)]
+        max_file_mb: u64,
+    },
     /// The whole story on built-in simulated data with a hidden effect: simulate, train, diagnose, add the
     /// effect, retrain, print the error ladder.
     Demo {
@@ -469,6 +512,14 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             out,
             json,
             data,
+        }),
+        Command::Init { recording, urdf, out, kind, force, max_file_mb } => cmd::init::run(&cmd::init::Args {
+            recording,
+            urdf,
+            out,
+            kind: kind.map(Into::into),
+            force,
+            max_file_bytes: max_file_mb.saturating_mul(1 << 20),
         }),
         Command::Demo { out, runs_per_command, hidden } => cmd::demo::run(&out, runs_per_command, &hidden, cli.quiet),
     }

@@ -9,6 +9,7 @@ pub mod cli;
 pub mod cmd;
 pub mod dataset;
 pub mod entry;
+pub mod init;
 pub mod interrupt;
 pub mod model_file;
 pub mod progress;

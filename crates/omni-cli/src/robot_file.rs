@@ -162,8 +162,12 @@ pub fn resolve(flag: Option<&str>, runs: &[PathBuf]) -> Result<Option<RobotFile>
     }
 }
 
-/// Prints `robot: SOURCE` on stderr, once per source in this process (a command may load several sets).
+/// Prints `robot: PATH (found beside the data)` on stderr for a robot.toml that was picked up without being
+/// named, once per file in this process (a command may load several sets). `--robot` is not repeated back.
 pub fn announce(source: &Source) {
+    if !matches!(source, Source::Discovered(_)) {
+        return;
+    }
     static SHOWN: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
     let text = source.to_string();
     let mut shown = SHOWN.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
@@ -238,6 +242,9 @@ fn quoted(s: &str) -> String {
 
 fn comment_lines(out: &mut String, lines: &[String]) {
     for l in lines {
+        if l.is_empty() {
+            out.push_str("#\n");
+        }
         for part in l.lines() {
             let _ = writeln!(out, "# {part}");
         }

@@ -4,6 +4,7 @@ pub mod demo;
 pub mod diagnose;
 pub mod eval;
 pub mod export;
+pub mod init;
 pub mod plan;
 pub mod report;
 pub mod simulate;

@@ -94,7 +94,6 @@ fn write_split(dir: &Path, runs: &[Run], format: Format, wheel_names: &[String])
 /// The simulated robot's design (from `--robot`) and its true model (from `--truth`).
 fn design_and_truth(a: &Args) -> anyhow::Result<(RobotFile, RobotGeometry, FittedModel, FittedModel)> {
     let robot = robot_file::from_arg(&a.robot).context("--robot")?;
-    robot_file::announce(&robot.source);
     let geometry = robot.description.to_geometry().with_context(|| format!("--robot {}", robot.source))?;
     let design_ik = robot.description.design_ik().with_context(|| format!("--robot {}", robot.source))?;
     let design = FittedModel::nominal(Model::ik(design_ik.clone()));

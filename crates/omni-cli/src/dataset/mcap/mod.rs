@@ -58,6 +58,7 @@
 //! release mode on one core of a 2-core machine (`tests/mcap_speed.rs`).
 
 mod common;
+mod inspect;
 mod joint_state;
 mod odometry;
 mod pose_stamped;
@@ -71,6 +72,8 @@ mod write;
 use crate::dataset::DatasetError;
 use omni_kin::{Run, StampedPose};
 use std::path::Path;
+
+pub use inspect::{Inventory, ROBOT_DESCRIPTION_TOPIC, TopicSummary, inspect, inspect_bytes};
 
 /// The default wheel joint names, in wheel order.
 pub const DEFAULT_WHEEL_JOINTS: [&str; 3] = ["wheel_a", "wheel_b", "wheel_c"];

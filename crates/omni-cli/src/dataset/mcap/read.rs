@@ -26,8 +26,8 @@ const MESSAGE_ENCODING: &str = "cdr";
 /// Frames that are the robot's own (REP-105): a pose in them is not a ground truth.
 const ROBOT_FRAMES: [&str; 3] = [ODOM_FRAME, "base_link", "base_footprint"];
 /// The smallest and largest cap on one record's length (the cap is 64 × the file size between them).
-const MIN_RECORD_LIMIT: usize = 64 << 20;
-const MAX_RECORD_LIMIT: usize = 4 << 30;
+pub(super) const MIN_RECORD_LIMIT: usize = 64 << 20;
+pub(super) const MAX_RECORD_LIMIT: usize = 4 << 30;
 /// The types a ground truth can come from.
 const TRUTH_TYPES: &str = "geometry_msgs/msg/PoseStamped, geometry_msgs/msg/PoseWithCovarianceStamped, \
                            nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage";
