@@ -27,10 +27,12 @@ pub struct UrdfWheel {
 }
 
 impl UrdfWheel {
-    /// The direction the rim pushes the robot at positive wheel speed, from x towards y. deg.
+    /// The direction the rim pushes the robot at positive wheel speed, from x towards y, in (−180, 180].
+    /// deg.
     pub fn drive_deg(&self) -> f64 {
         let [ax, ay, _] = self.axle;
-        (-ax).atan2(ay).to_degrees()
+        let d = (-ax).atan2(ay).to_degrees();
+        if d <= -180.0 { d + 360.0 } else { d }
     }
 
     /// Whether the axle lies (nearly) in the ground plane, as a driving wheel's does.

@@ -159,14 +159,14 @@ fn builtin_files_and_discovery() {
     std::fs::create_dir_all(&data).unwrap();
     std::fs::create_dir_all(&cwd).unwrap();
     let run = data.join("a.mcap");
-    assert_eq!(discover(&[run.clone()], &cwd), None);
+    assert_eq!(discover(std::slice::from_ref(&run), &cwd), None);
     std::fs::write(cwd.join(FILE_NAME), APR02).unwrap();
-    assert_eq!(discover(&[run.clone()], &cwd), Some(cwd.join(FILE_NAME)));
+    assert_eq!(discover(std::slice::from_ref(&run), &cwd), Some(cwd.join(FILE_NAME)));
     assert_eq!(discover(&[], &cwd), Some(cwd.join(FILE_NAME)));
     // Beside the data wins over the working directory; a folder argument is searched itself.
     std::fs::write(data.join(FILE_NAME), APR02).unwrap();
     assert_eq!(discover(&[run], &cwd), Some(data.join(FILE_NAME)));
-    assert_eq!(discover(&[data.clone()], &cwd), Some(data.join(FILE_NAME)));
+    assert_eq!(discover(std::slice::from_ref(&data), &cwd), Some(data.join(FILE_NAME)));
     let r = from_arg(data.join(FILE_NAME).to_str().unwrap()).unwrap();
     assert_eq!(r.description.joints(), ["wheel_a", "wheel_b", "wheel_c"]);
 }
