@@ -14,7 +14,7 @@ use crate::cli::DataArgs;
 use crate::dataset::{self, Dataset, LoadOptions};
 use crate::robot_file::{self, Design};
 use anyhow::Context;
-use omni_kin::{FittedModel, IkMatrix, Model, RobotGeometry};
+use omni_kin::{FittedModel, IkMatrix, KinematicsKind, Model, RobotGeometry};
 use std::path::{Path, PathBuf};
 
 /// Load runs from files/folders, printing what was skipped or noticed on stderr. The runs' recorded
@@ -77,11 +77,19 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
     Ok(ds)
 }
 
-/// The design IK matrix of a dataset's robot (`--robot`, the data's geometry, or a found robot.toml).
-pub fn design_ik(ds: &Dataset) -> anyhow::Result<IkMatrix> {
+/// The design model of `kind` for a dataset's robot: `--robot`, else the data's own geometry (OptiOdom), else
+/// a found robot.toml; none of them is an error saying how to describe the robot. A robot description's
+/// `ik` design is its design matrix (the paper's Eq. 7 for APR-02; the closed form for diff).
+pub fn design_model(kind: KinematicsKind, ds: &Dataset) -> anyhow::Result<Model> {
     match robot_file::design(ds) {
-        Some(Design::File(f)) => f.description.design_ik().with_context(|| format!("robot {}", f.source)),
-        Some(Design::Data(g)) => Ok(g.twist_from_wheels()?),
+        Some(Design::File(f)) if kind == KinematicsKind::Ik => {
+            Ok(Model::ik(f.description.design_ik().with_context(|| format!("robot {}", f.source))?))
+        }
+        Some(Design::File(f)) => {
+            let g = f.description.to_geometry().with_context(|| format!("robot {}", f.source))?;
+            Ok(Model::design(kind, Some(&g))?)
+        }
+        Some(Design::Data(g)) => Ok(Model::design(kind, Some(g))?),
         None => Err(robot_file::no_design("the design model")),
     }
 }
@@ -99,7 +107,7 @@ pub fn design_geometry(ds: &Dataset) -> anyhow::Result<RobotGeometry> {
 pub fn resolve_model(spec: &str, ds: &Dataset) -> anyhow::Result<FittedModel> {
     match spec {
         "design" => match robot_file::design(ds) {
-            Some(Design::File(_)) => Ok(FittedModel::nominal(Model::ik(design_ik(ds)?))),
+            Some(Design::File(_)) => Ok(FittedModel::nominal(design_model(KinematicsKind::Ik, ds)?)),
             Some(Design::Data(g)) => Ok(FittedModel::nominal(Model::geometry(g.clone()))),
             None => Err(robot_file::no_design("--model design")),
         },
