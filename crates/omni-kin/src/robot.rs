@@ -446,8 +446,8 @@ impl RobotDescription {
         self.unchecked_geometry().map(|_| ())
     }
 
-    /// The geometry as written, after every check of [`validate`](Self::validate) but without
-    /// [`RobotGeometry::validate`] (which, for now, requires rank 3 and so refuses a differential drive).
+    /// The geometry as written, after every check of [`validate`](Self::validate) (the geometry's own
+    /// checks are [`to_geometry`](Self::to_geometry)'s).
     pub fn unchecked_geometry(&self) -> Result<RobotGeometry, RobotError> {
         let wheels = match self.kind {
             BaseKind::Diff => {
@@ -470,7 +470,7 @@ impl RobotDescription {
             p.validate()?;
         }
         let g = RobotGeometry { wheel_names: self.joints(), wheels };
-        let rank = g.wheels_from_twist().rank(1e-9);
+        let rank = g.rank();
         if rank < self.kind.dof() {
             let field = if self.kind == BaseKind::Diff { "diff" } else { "wheels" };
             return Err(err(field, RobotProblem::Rank { kind: self.kind, rank, needed: self.kind.dof() }));
@@ -502,12 +502,12 @@ impl RobotDescription {
         Ok(out)
     }
 
-    /// The design geometry, checked (also by [`RobotGeometry::validate`]). A description within 1e-12 of
+    /// The design geometry, checked (also by [`RobotGeometry::validate_for`] the kind's rank: 2 for diff). A description within 1e-12 of
     /// APR-02 gives [`RobotGeometry::apr02`]'s values exactly, with this description's joint names.
     pub fn to_geometry(&self) -> Result<RobotGeometry, GeometryError> {
         let g = self.unchecked_geometry()?;
         let g = if is_apr02(&g) { RobotGeometry { wheel_names: g.wheel_names, ..RobotGeometry::apr02() } } else { g };
-        g.validate()?;
+        g.validate_for(self.kind.dof())?;
         Ok(g)
     }
 

@@ -165,7 +165,10 @@ fn diff_drive_closed_form() {
         assert_relative_eq!(t.vy_m_s, 0.0, epsilon = 1e-12);
         assert_relative_eq!(t.omega_rad_s, twist[2], epsilon = 1e-12);
     }
-    assert_eq!(d.unchecked_geometry().unwrap().wheels_from_twist().rank(1e-9), 2);
+    let g = d.to_geometry().unwrap();
+    assert_eq!(g.rank(), 2);
+    assert_eq!(g.wheel_names, ["left", "right"]);
+    assert_eq!((g.wheels[0].distance_m, g.wheels[1].radius_m), (0.15, 0.052));
 }
 
 fn problem(d: &RobotDescription) -> (String, String) {
