@@ -14,4 +14,5 @@ pub mod interrupt;
 pub mod model_file;
 pub mod progress;
 pub mod report;
+pub mod robot_config;
 pub mod robot_file;
