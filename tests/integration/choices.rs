@@ -7,6 +7,8 @@ use omni_ga::calibrate::{Preset, Unexcited};
 use omni_ga::diagnose::DiagnoseOptions;
 use omni_ga::excitation::{PlanRequest, RunSet};
 use omni_ga::identify::IdentifyOptions;
+use omni_kin::robot::BaseKind;
+use omni_kin::simulate::SimConfig;
 use omni_kin::{Choice, CostKind, CostName, KinematicsKind};
 
 /// Every id parses back, serde writes the same id, and the command line lists the ids (kebab-case) with
@@ -39,12 +41,17 @@ fn choices_have_one_name_everywhere() {
     check::<CostName>("train", "objective");
     check::<Unexcited>("train", "unexcited");
     check::<RunSet>("plan", "set");
+    check::<BaseKind>("init", "kind");
     assert_eq!(CostName::EndPose.flag_value(), "end-pose");
     assert_eq!(CostKind::PATH.name(), "path");
     // Messages list the default first; callers say what was chosen (`preset "fast": …`).
     assert_eq!("fast".parse::<Preset>().unwrap_err().to_string(), r#""fast": expected "default" or "paper""#);
     assert_eq!("x".parse::<RunSet>().unwrap_err().to_string(), r#""x": expected "greedy" or "flower""#);
-    assert_eq!("wheels".parse::<KinematicsKind>().unwrap_err().to_string(), r#""wheels": expected "ik" or "geometry""#);
+    assert_eq!(
+        "wheels".parse::<KinematicsKind>().unwrap_err().to_string(),
+        r#""wheels": expected "ik", "geometry", "diff" or "mecanum""#
+    );
+    assert_eq!("tank".parse::<BaseKind>().unwrap_err().to_string(), r#""tank": expected "omni", "mecanum" or "diff""#);
 }
 
 #[test]
@@ -66,4 +73,18 @@ fn command_line_defaults_are_the_library_defaults() {
     let cli = Cli::try_parse_from(["omnical", "diagnose", "--model", "design", "runs/"]).unwrap();
     let Command::Diagnose(d) = cli.command else { panic!("diagnose") };
     assert_eq!(d.min_gain, DiagnoseOptions::default().min_gain);
+
+    let cli = Cli::try_parse_from(["omnical", "simulate", "--out", "sim"]).unwrap();
+    let Command::Simulate(s) = cli.command else { panic!("simulate") };
+    let sim = SimConfig::default();
+    assert_eq!((s.runs_per_command, s.duration_s), (sim.runs_per_command, sim.duration_s));
+    assert_eq!(s.robot, "apr02");
+
+    let cli = Cli::try_parse_from(["omnical", "init", "rec.mcap"]).unwrap();
+    let Command::Init(i) = cli.command else { panic!("init") };
+    assert_eq!(i.max_file_mb << 20, omni_cli::dataset::DEFAULT_MAX_FILE_BYTES);
+    assert_eq!((i.out.to_str(), i.kind), (Some("robot.toml"), None));
+    let cli = Cli::try_parse_from(["omnical", "init", "rec.mcap", "--kind", "diff"]).unwrap();
+    let Command::Init(i) = cli.command else { panic!("init") };
+    assert_eq!(i.kind, Some(BaseKind::Diff));
 }

@@ -42,6 +42,10 @@ pub enum Command {
     /// Propose calibration runs that excite every parameter of a model (and its effects), with the
     /// standard errors they would give for a stated ground-truth noise.
     Plan(cmd::plan::Args),
+    /// Draft a robot description (robot.toml) from a recording and the robot's URDF: lists the recording's
+    /// topics, reads the wheels (continuous joints with a cylinder) and guesses the base kind; every guess is
+    /// a comment in the file.
+    Init(cmd::init::Args),
     /// The whole story on built-in simulated data with a hidden effect: simulate, train, diagnose, add the
     /// effect, retrain, print the error ladder.
     Demo(cmd::demo::Args),
@@ -67,6 +71,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Report(a) => cmd::report::run(&a, cli.quiet),
         Command::Export(a) => cmd::export::run(&a),
         Command::Plan(a) => cmd::plan::run(&a),
+        Command::Init(a) => cmd::init::run(&a),
         Command::Demo(a) => cmd::demo::run(&a, cli.quiet),
     }
 }

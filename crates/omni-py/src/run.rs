@@ -210,7 +210,11 @@ pub fn load(
     }
     let opts = LoadOptions { skip_invalid, ticks_per_rev, mcap, ..LoadOptions::default() };
     let ds = py.detach(|| dataset::load(&paths, &opts)).py()?;
-    let design = omni_cli::design::design_of(ds.robot.as_ref());
+    // The same lookup as the CLI's `--model design`; where the data names no robot, Python still falls back
+    // to the paper's APR-02 design (Eq. 7), where the CLI asks for a robot description.
+    let design = omni_cli::design::declared(&ds)
+        .map_err(|e| value_error(format!("{e:#}")))?
+        .unwrap_or_else(FittedModel::paper_design);
     Ok(PyDataset {
         runs: ds.runs,
         notes: ds.notes,

@@ -1,7 +1,7 @@
 //! `omnical export`: trajectories for other tools — TUM files for evo, MCAP bags with the calibrated
 //! odometry for Foxglove.
 
-use super::{DataArgs, load_runs_with_odometry, resolve_model};
+use super::{DataArgs, load_runs_with_odometry, resolve_model, wheel_joints};
 use crate::dataset::mcap::{WriteOptions, write_run};
 use crate::design::design_for;
 use crate::report::tum;
@@ -82,7 +82,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         for run in &ds.runs {
             let opts = WriteOptions {
-                wheel_joints: a.data.joints.clone(),
+                wheel_joints: wheel_joints(&a.data, &ds),
                 design_odometry: (!run.recorded_odometry().is_empty()).then(|| run.recorded_odometry().to_vec()),
                 calibrated_odometry: Some(odometry_poses(&model, run)?),
                 ..WriteOptions::default()
@@ -102,7 +102,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             design: &design,
             spec: &a.model,
             runs: &ds.runs,
-            wheel_names: joint_names(&model, &a.data.joints),
+            wheel_names: joint_names(&model, &wheel_joints(&a.data, &ds)),
             controller: a.controller,
         };
         let config = robot_config::build(&request)?;

@@ -4,21 +4,36 @@ pub mod demo;
 pub mod diagnose;
 pub mod eval;
 pub mod export;
+pub mod init;
 pub mod plan;
 pub mod report;
 pub mod simulate;
 pub mod train;
 
 use crate::dataset::{self, Dataset, LoadOptions};
+use crate::robot_file;
 use omni_kin::FittedModel;
 use std::path::PathBuf;
+
+/// The robot the data was recorded on (docs/formats.md, "Robot description").
+#[derive(Debug, Default, clap::Args)]
+pub struct RobotArgs {
+    /// The robot description: a robot.toml file, or `apr02` for the paper's robot. Default: a robot.toml
+    /// beside the data (the first RUNS argument's folder) or in the working directory.
+    #[arg(long, value_name = "FILE|apr02")]
+    pub robot: Option<String>,
+}
 
 /// Options shared by commands that read runs.
 #[derive(Debug, clap::Args)]
 pub struct DataArgs {
-    /// Wheel joint names in wheel order (MCAP JointState), comma-separated.
-    #[arg(long, value_delimiter = ',', default_value = dataset::mcap::DEFAULT_WHEEL_JOINTS.join(","))]
-    pub joints: Vec<String>,
+    /// The robot description (design geometry, joint names, topics).
+    #[command(flatten)]
+    pub robot: RobotArgs,
+    /// Wheel joint names in wheel order (MCAP JointState), comma-separated. Default: the robot
+    /// description's joints, else wheel_a,wheel_b,wheel_c.
+    #[arg(long, value_delimiter = ',')]
+    pub joints: Option<Vec<String>>,
     /// MCAP topic of the wheel JointState (default: the only one).
     #[arg(long)]
     pub joints_topic: Option<String>,
@@ -58,8 +73,12 @@ pub fn load_runs_with_odometry(paths: &[PathBuf], data: &DataArgs) -> anyhow::Re
 }
 
 fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::Result<Dataset> {
-    let mcap = dataset::mcap::McapOptions {
-        wheel_joints: data.joints.clone(),
+    let robot = robot_file::resolve(data.robot.robot.as_deref(), paths)?;
+    if let Some(r) = &robot {
+        robot_file::announce(&r.source);
+    }
+    let mut mcap = dataset::mcap::McapOptions {
+        wheel_joints: data.joints.clone().unwrap_or_default(),
         joints_topic: data.joints_topic.clone(),
         truth_topic: data.gt_topic.clone(),
         truth_parent_frame: data.gt_parent_frame.clone(),
@@ -67,7 +86,9 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
         split: data.split,
         skip_invalid: data.skip_invalid,
         recorded_odometry,
+        ..Default::default()
     };
+    robot_file::fill_mcap_options(&mut mcap, data.joints.is_none(), robot.as_ref().map(|r| &r.description));
     let opts = LoadOptions {
         skip_invalid: data.skip_invalid,
         ticks_per_rev: data.ticks_per_rev,
@@ -75,7 +96,8 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
         recorded_odometry,
         max_file_bytes: data.max_file_mb.saturating_mul(1 << 20),
     };
-    let ds = dataset::load(paths, &opts)?;
+    let mut ds = dataset::load(paths, &opts)?;
+    ds.robot_file = robot;
     // The same note from many files is printed once, with a count.
     let mut seen: Vec<(String, String, usize)> = Vec::new();
     for n in &ds.notes {
@@ -100,5 +122,14 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
 
 /// `design` / `paper` or a model file ([`crate::design::resolve`]), for the data's robot.
 pub fn resolve_model(spec: &str, ds: &Dataset) -> anyhow::Result<FittedModel> {
-    crate::design::resolve(spec, ds.robot.as_ref())
+    crate::design::resolve(spec, ds)
+}
+
+/// The wheel joint names the runs were read with: `--joints`, else the robot description's, else the
+/// default `wheel_a`, `wheel_b`, `wheel_c`.
+pub fn wheel_joints(data: &DataArgs, ds: &Dataset) -> Vec<String> {
+    let mut mcap =
+        dataset::mcap::McapOptions { wheel_joints: data.joints.clone().unwrap_or_default(), ..Default::default() };
+    robot_file::fill_mcap_options(&mut mcap, data.joints.is_none(), ds.robot_file.as_ref().map(|r| &r.description));
+    mcap.wheel_joints
 }

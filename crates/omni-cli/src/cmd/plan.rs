@@ -1,8 +1,8 @@
 //! `omnical plan`: propose calibration runs that excite every parameter.
 
 use super::{DataArgs, load_runs};
-use crate::atomic;
 use crate::cli::choice;
+use crate::{atomic, design, robot_file};
 use anyhow::Context;
 use omni_ga::excitation::{self, PlanRequest, RunPlan, RunSet};
 use omni_kin::simulate::SimConfig;
@@ -19,7 +19,7 @@ pub struct Args {
     /// Effects to plan for (catalogue ids). Repeatable.
     #[arg(long = "effect", value_name = "NAME")]
     pub effects: Vec<String>,
-    /// Take the robot's geometry from these runs (default: APR-02, the paper's robot).
+    /// Take the robot's geometry from these runs (OptiOdom metadata), when there is no --robot.
     #[arg(long = "robot-from", value_name = "RUNS", num_args = 1..)]
     pub robot_from: Vec<PathBuf>,
     /// Which set: a D-optimal pick from a library of commands, or the paper's 36 flower commands.
@@ -80,18 +80,7 @@ impl Args {
 
 /// Runs `omnical plan`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
-    let robot = if a.robot_from.is_empty() {
-        RobotGeometry::apr02()
-    } else {
-        let ds = load_runs(&a.robot_from, &a.data)?;
-        ds.robot.clone().with_context(|| {
-            format!(
-                "--robot-from {}: these runs do not describe the robot's geometry (wheel radii, distances, angles); \
-                 plan needs it to turn commands into wheel speeds",
-                a.robot_from.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(" ")
-            )
-        })?
-    };
+    let robot = plan_robot(a)?;
     let mut model = FittedModel::nominal(Model::design(a.model, Some(&robot))?);
     for id in &a.effects {
         model = model
@@ -118,6 +107,21 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         println!("plan written to {}", out.display());
     }
     Ok(())
+}
+
+/// The robot to plan for: `--robot`, else the geometry of the `--robot-from` runs, else a robot.toml beside
+/// them or in the working directory. Plan needs it to turn commands into wheel speeds.
+fn plan_robot(a: &Args) -> anyhow::Result<RobotGeometry> {
+    if !a.robot_from.is_empty() {
+        return design::geometry(&load_runs(&a.robot_from, &a.data)?);
+    }
+    match robot_file::resolve(a.data.robot.robot.as_deref(), &[])? {
+        Some(r) => {
+            robot_file::announce(&r.source);
+            r.description.to_geometry().with_context(|| format!("robot {}", r.source))
+        }
+        None => Err(robot_file::no_design("plan")),
+    }
 }
 
 /// The planned commands as CSV.

@@ -2,12 +2,12 @@
 
 use super::{DataArgs, load_runs};
 use crate::cli::choice;
-use crate::{atomic, interrupt, model_file, progress};
+use crate::{atomic, design, interrupt, model_file, progress};
 use anyhow::Context;
 use omni_ga::calibrate::{Calibration, Plan, Preset, Unexcited, calibrate};
 use omni_ga::identify::IdentifyOptions;
 use omni_kin::cost::{CostKind, CostName};
-use omni_kin::{EffectKind, FittedModel, KinematicsKind, Model};
+use omni_kin::{EffectKind, FittedModel, KinematicsKind};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -164,7 +164,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     }
     let mut start = match &a.start {
         Some(p) => model_file::read(p).context("reading --start")?,
-        None => FittedModel::nominal(Model::design(a.model, ds.robot.as_ref())?),
+        None => FittedModel::nominal(design::model(a.model, &ds)?),
     };
     for id in &a.effects {
         start = start

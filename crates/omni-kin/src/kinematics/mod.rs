@@ -12,15 +12,21 @@
 //! |---|---|---|
 //! | `ik` | [`MatrixKinematics`]: the paper's non-parametric model, every IK entry free | `m11` … `m3N` |
 //! | `geometry` | [`GeometryKinematics`]: the paper's ref. \[17\], per-wheel radius, distance, angle | `r_a` …, `R_a` …, `delta_a` … |
+//! | `diff` | [`DiffKinematics`]: a differential drive, both radii and the separation (`vy` row zero) | `r_right`, `r_left`, `b` |
+//! | `mecanum` | [`MecanumKinematics`]: four wheels on a rectangle (mecanum, or omni wheels in an X), per-wheel radius and the half-extents | `r_a` … `r_d`, `lx`, `ly` |
 //!
 //! To add a robot type: a new file implementing [`BaseKinematics`], and one variant in [`Kinematics`] and
 //! [`KinematicsKind`] (this file).
 
+mod diff_model;
 mod geometry_model;
 mod matrix_model;
+mod mecanum_model;
 
+pub use diff_model::DiffKinematics;
 pub use geometry_model::GeometryKinematics;
 pub use matrix_model::MatrixKinematics;
+pub use mecanum_model::MecanumKinematics;
 
 use crate::effect::ParamSpec;
 use crate::error::KinError;
@@ -115,11 +121,17 @@ pub enum KinematicsKind {
     Ik,
     /// [`GeometryKinematics`].
     Geometry,
+    /// [`DiffKinematics`].
+    Diff,
+    /// [`MecanumKinematics`].
+    Mecanum,
 }
 
 crate::choice!(KinematicsKind, default = Ik, {
     Ik => "ik": "Every entry of the IK matrix (the paper)",
     Geometry => "geometry": "Wheel radii, distances and angles (the paper's ref. [17])",
+    Diff => "diff": "A differential drive: both wheel radii and the separation",
+    Mecanum => "mecanum": "Four wheels on a rectangle (mecanum, omni X): per-wheel radius and the half-extents",
 });
 
 /// What a model file stores about the base kinematics (the keys of `omnical-model/1` besides `format`,
@@ -228,6 +240,10 @@ pub enum Kinematics {
     Ik(MatrixKinematics),
     /// The parametric model of the paper's ref. \[17\]: per wheel r_i, R_i, δ_i.
     Geometry(GeometryKinematics),
+    /// A differential drive: r_R, r_L, b.
+    Diff(DiffKinematics),
+    /// Four wheels on a rectangle: per-wheel radius, lx, ly.
+    Mecanum(MecanumKinematics),
 }
 
 /// Delegates each listed method to the model inside a [`Kinematics`]: the only `match` on its variants
@@ -240,6 +256,8 @@ macro_rules! delegate {
                 match self {
                     Kinematics::Ik(k) => k.$name($($arg),*),
                     Kinematics::Geometry(k) => k.$name($($arg),*),
+                    Kinematics::Diff(k) => k.$name($($arg),*),
+                    Kinematics::Mecanum(k) => k.$name($($arg),*),
                 }
             }
         )*
@@ -253,6 +271,8 @@ impl Kinematics {
         Ok(match kind {
             KinematicsKind::Ik => Self::Ik(MatrixKinematics::design_for(robot)?),
             KinematicsKind::Geometry => Self::Geometry(GeometryKinematics::design_for(robot)?),
+            KinematicsKind::Diff => Self::Diff(DiffKinematics::design_for(robot)?),
+            KinematicsKind::Mecanum => Self::Mecanum(MecanumKinematics::design_for(robot)?),
         })
     }
 
@@ -266,6 +286,14 @@ impl Kinematics {
             KinematicsKind::Geometry => {
                 let (k, p) = GeometryKinematics::from_record(record)?;
                 (Self::Geometry(k), p)
+            }
+            KinematicsKind::Diff => {
+                let (k, p) = DiffKinematics::from_record(record)?;
+                (Self::Diff(k), p)
+            }
+            KinematicsKind::Mecanum => {
+                let (k, p) = MecanumKinematics::from_record(record)?;
+                (Self::Mecanum(k), p)
             }
         })
     }
@@ -307,5 +335,7 @@ impl Kinematics {
     }
 }
 
+#[cfg(test)]
+mod robot_type_tests;
 #[cfg(test)]
 mod tests;
