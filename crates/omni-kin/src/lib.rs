@@ -17,6 +17,7 @@ pub mod geometry;
 pub mod ik;
 pub mod model;
 pub mod odometry;
+pub mod plan;
 pub mod pose;
 pub mod run;
 pub mod simulate;
