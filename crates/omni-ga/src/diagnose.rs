@@ -31,8 +31,9 @@ use crate::problem::{Bounds, LeastSquares, Problem};
 use nalgebra::{DMatrix, DVector};
 use omni_kin::cost::{self, CostKind};
 use omni_kin::effect::{Effect, Stage};
-use omni_kin::odometry::{self, Selection};
-use omni_kin::{EffectKind, FittedModel, Run};
+use omni_kin::evaluate::Evaluator;
+use omni_kin::odometry::Selection;
+use omni_kin::{EffectKind, FittedModel, PoseError, Run};
 use serde::{Deserialize, Serialize};
 
 /// Diagnosis settings.
@@ -497,20 +498,17 @@ fn compare(
     runs: &[Run],
     every: usize,
 ) -> Result<(Vec<RunReport>, Vec<GroupReport>, Growth), CalibrateError> {
-    let res = f.model.resolve(&f.params)?;
-    let dres = design.model.resolve(&design.params)?;
+    let selection = Selection::Path(every);
+    let fitted = Evaluator::new(&f.model, runs, selection)?.errors(&f.model.resolve(&f.params)?);
+    let designed = Evaluator::new(&design.model, runs, selection)?.errors(&design.model.resolve(&design.params)?);
     let mut reports = Vec::new();
     let mut groups: std::collections::BTreeMap<String, Vec<[f64; 3]>> = Default::default();
     const BINS: usize = 10;
     let (mut gp, mut gh, mut gn) = (vec![0.0; BINS], vec![0.0; BINS], vec![0usize; BINS]);
-    for r in runs {
-        let path = odometry::residuals(&res, r, Selection::Path(every));
-        let dpath = odometry::residuals(&dres, r, Selection::Path(every));
-        let rms = |v: &[odometry::Residual]| {
-            (v.iter().map(|e| e.error.norm().powi(2)).sum::<f64>() / v.len().max(1) as f64).sqrt()
-        };
-        let end = odometry::end_pose_error(&res, r);
-        let dend = odometry::end_pose_error(&dres, r);
+    for (i, r) in runs.iter().enumerate() {
+        let (path, dpath) = (fitted.run(i), designed.run(i));
+        let rms = |v: &[PoseError]| (v.iter().map(|e| e.norm().powi(2)).sum::<f64>() / v.len().max(1) as f64).sqrt();
+        let (end, dend) = (fitted.ends()[i], designed.ends()[i]);
         reports.push(RunReport {
             name: r.name().into(),
             command: r.command().map(|c| c.label()),
@@ -521,10 +519,10 @@ fn compare(
         });
         groups.entry(group_label(r)).or_default().push([end.dx_m, end.dy_m, end.dtheta_rad]);
         let (t0, dur) = (r.start().t_s, r.truth_duration_s().max(1e-9));
-        for e in &path {
-            let b = (((e.t_s - t0) / dur) * BINS as f64).floor().clamp(0.0, (BINS - 1) as f64) as usize;
-            gp[b] += e.error.position_m();
-            gh[b] += e.error.dtheta_rad.abs();
+        for (e, ti) in path.iter().zip(selection.indices(r.truth().len())) {
+            let b = (((r.truth()[ti].t_s - t0) / dur) * BINS as f64).floor().clamp(0.0, (BINS - 1) as f64) as usize;
+            gp[b] += e.position_m();
+            gh[b] += e.dtheta_rad.abs();
             gn[b] += 1;
         }
     }

@@ -12,6 +12,7 @@
 pub mod cost;
 pub mod effect;
 pub mod error;
+pub mod evaluate;
 pub mod fast;
 pub mod geometry;
 pub mod ik;
