@@ -42,7 +42,9 @@ fn benches(c: &mut Criterion) {
     g.throughput(Throughput::Elements(samples as u64));
     let walk = |sel| Evaluator::with_route(&design.model, &runs, sel, Route::Walk).ok();
     if let (Some(end_walk), Some(path_walk)) = (walk(Selection::End), walk(Selection::Path(1))) {
-        g.bench_function("end pose (Eq. 6), literal walk", |b| b.iter(|| black_box(end_walk.cost(&res, CostKind::EndPose))));
+        g.bench_function("end pose (Eq. 6), literal walk", |b| {
+            b.iter(|| black_box(end_walk.cost(&res, CostKind::EndPose)))
+        });
         g.bench_function("path, literal walk", |b| b.iter(|| black_box(path_walk.cost(&res, CostKind::PATH))));
         // What `eval` computes (Eq. 6 and path cost from one walk per run), then through the evaluator's
         // fast path, preparation included.
@@ -74,7 +76,9 @@ fn benches(c: &mut Criterion) {
         });
         g.bench_function(format!("fast, Eq. 6, Eq. 1 Euler 10 ms, increments redone, {threads} thread(s)"), |b| {
             pool.install(|| {
-                b.iter(|| black_box(end_paper_redone.end_pose_errors(&paper_res, &runs).map(|e| mean_end_pose_error(&e))))
+                b.iter(|| {
+                    black_box(end_paper_redone.end_pose_errors(&paper_res, &runs).map(|e| mean_end_pose_error(&e)))
+                })
             })
         });
         g.bench_function(format!("fast, Eq. 6, exact arcs, {threads} thread(s)"), |b| {

@@ -262,12 +262,18 @@ fn confident(c: &Candidate, opts: &DiagnoseOptions) -> bool {
 
 /// Costs of a fitted model on train and held-out runs.
 pub fn costs_of(f: &FittedModel, train: &[Run], held_out: &[Run], every: usize) -> Result<Costs, CalibrateError> {
-    let c = |runs: &[Run], k| cost::cost(&f.model, &f.params, runs, k);
+    let kind = path_kind(every);
+    let (train, held_out) = (
+        Evaluator::for_report(&f.model, train, kind.selection())?,
+        Evaluator::for_report(&f.model, held_out, kind.selection())?,
+    );
+    let res = f.model.resolve(&f.params)?;
+    let (train, held_out) = (train.errors(&res), held_out.errors(&res));
     Ok(Costs {
-        train_path: c(train, path_kind(every))?,
-        held_out_path: c(held_out, path_kind(every))?,
-        train_end_pose: c(train, CostKind::EndPose)?,
-        held_out_end_pose: c(held_out, CostKind::EndPose)?,
+        train_path: train.path_cost(kind.heading_weight()),
+        held_out_path: held_out.path_cost(kind.heading_weight()),
+        train_end_pose: train.end_pose_cost(),
+        held_out_end_pose: held_out.end_pose_cost(),
     })
 }
 
@@ -499,8 +505,9 @@ fn compare(
     every: usize,
 ) -> Result<(Vec<RunReport>, Vec<GroupReport>, Growth), CalibrateError> {
     let selection = Selection::Path(every);
-    let fitted = Evaluator::new(&f.model, runs, selection)?.errors(&f.model.resolve(&f.params)?);
-    let designed = Evaluator::new(&design.model, runs, selection)?.errors(&design.model.resolve(&design.params)?);
+    let fitted = Evaluator::for_report(&f.model, runs, selection)?.errors(&f.model.resolve(&f.params)?);
+    let designed =
+        Evaluator::for_report(&design.model, runs, selection)?.errors(&design.model.resolve(&design.params)?);
     let mut reports = Vec::new();
     let mut groups: std::collections::BTreeMap<String, Vec<[f64; 3]>> = Default::default();
     const BINS: usize = 10;

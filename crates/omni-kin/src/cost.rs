@@ -69,10 +69,10 @@ pub fn mean_end_pose_error(errors: &[PoseError]) -> f64 {
     errors.iter().map(PoseError::norm).sum::<f64>() / errors.len() as f64
 }
 
-/// The cost `kind` of `model` at `params` over `runs`, through the [`Evaluator`] (fast where it serves).
-/// Checks wheel counts.
+/// The cost `kind` of `model` at `params` over `runs`, through [`Evaluator::for_report`]. Checks wheel
+/// counts.
 pub fn cost(model: &Model, params: &[f64], runs: &[Run], kind: CostKind) -> Result<f64, KinError> {
-    let evaluator = Evaluator::for_cost(model, runs, kind)?;
+    let evaluator = Evaluator::for_report(model, runs, kind.selection())?;
     let res = model.resolve(params)?;
     Ok(evaluator.cost(&res, kind))
 }

@@ -171,7 +171,13 @@ pub fn end_pose_error(res: &Resolved<'_>, run: &Run) -> PoseError {
     let truth = run.truth();
     let last = truth.len() - 1;
     let mut err = PoseError::default();
-    walk(res, run, &StepPlan::new(run, res.clock_lag_s, &[last]), |_, p| err = p.error_to(&truth[last].pose), |_, _| {});
+    walk(
+        res,
+        run,
+        &StepPlan::new(run, res.clock_lag_s, &[last]),
+        |_, p| err = p.error_to(&truth[last].pose),
+        |_, _| {},
+    );
     err
 }
 

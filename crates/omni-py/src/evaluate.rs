@@ -106,7 +106,7 @@ pub fn evaluate(py: Python<'_>, runs: &Bound<'_, PyAny>, model: Option<&Bound<'_
     let (fm, adapters) = model_or(model, || design.unwrap_or_else(FittedModel::paper_design))?;
     let errors = crate::effect::EffectErrors::new(adapters);
     let out = py.detach(|| -> Result<_, omni_kin::KinError> {
-        let evaluator = Evaluator::for_cost(&fm.model, &runs, CostKind::PATH)?;
+        let evaluator = Evaluator::for_report(&fm.model, &runs, CostKind::PATH.selection())?;
         let res = fm.model.resolve(&fm.params)?;
         let errors = evaluator.errors(&res);
         let residuals: Vec<Vec<Residual>> =

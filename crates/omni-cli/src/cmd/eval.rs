@@ -11,7 +11,7 @@ use std::path::PathBuf;
 pub fn run(model: &str, paths: &[PathBuf], as_json: bool, data: &DataArgs) -> anyhow::Result<()> {
     let ds = load_runs(paths, data)?;
     let fm = resolve_model(model, &ds)?;
-    let evaluator = Evaluator::for_cost(&fm.model, &ds.runs, CostKind::PATH)?;
+    let evaluator = Evaluator::for_report(&fm.model, &ds.runs, CostKind::PATH.selection())?;
     let all = evaluator.errors(&fm.model.resolve(&fm.params)?);
     let errors = all.ends();
     let c = all.end_pose_cost();

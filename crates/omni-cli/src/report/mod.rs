@@ -153,8 +153,8 @@ impl Report {
         let mut models = Vec::with_capacity(input.models.len());
         let mut fig_errors = Vec::with_capacity(input.models.len());
         for m in &input.models {
-            let train = Evaluator::for_cost(&m.model.model, input.train, path)?;
-            let held_out = Evaluator::for_cost(&m.model.model, fig_runs, path)?;
+            let train = Evaluator::for_report(&m.model.model, input.train, path.selection())?;
+            let held_out = Evaluator::for_report(&m.model.model, fig_runs, path.selection())?;
             let res = m.model.model.resolve(&m.model.params)?;
             let (train, held_out) = (train.errors(&res), held_out.errors(&res));
             let w = path.heading_weight();

@@ -3,8 +3,7 @@
 
 use super::Lanes;
 use super::kernel::{
-    C0, C1, C2, C3, C4, LaneState, RESYNC_STEPS, S1, S2, S3, S4, arc_factors, displacement, measured_error,
-    step_lane,
+    C0, C1, C2, C3, C4, LaneState, RESYNC_STEPS, S1, S2, S3, S4, arc_factors, displacement, measured_error, step_lane,
 };
 use super::prepare::{Group, Increments};
 use crate::odometry::Selection;
@@ -113,10 +112,8 @@ pub(super) fn lane_rows<const N: usize, const ARC: bool>(
     let (s, c) = body.theta_rad.sin_cos();
     let mut st = LaneState { x: body.x_m, y: body.y_m, th: body.theta_rad, c, s };
     let mut t = Tangents::<N> { d: [[0.0; 2]; N], g: [[0.0; 2]; N], u: [0.0; N], p: [[0.0; 2]; N] };
-    let mine: Vec<(usize, usize, usize)> = (g.queries.iter().enumerate())
-        .filter(|(_, q)| q.lane == lane)
-        .map(|(qi, q)| (qi, q.step, q.slot))
-        .collect();
+    let mine: Vec<(usize, usize, usize)> =
+        (g.queries.iter().enumerate()).filter(|(_, q)| q.lane == lane).map(|(qi, q)| (qi, q.step, q.slot)).collect();
     let first_slot = mine.iter().map(|&(_, _, slot)| slot).min().unwrap_or(0);
     let poses = if selection == Selection::End { 1 } else { mine.len() };
     let mut out = LaneRows { errors: vec![PoseError::default(); poses], jacobian: DMatrix::zeros(3 * poses, 3 * N) };

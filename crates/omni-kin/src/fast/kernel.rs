@@ -3,9 +3,9 @@
 //! short polynomials in the step angle (exact to < 1e-16 for `|a| ≤ 0.1` rad), and the heading's cosine
 //! and sine are re-taken from the summed heading every [`RESYNC_STEPS`] steps.
 
+use super::LANES;
 use super::lanes::{LaneOps, Portable};
 use super::prepare::{Group, Increments};
-use super::LANES;
 use crate::pose::{Pose2, PoseError, wrap_angle};
 
 /// Steps between re-taking the heading's cosine and sine from the summed heading.
@@ -193,4 +193,3 @@ fn kernel<O: LaneOps, const N: usize, const ARC: bool>(
     let lanes = unpack(o, &v);
     std::array::from_fn(|l| measured_error(lanes[l], sensor, &g.end[l]))
 }
-

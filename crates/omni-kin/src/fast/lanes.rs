@@ -3,7 +3,6 @@
 
 use super::{LANES, Lanes};
 
-
 /// Lane-wise arithmetic on four runs: AVX2 + FMA vectors where the CPU has them, plain arrays otherwise.
 pub(super) trait LaneOps: Copy {
     type V: Copy;

@@ -210,7 +210,9 @@ impl PreparedRuns {
                 .map(|g| {
                     self.with_increments(g, res, runs, |inc| {
                         (0..g.lanes)
-                            .map(|lane| by_wheels!(n, arc, jacobian::lane_rows(g, inc, lane, m, sensor, self.selection)))
+                            .map(|lane| {
+                                by_wheels!(n, arc, jacobian::lane_rows(g, inc, lane, m, sensor, self.selection))
+                            })
                             .collect::<Option<Vec<_>>>()
                     })?
                 })
@@ -236,7 +238,9 @@ impl PreparedRuns {
             return None;
         }
         let (m, arc, sensor) = (res.ik.entries(), res.scheme == Scheme::ExactArc, res.sensor_from_body);
-        self.with_increments(g, res, runs, |inc| by_wheels!(self.n_wheels, arc, kernel::walk(g, inc, m, sensor, on_query)))?
+        self.with_increments(g, res, runs, |inc| {
+            by_wheels!(self.n_wheels, arc, kernel::walk(g, inc, m, sensor, on_query))
+        })?
     }
 
     /// Calls `f` with the increments of group `g` for `res`: the kept ones, ones redone from the runs'

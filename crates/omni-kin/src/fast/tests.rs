@@ -74,7 +74,8 @@ fn synthetic_run(n: usize, seed: usize) -> Run {
             StampedPose { t_s: t, pose: Pose2::new(0.1 * t, 0.01 * t * t, 0.05 * t) }
         })
         .collect();
-    let data = RunData { name: format!("n{n}-{seed}"), wheel_t_s, wheel_rad_s, n_wheels: n, truth, ..Default::default() };
+    let data =
+        RunData { name: format!("n{n}-{seed}"), wheel_t_s, wheel_rad_s, n_wheels: n, truth, ..Default::default() };
     Run::new(data).unwrap()
 }
 
