@@ -38,6 +38,15 @@ pub enum ModelKind {
     Geometry,
 }
 
+impl From<ModelKind> for omni_kin::KinematicsKind {
+    fn from(k: ModelKind) -> Self {
+        match k {
+            ModelKind::Ik => Self::Ik,
+            ModelKind::Geometry => Self::Geometry,
+        }
+    }
+}
+
 /// Calibration recipe.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum PresetArg {

@@ -24,7 +24,7 @@ use crate::problem::{
 use nalgebra::DMatrix;
 use omni_kin::cost::{self, CostKind};
 use omni_kin::evaluate::Evaluator;
-use omni_kin::{FittedModel, Integration, KinError, Kinematics, Model, Run};
+use omni_kin::{FittedModel, Integration, KinError, Model, Run};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 use thiserror::Error;
@@ -59,8 +59,9 @@ pub enum Preset {
 pub enum BoxRule {
     /// ±fraction of each start value (zero entries pinned). Paper: 0.10.
     PerValue(f64),
-    /// ±fraction of the largest magnitude in the entry's matrix row (ik) or of the value (geometry r, R;
-    /// angles ±fraction rad). Default: 0.10.
+    /// ±fraction of each base parameter's scale at the start (the kinematics' `param_scales`: for `ik` the
+    /// largest magnitude in the entry's matrix row; for `geometry` the value of r, R, and 1 rad for
+    /// angles). Default: 0.10.
     PerRow(f64),
 }
 
@@ -219,26 +220,15 @@ impl<'a> CalibrationProblem<'a> {
         }
     }
 
-    /// The IK matrix's derivatives with respect to the geometry parameters (IK entries × base parameters),
-    /// by central differences of the (cheap) map from geometry to IK matrix; `None` for an IK model.
-    fn ik_from_geometry(&self, x: &[f64], ik_entries: usize) -> Option<Option<DMatrix<f64>>> {
-        let Kinematics::Geometry { .. } = &self.model.kinematics else {
+    /// The IK matrix's derivatives with respect to the base parameters (IK entries × base parameters,
+    /// the kinematics' `twist_from_wheels_jacobian`); `Some(None)` when the parameters are the
+    /// IK entries themselves (the identity), `None` when the model cannot be differentiated at `x`.
+    fn ik_from_base(&self, x: &[f64]) -> Option<Option<DMatrix<f64>>> {
+        let k = &self.model.kinematics;
+        if k.params_are_ik_entries() {
             return Some(None);
-        };
-        let nb = self.model.n_base();
-        let mut dm = DMatrix::zeros(ik_entries, nb);
-        for c in 0..nb {
-            let h = 1e-7 * x[c].abs().max(1e-3);
-            let (mut xp, mut xm) = (x[..nb].to_vec(), x[..nb].to_vec());
-            xp[c] += h;
-            xm[c] -= h;
-            let mp = self.model.kinematics.ik(&xp).ok()?;
-            let mm = self.model.kinematics.ik(&xm).ok()?;
-            for (i, (a, b)) in mp.entries().iter().zip(mm.entries()).enumerate() {
-                dm[(i, c)] = (a - b) / (2.0 * h);
-            }
         }
-        Some(Some(dm))
+        k.twist_from_wheels_jacobian(&x[..self.model.n_base()]).ok().map(Some)
     }
 
     /// The effect parameters' Jacobian columns over all residuals (finite differences; see
@@ -257,8 +247,7 @@ impl<'a> CalibrationProblem<'a> {
     /// serve `x`.
     fn analytic_blocks(&self, x: &[f64], visit: &mut dyn FnMut(RunBlock<'_>)) -> Option<()> {
         let res = self.model.resolve(x).ok()?;
-        let ik_entries = res.ik.entries().len();
-        let dm = self.ik_from_geometry(x, ik_entries)?;
+        let dm = self.ik_from_base(x)?;
         let (nb, n) = (self.model.n_base(), x.len());
         let mut effects: Option<Vec<Vec<f64>>> = None;
         self.evaluator.ik_jacobian_blocks(&res, self.objective, &mut |b| {
@@ -448,6 +437,7 @@ fn hold_unexcited(x: &[f64], start: &[f64], scales: &[f64], weak: &DMatrix<f64>)
 pub fn search_box(model: &Model, start: &[f64], rule: BoxRule) -> Result<Bounds, OptimizeError> {
     let specs = model.params();
     let nb = model.n_base();
+    let scales = model.kinematics.param_scales(&start[..nb]);
     let mut lower = Vec::with_capacity(specs.len());
     let mut upper = Vec::with_capacity(specs.len());
     for (i, s) in specs.iter().enumerate() {
@@ -458,17 +448,9 @@ pub fn search_box(model: &Model, start: &[f64], rule: BoxRule) -> Result<Bounds,
             upper.push(s.upper.max(v));
             continue;
         } else {
-            match (rule, &model.kinematics) {
-                (BoxRule::PerValue(f), _) => f * v.abs(),
-                (BoxRule::PerRow(f), Kinematics::Ik { design }) => {
-                    let n = design.n_wheels();
-                    let row = i / n;
-                    f * start[row * n..(row + 1) * n].iter().fold(0.0f64, |m, x| m.max(x.abs()))
-                }
-                (BoxRule::PerRow(f), Kinematics::Geometry { design }) => {
-                    let n = design.n_wheels();
-                    if i >= 2 * n { f } else { f * v.abs() }
-                }
+            match rule {
+                BoxRule::PerValue(f) => f * v.abs(),
+                BoxRule::PerRow(f) => f * scales[i],
             }
         };
         lower.push(v - half);

@@ -26,8 +26,8 @@
 //! Pure computation: no I/O.
 
 use nalgebra::{DMatrix, DVector};
+use omni_kin::Model;
 use omni_kin::effect::Effect;
-use omni_kin::{Kinematics, Model};
 use serde::{Deserialize, Serialize};
 
 /// Settings of the analysis (scaled units: fractions of each parameter's scale).
@@ -155,21 +155,14 @@ impl Identifiability {
 pub fn param_scales(model: &Model) -> Vec<f64> {
     let specs = model.params();
     let nb = model.n_base();
+    let nominal: Vec<f64> = specs[..nb].iter().map(|s| s.null).collect();
+    let base = model.kinematics.param_scales(&nominal);
     specs
         .iter()
         .enumerate()
         .map(|(i, s)| {
             let scale = if i < nb {
-                match &model.kinematics {
-                    Kinematics::Ik { design } => {
-                        let n = design.n_wheels();
-                        design.row(i / n).iter().fold(0.0f64, |m, v| m.max(v.abs()))
-                    }
-                    Kinematics::Geometry { design } => {
-                        let n = design.n_wheels();
-                        if i >= 2 * n { 1.0 } else { s.null.abs() }
-                    }
-                }
+                base[i]
             } else if s.lower.is_finite() && s.upper.is_finite() && s.upper > s.lower {
                 0.5 * (s.upper - s.lower)
             } else {
@@ -487,32 +480,11 @@ fn wheel_pattern(
     if base_share < 0.25 {
         return (None, None, None);
     }
-    let nw = model.n_wheels();
-    // ΔM by a small central difference through the kinematics (exact for `ik`).
-    let h = 1e-4;
-    let step = |sign: f64| -> Option<Vec<f64>> {
-        let p: Vec<f64> = (0..nb).map(|i| params[i] + sign * h * dir[i] * scales[i]).collect();
-        model.kinematics.ik(&p).ok().map(|m| m.entries().to_vec())
+    let Some(base) = model.kinematics.unexcited(&params[..nb], &dir[..nb], &scales[..nb]) else {
+        return (None, None, None);
     };
-    let (Some(mp), Some(mm)) = (step(1.0), step(-1.0)) else { return (None, None, None) };
-    let dm = DMatrix::from_fn(3, nw, |r, c| (mp[r * nw + c] - mm[r * nw + c]) / (2.0 * h));
-    let Some(svd) = dm.try_svd(true, true, f64::EPSILON, 10_000) else { return (None, None, None) };
-    let Some(vt) = svd.v_t else { return (None, None, None) };
-    let k = (0..svd.singular_values.len()).max_by(|&a, &b| svd.singular_values[a].total_cmp(&svd.singular_values[b]));
-    let Some(k) = k else { return (None, None, None) };
-    let mut u: Vec<f64> = (0..nw).map(|c| vt[(k, c)]).collect();
-    // Design twist of the pattern.
-    let Ok(design) = model.kinematics.ik(&model.nominal()[..nb]) else { return (None, None, None) };
-    let mut t = design.twist(&u);
-    let lever = lever_arm_m(model);
-    // Prefer the sign that moves forward / turns left, for readable advice.
-    let key = [t.vx_m_s, t.vy_m_s, t.omega_rad_s * lever];
-    let dominant = key.iter().copied().fold(0.0f64, |a, b| if b.abs() > a.abs() { b } else { a });
-    if dominant < 0.0 {
-        u.iter_mut().for_each(|x| *x = -*x);
-        t = design.twist(&u);
-    }
-    let motion = [t.vx_m_s, t.vy_m_s, t.omega_rad_s];
+    let (u, motion) = (base.wheel_pattern, base.motion);
+    let lever = model.kinematics.lever_arm_m();
     let pattern: Vec<String> = u.iter().map(|x| format!("{x:+.2}")).collect();
     let wheels = model.kinematics.wheel_names();
     let named: Vec<String> = wheels.iter().zip(&pattern).map(|(w, p)| format!("{w} {p}")).collect();
@@ -549,16 +521,6 @@ fn pattern_share(u: &[f64], wheel_moment: Option<&DMatrix<f64>>) -> Option<f64> 
     (tr > 0.0).then(|| ((uv.transpose() * s * &uv)[(0, 0)] / tr).max(0.0).sqrt())
 }
 
-/// A typical wheel lever arm (m): the mean wheel distance of a geometry model, else 0.2 m.
-fn lever_arm_m(model: &Model) -> f64 {
-    match &model.kinematics {
-        Kinematics::Geometry { design } => {
-            design.wheels.iter().map(|w| w.distance_m).sum::<f64>() / design.wheels.len().max(1) as f64
-        }
-        Kinematics::Ik { .. } => 0.2,
-    }
-}
-
 /// The components of a design twist that matter, in words: "moving sideways (vy)" etc.
 fn motion_parts(t: &[f64; 3], lever: f64) -> Vec<&'static str> {
     let key = [t[0].abs(), t[1].abs(), (t[2] * lever).abs()];
@@ -590,7 +552,7 @@ fn motion_name(t: &[f64; 3], lever: f64) -> String {
 
 /// Advice: which runs excite a motion.
 fn motion_words(t: &[f64; 3], model: &Model) -> String {
-    let lever = lever_arm_m(model);
+    let lever = model.kinematics.lever_arm_m();
     let parts = motion_parts(t, lever);
     let translate: Vec<&str> = parts.iter().copied().filter(|p| !p.starts_with("rotating")).collect();
     let rotate = parts.iter().any(|p| p.starts_with("rotating"));
