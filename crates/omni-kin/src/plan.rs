@@ -106,28 +106,6 @@ impl StepPlan {
             _ => 1.0,
         })
     }
-
-    /// Wheel-angle increments of every step, `u = f h w` (rad), in step order: `steps × n_wheels` values
-    /// from the effective wheel speeds `wheels` (`n_wheels` per sample) and the fixed step `h_s`.
-    pub fn increments(&self, wheels: &[f64], n_wheels: usize, h_s: f64, mut out: impl FnMut(usize, usize, f64)) {
-        for (i, f) in self.fractions().enumerate() {
-            let w = &wheels[(self.first_sample + i) * n_wheels..(self.first_sample + i + 1) * n_wheels];
-            for (j, w) in w.iter().enumerate() {
-                out(i, j, f * h_s * w);
-            }
-        }
-    }
-
-    /// The partial-step increments `f h w` of query `q` (zero where the robot is at rest). rad.
-    pub fn query_increments(&self, q: &QueryPoint, wheels: &[f64], n_wheels: usize, h_s: f64) -> Vec<f64> {
-        match q.fraction {
-            Some(f) => {
-                let k = self.first_sample + q.step;
-                wheels[k * n_wheels..(k + 1) * n_wheels].iter().map(|w| f * h_s * w).collect()
-            }
-            None => vec![0.0; n_wheels],
-        }
-    }
 }
 
 /// The wheel speeds odometry integrates: the run's own, or a copy rewritten by `res`'s wheel-stage

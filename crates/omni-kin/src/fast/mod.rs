@@ -33,7 +33,7 @@ use crate::plan::wheel_speeds;
 use crate::pose::PoseError;
 use crate::run::Run;
 use nalgebra::DMatrix;
-use prepare::{Group, Increments, max_per_wheel};
+use prepare::{Group, Increments};
 use rayon::prelude::*;
 use std::cell::RefCell;
 
@@ -256,27 +256,31 @@ impl PreparedRuns {
     ) -> Option<R> {
         let m = res.ik.entries();
         let chunk = g.runs(runs)?;
-        if !res.wheel_effects.is_empty() {
-            let speeds: Vec<_> = chunk.iter().map(|r| wheel_speeds(res, r)).collect();
-            let wheels: Vec<&[f64]> = speeds.iter().map(|w| w.as_ref()).collect();
-            let mut u = Vec::new();
-            g.fill_steps(&wheels, &mut u);
-            let (query_u, u_max) = (g.fill_queries(&wheels), max_per_wheel(&u, self.n_wheels));
-            return in_range(m, &u_max).then(|| f(&Increments { u: &u, query_u: &query_u }));
-        }
-        if !in_range(m, g.u_max()) {
+        let rewritten: Option<Vec<_>> =
+            (!res.wheel_effects.is_empty()).then(|| chunk.iter().map(|r| wheel_speeds(res, r)).collect());
+        if rewritten.is_none() && !in_range(m, g.u_max()) {
             return None;
         }
-        if let Some(inc) = g.kept() {
+        if let (None, Some(inc)) = (&rewritten, g.kept()) {
             return Some(f(&inc));
         }
         SCRATCH.with(|cell| {
             let mut u = cell.take();
-            let wheels: Vec<&[f64]> = chunk.iter().map(Run::wheel_rad_s).collect();
-            g.fill_steps(&wheels, &mut u);
-            let out = f(&g.redone(&u));
+            let out = match &rewritten {
+                Some(speeds) => {
+                    let wheels: Vec<&[f64]> = speeds.iter().map(|w| w.as_ref()).collect();
+                    let u_max = g.fill_steps(&wheels, &mut u);
+                    let query_u = g.fill_queries(&wheels);
+                    in_range(m, &u_max).then(|| f(&Increments { u: &u, query_u: &query_u }))
+                }
+                None => {
+                    let wheels: Vec<&[f64]> = chunk.iter().map(Run::wheel_rad_s).collect();
+                    g.fill_steps(&wheels, &mut u);
+                    Some(f(&g.redone(&u)))
+                }
+            };
             cell.replace(u);
-            Some(out)
+            out
         })
     }
 }

@@ -102,9 +102,8 @@ impl Group {
         };
         let wheels: Vec<&[f64]> = chunk.iter().map(Run::wheel_rad_s).collect();
         let mut u = Vec::new();
-        g.fill_steps(&wheels, &mut u);
+        g.u_max = g.fill_steps(&wheels, &mut u);
         g.query_u = g.fill_queries(&wheels);
-        g.u_max = max_per_wheel(&u, n_wheels);
         if keep {
             g.u = u;
         }
@@ -134,33 +133,58 @@ impl Group {
     }
 
     /// Writes the increments of the group's steps into `u` (`u[k n + j][lane] = f h w`, from each lane's
-    /// wheel speeds `wheels[lane]`, zero past a lane's last step): the one place they are taken.
-    pub fn fill_steps(&self, wheels: &[&[f64]], u: &mut Vec<Lanes>) {
+    /// wheel speeds `wheels[lane]` and its plan's fractions, zero past a lane's last step) and returns the
+    /// largest |increment| of each wheel. With [`Self::fill_queries`], the one place increments are taken.
+    pub fn fill_steps(&self, wheels: &[&[f64]], u: &mut Vec<Lanes>) -> Vec<f64> {
         let n = self.n_wheels;
-        u.clear();
-        u.resize(self.steps * n, [0.0; LANES]);
-        for (lane, (plan, w)) in self.plans.iter().zip(wheels).enumerate() {
-            plan.increments(w, n, self.h[lane], |k, j, v| u[k * n + j][lane] = v);
+        // Each lane's wheel speeds over its steps (none for padding lanes).
+        let mut w: [&[f64]; LANES] = [&[]; LANES];
+        for (lane, (plan, speeds)) in self.plans.iter().zip(wheels).enumerate() {
+            w[lane] = &speeds[plan.first_sample * n..(plan.first_sample + plan.steps) * n];
         }
+        let h = self.h;
+        u.clear();
+        u.reserve(self.steps * n);
+        // Whole steps: f = 1, and (1 · h) · w = h · w exactly; four lanes at a time while all have steps.
+        let common = w.iter().map(|s| s.len()).min().unwrap_or(0);
+        let [a, b, c, d] = w.map(|s| &s[..common]);
+        for (((a, b), c), d) in a.iter().zip(b).zip(c).zip(d) {
+            u.push([h[0] * a, h[1] * b, h[2] * c, h[3] * d]);
+        }
+        for i in common..self.steps * n {
+            u.push(std::array::from_fn(|l| w[l].get(i).map_or(0.0, |v| h[l] * v)));
+        }
+        // Partial steps: their fraction of the step.
+        for (lane, plan) in self.plans.iter().enumerate() {
+            for &(k, f) in &plan.partial {
+                for j in 0..n {
+                    u[k * n + j][lane] = f * h[lane] * w[lane][k * n + j];
+                }
+            }
+        }
+        let mut u_max = vec![0.0f64; n];
+        for step in u.chunks_exact(n.max(1)) {
+            for (m, v) in u_max.iter_mut().zip(step) {
+                *m = v.iter().fold(*m, |a, x| a.max(x.abs()));
+            }
+        }
+        u_max
     }
 
-    /// The queries' partial-step increments from each lane's wheel speeds `wheels[lane]`. rad.
+    /// The queries' partial-step increments `f h w` from each lane's wheel speeds `wheels[lane]` (zero
+    /// where the robot is at rest), `n_wheels` per query. rad.
     pub fn fill_queries(&self, wheels: &[&[f64]]) -> Vec<f64> {
         let n = self.n_wheels;
         let mut query_u = Vec::with_capacity(self.queries.len() * n);
         for q in &self.queries {
-            let plan = &self.plans[q.lane];
-            query_u.extend(plan.query_increments(&plan.queries[q.source], wheels[q.lane], n, self.h[q.lane]));
+            let (plan, h) = (&self.plans[q.lane], self.h[q.lane]);
+            let at = &plan.queries[q.source];
+            let k = plan.first_sample + at.step;
+            match at.fraction {
+                Some(f) => query_u.extend(wheels[q.lane][k * n..(k + 1) * n].iter().map(|w| f * h * w)),
+                None => query_u.extend(std::iter::repeat_n(0.0, n)),
+            }
         }
         query_u
     }
-}
-
-/// Largest |increment| of each wheel over lane vectors `u` (`n` per step). rad.
-pub(super) fn max_per_wheel(u: &[Lanes], n: usize) -> Vec<f64> {
-    let mut m = vec![0.0f64; n];
-    for (i, v) in u.iter().enumerate() {
-        m[i % n] = v.iter().fold(m[i % n], |a, x| a.max(x.abs()));
-    }
-    m
 }
