@@ -8,8 +8,8 @@
 //! Prints evaluations, wheel samples per evaluation, CPU and wall seconds of the calibration and of as
 //! many kernel evaluations (Eq. 6, Eq. 1 Euler 10 ms, the design matrix), and the ratio of their rates.
 use omnical::cli::dataset::{LoadOptions, load};
-use omnical::ga::calibrate::{Plan, Preset, calibrate};
 use omnical::ga::NoopObserver;
+use omnical::ga::calibrate::{Plan, Preset, calibrate};
 use omnical::kin::cost::CostKind;
 use omnical::kin::evaluate::Evaluator;
 use omnical::kin::{FittedModel, IkMatrix, Integration, Model, Run, Selection};
@@ -48,10 +48,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         let (kernel_cpu, kernel_wall) = (cpu_s() - c0, w0.elapsed().as_secs_f64());
         let rate = |s: f64| (cal.evaluations * samples) as f64 / s / 1e6;
-        println!("threads {threads}: {} runs, {samples} samples per evaluation, {} evaluations", runs.len(), cal.evaluations);
+        println!(
+            "threads {threads}: {} runs, {samples} samples per evaluation, {} evaluations",
+            runs.len(),
+            cal.evaluations
+        );
         println!("training: {train_cpu:.2} s CPU, {train_wall:.2} s wall, {:.0} M samples/s (wall)", rate(train_wall));
-        println!("kernel:   {kernel_cpu:.2} s CPU, {kernel_wall:.2} s wall, {:.0} M samples/s (wall)", rate(kernel_wall));
-        println!("training / kernel rate: {:.1} % (CPU), {:.1} % (wall)", 100.0 * kernel_cpu / train_cpu, 100.0 * kernel_wall / train_wall);
+        println!(
+            "kernel:   {kernel_cpu:.2} s CPU, {kernel_wall:.2} s wall, {:.0} M samples/s (wall)",
+            rate(kernel_wall)
+        );
+        println!(
+            "training / kernel rate: {:.1} % (CPU), {:.1} % (wall)",
+            100.0 * kernel_cpu / train_cpu,
+            100.0 * kernel_wall / train_wall
+        );
         Ok(())
     })
     .map_err(|e| e as Box<dyn std::error::Error>)

@@ -519,8 +519,8 @@ fn compare(
         reports.push(RunReport {
             name: r.name().into(),
             command: r.command().map(|c| c.label()),
-            path_rms: rms(&path),
-            design_path_rms: rms(&dpath),
+            path_rms: rms(path),
+            design_path_rms: rms(dpath),
             end_error: end.norm(),
             design_end_error: dend.norm(),
         });

@@ -252,11 +252,11 @@ impl<'a> Evaluator<'a> {
         let w = kind.heading_weight();
         let n_runs = self.runs.len();
         let mut r = Vec::new();
-        prepared.ik_jacobian_rows(res, self.runs, &mut |run, errors, jac| {
-            let k = residual_weights(n_runs, errors.len(), w);
+        prepared.ik_jacobian_rows(res, self.runs, &mut |rows| {
+            let k = residual_weights(n_runs, rows.errors.len(), w);
             r.clear();
-            r.extend(errors.iter().flat_map(|e| [e.dx_m * k[0], e.dy_m * k[1], e.dtheta_rad * k[2]]));
-            let mut jacobian = jac.clone();
+            r.extend(rows.errors.iter().flat_map(|e| [e.dx_m * k[0], e.dy_m * k[1], e.dtheta_rad * k[2]]));
+            let (run, mut jacobian) = (rows.run, rows.jacobian.clone());
             for (i, mut row) in jacobian.row_iter_mut().enumerate() {
                 row *= k[i % 3];
             }

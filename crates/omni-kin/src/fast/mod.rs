@@ -33,7 +33,7 @@ use crate::plan::wheel_speeds;
 use crate::pose::PoseError;
 use crate::run::Run;
 use nalgebra::DMatrix;
-use prepare::{Group, Increments};
+use prepare::{Group, Increments, max_per_wheel};
 use rayon::prelude::*;
 use std::cell::RefCell;
 
@@ -92,6 +92,18 @@ pub struct FastErrors {
     pub at_queries: Vec<PoseError>,
     /// End-pose error of each run (the Eq. 6 terms).
     pub ends: Vec<PoseError>,
+}
+
+/// One run's errors at its selected poses and their unscaled IK Jacobian, as
+/// [`PreparedRuns::ik_jacobian_rows`] visits them.
+#[derive(Clone, Copy, Debug)]
+pub struct JacobianRows<'a> {
+    /// Index of the run.
+    pub run: usize,
+    /// Errors at the selected poses (for [`Selection::End`], the end pose).
+    pub errors: &'a [PoseError],
+    /// `3 × errors.len()` rows (dx, dy, dθ of each pose) by the IK entries `m11 … m3N`.
+    pub jacobian: &'a DMatrix<f64>,
 }
 
 /// Runs prepared for fast repeated evaluation at one step rule and one selection of ground-truth poses.
@@ -197,7 +209,7 @@ impl PreparedRuns {
         &self,
         res: &Resolved<'_>,
         runs: &[Run],
-        visit: &mut dyn FnMut(usize, &[PoseError], &DMatrix<f64>),
+        visit: &mut dyn FnMut(JacobianRows<'_>),
     ) -> Option<()> {
         let m = res.ik.entries();
         let ok = self.supports(res) && res.wheel_effects.is_empty() && runs.len() == self.n_runs;
@@ -219,7 +231,7 @@ impl PreparedRuns {
                 .collect();
             for (g, lanes) in batch.iter().zip(rows?) {
                 for (lane, r) in lanes.iter().enumerate() {
-                    visit(g.first_run + lane, &r.errors, &r.jacobian);
+                    visit(JacobianRows { run: g.first_run + lane, errors: &r.errors, jacobian: &r.jacobian });
                 }
             }
         }
@@ -269,7 +281,8 @@ impl PreparedRuns {
             let out = match &rewritten {
                 Some(speeds) => {
                     let wheels: Vec<&[f64]> = speeds.iter().map(|w| w.as_ref()).collect();
-                    let u_max = g.fill_steps(&wheels, &mut u);
+                    g.fill_steps(&wheels, &mut u);
+                    let u_max = max_per_wheel(&u, self.n_wheels);
                     let query_u = g.fill_queries(&wheels);
                     in_range(m, &u_max).then(|| f(&Increments { u: &u, query_u: &query_u }))
                 }

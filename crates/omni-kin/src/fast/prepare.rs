@@ -102,7 +102,8 @@ impl Group {
         };
         let wheels: Vec<&[f64]> = chunk.iter().map(Run::wheel_rad_s).collect();
         let mut u = Vec::new();
-        g.u_max = g.fill_steps(&wheels, &mut u);
+        g.fill_steps(&wheels, &mut u);
+        g.u_max = max_per_wheel(&u, n_wheels);
         g.query_u = g.fill_queries(&wheels);
         if keep {
             g.u = u;
@@ -133,9 +134,9 @@ impl Group {
     }
 
     /// Writes the increments of the group's steps into `u` (`u[k n + j][lane] = f h w`, from each lane's
-    /// wheel speeds `wheels[lane]` and its plan's fractions, zero past a lane's last step) and returns the
-    /// largest |increment| of each wheel. With [`Self::fill_queries`], the one place increments are taken.
-    pub fn fill_steps(&self, wheels: &[&[f64]], u: &mut Vec<Lanes>) -> Vec<f64> {
+    /// wheel speeds `wheels[lane]` and its plan's fractions, zero past a lane's last step). With
+    /// [`Self::fill_queries`], the one place increments are taken.
+    pub fn fill_steps(&self, wheels: &[&[f64]], u: &mut Vec<Lanes>) {
         let n = self.n_wheels;
         // Each lane's wheel speeds over its steps (none for padding lanes).
         let mut w: [&[f64]; LANES] = [&[]; LANES];
@@ -162,13 +163,6 @@ impl Group {
                 }
             }
         }
-        let mut u_max = vec![0.0f64; n];
-        for step in u.chunks_exact(n.max(1)) {
-            for (m, v) in u_max.iter_mut().zip(step) {
-                *m = v.iter().fold(*m, |a, x| a.max(x.abs()));
-            }
-        }
-        u_max
     }
 
     /// The queries' partial-step increments `f h w` from each lane's wheel speeds `wheels[lane]` (zero
@@ -187,4 +181,15 @@ impl Group {
         }
         query_u
     }
+}
+
+/// Largest |increment| of each wheel over lane vectors `u` (`n` per step). rad.
+pub(super) fn max_per_wheel(u: &[Lanes], n: usize) -> Vec<f64> {
+    let mut u_max = vec![0.0f64; n];
+    for step in u.chunks_exact(n.max(1)) {
+        for (m, v) in u_max.iter_mut().zip(step) {
+            *m = v.iter().fold(*m, |a, x| a.max(x.abs()));
+        }
+    }
+    u_max
 }

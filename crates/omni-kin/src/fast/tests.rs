@@ -31,14 +31,14 @@ fn max_gap(model: &Model, params: &[f64], runs: &[Run], selection: Selection) ->
     let mut at = |a: &PoseError, b: &PoseError| {
         gap = gap.max((a.dx_m - b.dx_m).abs()).max((a.dy_m - b.dy_m).abs()).max((a.dtheta_rad - b.dtheta_rad).abs());
     };
-    for i in 0..runs.len() {
+    for (i, end) in ends.iter().enumerate() {
         assert_eq!(f.run(i).len(), w.run(i).len());
         for (a, b) in f.run(i).iter().zip(w.run(i)) {
             at(a, b);
             count += 1;
         }
         at(&f.ends()[i], &w.ends()[i]);
-        at(&ends[i], &w.ends()[i]);
+        at(end, &w.ends()[i]);
     }
     (gap, count)
 }
@@ -212,7 +212,10 @@ fn redone_increments_give_the_same_bits_as_kept_ones() {
             if effect.is_none() {
                 let rows = |p: &PreparedRuns| {
                     let mut out = Vec::new();
-                    p.ik_jacobian_rows(&res, &runs, &mut |run, e, j| out.push((run, e.to_vec(), j.clone()))).unwrap();
+                    (p.ik_jacobian_rows(&res, &runs, &mut |r| {
+                        out.push((r.run, r.errors.to_vec(), r.jacobian.clone()))
+                    }))
+                    .unwrap();
                     out
                 };
                 assert_eq!(rows(&kept), rows(&redone));
