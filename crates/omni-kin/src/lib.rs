@@ -22,6 +22,7 @@ pub mod model;
 pub mod odometry;
 pub mod plan;
 pub mod pose;
+pub mod robot;
 pub mod run;
 pub mod simulate;
 
@@ -34,4 +35,5 @@ pub use kinematics::{BaseKinematics, BaseRecord, KinematicsKind, UnexcitedBase};
 pub use model::{FittedModel, Integration, Kinematics, Model, Scheme, StepMode};
 pub use odometry::{Selection, Trajectory};
 pub use pose::{Pose2, PoseError, StampedPose, Twist2};
+pub use robot::{BaseKind, RobotDescription};
 pub use run::{Command, Run, RunData};

@@ -311,3 +311,71 @@ fn ik_jacobian_serves_six_wheels() {
         }
     }
 }
+
+/// The robot-type models off their design values: a differential drive as robot.toml describes one (left
+/// wheel first, at +y, driving backward at positive speed; 2 wheels) and a slightly asymmetric mecanum base
+/// (4 wheels).
+fn robot_type_models() -> Vec<(Model, Vec<f64>)> {
+    use crate::geometry::Wheel;
+    use crate::kinematics::KinematicsKind;
+    use std::f64::consts::{FRAC_PI_2, PI};
+    let wheel = |r, angle, offset| Wheel {
+        radius_m: r,
+        distance_m: 0.105,
+        angle_rad: angle,
+        drive_offset_rad: offset,
+        roller_angle_rad: 0.0,
+    };
+    let wheels = vec![wheel(0.041, FRAC_PI_2, PI), wheel(0.043, -FRAC_PI_2, 0.0)];
+    let diff = RobotGeometry { wheel_names: vec!["left".into(), "right".into()], wheels };
+    let mut mecanum = RobotGeometry::mecanum4(0.05, 0.2, 0.15);
+    mecanum.wheels[1].radius_m = 0.051;
+    let off_design = |kind, g: &RobotGeometry| {
+        let model = Model::design(kind, Some(g)).unwrap().with_integration(Integration::DEFAULT);
+        let p: Vec<f64> =
+            model.nominal().iter().enumerate().map(|(i, v)| v * (1.0 + 0.02 * (i as f64 - 1.5))).collect();
+        (model, p)
+    };
+    vec![off_design(KinematicsKind::Diff, &diff), off_design(KinematicsKind::Mecanum, &mecanum)]
+}
+
+#[test]
+fn serves_diff_and_mecanum_models_as_the_walk_does() {
+    for (model, p) in robot_type_models() {
+        let n = model.n_wheels();
+        let runs: Vec<Run> = (0..5).map(|s| synthetic_run(n, s)).collect();
+        for selection in [Selection::End, Selection::Path(1), Selection::Path(3)] {
+            let (gap, count) = max_gap(&model, &p, &runs, selection);
+            assert!(gap < 1e-9, "{} ({n} wheels) {selection:?}: gap {gap:e} m", model.kinematics.id());
+            assert!(count >= 5);
+        }
+    }
+}
+
+/// The fast path's IK Jacobian chained through the model's `twist_from_wheels_jacobian` (what the LM
+/// polish uses for parametric models) against central differences in the model's own parameters.
+#[test]
+fn chained_jacobian_of_diff_and_mecanum_models_matches_central_differences() {
+    for (model, x) in robot_type_models() {
+        let runs: Vec<Run> = (0..4).map(|s| synthetic_run(model.n_wheels(), s)).collect();
+        let ev = Evaluator::for_cost(&model, &runs, CostKind::PATH).unwrap();
+        let (r, j_ik) = stacked(&ev, &model.resolve(&x).unwrap(), CostKind::PATH);
+        let j = j_ik * model.kinematics.twist_from_wheels_jacobian(&x).unwrap();
+        assert_eq!(j.ncols(), x.len());
+        for c in 0..x.len() {
+            let h = 1e-6 * x[c].abs();
+            let (mut xp, mut xm) = (x.clone(), x.clone());
+            xp[c] += h;
+            xm[c] -= h;
+            let rp = ev.residual_vector(&model.resolve(&xp).unwrap(), CostKind::PATH);
+            let rm = ev.residual_vector(&model.resolve(&xm).unwrap(), CostKind::PATH);
+            let col_max = (0..r.len()).map(|i| j[(i, c)].abs()).fold(0.0f64, f64::max);
+            assert!(col_max > 1e-3, "{}: column {c} is flat", model.kinematics.id());
+            for i in 0..r.len() {
+                let fd = (rp[i] - rm[i]) / (2.0 * h);
+                let gap = (fd - j[(i, c)]).abs() / col_max;
+                assert!(gap < 1e-6, "{} column {c} row {i}: {fd} vs {}", model.kinematics.id(), j[(i, c)]);
+            }
+        }
+    }
+}
