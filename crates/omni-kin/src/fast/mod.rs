@@ -3,16 +3,16 @@
 //! literal walk in tests) at close to the arithmetic limit. [`crate::evaluate::Evaluator`] chooses it
 //! whenever it serves a model and aggregates its errors; nothing else calls it.
 //!
-//! - [`prepare`]: what depends only on the data, done once in [`PreparedRuns::new`]: each step's fraction
+//! - `prepare.rs`: what depends only on the data, done once in [`PreparedRuns::new`]: each step's fraction
 //!   is folded into its wheel-angle increment `u_k = f_k h w_k` (rad), so with the IK matrix `M` a step's
 //!   body displacement is `M u_k` — 3 × N multiply-adds — for both Eq. 1 (Euler) and exact arcs. The
 //!   increments are kept up to [`KEPT_INCREMENTS_MAX_BYTES`] (8 B per wheel and sample); for larger
 //!   datasets each walk redoes a lane group's increments from the runs' own wheel columns (the same
 //!   products, so the same numbers). Runs are interleaved four to a lane group (struct of arrays).
-//! - [`lanes`]: the four lanes' arithmetic, AVX2 + FMA on x86-64 CPUs that have them (checked at run time
+//! - `lanes.rs`: the four lanes' arithmetic, AVX2 + FMA on x86-64 CPUs that have them (checked at run time
 //!   through `pulp`, no `-C target-cpu` needed), plain arrays otherwise.
-//! - [`kernel`]: the step loop; the heading's cosine and sine advance by polynomial rotations.
-//! - [`jacobian`]: the forward-mode Jacobian with respect to the IK matrix, for the LM polish.
+//! - `kernel.rs`: the step loop; the heading's cosine and sine advance by polynomial rotations.
+//! - `jacobian.rs`: the forward-mode Jacobian with respect to the IK matrix, for the LM polish.
 //!
 //! Scope. Fixed steps with no clock lag, no twist-stage effects and no measured stamps, 1 to
 //! [`MAX_WHEELS`] wheels; a sensor offset (measurement stage) and wheel-stage effects (the increments are
