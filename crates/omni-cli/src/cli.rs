@@ -7,9 +7,20 @@ use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Parser, Subcommand};
 use omni_kin::Choice;
 
-/// Calibrate omnidirectional robot kinematics from logs, and find out why the model still misses.
+/// Calibrate a wheeled robot's odometry from recorded runs, and find out why the model still misses.
+///
+/// omnical reads runs in which the wheel encoders and a ground-truth pose (motion capture, a total
+/// station) were recorded together (ROS 2 MCAP bags, CSV files or OptiOdom folders), fits the robot's
+/// kinematic model (the matrix that turns wheel speeds into body velocity, or the wheel radii and
+/// positions) so that integrated odometry follows the ground truth, and names the physical effect
+/// (a clock offset, slip, backlash, …) that the model still misses.
+///
+/// A session: `omnical init RECORDING --urdf robot.urdf` (describe the robot once),
+/// `omnical train RUNS --out fitted.toml`, `omnical eval --model fitted.toml OTHER_RUNS`,
+/// `omnical diagnose --model fitted.toml RUNS --validate OTHER_RUNS`, `omnical report …`,
+/// `omnical export …`. `omnical demo` shows the whole story on simulated data.
 #[derive(Debug, Parser)]
-#[command(name = "omnical", version, about, long_about = None)]
+#[command(name = "omnical", version)]
 pub struct Cli {
     /// Worker threads (default: all cores). Results do not depend on it.
     #[arg(long, global = true)]
@@ -49,6 +60,20 @@ pub enum Command {
     /// The whole story on built-in simulated data with a hidden effect: simulate, train, diagnose, add the
     /// effect, retrain, print the error ladder.
     Demo(cmd::demo::Args),
+}
+
+/// The built-in effect ids, for help texts: `sensor_offset, sensor_offset_yaw, time_offset, …`.
+pub fn effect_ids() -> String {
+    let mut ids: Vec<&str> = omni_kin::effect::CATALOGUE.to_vec();
+    if let Some(i) = ids.iter().position(|&id| id == "sensor_offset") {
+        ids.insert(i + 1, "sensor_offset_yaw");
+    }
+    ids.join(", ")
+}
+
+/// The help of an option that takes effect ids: `lead`, then the ids.
+pub fn effect_help(lead: &str) -> String {
+    format!("{lead} Effect ids: {}.", effect_ids())
 }
 
 /// The value parser of a library [`Choice`] (a preset, an objective, …): its ids in kebab-case, each

@@ -2,17 +2,22 @@
 //! wheel's console script (`omnical._omnical.cli_main`) run the same code.
 
 use crate::cli::{Cli, run};
-use clap::Parser;
+use clap::error::{ContextKind, ContextValue, Error, ErrorKind};
+use clap::{CommandFactory, Parser};
 use std::ffi::OsString;
 
 /// Parses `args` (the program name first, as `std::env::args_os`) and runs the command. Returns the exit
 /// status: 0 on success and for `--help`/`--version` and a closed pipe, 2 on errors (printed on stderr as
 /// `error: {e:#}`), 130 after Ctrl-C stopped a training, clap's own status for usage errors.
 pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
-    let cli = match Cli::try_parse_from(args) {
+    let args: Vec<OsString> = args.into_iter().collect();
+    let cli = match Cli::try_parse_from(&args) {
         Ok(cli) => cli,
-        Err(e) => {
+        Err(mut e) => {
             // `--help` and `--version` arrive here too; clap prints them on stdout and exits 0.
+            if let Some(tip) = validate_tip(&e, &args) {
+                e.insert(ContextKind::Suggested, ContextValue::StyledStrs(vec![tip.into()]));
+            }
             let _ = e.print();
             return e.exit_code();
         }
@@ -34,6 +39,22 @@ pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
             2
         }
     }
+}
+
+/// When the positional runs are missing from a command line that has `--validate` (an older spelling gave
+/// it several paths, and the runs were taken for held-out ones), the spelling that works.
+fn validate_tip(e: &Error, args: &[OsString]) -> Option<String> {
+    if e.kind() != ErrorKind::MissingRequiredArgument
+        || !args.iter().any(|a| a.to_string_lossy().starts_with("--validate"))
+    {
+        return None;
+    }
+    let cli = Cli::command();
+    let command = args.iter().skip(1).find_map(|a| cli.find_subcommand(a).map(|c| c.get_name().to_string()))?;
+    Some(format!(
+        "--validate takes one path (repeat it for more) and the training runs come without a flag: \
+         omnical {command} --model MODEL TRAIN_RUNS... --validate HELD_OUT [--validate HELD_OUT]..."
+    ))
 }
 
 /// The panic message of `print!`/`println!` when stdout is a closed pipe.

@@ -24,7 +24,9 @@ pub struct Args {
     #[arg(long, default_value_t = 2)]
     pub runs_per_command: usize,
     /// The hidden effect, NAME=VALUES as for `simulate --effect`.
-    #[arg(long, default_value = "time_offset=0.06")]
+    #[arg(long, default_value = "time_offset=0.06", help = crate::cli::effect_help(
+        "The hidden effect, NAME=VALUES as for `simulate --effect`."
+    ))]
     pub hidden: String,
 }
 

@@ -1,6 +1,7 @@
 //! `omnical diagnose`: compare, locate, and name the missing effect; `--auto` climbs the error ladder.
 
 use super::{DataArgs, load_runs, resolve_model};
+use crate::cli::effect_help;
 use crate::design::design_for;
 use crate::{atomic, model_file};
 use anyhow::Context;
@@ -16,14 +17,17 @@ pub struct Args {
     /// Training runs (the ones the model was fitted on).
     #[arg(required = true)]
     pub runs: Vec<PathBuf>,
-    /// Held-out runs (default: 2-fold cross-validation over repetitions).
-    #[arg(long, num_args = 1..)]
+    /// Held-out runs: a file or folder; repeat for more (`--validate A --validate B`). Default: 2-fold
+    /// cross-validation over repetitions.
+    #[arg(long, value_name = "PATH")]
     pub validate: Vec<PathBuf>,
     /// Add effects one at a time while the held-out cost falls, and print the error ladder.
     #[arg(long)]
     pub auto: bool,
-    /// Candidate effects (default: the whole catalogue), comma-separated.
-    #[arg(long, value_delimiter = ',')]
+    /// Candidate effects (effect ids, comma-separated; default: all of them).
+    #[arg(long, value_delimiter = ',', value_name = "NAMES", help = effect_help(
+        "Candidate effects, comma-separated (default: all of them)."
+    ))]
     pub candidates: Vec<String>,
     /// Minimum relative fall of the held-out path cost to recommend an effect.
     #[arg(long, default_value_t = DiagnoseOptions::default().min_gain)]

@@ -28,7 +28,7 @@ pub struct Args {
     /// Replace an existing file.
     #[arg(long)]
     pub force: bool,
-    /// Refuse a recording larger than this; it is read into memory whole. MiB.
+    /// Refuse a recording larger than this (MiB); it is read into memory whole.
     #[arg(long, value_name = "MIB", default_value_t = dataset::DEFAULT_MAX_FILE_BYTES >> 20)]
     pub max_file_mb: u64,
 }

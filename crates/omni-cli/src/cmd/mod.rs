@@ -15,6 +15,9 @@ use crate::robot_file;
 use omni_kin::FittedModel;
 use std::path::PathBuf;
 
+/// The help heading of [`DataArgs`].
+pub const DATA_OPTIONS: &str = "Data options";
+
 /// The robot the data was recorded on (docs/formats.md, "Robot description").
 #[derive(Debug, Default, clap::Args)]
 pub struct RobotArgs {
@@ -24,8 +27,9 @@ pub struct RobotArgs {
     pub robot: Option<String>,
 }
 
-/// Options shared by commands that read runs.
+/// Options shared by commands that read runs, listed under "Data options" in every command's help.
 #[derive(Debug, clap::Args)]
+#[command(next_help_heading = DATA_OPTIONS)]
 pub struct DataArgs {
     /// The robot description (design geometry, joint names, topics).
     #[command(flatten)]
@@ -46,7 +50,7 @@ pub struct DataArgs {
     /// Child frame of the ground truth in a TF topic (MCAP), e.g. `base_link`.
     #[arg(long)]
     pub gt_child_frame: Option<String>,
-    /// Cut MCAP files into runs where the robot stands still at least this long. s.
+    /// Cut MCAP files into runs where the robot stands still at least this long (s).
     #[arg(long)]
     pub split: Option<f64>,
     /// Skip runs that fail to load (they are listed) instead of stopping.
@@ -55,7 +59,7 @@ pub struct DataArgs {
     /// Encoder ticks per wheel revolution, for CSV files with tick columns.
     #[arg(long)]
     pub ticks_per_rev: Option<f64>,
-    /// Refuse input files (CSV, MCAP) larger than this; each is read into memory whole. MiB.
+    /// Refuse input files (CSV, MCAP) larger than this (MiB); each is read into memory whole.
     #[arg(long, value_name = "MIB", default_value_t = dataset::DEFAULT_MAX_FILE_BYTES >> 20)]
     pub max_file_mb: u64,
 }

@@ -1,7 +1,7 @@
 //! `omnical plan`: propose calibration runs that excite every parameter.
 
 use super::{DataArgs, load_runs};
-use crate::cli::choice;
+use crate::cli::{choice, effect_help};
 use crate::{atomic, design, robot_file};
 use anyhow::Context;
 use omni_ga::excitation::{self, PlanRequest, RunPlan, RunSet};
@@ -16,8 +16,8 @@ pub struct Args {
     /// Base model to plan for.
     #[arg(long, value_parser = choice::<KinematicsKind>(), default_value_t = KinematicsKind::default())]
     pub model: KinematicsKind,
-    /// Effects to plan for (catalogue ids). Repeatable.
-    #[arg(long = "effect", value_name = "NAME")]
+    /// An effect to plan for (an effect id). Repeatable.
+    #[arg(long = "effect", value_name = "NAME", help = effect_help("An effect to plan for. Repeatable."))]
     pub effects: Vec<String>,
     /// Take the robot's geometry from these runs (OptiOdom metadata), when there is no --robot.
     #[arg(long = "robot-from", value_name = "RUNS", num_args = 1..)]
@@ -31,22 +31,22 @@ pub struct Args {
     /// Repetitions of each command.
     #[arg(long, default_value_t = PlanRequest::default().repetitions)]
     pub repetitions: usize,
-    /// Translation speed of the commands. m/s.
+    /// Translation speed of the commands (m/s).
     #[arg(long = "speed", default_value_t = PlanRequest::default().speed_m_s, value_name = "M_S")]
     pub speed_m_s: f64,
-    /// Turn rate of the commands. rad/s.
+    /// Turn rate of the commands (rad/s).
     #[arg(long = "omega", default_value_t = PlanRequest::default().omega_rad_s, value_name = "RAD_S")]
     pub omega_rad_s: f64,
-    /// How long each command is held. s.
+    /// How long each command is held (s).
     #[arg(long = "duration", default_value_t = PlanRequest::default().duration_s, value_name = "S")]
     pub duration_s: f64,
-    /// Ground-truth rate. Hz.
+    /// Ground-truth rate (Hz).
     #[arg(long = "truth-rate", default_value_t = PlanRequest::default().truth_rate_hz, value_name = "HZ")]
     pub truth_rate_hz: f64,
-    /// Ground-truth position noise per axis. m.
+    /// Ground-truth position noise per axis (m).
     #[arg(long, default_value_t = PlanRequest::default().truth_noise_m, value_name = "M")]
     pub truth_noise_m: f64,
-    /// Ground-truth heading noise. rad.
+    /// Ground-truth heading noise (rad).
     #[arg(long, default_value_t = PlanRequest::default().truth_noise_rad, value_name = "RAD")]
     pub truth_noise_rad: f64,
     /// Write the planned commands as CSV here (v_m_s, alpha_deg, omega_rad_s, repetitions).

@@ -16,9 +16,9 @@ pub struct Args {
     /// Training runs (the ones the model was fitted on).
     #[arg(required = true)]
     pub runs: Vec<PathBuf>,
-    /// Held-out runs: the figures use them (default: the training runs, 2-fold cross-validation in the
-    /// diagnosis).
-    #[arg(long, num_args = 1..)]
+    /// Held-out runs: a file or folder; repeat for more (`--validate A --validate B`). The figures use
+    /// them (default: the training runs, 2-fold cross-validation in the diagnosis).
+    #[arg(long, value_name = "PATH")]
     pub validate: Vec<PathBuf>,
     /// The HTML file to write.
     #[arg(long, default_value = "report.html")]

@@ -1,5 +1,6 @@
 //! `omnical simulate`: write a flower-benchmark dataset from a true robot with optional hidden effects.
 
+use crate::cli::effect_help;
 use crate::robot_file::{self, RobotFile};
 use crate::{atomic, dataset, design, model_file};
 use anyhow::{Context, bail};
@@ -37,12 +38,15 @@ pub struct Args {
     /// Repetitions of each of the 36 commands.
     #[arg(long, default_value_t = SimConfig::default().runs_per_command)]
     pub runs_per_command: usize,
-    /// Duration of each command. s.
+    /// Duration of each command (s).
     #[arg(long = "duration", value_name = "DURATION", default_value_t = SimConfig::default().duration_s)]
     pub duration_s: f64,
     /// Inject an effect into the true robot: NAME=V1,V2,… in the effect's parameter order
     /// (`sample_timing=DROP_PROBABILITY,JITTER_S`). Repeatable.
-    #[arg(long = "effect", value_name = "NAME=VALUES")]
+    #[arg(long = "effect", value_name = "NAME=VALUES", help = effect_help(
+        "Inject an effect into the true robot: NAME=V1,V2,… in the effect's parameter order \
+         (sample_timing=DROP_PROBABILITY,JITTER_S). Repeatable."
+    ))]
     pub effects: Vec<String>,
     /// True robot: `paper` (Eq. 9, APR-02 only), `design` (the robot's design) or a model file.
     #[arg(long, default_value = "paper")]

@@ -1,7 +1,7 @@
 //! `omnical train`: fit a model to training runs.
 
 use super::{DataArgs, load_runs};
-use crate::cli::choice;
+use crate::cli::{choice, effect_help};
 use crate::{atomic, design, interrupt, model_file, progress};
 use anyhow::Context;
 use omni_ga::calibrate::{Calibration, Plan, Preset, Unexcited, calibrate};
@@ -29,8 +29,8 @@ pub struct Args {
     /// GA seed.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Add effects to fit (catalogue ids). Repeatable.
-    #[arg(long = "effect", value_name = "NAME")]
+    /// Add an effect to fit (an effect id). Repeatable.
+    #[arg(long = "effect", value_name = "NAME", help = effect_help("Add an effect to fit. Repeatable."))]
     pub effects: Vec<String>,
     /// Write the fitted model here (TOML; read back by `--model FILE`).
     #[arg(long)]
@@ -55,7 +55,7 @@ pub struct FitArgs {
     /// Path objective: use every k-th ground-truth pose (odometry is evaluated at its stamp).
     #[arg(long, default_value_t = CostKind::PATH_EVERY, value_name = "K")]
     pub every: usize,
-    /// Path objective: weight of heading errors against position errors. m/rad.
+    /// Path objective: weight of heading errors against position errors (m/rad).
     #[arg(long, default_value_t = CostKind::PATH_HEADING_WEIGHT_M_PER_RAD, value_name = "M_PER_RAD")]
     pub heading_weight: f64,
     /// Directions the runs do not constrain: hold them at the start or let them move (default: the

@@ -129,7 +129,7 @@ pub enum KinematicsKind {
 
 crate::choice!(KinematicsKind, default = Ik, {
     Ik => "ik": "Every entry of the IK matrix (the paper)",
-    Geometry => "geometry": "Wheel radii, distances and angles (the paper's ref. [17])",
+    Geometry => "geometry": "Per-wheel radius, distance from the centre and mounting angle (parametric)",
     Diff => "diff": "A differential drive: both wheel radii and the separation",
     Mecanum => "mecanum": "Four wheels on a rectangle (mecanum, omni X): per-wheel radius and the half-extents",
 });

@@ -1,0 +1,130 @@
+//! `omnical --help` and the subcommands' help, read as a new user would, and the `--validate` spelling
+//! (issue 19): the real binary.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::process::{Command, Output};
+
+fn omnical(args: &[&str]) -> Output {
+    let dir = tempfile::tempdir().unwrap();
+    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir.path()).output().expect("run omnical")
+}
+
+fn help(args: &[&str]) -> String {
+    let out = omnical(args);
+    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8(out.stdout).unwrap()
+}
+
+const SUBCOMMANDS: [&str; 9] = ["simulate", "eval", "train", "diagnose", "report", "export", "plan", "init", "demo"];
+/// The subcommands that read runs (and take the data options).
+const READING_RUNS: [&str; 6] = ["eval", "train", "diagnose", "report", "export", "plan"];
+const EFFECT_IDS: &str = "sensor_offset, sensor_offset_yaw, time_offset, wheel_asymmetry, speed_scale, rotation_slip, \
+                          accel_slip, backlash, wheel_eccentricity, sample_timing";
+
+#[test]
+fn top_of_the_help_describes_the_tool() {
+    for flag in ["-h", "--help"] {
+        let text = help(&[flag]);
+        let first = text.lines().next().unwrap().trim_end_matches('.');
+        assert_eq!(
+            first, "Calibrate a wheeled robot's odometry from recorded runs, and find out why the model still misses",
+            "{flag}"
+        );
+        assert!(!text.contains("omnical datasets (MCAP, CSV)"), "{text}");
+    }
+    let long = help(&["--help"]);
+    assert!(long.contains("ground-truth pose"), "{long}");
+    assert!(long.contains("omnical demo"), "{long}");
+}
+
+#[test]
+fn help_has_no_markdown_escapes_and_units_in_parentheses() {
+    for cmd in SUBCOMMANDS {
+        let text = help(&[cmd, "--help"]);
+        assert!(!text.contains('\\'), "{cmd}: {text}");
+        for unit in ["s", "m", "rad", "Hz", "MiB", "m/s", "rad/s", "m/rad"] {
+            for end in [" ", "\n", "."] {
+                assert!(!text.contains(&format!(". {unit}{end}")), "{cmd}: '. {unit}' in\n{text}");
+            }
+        }
+    }
+    assert!(help(&["simulate", "--help"]).contains("Duration of each command (s)\n"));
+    let plan = help(&["plan", "--help"]);
+    for line in ["Translation speed of the commands (m/s)", "Ground-truth rate (Hz)", "heading noise (rad)"] {
+        assert!(plan.contains(line), "{line}:\n{plan}");
+    }
+    assert!(help(&["eval", "--help"]).contains("at least this long (s)"));
+    assert!(help(&["train", "--help"]).contains("Per-wheel radius, distance from the centre and mounting angle"));
+}
+
+#[test]
+fn data_options_have_their_own_heading_in_every_command_that_reads_runs() {
+    for cmd in READING_RUNS {
+        let text = help(&[cmd, "--help"]);
+        let (own, data) = text.split_once("\nData options:\n").unwrap_or_else(|| panic!("{cmd}:\n{text}"));
+        for flag in ["--robot <", "--joints <", "--gt-topic <", "--split <", "--skip-invalid\n", "--max-file-mb <"] {
+            assert!(data.contains(flag) && !own.contains(flag), "{cmd}: {flag} outside Data options:\n{text}");
+        }
+        assert!(own.contains("--help"), "{cmd}: {text}");
+    }
+}
+
+#[test]
+fn effect_options_list_the_effect_ids() {
+    for (cmd, flag) in [
+        ("train", "--effect"),
+        ("plan", "--effect"),
+        ("simulate", "--effect"),
+        ("diagnose", "--candidates"),
+        ("demo", "--hidden"),
+    ] {
+        let text = help(&[cmd, "--help"]);
+        let at = text.find(&format!("{flag} ")).unwrap_or_else(|| panic!("{cmd} {flag}:\n{text}"));
+        let joined = text[at..].split_whitespace().collect::<Vec<_>>().join(" ");
+        assert!(joined.contains(&format!("Effect ids: {EFFECT_IDS}")), "{cmd} {flag}:\n{text}");
+    }
+}
+
+#[test]
+fn validate_takes_one_path_and_repeats() {
+    for cmd in ["diagnose", "report"] {
+        let text = help(&[cmd, "--help"]);
+        assert!(text.contains("--validate <PATH>"), "{text}");
+        assert!(text.contains("--validate A --validate B"), "{text}");
+    }
+    // The natural spelling works: the path after --validate is held out, the next one is the training runs.
+    let out = omnical(&["diagnose", "--model", "design", "--validate", "missing-val", "missing-train"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("missing-train"), "the training runs are read first: {err}");
+    assert!(!err.contains("required arguments"), "{err}");
+    // Runs missing after --validate: clap's error, then the spelling that works.
+    for cmd in ["diagnose", "report"] {
+        let out = omnical(&[cmd, "--model", "fit.toml", "--validate", "sim/validation"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(err.contains("the following required arguments were not provided"), "{err}");
+        let tip = format!(
+            "tip: --validate takes one path (repeat it for more) and the training runs come without a flag: omnical \
+             {cmd} --model MODEL TRAIN_RUNS... --validate HELD_OUT [--validate HELD_OUT]..."
+        );
+        assert!(err.contains(&tip), "{err}");
+    }
+    // Without --validate the error has no tip.
+    let out = omnical(&["diagnose", "--model", "fit.toml"]);
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("tip: --validate"));
+}
+
+#[test]
+fn validate_parses_one_path_per_flag() {
+    use clap::Parser;
+    use omni_cli::cli::{Cli, Command};
+    let cli = Cli::try_parse_from(["omnical", "diagnose", "--model", "m", "--validate", "v1", "--validate", "v2", "t"])
+        .unwrap();
+    let Command::Diagnose(d) = cli.command else { panic!("diagnose") };
+    assert_eq!((d.validate.len(), d.runs.len()), (2, 1));
+    assert_eq!((d.validate[1].to_str(), d.runs[0].to_str()), (Some("v2"), Some("t")));
+    let cli = Cli::try_parse_from(["omnical", "report", "--model", "m", "t1", "t2", "--validate", "v"]).unwrap();
+    let Command::Report(r) = cli.command else { panic!("report") };
+    assert_eq!((r.validate.len(), r.runs.len()), (1, 2));
+}
