@@ -10,16 +10,13 @@
 //! No file or terminal I/O happens here.
 #![deny(missing_docs)]
 
-pub mod calibrate;
-pub mod diagnose;
-pub mod error;
-pub mod excitation;
-pub mod ga;
-pub mod identify;
-pub mod lm;
-pub mod observe;
+pub mod fit;
 pub mod optimizer;
-pub mod problem;
+pub mod science;
+
+pub use fit as calibrate;
+pub use optimizer::{error, ga, lm, observe, problem};
+pub use science::{diagnose, excitation, identify};
 
 pub use error::OptimizeError;
 pub use ga::{Ga, GaConfig, StallRule};

@@ -1,5 +1,11 @@
 //! The optimizer interface and its result.
 
+pub mod error;
+pub mod ga;
+pub mod lm;
+pub mod observe;
+pub mod problem;
+
 use crate::error::OptimizeError;
 use crate::observe::Observer;
 use serde::{Deserialize, Serialize};
