@@ -10,17 +10,22 @@
 //! No file or terminal I/O happens here.
 #![deny(missing_docs)]
 
+pub mod error;
 pub mod fit;
 pub mod optimizer;
 pub mod science;
 
+// The first wave's module paths, kept for the CLI, Python and users: `omni_ga::calibrate::calibrate`,
+// `omni_ga::diagnose::diagnose`, `omni_ga::observe::Observer`, …
 pub use fit as calibrate;
-pub use optimizer::{error, ga, lm, observe, problem};
+pub use optimizer::{ga, lm, observe, problem};
 pub use science::{diagnose, excitation, identify};
 
-pub use error::OptimizeError;
+pub use error::{Error, OptimizeError};
+pub use fit::{Calibration, Plan, Preset, calibrate};
 pub use ga::{Ga, GaConfig, StallRule};
 pub use lm::{LevenbergMarquardt, LmConfig};
 pub use observe::{Control, FnObserver, Iteration, NoopObserver, Observer};
 pub use optimizer::{Optimizer, Solution, Termination};
 pub use problem::{Bounds, LeastSquares, NormalEquations, Problem};
+pub use science::diagnose::{DiagnoseOptions, Diagnosis, diagnose};

@@ -27,7 +27,7 @@ pub fn run(dir: &Path, runs_per_command: usize, hidden: &str, quiet: bool) -> an
     println!("== train: fit the 9-entry IK matrix (preset default)");
     let start = FittedModel::nominal(Model::ik(IkMatrix::paper_design()));
     let plan = Plan::preset(Preset::Default, 9).seed(0);
-    let mut bar = progress::ProgressObserver::new(plan.ga.as_ref().map_or(0, |g| g.max_generations), quiet);
+    let mut bar = progress::ProgressObserver::new(plan.ga().map_or(0, |g| g.max_generations), quiet);
     let fit = calibrate(&start, &train, &plan, &mut bar)?;
     bar.finish();
     print_summary(&fit, "default", train.len());

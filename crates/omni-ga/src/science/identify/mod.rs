@@ -25,8 +25,11 @@
 //!
 //! Pure computation: no I/O.
 
+mod analysis;
+mod direction;
+
+use crate::science::text;
 use nalgebra::{DMatrix, DVector};
-use omni_kin::effect::Effect;
 use omni_kin::{Kinematics, Model};
 use serde::{Deserialize, Serialize};
 
@@ -98,10 +101,71 @@ pub struct WeakDirection {
     pub wheel_pattern: Option<Vec<f64>>,
     /// The design twist of that pattern per unit wheel speed: (vx m/s, vy m/s, ω rad/s).
     pub motion: Option<[f64; 3]>,
-    /// The direction in words.
+    /// The direction in words ([`crate::science::text::weak_direction`], from the fields above and
+    /// `evidence`).
     pub text: String,
-    /// Which runs to add, in words.
+    /// Which runs to add, in words ([`crate::science::text::advice`], from `remedy`).
     pub advice: String,
+    /// What the runs say about the wheel pattern, when the direction changes the base kinematics.
+    #[serde(skip)]
+    pub evidence: Option<WheelEvidence>,
+    /// What would constrain the direction.
+    #[serde(skip)]
+    pub remedy: Advice,
+}
+
+/// The notable components of a design motion (at least 30 % of the largest; the turn rate weighted by a
+/// typical wheel lever arm).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MotionParts {
+    /// Forward/backward (vx).
+    pub forward: bool,
+    /// Sideways (vy).
+    pub sideways: bool,
+    /// Rotating (ω).
+    pub rotating: bool,
+}
+
+/// How much of the runs' wheel motion lies along a wheel-speed pattern (the RMS share, 0…1).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PatternPresence {
+    /// The runs contain it (at least 25 % of the wheel motion), but the residuals barely respond to it.
+    Present(f64),
+    /// The runs hardly contain it (less than 25 %).
+    Scarce(f64),
+    /// Unknown: the runs' wheel speeds were not given (planning).
+    Unknown,
+}
+
+/// The base-kinematics side of an unconstrained direction.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WheelEvidence {
+    /// The wheels' names, in the order of [`WeakDirection::wheel_pattern`].
+    pub wheels: Vec<String>,
+    /// The notable components of the pattern's design motion ([`WeakDirection::motion`]).
+    pub motion: MotionParts,
+    /// Whether the runs contain the pattern.
+    pub presence: PatternPresence,
+}
+
+/// What would constrain an unconstrained direction.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum Advice {
+    /// The runs contain the motion but the objective does not see it: fit the path objective, or add runs
+    /// along different paths.
+    PathObjective,
+    /// Add runs with this motion (a command along `alpha_deg`).
+    AddRuns {
+        /// The motion's notable components.
+        motion: MotionParts,
+        /// Direction of travel of the motion. deg.
+        alpha_deg: f64,
+    },
+    /// Add runs with other motions (the direction touches neither the base kinematics nor an effect).
+    #[default]
+    OtherMotions,
+    /// Add runs that exercise these effects (ids).
+    ExerciseEffects(Vec<String>),
 }
 
 /// The identifiability of a model on a set of runs.
@@ -136,7 +200,7 @@ impl Identifiability {
 
     /// One warning line per unconstrained direction.
     pub fn warnings(&self) -> Vec<String> {
-        self.weak.iter().map(|w| format!("{}; {}", w.text, w.advice)).collect()
+        self.weak.iter().map(text::warning).collect()
     }
 
     /// The unconstrained directions as columns of an `n × k` matrix in scaled parameter space.
@@ -237,7 +301,7 @@ pub fn analyse(
     wheel_moment: Option<&DMatrix<f64>>,
     opts: &IdentifyOptions,
 ) -> Identifiability {
-    analyse_core(model, params, &moments.jtj, Some(moments), wheel_moment, opts)
+    analysis::analyse_core(model, params, &moments.jtj, Some(moments), wheel_moment, opts)
 }
 
 /// The expected identifiability for a stated noise level: `info` is `JᵀJ` of the residuals' sensitivities
@@ -250,358 +314,7 @@ pub fn expected(
     wheel_moment: Option<&DMatrix<f64>>,
     opts: &IdentifyOptions,
 ) -> Identifiability {
-    analyse_core(model, params, info, None, wheel_moment, opts)
-}
-
-fn analyse_core(
-    model: &Model,
-    params: &[f64],
-    jtj: &DMatrix<f64>,
-    moments: Option<&Moments>,
-    wheel_moment: Option<&DMatrix<f64>>,
-    opts: &IdentifyOptions,
-) -> Identifiability {
-    let n = jtj.ncols();
-    let m = moments.map_or(0, |mo| mo.rows);
-    let groups = moments.map_or(0, |mo| mo.scores.len());
-    let specs = model.params();
-    let scales = param_scales(model);
-    let rr = moments.map_or(0.0, |mo| mo.rtr);
-    let dof = m.saturating_sub(n).max(1) as f64;
-    let s2 = if moments.is_some() { rr / dof } else { 1.0 };
-    // The residual vector's squared norm is a mean over runs of the mean squared pose error (three
-    // components), as `CalibrationProblem` stacks it.
-    let residual_rms = (rr / 3.0).sqrt();
-
-    // Scaled information D JᵀJ D = V S² Vᵀ: V's columns are directions, S the scaled Jacobian's singular
-    // values. Non-finite sensitivities or residuals (a failed effect hook, a singular model) say nothing,
-    // and an eigen-solver may not converge on them: everything is then reported undetermined, nothing held.
-    let jtj_s = DMatrix::from_fn(n, n, |a, b| jtj[(a, b)] * scales[a] * scales[b]);
-    let finite = moments.is_none_or(|mo| mo.finite) && jtj_s.iter().all(|v| v.is_finite());
-    let eig = if finite { jtj_s.clone().try_symmetric_eigen(f64::EPSILON, 10_000) } else { None };
-    let Some((sv, v)) = eig.map(|e| (e.eigenvalues.map(|l| l.max(0.0).sqrt()), e.eigenvectors)) else {
-        return Identifiability {
-            runs: groups,
-            residuals: m,
-            residual_rms: f64::NAN,
-            covariance_kind: CovarianceKind::Iid,
-            condition_number: f64::NAN,
-            relative_singular_values: Vec::new(),
-            params: specs
-                .iter()
-                .enumerate()
-                .map(|(i, s)| ParamUncertainty {
-                    name: s.name.clone(),
-                    unit: s.unit.clone(),
-                    value: params[i],
-                    scale: scales[i],
-                    std_error: None,
-                    std_error_iid: None,
-                })
-                .collect(),
-            covariance: Vec::new(),
-            weak: Vec::new(),
-        };
-    };
-    let mut order: Vec<usize> = (0..sv.len()).collect();
-    order.sort_by(|&a, &b| sv[b].total_cmp(&sv[a]));
-    let smax = order.first().map_or(0.0, |&k| sv[k]);
-    let relative: Vec<f64> = order.iter().map(|&k| if smax > 0.0 { sv[k] / smax } else { 0.0 }).collect();
-
-    // Per-run scores in scaled space, g_g = D J_gᵀ r_g, for the sandwich.
-    let scores: Vec<DVector<f64>> = moments
-        .map(|mo| mo.scores.iter().map(|g| DVector::from_fn(n, |i, _| g[i] * scales[i])).collect())
-        .unwrap_or_default();
-    let kind = if moments.is_none() {
-        CovarianceKind::Stated
-    } else if groups >= n + 2 {
-        CovarianceKind::PerRun
-    } else {
-        CovarianceKind::Iid
-    };
-    let cr1 = if groups > 1 { groups as f64 / (groups - 1) as f64 * (m as f64 - 1.0) / dof } else { 1.0 };
-
-    // Covariances in scaled space over the non-null directions: C = V S⁻² (Vᵀ B V) S⁻² Vᵀ.
-    let alive: Vec<usize> = order.iter().copied().filter(|&k| sv[k] > opts.rcond * smax && smax > 0.0).collect();
-    let va = DMatrix::from_fn(n, alive.len(), |r, c| v[(r, alive[c])]);
-    let inv_s2 = DVector::from_iterator(alive.len(), alive.iter().map(|&k| 1.0 / (sv[k] * sv[k])));
-    let mut b = DMatrix::zeros(alive.len(), alive.len());
-    for g in &scores {
-        let p = va.transpose() * g;
-        b += &p * p.transpose();
-    }
-    b *= cr1;
-    let robust_dir = DMatrix::from_fn(alive.len(), alive.len(), |a, c| inv_s2[a] * b[(a, c)] * inv_s2[c]);
-    let iid_dir = DMatrix::from_diagonal(&inv_s2.map(|x| x * s2));
-    let chosen_dir = match kind {
-        CovarianceKind::PerRun => &robust_dir,
-        CovarianceKind::Iid | CovarianceKind::Stated => &iid_dir,
-    };
-
-    // Unconstrained directions.
-    let mut weak_k: Vec<(usize, Option<f64>)> = Vec::new();
-    for &k in &order {
-        match alive.iter().position(|&a| a == k) {
-            None => weak_k.push((k, None)),
-            Some(a) => {
-                let se = chosen_dir[(a, a)].max(0.0).sqrt();
-                if se > opts.max_std_error || sv[k] < opts.min_excitation * smax {
-                    weak_k.push((k, Some(se)));
-                }
-            }
-        }
-    }
-    // Directions that stay: covariance restricted to the constrained subspace.
-    let strong: Vec<usize> = (0..alive.len()).filter(|&a| !weak_k.iter().any(|&(k, _)| k == alive[a])).collect();
-    let vs = DMatrix::from_fn(n, strong.len(), |r, c| va[(r, strong[c])]);
-    let sub = |c: &DMatrix<f64>| DMatrix::from_fn(strong.len(), strong.len(), |a, b| c[(strong[a], strong[b])]);
-    let to_params = |c: &DMatrix<f64>| {
-        let cs = &vs * sub(c) * vs.transpose();
-        DMatrix::from_fn(n, n, |a, b| cs[(a, b)] * scales[a] * scales[b])
-    };
-    let cov = to_params(chosen_dir);
-    let cov_iid = to_params(&iid_dir);
-    let weak_loading = |i: usize| weak_k.iter().map(|&(k, _)| v[(i, k)].abs()).fold(0.0f64, f64::max);
-
-    let uncertainties = specs
-        .iter()
-        .enumerate()
-        .map(|(i, s)| {
-            let determined = weak_loading(i) < 0.1;
-            ParamUncertainty {
-                name: s.name.clone(),
-                unit: s.unit.clone(),
-                value: params[i],
-                scale: scales[i],
-                std_error: determined.then(|| cov[(i, i)].max(0.0).sqrt()),
-                std_error_iid: determined.then(|| cov_iid[(i, i)].max(0.0).sqrt()),
-            }
-        })
-        .collect();
-
-    let weak = weak_k
-        .iter()
-        .map(|&(k, se)| {
-            let dir: Vec<f64> = (0..n).map(|i| v[(i, k)]).collect();
-            describe(model, params, &scales, dir, if smax > 0.0 { sv[k] / smax } else { 0.0 }, se, wheel_moment)
-        })
-        .collect();
-
-    Identifiability {
-        runs: groups,
-        residuals: m,
-        residual_rms,
-        covariance_kind: kind,
-        condition_number: if alive.len() == n && n > 0 {
-            smax / sv[*alive.last().unwrap_or(&0)].max(f64::MIN_POSITIVE)
-        } else {
-            f64::INFINITY
-        },
-        relative_singular_values: relative,
-        params: uncertainties,
-        covariance: (0..n).map(|a| (0..n).map(|b| cov[(a, b)]).collect()).collect(),
-        weak,
-    }
-}
-
-/// Name a direction: its parameters, and for the base kinematics the wheel pattern and motion it needs.
-fn describe(
-    model: &Model,
-    params: &[f64],
-    scales: &[f64],
-    mut dir: Vec<f64>,
-    relative_singular_value: f64,
-    std_error: Option<f64>,
-    wheel_moment: Option<&DMatrix<f64>>,
-) -> WeakDirection {
-    // Sign convention: the largest component positive.
-    let big = dir.iter().copied().fold(0.0f64, |a, b| if b.abs() > a.abs() { b } else { a });
-    if big < 0.0 {
-        dir.iter_mut().for_each(|x| *x = -*x);
-    }
-    let specs = model.params();
-    let top = dir.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-    let mut loadings: Vec<(String, f64)> = dir
-        .iter()
-        .enumerate()
-        .filter(|(_, d)| d.abs() >= 0.3 * top)
-        .map(|(i, d)| (specs[i].name.clone(), *d))
-        .collect();
-    loadings.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
-    let names: Vec<&str> = loadings.iter().map(|(n, _)| n.as_str()).collect();
-    let same_sign = loadings.iter().all(|(_, d)| *d > 0.0);
-    let who = match names.len() {
-        1 => format!("{} is", names[0]),
-        2 if same_sign => format!("{} and {} move together and are", names[0], names[1]),
-        2 => format!("{} and {} trade off (one up, the other down) and are", names[0], names[1]),
-        _ => {
-            let signed: Vec<String> =
-                loadings.iter().map(|(n, d)| format!("{}{n}", if *d > 0.0 { "+" } else { "−" })).collect();
-            format!("the combination {} is", signed.join(" "))
-        }
-    };
-    let how = match std_error {
-        None => "not excited at all".to_string(),
-        Some(se) => format!("poorly constrained (±{:.1} % of scale)", 100.0 * se),
-    };
-    let (wheel_pattern, motion, physical) = wheel_pattern(model, params, scales, &dir, wheel_moment);
-    let mut text = format!("{who} {how}");
-    if let Some(p) = &physical {
-        text.push_str(&format!(": {p}"));
-    }
-    let present = wheel_pattern.as_ref().and_then(|u| pattern_share(u, wheel_moment)).is_some_and(|s| s >= 0.25);
-    let advice = match &motion {
-        Some(_) if present => {
-            "fit the path objective (every ground-truth pose), or add runs along different paths".to_string()
-        }
-        Some(t) => format!("add runs {}", motion_words(t, model)),
-        None => {
-            let effects: Vec<String> = model
-                .effects
-                .iter()
-                .zip(model.effect_ranges())
-                .filter(|(_, r)| r.clone().any(|i| dir[i].abs() >= 0.3 * top))
-                .map(|(e, _)| e.id().to_string())
-                .collect();
-            if effects.is_empty() {
-                "add runs with other motions (see `omnical plan`)".into()
-            } else {
-                format!("add runs that exercise {} (see `omnical plan --effect …`)", effects.join(", "))
-            }
-        }
-    };
-    WeakDirection { direction: dir, loadings, relative_singular_value, std_error, wheel_pattern, motion, text, advice }
-}
-
-/// The change of the IK matrix along `dir` (scaled), its dominant wheel pattern, and that pattern's design
-/// motion. `None` when the direction hardly touches the base kinematics.
-fn wheel_pattern(
-    model: &Model,
-    params: &[f64],
-    scales: &[f64],
-    dir: &[f64],
-    wheel_moment: Option<&DMatrix<f64>>,
-) -> (Option<Vec<f64>>, Option<[f64; 3]>, Option<String>) {
-    let nb = model.n_base();
-    let base_share: f64 = dir[..nb].iter().map(|x| x * x).sum::<f64>();
-    if base_share < 0.25 {
-        return (None, None, None);
-    }
-    let nw = model.n_wheels();
-    // ΔM by a small central difference through the kinematics (exact for `ik`).
-    let h = 1e-4;
-    let step = |sign: f64| -> Option<Vec<f64>> {
-        let p: Vec<f64> = (0..nb).map(|i| params[i] + sign * h * dir[i] * scales[i]).collect();
-        model.kinematics.ik(&p).ok().map(|m| m.entries().to_vec())
-    };
-    let (Some(mp), Some(mm)) = (step(1.0), step(-1.0)) else { return (None, None, None) };
-    let dm = DMatrix::from_fn(3, nw, |r, c| (mp[r * nw + c] - mm[r * nw + c]) / (2.0 * h));
-    let Some(svd) = dm.try_svd(true, true, f64::EPSILON, 10_000) else { return (None, None, None) };
-    let Some(vt) = svd.v_t else { return (None, None, None) };
-    let k = (0..svd.singular_values.len()).max_by(|&a, &b| svd.singular_values[a].total_cmp(&svd.singular_values[b]));
-    let Some(k) = k else { return (None, None, None) };
-    let mut u: Vec<f64> = (0..nw).map(|c| vt[(k, c)]).collect();
-    // Design twist of the pattern.
-    let Ok(design) = model.kinematics.ik(&model.nominal()[..nb]) else { return (None, None, None) };
-    let mut t = design.twist(&u);
-    let lever = lever_arm_m(model);
-    // Prefer the sign that moves forward / turns left, for readable advice.
-    let key = [t.vx_m_s, t.vy_m_s, t.omega_rad_s * lever];
-    let dominant = key.iter().copied().fold(0.0f64, |a, b| if b.abs() > a.abs() { b } else { a });
-    if dominant < 0.0 {
-        u.iter_mut().for_each(|x| *x = -*x);
-        t = design.twist(&u);
-    }
-    let motion = [t.vx_m_s, t.vy_m_s, t.omega_rad_s];
-    let pattern: Vec<String> = u.iter().map(|x| format!("{x:+.2}")).collect();
-    let wheels = model.kinematics.wheel_names();
-    let named: Vec<String> = wheels.iter().zip(&pattern).map(|(w, p)| format!("{w} {p}")).collect();
-    let physical = match pattern_share(&u, wheel_moment) {
-        Some(share) if share >= 0.25 => format!(
-            "the runs contain the wheel-speed pattern ({}) — {} under the design matrix — ({:.0} % of the wheel motion), but the residuals barely respond to how the robot answers it",
-            named.join(", "),
-            motion_name(&motion, lever),
-            100.0 * share
-        ),
-        Some(share) => format!(
-            "the runs hardly contain the wheel-speed pattern ({}) — {} under the design matrix — ({:.0} % of the wheel motion), so the robot's response to it is not measured",
-            named.join(", "),
-            motion_name(&motion, lever),
-            100.0 * share
-        ),
-        None => format!(
-            "the robot's response to the wheel-speed pattern ({}) — {} under the design matrix — is not measured",
-            named.join(", "),
-            motion_name(&motion, lever)
-        ),
-    };
-    (Some(u), Some(motion), Some(physical))
-}
-
-/// RMS share of the wheel motion along the unit pattern `u`: `sqrt(uᵀ S u / tr S)`.
-fn pattern_share(u: &[f64], wheel_moment: Option<&DMatrix<f64>>) -> Option<f64> {
-    let s = wheel_moment?;
-    if s.nrows() != u.len() || s.ncols() != u.len() {
-        return None;
-    }
-    let uv = DVector::from_column_slice(u);
-    let tr = s.trace();
-    (tr > 0.0).then(|| ((uv.transpose() * s * &uv)[(0, 0)] / tr).max(0.0).sqrt())
-}
-
-/// A typical wheel lever arm (m): the mean wheel distance of a geometry model, else 0.2 m.
-fn lever_arm_m(model: &Model) -> f64 {
-    match &model.kinematics {
-        Kinematics::Geometry { design } => {
-            design.wheels.iter().map(|w| w.distance_m).sum::<f64>() / design.wheels.len().max(1) as f64
-        }
-        Kinematics::Ik { .. } => 0.2,
-    }
-}
-
-/// The components of a design twist that matter, in words: "moving sideways (vy)" etc.
-fn motion_parts(t: &[f64; 3], lever: f64) -> Vec<&'static str> {
-    let key = [t[0].abs(), t[1].abs(), (t[2] * lever).abs()];
-    let top = key.iter().copied().fold(0.0f64, f64::max);
-    let mut parts = Vec::new();
-    if key[0] >= 0.3 * top && top > 0.0 {
-        parts.push("forward/backward (vx)");
-    }
-    if key[1] >= 0.3 * top && top > 0.0 {
-        parts.push("sideways (vy)");
-    }
-    if key[2] >= 0.3 * top && top > 0.0 {
-        parts.push("rotating (ω)");
-    }
-    parts
-}
-
-fn motion_name(t: &[f64; 3], lever: f64) -> String {
-    let parts = motion_parts(t, lever);
-    let translate: Vec<&str> = parts.iter().copied().filter(|p| !p.starts_with("rotating")).collect();
-    let rotate = parts.len() > translate.len();
-    match (translate.is_empty(), rotate) {
-        (true, true) => "rotating on the spot (ω)".into(),
-        (false, false) => format!("moving {}", translate.join(" and ")),
-        (false, true) => format!("moving {} while rotating (ω)", translate.join(" and ")),
-        (true, false) => "no motion".into(),
-    }
-}
-
-/// Advice: which runs excite a motion.
-fn motion_words(t: &[f64; 3], model: &Model) -> String {
-    let lever = lever_arm_m(model);
-    let parts = motion_parts(t, lever);
-    let translate: Vec<&str> = parts.iter().copied().filter(|p| !p.starts_with("rotating")).collect();
-    let rotate = parts.iter().any(|p| p.starts_with("rotating"));
-    let what = match (translate.is_empty(), rotate) {
-        (true, true) => "turning on the spot in both directions (ω ≠ 0)".to_string(),
-        (false, false) => format!("translating {} in both directions", translate.join(" and ")),
-        (false, true) => format!("with ω ≠ 0 while translating {}", translate.join(" and ")),
-        (true, false) => "with other motions".to_string(),
-    };
-    let alpha = t[1].atan2(t[0]).to_degrees();
-    format!("{what} (e.g. a command along α ≈ {alpha:.0}°{})", if rotate { " with rotation" } else { "" })
+    analysis::analyse_core(model, params, info, None, wheel_moment, opts)
 }
 
 #[cfg(test)]

@@ -1,0 +1,50 @@
+//! The GA's search box around a start point.
+
+use crate::optimizer::error::OptimizeError;
+use crate::optimizer::problem::Bounds;
+use omni_kin::{Kinematics, Model};
+use serde::{Deserialize, Serialize};
+
+/// How the GA's search box is set around the start.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BoxRule {
+    /// ±fraction of each start value (zero entries pinned). Paper: 0.10.
+    PerValue(f64),
+    /// ±fraction of the largest magnitude in the entry's matrix row (ik) or of the value (geometry r, R;
+    /// angles ±fraction rad). Default: 0.10.
+    PerRow(f64),
+}
+
+/// The GA search box around `start` for `model`.
+pub fn search_box(model: &Model, start: &[f64], rule: BoxRule) -> Result<Bounds, OptimizeError> {
+    let specs = model.params();
+    let nb = model.n_base();
+    let mut lower = Vec::with_capacity(specs.len());
+    let mut upper = Vec::with_capacity(specs.len());
+    for (i, s) in specs.iter().enumerate() {
+        let v = start[i];
+        let half = if i >= nb {
+            // Effects: their own bounds, widened to contain the start.
+            lower.push(s.lower.min(v));
+            upper.push(s.upper.max(v));
+            continue;
+        } else {
+            match (rule, &model.kinematics) {
+                (BoxRule::PerValue(f), _) => f * v.abs(),
+                (BoxRule::PerRow(f), Kinematics::Ik { design }) => {
+                    let n = design.n_wheels();
+                    let row = i / n;
+                    f * start[row * n..(row + 1) * n].iter().fold(0.0f64, |m, x| m.max(x.abs()))
+                }
+                (BoxRule::PerRow(f), Kinematics::Geometry { design }) => {
+                    let n = design.n_wheels();
+                    if i >= 2 * n { f } else { f * v.abs() }
+                }
+            }
+        };
+        lower.push(v - half);
+        upper.push(v + half);
+    }
+    Bounds::new(lower, upper)
+}

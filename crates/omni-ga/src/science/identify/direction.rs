@@ -1,0 +1,165 @@
+//! What an unconstrained direction is, as facts: the parameters carrying it and, for the base kinematics,
+//! the wheel-speed pattern the runs hardly contain, its design motion and which runs to add. The words are
+//! made from these facts by [`crate::science::text`].
+
+use super::{Advice, MotionParts, PatternPresence, WeakDirection, WheelEvidence};
+use crate::science::text;
+use nalgebra::{DMatrix, DVector};
+use omni_kin::effect::Effect;
+use omni_kin::{Kinematics, Model};
+
+/// Share of the wheel motion from which a pattern counts as present in the runs.
+const PRESENT_SHARE: f64 = 0.25;
+/// Share of the largest component from which a component of a direction or motion is named.
+const NOTABLE: f64 = 0.3;
+
+/// Name a direction: its parameters, and for the base kinematics the wheel pattern and motion it needs.
+pub(super) fn describe(
+    model: &Model,
+    params: &[f64],
+    scales: &[f64],
+    mut dir: Vec<f64>,
+    relative_singular_value: f64,
+    std_error: Option<f64>,
+    wheel_moment: Option<&DMatrix<f64>>,
+) -> WeakDirection {
+    // Sign convention: the largest component positive.
+    let big = dir.iter().copied().fold(0.0f64, |a, b| if b.abs() > a.abs() { b } else { a });
+    if big < 0.0 {
+        dir.iter_mut().for_each(|x| *x = -*x);
+    }
+    let specs = model.params();
+    let top = dir.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    let mut loadings: Vec<(String, f64)> = dir
+        .iter()
+        .enumerate()
+        .filter(|(_, d)| d.abs() >= NOTABLE * top)
+        .map(|(i, d)| (specs[i].name.clone(), *d))
+        .collect();
+    loadings.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+    let pattern = wheel_pattern(model, params, scales, &dir, wheel_moment);
+    let remedy = match &pattern {
+        Some(p) if matches!(p.evidence.presence, PatternPresence::Present(_)) => Advice::PathObjective,
+        Some(p) => {
+            Advice::AddRuns { motion: p.evidence.motion, alpha_deg: p.motion[1].atan2(p.motion[0]).to_degrees() }
+        }
+        None => {
+            let effects: Vec<String> = model
+                .effects
+                .iter()
+                .zip(model.effect_ranges())
+                .filter(|(_, r)| r.clone().any(|i| dir[i].abs() >= NOTABLE * top))
+                .map(|(e, _)| e.id().to_string())
+                .collect();
+            if effects.is_empty() { Advice::OtherMotions } else { Advice::ExerciseEffects(effects) }
+        }
+    };
+    let (wheel_pattern, motion, evidence) = match pattern {
+        Some(p) => (Some(p.u), Some(p.motion), Some(p.evidence)),
+        None => (None, None, None),
+    };
+    let mut w = WeakDirection {
+        direction: dir,
+        loadings,
+        relative_singular_value,
+        std_error,
+        wheel_pattern,
+        motion,
+        text: String::new(),
+        advice: String::new(),
+        evidence,
+        remedy,
+    };
+    w.text = text::weak_direction(&w);
+    w.advice = text::advice(&w.remedy);
+    w
+}
+
+/// A direction's base-kinematics side.
+struct Pattern {
+    /// The wheel-speed pattern (unit vector, one entry per wheel).
+    u: Vec<f64>,
+    /// Its design twist per unit wheel speed: (vx m/s, vy m/s, ω rad/s).
+    motion: [f64; 3],
+    evidence: WheelEvidence,
+}
+
+/// The change of the IK matrix along `dir` (scaled), its dominant wheel pattern, and that pattern's design
+/// motion. `None` when the direction hardly touches the base kinematics.
+fn wheel_pattern(
+    model: &Model,
+    params: &[f64],
+    scales: &[f64],
+    dir: &[f64],
+    wheel_moment: Option<&DMatrix<f64>>,
+) -> Option<Pattern> {
+    let nb = model.n_base();
+    let base_share: f64 = dir[..nb].iter().map(|x| x * x).sum::<f64>();
+    if base_share < 0.25 {
+        return None;
+    }
+    let nw = model.n_wheels();
+    // ΔM by a small central difference through the kinematics (exact for `ik`).
+    let h = 1e-4;
+    let step = |sign: f64| -> Option<Vec<f64>> {
+        let p: Vec<f64> = (0..nb).map(|i| params[i] + sign * h * dir[i] * scales[i]).collect();
+        model.kinematics.ik(&p).ok().map(|m| m.entries().to_vec())
+    };
+    let (mp, mm) = (step(1.0)?, step(-1.0)?);
+    let dm = DMatrix::from_fn(3, nw, |r, c| (mp[r * nw + c] - mm[r * nw + c]) / (2.0 * h));
+    let svd = dm.try_svd(true, true, f64::EPSILON, 10_000)?;
+    let vt = svd.v_t?;
+    let k =
+        (0..svd.singular_values.len()).max_by(|&a, &b| svd.singular_values[a].total_cmp(&svd.singular_values[b]))?;
+    let mut u: Vec<f64> = (0..nw).map(|c| vt[(k, c)]).collect();
+    // Design twist of the pattern.
+    let design = model.kinematics.ik(&model.nominal()[..nb]).ok()?;
+    let mut t = design.twist(&u);
+    let lever = lever_arm_m(model);
+    // Prefer the sign that moves forward / turns left, for readable advice.
+    let key = [t.vx_m_s, t.vy_m_s, t.omega_rad_s * lever];
+    let dominant = key.iter().copied().fold(0.0f64, |a, b| if b.abs() > a.abs() { b } else { a });
+    if dominant < 0.0 {
+        u.iter_mut().for_each(|x| *x = -*x);
+        t = design.twist(&u);
+    }
+    let motion = [t.vx_m_s, t.vy_m_s, t.omega_rad_s];
+    let presence = match pattern_share(&u, wheel_moment) {
+        Some(share) if share >= PRESENT_SHARE => PatternPresence::Present(share),
+        Some(share) => PatternPresence::Scarce(share),
+        None => PatternPresence::Unknown,
+    };
+    let evidence =
+        WheelEvidence { wheels: model.kinematics.wheel_names(), motion: motion_parts(&motion, lever), presence };
+    Some(Pattern { u, motion, evidence })
+}
+
+/// RMS share of the wheel motion along the unit pattern `u`: `sqrt(uᵀ S u / tr S)`.
+fn pattern_share(u: &[f64], wheel_moment: Option<&DMatrix<f64>>) -> Option<f64> {
+    let s = wheel_moment?;
+    if s.nrows() != u.len() || s.ncols() != u.len() {
+        return None;
+    }
+    let uv = DVector::from_column_slice(u);
+    let tr = s.trace();
+    (tr > 0.0).then(|| ((uv.transpose() * s * &uv)[(0, 0)] / tr).max(0.0).sqrt())
+}
+
+/// A typical wheel lever arm (m): the mean wheel distance of a geometry model, else 0.2 m.
+fn lever_arm_m(model: &Model) -> f64 {
+    match &model.kinematics {
+        Kinematics::Geometry { design } => {
+            design.wheels.iter().map(|w| w.distance_m).sum::<f64>() / design.wheels.len().max(1) as f64
+        }
+        Kinematics::Ik { .. } => 0.2,
+    }
+}
+
+/// The components of a design twist that matter (at least 30 % of the largest, the turn rate weighted by
+/// the lever arm `lever` m).
+fn motion_parts(t: &[f64; 3], lever: f64) -> MotionParts {
+    let key = [t[0].abs(), t[1].abs(), (t[2] * lever).abs()];
+    let top = key.iter().copied().fold(0.0f64, f64::max);
+    let notable = |v: f64| v >= NOTABLE * top && top > 0.0;
+    MotionParts { forward: notable(key[0]), sideways: notable(key[1]), rotating: notable(key[2]) }
+}
