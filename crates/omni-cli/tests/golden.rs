@@ -78,7 +78,10 @@ fn outputs_are_byte_identical_to_the_golden_files() {
     omnical(&[&sim[..], &["--out", "sim", "--effect", "time_offset=0.04"]].concat(), d);
     check("truth.json", &read(d, "sim/truth.json"), &mut failures);
     check("truth_model.toml", &read(d, "sim/truth_model.toml"), &mut failures);
-    omnical(&[&sim[..], &["--out", "csv", "--format", "csv", "--effect", "wheel_asymmetry=0.02,-0.02,0.0"]].concat(), d);
+    omnical(
+        &[&sim[..], &["--out", "csv", "--format", "csv", "--effect", "wheel_asymmetry=0.02,-0.02,0.0"]].concat(),
+        d,
+    );
     check("sim_csv_run.csv", &read(d, "csv/validation/17-r0.csv"), &mut failures);
 
     let trainings: [(&str, &[&str]); 4] = [

@@ -3,10 +3,10 @@
 
 pub use crate::optimizer::error::OptimizeError;
 use omni_kin::KinError;
-use thiserror::Error;
+use thiserror::Error as ThisError;
 
 /// A calibration, diagnosis or plan failed.
-#[derive(Debug, Error)]
+#[derive(Debug, ThisError)]
 pub enum Error {
     /// The model or runs are not usable.
     #[error(transparent)]

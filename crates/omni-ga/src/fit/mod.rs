@@ -14,7 +14,7 @@
 //! | odometry | Eq. 1, Euler, 10 ms fixed step | exact arcs, each run's median step |
 //! | search | MATLAB-default GA, 200 individuals, stall 50 generations, tol 1e-6 divided by max(1, \|best\|) | stages: small GA (24 × ≤ 30 generations, scale-aware stall rule), then Levenberg–Marquardt |
 //! | bounds | ±10 % of each design value (pins zero entries, e.g. m12 = 0, as Eq. 9) | GA: ±10 % of each row's largest magnitude; the polish is unbounded |
-//! | unconstrained directions ([`crate::identify`]) | move freely | held at the start: truncated update ([`Unexcited::Hold`]) |
+//! | unconstrained directions ([`crate::science::identify`]) | move freely | held at the start: truncated update ([`Unexcited::Hold`]) |
 //!
 //! Every fit reports the parameters that ended on a GA bound and those the polish moved outside the box,
 //! so a trapped fit is never silent. The polish never returns a higher objective than its start.

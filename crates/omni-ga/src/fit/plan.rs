@@ -21,7 +21,7 @@ pub enum Preset {
 }
 
 /// What a fit does along directions of parameter space the training runs do not constrain
-/// ([`crate::identify`]).
+/// ([`crate::science::identify`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Unexcited {

@@ -300,8 +300,8 @@ impl<P: LeastSquares + ?Sized> Optimizer<P> for LevenbergMarquardt {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::observe::NoopObserver;
-    use crate::problem::{Bounds, Problem};
+    use crate::optimizer::observe::NoopObserver;
+    use crate::optimizer::problem::{Bounds, Problem};
 
     /// Fit y = a·exp(−b·t) + c.
     struct Decay {

@@ -15,7 +15,7 @@
 //!
 //! Expected standard errors count ground-truth noise only: wheel-speed noise integrates along a path
 //! into correlated drift, which makes real standard errors larger (on the simulator's defaults, 3–4×:
-//! see [`crate::identify`]).
+//! see [`crate::science::identify`]).
 
 use crate::error::Error;
 use crate::fit::CalibrationProblem;

@@ -380,8 +380,8 @@ impl<P: Problem + ?Sized> Optimizer<P> for Ga {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::observe::{FnObserver, NoopObserver};
-    use crate::problem::Bounds;
+    use crate::optimizer::observe::{FnObserver, NoopObserver};
+    use crate::optimizer::problem::Bounds;
     use std::sync::Mutex;
 
     struct Sphere {
