@@ -38,6 +38,15 @@ pub enum ModelKind {
     Geometry,
 }
 
+impl From<ModelKind> for omni_kin::KinematicsKind {
+    fn from(k: ModelKind) -> Self {
+        match k {
+            ModelKind::Ik => Self::Ik,
+            ModelKind::Geometry => Self::Geometry,
+        }
+    }
+}
+
 /// Calibration recipe.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum PresetArg {
@@ -282,6 +291,16 @@ pub enum Command {
         /// Write one MCAP bag per run into this folder, with the calibrated odometry added.
         #[arg(long, value_name = "DIR")]
         mcap: Option<PathBuf>,
+        /// Write the calibration for the robot into this folder: the matrix as ROS 2 parameters
+        /// (omnical_odometry.yaml) and as a C header (omnical_odometry.h), and the parameters of the
+        /// matching ros2_controllers drive controller (ros2_controllers.yaml) from the nearest parametric fit,
+        /// with the accuracy it gives up on the runs (docs/applying.md).
+        #[arg(long, value_name = "DIR")]
+        robot_config: Option<PathBuf>,
+        /// Drive controller for --robot-config: diff_drive_controller, mecanum_drive_controller or
+        /// omni_wheel_drive_controller (default: the one that matches the base).
+        #[arg(long, value_name = "NAME")]
+        controller: Option<omni_kin::controller::ControllerKind>,
         /// Data options.
         #[command(flatten)]
         data: DataArgs,
@@ -410,8 +429,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 quiet: cli.quiet,
             })
         }
-        Command::Export { model, runs, tum, mcap, data } => {
-            cmd::export::run(&cmd::export::Args { model, runs, tum, mcap, data })
+        Command::Export { model, runs, tum, mcap, robot_config, controller, data } => {
+            cmd::export::run(&cmd::export::Args { model, runs, tum, mcap, robot_config, controller, data })
         }
         Command::Plan {
             model,

@@ -17,7 +17,7 @@ pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
             return e.exit_code();
         }
     };
-    match run(cli) {
+    match run_quiet_on_closed_pipe(cli) {
         Ok(()) => 0,
         Err(e) => {
             // A closed pipe (`omnical eval … | head`) is not a failure.
@@ -34,4 +34,41 @@ pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
             2
         }
     }
+}
+
+/// The panic message of `print!`/`println!` when stdout is a closed pipe.
+const CLOSED_PIPE_PANIC: &str = "failed printing to stdout";
+
+/// Runs the command; a `print!` into a closed pipe (`omnical eval … | head -1`) ends it quietly as
+/// `Ok(())` instead of a panic, the way `cat` or `ls` end when `head` stops reading. Other panics go on
+/// unchanged (their message is printed by the previous hook).
+fn run_quiet_on_closed_pipe(cli: Cli) -> anyhow::Result<()> {
+    install_closed_pipe_hook();
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(cli))) {
+        Ok(result) => result,
+        Err(payload) if is_closed_pipe_panic(payload.as_ref()) => Ok(()),
+        Err(payload) => std::panic::resume_unwind(payload),
+    }
+}
+
+fn is_closed_pipe_panic(payload: &(dyn std::any::Any + Send)) -> bool {
+    let message = payload
+        .downcast_ref::<String>()
+        .map(String::as_str)
+        .or_else(|| payload.downcast_ref::<&str>().copied())
+        .unwrap_or("");
+    message.starts_with(CLOSED_PIPE_PANIC) && message.contains("Broken pipe")
+}
+
+/// Silences the panic hook for the closed-pipe panic only (once per process).
+fn install_closed_pipe_hook() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !is_closed_pipe_panic(info.payload()) {
+                previous(info);
+            }
+        }));
+    });
 }

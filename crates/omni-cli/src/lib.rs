@@ -13,3 +13,4 @@ pub mod interrupt;
 pub mod model_file;
 pub mod progress;
 pub mod report;
+pub mod robot_config;

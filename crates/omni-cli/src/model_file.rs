@@ -24,7 +24,7 @@
 //! roller_angle_rad) and `[[design_wheels]]` instead of the matrices.
 
 use omni_kin::effect::Effect;
-use omni_kin::{EffectKind, FittedModel, IkMatrix, Integration, Kinematics, Model, RobotGeometry, Wheel};
+use omni_kin::{BaseRecord, EffectKind, FittedModel, Integration, KinematicsKind, Model, Wheel};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -107,15 +107,8 @@ impl ModelFile {
     /// The file form of a fitted model.
     pub fn from_fitted(f: &FittedModel, fit: Option<toml::Table>) -> Result<Self, omni_kin::KinError> {
         let nb = f.model.n_base();
-        let (matrix, design_matrix, wheels, design_wheels, wheel_names) = match &f.model.kinematics {
-            Kinematics::Ik { design } => {
-                (Some(f.ik()?.rows()), Some(design.rows()), None, None, f.model.kinematics.wheel_names())
-            }
-            Kinematics::Geometry { design } => {
-                let g = f.model.kinematics.geometry_at(&f.params[..nb]).transpose()?.unwrap_or_else(|| design.clone());
-                (None, None, Some(g.wheels), Some(design.wheels.clone()), design.wheel_names.clone())
-            }
-        };
+        let BaseRecord { wheel_names, matrix, design_matrix, wheels, design_wheels } =
+            f.model.kinematics.record(&f.params[..nb])?;
         let effects = f
             .model
             .effects
@@ -145,37 +138,8 @@ impl ModelFile {
         if self.format != FORMAT {
             return Err(format!("format is {:?}, expected {FORMAT:?}", self.format));
         }
-        let (kinematics, mut params) = match self.kinematics.as_str() {
-            "ik" => {
-                let m = self.matrix.as_ref().ok_or("kinematics = \"ik\" needs `matrix`")?;
-                let fitted = IkMatrix::from_rows(m).map_err(|e| format!("matrix: {e}"))?;
-                let design = match &self.design_matrix {
-                    Some(d) => IkMatrix::from_rows(d).map_err(|e| format!("design_matrix: {e}"))?,
-                    None => fitted.clone(),
-                };
-                if design.n_wheels() != fitted.n_wheels() {
-                    return Err("design_matrix and matrix have different wheel counts".into());
-                }
-                (Kinematics::Ik { design }, fitted.entries().to_vec())
-            }
-            "geometry" => {
-                let w = self.wheels.as_ref().ok_or("kinematics = \"geometry\" needs `[[wheels]]`")?;
-                let d = self.design_wheels.clone().unwrap_or_else(|| w.clone());
-                let names = self.wheel_names.clone();
-                let design = RobotGeometry { wheel_names: names.clone(), wheels: d };
-                design.validate().map_err(|e| format!("design_wheels: {e}"))?;
-                let fitted = RobotGeometry { wheel_names: names, wheels: w.clone() };
-                fitted.validate().map_err(|e| format!("wheels: {e}"))?;
-                if fitted.n_wheels() != design.n_wheels() {
-                    return Err("design_wheels and wheels have different wheel counts".into());
-                }
-                let mut p: Vec<f64> = fitted.wheels.iter().map(|w| w.radius_m).collect();
-                p.extend(fitted.wheels.iter().map(|w| w.distance_m));
-                p.extend(fitted.wheels.iter().map(|w| w.angle_rad));
-                (Kinematics::Geometry { design }, p)
-            }
-            other => return Err(format!("kinematics = {other:?}: expected \"ik\" or \"geometry\"")),
-        };
+        let kind: KinematicsKind = self.kinematics.parse().map_err(|e| format!("kinematics = {e}"))?;
+        let (kinematics, mut params) = self.base_record().read(kind).map_err(|e| e.to_string())?;
         let n_wheels = kinematics.n_wheels();
         if self.wheel_names.len() != n_wheels {
             return Err(format!("wheel_names has {} names for {n_wheels} wheels", self.wheel_names.len()));
@@ -208,6 +172,17 @@ impl ModelFile {
             model.effects.push(e);
         }
         FittedModel::new(model, params).map_err(|e| e.to_string())
+    }
+
+    /// The keys that describe the base kinematics.
+    fn base_record(&self) -> BaseRecord {
+        BaseRecord {
+            wheel_names: self.wheel_names.clone(),
+            matrix: self.matrix.clone(),
+            design_matrix: self.design_matrix.clone(),
+            wheels: self.wheels.clone(),
+            design_wheels: self.design_wheels.clone(),
+        }
     }
 
     /// TOML text.
@@ -246,7 +221,7 @@ pub fn to_toml(f: &FittedModel, fit: Option<toml::Table>) -> Result<String, Stri
 #[cfg(test)]
 mod tests {
     use super::*;
-    use omni_kin::Model;
+    use omni_kin::{IkMatrix, RobotGeometry};
 
     #[test]
     fn round_trip_is_exact() {

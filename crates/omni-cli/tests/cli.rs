@@ -169,3 +169,26 @@ fn square_runs_warn_under_the_end_pose_objective() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("sampled every 40 ms") && err.contains("factor 0.25"), "{err}");
 }
+
+/// `omnical eval … | head -1`: the reader closes the pipe before omnical has written; omnical must end
+/// quietly (exit 0, as for any closed pipe) instead of panicking with "failed printing to stdout".
+#[test]
+fn a_closed_stdout_pipe_ends_quietly() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = ["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "2", "--seed", "5", "-q"];
+    assert!(omnical(&sim, dir.path()).status.success());
+    for args in [&["eval", "--model", "design", "sim/validation"][..], &["eval", "--model", "design", "sim/train"]] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_omnical"))
+            .args(args)
+            .current_dir(dir.path())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take()); // the reader is gone before the first line is written
+        let out = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "{stderr}");
+        assert!(!stderr.contains("panicked") && !stderr.contains("Broken pipe"), "{stderr}");
+    }
+}

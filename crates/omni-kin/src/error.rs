@@ -17,13 +17,15 @@ pub enum KinError {
         /// Why it is rejected.
         why: &'static str,
     },
-    /// The wheels cannot produce every planar twist.
-    #[error("robot with {wheels} wheels cannot produce every planar twist (the wheel matrix has rank {rank} < 3)")]
+    /// The wheels cannot produce the twists the base needs.
+    #[error("robot with {wheels} wheels cannot produce {} (the wheel matrix has rank {rank} < {needed})", twists_named(*needed))]
     Singular {
         /// Wheel count.
         wheels: usize,
         /// Numerical rank found.
         rank: usize,
+        /// Rank the base needs: 3 (every planar twist) for an omnidirectional base.
+        needed: usize,
     },
     /// A matrix or vector has the wrong size.
     #[error("{what} has {got} entries, expected {expected}")]
@@ -145,4 +147,13 @@ pub enum KinError {
         /// Why it is rejected.
         why: String,
     },
+}
+
+/// What a base with forward-kinematics rank `needed` must produce, for [`KinError::Singular`].
+fn twists_named(needed: usize) -> String {
+    if needed >= crate::geometry::PLANAR_TWIST_DIMENSIONS {
+        "every planar twist".to_string()
+    } else {
+        format!("{needed} independent twist directions")
+    }
 }

@@ -19,6 +19,12 @@ use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::FRAC_PI_2;
 
+/// Dimensions of a planar twist (vx, vy, ω): the rank an omnidirectional base's forward kinematics needs.
+pub const PLANAR_TWIST_DIMENSIONS: usize = 3;
+
+/// Singular values of the forward kinematics at or below this count as zero in [`RobotGeometry::rank`].
+const RANK_TOLERANCE: f64 = 1e-9;
+
 /// One wheel of the robot.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Wheel {
@@ -158,8 +164,22 @@ impl RobotGeometry {
         self.wheels.len()
     }
 
-    /// Checks every wheel, the names and that the wheels span every planar twist.
+    /// Checks every wheel, the names and that the wheels span every planar twist (rank
+    /// [`PLANAR_TWIST_DIMENSIONS`]): what an omnidirectional base needs.
     pub fn validate(&self) -> Result<(), KinError> {
+        self.validate_for(PLANAR_TWIST_DIMENSIONS)
+    }
+
+    /// Numerical rank of the forward kinematics [`Self::wheels_from_twist`] (singular values above
+    /// `1e-9`): how many independent twist directions the wheels drive (3 for an omnidirectional base, 2
+    /// for a differential drive).
+    pub fn rank(&self) -> usize {
+        self.wheels_from_twist().rank(RANK_TOLERANCE)
+    }
+
+    /// Checks every wheel, the names and that the wheels drive at least `needed` independent twist
+    /// directions ([`Self::rank`]); a base type states what it needs (3: every planar twist).
+    pub fn validate_for(&self, needed: usize) -> Result<(), KinError> {
         if self.wheel_names.len() != self.wheels.len() {
             return Err(KinError::Shape {
                 what: "wheel_names".into(),
@@ -170,10 +190,9 @@ impl RobotGeometry {
         for (i, w) in self.wheels.iter().enumerate() {
             w.validate(i)?;
         }
-        let m = self.wheels_from_twist();
-        let rank = m.rank(1e-9);
-        if rank < 3 {
-            return Err(KinError::Singular { wheels: self.wheels.len(), rank });
+        let rank = self.rank();
+        if rank < needed {
+            return Err(KinError::Singular { wheels: self.wheels.len(), rank, needed });
         }
         Ok(())
     }
@@ -190,12 +209,19 @@ impl RobotGeometry {
     pub fn twist_from_wheels(&self) -> Result<IkMatrix, KinError> {
         self.validate()?;
         let m = self.wheels_from_twist();
+        // The (pseudo-)inverse exists once the rank is full; were it lost to rounding, say so as a rank
+        // one short of full.
+        let full = PLANAR_TWIST_DIMENSIONS;
         let inv = if m.nrows() == 3 {
-            m.try_inverse().ok_or(KinError::Singular { wheels: 3, rank: 2 })?
+            m.try_inverse().ok_or(KinError::Singular { wheels: 3, rank: full - 1, needed: full })?
         } else {
             let mt = m.transpose();
             let normal = &mt * &m;
-            let normal_inv = normal.try_inverse().ok_or(KinError::Singular { wheels: self.wheels.len(), rank: 2 })?;
+            let normal_inv = normal.try_inverse().ok_or(KinError::Singular {
+                wheels: self.wheels.len(),
+                rank: full - 1,
+                needed: full,
+            })?;
             normal_inv * mt
         };
         let n = self.wheels.len();

@@ -9,12 +9,14 @@
 //! Units follow ROS REP-103: metres, seconds, radians, rad/s; x forward, y left, yaw counter-clockwise.
 #![deny(missing_docs)]
 
+pub mod controller;
 pub mod cost;
 pub mod effect;
 pub mod error;
 pub mod fast;
 pub mod geometry;
 pub mod ik;
+pub mod kinematics;
 pub mod model;
 pub mod odometry;
 pub mod pose;
@@ -26,6 +28,7 @@ pub use effect::{Effect, EffectKind, ParamSpec, Stage};
 pub use error::KinError;
 pub use geometry::{RobotGeometry, Wheel};
 pub use ik::IkMatrix;
+pub use kinematics::{BaseKinematics, BaseRecord, KinematicsKind, UnexcitedBase};
 pub use model::{FittedModel, Integration, Kinematics, Model, Scheme, StepMode};
 pub use odometry::{Selection, Trajectory};
 pub use pose::{Pose2, PoseError, StampedPose, Twist2};

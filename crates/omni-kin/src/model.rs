@@ -6,118 +6,15 @@
 
 use crate::effect::{Effect, EffectKind, ParamSpec, Stage};
 use crate::error::KinError;
-use crate::geometry::{RobotGeometry, Wheel, default_wheel_names};
+use crate::geometry::RobotGeometry;
 use crate::ik::IkMatrix;
+pub use crate::kinematics::Kinematics;
+use crate::kinematics::{GeometryKinematics, KinematicsKind, MatrixKinematics};
 use crate::pose::Pose2;
 use serde::{Deserialize, Serialize};
 
 /// Step of the paper's odometry (Eq. 1). s.
 pub const PAPER_STEP_S: f64 = 0.010;
-
-/// The base kinematics a model fits.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-pub enum Kinematics {
-    /// The paper's non-parametric model: every entry of the 3 × N IK matrix is free.
-    Ik {
-        /// Design matrix (the start and centre of the search).
-        design: IkMatrix,
-    },
-    /// The parametric model of the paper's ref. \[17\]: per wheel r_i, R_i, δ_i.
-    Geometry {
-        /// Design geometry.
-        design: RobotGeometry,
-    },
-}
-
-impl Kinematics {
-    /// Number of wheels.
-    pub fn n_wheels(&self) -> usize {
-        match self {
-            Self::Ik { design } => design.n_wheels(),
-            Self::Geometry { design } => design.n_wheels(),
-        }
-    }
-
-    /// `ik` or `geometry`.
-    pub fn id(&self) -> &'static str {
-        match self {
-            Self::Ik { .. } => "ik",
-            Self::Geometry { .. } => "geometry",
-        }
-    }
-
-    /// Parameter specs at the design values (bounds: ±10 % of each design value, as the paper).
-    pub fn params(&self) -> Vec<ParamSpec> {
-        match self {
-            Self::Ik { design } => {
-                let names = IkMatrix::entry_names(design.n_wheels());
-                names
-                    .into_iter()
-                    .zip(design.entries())
-                    .enumerate()
-                    .map(|(i, (name, &v))| {
-                        let unit = if i / design.n_wheels() == 2 { "rad" } else { "m" };
-                        ParamSpec::new(name, unit, v, v - 0.1 * v.abs(), v + 0.1 * v.abs())
-                    })
-                    .collect()
-            }
-            Self::Geometry { design } => {
-                let letters: Vec<String> =
-                    (0..design.n_wheels()).map(|i| ((b'a' + i as u8) as char).to_string()).collect();
-                let mut p = Vec::new();
-                for (l, w) in letters.iter().zip(&design.wheels) {
-                    p.push(ParamSpec::new(format!("r_{l}"), "m", w.radius_m, 0.9 * w.radius_m, 1.1 * w.radius_m));
-                }
-                for (l, w) in letters.iter().zip(&design.wheels) {
-                    p.push(ParamSpec::new(format!("R_{l}"), "m", w.distance_m, 0.9 * w.distance_m, 1.1 * w.distance_m));
-                }
-                for (l, w) in letters.iter().zip(&design.wheels) {
-                    let d = w.angle_rad;
-                    p.push(ParamSpec::new(format!("delta_{l}"), "rad", d, d - 0.1 * d.abs(), d + 0.1 * d.abs()));
-                }
-                p
-            }
-        }
-    }
-
-    /// The IK matrix for base parameters `p`.
-    pub fn ik(&self, p: &[f64]) -> Result<IkMatrix, KinError> {
-        match self {
-            Self::Ik { design } => IkMatrix::new(design.n_wheels(), p.to_vec()),
-            Self::Geometry { design } => self.geometry(p, design)?.twist_from_wheels(),
-        }
-    }
-
-    fn geometry(&self, p: &[f64], design: &RobotGeometry) -> Result<RobotGeometry, KinError> {
-        let n = design.n_wheels();
-        let wheels = design
-            .wheels
-            .iter()
-            .enumerate()
-            .map(|(i, w)| Wheel { radius_m: p[i], distance_m: p[n + i], angle_rad: p[2 * n + i], ..w.clone() })
-            .collect();
-        let g = RobotGeometry { wheel_names: design.wheel_names.clone(), wheels };
-        g.validate()?;
-        Ok(g)
-    }
-
-    /// The robot geometry for base parameters `p` (`geometry` models only).
-    pub fn geometry_at(&self, p: &[f64]) -> Option<Result<RobotGeometry, KinError>> {
-        match self {
-            Self::Geometry { design } => Some(self.geometry(p, design)),
-            Self::Ik { .. } => None,
-        }
-    }
-
-    /// Wheel names.
-    pub fn wheel_names(&self) -> Vec<String> {
-        match self {
-            Self::Geometry { design } => design.wheel_names.clone(),
-            Self::Ik { design } => default_wheel_names(design.n_wheels()),
-        }
-    }
-}
 
 /// How each wheel sample is turned into a step length.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -183,14 +80,26 @@ pub struct Model {
 }
 
 impl Model {
+    /// A model of these base kinematics, without effects, with default integration.
+    pub fn new(kinematics: Kinematics) -> Self {
+        Self { kinematics, effects: Vec::new(), integration: Integration::DEFAULT }
+    }
+
     /// The paper's `ik` model around `design`, with default integration.
     pub fn ik(design: IkMatrix) -> Self {
-        Self { kinematics: Kinematics::Ik { design }, effects: Vec::new(), integration: Integration::DEFAULT }
+        Self::new(Kinematics::Ik(MatrixKinematics { design }))
     }
 
     /// The `geometry` model around `design`, with default integration.
     pub fn geometry(design: RobotGeometry) -> Self {
-        Self { kinematics: Kinematics::Geometry { design }, effects: Vec::new(), integration: Integration::DEFAULT }
+        Self::new(Kinematics::Geometry(GeometryKinematics { design }))
+    }
+
+    /// The design model of `kind` for a robot (its geometry when known, else the paper's APR-02), with
+    /// default integration: `ik` around the robot's IK matrix (Eq. 3; Eq. 7 for APR-02), `geometry` around
+    /// its geometry.
+    pub fn design(kind: KinematicsKind, robot: Option<&RobotGeometry>) -> Result<Self, KinError> {
+        Ok(Self::new(Kinematics::design(kind, robot)?))
     }
 
     /// This model with another effect appended.
@@ -212,7 +121,7 @@ impl Model {
 
     /// Number of base (kinematic) parameters.
     pub fn n_base(&self) -> usize {
-        self.kinematics.params().len()
+        self.kinematics.n_params()
     }
 
     /// Every parameter spec: base first, then effects with names qualified as `<effect>.<name>`.
@@ -266,7 +175,7 @@ impl Model {
             });
         }
         let nb = self.n_base();
-        let ik = self.kinematics.ik(&params[..nb])?;
+        let ik = self.kinematics.twist_from_wheels(&params[..nb])?;
         let mut clock_lag_s = 0.0;
         let mut sensor_from_body = Pose2::IDENTITY;
         let mut stamps = matches!(self.integration.step, StepMode::Stamps);
@@ -349,7 +258,7 @@ impl FittedModel {
 
     /// The IK matrix these parameters give.
     pub fn ik(&self) -> Result<IkMatrix, KinError> {
-        self.model.kinematics.ik(&self.params[..self.model.n_base()])
+        self.model.kinematics.twist_from_wheels(&self.params[..self.model.n_base()])
     }
 
     /// Value of a parameter by its qualified name.

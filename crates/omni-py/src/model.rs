@@ -7,7 +7,7 @@ use crate::errors::{ModelFileError as PyModelFileError, PyResultExt, ToPyErr, va
 use numpy::{PyArray1, PyArray2};
 use omni_cli::model_file::{self, ModelFile, ModelFileError};
 use omni_kin::effect::{Effect, ParamSpec};
-use omni_kin::{EffectKind, FittedModel, IkMatrix, Model, RobotGeometry};
+use omni_kin::{EffectKind, FittedModel, IkMatrix, KinematicsKind, Model};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::collections::BTreeMap;
@@ -71,11 +71,8 @@ impl PyModel {
     #[staticmethod]
     #[pyo3(signature = (*, kinematics = "ik"))]
     fn design(kinematics: &str) -> PyResult<Self> {
-        let m = match kinematics {
-            "ik" => FittedModel::paper_design(),
-            "geometry" => FittedModel::nominal(Model::geometry(RobotGeometry::apr02())),
-            other => return Err(value_error(format!("kinematics {other:?}: expected \"ik\" or \"geometry\""))),
-        };
+        let kind: KinematicsKind = kinematics.parse().map_err(|e| value_error(format!("kinematics {e}")))?;
+        let m = FittedModel::nominal(Model::design(kind, None).py()?);
         Ok(Self::from_fitted(m, Vec::new()))
     }
 
@@ -124,7 +121,7 @@ impl PyModel {
     #[getter]
     fn design_matrix<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let nominal = self.inner.model.nominal();
-        let m = self.inner.model.kinematics.ik(&nominal[..self.inner.model.n_base()]).py()?;
+        let m = self.inner.model.kinematics.twist_from_wheels(&nominal[..self.inner.model.n_base()]).py()?;
         to_matrix(py, 3, m.n_wheels(), m.entries().to_vec())
     }
     /// Effect ids, in pipeline order.

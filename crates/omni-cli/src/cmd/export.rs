@@ -3,10 +3,10 @@
 
 use super::diagnose::design_for;
 use super::{load_runs_with_odometry, resolve_model};
-use crate::atomic;
 use crate::cli::DataArgs;
 use crate::dataset::mcap::{WriteOptions, write_run};
 use crate::report::tum;
+use crate::{atomic, robot_config};
 use anyhow::Context;
 use omni_kin::odometry::{self, Selection};
 use omni_kin::{FittedModel, Run, StampedPose};
@@ -23,6 +23,10 @@ pub struct Args {
     pub tum: Option<PathBuf>,
     /// MCAP output folder.
     pub mcap: Option<PathBuf>,
+    /// Robot configuration output folder (`--robot-config`).
+    pub robot_config: Option<PathBuf>,
+    /// Controller for the robot configuration (default: the one that matches the base).
+    pub controller: Option<omni_kin::controller::ControllerKind>,
     /// Wheel joint names for the MCAP output.
     pub data: DataArgs,
 }
@@ -43,8 +47,8 @@ pub fn odometry_poses(model: &FittedModel, run: &Run) -> anyhow::Result<Vec<Stam
 
 /// Runs `omnical export`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
-    if a.tum.is_none() && a.mcap.is_none() {
-        anyhow::bail!("nothing to export: give --tum DIR and/or --mcap DIR");
+    if a.tum.is_none() && a.mcap.is_none() && a.robot_config.is_none() {
+        anyhow::bail!("nothing to export: give --tum DIR and/or --mcap DIR (or --robot-config DIR)");
     }
     let ds = load_runs_with_odometry(&a.runs, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
@@ -82,7 +86,31 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             dir.display()
         );
     }
+    if let Some(dir) = &a.robot_config {
+        let request = robot_config::Request {
+            model: &model,
+            design: &design,
+            spec: &a.model,
+            runs: &ds.runs,
+            wheel_names: joint_names(&model, &a.data.joints),
+            controller: a.controller,
+        };
+        let config = robot_config::build(&request)?;
+        robot_config::write(dir, &config)?;
+        print!("{}", robot_config::summary(&config, dir));
+    }
     Ok(())
+}
+
+/// Joint names in the model's column order: the model's own, or `--joints` when the model only has the
+/// default names `wheel_a`, `wheel_b`, ….
+fn joint_names(model: &FittedModel, joints: &[String]) -> Vec<String> {
+    let names = model.model.kinematics.wheel_names();
+    if names == omni_kin::geometry::default_wheel_names(names.len()) && joints.len() == names.len() {
+        joints.to_vec()
+    } else {
+        names
+    }
 }
 
 fn write_tum(dir: &Path, run: &Run, design: &FittedModel, model: &FittedModel, spec: &str) -> anyhow::Result<()> {

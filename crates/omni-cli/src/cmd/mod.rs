@@ -68,14 +68,6 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
     Ok(ds)
 }
 
-/// The design IK matrix of a dataset: the geometry it declares, else the paper's Eq. 7.
-pub fn design_ik(ds: &Dataset) -> anyhow::Result<IkMatrix> {
-    match &ds.robot {
-        Some(g) => Ok(g.twist_from_wheels()?),
-        None => Ok(IkMatrix::paper_design()),
-    }
-}
-
 /// `design` / `paper` or a model file.
 pub fn resolve_model(spec: &str, ds: &Dataset) -> anyhow::Result<FittedModel> {
     match spec {

@@ -43,10 +43,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             )
         })?
     };
-    let mut model = match a.model {
-        ModelKind::Ik => FittedModel::nominal(Model::ik(robot.twist_from_wheels()?)),
-        ModelKind::Geometry => FittedModel::nominal(Model::geometry(robot.clone())),
-    };
+    let mut model = FittedModel::nominal(Model::design(a.model.into(), Some(&robot))?);
     for id in &a.effects {
         model = model
             .with_effect(EffectKind::from_id(id, model.model.n_wheels()).with_context(|| format!("--effect {id}"))?);

@@ -1,12 +1,12 @@
 //! `omnical train`: fit a model to training runs.
 
-use super::{design_ik, load_runs};
+use super::load_runs;
 use crate::cli::{CostArg, DataArgs, FitArgs, ModelKind, PresetArg, UnexcitedArg};
 use crate::{atomic, interrupt, model_file, progress};
 use anyhow::Context;
 use omni_ga::calibrate::{Calibration, Plan, Preset, Unexcited, calibrate};
 use omni_kin::cost::CostKind;
-use omni_kin::{EffectKind, FittedModel, Model, RobotGeometry};
+use omni_kin::{EffectKind, FittedModel, Model};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -145,12 +145,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     }
     let mut start = match &a.start {
         Some(p) => model_file::read(p).context("reading --start")?,
-        None => match a.model {
-            ModelKind::Ik => FittedModel::nominal(Model::ik(design_ik(&ds)?)),
-            ModelKind::Geometry => {
-                FittedModel::nominal(Model::geometry(ds.robot.clone().unwrap_or_else(RobotGeometry::apr02)))
-            }
-        },
+        None => FittedModel::nominal(Model::design(a.model.into(), ds.robot.as_ref())?),
     };
     for id in &a.effects {
         start = start
@@ -222,9 +217,11 @@ pub fn print_summary(c: &Calibration, preset: &str, runs: usize) {
     }
     let nb = c.fitted.model.n_base();
     let specs = c.fitted.model.params();
-    if matches!(c.fitted.model.kinematics, omni_kin::Kinematics::Geometry { .. }) || specs.len() > nb {
+    // The matrix above shows base parameters that are its entries; print the others.
+    let base_shown = c.fitted.model.kinematics.params_are_ik_entries();
+    if !base_shown || specs.len() > nb {
         for (i, s) in specs.iter().enumerate() {
-            if i >= nb || matches!(c.fitted.model.kinematics, omni_kin::Kinematics::Geometry { .. }) {
+            if i >= nb || !base_shown {
                 println!("  {:<28} {:>14.6} {}", s.name, c.fitted.params[i], s.unit);
             }
         }

@@ -161,11 +161,8 @@ impl Report {
                 held_out_end_pose: c(fig_runs, CostKind::EndPose)?,
             };
             let specs = m.model.model.params();
-            let nb = if matches!(m.model.model.kinematics, omni_kin::Kinematics::Ik { .. }) {
-                m.model.model.n_base()
-            } else {
-                0
-            };
+            // The matrix shows base parameters that are its entries; list the others.
+            let nb = if m.model.model.kinematics.params_are_ik_entries() { m.model.model.n_base() } else { 0 };
             let params =
                 specs.iter().zip(&m.model.params).skip(nb).map(|(s, v)| (s.name.clone(), *v, s.unit.to_string()));
             models.push(ModelSummary {
@@ -313,22 +310,19 @@ pub fn write(
 /// The models a report shows for a fitted model and its diagnosis: the design, the model itself, and the
 /// model with the effects the diagnosis added (when it added any).
 pub fn models_for(design: &FittedModel, fitted: &FittedModel, diagnosis: Option<&Diagnosis>) -> Vec<Labelled> {
-    let base = match fitted.model.kinematics {
-        omni_kin::Kinematics::Ik { .. } => "fitted matrix",
-        omni_kin::Kinematics::Geometry { .. } => "fitted geometry",
-    };
+    let base = format!("fitted {}", fitted.model.kinematics.noun());
     let with_effects = |m: &FittedModel, base: &str| {
         let ids: Vec<&str> = m.model.effects.iter().map(omni_kin::effect::Effect::id).collect();
         if ids.is_empty() { base.to_string() } else { format!("{base} + {}", ids.join(" + ")) }
     };
     let mut v = vec![
         Labelled { label: "design".into(), model: design.clone() },
-        Labelled { label: with_effects(fitted, base), model: fitted.clone() },
+        Labelled { label: with_effects(fitted, &base), model: fitted.clone() },
     ];
     if let Some(f) = diagnosis.and_then(|d| d.final_model.as_ref())
         && f.model.effects.len() > fitted.model.effects.len()
     {
-        v.push(Labelled { label: with_effects(f, base), model: f.clone() });
+        v.push(Labelled { label: with_effects(f, &base), model: f.clone() });
     }
     v
 }

@@ -9,7 +9,7 @@ use crate::science::identify::{self, Identifiability, IdentifyOptions};
 use nalgebra::DMatrix;
 use omni_kin::cost::{self, CostKind};
 use omni_kin::fast::PreparedRuns;
-use omni_kin::{Kinematics, Model, Run, Selection, StepMode};
+use omni_kin::{Model, Run, Selection, StepMode};
 
 /// The fitting problem: a model structure, training runs and an objective.
 ///
@@ -97,26 +97,15 @@ impl<'a> CalibrationProblem<'a> {
         }
     }
 
-    /// The IK matrix's derivatives with respect to the geometry parameters (IK entries × base parameters),
-    /// by central differences of the (cheap) map from geometry to IK matrix; `None` for an IK model.
-    fn ik_from_geometry(&self, x: &[f64], ik_entries: usize) -> Option<Option<DMatrix<f64>>> {
-        let Kinematics::Geometry { .. } = &self.model.kinematics else {
+    /// The IK matrix's derivatives with respect to the base parameters (IK entries × base parameters,
+    /// the kinematics' `twist_from_wheels_jacobian`); `Some(None)` when the parameters are the
+    /// IK entries themselves (the identity), `None` when the model cannot be differentiated at `x`.
+    fn ik_from_base(&self, x: &[f64]) -> Option<Option<DMatrix<f64>>> {
+        let k = &self.model.kinematics;
+        if k.params_are_ik_entries() {
             return Some(None);
-        };
-        let nb = self.model.n_base();
-        let mut dm = DMatrix::zeros(ik_entries, nb);
-        for c in 0..nb {
-            let h = 1e-7 * x[c].abs().max(1e-3);
-            let (mut xp, mut xm) = (x[..nb].to_vec(), x[..nb].to_vec());
-            xp[c] += h;
-            xm[c] -= h;
-            let mp = self.model.kinematics.ik(&xp).ok()?;
-            let mm = self.model.kinematics.ik(&xm).ok()?;
-            for (i, (a, b)) in mp.entries().iter().zip(mm.entries()).enumerate() {
-                dm[(i, c)] = (a - b) / (2.0 * h);
-            }
         }
-        Some(Some(dm))
+        k.twist_from_wheels_jacobian(&x[..self.model.n_base()]).ok().map(Some)
     }
 
     /// The effect parameters' Jacobian columns over all residuals (finite differences; see
@@ -136,8 +125,7 @@ impl<'a> CalibrationProblem<'a> {
     fn analytic_blocks(&self, x: &[f64], visit: &mut dyn FnMut(RunBlock<'_>)) -> Option<()> {
         let prepared = self.prepared.as_ref()?;
         let res = self.model.resolve(x).ok()?;
-        let ik_entries = res.ik.entries().len();
-        let dm = self.ik_from_geometry(x, ik_entries)?;
+        let dm = self.ik_from_base(x)?;
         let (nb, n) = (self.model.n_base(), x.len());
         let mut effects: Option<Vec<Vec<f64>>> = None;
         prepared.ik_jacobian_blocks(&res, self.runs, self.objective, &mut |b| {
@@ -202,13 +190,10 @@ impl<'a> CalibrationProblem<'a> {
         let nb = self.model.n_base();
         let n = x.len();
         let mut j = DMatrix::zeros(r.len(), n);
-        match &self.model.kinematics {
-            Kinematics::Ik { .. } => j.columns_mut(0, nb).copy_from(&j_ik),
-            Kinematics::Geometry { .. } => {
-                // Chain rule through the (cheap) map from geometry to IK matrix, by central differences.
-                let dm = self.ik_from_geometry(x, j_ik.ncols())??;
-                j.columns_mut(0, nb).copy_from(&(j_ik * dm));
-            }
+        // Chain rule through the map from base parameters to IK matrix.
+        match self.ik_from_base(x)? {
+            None => j.columns_mut(0, nb).copy_from(&j_ik),
+            Some(dm) => j.columns_mut(0, nb).copy_from(&(j_ik * dm)),
         }
         for (c, col) in (nb..n).zip(self.effect_columns(x)) {
             for (i, v) in col.into_iter().enumerate().take(r.len()) {

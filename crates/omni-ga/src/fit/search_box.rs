@@ -2,7 +2,7 @@
 
 use crate::optimizer::error::OptimizeError;
 use crate::optimizer::problem::Bounds;
-use omni_kin::{Kinematics, Model};
+use omni_kin::Model;
 use serde::{Deserialize, Serialize};
 
 /// How the GA's search box is set around the start.
@@ -11,8 +11,9 @@ use serde::{Deserialize, Serialize};
 pub enum BoxRule {
     /// ±fraction of each start value (zero entries pinned). Paper: 0.10.
     PerValue(f64),
-    /// ±fraction of the largest magnitude in the entry's matrix row (ik) or of the value (geometry r, R;
-    /// angles ±fraction rad). Default: 0.10.
+    /// ±fraction of each base parameter's scale at the start (the kinematics' `param_scales`: for `ik` the
+    /// largest magnitude in the entry's matrix row; for `geometry` the value of r, R, and 1 rad for
+    /// angles). Default: 0.10.
     PerRow(f64),
 }
 
@@ -20,6 +21,7 @@ pub enum BoxRule {
 pub fn search_box(model: &Model, start: &[f64], rule: BoxRule) -> Result<Bounds, OptimizeError> {
     let specs = model.params();
     let nb = model.n_base();
+    let scales = model.kinematics.param_scales(&start[..nb]);
     let mut lower = Vec::with_capacity(specs.len());
     let mut upper = Vec::with_capacity(specs.len());
     for (i, s) in specs.iter().enumerate() {
@@ -30,17 +32,9 @@ pub fn search_box(model: &Model, start: &[f64], rule: BoxRule) -> Result<Bounds,
             upper.push(s.upper.max(v));
             continue;
         } else {
-            match (rule, &model.kinematics) {
-                (BoxRule::PerValue(f), _) => f * v.abs(),
-                (BoxRule::PerRow(f), Kinematics::Ik { design }) => {
-                    let n = design.n_wheels();
-                    let row = i / n;
-                    f * start[row * n..(row + 1) * n].iter().fold(0.0f64, |m, x| m.max(x.abs()))
-                }
-                (BoxRule::PerRow(f), Kinematics::Geometry { design }) => {
-                    let n = design.n_wheels();
-                    if i >= 2 * n { f } else { f * v.abs() }
-                }
+            match rule {
+                BoxRule::PerValue(f) => f * v.abs(),
+                BoxRule::PerRow(f) => f * scales[i],
             }
         };
         lower.push(v - half);

@@ -5,8 +5,8 @@
 use super::{Advice, MotionParts, PatternPresence, WeakDirection, WheelEvidence};
 use crate::science::text;
 use nalgebra::{DMatrix, DVector};
+use omni_kin::Model;
 use omni_kin::effect::Effect;
-use omni_kin::{Kinematics, Model};
 
 /// Share of the wheel motion from which a pattern counts as present in the runs.
 const PRESENT_SHARE: f64 = 0.25;
@@ -98,32 +98,9 @@ fn wheel_pattern(
     if base_share < 0.25 {
         return None;
     }
-    let nw = model.n_wheels();
-    // ΔM by a small central difference through the kinematics (exact for `ik`).
-    let h = 1e-4;
-    let step = |sign: f64| -> Option<Vec<f64>> {
-        let p: Vec<f64> = (0..nb).map(|i| params[i] + sign * h * dir[i] * scales[i]).collect();
-        model.kinematics.ik(&p).ok().map(|m| m.entries().to_vec())
-    };
-    let (mp, mm) = (step(1.0)?, step(-1.0)?);
-    let dm = DMatrix::from_fn(3, nw, |r, c| (mp[r * nw + c] - mm[r * nw + c]) / (2.0 * h));
-    let svd = dm.try_svd(true, true, f64::EPSILON, 10_000)?;
-    let vt = svd.v_t?;
-    let k =
-        (0..svd.singular_values.len()).max_by(|&a, &b| svd.singular_values[a].total_cmp(&svd.singular_values[b]))?;
-    let mut u: Vec<f64> = (0..nw).map(|c| vt[(k, c)]).collect();
-    // Design twist of the pattern.
-    let design = model.kinematics.ik(&model.nominal()[..nb]).ok()?;
-    let mut t = design.twist(&u);
-    let lever = lever_arm_m(model);
-    // Prefer the sign that moves forward / turns left, for readable advice.
-    let key = [t.vx_m_s, t.vy_m_s, t.omega_rad_s * lever];
-    let dominant = key.iter().copied().fold(0.0f64, |a, b| if b.abs() > a.abs() { b } else { a });
-    if dominant < 0.0 {
-        u.iter_mut().for_each(|x| *x = -*x);
-        t = design.twist(&u);
-    }
-    let motion = [t.vx_m_s, t.vy_m_s, t.omega_rad_s];
+    let base = model.kinematics.unexcited(&params[..nb], &dir[..nb], &scales[..nb])?;
+    let (u, motion) = (base.wheel_pattern, base.motion);
+    let lever = model.kinematics.lever_arm_m();
     let presence = match pattern_share(&u, wheel_moment) {
         Some(share) if share >= PRESENT_SHARE => PatternPresence::Present(share),
         Some(share) => PatternPresence::Scarce(share),
@@ -143,16 +120,6 @@ fn pattern_share(u: &[f64], wheel_moment: Option<&DMatrix<f64>>) -> Option<f64> 
     let uv = DVector::from_column_slice(u);
     let tr = s.trace();
     (tr > 0.0).then(|| ((uv.transpose() * s * &uv)[(0, 0)] / tr).max(0.0).sqrt())
-}
-
-/// A typical wheel lever arm (m): the mean wheel distance of a geometry model, else 0.2 m.
-fn lever_arm_m(model: &Model) -> f64 {
-    match &model.kinematics {
-        Kinematics::Geometry { design } => {
-            design.wheels.iter().map(|w| w.distance_m).sum::<f64>() / design.wheels.len().max(1) as f64
-        }
-        Kinematics::Ik { .. } => 0.2,
-    }
 }
 
 /// The components of a design twist that matter (at least 30 % of the largest, the turn rate weighted by

@@ -30,7 +30,7 @@ mod direction;
 
 use crate::science::text;
 use nalgebra::{DMatrix, DVector};
-use omni_kin::{Kinematics, Model};
+use omni_kin::Model;
 use serde::{Deserialize, Serialize};
 
 /// Settings of the analysis (scaled units: fractions of each parameter's scale).
@@ -219,21 +219,14 @@ impl Identifiability {
 pub fn param_scales(model: &Model) -> Vec<f64> {
     let specs = model.params();
     let nb = model.n_base();
+    let nominal: Vec<f64> = specs[..nb].iter().map(|s| s.null).collect();
+    let base = model.kinematics.param_scales(&nominal);
     specs
         .iter()
         .enumerate()
         .map(|(i, s)| {
             let scale = if i < nb {
-                match &model.kinematics {
-                    Kinematics::Ik { design } => {
-                        let n = design.n_wheels();
-                        design.row(i / n).iter().fold(0.0f64, |m, v| m.max(v.abs()))
-                    }
-                    Kinematics::Geometry { design } => {
-                        let n = design.n_wheels();
-                        if i >= 2 * n { 1.0 } else { s.null.abs() }
-                    }
-                }
+                base[i]
             } else if s.lower.is_finite() && s.upper.is_finite() && s.upper > s.lower {
                 0.5 * (s.upper - s.lower)
             } else {

@@ -1,0 +1,379 @@
+//! `omnical export --robot-config DIR` on the real binary: the files parse as YAML (yaml-rust2) and as C,
+//! the written matrix is the model's, and the controller parameters reproduce the fitted odometry — exactly
+//! when the robot is of the controller's form (APR-02's design, a differential drive, a mecanum base), and
+//! within a stated tolerance for the paper's calibrated APR-02 (Eq. 9).
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use omni_cli::dataset::{self, LoadOptions};
+use omni_kin::{FittedModel, IkMatrix, Model, RobotGeometry, Run, RunData, Scheme, StampedPose, Wheel};
+use std::path::Path;
+use std::process::Command;
+use yaml_rust2::{Yaml, YamlLoader};
+
+fn omnical(args: &[&str], dir: &Path) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_omnical"))
+        .args(["--threads", "2", "-q"])
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run omnical");
+    assert!(out.status.success(), "omnical {args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8(out.stdout).unwrap()
+}
+
+fn yaml(path: &Path) -> Yaml {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut docs = YamlLoader::load_from_str(&text).unwrap_or_else(|e| panic!("{}: {e}\n{text}", path.display()));
+    assert_eq!(docs.len(), 1);
+    docs.remove(0)
+}
+
+/// A ROS 2 double: YAML must type it as a float (`1.0`, never `1`), or the parameter is refused.
+fn real(y: &Yaml) -> f64 {
+    assert!(matches!(y, Yaml::Real(_)), "not a YAML float: {y:?}");
+    y.as_f64().unwrap()
+}
+
+fn strings(y: &Yaml) -> Vec<String> {
+    y.as_vec().unwrap_or_else(|| panic!("not a list: {y:?}")).iter().map(|s| s.as_str().unwrap().to_string()).collect()
+}
+
+/// The matrix written in omnical_odometry.yaml (row-major 3 × N).
+fn written_matrix(dir: &Path) -> IkMatrix {
+    let y = yaml(&dir.join("omnical_odometry.yaml"));
+    let p = &y["/**"]["ros__parameters"];
+    let n = strings(&p["wheel_names"]).len();
+    let entries: Vec<f64> = p["twist_from_wheels"].as_vec().unwrap().iter().map(real).collect();
+    IkMatrix::new(n, entries).unwrap()
+}
+
+fn assert_close(a: &[f64], b: &[f64], tol: f64, what: &str) {
+    assert_eq!(a.len(), b.len(), "{what}");
+    for (x, y) in a.iter().zip(b) {
+        assert!((x - y).abs() <= tol, "{what}: {a:?} vs {b:?}");
+    }
+}
+
+/// The controller's loss against the full model in % (Eq. 6, path RMS), as printed.
+fn loss_pct(stdout: &str) -> [f64; 2] {
+    let line = stdout.lines().find(|l| l.contains("given up by the controller")).unwrap_or_else(|| panic!("{stdout}"));
+    let v: Vec<f64> = line.split_whitespace().filter_map(|t| t.parse().ok()).collect();
+    v.try_into().unwrap_or_else(|_| panic!("{line}"))
+}
+
+/// Twist from wheel speeds through ros2_controllers' omni_wheel_drive_controller formula, N = 3 (A is
+/// square: twist = A⁻¹ r ω), written out independently of omnical's code.
+fn omni_controller_twist(r: f64, big_r: f64, offset: f64, w: [f64; 3]) -> [f64; 3] {
+    let a: Vec<[f64; 3]> = (0..3)
+        .map(|i| {
+            let th = offset + std::f64::consts::TAU * i as f64 / 3.0;
+            [th.sin(), -th.cos(), -big_r]
+        })
+        .collect();
+    let det = |m: &[[f64; 3]]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let d = det(&a);
+    // Cramer's rule for A x = r w.
+    (0..3)
+        .map(|j| {
+            let mut m = a.clone();
+            for i in 0..3 {
+                m[i][j] = r * w[i];
+            }
+            det(&m) / d
+        })
+        .collect::<Vec<_>>()
+        .try_into()
+        .unwrap()
+}
+
+fn simulate_apr02(dir: &Path) {
+    omnical(
+        &["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "3", "--format", "csv", "--noise-free"],
+        dir,
+    );
+}
+
+#[test]
+fn apr02_design_is_exactly_an_omni_wheel_drive_controller() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    simulate_apr02(dir);
+    let out = omnical(&["export", "--model", "design", "--robot-config", "rc", "sim/validation"], dir);
+    let rc = dir.join("rc");
+    // The written matrix is Eq. 7 bit for bit.
+    assert_eq!(written_matrix(&rc), IkMatrix::paper_design());
+    let y = yaml(&rc.join("ros2_controllers.yaml"));
+    assert_eq!(
+        y["controller_manager"]["ros__parameters"]["omni_wheel_drive_controller"]["type"].as_str(),
+        Some("omni_wheel_drive_controller/OmniWheelDriveController")
+    );
+    let p = &y["omni_wheel_drive_controller"]["ros__parameters"];
+    assert_eq!(strings(&p["wheel_names"]), ["wheel_a", "wheel_b", "wheel_c"]);
+    // Eq. 7 holds its digits to ~1e-16: the controller's r = 0.148 m, R = 0.195 m, first wheel at 60°.
+    assert!((real(&p["wheel_radius"]) - 0.148).abs() < 1e-12, "{out}");
+    assert!((real(&p["robot_radius"]) - 0.195).abs() < 1e-12, "{out}");
+    assert!((real(&p["wheel_offset"]) - std::f64::consts::FRAC_PI_3).abs() < 1e-12, "{out}");
+    // Nothing is given up, and the sign convention is reported (APR-02 counts anticlockwise).
+    assert!(loss_pct(&out).iter().all(|p| p.abs() < 0.05), "{out}");
+    assert!(out.contains("these joints count the other way: wheel_a, wheel_b, wheel_c"), "{out}");
+}
+
+#[test]
+fn calibrated_apr02_matrix_header_and_nearest_controller() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    simulate_apr02(dir);
+    let out = omnical(&["export", "--model", "paper", "--robot-config", "rc", "sim/validation"], dir);
+    let rc = dir.join("rc");
+    let eq9 = IkMatrix::paper_calibrated();
+    let written = written_matrix(&rc);
+    assert_close(written.entries(), eq9.entries(), 1e-12, "omnical_odometry.yaml vs the model's matrix");
+    check_header(&rc, &eq9, Scheme::ExactArc);
+
+    // The controller's twist (its own formula, with the reversed joints negated) against Eq. 9's over the
+    // runs' wheel speeds, RMS per run then over runs: within 3 mm/s and 3 mrad/s, and closer than the
+    // design controller (Eq. 7) is.
+    let y = yaml(&rc.join("ros2_controllers.yaml"));
+    let p = &y["omni_wheel_drive_controller"]["ros__parameters"];
+    let (r, big_r, offset) = (real(&p["wheel_radius"]), real(&p["robot_radius"]), real(&p["wheel_offset"]));
+    let runs = dataset::load(&[dir.join("sim/validation")], &LoadOptions::default()).unwrap().runs;
+    let design = IkMatrix::paper_design();
+    let fitted = rms_twist_difference(&runs, &eq9, |w| omni_controller_twist(r, big_r, offset, w.map(|x| -x)));
+    let nominal = rms_twist_difference(&runs, &eq9, |w| {
+        let t = design.twist(&w);
+        [t.vx_m_s, t.vy_m_s, t.omega_rad_s]
+    });
+    for k in 0..3 {
+        assert!(fitted[k] < 3e-3, "component {k}: {fitted:?}\n{out}");
+        assert!(fitted[k] < nominal[k], "component {k}: fitted {fitted:?} vs design {nominal:?}");
+    }
+    // The simpler model gives something up on these runs, and says how much.
+    let [end_pose, path] = loss_pct(&out);
+    assert!(end_pose > 0.05 && path > 0.05, "{out}");
+}
+
+fn rms_twist_difference(runs: &[Run], m: &IkMatrix, controller: impl Fn([f64; 3]) -> [f64; 3]) -> [f64; 3] {
+    let mut total = [0.0; 3];
+    for run in runs {
+        let mut sum = [0.0; 3];
+        for k in 0..run.n_samples() {
+            let w: [f64; 3] = run.wheel_sample(k).try_into().unwrap();
+            let t = m.twist(&w);
+            let c = controller(w);
+            for (j, v) in [t.vx_m_s, t.vy_m_s, t.omega_rad_s].iter().enumerate() {
+                sum[j] += (c[j] - v).powi(2);
+            }
+        }
+        for j in 0..3 {
+            total[j] += sum[j] / run.n_samples() as f64 / runs.len() as f64;
+        }
+    }
+    total.map(f64::sqrt)
+}
+
+/// Compiles a C program with the header and compares its twist and 500 integration steps with omnical's.
+fn check_header(rc: &Path, m: &IkMatrix, scheme: Scheme) {
+    let prog = rc.join("prog.c");
+    std::fs::write(
+        &prog,
+        r#"#include <stdio.h>
+#include "omnical_odometry.h"
+int main(void) {
+    double w[OMNICAL_N_WHEELS], t[3], pose[3] = {0.1, -0.2, 0.3};
+    for (int i = 0; i < OMNICAL_N_WHEELS; ++i) w[i] = 1.0 + 0.5 * i - 0.75 * i * i;
+    omnical_twist(w, t);
+    for (int k = 0; k < 500; ++k) omnical_step(pose, t, 0.01);
+    printf("%s %.17g %.17g %.17g %.17g %.17g %.17g\n", OMNICAL_WHEEL_NAMES[0], t[0], t[1], t[2], pose[0], pose[1], pose[2]);
+    return 0;
+}
+"#,
+    )
+    .unwrap();
+    let exe = rc.join("prog");
+    let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
+    let built = Command::new(&cc)
+        .args(["-std=c99", "-Wall", "-Wextra", "-Werror", "-o"])
+        .arg(&exe)
+        .arg(&prog)
+        .arg("-lm")
+        .output()
+        .unwrap_or_else(|e| panic!("{cc}: {e}"));
+    assert!(built.status.success(), "{}", String::from_utf8_lossy(&built.stderr));
+    let run = Command::new(&exe).output().unwrap();
+    let text = String::from_utf8(run.stdout).unwrap();
+    let fields: Vec<&str> = text.split_whitespace().collect();
+    assert_eq!(fields[0], "wheel_a");
+    let c: Vec<f64> = fields[1..].iter().map(|f| f.parse().unwrap()).collect();
+    let w: Vec<f64> = (0..m.n_wheels()).map(|i| 1.0 + 0.5 * i as f64 - 0.75 * (i * i) as f64).collect();
+    let t = m.twist(&w);
+    let mut pose = omni_kin::Pose2 { x_m: 0.1, y_m: -0.2, theta_rad: 0.3 };
+    for _ in 0..500 {
+        pose = omni_kin::odometry::step(scheme, pose, t, 0.01);
+    }
+    let rust = [t.vx_m_s, t.vy_m_s, t.omega_rad_s, pose.x_m, pose.y_m, pose.theta_rad];
+    assert_close(&c, &rust, 1e-12, "C header vs omnical");
+}
+
+/// Runs of a robot driven by smooth, deterministic wheel-speed patterns (no command needed), with ground
+/// truth from the model's own odometry every 0.25 s (plus noise), written as omnical CSV.
+fn write_runs(dir: &Path, truth: &FittedModel, names: &[String]) {
+    std::fs::create_dir_all(dir).unwrap();
+    let n = truth.model.n_wheels();
+    let res = truth.model.resolve(&truth.params).unwrap();
+    let mut seed = 12345u64;
+    let mut next = move || {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    for r in 0..12 {
+        let coef: Vec<[f64; 3]> = (0..n).map(|_| [6.0 * next(), 3.0 * next(), 0.5 + next().abs()]).collect();
+        let t: Vec<f64> = (0..=600).map(|k| k as f64 * 0.01).collect();
+        let w: Vec<f64> = t.iter().flat_map(|&t| coef.iter().map(move |c| c[0] + c[1] * (c[2] * t).sin())).collect();
+        let origin = omni_kin::Pose2 { x_m: 0.0, y_m: 0.0, theta_rad: 0.0 };
+        let mut data = RunData {
+            name: format!("run-{r:02}"),
+            wheel_t_s: t,
+            wheel_rad_s: w,
+            n_wheels: n,
+            truth: vec![StampedPose { t_s: 0.0, pose: origin }, StampedPose { t_s: 6.0, pose: origin }],
+            ..RunData::default()
+        };
+        let path = omni_kin::odometry::integrate(&res, &Run::new(data.clone()).unwrap());
+        // Ground truth with ±1 mm / ±1 mrad of noise, so that no model fits it perfectly.
+        data.truth = (0..path.t_s.len())
+            .step_by(25)
+            .map(|i| {
+                let p = path.poses[i];
+                let pose = omni_kin::Pose2 {
+                    x_m: p.x_m + 1e-3 * next(),
+                    y_m: p.y_m + 1e-3 * next(),
+                    theta_rad: p.theta_rad + 1e-3 * next(),
+                };
+                StampedPose { t_s: path.t_s[i], pose }
+            })
+            .collect();
+        let run = Run::new(data).unwrap();
+        dataset::csv::write_run(&dir.join(format!("run-{r:02}.csv")), &run, names).unwrap();
+    }
+}
+
+fn write_model(path: &Path, f: &FittedModel) {
+    std::fs::write(path, omni_cli::model_file::to_toml(f, None).unwrap()).unwrap();
+}
+
+/// omnical's matrix of a differential drive, columns (right, left) as a robot may list its joints.
+fn diff_matrix(s: f64, rl: f64, rr: f64) -> IkMatrix {
+    IkMatrix::from_rows(&[vec![rr / 2.0, rl / 2.0], vec![0.0, 0.0], vec![rr / s, -rl / s]]).unwrap()
+}
+
+#[test]
+fn diff_drive_multipliers_reproduce_a_differential_drive_exactly() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    // Design: separation 0.40 m, radii 0.05 m; the robot: 0.42 m, left 0.050 m, right 0.0505 m.
+    let truth = diff_matrix(0.42, 0.05, 0.0505);
+    let fitted = FittedModel::new(Model::ik(diff_matrix(0.4, 0.05, 0.05)), truth.entries().to_vec()).unwrap();
+    let names = vec!["right_wheel_joint".to_string(), "left_wheel_joint".to_string()];
+    write_runs(&dir.join("runs"), &fitted, &names);
+    write_model(&dir.join("diff.toml"), &fitted);
+    let out = omnical(
+        &[
+            "export",
+            "--model",
+            "diff.toml",
+            "--robot-config",
+            "rc",
+            "runs",
+            "--joints",
+            "right_wheel_joint,left_wheel_joint",
+        ],
+        dir,
+    );
+    let rc = dir.join("rc");
+    assert_eq!(written_matrix(&rc), truth);
+    let y = yaml(&rc.join("ros2_controllers.yaml"));
+    let p = &y["diff_drive_controller"]["ros__parameters"];
+    assert_eq!(strings(&p["left_wheel_names"]), ["left_wheel_joint"]);
+    assert_eq!(strings(&p["right_wheel_names"]), ["right_wheel_joint"]);
+    let got = [
+        real(&p["wheel_separation"]),
+        real(&p["wheel_radius"]),
+        real(&p["wheel_separation_multiplier"]),
+        real(&p["left_wheel_radius_multiplier"]),
+        real(&p["right_wheel_radius_multiplier"]),
+    ];
+    assert_close(&got, &[0.4, 0.05, 1.05, 1.0, 1.01], 1e-12, "diff_drive_controller parameters");
+    // The controller's own formula with these parameters is the robot's matrix.
+    let (s, rl, rr) = (got[0] * got[2], got[1] * got[3], got[1] * got[4]);
+    assert_close(diff_matrix(s, rl, rr).entries(), truth.entries(), 1e-12, "controller odometry");
+    assert!(loss_pct(&out).iter().all(|p| p.abs() < 0.05), "{out}");
+    assert!(!out.contains("warning"), "{out}");
+}
+
+#[test]
+fn mecanum_controller_reproduces_a_mecanum_base_with_its_own_joint_order() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    // A mecanum base whose joints come in the order rear_right, front_left, rear_left, front_right.
+    let m = RobotGeometry::mecanum4(0.05, 0.2, 0.15);
+    let order = [3, 0, 2, 1];
+    let wheels: Vec<Wheel> = order.iter().map(|&i| m.wheels[i].clone()).collect();
+    let names: Vec<String> = ["rr", "fl", "rl", "fr"].iter().map(|s| s.to_string()).collect();
+    let g = RobotGeometry { wheel_names: names.clone(), wheels };
+    let fitted = FittedModel::nominal(Model::geometry(g));
+    write_runs(&dir.join("runs"), &fitted, &names);
+    write_model(&dir.join("mecanum.toml"), &fitted);
+    let out = omnical(&["export", "--model", "mecanum.toml", "--robot-config", "rc", "runs"], dir);
+    let rc = dir.join("rc");
+    assert_close(written_matrix(&rc).entries(), fitted.ik().unwrap().entries(), 1e-15, "matrix");
+    let y = yaml(&rc.join("ros2_controllers.yaml"));
+    let p = &y["mecanum_drive_controller"]["ros__parameters"];
+    for (key, joint) in [("front_left", "fl"), ("front_right", "fr"), ("rear_left", "rl"), ("rear_right", "rr")] {
+        assert_eq!(p[format!("{key}_wheel_command_joint_name").as_str()].as_str(), Some(joint), "{key}");
+    }
+    let k = &p["kinematics"];
+    assert!((real(&k["wheels_radius"]) - 0.05).abs() < 1e-12, "{out}");
+    assert!((real(&k["sum_of_robot_center_projection_on_X_Y_axis"]) - 0.35).abs() < 1e-12, "{out}");
+    assert!(loss_pct(&out).iter().all(|p| p.abs() < 0.05), "{out}");
+}
+
+#[test]
+fn a_controller_that_cannot_drive_the_base_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    simulate_apr02(dir);
+    let out = Command::new(env!("CARGO_BIN_EXE_omnical"))
+        .args(["export", "--model", "paper", "--robot-config", "rc", "--controller", "mecanum", "sim/validation"])
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("mecanum_drive_controller") && err.contains("cannot drive a base with 3 wheels"), "{err}");
+}
+
+#[test]
+fn effects_a_matrix_cannot_carry_are_listed_as_warnings() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    simulate_apr02(dir);
+    let mut fitted = FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated()))
+        .with_effect(omni_kin::EffectKind::from_id("time_offset", 3).unwrap());
+    fitted.set("time_offset.tau_s", 0.04).unwrap();
+    write_model(&dir.join("lag.toml"), &fitted);
+    let out = omnical(&["export", "--model", "lag.toml", "--robot-config", "rc", "sim/validation"], dir);
+    let rc = dir.join("rc");
+    assert_eq!(written_matrix(&rc), IkMatrix::paper_calibrated());
+    let header = std::fs::read_to_string(rc.join("omnical_odometry.h")).unwrap();
+    assert!(header.contains(" * WARNING: the model also has effects a plain matrix cannot carry"), "{header}");
+    assert!(header.contains(" *   - time_offset: tau_s = 0.04 s"), "{header}");
+    let y = yaml(&rc.join("omnical_odometry.yaml"));
+    assert_eq!(strings(&y["/**"]["ros__parameters"]["effects_not_in_matrix"]), ["time_offset: tau_s = 0.04 s"]);
+    // The matrix alone is measured too (the simulated robot has no clock lag, so the lag costs accuracy).
+    let alone = out.lines().find(|l| l.contains("its matrix alone")).unwrap_or_else(|| panic!("{out}"));
+    assert_eq!(alone.split_whitespace().filter_map(|t| t.parse::<f64>().ok()).count(), 2, "{alone}");
+    assert!(out.contains("warning: the controller cannot carry the model's effects (time_offset)."), "{out}");
+}
