@@ -36,6 +36,10 @@ pub enum ModelKind {
     Ik,
     /// Wheel radii, distances and angles (the paper's ref. \[17\]).
     Geometry,
+    /// A differential drive: both wheel radii and the separation.
+    Diff,
+    /// Four wheels on a rectangle (mecanum, omni X): per-wheel radius and the half-extents.
+    Mecanum,
 }
 
 impl From<ModelKind> for omni_kin::KinematicsKind {
@@ -43,6 +47,8 @@ impl From<ModelKind> for omni_kin::KinematicsKind {
         match k {
             ModelKind::Ik => Self::Ik,
             ModelKind::Geometry => Self::Geometry,
+            ModelKind::Diff => Self::Diff,
+            ModelKind::Mecanum => Self::Mecanum,
         }
     }
 }
@@ -100,6 +106,27 @@ pub struct FitArgs {
     pub min_excitation: f64,
 }
 
+/// A base kind (`omnical init --kind`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum KindArg {
+    /// N ≥ 3 omni wheels.
+    Omni,
+    /// Four mecanum wheels.
+    Mecanum,
+    /// Differential drive.
+    Diff,
+}
+
+impl From<KindArg> for omni_kin::robot::BaseKind {
+    fn from(k: KindArg) -> Self {
+        match k {
+            KindArg::Omni => Self::Omni,
+            KindArg::Mecanum => Self::Mecanum,
+            KindArg::Diff => Self::Diff,
+        }
+    }
+}
+
 /// Which run set `plan` proposes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum RunSetArg {
@@ -109,12 +136,25 @@ pub enum RunSetArg {
     Flower,
 }
 
+/// The robot the data was recorded on (docs/formats.md, "Robot description").
+#[derive(Debug, Default, clap::Args)]
+pub struct RobotArgs {
+    /// The robot description: a robot.toml file, or `apr02` for the paper's robot. Default: a robot.toml
+    /// beside the data (the first RUNS argument's folder) or in the working directory.
+    #[arg(long, value_name = "FILE|apr02")]
+    pub robot: Option<String>,
+}
+
 /// Options shared by commands that read runs.
 #[derive(Debug, clap::Args)]
 pub struct DataArgs {
-    /// Wheel joint names in wheel order (MCAP JointState), comma-separated.
-    #[arg(long, value_delimiter = ',', default_value = "wheel_a,wheel_b,wheel_c")]
-    pub joints: Vec<String>,
+    /// The robot description (design geometry, joint names, topics).
+    #[command(flatten)]
+    pub robot: RobotArgs,
+    /// Wheel joint names in wheel order (MCAP JointState), comma-separated. Default: the robot
+    /// description's joints, else wheel_a,wheel_b,wheel_c.
+    #[arg(long, value_delimiter = ',')]
+    pub joints: Option<Vec<String>>,
     /// MCAP topic of the wheel JointState (default: the only one).
     #[arg(long)]
     pub joints_topic: Option<String>,
@@ -162,9 +202,13 @@ pub enum Command {
         /// (`sample_timing=DROP_PROBABILITY,JITTER_S`). Repeatable.
         #[arg(long = "effect", value_name = "NAME=VALUES")]
         effects: Vec<String>,
-        /// True robot: `paper` (Eq. 9) or a model file.
+        /// True robot: `paper` (Eq. 9, APR-02 only), `design` (the robot's design) or a model file.
         #[arg(long, default_value = "paper")]
         truth: String,
+        /// The robot: its design drives the simulated controller and is written as robot.toml beside the
+        /// runs. Default: `apr02`, the paper's robot.
+        #[arg(long, value_name = "FILE|apr02", default_value = crate::robot_file::BUILTIN_APR02)]
+        robot: String,
         /// Output format.
         #[arg(long, value_enum, default_value_t = Format::Mcap)]
         format: Format,
@@ -314,7 +358,7 @@ pub enum Command {
         /// Effects to plan for (catalogue ids). Repeatable.
         #[arg(long = "effect", value_name = "NAME")]
         effects: Vec<String>,
-        /// Take the robot's geometry from these runs (default: APR-02, the paper's robot).
+        /// Take the robot's geometry from these runs (OptiOdom metadata), when there is no --robot.
         #[arg(long = "robot-from", value_name = "RUNS", num_args = 1..)]
         robot_from: Vec<PathBuf>,
         /// Which set: a D-optimal pick from a library of commands, or the paper's 36 flower commands.
@@ -354,6 +398,28 @@ pub enum Command {
         #[command(flatten)]
         data: DataArgs,
     },
+    /// Draft a robot description (robot.toml) from a recording and the robot's URDF: lists the recording's
+    /// topics, reads the wheels (continuous joints with a cylinder) and guesses the base kind; every guess is
+    /// a comment in the file.
+    Init {
+        /// The recording (ROS 2 MCAP).
+        recording: PathBuf,
+        /// The robot's URDF (default: the recording's /robot_description topic).
+        #[arg(long, value_name = "FILE")]
+        urdf: Option<PathBuf>,
+        /// The file to write.
+        #[arg(long, default_value = crate::robot_file::FILE_NAME)]
+        out: PathBuf,
+        /// The base kind, instead of the guess (2 wheels: diff; 4 named mecanum: mecanum; else omni).
+        #[arg(long, value_enum)]
+        kind: Option<KindArg>,
+        /// Replace an existing file.
+        #[arg(long)]
+        force: bool,
+        /// Refuse a recording larger than this; it is read into memory whole. MiB.
+        #[arg(long, value_name = "MIB", default_value_t = 1024)]
+        max_file_mb: u64,
+    },
     /// The whole story on built-in simulated data with a hidden effect: simulate, train, diagnose, add the
     /// effect, retrain, print the error ladder.
     Demo {
@@ -375,7 +441,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         rayon::ThreadPoolBuilder::new().num_threads(n).build_global()?;
     }
     match cli.command {
-        Command::Simulate { out, seed, runs_per_command, duration, effects, truth, format, noise_free } => {
+        Command::Simulate { out, seed, runs_per_command, duration, effects, truth, robot, format, noise_free } => {
             cmd::simulate::run(&cmd::simulate::Args {
                 out,
                 seed,
@@ -383,6 +449,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 duration_s: duration,
                 effects,
                 truth,
+                robot,
                 format,
                 noise_free,
                 quiet: cli.quiet,
@@ -470,6 +537,14 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             out,
             json,
             data,
+        }),
+        Command::Init { recording, urdf, out, kind, force, max_file_mb } => cmd::init::run(&cmd::init::Args {
+            recording,
+            urdf,
+            out,
+            kind: kind.map(Into::into),
+            force,
+            max_file_bytes: max_file_mb.saturating_mul(1 << 20),
         }),
         Command::Demo { out, runs_per_command, hidden } => cmd::demo::run(&out, runs_per_command, &hidden, cli.quiet),
     }

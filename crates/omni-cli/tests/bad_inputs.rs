@@ -53,6 +53,8 @@ fn omnical(cmd: &str, file: &Path, args: &[String]) -> (i32, String) {
         .arg(cmd)
         .arg(file)
         .args(args)
+        // The design is the paper's robot (runs without a robot description are refused).
+        .args(["--robot", "apr02"])
         .args(["--quiet"].iter().filter(|_| cmd == "train"))
         .env("RUST_BACKTRACE", "0")
         .output()

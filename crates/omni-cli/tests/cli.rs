@@ -24,7 +24,12 @@ fn simulate_train_eval_round_trip() {
     let (design, oracle) =
         (truth["design_cost"]["train"].as_f64().unwrap(), truth["oracle_cost"]["train"].as_f64().unwrap());
     assert!(oracle * 5.0 < design, "oracle {oracle} design {design}");
-    assert_eq!(std::fs::read_dir(dir.path().join("sim/train")).unwrap().count(), 36);
+    let files: Vec<String> = std::fs::read_dir(dir.path().join("sim/train"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(files.iter().filter(|f| f.ends_with(".mcap")).count(), 36);
+    assert!(files.iter().any(|f| f == "robot.toml"), "{files:?}");
 
     let out = omnical(&["train", "sim/train", "--out", "fit.toml", "--json"], dir.path());
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -113,8 +118,10 @@ fn design_model_on_real_optiodom_runs() {
 #[test]
 fn plan_proposes_runs_that_excite_every_parameter() {
     let dir = tempfile::tempdir().unwrap();
-    let out =
-        omnical(&["plan", "--effect", "wheel_asymmetry", "--runs", "8", "--out", "plan.csv", "--json"], dir.path());
+    let out = omnical(
+        &["plan", "--robot", "apr02", "--effect", "wheel_asymmetry", "--runs", "8", "--out", "plan.csv", "--json"],
+        dir.path(),
+    );
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let plan = &v["plan"];
@@ -134,7 +141,7 @@ fn plan_proposes_runs_that_excite_every_parameter() {
     // The flower set is reported beside it, with 36 runs.
     assert_eq!(v["flower"]["total_runs"].as_u64(), Some(36));
 
-    let out = omnical(&["plan", "--runs", "0"], dir.path());
+    let out = omnical(&["plan", "--robot", "apr02", "--runs", "0"], dir.path());
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("at least one run"));
 }

@@ -114,7 +114,7 @@ fn outputs_are_byte_identical_to_the_golden_files() {
     let text = omnical(&diag, d);
     check("diagnose.txt", &String::from_utf8_lossy(&text), &mut failures);
 
-    let json = omnical(&["plan", "--json", "--effect", "time_offset"], d);
+    let json = omnical(&["plan", "--robot", "apr02", "--json", "--effect", "time_offset"], d);
     check("plan.json", &json_without_timing(&json), &mut failures);
 
     omnical(&["report", "--model", "fit.toml", "sim/train", "--validate", "sim/validation", "--out", "r.html"], d);

@@ -84,7 +84,11 @@ fn ctrl_c_stops_training_and_keeps_the_best_model() {
     .unwrap();
     // The fit has started (and the handler is in place) once this line is on stderr.
     let mut stderr = BufReader::new(child.stderr.take().unwrap());
+    // (After the note naming the robot.toml found beside the runs.)
     let mut line = String::new();
+    stderr.read_line(&mut line).unwrap();
+    assert_eq!(line, "robot: sim/train/robot.toml (found beside the data)\n");
+    line.clear();
     stderr.read_line(&mut line).unwrap();
     assert!(line.starts_with("training on 36 runs"), "{line:?}");
     std::thread::sleep(Duration::from_millis(300));

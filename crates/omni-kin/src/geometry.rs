@@ -204,25 +204,40 @@ impl RobotGeometry {
         DMatrix::from_fn(n, 3, |i, j| self.wheels[i].wheel_from_twist_row()[j])
     }
 
-    /// The IK matrix (3 × N, Eq. 3): body twist from wheel speeds. The exact inverse for three wheels, the
-    /// least-squares inverse for more.
+    /// The IK matrix (3 × N, Eq. 3): body twist from wheel speeds. The exact inverse for three wheels; for
+    /// more, the least-squares inverse in rim speeds (`G = diag(r) F`, rim speed m/s per twist:
+    /// `M = (GᵀG)⁻¹ Gᵀ diag(r)`), which weighs every wheel's arc length alike whatever its radius, as
+    /// OptiOdom's and the textbook mecanum models do (with equal radii it is `F`'s own least-squares
+    /// inverse). Two wheels (a differential drive) drive two twist directions (rank 2 is enough): the
+    /// minimum-norm inverse `M = Gᵀ (G Gᵀ)⁻¹ diag(r)`, which on an axle along y has a zero `vy` row.
     pub fn twist_from_wheels(&self) -> Result<IkMatrix, KinError> {
-        self.validate()?;
+        let n = self.wheels.len();
+        let needed = if n == 2 { 2 } else { PLANAR_TWIST_DIMENSIONS };
+        self.validate_for(needed)?;
         let m = self.wheels_from_twist();
-        // The (pseudo-)inverse exists once the rank is full; were it lost to rounding, say so as a rank
-        // one short of full.
-        let full = PLANAR_TWIST_DIMENSIONS;
-        let inv = if m.nrows() == 3 {
-            m.try_inverse().ok_or(KinError::Singular { wheels: 3, rank: full - 1, needed: full })?
+        // The (pseudo-)inverse exists once the rank is enough; were it lost to rounding, say so as a rank
+        // one short.
+        let lost = KinError::Singular { wheels: n, rank: needed - 1, needed };
+        let inv = if n == 3 {
+            m.try_inverse().ok_or(lost)?
         } else {
-            let mt = m.transpose();
-            let normal = &mt * &m;
-            let normal_inv = normal.try_inverse().ok_or(KinError::Singular {
-                wheels: self.wheels.len(),
-                rank: full - 1,
-                needed: full,
-            })?;
-            normal_inv * mt
+            let radii =
+                DMatrix::from_diagonal(&nalgebra::DVector::from_iterator(n, self.wheels.iter().map(|w| w.radius_m)));
+            let rim = &radii * &m;
+            let rt = rim.transpose();
+            if n == 2 {
+                let gram_inv = (&rim * &rt).try_inverse().ok_or(lost)?;
+                let mut inv = rt * gram_inv * radii;
+                // An axle along y cannot push sideways: its vy row is zero, exactly (not sin π's rounding),
+                // so that models see a structural zero.
+                if m.column(1).amax() <= 1e-12 * m.amax() {
+                    inv.row_mut(1).fill(0.0);
+                }
+                inv
+            } else {
+                let normal_inv = (&rt * &rim).try_inverse().ok_or(lost)?;
+                normal_inv * rt * radii
+            }
         };
         let n = self.wheels.len();
         let mut entries = Vec::with_capacity(3 * n);

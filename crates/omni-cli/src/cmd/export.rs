@@ -2,7 +2,7 @@
 //! odometry for Foxglove.
 
 use super::diagnose::design_for;
-use super::{load_runs_with_odometry, resolve_model};
+use super::{load_runs_with_odometry, resolve_model, wheel_joints};
 use crate::cli::DataArgs;
 use crate::dataset::mcap::{WriteOptions, write_run};
 use crate::report::tum;
@@ -72,7 +72,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         for run in &ds.runs {
             let opts = WriteOptions {
-                wheel_joints: a.data.joints.clone(),
+                wheel_joints: wheel_joints(&a.data, &ds),
                 design_odometry: (!run.recorded_odometry().is_empty()).then(|| run.recorded_odometry().to_vec()),
                 calibrated_odometry: Some(odometry_poses(&model, run)?),
                 ..WriteOptions::default()
@@ -92,7 +92,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             design: &design,
             spec: &a.model,
             runs: &ds.runs,
-            wheel_names: joint_names(&model, &a.data.joints),
+            wheel_names: joint_names(&model, &wheel_joints(&a.data, &ds)),
             controller: a.controller,
         };
         let config = robot_config::build(&request)?;

@@ -4,6 +4,7 @@ pub mod demo;
 pub mod diagnose;
 pub mod eval;
 pub mod export;
+pub mod init;
 pub mod plan;
 pub mod report;
 pub mod simulate;
@@ -11,8 +12,9 @@ pub mod train;
 
 use crate::cli::DataArgs;
 use crate::dataset::{self, Dataset, LoadOptions};
+use crate::robot_file::{self, Design};
 use anyhow::Context;
-use omni_kin::{FittedModel, IkMatrix, Model};
+use omni_kin::{FittedModel, IkMatrix, KinematicsKind, Model, RobotGeometry};
 use std::path::{Path, PathBuf};
 
 /// Load runs from files/folders, printing what was skipped or noticed on stderr. The runs' recorded
@@ -28,8 +30,12 @@ pub fn load_runs_with_odometry(paths: &[PathBuf], data: &DataArgs) -> anyhow::Re
 }
 
 fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::Result<Dataset> {
-    let mcap = dataset::mcap::McapOptions {
-        wheel_joints: data.joints.clone(),
+    let robot = robot_file::resolve(data.robot.robot.as_deref(), paths)?;
+    if let Some(r) = &robot {
+        robot_file::announce(&r.source);
+    }
+    let mut mcap = dataset::mcap::McapOptions {
+        wheel_joints: data.joints.clone().unwrap_or_default(),
         joints_topic: data.joints_topic.clone(),
         truth_topic: data.gt_topic.clone(),
         truth_parent_frame: data.gt_parent_frame.clone(),
@@ -37,7 +43,9 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
         split: data.split,
         skip_invalid: data.skip_invalid,
         recorded_odometry,
+        ..Default::default()
     };
+    robot_file::fill_mcap_options(&mut mcap, data.joints.is_none(), robot.as_ref().map(|r| &r.description));
     let opts = LoadOptions {
         skip_invalid: data.skip_invalid,
         ticks_per_rev: data.ticks_per_rev,
@@ -45,7 +53,8 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
         recorded_odometry,
         max_file_bytes: data.max_file_mb.saturating_mul(1 << 20),
     };
-    let ds = dataset::load(paths, &opts)?;
+    let mut ds = dataset::load(paths, &opts)?;
+    ds.robot_file = robot;
     // The same note from many files is printed once, with a count.
     let mut seen: Vec<(String, String, usize)> = Vec::new();
     for n in &ds.notes {
@@ -68,14 +77,54 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
     Ok(ds)
 }
 
+/// The design model of `kind` for a dataset's robot: `--robot`, else the data's own geometry (OptiOdom), else
+/// a found robot.toml; none of them is an error saying how to describe the robot. A robot description's
+/// `ik` design is its design matrix (the paper's Eq. 7 for APR-02; the closed form for diff).
+pub fn design_model(kind: KinematicsKind, ds: &Dataset) -> anyhow::Result<Model> {
+    match robot_file::design(ds) {
+        Some(Design::File(f)) if kind == KinematicsKind::Ik => {
+            Ok(Model::ik(f.description.design_ik().with_context(|| format!("robot {}", f.source))?))
+        }
+        Some(Design::File(f)) => {
+            let g = f.description.to_geometry().with_context(|| format!("robot {}", f.source))?;
+            Ok(Model::design(kind, Some(&g))?)
+        }
+        Some(Design::Data(g)) => Ok(Model::design(kind, Some(g))?),
+        None => Err(robot_file::no_design("the design model")),
+    }
+}
+
+/// The design geometry of a dataset's robot (`--robot`, the data's geometry, or a found robot.toml).
+pub fn design_geometry(ds: &Dataset) -> anyhow::Result<RobotGeometry> {
+    match robot_file::design(ds) {
+        Some(Design::File(f)) => f.description.to_geometry().with_context(|| format!("robot {}", f.source)),
+        Some(Design::Data(g)) => Ok(g.clone()),
+        None => Err(robot_file::no_design("the design geometry")),
+    }
+}
+
 /// `design` / `paper` or a model file.
 pub fn resolve_model(spec: &str, ds: &Dataset) -> anyhow::Result<FittedModel> {
     match spec {
-        "design" => Ok(match &ds.robot {
-            Some(g) => FittedModel::nominal(Model::geometry(g.clone())),
-            None => FittedModel::paper_design(),
-        }),
+        "design" => match robot_file::design(ds) {
+            Some(Design::File(_)) => Ok(FittedModel::nominal(design_model(KinematicsKind::Ik, ds)?)),
+            // A two-wheel base (OptiOdom's diff) has no omnidirectional geometry model: its own.
+            Some(Design::Data(g)) if g.n_wheels() == 2 => {
+                Ok(FittedModel::nominal(Model::design(KinematicsKind::Diff, Some(g))?))
+            }
+            Some(Design::Data(g)) => Ok(FittedModel::nominal(Model::geometry(g.clone()))),
+            None => Err(robot_file::no_design("--model design")),
+        },
         "paper" => Ok(FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated()))),
         path => crate::model_file::read(Path::new(path)).context("reading the model"),
     }
+}
+
+/// The wheel joint names the runs were read with: `--joints`, else the robot description's, else the
+/// default `wheel_a`, `wheel_b`, `wheel_c`.
+pub fn wheel_joints(data: &DataArgs, ds: &Dataset) -> Vec<String> {
+    let mut mcap =
+        dataset::mcap::McapOptions { wheel_joints: data.joints.clone().unwrap_or_default(), ..Default::default() };
+    robot_file::fill_mcap_options(&mut mcap, data.joints.is_none(), ds.robot_file.as_ref().map(|r| &r.description));
+    mcap.wheel_joints
 }

@@ -1,8 +1,8 @@
 //! `omnical plan`: propose calibration runs that excite every parameter.
 
-use super::load_runs;
-use crate::atomic;
+use super::{design_geometry, load_runs};
 use crate::cli::{DataArgs, ModelKind};
+use crate::{atomic, robot_file};
 use anyhow::Context;
 use omni_ga::excitation::{self, PlanRequest, RunPlan, RunSet};
 use omni_kin::simulate::SimConfig;
@@ -31,18 +31,7 @@ pub struct Args {
 
 /// Runs `omnical plan`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
-    let robot = if a.robot_from.is_empty() {
-        RobotGeometry::apr02()
-    } else {
-        let ds = load_runs(&a.robot_from, &a.data)?;
-        ds.robot.clone().with_context(|| {
-            format!(
-                "--robot-from {}: these runs do not describe the robot's geometry (wheel radii, distances, angles); \
-                 plan needs it to turn commands into wheel speeds",
-                a.robot_from.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(" ")
-            )
-        })?
-    };
+    let robot = plan_robot(a)?;
     let mut model = FittedModel::nominal(Model::design(a.model.into(), Some(&robot))?);
     for id in &a.effects {
         model = model
@@ -69,6 +58,21 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         println!("plan written to {}", out.display());
     }
     Ok(())
+}
+
+/// The robot to plan for: `--robot`, else the geometry of the `--robot-from` runs, else a robot.toml beside
+/// them or in the working directory. Plan needs it to turn commands into wheel speeds.
+fn plan_robot(a: &Args) -> anyhow::Result<RobotGeometry> {
+    if !a.robot_from.is_empty() {
+        return design_geometry(&load_runs(&a.robot_from, &a.data)?);
+    }
+    match robot_file::resolve(a.data.robot.robot.as_deref(), &[])? {
+        Some(r) => {
+            robot_file::announce(&r.source);
+            r.description.to_geometry().with_context(|| format!("robot {}", r.source))
+        }
+        None => Err(robot_file::no_design("plan")),
+    }
 }
 
 /// The planned commands as CSV.

@@ -1,12 +1,13 @@
 //! `omnical simulate`: write a flower-benchmark dataset from a true robot with optional hidden effects.
 
 use crate::cli::Format;
+use crate::robot_file::{self, RobotFile};
 use crate::{atomic, dataset, model_file};
 use anyhow::{Context, bail};
 use omni_kin::cost::{self, CostKind};
 use omni_kin::effect::Effect;
 use omni_kin::simulate::{SimConfig, simulate};
-use omni_kin::{EffectKind, FittedModel, IkMatrix, Model, Run};
+use omni_kin::{EffectKind, FittedModel, IkMatrix, Model, RobotGeometry, Run};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
@@ -26,8 +27,10 @@ pub struct Args {
     pub duration_s: f64,
     /// `NAME=V1,V2` effect specs.
     pub effects: Vec<String>,
-    /// `paper` or a model file.
+    /// `paper`, `design` or a model file.
     pub truth: String,
+    /// `apr02` or a robot description file.
+    pub robot: String,
     /// Output format.
     pub format: Format,
     /// No quantisation, no noise.
@@ -88,28 +91,73 @@ fn write_split(dir: &Path, runs: &[Run], format: Format, wheel_names: &[String])
     Ok(())
 }
 
-/// Runs `omnical simulate`.
-pub fn run(a: &Args) -> anyhow::Result<()> {
-    let mut truth = match a.truth.as_str() {
+/// The simulated robot's design (from `--robot`) and its true model (from `--truth`).
+fn design_and_truth(a: &Args) -> anyhow::Result<(RobotFile, RobotGeometry, FittedModel, FittedModel)> {
+    let robot = robot_file::from_arg(&a.robot).context("--robot")?;
+    let geometry = robot.description.to_geometry().with_context(|| format!("--robot {}", robot.source))?;
+    let design_ik = robot.description.design_ik().with_context(|| format!("--robot {}", robot.source))?;
+    let design = FittedModel::nominal(Model::ik(design_ik.clone()));
+    let truth = match a.truth.as_str() {
+        "paper" if design_ik != IkMatrix::paper_design() => bail!(
+            "--truth paper is the paper's Eq. 9, a calibration of APR-02, and --robot {} is another robot: give \
+             --truth design (the design itself) or --truth FILE (a model file)",
+            robot.source
+        ),
         "paper" => FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated())),
+        "design" => design.clone(),
         path => model_file::read(Path::new(path)).context("reading --truth")?,
     };
-    let mut config =
-        SimConfig { runs_per_command: a.runs_per_command, duration_s: a.duration_s, ..SimConfig::default() };
+    let joints = robot.description.joints();
+    if truth.model.n_wheels() != joints.len() {
+        bail!(
+            "--truth has {} wheels and --robot {} has {} ({})",
+            truth.model.n_wheels(),
+            robot.source,
+            joints.len(),
+            joints.join(", ")
+        );
+    }
+    Ok((robot, geometry, design, truth))
+}
+
+/// Writes `robot.toml` into a split's folder, so that commands reading the runs find the robot.
+fn write_robot(dir: &Path, robot: &RobotFile) -> anyhow::Result<()> {
+    let comments = robot_file::Comments {
+        header: vec![format!(
+            "The robot these simulated runs were made with (omnical simulate --robot {}): its design, joint names \
+             and topics. Commands reading this folder use it.",
+            robot.source
+        )],
+        ..Default::default()
+    };
+    let path = dir.join(robot_file::FILE_NAME);
+    let text = robot_file::to_toml(&robot.description, &comments);
+    atomic::write_atomic(&path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))
+}
+
+/// Runs `omnical simulate`.
+pub fn run(a: &Args) -> anyhow::Result<()> {
+    let (robot, geometry, design, mut truth) = design_and_truth(a)?;
+    let mut config = SimConfig {
+        design: geometry,
+        runs_per_command: a.runs_per_command,
+        duration_s: a.duration_s,
+        ..SimConfig::default()
+    };
     if a.noise_free {
         config = config.noise_free();
     }
     for spec in &a.effects {
         apply_effect_spec(spec, &mut truth, &mut config)?;
     }
-    let design = FittedModel::paper_design();
-    let wheel_names = truth.model.kinematics.wheel_names();
+    let wheel_names = robot.description.joints();
     let mut summary = serde_json::Map::new();
     for (split, seed) in [("train", a.seed), ("validation", a.seed.wrapping_add(1))] {
         let cfg = SimConfig { seed, ..config.clone() };
         let spinner = crate::progress::spinner(format!("simulating and writing {split} runs"), a.quiet);
         let runs = simulate(&cfg, &truth, &format!("{split}/"))?;
         write_split(&a.out.join(split), &runs, a.format, &wheel_names)?;
+        write_robot(&a.out.join(split), &robot)?;
         spinner.finish_and_clear();
         let costs: Vec<(String, f64)> = [CostKind::EndPose, CostKind::PATH]
             .iter()

@@ -1,12 +1,12 @@
 //! `omnical train`: fit a model to training runs.
 
-use super::load_runs;
+use super::{design_model, load_runs};
 use crate::cli::{CostArg, DataArgs, FitArgs, ModelKind, PresetArg, UnexcitedArg};
 use crate::{atomic, interrupt, model_file, progress};
 use anyhow::Context;
 use omni_ga::calibrate::{Calibration, Plan, Preset, Unexcited, calibrate};
 use omni_kin::cost::CostKind;
-use omni_kin::{EffectKind, FittedModel, Model};
+use omni_kin::{EffectKind, FittedModel};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -145,7 +145,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     }
     let mut start = match &a.start {
         Some(p) => model_file::read(p).context("reading --start")?,
-        None => FittedModel::nominal(Model::design(a.model.into(), ds.robot.as_ref())?),
+        None => FittedModel::nominal(design_model(a.model.into(), &ds)?),
     };
     for id in &a.effects {
         start = start

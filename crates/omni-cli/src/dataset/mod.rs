@@ -21,6 +21,9 @@ pub struct Dataset {
     pub notes: Vec<String>,
     /// The design geometry the data declares (OptiOdom metadata), if any.
     pub robot: Option<RobotGeometry>,
+    /// The robot description the data was read with (`--robot`, or a `robot.toml` found beside it), if any.
+    /// Set by the command line, not by [`load`].
+    pub robot_file: Option<crate::robot_file::RobotFile>,
 }
 
 /// The default cap on one input file's size (`--max-file-mb`). Bytes: 1 GiB.

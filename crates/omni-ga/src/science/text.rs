@@ -159,7 +159,12 @@ pub fn weak_direction(w: &WeakDirection) -> String {
 /// What the runs say about the wheel-speed pattern `u` of a direction.
 fn wheel_evidence(e: &WheelEvidence, u: &[f64]) -> String {
     let named: Vec<String> = e.wheels.iter().zip(u).map(|(w, x)| format!("{w} {x:+.2}")).collect();
-    let (named, motion) = (named.join(", "), motion_name(e.motion));
+    let motion = if e.moves_nowhere {
+        "the wheels fighting each other, a pattern that moves the robot nowhere".to_string()
+    } else {
+        motion_name(e.motion)
+    };
+    let named = named.join(", ");
     match e.presence {
         PatternPresence::Present(share) => format!(
             "the runs contain the wheel-speed pattern ({named}) — {motion} under the design matrix — ({:.0} % of the wheel motion), but the residuals barely respond to how the robot answers it",

@@ -1,5 +1,11 @@
 //! The paper's non-parametric model (`ik`): every entry of the 3 × N IK matrix is a parameter, named
 //! `m11` … `m3N` row by row (the paper's Eq. 5 order).
+//!
+//! Structural zeros: a row that is zero throughout the design is a motion the base cannot make (the `vy`
+//! row of a differential drive, whose wheels cannot push sideways). Its entries are not parameters: they
+//! stay at zero, whatever the runs say (ground-truth motion there, such as a marker off the axle seen
+//! sideways while turning, belongs to an effect: `sensor_offset`). Every other design keeps all `3N`
+//! entries free.
 
 use super::{BaseKinematics, BaseRecord, KinematicsKind, RecordError};
 use crate::effect::ParamSpec;
@@ -14,6 +20,28 @@ use serde::{Deserialize, Serialize};
 pub struct MatrixKinematics {
     /// Design matrix (the start and centre of the search).
     pub design: IkMatrix,
+}
+
+impl MatrixKinematics {
+    /// Indices (row-major, into [`IkMatrix::entries`]) of the entries that are parameters: all but the
+    /// rows that are zero throughout the design.
+    fn free_entries(&self) -> Vec<usize> {
+        let n = self.design.n_wheels();
+        (0..3 * n).filter(|&i| self.design.row(i / n).iter().any(|v| *v != 0.0)).collect()
+    }
+
+    /// The whole matrix (row-major) from the parameters `p`, structural zeros filled in.
+    fn entries(&self, p: &[f64]) -> Result<Vec<f64>, KinError> {
+        let free = self.free_entries();
+        if p.len() != free.len() {
+            return Err(KinError::ParamCount { got: p.len(), expected: free.len() });
+        }
+        let mut e = vec![0.0; self.design.entries().len()];
+        for (&i, v) in free.iter().zip(p) {
+            e[i] = *v;
+        }
+        Ok(e)
+    }
 }
 
 impl BaseKinematics for MatrixKinematics {
@@ -31,17 +59,17 @@ impl BaseKinematics for MatrixKinematics {
     }
 
     fn n_params(&self) -> usize {
-        self.design.entries().len()
+        self.free_entries().len()
     }
 
     /// `m11` … `m3N` at the design entries; units m (rows vx, vy) and rad (row ω) per wheel rad.
     fn params(&self) -> Vec<ParamSpec> {
         let n = self.design.n_wheels();
-        IkMatrix::entry_names(n)
+        let names = IkMatrix::entry_names(n);
+        self.free_entries()
             .into_iter()
-            .zip(self.design.entries())
-            .enumerate()
-            .map(|(i, (name, &v))| {
+            .map(|i| {
+                let (name, v) = (names[i].clone(), self.design.entries()[i]);
                 let unit = if i / n == 2 { "rad" } else { "m" };
                 ParamSpec::new(name, unit, v, v - 0.1 * v.abs(), v + 0.1 * v.abs())
             })
@@ -52,24 +80,40 @@ impl BaseKinematics for MatrixKinematics {
     /// the row's scale).
     fn param_scales(&self, p: &[f64]) -> Vec<f64> {
         let n = self.design.n_wheels();
-        (0..p.len()).map(|i| p[(i / n) * n..(i / n + 1) * n].iter().fold(0.0f64, |m, x| m.max(x.abs()))).collect()
+        let free = self.free_entries();
+        if free.len() == p.len() && free.len() == 3 * n {
+            return (0..p.len())
+                .map(|i| p[(i / n) * n..(i / n + 1) * n].iter().fold(0.0f64, |m, x| m.max(x.abs())))
+                .collect();
+        }
+        let e = self.entries(p).unwrap_or_else(|_| self.design.entries().to_vec());
+        free.iter().map(|&i| e[(i / n) * n..(i / n + 1) * n].iter().fold(0.0f64, |m, x| m.max(x.abs()))).collect()
     }
 
     fn twist_from_wheels(&self, p: &[f64]) -> Result<IkMatrix, KinError> {
-        IkMatrix::new(self.design.n_wheels(), p.to_vec())
-    }
-
-    /// The identity.
-    fn twist_from_wheels_jacobian(&self, p: &[f64]) -> Result<DMatrix<f64>, KinError> {
-        let n = self.n_params();
-        if p.len() != n {
-            return Err(KinError::ParamCount { got: p.len(), expected: n });
+        if self.params_are_ik_entries() {
+            // Every entry free (no structural zeros): the parameters are the matrix.
+            return IkMatrix::new(self.design.n_wheels(), p.to_vec());
         }
-        Ok(DMatrix::identity(n, n))
+        IkMatrix::new(self.design.n_wheels(), self.entries(p)?)
     }
 
+    /// The identity (with structural zeros: the columns of the free entries).
+    fn twist_from_wheels_jacobian(&self, p: &[f64]) -> Result<DMatrix<f64>, KinError> {
+        let free = self.free_entries();
+        if p.len() != free.len() {
+            return Err(KinError::ParamCount { got: p.len(), expected: free.len() });
+        }
+        let mut j = DMatrix::zeros(self.design.entries().len(), free.len());
+        for (c, &i) in free.iter().enumerate() {
+            j[(i, c)] = 1.0;
+        }
+        Ok(j)
+    }
+
+    /// True unless the design has structural zeros.
     fn params_are_ik_entries(&self) -> bool {
-        true
+        self.free_entries().len() == self.design.entries().len()
     }
 
     fn noun(&self) -> &'static str {
@@ -97,7 +141,22 @@ impl BaseKinematics for MatrixKinematics {
         if design.n_wheels() != fitted.n_wheels() {
             return Err(RecordError::WheelCounts { design_key: "design_matrix", key: "matrix" });
         }
-        Ok((Self { design }, fitted.entries().to_vec()))
+        let model = Self { design };
+        let free = model.free_entries();
+        let e = fitted.entries();
+        if let Some(i) = (0..e.len()).find(|i| e[*i] != 0.0 && !free.contains(i)) {
+            let n = fitted.n_wheels();
+            let error = KinError::Invalid {
+                what: format!("entry m{}{}", i / n + 1, i % n + 1),
+                why: format!(
+                    "{} is not zero, but its row is zero throughout design_matrix (a motion the base cannot make)",
+                    e[i]
+                ),
+            };
+            return Err(RecordError::Invalid { key: "matrix", error });
+        }
+        let p = free.iter().map(|&i| e[i]).collect();
+        Ok((model, p))
     }
 
     /// The robot's IK matrix (Eq. 3) when its geometry is known, else the paper's Eq. 7.

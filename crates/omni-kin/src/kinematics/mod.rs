@@ -12,15 +12,21 @@
 //! |---|---|---|
 //! | `ik` | [`MatrixKinematics`]: the paper's non-parametric model, every IK entry free | `m11` … `m3N` |
 //! | `geometry` | [`GeometryKinematics`]: the paper's ref. \[17\], per-wheel radius, distance, angle | `r_a` …, `R_a` …, `delta_a` … |
+//! | `diff` | [`DiffKinematics`]: a differential drive, both radii and the separation (`vy` row zero) | `r_right`, `r_left`, `b` |
+//! | `mecanum` | [`MecanumKinematics`]: four wheels on a rectangle (mecanum, or omni wheels in an X), per-wheel radius and the half-extents | `r_a` … `r_d`, `lx`, `ly` |
 //!
 //! To add a robot type: a new file implementing [`BaseKinematics`], and one variant in [`Kinematics`] and
 //! [`KinematicsKind`] (this file).
 
+mod diff_model;
 mod geometry_model;
 mod matrix_model;
+mod mecanum_model;
 
+pub use diff_model::DiffKinematics;
 pub use geometry_model::GeometryKinematics;
 pub use matrix_model::MatrixKinematics;
+pub use mecanum_model::MecanumKinematics;
 
 use crate::effect::ParamSpec;
 use crate::error::KinError;
@@ -117,17 +123,24 @@ pub enum KinematicsKind {
     Ik,
     /// [`GeometryKinematics`].
     Geometry,
+    /// [`DiffKinematics`].
+    Diff,
+    /// [`MecanumKinematics`].
+    Mecanum,
 }
 
 impl KinematicsKind {
     /// Every kind, in the order help texts list them.
-    pub const ALL: [KinematicsKind; 2] = [KinematicsKind::Ik, KinematicsKind::Geometry];
+    pub const ALL: [KinematicsKind; 4] =
+        [KinematicsKind::Ik, KinematicsKind::Geometry, KinematicsKind::Diff, KinematicsKind::Mecanum];
 
-    /// The id: `ik`, `geometry`.
+    /// The id: `ik`, `geometry`, `diff`, `mecanum`.
     pub fn id(self) -> &'static str {
         match self {
             Self::Ik => "ik",
             Self::Geometry => "geometry",
+            Self::Diff => "diff",
+            Self::Mecanum => "mecanum",
         }
     }
 }
@@ -138,14 +151,15 @@ impl fmt::Display for KinematicsKind {
     }
 }
 
-/// An id that names no [`KinematicsKind`]. Displays as `"x": expected "ik" or "geometry"`.
+/// An id that names no [`KinematicsKind`]. Displays as `"x": expected "ik", "geometry", "diff" or "mecanum"`.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct UnknownKinematics(pub String);
 
 impl fmt::Display for UnknownKinematics {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let ids: Vec<String> = KinematicsKind::ALL.iter().map(|k| format!("{:?}", k.id())).collect();
-        write!(f, "{:?}: expected {}", self.0, ids.join(" or "))
+        let (last, rest) = ids.split_last().map_or(("", &[][..]), |(l, r)| (l.as_str(), r));
+        write!(f, "{:?}: expected {} or {last}", self.0, rest.join(", "))
     }
 }
 
@@ -264,6 +278,10 @@ pub enum Kinematics {
     Ik(MatrixKinematics),
     /// The parametric model of the paper's ref. \[17\]: per wheel r_i, R_i, δ_i.
     Geometry(GeometryKinematics),
+    /// A differential drive: r_R, r_L, b.
+    Diff(DiffKinematics),
+    /// Four wheels on a rectangle: per-wheel radius, lx, ly.
+    Mecanum(MecanumKinematics),
 }
 
 /// Delegates each listed method to the model inside a [`Kinematics`]: the only `match` on its variants
@@ -276,6 +294,8 @@ macro_rules! delegate {
                 match self {
                     Kinematics::Ik(k) => k.$name($($arg),*),
                     Kinematics::Geometry(k) => k.$name($($arg),*),
+                    Kinematics::Diff(k) => k.$name($($arg),*),
+                    Kinematics::Mecanum(k) => k.$name($($arg),*),
                 }
             }
         )*
@@ -289,6 +309,8 @@ impl Kinematics {
         Ok(match kind {
             KinematicsKind::Ik => Self::Ik(MatrixKinematics::design_for(robot)?),
             KinematicsKind::Geometry => Self::Geometry(GeometryKinematics::design_for(robot)?),
+            KinematicsKind::Diff => Self::Diff(DiffKinematics::design_for(robot)?),
+            KinematicsKind::Mecanum => Self::Mecanum(MecanumKinematics::design_for(robot)?),
         })
     }
 
@@ -302,6 +324,14 @@ impl Kinematics {
             KinematicsKind::Geometry => {
                 let (k, p) = GeometryKinematics::from_record(record)?;
                 (Self::Geometry(k), p)
+            }
+            KinematicsKind::Diff => {
+                let (k, p) = DiffKinematics::from_record(record)?;
+                (Self::Diff(k), p)
+            }
+            KinematicsKind::Mecanum => {
+                let (k, p) = MecanumKinematics::from_record(record)?;
+                (Self::Mecanum(k), p)
             }
         })
     }
@@ -343,5 +373,7 @@ impl Kinematics {
     }
 }
 
+#[cfg(test)]
+mod robot_type_tests;
 #[cfg(test)]
 mod tests;

@@ -13,6 +13,8 @@ fn models() -> Vec<Kinematics> {
         Kinematics::Ik(MatrixKinematics {
             design: RobotGeometry::omni_regular(6, 0.05, 0.3, 0.1).twist_from_wheels().unwrap(),
         }),
+        Kinematics::Diff(DiffKinematics::new(super::robot_type_tests::diff_left_first(0.041, 0.043, 0.21)).unwrap()),
+        Kinematics::Mecanum(MecanumKinematics::new(RobotGeometry::mecanum4(0.05, 0.2, 0.15)).unwrap()),
     ]
 }
 
@@ -128,8 +130,8 @@ fn kind_ids_parse_and_print() {
     for k in models() {
         assert_eq!(k.id(), k.kind().id());
     }
-    let err = "mecanum".parse::<KinematicsKind>().unwrap_err();
-    assert_eq!(err.to_string(), "\"mecanum\": expected \"ik\" or \"geometry\"");
+    let err = "tricycle".parse::<KinematicsKind>().unwrap_err();
+    assert_eq!(err.to_string(), "\"tricycle\": expected \"ik\", \"geometry\", \"diff\" or \"mecanum\"");
 }
 
 #[test]

@@ -58,6 +58,7 @@
 //! release mode on one core of a 2-core machine (`tests/mcap_speed.rs`).
 
 mod common;
+mod inspect;
 mod joint_state;
 mod odometry;
 mod pose_stamped;
@@ -71,6 +72,8 @@ mod write;
 use crate::dataset::DatasetError;
 use omni_kin::{Run, StampedPose};
 use std::path::Path;
+
+pub use inspect::{Inventory, ROBOT_DESCRIPTION_TOPIC, TopicSummary, inspect, inspect_bytes};
 
 /// The default wheel joint names, in wheel order.
 pub const DEFAULT_WHEEL_JOINTS: [&str; 3] = ["wheel_a", "wheel_b", "wheel_c"];
@@ -91,6 +94,8 @@ pub struct McapOptions {
     /// The ground truth's tracked frame (`--gt-child-frame`): selects the TF pair, and must match an
     /// Odometry's `child_frame_id`. Default: any.
     pub truth_child_frame: Option<String>,
+    /// The command topic (Twist or TwistStamped). Default: `/cmd_vel`, else the only one.
+    pub command_topic: Option<String>,
     /// Cut the file into runs at standstills of at least this long. s. Default: one run per file.
     pub split: Option<f64>,
     /// Collect runs that fail validation in [`McapRead::skipped`] instead of failing. Default false.
@@ -109,6 +114,7 @@ impl Default for McapOptions {
             truth_topic: None,
             truth_parent_frame: None,
             truth_child_frame: None,
+            command_topic: None,
             split: None,
             skip_invalid: false,
             recorded_odometry: true,

@@ -26,8 +26,8 @@ const MESSAGE_ENCODING: &str = "cdr";
 /// Frames that are the robot's own (REP-105): a pose in them is not a ground truth.
 const ROBOT_FRAMES: [&str; 3] = [ODOM_FRAME, "base_link", "base_footprint"];
 /// The smallest and largest cap on one record's length (the cap is 64 × the file size between them).
-const MIN_RECORD_LIMIT: usize = 64 << 20;
-const MAX_RECORD_LIMIT: usize = 4 << 30;
+pub(super) const MIN_RECORD_LIMIT: usize = 64 << 20;
+pub(super) const MAX_RECORD_LIMIT: usize = 4 << 30;
 /// The types a ground truth can come from.
 const TRUTH_TYPES: &str = "geometry_msgs/msg/PoseStamped, geometry_msgs/msg/PoseWithCovarianceStamped, \
                            nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage";
@@ -405,10 +405,10 @@ impl Bag<'_> {
         self.optional(Channel::is_wheel_odometry, "/odom", "recorded odometry", notes)
     }
 
-    /// The command topic: `/cmd_vel` if it is one, else the only one.
-    fn commands(&self, notes: &mut Vec<String>) -> Option<usize> {
+    /// The command topic: `preferred` (default `/cmd_vel`) if it is one, else the only one.
+    fn commands(&self, preferred: Option<&str>, notes: &mut Vec<String>) -> Option<usize> {
         let is_cmd = |c: &Channel| matches!(c.msg_type, MsgType::Twist | MsgType::TwistStamped);
-        let chosen = self.optional(is_cmd, "/cmd_vel", "the command", notes)?;
+        let chosen = self.optional(is_cmd, preferred.unwrap_or("/cmd_vel"), "the command", notes)?;
         if self.channels[chosen].msg_type == MsgType::Twist {
             notes.push(format!(
                 "{}: topic {:?} ({}) has no header: command times are log times",
@@ -652,7 +652,7 @@ pub(super) fn read_bytes(path: &Path, buf: &[u8], opts: &McapOptions) -> Result<
     bag.check(truth_ch)?;
     let odom = if opts.recorded_odometry { bag.recorded_odometry(&mut notes) } else { None };
     let odom = odom.filter(|&i| i != truth_ch);
-    let cmd = bag.commands(&mut notes);
+    let cmd = bag.commands(opts.command_topic.as_deref(), &mut notes);
 
     // Wheels.
     let joints_topic = bag.channels[j].topic.clone();
@@ -818,7 +818,7 @@ mod tests {
             channels: vec![channel("/cmd_vel", MsgType::TwistStamped, None, Some("field linear.x is NaN"))],
         };
         let mut notes = Vec::new();
-        assert_eq!(bag.commands(&mut notes), None);
+        assert_eq!(bag.commands(None, &mut notes), None);
         assert_eq!(notes, ["a.mcap: topic \"/cmd_vel\", message 2: field linear.x is NaN (the command is left out)"]);
     }
 }

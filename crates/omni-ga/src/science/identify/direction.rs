@@ -106,9 +106,29 @@ fn wheel_pattern(
         Some(share) => PatternPresence::Scarce(share),
         None => PatternPresence::Unknown,
     };
-    let evidence =
-        WheelEvidence { wheels: model.kinematics.wheel_names(), motion: motion_parts(&motion, lever), presence };
+    let evidence = WheelEvidence {
+        wheels: model.kinematics.wheel_names(),
+        motion: motion_parts(&motion, lever),
+        presence,
+        moves_nowhere: moves_nowhere(model, &motion, lever),
+    };
     Some(Pattern { u, motion, evidence })
+}
+
+/// Whether the design twist of a unit wheel pattern (`motion`) is negligible: below 5 % of the largest
+/// twist any unit wheel pattern gives under the design (translations in m/s and ω·lever in m/s compared
+/// alike). With more wheels than degrees of freedom such patterns exist (the wheels push against each
+/// other); a base with N ≤ 3 full-rank wheels has none.
+fn moves_nowhere(model: &Model, motion: &[f64; 3], lever: f64) -> bool {
+    let nominal: Vec<f64> = model.kinematics.params().iter().map(|s| s.null).collect();
+    let Ok(design) = model.kinematics.twist_from_wheels(&nominal) else {
+        return false;
+    };
+    let nw = design.n_wheels();
+    let m = DMatrix::from_fn(3, nw, |r, c| design.entries()[r * nw + c] * if r == 2 { lever } else { 1.0 });
+    let largest = m.singular_values().iter().copied().fold(0.0f64, f64::max);
+    let size = (motion[0].powi(2) + motion[1].powi(2) + (motion[2] * lever).powi(2)).sqrt();
+    largest > 0.0 && size < 0.05 * largest
 }
 
 /// RMS share of the wheel motion along the unit pattern `u`: `sqrt(uᵀ S u / tr S)`.

@@ -146,6 +146,9 @@ pub struct WheelEvidence {
     pub motion: MotionParts,
     /// Whether the runs contain the pattern.
     pub presence: PatternPresence,
+    /// Whether the pattern's design twist is negligible (below 5 % of the largest any unit pattern gives):
+    /// with more wheels than degrees of freedom, the wheels fighting each other.
+    pub moves_nowhere: bool,
 }
 
 /// What would constrain an unconstrained direction.

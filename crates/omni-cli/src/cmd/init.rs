@@ -1,0 +1,82 @@
+//! `omnical init`: inspect a recording, read the robot's URDF, and write a commented robot.toml.
+
+use crate::dataset::mcap::{self, Inventory};
+use crate::init::{self, UrdfSource, urdf};
+use crate::{atomic, robot_file};
+use anyhow::{Context, bail};
+use omni_kin::robot::BaseKind;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `omnical init`.
+#[derive(Debug)]
+pub struct Args {
+    /// The recording (ROS 2 MCAP).
+    pub recording: PathBuf,
+    /// The URDF file (default: the recording's `/robot_description`).
+    pub urdf: Option<PathBuf>,
+    /// Where to write.
+    pub out: PathBuf,
+    /// The base kind, instead of the guess.
+    pub kind: Option<BaseKind>,
+    /// Overwrite an existing file.
+    pub force: bool,
+    /// Refuse recordings larger than this. Bytes.
+    pub max_file_bytes: u64,
+}
+
+/// The URDF text and where it came from.
+fn urdf_text(a: &Args, inv: &Inventory) -> anyhow::Result<(String, UrdfSource, PathBuf)> {
+    if let Some(p) = &a.urdf {
+        let text = std::fs::read_to_string(p).with_context(|| format!("{}", p.display()))?;
+        return Ok((text, UrdfSource { label: p.display().to_string() }, p.clone()));
+    }
+    match &inv.robot_description {
+        Some(text) => Ok((
+            text.clone(),
+            UrdfSource { label: format!("topic {} of {}", mcap::ROBOT_DESCRIPTION_TOPIC, a.recording.display()) },
+            a.recording.clone(),
+        )),
+        None => bail!(
+            "{}: the recording has no {} topic (std_msgs/msg/String) with the robot's URDF; give it with --urdf FILE \
+             (for a .xacro, run `xacro robot.urdf.xacro > robot.urdf` first)",
+            a.recording.display(),
+            mcap::ROBOT_DESCRIPTION_TOPIC
+        ),
+    }
+}
+
+/// Runs `omnical init`.
+pub fn run(a: &Args) -> anyhow::Result<()> {
+    if a.out.exists() && !a.force {
+        bail!("{} exists; pass --force to replace it, or --out another file", a.out.display());
+    }
+    let inv = mcap::inspect(&a.recording, a.max_file_bytes)?;
+    let (text, source, urdf_path) = urdf_text(a, &inv)?;
+    let found = urdf::wheels(&text).map_err(|e| anyhow::anyhow!("{}: {e}", source.label))?;
+    let recording = a.recording.display().to_string();
+    let d = init::draft(&inv, &recording, &found, &source, a.kind)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", urdf_label(&urdf_path, &source)))?;
+    let toml = robot_file::to_toml(&d.description, &d.comments);
+    // What is written must read back as written.
+    robot_file::parse(&toml, &a.out).context("the drafted robot.toml does not read back (a bug)")?;
+    atomic::write_atomic(&a.out, toml.as_bytes()).with_context(|| format!("writing {}", a.out.display()))?;
+    for line in d.comments.header.iter().filter(|l| !l.starts_with("  CHECK: ")) {
+        println!("{line}");
+    }
+    for w in &d.warnings {
+        eprintln!("warning: {w}");
+    }
+    println!(
+        "\nwrote {} ({} base, joints {}); check it, then e.g. `omnical eval --robot {} {}`",
+        a.out.display(),
+        d.description.kind,
+        d.description.joints().join(", "),
+        a.out.display(),
+        a.recording.display()
+    );
+    Ok(())
+}
+
+fn urdf_label(path: &Path, source: &UrdfSource) -> String {
+    if source.label.starts_with("topic ") { source.label.clone() } else { path.display().to_string() }
+}

@@ -1,0 +1,397 @@
+//! Robot description files (`robot.toml`, schema in docs/formats.md and [`omni_kin::robot`]): reading them
+//! with errors that name the file, the line and the field; the built-in `apr02`; finding one beside the
+//! data or in the working directory; writing one, with comments.
+//!
+//! Which robot a command uses, in this order: `--robot FILE|apr02`, the geometry the data declares
+//! (OptiOdom metadata), a `robot.toml` found beside the data. A command that needs the design and finds
+//! none refuses ([`no_design`]): there is no silent default robot.
+
+use crate::dataset::Dataset;
+use crate::dataset::mcap::McapOptions;
+use omni_kin::RobotGeometry;
+use omni_kin::robot::{BaseKind, RobotDescription, RobotError};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// The file name looked for beside the data and in the working directory.
+pub const FILE_NAME: &str = "robot.toml";
+/// `--robot apr02`: the paper's robot, built in.
+pub const BUILTIN_APR02: &str = "apr02";
+/// A robot description is a few hundred bytes; anything above this is not one. Bytes.
+const MAX_FILE_BYTES: u64 = 1 << 20;
+
+/// Where a robot description came from.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Source {
+    /// `--robot FILE`.
+    Flag(PathBuf),
+    /// `--robot apr02`.
+    Builtin,
+    /// A `robot.toml` found beside the data or in the working directory.
+    Discovered(PathBuf),
+}
+
+impl std::fmt::Display for Source {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Flag(p) => write!(f, "{}", p.display()),
+            Self::Builtin => write!(f, "{BUILTIN_APR02} (built in: the paper's APR-02)"),
+            Self::Discovered(p) => write!(f, "{} (found beside the data)", p.display()),
+        }
+    }
+}
+
+/// A robot description and where it came from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RobotFile {
+    /// The description, validated.
+    pub description: RobotDescription,
+    /// Its source.
+    pub source: Source,
+}
+
+/// What is wrong with a robot description file. Every variant names the file.
+#[derive(Debug, Error)]
+pub enum RobotFileError {
+    /// The file could not be read.
+    #[error("{path}: {error}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        error: std::io::Error,
+    },
+    /// A problem at a field of the file.
+    #[error("{path}: line {line}: {field}: {message}")]
+    At {
+        /// The file.
+        path: PathBuf,
+        /// Line of the field (1-based).
+        line: usize,
+        /// The field, as a TOML path (`wheels[2].radius_m`).
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A problem with the file as a whole (not TOML, too large, empty).
+    #[error("{path}: {message}")]
+    File {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// Parse and validate the text of a robot description; `path` names it in errors.
+pub fn parse(text: &str, path: &Path) -> Result<RobotDescription, RobotFileError> {
+    let d: RobotDescription = toml::from_str(text).map_err(|e| {
+        let span = e.span().unwrap_or(0..0);
+        let field = locate::path_at(text, &span).unwrap_or_else(|| "(file)".into());
+        RobotFileError::At {
+            path: path.to_path_buf(),
+            line: line_of(text, span.start),
+            field,
+            message: e.message().trim_end().to_string(),
+        }
+    })?;
+    d.validate().map_err(|e| at_field(text, path, &e))?;
+    Ok(d)
+}
+
+/// A validation error located in the text (the field's line, or its nearest enclosing table's).
+fn at_field(text: &str, path: &Path, e: &RobotError) -> RobotFileError {
+    let start = locate::span_of(text, &e.field).map_or(0, |s| s.start);
+    RobotFileError::At {
+        path: path.to_path_buf(),
+        line: line_of(text, start),
+        field: e.field.clone(),
+        message: e.problem.to_string(),
+    }
+}
+
+fn line_of(text: &str, offset: usize) -> usize {
+    text.get(..offset).map_or(1, |s| s.matches('\n').count() + 1)
+}
+
+/// Read a robot description file.
+pub fn read(path: &Path) -> Result<RobotDescription, RobotFileError> {
+    let io = |error| RobotFileError::Io { path: path.to_path_buf(), error };
+    let len = std::fs::metadata(path).map_err(io)?.len();
+    if len > MAX_FILE_BYTES {
+        return Err(RobotFileError::File {
+            path: path.to_path_buf(),
+            message: format!("{len} bytes is too large for a robot description (see docs/formats.md)"),
+        });
+    }
+    let text = std::fs::read_to_string(path).map_err(io)?;
+    parse(&text, path)
+}
+
+/// `--robot VALUE`: the built-in `apr02` or a file.
+pub fn from_arg(value: &str) -> Result<RobotFile, RobotFileError> {
+    if value == BUILTIN_APR02 {
+        return Ok(RobotFile { description: RobotDescription::apr02(), source: Source::Builtin });
+    }
+    let path = PathBuf::from(value);
+    Ok(RobotFile { description: read(&path)?, source: Source::Flag(path) })
+}
+
+/// The `robot.toml` for data at `runs`: in the folder of the first run (or that folder itself, when it is
+/// one), else in `cwd`. `None` if there is none.
+pub fn discover(runs: &[PathBuf], cwd: &Path) -> Option<PathBuf> {
+    let beside =
+        runs.first().map(|p| if p.is_dir() { p.clone() } else { p.parent().unwrap_or(Path::new("")).to_path_buf() });
+    beside.into_iter().chain([cwd.to_path_buf()]).map(|dir| dir.join(FILE_NAME)).find(|p| p.is_file())
+}
+
+/// The robot for a command: `--robot` if given, else a discovered `robot.toml` (see [`discover`]).
+pub fn resolve(flag: Option<&str>, runs: &[PathBuf]) -> Result<Option<RobotFile>, RobotFileError> {
+    if let Some(v) = flag {
+        return from_arg(v).map(Some);
+    }
+    let cwd = std::env::current_dir().unwrap_or_default();
+    match discover(runs, &cwd) {
+        Some(path) => {
+            // Show the path as found (relative to the data or the working directory).
+            let shown = path.strip_prefix(&cwd).map(Path::to_path_buf).unwrap_or(path);
+            Ok(Some(RobotFile { description: read(&shown)?, source: Source::Discovered(shown) }))
+        }
+        None => Ok(None),
+    }
+}
+
+/// Prints `robot: PATH (found beside the data)` on stderr for a robot.toml that was picked up without being
+/// named, once per file in this process (a command may load several sets). `--robot` is not repeated back.
+pub fn announce(source: &Source) {
+    if !matches!(source, Source::Discovered(_)) {
+        return;
+    }
+    static SHOWN: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+    let text = source.to_string();
+    let mut shown = SHOWN.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    if !shown.contains(&text) {
+        eprintln!("robot: {text}");
+        shown.push(text);
+    }
+}
+
+/// Fills what the command line left open from the robot description: the wheel joints (when
+/// `joints_open`; without a description, `wheel_a`, `wheel_b`, `wheel_c`), the topics and the frames.
+pub fn fill_mcap_options(mcap: &mut McapOptions, joints_open: bool, robot: Option<&RobotDescription>) {
+    if joints_open {
+        mcap.wheel_joints = robot.map_or_else(|| McapOptions::default().wheel_joints, RobotDescription::joints);
+    }
+    let Some(r) = robot else { return };
+    let fill = |slot: &mut Option<String>, from: &Option<String>| {
+        if slot.is_none() {
+            slot.clone_from(from);
+        }
+    };
+    fill(&mut mcap.joints_topic, &r.topics.joint_states);
+    fill(&mut mcap.truth_topic, &r.topics.ground_truth);
+    fill(&mut mcap.command_topic, &r.topics.command);
+    fill(&mut mcap.truth_parent_frame, &r.frames.ground_truth_parent);
+    fill(&mut mcap.truth_child_frame, &r.frames.ground_truth_child);
+}
+
+/// Where a command's design comes from.
+#[derive(Clone, Copy, Debug)]
+pub enum Design<'a> {
+    /// A robot description (`--robot`, or found beside the data).
+    File(&'a RobotFile),
+    /// The geometry the data declares (OptiOdom metadata).
+    Data(&'a RobotGeometry),
+}
+
+/// The design of a dataset's robot, in this order: `--robot`, the geometry the data declares, a
+/// `robot.toml` found beside the data. `None` when there is none of them.
+pub fn design(ds: &Dataset) -> Option<Design<'_>> {
+    match (&ds.robot_file, &ds.robot) {
+        (Some(f), _) if !matches!(f.source, Source::Discovered(_)) => Some(Design::File(f)),
+        (_, Some(g)) => Some(Design::Data(g)),
+        (Some(f), None) => Some(Design::File(f)),
+        (None, None) => None,
+    }
+}
+
+/// The error of a command that needs the robot's design and has none: how to give one.
+pub fn no_design(what: &str) -> anyhow::Error {
+    anyhow::anyhow!(
+        "{what} needs the robot's design (its wheel geometry), and none is given: no --robot, no geometry in \
+         the data, no {FILE_NAME} beside the data or in the working directory. Describe the robot once in a \
+         {FILE_NAME} (docs/formats.md, \"Robot description\"; `omnical init RECORDING --urdf FILE` drafts one \
+         from a recording and the robot's URDF) and put it beside the data or pass --robot FILE; for the \
+         paper's APR-02 robot pass --robot {BUILTIN_APR02}"
+    )
+}
+
+/// Comments to write into a robot description: a header, and lines above each wheel (or the `[diff]` table).
+#[derive(Clone, Debug, Default)]
+pub struct Comments {
+    /// Lines at the top of the file.
+    pub header: Vec<String>,
+    /// Lines above wheel `i`'s `[[wheels]]` table (or, for `diff`, index 0 above `[diff]`).
+    pub wheels: Vec<Vec<String>>,
+}
+
+fn quoted(s: &str) -> String {
+    toml::Value::String(s.to_string()).to_string()
+}
+
+fn comment_lines(out: &mut String, lines: &[String]) {
+    for l in lines {
+        if l.is_empty() {
+            out.push_str("#\n");
+        }
+        for part in l.lines() {
+            let _ = writeln!(out, "# {part}");
+        }
+    }
+}
+
+/// A robot description as commented TOML that [`parse`] reads back to the same description.
+pub fn to_toml(d: &RobotDescription, comments: &Comments) -> String {
+    let mut s = String::new();
+    comment_lines(&mut s, &comments.header);
+    if let Some(n) = &d.name {
+        let _ = writeln!(s, "name = {}", quoted(n));
+    }
+    let _ = writeln!(s, "kind = {}", quoted(d.kind.name()));
+    let num = |s: &mut String, key: &str, v: Option<f64>| {
+        if let Some(v) = v {
+            let _ = writeln!(s, "{key} = {v:?}");
+        }
+    };
+    let text = |s: &mut String, key: &str, v: &Option<String>| {
+        if let Some(v) = v {
+            let _ = writeln!(s, "{key} = {}", quoted(v));
+        }
+    };
+    for (i, w) in d.wheels.iter().enumerate() {
+        s.push('\n');
+        comment_lines(&mut s, comments.wheels.get(i).map_or(&[], Vec::as_slice));
+        let _ = writeln!(s, "[[wheels]]\njoint = {}", quoted(&w.joint));
+        num(&mut s, "x_m", w.x_m);
+        num(&mut s, "y_m", w.y_m);
+        num(&mut s, "distance_m", w.distance_m);
+        num(&mut s, "angle_deg", w.angle_deg);
+        num(&mut s, "drive_deg", w.drive_deg);
+        num(&mut s, "radius_m", Some(w.radius_m));
+        num(&mut s, "roller_angle_deg", w.roller_angle_deg);
+    }
+    if let (BaseKind::Diff, Some(x)) = (d.kind, &d.diff) {
+        s.push('\n');
+        comment_lines(&mut s, comments.wheels.first().map_or(&[], Vec::as_slice));
+        let _ = writeln!(s, "[diff]");
+        num(&mut s, "wheel_separation_m", Some(x.wheel_separation_m));
+        let _ = writeln!(s, "left_joint = {}\nright_joint = {}", quoted(&x.left_joint), quoted(&x.right_joint));
+        num(&mut s, "left_radius_m", Some(x.left_radius_m));
+        num(&mut s, "right_radius_m", Some(x.right_radius_m));
+    }
+    let t = &d.topics;
+    if t.joint_states.is_some() || t.ground_truth.is_some() || t.command.is_some() {
+        s.push_str("\n[topics]\n");
+        text(&mut s, "joint_states", &t.joint_states);
+        text(&mut s, "ground_truth", &t.ground_truth);
+        text(&mut s, "command", &t.command);
+    }
+    let f = &d.frames;
+    if f.ground_truth_parent.is_some() || f.ground_truth_child.is_some() {
+        s.push_str("\n[frames]\n");
+        text(&mut s, "ground_truth_parent", &f.ground_truth_parent);
+        text(&mut s, "ground_truth_child", &f.ground_truth_child);
+    }
+    if let Some(p) = &d.priors {
+        s.push_str("\n[priors]\n");
+        num(&mut s, "radius_std_m", p.radius_std_m);
+        num(&mut s, "position_std_m", p.position_std_m);
+        num(&mut s, "angle_std_deg", p.angle_std_deg);
+        num(&mut s, "separation_std_m", p.separation_std_m);
+    }
+    s
+}
+
+/// Finding fields in the TOML text: the field at an error's byte offset, and the bytes of a field path.
+mod locate {
+    use std::ops::Range;
+    use toml::Spanned;
+    use toml::de::{DeTable, DeValue};
+
+    /// The path (`wheels[1].radius_m`) of the innermost key or array element that starts at or before
+    /// `span.start` (the last one before it in the text). Tables of an array (`[[wheels]]`) have spans
+    /// that do not cover their keys, so containment cannot be used.
+    pub fn path_at(text: &str, span: &Range<usize>) -> Option<String> {
+        let root = DeTable::parse(text).ok()?;
+        let mut path = String::new();
+        walk_to(root.get_ref(), span.start, &mut path);
+        (!path.is_empty()).then_some(path)
+    }
+
+    fn walk_to(table: &DeTable<'_>, at: usize, path: &mut String) {
+        let last = table
+            .iter()
+            .map(|(k, v)| (k.span().start.min(v.span().start), k, v))
+            .filter(|(start, _, _)| *start <= at)
+            .max_by_key(|(start, _, _)| *start);
+        if let Some((_, k, v)) = last {
+            if !path.is_empty() {
+                path.push('.');
+            }
+            path.push_str(k.get_ref());
+            descend(v, at, path);
+        }
+    }
+
+    fn descend(v: &Spanned<DeValue<'_>>, at: usize, path: &mut String) {
+        match v.get_ref() {
+            DeValue::Table(t) => walk_to(t, at, path),
+            DeValue::Array(a) => {
+                let last =
+                    a.iter().enumerate().filter(|(_, e)| e.span().start <= at).max_by_key(|(_, e)| e.span().start);
+                if let Some((i, e)) = last {
+                    path.push_str(&format!("[{i}]"));
+                    descend(e, at, path);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// The bytes of the field named by `path` (`wheels[2].radius_m`), or of the innermost part of it that
+    /// exists (the wheel's table when the key is missing).
+    pub fn span_of(text: &str, path: &str) -> Option<Range<usize>> {
+        let root = DeTable::parse(text).ok()?;
+        let mut table: &DeTable<'_> = root.get_ref();
+        let mut found: Option<Range<usize>> = None;
+        for part in path.split('.') {
+            let (key, index) = match part.split_once('[') {
+                Some((k, rest)) => (k, rest.trim_end_matches(']').parse::<usize>().ok()),
+                None => (part, None),
+            };
+            let Some((k, v)) = table.iter().find(|(k, _)| k.get_ref().as_ref() == key) else {
+                return found;
+            };
+            found = Some(k.span());
+            let value = match (index, v.get_ref()) {
+                (Some(i), DeValue::Array(a)) => match a.get(i) {
+                    Some(e) => {
+                        found = Some(e.span());
+                        e
+                    }
+                    None => return found,
+                },
+                _ => v,
+            };
+            match value.get_ref() {
+                DeValue::Table(t) => table = t,
+                _ => return found,
+            }
+        }
+        found
+    }
+}
+
+#[cfg(test)]
+mod tests;

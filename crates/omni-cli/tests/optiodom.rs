@@ -1,0 +1,444 @@
+//! OptiOdom set folders of every supported robot type, on small synthetic sets written by the tests (CI
+//! has no ../shared/data): the ground truth is integrated from the wheel ticks with OptiOdom's own nominal
+//! model (the formulas of the data's README), so the design model read from the metadata must reproduce it
+//! to rounding; and bad metadata or rows are refused naming the file, the line and the field.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use omni_cli::dataset::{self, LoadOptions};
+use omni_kin::cost::{self, CostKind};
+use omni_kin::{FittedModel, Model};
+use std::f64::consts::PI;
+use std::fmt::Write as _;
+use std::path::Path;
+use std::process::Command;
+
+/// A synthetic OptiOdom set: robot type and metadata values, and the robot that made it.
+struct Set {
+    kind: &'static str,
+    ngear: f64,
+    enc_res: f64,
+    li: Vec<f64>,
+    di: Vec<f64>,
+    dt_s: f64,
+    /// The robot that made the ground truth: each wheel's arc length scaled by `wheel_gain[i]`, and `li`
+    /// replaced by `true_li` in OptiOdom's formulas. Default: the metadata's robot.
+    wheel_gain: Vec<f64>,
+    true_li: Vec<f64>,
+    /// Wheels driven by a controller from a smooth body twist through the nominal model (a real robot:
+    /// they never fight each other) instead of each wheel on its own.
+    from_twist: bool,
+    /// Added to each run's index to vary its motion (held-out sets).
+    seed_offset: usize,
+}
+
+impl Set {
+    fn new(kind: &'static str, ngear: f64, enc_res: f64, li: &[f64], di: &[f64], dt_s: f64) -> Self {
+        let (li, di) = (li.to_vec(), di.to_vec());
+        let (wheel_gain, true_li) = (vec![1.0; di.len()], li.clone());
+        Self { kind, ngear, enc_res, li, di, dt_s, wheel_gain, true_li, from_twist: false, seed_offset: 0 }
+    }
+    fn omni4() -> Self {
+        Self::new("omni4", 1.0, 1.0, &[0.205, 0.215], &[0.06, 0.0592, 0.0607, 0.06], 0.01)
+    }
+    fn diff() -> Self {
+        Self::new("diff", 43.7, 64.0, &[0.2], &[0.084, 0.0832], 0.05)
+    }
+    fn omni3() -> Self {
+        Self::new("omni3", 12.0, 1024.0, &[0.195], &[0.102, 0.1, 0.103], 0.04)
+    }
+
+    /// The same set made by a robot whose wheels roll `wheel_gain` × their nominal arc and whose `Li` is
+    /// `true_li`, its wheels driven from a body twist.
+    fn real(mut self, wheel_gain: &[f64], true_li: &[f64]) -> Self {
+        self.wheel_gain = wheel_gain.to_vec();
+        self.true_li = true_li.to_vec();
+        self.from_twist = true;
+        self
+    }
+
+    /// OptiOdom's robot-frame displacement (dx m, dy m, dθ rad) of one cycle from the wheel arc lengths
+    /// (m), with wheel-position values `li`: the README formulas, written out independently of the reader.
+    fn model(&self, s: &[f64], li: &[f64]) -> [f64; 3] {
+        match self.kind {
+            "omni3" => {
+                let l = li[0];
+                let r3 = 3f64.sqrt() / 3.0;
+                [r3 * (s[1] - s[0]), (2.0 * s[2] - s[0] - s[1]) / 3.0, -(s[0] + s[1] + s[2]) / (3.0 * l)]
+            }
+            "omni4" => {
+                let k = -1.0 / (2.0 * (li[0] + li[1]));
+                [(s[0] - s[1] + s[2] - s[3]) / 4.0, (-s[0] - s[1] + s[2] + s[3]) / 4.0, k * (s[0] + s[1] + s[2] + s[3])]
+            }
+            "diff" => [(s[0] + s[1]) / 2.0, 0.0, (s[0] - s[1]) / li[0]],
+            k => panic!("no nominal model for {k}"),
+        }
+    }
+
+    /// The nominal wheel arcs (m) that make the body displacement `d` (dx m, dy m, dθ rad): the exact
+    /// inverse of [`Self::model`] with the metadata's `li` (omni4's forward rows are orthogonal).
+    fn arcs(&self, d: [f64; 3]) -> Vec<f64> {
+        match self.kind {
+            "omni4" => {
+                let c = (self.li[0] + self.li[1]) / 2.0;
+                let signs = [(1.0, -1.0), (-1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+                signs.iter().map(|(a, b)| a * d[0] + b * d[1] - c * d[2]).collect()
+            }
+            "diff" => vec![d[0] + self.li[0] / 2.0 * d[2], d[0] - self.li[0] / 2.0 * d[2]],
+            k => panic!("no forward model for {k}"),
+        }
+    }
+
+    /// Writes `<dir>/<id>/` with a metadata file and `runs` run files; returns the set folder.
+    fn write(&self, dir: &Path, id: &str, runs: usize) -> std::path::PathBuf {
+        let set = dir.join(id);
+        std::fs::create_dir_all(&set).unwrap();
+        let row =
+            |k: &str, v: &[f64]| format!("{k},{}\n", v.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(","));
+        let mut meta = format!("type,{},,\n", self.kind);
+        meta += &row("ngear", &[self.ngear]);
+        meta += &row("encRes", &[self.enc_res]);
+        meta += &row("Li", &self.li);
+        meta += &row("Di", &self.di);
+        meta += "Thi,,,\n";
+        meta += &row("N", &[runs as f64]);
+        std::fs::write(set.join(format!("{id}_metadata.csv")), meta).unwrap();
+        for r in 0..runs {
+            std::fs::write(set.join(format!("{id}_run-{:02}.csv", r + 1)), self.run_text(r + self.seed_offset))
+                .unwrap();
+        }
+        set
+    }
+
+    /// Nominal wheel arcs (m) of cycle `k` of run `seed`: each wheel on its own (smoothly varying, its own
+    /// frequency and phase), or from a smooth body twist ([`Self::from_twist`]).
+    fn cycle_arcs(&self, k: usize, seed: usize) -> Vec<f64> {
+        let (t, sd) = (k as f64 * self.dt_s, seed as f64);
+        if self.from_twist {
+            let wave = |f: f64, phase: f64| (2.0 * PI * f * t + phase + sd).sin();
+            let vy = if self.kind == "diff" { 0.0 } else { 0.25 * wave(0.11, 2.0) };
+            let twist = [0.3 * wave(0.13, 0.0), vy, 0.9 * wave(0.07 + 0.02 * sd, 1.0)];
+            return self.arcs(twist.map(|v| v * self.dt_s));
+        }
+        (0..self.di.len())
+            .map(|i| {
+                let f = 0.3 + 0.17 * i as f64 + 0.05 * sd;
+                let speed_m_s = 0.3 * (2.0 * PI * f * t + i as f64 + sd).sin() + 0.1 * (i as f64 - 1.0);
+                speed_m_s * self.dt_s
+            })
+            .collect()
+    }
+
+    /// One run: 6 s of wheel motion ([`Self::cycle_arcs`]), the ground truth integrated from it with the
+    /// true robot's model held over each cycle (an exact arc).
+    fn run_text(&self, seed: usize) -> String {
+        let n = self.di.len();
+        let per_tick: Vec<f64> = self.di.iter().map(|d| PI * d / (self.ngear * self.enc_res)).collect();
+        let cycles = (6.0 / self.dt_s).round() as usize;
+        let (mut x, mut y, mut th) = (0.0f64, 0.0f64, 0.0f64);
+        let mut text = String::new();
+        for k in 0..=cycles {
+            let t = k as f64 * self.dt_s;
+            let arcs = if k == 0 { vec![0.0; n] } else { self.cycle_arcs(k, seed) };
+            let ticks: Vec<f64> = (0..n).map(|i| arcs[i] / per_tick[i]).collect();
+            let s: Vec<f64> = (0..n).map(|i| self.wheel_gain[i] * per_tick[i] * ticks[i]).collect();
+            let [dx, dy, a] = self.model(&s, &self.true_li);
+            let (f1, f2) =
+                if a.abs() < 1e-6 { (1.0 - a * a / 6.0, a / 2.0) } else { (a.sin() / a, (1.0 - a.cos()) / a) };
+            let (bx, by) = (f1 * dx - f2 * dy, f2 * dx + f1 * dy);
+            let (sn, cs) = th.sin_cos();
+            x += cs * bx - sn * by;
+            y += sn * bx + cs * by;
+            th += a;
+            write!(text, "{t},{x},{y},{th}").unwrap();
+            for v in &ticks {
+                write!(text, ",{v}").unwrap();
+            }
+            text.push('\n');
+        }
+        text
+    }
+}
+
+fn omnical(args: &[&str], dir: &Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir).output().expect("run omnical")
+}
+
+/// The design model of a synthetic set follows its ground truth to rounding: the metadata's geometry is
+/// OptiOdom's nominal model, whatever the robot type, with unequal wheel diameters.
+#[test]
+fn design_of_every_type_reproduces_optiodom_nominal_model() {
+    let dir = tempfile::tempdir().unwrap();
+    for (set, wheels) in [
+        (Set::omni3(), vec!["wheel_1", "wheel_2", "wheel_3"]),
+        (Set::omni4(), vec!["wheel_1", "wheel_2", "wheel_3", "wheel_4"]),
+        (Set::diff(), vec!["wheel_right", "wheel_left"]),
+    ] {
+        let folder = set.write(dir.path(), &format!("{}0001", set.kind), 3);
+        let ds = dataset::load(&[folder], &LoadOptions::default()).unwrap();
+        assert_eq!(ds.runs.len(), 3, "{}", set.kind);
+        assert_eq!(ds.runs[0].name(), format!("{}0001/run-01", set.kind));
+        assert!(ds.runs.iter().all(|r| r.n_wheels() == wheels.len() && r.truth().len() == r.n_samples()));
+        let robot = ds.robot.expect("the metadata declares the robot");
+        assert_eq!(robot.wheel_names, wheels);
+        let design = FittedModel::nominal(Model::ik(robot.twist_from_wheels().unwrap()));
+        let end = cost::cost(&design.model, &design.params, &ds.runs, CostKind::EndPose).unwrap();
+        let path = cost::cost(&design.model, &design.params, &ds.runs, CostKind::PATH).unwrap();
+        assert!(end < 1e-9 && path < 1e-9, "{}: Eq. 6 {end}, path {path}", set.kind);
+        // The runs move: a wrong model would show.
+        let far = ds.runs.iter().map(|r| r.truth().last().unwrap().pose.x_m.abs()).fold(0.0, f64::max);
+        assert!(far > 0.05, "{}: runs end within {far} m of the start", set.kind);
+    }
+}
+
+/// `omnical eval --model design` on a folder of each type: exit 0 and a cost at rounding level.
+#[test]
+fn eval_reads_omni4_and_diff_folders() {
+    let dir = tempfile::tempdir().unwrap();
+    for set in [Set::omni4(), Set::diff()] {
+        let id = format!("{}0002", set.kind);
+        set.write(dir.path(), &id, 2);
+        let out = omnical(&["eval", "--model", "design", &id, "--json"], dir.path());
+        assert!(out.status.success(), "{}: {}", set.kind, String::from_utf8_lossy(&out.stderr));
+        let e: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(e["runs"].as_array().unwrap().len(), 2);
+        assert!(e["cost"].as_f64().unwrap() < 1e-9, "{}: {}", set.kind, e["cost"]);
+    }
+}
+
+/// Refusals: exit 2, `error: <file>: line N, <field>: …`.
+fn refused(dir: &Path, id: &str) -> String {
+    let out = omnical(&["eval", id], dir);
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stdout));
+    String::from_utf8_lossy(&out.stderr).trim().to_string()
+}
+
+#[test]
+fn tricycle_and_unknown_types_are_refused_naming_file_and_type() {
+    let dir = tempfile::tempdir().unwrap();
+    for kind in ["tricycle", "omni5"] {
+        let id = format!("{kind}0003");
+        let set = Set::diff().write(dir.path(), &id, 1);
+        let meta = set.join(format!("{id}_metadata.csv"));
+        let text = std::fs::read_to_string(&meta).unwrap().replacen("type,diff", &format!("type,{kind}"), 1);
+        std::fs::write(&meta, text).unwrap();
+        assert_eq!(
+            refused(dir.path(), &id),
+            format!(
+                "error: {id}/{id}_metadata.csv: line 1, key type: robot type \"{kind}\" is not supported (omnical \
+                 reads OptiOdom's omni3, omni4, diff sets)"
+            )
+        );
+    }
+}
+
+#[test]
+fn bad_metadata_and_rows_name_file_line_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let edit = |id: &str, file: &str, from: &str, to: &str| {
+        let p = dir.path().join(id).join(format!("{id}_{file}"));
+        let text = std::fs::read_to_string(&p).unwrap();
+        assert!(text.contains(from), "{from:?} not in {file}");
+        std::fs::write(&p, text.replacen(from, to, 1)).unwrap();
+    };
+    Set::omni4().write(dir.path(), "o4", 1);
+    edit("o4", "metadata.csv", "Di,0.06,0.0592,0.0607,0.06", "Di,0.06,0.0592,0.0607");
+    assert_eq!(
+        refused(dir.path(), "o4"),
+        "error: o4/o4_metadata.csv: line 5, key Di: expected 4 value(s) (wheel diameters, m), got 3"
+    );
+    Set::diff().write(dir.path(), "d1", 1);
+    edit("d1", "metadata.csv", "Li,0.2", "Li,-0.2");
+    assert_eq!(
+        refused(dir.path(), "d1"),
+        "error: d1/d1_metadata.csv: line 4, key Li: \"-0.2\" must be a number > 0 (wheel separation b, m)"
+    );
+    Set::diff().write(dir.path(), "d2", 1);
+    edit("d2", "metadata.csv", "encRes,64", "encRes,sixty-four");
+    assert_eq!(
+        refused(dir.path(), "d2"),
+        "error: d2/d2_metadata.csv: line 3, key encRes: \"sixty-four\" is not a number (encoder counts per motor \
+         revolution)"
+    );
+    Set::diff().write(dir.path(), "d3", 1);
+    edit("d3", "metadata.csv", "ngear,43.7\n", "");
+    assert_eq!(refused(dir.path(), "d3"), "error: d3/d3_metadata.csv: missing key ngear");
+    // Rows: a bad cell names its line and column, a short row its line and the expected count.
+    Set::diff().write(dir.path(), "d4", 1);
+    let run = std::fs::read_to_string(dir.path().join("d4/d4_run-01.csv")).unwrap();
+    let line3: Vec<&str> = run.lines().nth(2).unwrap().split(',').collect();
+    edit("d4", "run-01.csv", &line3.join(","), &[&line3[..5], &["x"]].concat().join(","));
+    assert_eq!(refused(dir.path(), "d4"), "error: d4/d4_run-01.csv: line 3, column ticks_left: \"x\" is not a number");
+    Set::omni4().write(dir.path(), "o5", 1);
+    let run = std::fs::read_to_string(dir.path().join("o5/o5_run-01.csv")).unwrap();
+    let line2 = run.lines().nth(1).unwrap();
+    edit("o5", "run-01.csv", line2, line2.rsplit_once(',').unwrap().0);
+    assert_eq!(
+        refused(dir.path(), "o5"),
+        "error: o5/o5_run-01.csv: line 2: has 7 columns, expected 8 (time, x, y, θ and 4 wheels)"
+    );
+}
+
+/// `omnical train … --json` in `dir`: the summary.
+fn train(dir: &Path, args: &[&str]) -> serde_json::Value {
+    let out = omnical(&[&["train", "--json", "-q"], args].concat(), dir);
+    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+fn param(s: &serde_json::Value, name: &str) -> f64 {
+    let p = s["params"].as_array().unwrap().iter().find(|p| p["name"] == name);
+    p.unwrap_or_else(|| panic!("no {name} in {}", s["params"]))["value"].as_f64().unwrap()
+}
+
+/// A differential drive whose wheels roll 3 % more and 2 % less than declared and whose wheels sit 4 %
+/// farther apart: `train --model diff` finds r_right, r_left and b; `--model ik` the same matrix, its vy
+/// row held at zero (no parameter there), and both predict held-out runs to rounding.
+#[test]
+fn diff_models_recover_the_true_axle() {
+    let dir = tempfile::tempdir().unwrap();
+    let set = Set::diff().real(&[1.03, 0.98], &[0.208]);
+    set.write(dir.path(), "train", 3);
+    let (rr, rl, b) = (0.042 * 1.03, 0.0416 * 0.98, 0.208);
+    let s = train(dir.path(), &["train", "--model", "diff", "--out", "diff.toml"]);
+    let names: Vec<&str> = s["params"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["r_right", "r_left", "b"]);
+    for (name, want) in [("r_right", rr), ("r_left", rl), ("b", b)] {
+        assert!((param(&s, name) / want - 1.0).abs() < 1e-6, "{name} {} vs {want}", param(&s, name));
+    }
+    assert!(s["cost_design"].as_f64().unwrap() > 0.02, "the declared robot is off: {}", s["cost_design"]);
+    let s = train(dir.path(), &["train", "--model", "ik", "--out", "ik.toml"]);
+    let m = &s["matrix"];
+    let want = [[rr / 2.0, rl / 2.0], [0.0, 0.0], [rr / b, -rl / b]];
+    for (r, row) in want.iter().enumerate() {
+        for (c, w) in row.iter().enumerate() {
+            let got = m[r][c].as_f64().unwrap();
+            assert!((got - w).abs() <= 1e-6 * w.abs().max(1e-3), "m{}{}: {got} vs {w}", r + 1, c + 1);
+        }
+    }
+    assert_eq!((m[1][0].as_f64(), m[1][1].as_f64()), (Some(0.0), Some(0.0)), "vy row exactly zero");
+    assert_eq!(s["params"].as_array().unwrap().len(), 4, "m11, m12, m31, m32");
+    // Held-out runs (other seeds) from the same robot.
+    let mut held_out = Set::diff().real(&[1.03, 0.98], &[0.208]);
+    held_out.seed_offset = 5;
+    held_out.write(dir.path(), "heldout", 2);
+    for model in ["diff.toml", "ik.toml"] {
+        let out = omnical(&["eval", "--model", model, "heldout", "--json"], dir.path());
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let e: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert!(e["cost"].as_f64().unwrap() < 1e-6, "{model}: held-out Eq. 6 {}", e["cost"]);
+    }
+}
+
+/// A four-wheel omni base whose wheels roll 2 %, −3 %, 1 %, 4 % off and whose l1 + l2 is 0.43 m instead
+/// of 0.42 m, its wheels driven from a body twist (they never fight each other).
+const OMNI4_GAINS: [f64; 4] = [1.02, 0.97, 1.01, 1.04];
+fn omni4_real() -> Set {
+    Set::omni4().real(&OMNI4_GAINS, &[0.21, 0.22])
+}
+
+/// `--model ik` leaves the three matrix directions along the fighting pattern to the design
+/// (identifiability names them, the fit holds them) and fits the rest exactly.
+#[test]
+fn omni4_matrix_holds_the_pattern_that_moves_the_robot_nowhere() {
+    let dir = tempfile::tempdir().unwrap();
+    omni4_real().write(dir.path(), "train", 3);
+    let s = train(dir.path(), &["train", "--model", "ik"]);
+    let weak = s["identifiability"]["weak"].as_array().unwrap();
+    assert_eq!(s["held_at_start"].as_array().unwrap().len(), 3, "{}", s["warnings"]);
+    for w in weak {
+        let u: Vec<f64> = w["wheel_pattern"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+        let signs: Vec<f64> = u.iter().map(|v| v.signum() * u[0].signum()).collect();
+        assert_eq!(signs, [1.0, -1.0, -1.0, 1.0], "the wheels fighting each other: {u:?}");
+        assert!(w["text"].as_str().unwrap().contains("moves the robot nowhere"), "{}", w["text"]);
+    }
+    assert!(s["cost_fitted"].as_f64().unwrap() < 1e-6, "{}", s["cost_fitted"]);
+}
+
+/// `--model mecanum` finds the radii and lx + ly, and holds lx − ly, which a rectangle of wheels pushing
+/// at ±45° cannot show.
+#[test]
+fn omni4_mecanum_model_finds_radii_and_lx_plus_ly() {
+    let dir = tempfile::tempdir().unwrap();
+    omni4_real().write(dir.path(), "train", 3);
+    let s = train(dir.path(), &["train", "--model", "mecanum"]);
+    let design_r = [0.06, 0.0592, 0.0607, 0.06].map(|d: f64| d / (2.0 * 2f64.sqrt()));
+    for (i, name) in ["r_a", "r_b", "r_c", "r_d"].iter().enumerate() {
+        let want = design_r[i] * OMNI4_GAINS[i];
+        assert!((param(&s, name) / want - 1.0).abs() < 1e-6, "{name} {} vs {want}", param(&s, name));
+    }
+    let (lx, ly) = (param(&s, "lx"), param(&s, "ly"));
+    assert!(((lx + ly) / 0.215 - 1.0).abs() < 1e-6, "lx + ly = {}", lx + ly);
+    assert!((lx - ly).abs() < 1e-9, "lx − ly held at the design's 0: {lx} {ly}");
+    let held = s["held_at_start"].as_array().unwrap();
+    assert_eq!(held.len(), 1, "{}", s["warnings"]);
+    let text = held[0].as_str().unwrap();
+    assert!(text.starts_with("lx and ly trade off") || text.starts_with("ly and lx trade off"), "{text}");
+}
+
+/// The shared OptiOdom folder of a robot type, if this machine has it (CI does not).
+fn shared(kind: &str) -> Option<std::path::PathBuf> {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../../../shared/data/optiodom-{kind}-square"));
+    if p.exists() {
+        Some(p)
+    } else {
+        eprintln!("SKIPPED: ../shared/data/optiodom-{kind}-square not found");
+        None
+    }
+}
+
+fn eval_cost(dir: &Path, model: &str, sets: &[&Path]) -> (f64, f64) {
+    let mut args = vec!["eval", "--model", model, "--json"];
+    args.extend(sets.iter().map(|p| p.to_str().unwrap()));
+    let out = omnical(&args, dir);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let e: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    (e["cost"].as_f64().unwrap(), e["path_cost"].as_f64().unwrap())
+}
+
+/// The real four-wheel robot (docs/real-robots.md): the design's Eq. 6 on set 080920201715, the fitted
+/// matrix on it and on the other set, and identifiability's finding: the runs hardly contain the wheels
+/// fighting each other, so the three matrix directions along that pattern are held at the design.
+#[test]
+fn real_omni4_runs_hold_the_fighting_pattern() {
+    let Some(data) = shared("omni4") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let (train_set, other) = (data.join("080920201715"), data.join("231220200521"));
+    let s = train(dir.path(), &[train_set.to_str().unwrap(), "--model", "ik", "--out", "ik.toml"]);
+    // Measured: design 0.39375, fitted 0.04480 (Eq. 6), 3 directions held.
+    assert!((s["cost_design"].as_f64().unwrap() - 0.39375).abs() < 1e-4, "{}", s["cost_design"]);
+    assert!(s["cost_fitted"].as_f64().unwrap() < 0.05, "{}", s["cost_fitted"]);
+    let weak = s["identifiability"]["weak"].as_array().unwrap();
+    assert_eq!(s["held_at_start"].as_array().unwrap().len(), 3, "{}", s["warnings"]);
+    for w in weak {
+        let u: Vec<f64> = w["wheel_pattern"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+        let want = [0.5, -0.5, -0.5, 0.5].map(|v| v * u[0].signum());
+        assert!(u.iter().zip(want).all(|(a, b)| (a - b).abs() < 0.05), "{u:?}");
+        assert!(w["text"].as_str().unwrap().contains("moves the robot nowhere"), "{}", w["text"]);
+    }
+    // Held out: the other set (another declared geometry, longer runs). Measured 0.1127 vs design 0.9840.
+    let (held_out, _) = eval_cost(dir.path(), "ik.toml", &[&other]);
+    let (design, _) = eval_cost(dir.path(), "design", &[&other]);
+    assert!(held_out < 0.2 * design, "held-out {held_out} vs design {design}");
+}
+
+/// The real differential drive: `--model diff` on one set finds a separation near 0.2007 m and radii
+/// near 41.9 mm, and beats the design on the three other sets.
+#[test]
+fn real_diff_runs_fit_the_axle() {
+    let Some(data) = shared("diff") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let sets: Vec<std::path::PathBuf> =
+        ["230620202042", "230620202144", "231220200029", "231220200040"].iter().map(|s| data.join(s)).collect();
+    let s = train(dir.path(), &[sets[0].to_str().unwrap(), "--model", "diff", "--out", "diff.toml"]);
+    // Measured: b 0.200672 m, r_right 0.041891 m, r_left 0.041925 m; Eq. 6 0.04623 → 0.00835.
+    assert!((param(&s, "b") - 0.2007).abs() < 5e-4, "{}", param(&s, "b"));
+    for r in ["r_right", "r_left"] {
+        assert!((param(&s, r) - 0.0419).abs() < 2e-4, "{r} {}", param(&s, r));
+    }
+    assert!(s["cost_fitted"].as_f64().unwrap() < 0.25 * s["cost_design"].as_f64().unwrap());
+    for other in &sets[1..] {
+        let (fitted, _) = eval_cost(dir.path(), "diff.toml", &[other]);
+        let (design, _) = eval_cost(dir.path(), "design", &[other]);
+        assert!(fitted < 0.7 * design, "{}: fitted {fitted} vs design {design}", other.display());
+    }
+}

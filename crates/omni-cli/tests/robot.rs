@@ -1,0 +1,169 @@
+//! The robot description through the real binary: `--robot FILE|apr02`, a `robot.toml` found beside the
+//! data or in the working directory (and said so on stderr), joint names and topics from it, refusals
+//! without one, and bad files (exit 2, naming the file, line and field).
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn omnical(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir).output().expect("run omnical")
+}
+
+fn ok(out: Output) -> Output {
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    out
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn simulate(dir: &Path, out: &str, extra: &[&str]) {
+    let base = ["simulate", "--out", out, "--runs-per-command", "1", "--duration", "2", "--seed", "4", "-q"];
+    ok(omnical(&[&base[..], extra].concat(), dir));
+}
+
+const OMNI4: &str = r#"kind = "omni"
+[[wheels]]
+joint = "fl"
+distance_m = 0.21
+angle_deg = 45.0
+radius_m = 0.05
+[[wheels]]
+joint = "rl"
+distance_m = 0.21
+angle_deg = 135.0
+radius_m = 0.05
+[[wheels]]
+joint = "rr"
+distance_m = 0.21
+angle_deg = 225.0
+radius_m = 0.05
+[[wheels]]
+joint = "fr"
+distance_m = 0.21
+angle_deg = 315.0
+radius_m = 0.05
+"#;
+
+#[test]
+fn simulated_runs_carry_their_robot_and_it_is_announced() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    simulate(d, "sim", &[]);
+    let text = std::fs::read_to_string(d.join("sim/validation/robot.toml")).unwrap();
+    assert!(text.starts_with("# The robot these simulated runs were made with"), "{text}");
+    assert!(text.contains("angle_deg = 300.0"), "{text}");
+    let found = ok(omnical(&["eval", "sim/validation", "--json"], d));
+    assert!(stderr(&found).contains("robot: sim/validation/robot.toml (found beside the data)"), "{}", stderr(&found));
+    // The same numbers as naming the paper's robot.
+    let named = ok(omnical(&["eval", "sim/validation", "--json", "--robot", "apr02"], d));
+    assert_eq!(found.stdout, named.stdout);
+    assert!(!stderr(&named).contains("robot: "), "a named robot is not announced: {}", stderr(&named));
+    // A file given by path.
+    let given = ok(omnical(&["eval", "sim/validation", "--json", "--robot", "sim/train/robot.toml"], d));
+    assert_eq!(found.stdout, given.stdout);
+}
+
+#[test]
+fn no_robot_no_design() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    simulate(d, "sim", &["--format", "csv"]);
+    std::fs::remove_file(d.join("sim/train/robot.toml")).unwrap();
+    for cmd in [
+        &["eval", "sim/train"][..],
+        &["train", "sim/train", "-q"],
+        &["plan"],
+        &["diagnose", "--model", "design", "sim/train"],
+    ] {
+        let out = omnical(cmd, d);
+        let e = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{cmd:?}: {e}");
+        assert!(e.starts_with("error: "), "{e}");
+        assert!(e.contains("needs the robot's design") && e.contains("--robot apr02"), "{cmd:?}: {e}");
+        assert!(e.contains("robot.toml") && e.contains("omnical init"), "{e}");
+    }
+    // A model file carries its design: no robot needed.
+    ok(omnical(&["train", "sim/train", "-q", "--robot", "apr02", "--out", "fit.toml"], d));
+    ok(omnical(&["eval", "--model", "fit.toml", "sim/train"], d));
+    // A robot.toml in the working directory is found.
+    std::fs::copy(d.join("sim/validation/robot.toml"), d.join("robot.toml")).unwrap();
+    let out = ok(omnical(&["eval", "sim/train"], d));
+    assert!(stderr(&out).contains("robot: robot.toml (found beside the data)"), "{}", stderr(&out));
+}
+
+#[test]
+fn joint_names_and_a_four_wheel_design_come_from_the_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::write(d.join("omni4.toml"), OMNI4).unwrap();
+    simulate(d, "sim4", &["--robot", "omni4.toml", "--truth", "design", "--noise-free"]);
+    // The runs were written with the file's joints; eval reads them through the robot.toml beside them and
+    // the design (a 3 × 4 matrix from the file) reproduces the noise-free motion.
+    let out = ok(omnical(&["eval", "sim4/validation", "--json"], d));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let cost = v["cost"].as_f64().unwrap();
+    assert!(cost < 2e-3, "Eq. 6 of the design on its own noise-free runs: {cost}");
+    assert_eq!(v["runs"].as_array().unwrap().len(), 36);
+    // --joints still wins: the bag's names are listed.
+    let out = omnical(&["eval", "sim4/validation/00-r0.mcap", "--joints", "wheel_a,wheel_b,wheel_c,wheel_d"], d);
+    assert_eq!(out.status.code(), Some(2));
+    let e = stderr(&out);
+    assert!(e.contains("wheel_a") && e.contains("fl"), "{e}");
+    // The paper's Eq. 9 is not this robot.
+    let out = omnical(&["simulate", "--out", "x", "--robot", "omni4.toml"], d);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("--truth paper is the paper's Eq. 9"), "{}", stderr(&out));
+}
+
+#[test]
+fn bad_robot_files_name_the_file_line_and_field() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    simulate(d, "sim", &["--format", "csv"]);
+    let good = std::fs::read_to_string(d.join("sim/train/robot.toml")).unwrap();
+    let cut_last_wheel = good.rsplit_once("\n[[wheels]]").unwrap().0.to_string() + "\n";
+    let cases: [(&str, String, &str); 6] = [
+        ("joints.toml", cut_last_wheel, "wheels: a omni base needs at least 3"),
+        (
+            "dup.toml",
+            good.replace("joint = \"wheel_c\"", "joint = \"wheel_b\""),
+            "wheels[2].joint: joint \"wheel_b\" is also",
+        ),
+        ("radius.toml", good.replacen("radius_m = 0.148", "radius_m = 0.0", 1), "wheels[0].radius_m: 0 must be > 0"),
+        (
+            "collinear.toml",
+            good.replace("angle_deg = 180.0", "angle_deg = 60.0").replace("angle_deg = 300.0", "angle_deg = 60.0"),
+            "wheels: the wheels can produce only 1 of the 3",
+        ),
+        ("kind.toml", good.replace("kind = \"omni\"", "kind = \"hexapod\""), "kind: unknown variant `hexapod`"),
+        (
+            "key.toml",
+            good.replace("radius_m = 0.148", "radius_m = 0.148\ntyre = \"soft\""),
+            "wheels[0].tyre: unknown field",
+        ),
+    ];
+    for (name, text, want) in cases {
+        std::fs::write(d.join(name), text).unwrap();
+        let out = omnical(&["eval", "sim/train", "--robot", name], d);
+        let e = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{name}: {e}");
+        assert!(
+            e.starts_with(&format!("error: --robot: {name}: line ")) || e.starts_with(&format!("error: {name}: line ")),
+            "{name}: {e}"
+        );
+        assert!(e.contains(want), "{name}: {e}");
+        assert!(!e.contains("panicked"), "{e}");
+    }
+    // A bad robot.toml found beside the data is refused the same way.
+    std::fs::write(d.join("sim/train/robot.toml"), good.replace("kind = \"omni\"", "kind = \"tank\"")).unwrap();
+    let out = omnical(&["eval", "sim/train"], d);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).starts_with("error: sim/train/robot.toml: line 3: kind: unknown variant `tank`"),
+        "{}",
+        stderr(&out)
+    );
+}
