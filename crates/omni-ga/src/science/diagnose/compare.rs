@@ -4,7 +4,7 @@
 use super::{Costs, GroupReport, Growth, RunReport};
 use crate::error::Error;
 use crate::science::text;
-use omni_kin::cost::CostKind;
+use omni_kin::cost::{self, CostKind};
 use omni_kin::evaluate::Evaluator;
 use omni_kin::odometry::Selection;
 use omni_kin::{FittedModel, PoseError, Run};
@@ -83,13 +83,12 @@ pub(super) fn compare(f: &FittedModel, design: &FittedModel, runs: &[Run], every
     let mut bins = GrowthBins::default();
     for (i, r) in runs.iter().enumerate() {
         let (path, dpath) = (fitted.run(i), designed.run(i));
-        let rms = |v: &[PoseError]| (v.iter().map(|e| e.norm().powi(2)).sum::<f64>() / v.len().max(1) as f64).sqrt();
         let (end, dend) = (fitted.ends()[i], designed.ends()[i]);
         reports.push(RunReport {
             name: r.name().into(),
             command: r.command().map(|c| c.label()),
-            path_rms: rms(path),
-            design_path_rms: rms(dpath),
+            path_rms: cost::path_rms(path),
+            design_path_rms: cost::path_rms(dpath),
             end_error: end.norm(),
             design_end_error: dend.norm(),
         });
