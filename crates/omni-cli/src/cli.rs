@@ -192,19 +192,27 @@ pub enum Command {
         /// Seed (training uses it, validation seed + 1).
         #[arg(long, default_value_t = 7)]
         seed: u64,
-        /// Repetitions of each of the 36 commands.
+        /// Repetitions of each command.
         #[arg(long, default_value_t = 5)]
         runs_per_command: usize,
         /// Duration of each command. s.
         #[arg(long, default_value_t = 10.0)]
         duration: f64,
         /// Inject an effect into the true robot: NAME=V1,V2,… in the effect's parameter order
-        /// (`sample_timing=DROP_PROBABILITY,JITTER_S`). Repeatable.
-        #[arg(long = "effect", value_name = "NAME=VALUES")]
+        /// (`sample_timing=DROP_PROBABILITY,JITTER_S`); one wheel's: NAME:WHEEL=V (WHEEL: its letter a, b, …
+        /// or joint name). The true base: wheel_radius:WHEEL=E (radius 1 + E times the design's),
+        /// wheel_separation=E (a diff base's axle). Repeatable.
+        #[arg(long = "effect", value_name = "NAME[:WHEEL]=VALUES")]
         effects: Vec<String>,
+        /// Commands to simulate, a `plan --out` CSV (v_m_s,alpha_deg,omega_rad_s,repetitions), instead of the
+        /// robot's benchmark (the paper's 36 flower commands; a diff base's 12 forward/backward arcs and
+        /// turns on the spot).
+        #[arg(long, value_name = "CSV")]
+        commands: Option<PathBuf>,
         /// True robot: `paper` (Eq. 9, APR-02 only), `design` (the robot's design) or a model file.
-        #[arg(long, default_value = "paper")]
-        truth: String,
+        /// Default: `paper` on APR-02, `design` on any other robot.
+        #[arg(long)]
+        truth: Option<String>,
         /// The robot: its design drives the simulated controller and is written as robot.toml beside the
         /// runs. Default: `apr02`, the paper's robot.
         #[arg(long, value_name = "FILE|apr02", default_value = crate::robot_file::BUILTIN_APR02)]
@@ -432,6 +440,11 @@ pub enum Command {
         /// The hidden effect, NAME=VALUES as for `simulate --effect`.
         #[arg(long, default_value = "time_offset=0.06")]
         hidden: String,
+        /// Run the demo on this robot (a robot.toml): its design is the start, the true robot deviates from
+        /// it (wheel radii, a diff base's axle) and has the hidden effect. Default: the paper's APR-02 with
+        /// its calibrated Eq. 9 as the true robot.
+        #[arg(long, value_name = "FILE|apr02")]
+        robot: Option<String>,
     },
 }
 
@@ -441,20 +454,30 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         rayon::ThreadPoolBuilder::new().num_threads(n).build_global()?;
     }
     match cli.command {
-        Command::Simulate { out, seed, runs_per_command, duration, effects, truth, robot, format, noise_free } => {
-            cmd::simulate::run(&cmd::simulate::Args {
-                out,
-                seed,
-                runs_per_command,
-                duration_s: duration,
-                effects,
-                truth,
-                robot,
-                format,
-                noise_free,
-                quiet: cli.quiet,
-            })
-        }
+        Command::Simulate {
+            out,
+            seed,
+            runs_per_command,
+            duration,
+            effects,
+            commands,
+            truth,
+            robot,
+            format,
+            noise_free,
+        } => cmd::simulate::run(&cmd::simulate::Args {
+            out,
+            seed,
+            runs_per_command,
+            duration_s: duration,
+            effects,
+            commands,
+            truth,
+            robot,
+            format,
+            noise_free,
+            quiet: cli.quiet,
+        }),
         Command::Eval { model, runs, json, data } => cmd::eval::run(&model, &runs, json, &data),
         Command::Train { runs, model, start, preset, seed, effects, out, json, fit, data } => {
             cmd::train::run(&cmd::train::Args {
@@ -546,6 +569,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             force,
             max_file_bytes: max_file_mb.saturating_mul(1 << 20),
         }),
-        Command::Demo { out, runs_per_command, hidden } => cmd::demo::run(&out, runs_per_command, &hidden, cli.quiet),
+        Command::Demo { out, runs_per_command, hidden, robot } => {
+            cmd::demo::run(&out, runs_per_command, &hidden, robot.as_deref(), cli.quiet)
+        }
     }
 }
