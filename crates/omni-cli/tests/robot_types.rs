@@ -106,8 +106,8 @@ fn twist_response_error(a: &[Vec<f64>], b: &[Vec<f64>], forward: &[[f64; 3]]) ->
 }
 
 /// `train --model ik` on the training runs, the fit checked against the truth along every commanded
-/// twist; `eval` of it on the held-out runs beats the design. Returns the fit's held-out Eq. 6.
-fn matrix_fit_recovers_the_truth(dir: &Path, truth: &Value, forward: &[[f64; 3]]) -> f64 {
+/// twist; `eval` of it on the held-out runs beats the design. Returns the training summary.
+fn matrix_fit_recovers_the_truth(dir: &Path, truth: &Value, forward: &[[f64; 3]]) -> Value {
     let s = json(&["train", "sim/train", "--effect", "time_offset", "--out", "ik.toml", "--json", "-q"], dir);
     let err = twist_response_error(&matrix_of(&s), &true_matrix(truth), forward);
     assert!(err < 5e-3, "matrix vs truth along the commanded twists: {err}");
@@ -117,7 +117,7 @@ fn matrix_fit_recovers_the_truth(dir: &Path, truth: &Value, forward: &[[f64; 3]]
     let (f, d) = (fit["cost"].as_f64().unwrap(), design["cost"].as_f64().unwrap());
     let oracle = truth["oracle_cost"]["validation"].as_f64().unwrap();
     assert!(f < 1.15 * oracle && f < 0.75 * d, "held-out Eq. 6: fitted {f}, oracle {oracle}, design {d}");
-    f
+    s
 }
 
 /// `diagnose` of the matrix fitted without the lag finds the hidden time_offset and its size.
@@ -165,7 +165,16 @@ fn omni4_workbench() {
     let d = tmp.path();
     let angles = [45.0, 135.0, 225.0, 315.0];
     let truth = simulate(d, &omni_toml("omni4", 0.0508, 0.21, &angles), "1", &["wheel_radius:b=0.015"]);
-    matrix_fit_recovers_the_truth(d, &truth, &omni_forward(0.0508, 0.21, &angles));
+    let s = matrix_fit_recovers_the_truth(d, &truth, &omni_forward(0.0508, 0.21, &angles));
+    // Four wheels, three degrees of freedom: the wheels working against each other (+, −, +, −) move the
+    // robot nowhere; the matrix's three directions along that pattern are named and held.
+    assert_eq!(s["held_at_start"].as_array().unwrap().len(), 3, "{}", s["warnings"]);
+    for w in s["identifiability"]["weak"].as_array().unwrap() {
+        let u: Vec<f64> = w["wheel_pattern"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+        let want = [0.5, -0.5, 0.5, -0.5].map(|v| v * u[0].signum());
+        assert!(u.iter().zip(want).all(|(a, b)| (a - b).abs() < 0.01), "{u:?}");
+        assert!(w["text"].as_str().unwrap().contains("moves the robot nowhere"), "{}", w["text"]);
+    }
     diagnose_finds_the_hidden_lag(d);
     plan_and_report(d, 4);
 }

@@ -444,6 +444,11 @@ fn describe(
     }
     let present = wheel_pattern.as_ref().and_then(|u| pattern_share(u, wheel_moment)).is_some_and(|s| s >= 0.25);
     let advice = match &motion {
+        Some(t) if moves_nowhere(model, t) => {
+            "no run can show it: it stays at the design (the default fit holds it; `--unexcited move` lets it drift \
+             with the noise)"
+                .to_string()
+        }
         Some(_) if present => {
             "fit the path objective (every ground-truth pose), or add runs along different paths".to_string()
         }
@@ -489,6 +494,14 @@ fn wheel_pattern(
     let wheels = model.kinematics.wheel_names();
     let named: Vec<String> = wheels.iter().zip(&pattern).map(|(w, p)| format!("{w} {p}")).collect();
     let physical = match pattern_share(&u, wheel_moment) {
+        _ if moves_nowhere(model, &motion) => format!(
+            "the wheel-speed pattern ({}) moves the robot nowhere under the design matrix (the wheels work against \
+             each other): no command asks for it, so the runs contain it only as slip and noise{}, and the robot's \
+             response to it is not measured",
+            named.join(", "),
+            pattern_share(&u, wheel_moment)
+                .map_or(String::new(), |s| format!(" ({:.0} % of the wheel motion)", 100.0 * s))
+        ),
         Some(share) if share >= 0.25 => format!(
             "the runs contain the wheel-speed pattern ({}) — {} under the design matrix — ({:.0} % of the wheel motion), but the residuals barely respond to how the robot answers it",
             named.join(", "),
@@ -508,6 +521,31 @@ fn wheel_pattern(
         ),
     };
     (Some(u), Some(motion), Some(physical))
+}
+
+/// Below this [`design_motion_share`] a wheel pattern moves the robot nowhere (the wheels of a base with
+/// more wheels than degrees of freedom working against each other). Measured: such patterns 3e-5 to 6e-4
+/// when the runs come from the design's own geometry (OptiOdom omni4, simulated omni4 and mecanum), 0.02
+/// when the true wheel positions are 5 % off the design's; motions a command asks for 0.8 to 1.1.
+const NOWHERE_SHARE: f64 = 0.1;
+
+/// Whether a unit wheel pattern whose design twist is `motion` moves the robot nowhere.
+fn moves_nowhere(model: &Model, motion: &[f64; 3]) -> bool {
+    design_motion_share(model, motion).is_some_and(|s| s < NOWHERE_SHARE)
+}
+
+/// How far a unit wheel-speed pattern whose design twist is `motion` moves the robot, as a fraction of
+/// the farthest any single wheel at unit speed moves it under the design matrix (twists compared with ω
+/// times the model's lever arm). `None` when the design matrix cannot be evaluated.
+fn design_motion_share(model: &Model, motion: &[f64; 3]) -> Option<f64> {
+    let nominal: Vec<f64> = model.kinematics.params().iter().map(|p| p.null).collect();
+    let design = model.kinematics.twist_from_wheels(&nominal).ok()?;
+    let lever = model.kinematics.lever_arm_m();
+    let size = |t: [f64; 3]| (t[0] * t[0] + t[1] * t[1] + (lever * t[2]).powi(2)).sqrt();
+    let reach = (0..design.n_wheels())
+        .map(|c| size([design.get(0, c), design.get(1, c), design.get(2, c)]))
+        .fold(0.0, f64::max);
+    (reach > 0.0).then(|| size(*motion) / reach)
 }
 
 /// RMS share of the wheel motion along the unit pattern `u`: `sqrt(uᵀ S u / tr S)`.
