@@ -444,7 +444,8 @@ fn describe(
     }
     let present = wheel_pattern.as_ref().and_then(|u| pattern_share(u, wheel_moment)).is_some_and(|s| s >= 0.25);
     let advice = match &motion {
-        Some(t) if moves_nowhere(model, t) => {
+        // No command asks for it (docs/identifiability.md, "Robot types").
+        Some(t) if moves_nowhere(model, t, model.kinematics.lever_arm_m()) => {
             "no run can show it: it stays at the design (the default fit holds it; `--unexcited move` lets it drift \
              with the noise)"
                 .to_string()
@@ -493,59 +494,47 @@ fn wheel_pattern(
     let pattern: Vec<String> = u.iter().map(|x| format!("{x:+.2}")).collect();
     let wheels = model.kinematics.wheel_names();
     let named: Vec<String> = wheels.iter().zip(&pattern).map(|(w, p)| format!("{w} {p}")).collect();
+    let moves = if moves_nowhere(model, &motion, lever) {
+        "the wheels fighting each other, a pattern that moves the robot nowhere".to_string()
+    } else {
+        motion_name(&motion, lever)
+    };
     let physical = match pattern_share(&u, wheel_moment) {
-        _ if moves_nowhere(model, &motion) => format!(
-            "the wheel-speed pattern ({}) moves the robot nowhere under the design matrix (the wheels work against \
-             each other): no command asks for it, so the runs contain it only as slip and noise{}, and the robot's \
-             response to it is not measured",
-            named.join(", "),
-            pattern_share(&u, wheel_moment)
-                .map_or(String::new(), |s| format!(" ({:.0} % of the wheel motion)", 100.0 * s))
-        ),
         Some(share) if share >= 0.25 => format!(
             "the runs contain the wheel-speed pattern ({}) — {} under the design matrix — ({:.0} % of the wheel motion), but the residuals barely respond to how the robot answers it",
             named.join(", "),
-            motion_name(&motion, lever),
+            moves,
             100.0 * share
         ),
         Some(share) => format!(
             "the runs hardly contain the wheel-speed pattern ({}) — {} under the design matrix — ({:.0} % of the wheel motion), so the robot's response to it is not measured",
             named.join(", "),
-            motion_name(&motion, lever),
+            moves,
             100.0 * share
         ),
         None => format!(
             "the robot's response to the wheel-speed pattern ({}) — {} under the design matrix — is not measured",
             named.join(", "),
-            motion_name(&motion, lever)
+            moves
         ),
     };
     (Some(u), Some(motion), Some(physical))
 }
 
-/// Below this [`design_motion_share`] a wheel pattern moves the robot nowhere (the wheels of a base with
-/// more wheels than degrees of freedom working against each other). Measured: such patterns 3e-5 to 6e-4
-/// when the runs come from the design's own geometry (OptiOdom omni4, simulated omni4 and mecanum), 0.02
-/// when the true wheel positions are 5 % off the design's; motions a command asks for 0.8 to 1.1.
-const NOWHERE_SHARE: f64 = 0.1;
-
-/// Whether a unit wheel pattern whose design twist is `motion` moves the robot nowhere.
-fn moves_nowhere(model: &Model, motion: &[f64; 3]) -> bool {
-    design_motion_share(model, motion).is_some_and(|s| s < NOWHERE_SHARE)
-}
-
-/// How far a unit wheel-speed pattern whose design twist is `motion` moves the robot, as a fraction of
-/// the farthest any single wheel at unit speed moves it under the design matrix (twists compared with ω
-/// times the model's lever arm). `None` when the design matrix cannot be evaluated.
-fn design_motion_share(model: &Model, motion: &[f64; 3]) -> Option<f64> {
-    let nominal: Vec<f64> = model.kinematics.params().iter().map(|p| p.null).collect();
-    let design = model.kinematics.twist_from_wheels(&nominal).ok()?;
-    let lever = model.kinematics.lever_arm_m();
-    let size = |t: [f64; 3]| (t[0] * t[0] + t[1] * t[1] + (lever * t[2]).powi(2)).sqrt();
-    let reach = (0..design.n_wheels())
-        .map(|c| size([design.get(0, c), design.get(1, c), design.get(2, c)]))
-        .fold(0.0, f64::max);
-    (reach > 0.0).then(|| size(*motion) / reach)
+/// Whether the design twist of a unit wheel pattern (`motion`) is negligible: below 5 % of the largest
+/// twist any unit wheel pattern gives under the design (translations in m/s and ω·lever in m/s compared
+/// alike). With more wheels than degrees of freedom such patterns exist (the wheels push against each
+/// other); a base with N ≤ 3 full-rank wheels has none.
+fn moves_nowhere(model: &Model, motion: &[f64; 3], lever: f64) -> bool {
+    let nominal: Vec<f64> = model.kinematics.params().iter().map(|s| s.null).collect();
+    let Ok(design) = model.kinematics.twist_from_wheels(&nominal) else {
+        return false;
+    };
+    let nw = design.n_wheels();
+    let m = DMatrix::from_fn(3, nw, |r, c| design.entries()[r * nw + c] * if r == 2 { lever } else { 1.0 });
+    let largest = m.singular_values().iter().copied().fold(0.0f64, f64::max);
+    let size = (motion[0].powi(2) + motion[1].powi(2) + (motion[2] * lever).powi(2)).sqrt();
+    largest > 0.0 && size < 0.05 * largest
 }
 
 /// RMS share of the wheel motion along the unit pattern `u`: `sqrt(uᵀ S u / tr S)`.
