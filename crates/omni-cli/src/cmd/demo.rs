@@ -1,9 +1,11 @@
 //! `omnical demo`: the whole story on built-in simulated data with a hidden effect — simulate, train,
 //! diagnose, add the effect, retrain — printing the error ladder — and write the HTML report.
 
-use super::diagnose::{design_for, print_diagnosis};
+use super::diagnose::print_diagnosis;
 use super::sim_spec::apply_effect_spec;
+use super::simulate::DEFAULT_SEED;
 use super::train::print_summary;
+use crate::design::{design_for, paper_calibrated};
 use crate::report::{self, ReportInput};
 use crate::{atomic, model_file, progress, robot_file};
 use anyhow::Context;
@@ -11,7 +13,26 @@ use omni_ga::calibrate::{Plan, Preset, calibrate};
 use omni_ga::diagnose::{DiagnoseOptions, diagnose};
 use omni_kin::simulate::{SimConfig, simulate};
 use omni_kin::{FittedModel, IkMatrix, Model};
-use std::path::Path;
+use std::path::PathBuf;
+
+/// Arguments of `omnical demo`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Write the models, the diagnosis and the HTML report (report.html) here.
+    #[arg(long, default_value = "omnical-demo")]
+    pub out: PathBuf,
+    /// Repetitions of each command.
+    #[arg(long, default_value_t = 2)]
+    pub runs_per_command: usize,
+    /// The hidden effect, NAME=VALUES as for `simulate --effect`.
+    #[arg(long, default_value = "time_offset=0.06")]
+    pub hidden: String,
+    /// Run the demo on this robot (a robot.toml): its design is the start, the true robot deviates from
+    /// it (wheel radii, a diff base's axle) and has the hidden effect. Default: the paper's APR-02 with
+    /// its calibrated Eq. 9 as the true robot.
+    #[arg(long, value_name = "FILE|apr02")]
+    pub robot: Option<String>,
+}
 
 /// The simulated robot of a demo: its true model, the design it starts from, the simulator, and words.
 struct Setup {
@@ -29,9 +50,9 @@ struct Setup {
 /// The paper's APR-02: its calibrated Eq. 9 is the true robot, the design Eq. 7 the start.
 fn paper_setup(runs_per_command: usize) -> Setup {
     Setup {
-        truth: FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated())),
+        truth: paper_calibrated(),
         start: FittedModel::nominal(Model::ik(IkMatrix::paper_design())),
-        config: SimConfig { runs_per_command, seed: 7, ..SimConfig::default() },
+        config: SimConfig { runs_per_command, seed: DEFAULT_SEED, ..SimConfig::default() },
         wheels: omni_kin::geometry::default_wheel_names(3),
         true_robot: "the paper's Eq. 9 matrix".into(),
         commands: "36 flower commands".into(),
@@ -57,7 +78,7 @@ fn robot_setup(arg: &str, runs_per_command: usize) -> anyhow::Result<Setup> {
     let start = FittedModel::nominal(Model::ik(design));
     let wheels = robot.description.joints();
     let mut truth = start.clone();
-    let mut config = SimConfig { runs_per_command, seed: 7, ..SimConfig::for_robot(geometry) };
+    let mut config = SimConfig { runs_per_command, seed: DEFAULT_SEED, ..SimConfig::for_robot(geometry) };
     let deviations = demo_deviations(wheels.len());
     for spec in &deviations {
         apply_effect_spec(spec, &mut truth, &mut config, &wheels)?;
@@ -73,8 +94,11 @@ fn robot_setup(arg: &str, runs_per_command: usize) -> anyhow::Result<Setup> {
     })
 }
 
-/// Runs `omnical demo`: on the paper's APR-02, or on `robot` (a robot.toml; `apr02` is the paper's).
-pub fn run(dir: &Path, runs_per_command: usize, hidden: &str, robot: Option<&str>, quiet: bool) -> anyhow::Result<()> {
+/// Runs `omnical demo`: on the paper's APR-02, or on `--robot` (a robot.toml; `apr02` is the paper's);
+/// `quiet` hides the progress display.
+pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
+    let (dir, runs_per_command, hidden, robot) =
+        (a.out.as_path(), a.runs_per_command, a.hidden.as_str(), a.robot.as_deref());
     let Setup { mut truth, start, mut config, wheels, true_robot, commands } = match robot {
         None | Some(robot_file::BUILTIN_APR02) => paper_setup(runs_per_command),
         Some(arg) => robot_setup(arg, runs_per_command)?,
@@ -83,16 +107,17 @@ pub fn run(dir: &Path, runs_per_command: usize, hidden: &str, robot: Option<&str
     println!("== simulate: true robot = {true_robot} + a hidden effect ({hidden})");
     let spinner = progress::spinner("simulating", quiet);
     let train = simulate(&config, &truth, "train/")?;
-    let val = simulate(&SimConfig { seed: 8, ..config.clone() }, &truth, "validation/")?;
+    let val = simulate(&SimConfig { seed: DEFAULT_SEED + 1, ..config.clone() }, &truth, "validation/")?;
     spinner.finish_and_clear();
     println!("   {} training and {} validation runs", train.len(), val.len());
     let n_base = start.model.n_base();
     println!("== train: fit the {n_base}-entry IK matrix (preset default)");
-    let plan = Plan::preset(Preset::Default, n_base).seed(0);
+    let preset = Preset::Default;
+    let plan = Plan::preset(preset, n_base).seed(0);
     let mut bar = progress::ProgressObserver::new(plan.ga.as_ref().map_or(0, |g| g.max_generations), quiet);
     let fit = calibrate(&start, &train, &plan, &mut bar)?;
     bar.finish();
-    print_summary(&fit, "default", train.len());
+    print_summary(&fit, preset.id(), train.len());
     println!("== diagnose: which physical effect is missing? (--auto: add effects while held-out error falls)");
     let opts = DiagnoseOptions { auto: true, ..DiagnoseOptions::default() };
     let spinner = progress::spinner("diagnosing: refitting each candidate effect", quiet);
@@ -125,7 +150,9 @@ pub fn run(dir: &Path, runs_per_command: usize, hidden: &str, robot: Option<&str
         held_out: &val,
         diagnosis: Some(&d),
         sources: vec![format!(
-            "simulated: {commands} × {runs_per_command} (train seed 7, validation seed 8), hidden {hidden}"
+            "simulated: {commands} × {runs_per_command} (train seed {DEFAULT_SEED}, validation seed {}), hidden \
+             {hidden}",
+            DEFAULT_SEED + 1
         )],
     };
     let html = dir.join("report.html");
