@@ -114,7 +114,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     println!("== train: fit the {n_base}-entry IK matrix (preset default)");
     let preset = Preset::Default;
     let plan = Plan::preset(preset, n_base).seed(0);
-    let mut bar = progress::ProgressObserver::new(plan.ga.as_ref().map_or(0, |g| g.max_generations), quiet);
+    let mut bar = progress::ProgressObserver::new(plan.ga().map_or(0, |g| g.max_generations), quiet);
     let fit = calibrate(&start, &train, &plan, &mut bar)?;
     bar.finish();
     print_summary(&fit, preset.id(), train.len());
