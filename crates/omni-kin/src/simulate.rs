@@ -276,6 +276,9 @@ fn gauss(rng: &mut ChaCha8Rng, sigma: f64) -> f64 {
 }
 
 /// Simulate one run on random stream `stream`.
+///
+/// long: one fine-step loop applying every effect stage in order (clock, wheel speeds, twist, integration,
+/// measurement) on shared per-step state; to split into stage helpers (issue 15 leftover).
 pub fn simulate_run(
     config: &SimConfig,
     truth: &FittedModel,
