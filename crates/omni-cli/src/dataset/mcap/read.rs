@@ -306,6 +306,8 @@ impl Bag<'_> {
         None
     }
 
+    /// long: the ground-truth channel, named (`--gt-topic`) or found, with errors that list every
+    /// transform or pose topic seen; kept together so the messages can name them.
     fn truth(&self, opts: &McapOptions) -> Result<Truth, DatasetError> {
         let (parent, child) = (opts.truth_parent_frame.as_deref(), opts.truth_child_frame.as_deref());
         if let Some(topic) = &opts.truth_topic {
@@ -636,6 +638,9 @@ pub(super) fn read_file(path: &Path, opts: &McapOptions) -> Result<McapRead, Dat
 }
 
 /// Reads one bag from its bytes; `path` only names it in messages and runs.
+///
+/// long: the bag's channels (wheel joints, ground truth, command) in turn, each failure naming file, topic
+/// and message; to split per channel (issue 15 leftover).
 pub(super) fn read_bytes(path: &Path, buf: &[u8], opts: &McapOptions) -> Result<McapRead, DatasetError> {
     // mcap 0.26 can still panic on some damaged files (an integer overflow on a record longer than its
     // uncompressed chunk, in builds with overflow checks): a damaged file is an error, never a crash.
