@@ -63,7 +63,7 @@ mod joint_state;
 mod odometry;
 mod pose_stamped;
 mod poses;
-mod read;
+pub(crate) mod read;
 pub mod split;
 mod tf;
 mod twist;
