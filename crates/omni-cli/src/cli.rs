@@ -167,6 +167,22 @@ pub struct DataArgs {
     /// Child frame of the ground truth in a TF topic (MCAP), e.g. `base_link`.
     #[arg(long)]
     pub gt_child_frame: Option<String>,
+    /// Ground truth from a separate file instead of a topic: a TUM (`t x y z qx qy qz qw`) or CSV file for
+    /// one recording, or a folder of files named after the recordings (`rec.tum`, `rec.csv`). Default: the
+    /// robot description's `[ground_truth] file`, else a topic of the recording.
+    #[arg(long, value_name = "FILE|DIR")]
+    pub gt: Option<PathBuf>,
+    /// Clock offset of the `--gt` file: wheel time = ground-truth time + SECONDS. Default: estimated from
+    /// the data (reported with its standard error).
+    #[arg(long, value_name = "SECONDS", allow_hyphen_values = true)]
+    pub gt_time_offset: Option<f64>,
+    /// CSV columns of the `--gt` file, e.g. `t=stamp_ns,x=pos_x_mm,y=pos_y_mm,yaw=heading_deg` (default t, x,
+    /// y, yaw, or a quaternion qx, qy, qz, qw).
+    #[arg(long, value_delimiter = ',', value_name = "KEY=COLUMN")]
+    pub gt_columns: Vec<String>,
+    /// Units of the `--gt` CSV columns, e.g. `time=ns,length=mm,angle=deg` (default s, m, rad).
+    #[arg(long, value_delimiter = ',', value_name = "KEY=UNIT")]
+    pub gt_units: Vec<String>,
     /// Cut MCAP files into runs where the robot stands still at least this long. s.
     #[arg(long)]
     pub split: Option<f64>,

@@ -51,11 +51,11 @@ fn every_layout_gives_the_runs_of_the_bare_mcap() {
         assert_eq!(want.origin_s, expected["origin_s"].as_i64().unwrap());
         assert!(want.notes.is_empty(), "{:?}", want.notes);
         for layout in LAYOUTS {
-            let got = rosbag2::read_recording(&dir.join(layout).join("rec"), &opts, u64::MAX)
+            let got = rosbag2::read_recording(&dir.join(layout).join("rec"), &opts, u64::MAX, None)
                 .unwrap_or_else(|e| panic!("{layout}: {e}"));
             assert_eq!(got, want, "{layout}, split {:?}", opts.split);
         }
-        let bare = rosbag2::read_db3(&dir.join("bare/rec.db3"), &opts, u64::MAX).unwrap();
+        let bare = rosbag2::read_db3(&dir.join("bare/rec.db3"), &opts, u64::MAX, None).unwrap();
         assert_eq!(bare, want, "bare .db3");
     }
     // Three motion segments between 2 s standstills: three runs, the wheel samples shared at the cuts.
@@ -65,7 +65,7 @@ fn every_layout_gives_the_runs_of_the_bare_mcap() {
     let n = expected["n_wheel"].as_u64().unwrap() as usize;
     assert_eq!(runs.iter().map(|r| r.wheel_t_s().len()).sum::<usize>(), n + 2);
     // The split files are one recording: without --split, one run over all 30 s.
-    let whole = rosbag2::read_recording(&dir.join("split_db3/rec"), &split(None), u64::MAX).unwrap();
+    let whole = rosbag2::read_recording(&dir.join("split_db3/rec"), &split(None), u64::MAX, None).unwrap();
     assert_eq!(whole.runs.len(), 1);
     assert_eq!(whole.runs[0].wheel_t_s().len(), n);
     assert_eq!(whole.runs[0].truth().len(), expected["n_truth"].as_u64().unwrap() as usize);
@@ -172,4 +172,112 @@ fn bad_recordings_exit_2_naming_the_file_and_the_problem() {
              type right?"
         )
     );
+}
+
+/// `omnical eval` on the recording without a ground-truth topic, with `--gt` and more; the JSON output.
+fn eval_json(dir: &Path, args: &[&str]) -> Value {
+    let input = dir.join("nogt/rec");
+    let mut all = vec!["eval", input.to_str().unwrap(), "--robot", "apr02", "--model", "paper", "--json"];
+    all.extend_from_slice(args);
+    let (code, out, err) = omnical(&all);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("clock offset"), "{err}");
+    serde_json::from_str(&out).unwrap()
+}
+
+#[test]
+#[cfg_attr(
+    not(python_bag_tools),
+    ignore = "needs rosbags and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
+)]
+fn ground_truth_files_on_other_clocks_are_aligned_within_5_ms() {
+    let (dir, expected) = fixtures();
+    let csv_args = [
+        "--gt-columns",
+        "t=stamp_ns,x=pos_x_mm,y=pos_y_mm,yaw=heading_deg",
+        "--gt-units",
+        "time=ns,length=mm,angle=deg",
+    ];
+    for (name, truth) in expected["offsets_s"].as_object().unwrap() {
+        let truth = truth.as_f64().unwrap();
+        for format in ["tum", "csv"] {
+            // A folder of files matched by recording name (nogt/rec ↔ rec.tum / rec.csv).
+            let gt = dir.join(format!("gt/{format}_{name}"));
+            let mut args = vec!["--gt", gt.to_str().unwrap()];
+            if format == "csv" {
+                args.extend_from_slice(&csv_args);
+            }
+            let v = eval_json(dir, &args);
+            let clock = &v["ground_truth_clock"][0];
+            let offset = clock["offset_s"].as_f64().unwrap();
+            let se = clock["std_error_s"].as_f64().unwrap();
+            assert!((offset - truth).abs() < 0.005, "{format} {name}: {offset} s, true {truth} s");
+            assert!(se > 0.0 && se < 0.005, "{format} {name}: standard error {se} s");
+            assert!(clock["r_squared"].as_f64().unwrap() > 0.99, "{clock}");
+            assert_eq!(clock["recording"], "rec");
+        }
+    }
+}
+
+#[test]
+#[cfg_attr(
+    not(python_bag_tools),
+    ignore = "needs rosbags and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
+)]
+fn bag_and_tum_give_the_costs_of_the_bag_with_its_topic() {
+    let (dir, _) = fixtures();
+    let (code, out, err) =
+        omnical(&["eval", dir.join("db3/rec").to_str().unwrap(), "--robot", "apr02", "--model", "paper", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let want: Value = serde_json::from_str(&out).unwrap();
+    // The same clock, forced: exactly the poses of the topic (TUM stamps are read as exact decimals).
+    let tum = dir.join("gt/same_clock.tum");
+    let got = eval_json(dir, &["--gt", tum.to_str().unwrap(), "--gt-time-offset", "0"]);
+    assert_eq!(got["cost"], want["cost"]);
+    assert_eq!(got["runs"], want["runs"]);
+    assert_eq!(got["ground_truth_clock"][0]["estimated"], false);
+    // Estimated: within a few microseconds of it, so the same cost to 1e-6.
+    let got = eval_json(dir, &["--gt", tum.to_str().unwrap()]);
+    let (a, b) = (got["cost"].as_f64().unwrap(), want["cost"].as_f64().unwrap());
+    assert!((a - b).abs() < 1e-6 * b, "{a} vs {b}");
+}
+
+#[test]
+#[cfg_attr(
+    not(python_bag_tools),
+    ignore = "needs rosbags and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
+)]
+fn bad_ground_truth_files_exit_2_naming_the_file_and_row() {
+    let (dir, _) = fixtures();
+    let rec = dir.join("nogt/rec");
+    let bad = dir.join("bad");
+    let run = |gt: &str, extra: &[&str]| {
+        let gt = bad.join(gt);
+        let mut args = vec!["eval", rec.to_str().unwrap(), "--robot", "apr02", "--model", "paper", "--gt"];
+        args.push(gt.to_str().unwrap());
+        args.extend_from_slice(extra);
+        let (code, _, err) = omnical(&args);
+        assert_eq!(code, 2, "{err}");
+        err.trim_end().replace(&format!("{}/", bad.display()), "")
+    };
+    assert_eq!(run("nan.tum", &[]), "error: nan.tum: line 12, column y: value NaN is not finite");
+    assert_eq!(
+        run("decreasing.tum", &[]),
+        "error: decreasing.tum: line 23: time 1700000000.363000000 s is not after the previous row's \
+         1700000000.371000000 s (times must increase)"
+    );
+    let e = run("elsewhen.tum", &["--gt-time-offset", "0"]);
+    assert!(
+        e.starts_with(&format!(
+            "error: {}: wheel data on \"/joint_states\" spans 0.25..30.25 s but the ground truth in \
+             elsewhen.tum (+0.0000 s clock offset) spans 3600.253..",
+            rec.display()
+        )),
+        "{e}"
+    );
+    assert!(e.ends_with("no ground-truth pose lies within the wheel data"), "{e}");
+    // A recording without a ground-truth topic and no --gt names what is missing.
+    let (code, _, err) = omnical(&["eval", rec.to_str().unwrap(), "--robot", "apr02", "--model", "paper"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("no ground truth"), "{err}");
 }

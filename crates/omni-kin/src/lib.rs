@@ -9,6 +9,7 @@
 //! Units follow ROS REP-103: metres, seconds, radians, rad/s; x forward, y left, yaw counter-clockwise.
 #![deny(missing_docs)]
 
+pub mod clock;
 pub mod controller;
 pub mod cost;
 pub mod effect;

@@ -52,6 +52,7 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
         mcap,
         recorded_odometry,
         max_file_bytes: data.max_file_mb.saturating_mul(1 << 20),
+        ground_truth: ground_truth_options(data, robot.as_ref())?,
     };
     let mut ds = dataset::load(paths, &opts)?;
     ds.robot_file = robot;
@@ -74,7 +75,53 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
     for s in &ds.skipped {
         eprintln!("skipped {}: {}", s.source, s.reason);
     }
+    for c in &ds.ground_truth_clocks {
+        eprintln!("{}", c.describe());
+    }
     Ok(ds)
+}
+
+/// `--gt` and its options, over the robot description's `[ground_truth]` (its `file` relative to the
+/// description's folder).
+fn ground_truth_options(
+    data: &DataArgs,
+    robot: Option<&robot_file::RobotFile>,
+) -> anyhow::Result<Option<dataset::ground_truth::GroundTruthOptions>> {
+    let from_robot = robot.and_then(|r| r.description.ground_truth.as_ref().map(|g| (r, g)));
+    let path = match (&data.gt, from_robot.and_then(|(r, g)| g.file.as_ref().map(|f| (r, f)))) {
+        (Some(p), _) => p.clone(),
+        (None, Some((r, file))) => match &r.source {
+            robot_file::Source::Flag(p) | robot_file::Source::Discovered(p) => {
+                p.parent().unwrap_or(Path::new("")).join(file)
+            }
+            robot_file::Source::Builtin => PathBuf::from(file),
+        },
+        (None, None) => return Ok(None),
+    };
+    let mut csv = dataset::ground_truth::CsvColumns::default();
+    let settings = |list: &[String]| -> Vec<(String, String)> {
+        list.iter()
+            .filter_map(|kv| kv.split_once('=').map(|(k, v)| (k.trim().to_string(), v.trim().to_string())))
+            .collect()
+    };
+    let (mut columns, mut units) = (Vec::new(), Vec::new());
+    if let Some((_, g)) = from_robot {
+        columns.extend(g.columns.iter().map(|(k, v)| (k.clone(), v.clone())));
+        units.extend(g.units.iter().map(|(k, v)| (k.clone(), v.clone())));
+    }
+    for kv in data.gt_columns.iter().chain(&data.gt_units) {
+        anyhow::ensure!(kv.contains('='), "--gt-columns/--gt-units {kv:?}: expected KEY=VALUE");
+    }
+    columns.extend(settings(&data.gt_columns));
+    units.extend(settings(&data.gt_units));
+    for (k, v) in &columns {
+        csv.set_column(k, v).map_err(anyhow::Error::msg)?;
+    }
+    for (k, v) in &units {
+        csv.set_unit(k, v).map_err(anyhow::Error::msg)?;
+    }
+    let time_offset_s = data.gt_time_offset.or(from_robot.and_then(|(_, g)| g.time_offset_s));
+    Ok(Some(dataset::ground_truth::GroundTruthOptions { path, time_offset_s, csv }))
 }
 
 /// The design model of `kind` for a dataset's robot: `--robot`, else the data's own geometry (OptiOdom), else

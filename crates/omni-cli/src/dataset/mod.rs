@@ -4,6 +4,7 @@
 //! Every error names the file and, where it applies, the line, topic, message, run and field.
 
 pub mod csv;
+pub mod ground_truth;
 pub mod mcap;
 pub mod optiodom;
 pub mod rosbag2;
@@ -26,6 +27,8 @@ pub struct Dataset {
     /// The robot description the data was read with (`--robot`, or a `robot.toml` found beside it), if any.
     /// Set by the command line, not by [`load`].
     pub robot_file: Option<crate::robot_file::RobotFile>,
+    /// The clock offsets of ground truths read from separate files (`--gt`), one per recording.
+    pub ground_truth_clocks: Vec<ground_truth::GtClock>,
 }
 
 /// The default cap on one input file's size (`--max-file-mb`). Bytes: 1 GiB.
@@ -48,6 +51,8 @@ pub struct LoadOptions {
     /// decompressed one at a time), so the cap keeps a huge or mistaken input from exhausting memory.
     /// Bytes. Default [`DEFAULT_MAX_FILE_BYTES`].
     pub max_file_bytes: u64,
+    /// Ground truth from separate files (`--gt`) instead of a topic of the recordings. Default none.
+    pub ground_truth: Option<ground_truth::GroundTruthOptions>,
 }
 
 impl Default for LoadOptions {
@@ -58,6 +63,7 @@ impl Default for LoadOptions {
             mcap: mcap::McapOptions::default(),
             recorded_odometry: true,
             max_file_bytes: DEFAULT_MAX_FILE_BYTES,
+            ground_truth: None,
         }
     }
 }
@@ -72,6 +78,7 @@ pub fn load(paths: &[PathBuf], opts: &LoadOptions) -> Result<Dataset, DatasetErr
     for p in paths {
         expand(p, &mut inputs);
     }
+    check_one_truth_file(&inputs, opts)?;
     let mut ds = Dataset::default();
     for input in inputs {
         // A path that is no input (unreadable, unsupported) stops the load where it stands in the order.
@@ -122,6 +129,30 @@ struct Loaded {
     skipped: Vec<Skipped>,
     notes: Vec<String>,
     robot: Option<RobotGeometry>,
+    clock: Option<ground_truth::GtClock>,
+}
+
+/// `--gt FILE` is one recording's ground truth: it cannot serve several.
+fn check_one_truth_file(inputs: &[Result<Input, DatasetError>], opts: &LoadOptions) -> Result<(), DatasetError> {
+    let Some(gt) = &opts.ground_truth else { return Ok(()) };
+    let recordings =
+        inputs.iter().filter(|i| matches!(i, Ok(Input::Mcap(_) | Input::Db3(_) | Input::Recording(_)))).count();
+    if recordings > 1 && !gt.path.is_dir() {
+        return Err(DatasetError::file(
+            &gt.path,
+            format!(
+                "--gt names one ground-truth file but {recordings} recordings were given; give a folder of files \
+                 named after the recordings (<recording>.tum or <recording>.csv)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The recording's name, for matching ground-truth files: a folder's name, a file's stem.
+fn recording_name(p: &Path, folder: bool) -> String {
+    let name = if folder { p.file_name() } else { p.file_stem() };
+    name.map_or_else(|| p.display().to_string(), |s| s.to_string_lossy().into_owned())
 }
 
 /// The inputs under `p`, in order: a folder's entries sorted by name, recursively; a recording folder or an
@@ -173,7 +204,18 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
         skipped: r.skipped.into_iter().map(|(source, reason)| Skipped { source, reason }).collect(),
         notes: r.notes,
         robot: None,
+        clock: r.ground_truth_clock,
     };
+    // The ground-truth file of a ROS recording, when --gt is given.
+    let truth = |p: &Path, folder: bool| -> Result<Option<ground_truth::ExternalTruth>, DatasetError> {
+        opts.ground_truth.as_ref().map(|g| ground_truth::read_for(g, p, &recording_name(p, folder))).transpose()
+    };
+    if opts.ground_truth.is_some() && matches!(input, Input::Csv(_) | Input::OptiOdom(_)) {
+        return Err(DatasetError::file(
+            input.path(),
+            "--gt gives the ground truth of ROS recordings (.mcap, .db3, rosbag2 folders); this input has its own",
+        ));
+    }
     match input {
         Input::Csv(p) => {
             check_size(p, opts.max_file_bytes)?;
@@ -184,10 +226,14 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
         }
         Input::Mcap(p) => {
             check_size(p, opts.max_file_bytes)?;
-            Ok(mcap::read_file(p, &mo).map(from_bag))
+            Ok(truth(p, false).and_then(|t| mcap::read_file_with_truth(p, &mo, t.as_ref())).map(from_bag))
         }
-        Input::Db3(p) => Ok(rosbag2::read_db3(p, &mo, opts.max_file_bytes).map(from_bag)),
-        Input::Recording(p) => Ok(rosbag2::read_recording(p, &mo, opts.max_file_bytes).map(from_bag)),
+        Input::Db3(p) => {
+            Ok(truth(p, false).and_then(|t| rosbag2::read_db3(p, &mo, opts.max_file_bytes, t.as_ref())).map(from_bag))
+        }
+        Input::Recording(p) => Ok(truth(p, true)
+            .and_then(|t| rosbag2::read_recording(p, &mo, opts.max_file_bytes, t.as_ref()))
+            .map(from_bag)),
         Input::OptiOdom(p) => {
             // The set's runs are checked one by one (skipped under skip_invalid); a failure of the set
             // itself stops the load.
@@ -200,7 +246,7 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
                     Err(e)
                 }
             })?;
-            Ok(Ok(Loaded { runs, skipped, notes: Vec::new(), robot: Some(robot) }))
+            Ok(Ok(Loaded { runs, skipped, notes: Vec::new(), robot: Some(robot), clock: None }))
         }
     }
 }
@@ -221,6 +267,7 @@ fn merge(
             if l.robot.is_some() {
                 ds.robot = l.robot;
             }
+            ds.ground_truth_clocks.extend(l.clock);
             Ok(())
         }
         Err(e) if opts.skip_invalid => {

@@ -14,8 +14,10 @@ use super::tf::{self, TfMessage, TfPairs};
 use super::twist::{self, Commands, TwistStamped};
 use super::{McapOptions, McapRead, split};
 use crate::dataset::DatasetError;
+use crate::dataset::ground_truth::{ExternalTruth, GtClock, TruthSample};
 use mcap::sans_io::LinearReaderOptions;
-use omni_kin::{KinError, Run, RunData, StampedPose};
+use omni_kin::clock::ClockAlignment;
+use omni_kin::{KinError, Pose2, Run, RunData, StampedPose};
 use std::path::Path;
 
 /// Schema encodings whose type names this reader knows. `ros2idl` names the same types with the same CDR
@@ -695,34 +697,94 @@ fn scan(path: &Path, buf: &[u8], rec: &mut Recording) -> Result<(), DatasetError
 }
 
 /// Reads one bag. See the module docs of [`super`].
-pub(super) fn read_file(path: &Path, opts: &McapOptions) -> Result<McapRead, DatasetError> {
+pub(super) fn read_file(
+    path: &Path,
+    opts: &McapOptions,
+    external: Option<&ExternalTruth>,
+) -> Result<McapRead, DatasetError> {
     let buf = std::fs::read(path).map_err(|e| DatasetError::io(path, e))?;
-    read_bytes(path, &buf, opts)
+    read_bytes(path, &buf, opts, external)
 }
 
 /// Reads one bag from its bytes; `path` only names it in messages and runs.
-pub(super) fn read_bytes(path: &Path, buf: &[u8], opts: &McapOptions) -> Result<McapRead, DatasetError> {
+pub(super) fn read_bytes(
+    path: &Path,
+    buf: &[u8],
+    opts: &McapOptions,
+    external: Option<&ExternalTruth>,
+) -> Result<McapRead, DatasetError> {
     let mut rec = Recording::new(&opts.wheel_joints);
     feed_mcap(path, buf, &mut rec)?;
     let stem = path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned());
-    runs(path, &stem, rec, opts)
+    runs(path, &stem, rec, opts, external)
+}
+
+/// The poses of a ground-truth file on the wheel clock (seconds since `origin_s`), with the clock offset:
+/// the forced one, or one estimated from the wheel data (`omni_kin::clock`). Errors name the file.
+fn external_truth(
+    ext: &ExternalTruth,
+    recording: &str,
+    origin_s: i64,
+    t_s: &[f64],
+    rad_s: &[f64],
+    n_wheels: usize,
+) -> Result<(Vec<StampedPose>, GtClock), DatasetError> {
+    let pose =
+        |s: &TruthSample, t_s: f64| StampedPose { t_s, pose: Pose2 { x_m: s.x_m, y_m: s.y_m, theta_rad: s.yaw_rad } };
+    let clock = |offset_s: f64, estimate: Option<ClockAlignment>| GtClock {
+        recording: recording.to_string(),
+        file: ext.path.clone(),
+        offset_s,
+        estimate,
+    };
+    if let Some(offset_s) = ext.time_offset_s {
+        let poses = ext.samples.iter().map(|s| pose(s, seconds_since(s.t_ns, origin_s) + offset_s)).collect();
+        return Ok((poses, clock(offset_s, None)));
+    }
+    // The truth's times relative to its own first whole second (small numbers for the estimate).
+    let truth_origin_s = ext.samples.first().map_or(0, |s| s.t_ns.div_euclid(NS_PER_S));
+    let own: Vec<StampedPose> = ext.samples.iter().map(|s| pose(s, seconds_since(s.t_ns, truth_origin_s))).collect();
+    let a = omni_kin::clock::align_clocks(t_s, rad_s, n_wheels, &own).map_err(|e| {
+        DatasetError::file(&ext.path, format!("cannot align its clock with recording {recording:?}: {e}"))
+    })?;
+    // own + a.offset_s is on the wheel clock since origin_s.
+    let poses = own.iter().map(|p| StampedPose { t_s: p.t_s + a.offset_s, ..*p }).collect();
+    // t_wheel = t_truth + offset in absolute time: the relative offset less the origins' difference.
+    let origins_s = (origin_s - truth_origin_s) as f64;
+    let offset_s = a.offset_s + origins_s;
+    let estimate = ClockAlignment { offset_s, coarse_offset_s: a.coarse_offset_s + origins_s, ..a };
+    Ok((poses, clock(offset_s, Some(estimate))))
 }
 
 /// The runs of a recording whose messages are all in `rec`; `path` names it in messages, `stem` names its
 /// runs (`stem`, or `stem#1`, `stem#2`, … when split). See the module docs of [`super`].
-pub(crate) fn runs(path: &Path, stem: &str, rec: Recording, opts: &McapOptions) -> Result<McapRead, DatasetError> {
+///
+/// With `external`, the ground truth comes from that file (its clock aligned to the wheels', see
+/// [`external_truth`]) and the recording needs no ground-truth topic.
+pub(crate) fn runs(
+    path: &Path,
+    stem: &str,
+    rec: Recording,
+    opts: &McapOptions,
+    external: Option<&ExternalTruth>,
+) -> Result<McapRead, DatasetError> {
     let mut bag = Bag { path, channels: rec.channels };
     let mut notes = Vec::new();
 
     let j = bag.joints(opts)?;
     bag.check(j)?;
-    let truth_src = bag.truth(opts)?;
-    let truth_ch = match truth_src {
-        Truth::Poses(i) | Truth::Tf(i, _) => i,
+    let truth_src = match external {
+        Some(_) => None,
+        None => Some(bag.truth(opts)?),
     };
-    bag.check(truth_ch)?;
+    let truth_ch = truth_src.map(|t| match t {
+        Truth::Poses(i) | Truth::Tf(i, _) => i,
+    });
+    if let Some(i) = truth_ch {
+        bag.check(i)?;
+    }
     let odom = if opts.recorded_odometry { bag.recorded_odometry(&mut notes) } else { None };
-    let odom = odom.filter(|&i| i != truth_ch);
+    let odom = odom.filter(|&i| Some(i) != truth_ch);
     let cmd = bag.commands(opts.command_topic.as_deref(), &mut notes);
 
     // Wheels.
@@ -746,19 +808,35 @@ pub(crate) fn runs(path: &Path, stem: &str, rec: Recording, opts: &McapOptions) 
     }
 
     // Ground truth, trimmed to the wheel data's span.
-    let truth_topic = bag.channels[truth_ch].topic.clone();
-    let poses = match (truth_src, bag.take(truth_ch)) {
-        (Truth::Tf(_, k), Content::Tf(mut pairs)) => {
-            let pair = pairs.pairs.swap_remove(k);
-            if let Some((m, what)) = pair.problem {
-                return Err(DatasetError::at(path, format!("topic {truth_topic:?}, message {m}"), what));
-            }
-            pair.poses
+    let n_wheels = opts.wheel_joints.len();
+    let (all_truth, truth_where, truth_label, clock) = match (truth_src, truth_ch, external) {
+        (Some(src), Some(ch), _) => {
+            let truth_topic = bag.channels[ch].topic.clone();
+            let poses = match (src, bag.take(ch)) {
+                (Truth::Tf(_, k), Content::Tf(mut pairs)) => {
+                    let pair = pairs.pairs.swap_remove(k);
+                    if let Some((m, what)) = pair.problem {
+                        return Err(DatasetError::at(path, format!("topic {truth_topic:?}, message {m}"), what));
+                    }
+                    pair.poses
+                }
+                (_, Content::Poses(p)) => p,
+                _ => unreachable!("truth() returns pose channels or TF pairs"),
+            };
+            (poses.stamped(origin_s), format!("on {truth_topic:?}"), format!("topic {truth_topic:?}"), None)
         }
-        (_, Content::Poses(p)) => p,
-        _ => unreachable!("truth() returns pose channels or TF pairs"),
+        (_, _, Some(ext)) => {
+            let (poses, clock) = external_truth(ext, stem, origin_s, &t_s, &wheels.rad_s, n_wheels)?;
+            let file = ext.path.display();
+            (
+                poses,
+                format!("in {file} ({:+.4} s clock offset)", clock.offset_s),
+                format!("ground truth {file}"),
+                Some(clock),
+            )
+        }
+        _ => unreachable!("the ground truth comes from a topic or a file"),
     };
-    let all_truth = poses.stamped(origin_s);
     let (w0, w1) = (t_s[0], t_s[t_s.len() - 1]);
     let truth: Vec<StampedPose> = all_truth.iter().copied().filter(|p| (w0..=w1).contains(&p.t_s)).collect();
     if truth.is_empty() {
@@ -769,7 +847,7 @@ pub(crate) fn runs(path: &Path, stem: &str, rec: Recording, opts: &McapOptions) 
         return Err(DatasetError::file(
             path,
             format!(
-                "wheel data on {joints_topic:?} spans {w0}..{w1} s but the ground truth on {truth_topic:?} {span}: \
+                "wheel data on {joints_topic:?} spans {w0}..{w1} s but the ground truth {truth_where} {span}: \
                  no ground-truth pose lies within the wheel data"
             ),
         ));
@@ -777,7 +855,7 @@ pub(crate) fn runs(path: &Path, stem: &str, rec: Recording, opts: &McapOptions) 
     let dropped = all_truth.len() - truth.len();
     if dropped > 0 {
         notes.push(format!(
-            "{}: topic {truth_topic:?}: dropped {dropped} ground-truth poses outside the wheel data's time span \
+            "{}: {truth_label}: dropped {dropped} ground-truth poses outside the wheel data's time span \
              ({w0}..{w1} s)",
             path.display()
         ));
@@ -792,12 +870,11 @@ pub(crate) fn runs(path: &Path, stem: &str, rec: Recording, opts: &McapOptions) 
     };
 
     // Runs.
-    let n_wheels = opts.wheel_joints.len();
     let pieces = match opts.split {
         Some(min_s) => split::pieces(&t_s, &wheels.rad_s, n_wheels, &truth, min_s),
         None => vec![(0, t_s.len() - 1)],
     };
-    let mut out = McapRead { runs: Vec::new(), notes, skipped: Vec::new(), origin_s };
+    let mut out = McapRead { runs: Vec::new(), notes, skipped: Vec::new(), origin_s, ground_truth_clock: clock };
     let last_piece = pieces.len() - 1;
     for (p, &(lo, hi)) in pieces.iter().enumerate() {
         let name = if opts.split.is_some() { format!("{stem}#{}", p + 1) } else { stem.to_string() };

@@ -26,6 +26,7 @@ pub mod metadata;
 mod sqlite;
 
 use crate::dataset::DatasetError;
+use crate::dataset::ground_truth::ExternalTruth;
 use crate::dataset::mcap::McapOptions;
 use crate::dataset::mcap::McapRead;
 use crate::dataset::mcap::read::{self, Recording};
@@ -40,7 +41,15 @@ pub fn is_recording(dir: &Path) -> bool {
 
 /// Reads the recording in folder `dir` (see the module docs). Each storage file (decompressed, for `FILE`
 /// compression) may be at most `max_file_bytes` long.
-pub fn read_recording(dir: &Path, opts: &McapOptions, max_file_bytes: u64) -> Result<McapRead, DatasetError> {
+///
+/// With `truth`, the ground truth comes from that file instead of a topic (see
+/// [`crate::dataset::mcap::read_file_with_truth`]).
+pub fn read_recording(
+    dir: &Path,
+    opts: &McapOptions,
+    max_file_bytes: u64,
+    truth: Option<&ExternalTruth>,
+) -> Result<McapRead, DatasetError> {
     let meta = metadata::read(dir)?;
     let meta_path = dir.join(metadata::FILE_NAME);
     let mut rec = Recording::new(&opts.wheel_joints);
@@ -84,18 +93,23 @@ pub fn read_recording(dir: &Path, opts: &McapOptions, max_file_bytes: u64) -> Re
         rec.channel(&t.name, &t.msg_type, "ros2msg", &t.serialization_format);
     }
     let name = dir.file_name().map_or_else(|| dir.display().to_string(), |s| s.to_string_lossy().into_owned());
-    let mut out = read::runs(dir, &name, rec, opts)?;
+    let mut out = read::runs(dir, &name, rec, opts, truth)?;
     out.notes.splice(0..0, notes);
     Ok(out)
 }
 
 /// Reads a bare rosbag2 sqlite3 file (`.db3`) as a recording of that one file, named after its stem.
-pub fn read_db3(path: &Path, opts: &McapOptions, max_file_bytes: u64) -> Result<McapRead, DatasetError> {
+pub fn read_db3(
+    path: &Path,
+    opts: &McapOptions,
+    max_file_bytes: u64,
+    truth: Option<&ExternalTruth>,
+) -> Result<McapRead, DatasetError> {
     check_size(path, max_file_bytes)?;
     let mut rec = Recording::new(&opts.wheel_joints);
     sqlite::feed(path, None, &mut rec)?;
     let stem = path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned());
-    read::runs(path, &stem, rec, opts)
+    read::runs(path, &stem, rec, opts, truth)
 }
 
 fn check_size(path: &Path, max_file_bytes: u64) -> Result<(), DatasetError> {
