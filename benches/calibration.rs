@@ -6,7 +6,8 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use omnical::ga::calibrate::{BoxRule, CalibrationProblem, Plan, Preset, calibrate, search_box};
 use omnical::ga::diagnose::{DiagnoseOptions, diagnose};
 use omnical::ga::{LevenbergMarquardt, LmConfig, NoopObserver, Optimizer, Problem};
-use omnical::kin::cost::{CostKind, cost_resolved};
+use omnical::kin::cost::{CostKind, mean_end_pose_error};
+use omnical::kin::evaluate::{Evaluator, Route};
 use omnical::kin::fast::PreparedRuns;
 use omnical::kin::odometry::end_pose_error;
 use omnical::kin::simulate::{SimConfig, simulate};
@@ -39,28 +40,52 @@ fn benches(c: &mut Criterion) {
 
     let mut g = c.benchmark_group("cost over 180 runs");
     g.throughput(Throughput::Elements(samples as u64));
-    g.bench_function("end pose (Eq. 6), literal walk", |b| {
-        b.iter(|| black_box(cost_resolved(&res, &runs, CostKind::EndPose)))
-    });
-    g.bench_function("path, literal walk", |b| b.iter(|| black_box(cost_resolved(&res, &runs, CostKind::PATH))));
-    let end_paper = PreparedRuns::new(&runs, Some(0.01), Selection::End);
-    let end_default = PreparedRuns::new(&runs, None, Selection::End);
-    let path_default = PreparedRuns::new(&runs, None, Selection::Path(1));
+    let walk = |sel| Evaluator::with_route(&design.model, &runs, sel, Route::Walk).ok();
+    if let (Some(end_walk), Some(path_walk)) = (walk(Selection::End), walk(Selection::Path(1))) {
+        g.bench_function("end pose (Eq. 6), literal walk", |b| {
+            b.iter(|| black_box(end_walk.cost(&res, CostKind::EndPose)))
+        });
+        g.bench_function("path, literal walk", |b| b.iter(|| black_box(path_walk.cost(&res, CostKind::PATH))));
+        // What `eval` computes (Eq. 6 and path cost from one walk per run), then through the evaluator's
+        // fast path, preparation included.
+        g.bench_function("eval: Eq. 6 + path, literal walk", |b| {
+            b.iter(|| {
+                let e = path_walk.errors(&res);
+                black_box((e.end_pose_cost(), e.path_cost(1.0)))
+            })
+        });
+        g.bench_function("eval: Eq. 6 + path, evaluator (fast path, preparation included)", |b| {
+            b.iter(|| {
+                let e = Evaluator::new(&design.model, &runs, Selection::Path(1)).map(|ev| ev.errors(&res));
+                black_box(e.map(|e| (e.end_pose_cost(), e.path_cost(1.0))).ok())
+            })
+        });
+    }
+    let ev = |m: &Model, sel| Evaluator::new(m, &runs, sel).ok();
+    let (Some(end_paper), Some(end_default), Some(path_default)) =
+        (ev(&paper_model, Selection::End), ev(&design.model, Selection::End), ev(&design.model, Selection::Path(1)))
+    else {
+        return;
+    };
     // Increments redone on every walk, as for datasets beyond `KEPT_INCREMENTS_MAX_BYTES`.
     let end_paper_redone = PreparedRuns::with_increment_budget(&runs, Some(0.01), Selection::End, 0);
     for threads in [1, 2] {
         let Some(pool) = pool(threads) else { continue };
         g.bench_function(format!("fast, Eq. 6, Eq. 1 Euler 10 ms, {threads} thread(s)"), |b| {
-            pool.install(|| b.iter(|| black_box(end_paper.cost(&paper_res, &runs, CostKind::EndPose))))
+            pool.install(|| b.iter(|| black_box(end_paper.cost(&paper_res, CostKind::EndPose))))
         });
         g.bench_function(format!("fast, Eq. 6, Eq. 1 Euler 10 ms, increments redone, {threads} thread(s)"), |b| {
-            pool.install(|| b.iter(|| black_box(end_paper_redone.cost(&paper_res, &runs, CostKind::EndPose))))
+            pool.install(|| {
+                b.iter(|| {
+                    black_box(end_paper_redone.end_pose_errors(&paper_res, &runs).map(|e| mean_end_pose_error(&e)))
+                })
+            })
         });
         g.bench_function(format!("fast, Eq. 6, exact arcs, {threads} thread(s)"), |b| {
-            pool.install(|| b.iter(|| black_box(end_default.cost(&res, &runs, CostKind::EndPose))))
+            pool.install(|| b.iter(|| black_box(end_default.cost(&res, CostKind::EndPose))))
         });
         g.bench_function(format!("fast, path, exact arcs, {threads} thread(s)"), |b| {
-            pool.install(|| b.iter(|| black_box(path_default.cost(&res, &runs, CostKind::PATH))))
+            pool.install(|| b.iter(|| black_box(path_default.cost(&res, CostKind::PATH))))
         });
     }
     g.finish();

@@ -17,6 +17,7 @@ use anyhow::Context;
 use omni_kin::controller::{self, ControllerFit, ControllerKind, ControllerParams, FitOptions};
 use omni_kin::cost::{self, CostKind};
 use omni_kin::effect::Effect;
+use omni_kin::evaluate::Evaluator;
 use omni_kin::{FittedModel, IkMatrix, Integration, Model, Run, Scheme, StepMode};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -122,12 +123,9 @@ fn roller_angles(design: &FittedModel) -> Option<Vec<f64>> {
 }
 
 fn accuracy(fm: &FittedModel, runs: &[Run]) -> anyhow::Result<Accuracy> {
-    let res = fm.model.resolve(&fm.params)?;
-    let errors = cost::end_pose_errors(&res, runs);
-    Ok(Accuracy {
-        end_pose: cost::mean_end_pose_error(&errors),
-        path_rms: cost::cost_resolved(&res, runs, CostKind::PATH),
-    })
+    let evaluator = Evaluator::for_report(&fm.model, runs, CostKind::PATH.selection())?;
+    let errors = evaluator.errors(&fm.model.resolve(&fm.params)?);
+    Ok(Accuracy { end_pose: errors.end_pose_cost(), path_rms: errors.path_cost(CostKind::PATH.heading_weight()) })
 }
 
 fn effects_of(fm: &FittedModel) -> Vec<EffectSummary> {

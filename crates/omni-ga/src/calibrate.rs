@@ -23,8 +23,8 @@ use crate::problem::{
 };
 use nalgebra::DMatrix;
 use omni_kin::cost::{self, CostKind};
-use omni_kin::fast::PreparedRuns;
-use omni_kin::{FittedModel, Integration, KinError, Model, Run, Selection, StepMode};
+use omni_kin::evaluate::Evaluator;
+use omni_kin::{FittedModel, Integration, KinError, Model, Run};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 use thiserror::Error;
@@ -150,9 +150,8 @@ impl Plan {
 
 /// The fitting problem: a model structure, training runs and an objective.
 ///
-/// With fixed-step odometry the runs are prepared once ([`PreparedRuns`]) and costs, residuals and the
-/// IK part of the Jacobian go through the fast kernel; parameter vectors it cannot serve (a clock lag,
-/// wheel- or twist-stage effects) fall back to the general walk.
+/// Costs, residuals and the IK part of the Jacobian come from one [`Evaluator`]: the fast kernel where it
+/// serves the parameters, the literal walk otherwise (a clock lag, twist-stage effects).
 ///
 /// Its residuals are grouped by run; [`Self::for_each_run_block`] visits each run's residuals with their
 /// Jacobian rows, and the normal equations are accumulated from those blocks, so the Levenberg–Marquardt
@@ -163,7 +162,7 @@ pub struct CalibrationProblem<'a> {
     runs: &'a [Run],
     objective: CostKind,
     bounds: Bounds,
-    prepared: Option<PreparedRuns>,
+    evaluator: Evaluator<'a>,
     /// Where each run's residuals start in [`LeastSquares::residuals`]; one more entry: the total.
     row_offsets: Vec<usize>,
 }
@@ -188,21 +187,8 @@ impl<'a> CalibrationProblem<'a> {
         if runs.is_empty() {
             return Err(CalibrateError::NoRuns);
         }
-        cost::check_runs(model, runs)?;
-        let prepared = match model.integration.step {
-            StepMode::Fixed { dt_s } if matches!(model.n_wheels(), 3 | 4) => {
-                let selection = match objective {
-                    CostKind::EndPose => Selection::End,
-                    CostKind::Path { every, .. } => Selection::Path(every),
-                };
-                Some(PreparedRuns::new(runs, dt_s, selection))
-            }
-            _ => None,
-        };
-        let selection = match objective {
-            CostKind::EndPose => Selection::End,
-            CostKind::Path { every, .. } => Selection::Path(every),
-        };
+        let evaluator = Evaluator::for_cost(model, runs, objective)?;
+        let selection = objective.selection();
         let mut row_offsets = Vec::with_capacity(runs.len() + 1);
         let mut rows = 0;
         row_offsets.push(rows);
@@ -210,7 +196,7 @@ impl<'a> CalibrationProblem<'a> {
             rows += 3 * selection.indices(r.truth().len()).len();
             row_offsets.push(rows);
         }
-        Ok(Self { model, runs, objective, bounds, prepared, row_offsets })
+        Ok(Self { model, runs, objective, bounds, evaluator, row_offsets })
     }
 
     /// Visits each run's residuals and Jacobian rows ([`RunBlock`]), in run order: the numbers of
@@ -260,12 +246,11 @@ impl<'a> CalibrationProblem<'a> {
     /// [`Self::for_each_run_block`] through the fast kernel; `None` (before any visit) when it cannot
     /// serve `x`.
     fn analytic_blocks(&self, x: &[f64], visit: &mut dyn FnMut(RunBlock<'_>)) -> Option<()> {
-        let prepared = self.prepared.as_ref()?;
         let res = self.model.resolve(x).ok()?;
         let dm = self.ik_from_base(x)?;
         let (nb, n) = (self.model.n_base(), x.len());
         let mut effects: Option<Vec<Vec<f64>>> = None;
-        prepared.ik_jacobian_blocks(&res, self.runs, self.objective, &mut |b| {
+        self.evaluator.ik_jacobian_blocks(&res, self.objective, &mut |b| {
             let row_offset = self.row_offsets[b.run];
             let rows = b.residuals.len();
             let mut j = DMatrix::zeros(rows, n);
@@ -321,22 +306,13 @@ impl<'a> CalibrationProblem<'a> {
     /// The residuals and their Jacobian: the IK (or geometry) columns analytically through the fast
     /// kernel, the effect columns by finite differences. `None` when the fast kernel cannot serve `x`.
     fn analytic(&self, x: &[f64]) -> Option<(Vec<f64>, DMatrix<f64>)> {
-        let prepared = self.prepared.as_ref()?;
-        let res = self.model.resolve(x).ok()?;
-        let (r, j_ik) = prepared.residuals_and_ik_jacobian(&res, self.runs, self.objective)?;
-        let nb = self.model.n_base();
-        let n = x.len();
-        let mut j = DMatrix::zeros(r.len(), n);
-        // Chain rule through the map from base parameters to IK matrix.
-        match self.ik_from_base(x)? {
-            None => j.columns_mut(0, nb).copy_from(&j_ik),
-            Some(dm) => j.columns_mut(0, nb).copy_from(&(j_ik * dm)),
-        }
-        for (c, col) in (nb..n).zip(self.effect_columns(x)) {
-            for (i, v) in col.into_iter().enumerate().take(r.len()) {
-                j[(i, c)] = v;
-            }
-        }
+        let total = self.row_offsets.last().copied().unwrap_or(0);
+        let mut r = Vec::with_capacity(total);
+        let mut j = DMatrix::zeros(total, x.len());
+        self.analytic_blocks(x, &mut |b| {
+            r.extend_from_slice(b.residuals);
+            j.rows_mut(b.row_offset, b.residuals.len()).copy_from(b.jacobian);
+        })?;
         Some((r, j))
     }
 }
@@ -348,11 +324,7 @@ impl Problem for CalibrationProblem<'_> {
     /// The objective; `f64::INFINITY` where the parameters make no valid model (e.g. singular geometry).
     fn cost(&self, x: &[f64]) -> f64 {
         match self.model.resolve(x) {
-            Ok(res) => self
-                .prepared
-                .as_ref()
-                .and_then(|p| p.cost(&res, self.runs, self.objective))
-                .unwrap_or_else(|| cost::cost_resolved(&res, self.runs, self.objective)),
+            Ok(res) => self.evaluator.cost(&res, self.objective),
             Err(_) => f64::INFINITY,
         }
     }
@@ -362,11 +334,7 @@ impl LeastSquares for CalibrationProblem<'_> {
     /// Stacked residuals whose squared norm is the squared path cost (or mean squared end-pose error).
     fn residuals(&self, x: &[f64]) -> Vec<f64> {
         match self.model.resolve(x) {
-            Ok(res) => self
-                .prepared
-                .as_ref()
-                .and_then(|p| p.residual_vector(&res, self.runs, self.objective))
-                .unwrap_or_else(|| cost::residual_vector(&res, self.runs, self.objective)),
+            Ok(res) => self.evaluator.residual_vector(&res, self.objective),
             Err(_) => vec![f64::NAN; 3 * self.runs.len()],
         }
     }

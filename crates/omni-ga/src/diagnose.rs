@@ -31,8 +31,9 @@ use crate::problem::{Bounds, LeastSquares, Problem};
 use nalgebra::{DMatrix, DVector};
 use omni_kin::cost::{self, CostKind};
 use omni_kin::effect::{Effect, Stage};
-use omni_kin::odometry::{self, Selection};
-use omni_kin::{EffectKind, FittedModel, Run};
+use omni_kin::evaluate::Evaluator;
+use omni_kin::odometry::Selection;
+use omni_kin::{EffectKind, FittedModel, PoseError, Run};
 use serde::{Deserialize, Serialize};
 
 /// Diagnosis settings.
@@ -261,12 +262,18 @@ fn confident(c: &Candidate, opts: &DiagnoseOptions) -> bool {
 
 /// Costs of a fitted model on train and held-out runs.
 pub fn costs_of(f: &FittedModel, train: &[Run], held_out: &[Run], every: usize) -> Result<Costs, CalibrateError> {
-    let c = |runs: &[Run], k| cost::cost(&f.model, &f.params, runs, k);
+    let kind = path_kind(every);
+    let (train, held_out) = (
+        Evaluator::for_report(&f.model, train, kind.selection())?,
+        Evaluator::for_report(&f.model, held_out, kind.selection())?,
+    );
+    let res = f.model.resolve(&f.params)?;
+    let (train, held_out) = (train.errors(&res), held_out.errors(&res));
     Ok(Costs {
-        train_path: c(train, path_kind(every))?,
-        held_out_path: c(held_out, path_kind(every))?,
-        train_end_pose: c(train, CostKind::EndPose)?,
-        held_out_end_pose: c(held_out, CostKind::EndPose)?,
+        train_path: train.path_cost(kind.heading_weight()),
+        held_out_path: held_out.path_cost(kind.heading_weight()),
+        train_end_pose: train.end_pose_cost(),
+        held_out_end_pose: held_out.end_pose_cost(),
     })
 }
 
@@ -497,34 +504,32 @@ fn compare(
     runs: &[Run],
     every: usize,
 ) -> Result<(Vec<RunReport>, Vec<GroupReport>, Growth), CalibrateError> {
-    let res = f.model.resolve(&f.params)?;
-    let dres = design.model.resolve(&design.params)?;
+    let selection = Selection::Path(every);
+    let fitted = Evaluator::for_report(&f.model, runs, selection)?.errors(&f.model.resolve(&f.params)?);
+    let designed =
+        Evaluator::for_report(&design.model, runs, selection)?.errors(&design.model.resolve(&design.params)?);
     let mut reports = Vec::new();
     let mut groups: std::collections::BTreeMap<String, Vec<[f64; 3]>> = Default::default();
     const BINS: usize = 10;
     let (mut gp, mut gh, mut gn) = (vec![0.0; BINS], vec![0.0; BINS], vec![0usize; BINS]);
-    for r in runs {
-        let path = odometry::residuals(&res, r, Selection::Path(every));
-        let dpath = odometry::residuals(&dres, r, Selection::Path(every));
-        let rms = |v: &[odometry::Residual]| {
-            (v.iter().map(|e| e.error.norm().powi(2)).sum::<f64>() / v.len().max(1) as f64).sqrt()
-        };
-        let end = odometry::end_pose_error(&res, r);
-        let dend = odometry::end_pose_error(&dres, r);
+    for (i, r) in runs.iter().enumerate() {
+        let (path, dpath) = (fitted.run(i), designed.run(i));
+        let rms = |v: &[PoseError]| (v.iter().map(|e| e.norm().powi(2)).sum::<f64>() / v.len().max(1) as f64).sqrt();
+        let (end, dend) = (fitted.ends()[i], designed.ends()[i]);
         reports.push(RunReport {
             name: r.name().into(),
             command: r.command().map(|c| c.label()),
-            path_rms: rms(&path),
-            design_path_rms: rms(&dpath),
+            path_rms: rms(path),
+            design_path_rms: rms(dpath),
             end_error: end.norm(),
             design_end_error: dend.norm(),
         });
         groups.entry(group_label(r)).or_default().push([end.dx_m, end.dy_m, end.dtheta_rad]);
         let (t0, dur) = (r.start().t_s, r.truth_duration_s().max(1e-9));
-        for e in &path {
-            let b = (((e.t_s - t0) / dur) * BINS as f64).floor().clamp(0.0, (BINS - 1) as f64) as usize;
-            gp[b] += e.error.position_m();
-            gh[b] += e.error.dtheta_rad.abs();
+        for (e, ti) in path.iter().zip(selection.indices(r.truth().len())) {
+            let b = (((r.truth()[ti].t_s - t0) / dur) * BINS as f64).floor().clamp(0.0, (BINS - 1) as f64) as usize;
+            gp[b] += e.position_m();
+            gh[b] += e.dtheta_rad.abs();
             gn[b] += 1;
         }
     }

@@ -488,26 +488,47 @@ fn wheel_pattern(
     let pattern: Vec<String> = u.iter().map(|x| format!("{x:+.2}")).collect();
     let wheels = model.kinematics.wheel_names();
     let named: Vec<String> = wheels.iter().zip(&pattern).map(|(w, p)| format!("{w} {p}")).collect();
+    let moves = if moves_nowhere(model, &motion, lever) {
+        "the wheels fighting each other, a pattern that moves the robot nowhere".to_string()
+    } else {
+        motion_name(&motion, lever)
+    };
     let physical = match pattern_share(&u, wheel_moment) {
         Some(share) if share >= 0.25 => format!(
             "the runs contain the wheel-speed pattern ({}) — {} under the design matrix — ({:.0} % of the wheel motion), but the residuals barely respond to how the robot answers it",
             named.join(", "),
-            motion_name(&motion, lever),
+            moves,
             100.0 * share
         ),
         Some(share) => format!(
             "the runs hardly contain the wheel-speed pattern ({}) — {} under the design matrix — ({:.0} % of the wheel motion), so the robot's response to it is not measured",
             named.join(", "),
-            motion_name(&motion, lever),
+            moves,
             100.0 * share
         ),
         None => format!(
             "the robot's response to the wheel-speed pattern ({}) — {} under the design matrix — is not measured",
             named.join(", "),
-            motion_name(&motion, lever)
+            moves
         ),
     };
     (Some(u), Some(motion), Some(physical))
+}
+
+/// Whether the design twist of a unit wheel pattern (`motion`) is negligible: below 5 % of the largest
+/// twist any unit wheel pattern gives under the design (translations in m/s and ω·lever in m/s compared
+/// alike). With more wheels than degrees of freedom such patterns exist (the wheels push against each
+/// other); a base with N ≤ 3 full-rank wheels has none.
+fn moves_nowhere(model: &Model, motion: &[f64; 3], lever: f64) -> bool {
+    let nominal: Vec<f64> = model.kinematics.params().iter().map(|s| s.null).collect();
+    let Ok(design) = model.kinematics.twist_from_wheels(&nominal) else {
+        return false;
+    };
+    let nw = design.n_wheels();
+    let m = DMatrix::from_fn(3, nw, |r, c| design.entries()[r * nw + c] * if r == 2 { lever } else { 1.0 });
+    let largest = m.singular_values().iter().copied().fold(0.0f64, f64::max);
+    let size = (motion[0].powi(2) + motion[1].powi(2) + (motion[2] * lever).powi(2)).sqrt();
+    largest > 0.0 && size < 0.05 * largest
 }
 
 /// RMS share of the wheel motion along the unit pattern `u`: `sqrt(uᵀ S u / tr S)`.

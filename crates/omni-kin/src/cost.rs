@@ -7,15 +7,14 @@
 //!   pose cannot (a clock offset when the robot rests at both ends) and constrains directions a few end
 //!   poses leave free.
 //!
-//! Runs are evaluated in parallel (rayon) and summed sequentially in run order, so a cost is bit-identical
-//! whatever the thread count.
+//! The errors come from the [`Evaluator`], which also aggregates them ([`crate::evaluate::RunErrors`]).
 
 use crate::error::KinError;
-use crate::model::{Model, Resolved};
-use crate::odometry::{self, Selection};
+use crate::evaluate::Evaluator;
+use crate::model::Model;
+use crate::odometry::Selection;
 use crate::pose::PoseError;
 use crate::run::Run;
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Which cost to compute.
@@ -37,6 +36,22 @@ impl CostKind {
     /// The path cost over every pose with heading weight 1 m/rad.
     pub const PATH: CostKind = CostKind::Path { every: 1, heading_weight_m_per_rad: 1.0 };
 
+    /// The ground-truth poses the cost reads.
+    pub fn selection(&self) -> Selection {
+        match *self {
+            CostKind::EndPose => Selection::End,
+            CostKind::Path { every, .. } => Selection::Path(every),
+        }
+    }
+
+    /// Weight of heading errors in the residuals (1 for the end pose, as Eq. 6). m/rad.
+    pub fn heading_weight(&self) -> f64 {
+        match *self {
+            CostKind::EndPose => 1.0,
+            CostKind::Path { heading_weight_m_per_rad, .. } => heading_weight_m_per_rad,
+        }
+    }
+
     /// Short name for tables: `end_pose` or `path`.
     pub fn name(&self) -> &'static str {
         match self {
@@ -44,11 +59,6 @@ impl CostKind {
             CostKind::Path { .. } => "path",
         }
     }
-}
-
-/// The end-pose error of every run (Eq. 6 terms), in run order.
-pub fn end_pose_errors(res: &Resolved<'_>, runs: &[Run]) -> Vec<PoseError> {
-    runs.par_iter().map(|r| odometry::end_pose_error(res, r)).collect()
 }
 
 /// Mean of the Eq. 6 terms, summed in run order.
@@ -59,39 +69,12 @@ pub fn mean_end_pose_error(errors: &[PoseError]) -> f64 {
     errors.iter().map(PoseError::norm).sum::<f64>() / errors.len() as f64
 }
 
-/// Mean squared path error of one run (weighted heading), and the number of poses used.
-pub fn run_path_mse(res: &Resolved<'_>, run: &Run, every: usize, heading_weight: f64) -> f64 {
-    let r = odometry::residuals(res, run, Selection::Path(every));
-    let sum: f64 = r
-        .iter()
-        .map(|e| {
-            let th = heading_weight * e.error.dtheta_rad;
-            e.error.dx_m * e.error.dx_m + e.error.dy_m * e.error.dy_m + th * th
-        })
-        .sum();
-    sum / r.len().max(1) as f64
-}
-
-/// The cost of a resolved model over runs.
-pub fn cost_resolved(res: &Resolved<'_>, runs: &[Run], kind: CostKind) -> f64 {
-    match kind {
-        CostKind::EndPose => mean_end_pose_error(&end_pose_errors(res, runs)),
-        CostKind::Path { every, heading_weight_m_per_rad } => {
-            let per: Vec<f64> =
-                runs.par_iter().map(|r| run_path_mse(res, r, every, heading_weight_m_per_rad)).collect();
-            if per.is_empty() {
-                return 0.0;
-            }
-            (per.iter().sum::<f64>() / per.len() as f64).sqrt()
-        }
-    }
-}
-
-/// The cost of `model` at `params` over `runs`. Checks wheel counts once.
+/// The cost `kind` of `model` at `params` over `runs`, through [`Evaluator::for_report`]. Checks wheel
+/// counts.
 pub fn cost(model: &Model, params: &[f64], runs: &[Run], kind: CostKind) -> Result<f64, KinError> {
-    check_runs(model, runs)?;
+    let evaluator = Evaluator::for_report(model, runs, kind.selection())?;
     let res = model.resolve(params)?;
-    Ok(cost_resolved(&res, runs, kind))
+    Ok(evaluator.cost(&res, kind))
 }
 
 /// Checks that every run has the model's wheel count.
@@ -102,26 +85,4 @@ pub fn check_runs(model: &Model, runs: &[Run]) -> Result<(), KinError> {
         }
     }
     Ok(())
-}
-
-/// Stacked residual vector whose squared norm is the squared path cost (or, for `EndPose`, the mean
-/// squared end-pose error): what least-squares solvers minimise. Per run, in run order: `(dx, dy, w dθ)`
-/// for each selected pose, scaled by `1/sqrt(n_runs · n_poses)`.
-pub fn residual_vector(res: &Resolved<'_>, runs: &[Run], kind: CostKind) -> Vec<f64> {
-    let (sel, w) = match kind {
-        CostKind::EndPose => (Selection::End, 1.0),
-        CostKind::Path { every, heading_weight_m_per_rad } => (Selection::Path(every), heading_weight_m_per_rad),
-    };
-    let n_runs = runs.len().max(1) as f64;
-    let per: Vec<Vec<f64>> = runs
-        .par_iter()
-        .map(|r| {
-            let e = odometry::residuals(res, r, sel);
-            let scale = 1.0 / (n_runs * e.len().max(1) as f64).sqrt();
-            e.iter()
-                .flat_map(|e| [e.error.dx_m * scale, e.error.dy_m * scale, w * e.error.dtheta_rad * scale])
-                .collect()
-        })
-        .collect();
-    per.concat()
 }

@@ -12,8 +12,9 @@
 //! exactly on SE(2): `Δ = [S vx − C vy, C vx + S vy, ω h]` in the body frame with `S = sin(ωh)/ω`,
 //! `C = (1 − cos ωh)/ω`.
 
-use crate::effect::{Effect, WheelContext};
+use crate::effect::Effect;
 use crate::model::{Resolved, Scheme};
+use crate::plan::{StepPlan, interval, wheel_speeds};
 use crate::pose::{Pose2, PoseError, Twist2};
 use crate::run::Run;
 use serde::{Deserialize, Serialize};
@@ -104,90 +105,47 @@ fn twist_of(res: &Resolved<'_>, w: &[f64]) -> Twist2 {
     t
 }
 
-/// Core loop: walks the samples from the first to the last ground-truth stamp, calling `on_query` for each
-/// selected ground-truth index (ascending) with the measured point's predicted pose, and `on_sample` after
-/// each sample.
-fn walk(
+/// Core loop: walks the steps of `plan` (built for `res`'s clock lag), calling `on_query` for each of its
+/// ground-truth poses (ascending) with the measured point's predicted pose, and `on_sample` after each
+/// step.
+pub(crate) fn walk(
     res: &Resolved<'_>,
     run: &Run,
-    queries: &[usize],
+    plan: &StepPlan,
     mut on_query: impl FnMut(usize, Pose2),
     mut on_sample: impl FnMut(f64, Pose2),
 ) {
     let n_w = run.n_wheels();
     let t = run.wheel_t_s();
-    let n = t.len();
-    let lag = res.clock_lag_s;
+    let lag = plan.clock_lag_s;
     let median = run.median_dt_s();
     let fixed = res.fixed_dt_s.unwrap_or(median);
     let truth = run.truth();
     let sensor = res.sensor_from_body;
-    let start = truth[0];
     let g_last = truth[truth.len() - 1].t_s;
+    let wheels = wheel_speeds(res, run);
 
-    // Effective wheel speeds: the run's own, or a rewritten copy when wheel-stage effects are present.
-    let rewritten: Option<Vec<f64>> = if res.wheel_effects.is_empty() {
-        None
-    } else {
-        let s: Vec<f64> = t.iter().map(|t| t - lag).collect();
-        let h: Vec<f64> = (0..n)
-            .map(|k| {
-                if !res.stamps {
-                    fixed
-                } else if k == 0 {
-                    median
-                } else {
-                    s[k] - s[k - 1]
-                }
-            })
-            .collect();
-        let mut w = run.wheel_rad_s().to_vec();
-        let angles = run.wheel_start_rad();
-        let ctx = WheelContext { n_wheels: n_w, t_s: &s, dt_s: &h, start_angle_rad: angles };
-        for (e, p) in &res.wheel_effects {
-            e.wheel_rates(p, &ctx, &mut w);
-        }
-        Some(w)
-    };
-    let wheels = rewritten.as_deref().unwrap_or(run.wheel_rad_s());
-
-    let mut body = start.pose.compose(&sensor.inverse());
-    let mut q = 0;
-    // Queries at or before the start.
-    while q < queries.len() && truth[queries[q]].t_s <= start.t_s {
-        on_query(queries[q], body.compose(&sensor));
-        q += 1;
-    }
-    on_sample(start.t_s, body.compose(&sensor));
-    let first = t.partition_point(|&tk| tk - lag <= start.t_s);
-    let mut cursor = start.t_s;
-    for k in first..n {
-        let s_k = t[k] - lag;
-        let a_k = if k == 0 { s_k - median } else { t[k - 1] - lag };
-        let len = s_k - a_k;
-        let h = if !res.stamps { fixed } else { len };
-        let from = a_k.max(cursor);
+    let mut body = truth[0].pose.compose(&sensor.inverse());
+    on_sample(truth[0].t_s, body.compose(&sensor));
+    let mut queries = plan.queries.iter().peekable();
+    for (i, f) in plan.fractions().enumerate() {
+        let k = plan.first_sample + i;
+        let (a_k, s_k) = interval(t, lag, median, k);
+        let h = if res.stamps { s_k - a_k } else { fixed };
         let v = twist_of(res, &wheels[k * n_w..(k + 1) * n_w]);
-        while q < queries.len() && truth[queries[q]].t_s <= s_k {
-            let f = ((truth[queries[q]].t_s - from) / len).clamp(0.0, 1.0);
-            on_query(queries[q], step(res.scheme, body, v, f * h).compose(&sensor));
-            q += 1;
+        while let Some(q) = queries.next_if(|q| q.step == i) {
+            let at = match q.fraction {
+                Some(f) => step(res.scheme, body, v, f * h),
+                None => body,
+            };
+            on_query(q.truth_index, at.compose(&sensor));
         }
-        if s_k >= g_last {
-            let f = ((g_last - from) / len).clamp(0.0, 1.0);
-            body = step(res.scheme, body, v, f * h);
-            on_sample(g_last, body.compose(&sensor));
-            break;
-        }
-        let f = ((s_k - from) / len).clamp(0.0, 1.0);
         body = step(res.scheme, body, v, f * h);
-        cursor = s_k;
-        on_sample(s_k, body.compose(&sensor));
+        on_sample(if s_k >= g_last { g_last } else { s_k }, body.compose(&sensor));
     }
-    // Queries after the last sample: at rest.
-    while q < queries.len() {
-        on_query(queries[q], body.compose(&sensor));
-        q += 1;
+    // After the last sample: at rest.
+    for q in queries {
+        on_query(q.truth_index, body.compose(&sensor));
     }
 }
 
@@ -199,7 +157,7 @@ pub fn residuals(res: &Resolved<'_>, run: &Run, selection: Selection) -> Vec<Res
     walk(
         res,
         run,
-        &idx,
+        &StepPlan::new(run, res.clock_lag_s, &idx),
         |i, p| {
             out.push(Residual { truth_index: i, t_s: truth[i].t_s, predicted: p, error: p.error_to(&truth[i].pose) })
         },
@@ -213,7 +171,13 @@ pub fn end_pose_error(res: &Resolved<'_>, run: &Run) -> PoseError {
     let truth = run.truth();
     let last = truth.len() - 1;
     let mut err = PoseError::default();
-    walk(res, run, &[last], |_, p| err = p.error_to(&truth[last].pose), |_, _| {});
+    walk(
+        res,
+        run,
+        &StepPlan::new(run, res.clock_lag_s, &[last]),
+        |_, p| err = p.error_to(&truth[last].pose),
+        |_, _| {},
+    );
     err
 }
 
@@ -224,7 +188,7 @@ pub fn integrate(res: &Resolved<'_>, run: &Run) -> Trajectory {
     walk(
         res,
         run,
-        &[],
+        &StepPlan::new(run, res.clock_lag_s, &[]),
         |_, _| {},
         |t, p| {
             tr.t_s.push(t);

@@ -6,7 +6,8 @@ use crate::model::model_or;
 use crate::run::{PyRun, runs_from};
 use numpy::{PyArray1, PyArray2};
 use omni_kin::cost::{self, CostKind};
-use omni_kin::odometry::{self, Residual, Selection};
+use omni_kin::evaluate::Evaluator;
+use omni_kin::odometry::{self, Residual};
 use omni_kin::{FittedModel, PoseError};
 use pyo3::prelude::*;
 use rayon::prelude::*;
@@ -105,27 +106,25 @@ pub fn evaluate(py: Python<'_>, runs: &Bound<'_, PyAny>, model: Option<&Bound<'_
     let (fm, adapters) = model_or(model, || design.unwrap_or_else(FittedModel::paper_design))?;
     let errors = crate::effect::EffectErrors::new(adapters);
     let out = py.detach(|| -> Result<_, omni_kin::KinError> {
-        cost::check_runs(&fm.model, &runs)?;
+        let evaluator = Evaluator::for_report(&fm.model, &runs, CostKind::PATH.selection())?;
         let res = fm.model.resolve(&fm.params)?;
-        let per: Vec<(Vec<Residual>, PoseError)> = runs
-            .par_iter()
-            .map(|r| (odometry::residuals(&res, r, Selection::Path(1)), odometry::end_pose_error(&res, r)))
-            .collect();
-        let ends: Vec<PoseError> = per.iter().map(|(_, e)| *e).collect();
-        let c = cost::mean_end_pose_error(&ends);
-        let path = cost::cost_resolved(&res, &runs, CostKind::PATH);
-        Ok((per, c, path))
+        let errors = evaluator.errors(&res);
+        let residuals: Vec<Vec<Residual>> =
+            runs.par_iter().map(|r| odometry::residuals(&res, r, CostKind::PATH.selection())).collect();
+        Ok((errors, residuals))
     });
-    let (per, c, path) = errors.check(out)?.py()?;
-    let runs = runs
+    let (errors, residuals) = errors.check(out)?.py()?;
+    let w = CostKind::PATH.heading_weight();
+    let per_run = runs
         .iter()
-        .zip(per)
-        .map(|(r, (residuals, end))| {
-            let n = residuals.len().max(1) as f64;
-            let path_rms = (residuals.iter().map(|e| e.error.norm().powi(2)).sum::<f64>() / n).sqrt();
+        .zip(residuals)
+        .enumerate()
+        .map(|(i, (r, residuals))| {
+            let (path_rms, end) = (errors.path_mse(i, w).sqrt(), errors.ends()[i]);
             Py::new(py, PyRunResiduals { name: r.name().to_string(), path_rms, residuals, end })
         })
         .collect::<PyResult<_>>()?;
+    let (c, path, runs) = (errors.end_pose_cost(), errors.path_cost(w), per_run);
     Ok(PyEvaluation { cost: c, path_cost: path, runs })
 }
 

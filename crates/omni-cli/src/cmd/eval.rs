@@ -2,7 +2,8 @@
 
 use super::{load_runs, resolve_model};
 use crate::cli::DataArgs;
-use omni_kin::cost::{self, CostKind};
+use omni_kin::cost::CostKind;
+use omni_kin::evaluate::Evaluator;
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -10,16 +11,16 @@ use std::path::PathBuf;
 pub fn run(model: &str, paths: &[PathBuf], as_json: bool, data: &DataArgs) -> anyhow::Result<()> {
     let ds = load_runs(paths, data)?;
     let fm = resolve_model(model, &ds)?;
-    cost::check_runs(&fm.model, &ds.runs)?;
-    let res = fm.model.resolve(&fm.params)?;
-    let errors = cost::end_pose_errors(&res, &ds.runs);
-    let c = cost::mean_end_pose_error(&errors);
-    let path = cost::cost_resolved(&res, &ds.runs, CostKind::PATH);
+    let evaluator = Evaluator::for_report(&fm.model, &ds.runs, CostKind::PATH.selection())?;
+    let all = evaluator.errors(&fm.model.resolve(&fm.params)?);
+    let errors = all.ends();
+    let c = all.end_pose_cost();
+    let path = all.path_cost(CostKind::PATH.heading_weight());
     if as_json {
         let runs: Vec<_> = ds
             .runs
             .iter()
-            .zip(&errors)
+            .zip(errors)
             .map(|(r, e)| {
                 json!({
                     "name": r.name(),
@@ -36,7 +37,7 @@ pub fn run(model: &str, paths: &[PathBuf], as_json: bool, data: &DataArgs) -> an
         return Ok(());
     }
     println!("{:<28} {:>18} {:>9} {:>9} {:>10} {:>9}", "run", "command", "dx m", "dy m", "dθ rad", "error");
-    for (r, e) in ds.runs.iter().zip(&errors) {
+    for (r, e) in ds.runs.iter().zip(errors) {
         let cmd = r.command().map(|c| c.label()).unwrap_or_else(|| "-".into());
         println!(
             "{:<28} {:>18} {:>9.4} {:>9.4} {:>10.4} {:>9.4}",

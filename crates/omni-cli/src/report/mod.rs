@@ -14,7 +14,8 @@ pub mod png;
 pub mod tum;
 
 use omni_ga::diagnose::{Costs, Diagnosis};
-use omni_kin::cost::{self, CostKind};
+use omni_kin::cost::CostKind;
+use omni_kin::evaluate::Evaluator;
 use omni_kin::odometry::{self, Selection};
 use omni_kin::{FittedModel, KinError, Pose2, Run};
 use serde::Serialize;
@@ -150,16 +151,20 @@ impl Report {
         };
         let path = CostKind::Path { every: 1, heading_weight_m_per_rad: HEADING_WEIGHT_M_PER_RAD };
         let mut models = Vec::with_capacity(input.models.len());
+        let mut fig_errors = Vec::with_capacity(input.models.len());
         for m in &input.models {
-            cost::check_runs(&m.model.model, input.train)?;
-            cost::check_runs(&m.model.model, fig_runs)?;
-            let c = |runs: &[Run], k| cost::cost(&m.model.model, &m.model.params, runs, k);
+            let train = Evaluator::for_report(&m.model.model, input.train, path.selection())?;
+            let held_out = Evaluator::for_report(&m.model.model, fig_runs, path.selection())?;
+            let res = m.model.model.resolve(&m.model.params)?;
+            let (train, held_out) = (train.errors(&res), held_out.errors(&res));
+            let w = path.heading_weight();
             let costs = Costs {
-                train_path: c(input.train, path)?,
-                held_out_path: c(fig_runs, path)?,
-                train_end_pose: c(input.train, CostKind::EndPose)?,
-                held_out_end_pose: c(fig_runs, CostKind::EndPose)?,
+                train_path: train.path_cost(w),
+                held_out_path: held_out.path_cost(w),
+                train_end_pose: train.end_pose_cost(),
+                held_out_end_pose: held_out.end_pose_cost(),
             };
+            fig_errors.push(held_out);
             let specs = m.model.model.params();
             // The matrix shows base parameters that are its entries; list the others.
             let nb = if m.model.model.kinematics.params_are_ik_entries() { m.model.model.n_base() } else { 0 };
@@ -175,7 +180,7 @@ impl Report {
 
         let mut runs = Vec::with_capacity(fig_runs.len());
         let mut growth_sum = vec![vec![(0.0, 0.0, 0usize); GROWTH_BINS]; input.models.len()];
-        for run in fig_runs {
+        for (ri, run) in fig_runs.iter().enumerate() {
             let mut e = RunErrors {
                 name: run.name().to_string(),
                 alpha_rad: run.command().map(|c| c.alpha_rad),
@@ -185,21 +190,20 @@ impl Report {
                 path_rms_m: Vec::new(),
             };
             let (t0, t1) = (run.start().t_s, run.end().t_s);
-            for (mi, m) in input.models.iter().enumerate() {
-                let res = m.model.model.resolve(&m.model.params)?;
-                let r = odometry::residuals(&res, run, Selection::Path(1));
+            for (mi, errors) in fig_errors.iter().enumerate() {
+                let r = errors.run(ri);
                 let mut sq = 0.0;
-                for x in &r {
-                    let pos = x.error.position_m();
-                    sq += pos * pos + (HEADING_WEIGHT_M_PER_RAD * x.error.dtheta_rad).powi(2);
-                    let f = if t1 > t0 { (x.t_s - t0) / (t1 - t0) } else { 0.0 };
+                for (x, ti) in r.iter().zip(Selection::Path(1).indices(run.truth().len())) {
+                    let pos = x.position_m();
+                    sq += pos * pos + (HEADING_WEIGHT_M_PER_RAD * x.dtheta_rad).powi(2);
+                    let f = if t1 > t0 { (run.truth()[ti].t_s - t0) / (t1 - t0) } else { 0.0 };
                     let b = ((f * GROWTH_BINS as f64) as usize).min(GROWTH_BINS - 1);
                     let cell = &mut growth_sum[mi][b];
                     cell.0 += pos;
-                    cell.1 += x.error.dtheta_rad.abs();
+                    cell.1 += x.dtheta_rad.abs();
                     cell.2 += 1;
                 }
-                let last = r.last().map(|x| x.error).unwrap_or_default();
+                let last = r.last().copied().unwrap_or_default();
                 e.end_position_m.push(last.position_m());
                 e.end_heading_rad.push(last.dtheta_rad.abs());
                 e.path_rms_m.push(if r.is_empty() { 0.0 } else { (sq / r.len() as f64).sqrt() });

@@ -1,0 +1,309 @@
+//! Fast fixed-step odometry over prepared runs: the same steps as [`crate::odometry`] (both read the
+//! runs' [`crate::plan::StepPlan`]s; the numbers agree within rounding, checked to 1e-9 m against the
+//! literal walk in tests) at close to the arithmetic limit. [`crate::evaluate::Evaluator`] chooses it
+//! whenever it serves a model and aggregates its errors; nothing else calls it.
+//!
+//! - `prepare.rs`: what depends only on the data, done once in [`PreparedRuns::new`]: each step's fraction
+//!   is folded into its wheel-angle increment `u_k = f_k h w_k` (rad), so with the IK matrix `M` a step's
+//!   body displacement is `M u_k` — 3 × N multiply-adds — for both Eq. 1 (Euler) and exact arcs. The
+//!   increments are kept up to [`KEPT_INCREMENTS_MAX_BYTES`] (8 B per wheel and sample); for larger
+//!   datasets each walk redoes a lane group's increments from the runs' own wheel columns (the same
+//!   products, so the same numbers). Runs are interleaved four to a lane group (struct of arrays).
+//! - `lanes.rs`: the four lanes' arithmetic, AVX2 + FMA on x86-64 CPUs that have them (checked at run time
+//!   through `pulp`, no `-C target-cpu` needed), plain arrays otherwise.
+//! - `kernel.rs`: the step loop; the heading's cosine and sine advance by polynomial rotations.
+//! - `jacobian.rs`: the forward-mode Jacobian with respect to the IK matrix, for the LM polish.
+//!
+//! Scope. Fixed steps with no clock lag, no twist-stage effects and no measured stamps, 1 to
+//! [`MAX_WHEELS`] wheels; a sensor offset (measurement stage) and wheel-stage effects (the increments are
+//! redone from the rewritten wheel speeds on each evaluation) are allowed. Anything else — or a step angle
+//! above [`MAX_STEP_ANGLE_RAD`] — returns `None` and the evaluator takes the literal walk.
+//!
+//! Results are deterministic: groups are evaluated in parallel and collected in run order, so they do not
+//! depend on the thread count. With FMA the last bits differ from a CPU without it.
+
+mod jacobian;
+mod kernel;
+mod lanes;
+mod prepare;
+
+use crate::model::{Resolved, Scheme};
+use crate::odometry::Selection;
+use crate::plan::wheel_speeds;
+use crate::pose::PoseError;
+use crate::run::Run;
+use nalgebra::DMatrix;
+use prepare::{Group, Increments, max_per_wheel};
+use rayon::prelude::*;
+use std::cell::RefCell;
+
+/// Runs per lane group.
+pub const LANES: usize = 4;
+/// Largest step angle the polynomials serve. rad.
+pub const MAX_STEP_ANGLE_RAD: f64 = 0.1;
+/// Largest wheel count the fast path serves (its kernels are compiled for 1 to 8 wheels; more take the
+/// literal walk).
+pub const MAX_WHEELS: usize = 8;
+/// Runs whose Jacobian rows [`PreparedRuns::ik_jacobian_rows`] holds at once (a multiple of [`LANES`]).
+pub const BLOCK_RUNS: usize = 256;
+/// Largest size of the increments [`PreparedRuns::new`] keeps (8 B per wheel and sample: 64 MB holds
+/// 2.8 M samples of 3 wheels, 13 × the paper-size set). Beyond, each walk of a lane group redoes its
+/// increments from the runs' wheel speeds (the same products, so the same numbers) into a buffer of
+/// the group's size: no copy of the dataset, at some speed.
+pub const KEPT_INCREMENTS_MAX_BYTES: usize = 64 << 20;
+
+type Lanes = [f64; LANES];
+
+thread_local! {
+    /// Each thread's buffer for increments redone on a walk (datasets beyond [`KEPT_INCREMENTS_MAX_BYTES`]).
+    static SCRATCH: RefCell<Vec<Lanes>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Calls `$f::<N, ARC>($args)` for the wheel count `$n` (1 to [`MAX_WHEELS`]) and scheme flag `$arc`:
+/// `Some(result)`, or `None` for other wheel counts.
+macro_rules! by_wheels {
+    ($n:expr, $arc:expr, $($f:ident)::+ ($($a:expr),* $(,)?)) => {
+        match ($n, $arc) {
+            (1, false) => Some($($f)::+::<1, false>($($a),*)),
+            (1, true) => Some($($f)::+::<1, true>($($a),*)),
+            (2, false) => Some($($f)::+::<2, false>($($a),*)),
+            (2, true) => Some($($f)::+::<2, true>($($a),*)),
+            (3, false) => Some($($f)::+::<3, false>($($a),*)),
+            (3, true) => Some($($f)::+::<3, true>($($a),*)),
+            (4, false) => Some($($f)::+::<4, false>($($a),*)),
+            (4, true) => Some($($f)::+::<4, true>($($a),*)),
+            (5, false) => Some($($f)::+::<5, false>($($a),*)),
+            (5, true) => Some($($f)::+::<5, true>($($a),*)),
+            (6, false) => Some($($f)::+::<6, false>($($a),*)),
+            (6, true) => Some($($f)::+::<6, true>($($a),*)),
+            (7, false) => Some($($f)::+::<7, false>($($a),*)),
+            (7, true) => Some($($f)::+::<7, true>($($a),*)),
+            (8, false) => Some($($f)::+::<8, false>($($a),*)),
+            (8, true) => Some($($f)::+::<8, true>($($a),*)),
+            _ => None,
+        }
+    };
+}
+
+/// The errors the fast path computed, in run order.
+#[derive(Clone, Debug, Default)]
+pub struct FastErrors {
+    /// Errors at the selected ground-truth poses, every run's in turn (empty for [`Selection::End`]).
+    pub at_queries: Vec<PoseError>,
+    /// End-pose error of each run (the Eq. 6 terms).
+    pub ends: Vec<PoseError>,
+}
+
+/// One run's errors at its selected poses and their unscaled IK Jacobian, as
+/// [`PreparedRuns::ik_jacobian_rows`] visits them.
+#[derive(Clone, Copy, Debug)]
+pub struct JacobianRows<'a> {
+    /// Index of the run.
+    pub run: usize,
+    /// Errors at the selected poses (for [`Selection::End`], the end pose).
+    pub errors: &'a [PoseError],
+    /// `3 × errors.len()` rows (dx, dy, dθ of each pose) by the IK entries `m11 … m3N`.
+    pub jacobian: &'a DMatrix<f64>,
+}
+
+/// Runs prepared for fast repeated evaluation at one step rule and one selection of ground-truth poses.
+#[derive(Clone, Debug)]
+pub struct PreparedRuns {
+    n_runs: usize,
+    n_wheels: usize,
+    fixed_dt_s: Option<f64>,
+    selection: Selection,
+    groups: Vec<Group>,
+}
+
+impl PreparedRuns {
+    /// Prepares `runs` (all with the same wheel count) for fixed steps of `fixed_dt_s` (`None`: each run's
+    /// median interval) and the ground-truth poses of `selection`. The increments are kept when they take
+    /// at most [`KEPT_INCREMENTS_MAX_BYTES`].
+    pub fn new(runs: &[Run], fixed_dt_s: Option<f64>, selection: Selection) -> Self {
+        Self::with_increment_budget(runs, fixed_dt_s, selection, KEPT_INCREMENTS_MAX_BYTES)
+    }
+
+    /// [`Self::new`], keeping the increments only when they take at most `max_bytes` (8 B per wheel and
+    /// sample); `0` never keeps them. The results do not depend on it.
+    pub fn with_increment_budget(
+        runs: &[Run],
+        fixed_dt_s: Option<f64>,
+        selection: Selection,
+        max_bytes: usize,
+    ) -> Self {
+        let n_wheels = runs.first().map_or(0, Run::n_wheels);
+        let bytes = runs.iter().map(|r| std::mem::size_of_val(r.wheel_rad_s())).sum::<usize>();
+        let keep = bytes <= max_bytes;
+        let groups = (runs.par_chunks(LANES).enumerate())
+            .map(|(gi, chunk)| Group::new(gi * LANES, chunk, fixed_dt_s, selection, keep))
+            .collect();
+        Self { n_runs: runs.len(), n_wheels, fixed_dt_s, selection, groups }
+    }
+
+    /// Number of runs.
+    pub fn n_runs(&self) -> usize {
+        self.n_runs
+    }
+
+    /// The selection of ground-truth poses these runs were prepared for.
+    pub fn selection(&self) -> Selection {
+        self.selection
+    }
+
+    /// Whether the increments are kept (else each walk redoes them).
+    pub fn increments_kept(&self) -> bool {
+        self.groups.iter().all(|g| g.kept().is_some())
+    }
+
+    /// True when `res` can use these prepared runs (same fixed step, no clock lag, no twist-stage effects,
+    /// no measured stamps, 1 to [`MAX_WHEELS`] wheels). Wheel-stage effects are applied to the runs'
+    /// wheel speeds before the increments are redone, on each evaluation.
+    pub fn supports(&self, res: &Resolved<'_>) -> bool {
+        !res.stamps
+            && res.clock_lag_s == 0.0
+            && res.twist_effects.is_empty()
+            && res.fixed_dt_s == self.fixed_dt_s
+            && res.ik.n_wheels() == self.n_wheels
+            && (1..=MAX_WHEELS).contains(&self.n_wheels)
+    }
+
+    /// Errors at the selected ground-truth poses and at each run's end, in run order. `None` when `res`
+    /// needs the literal walk (or `runs` are not the prepared runs).
+    pub fn errors(&self, res: &Resolved<'_>, runs: &[Run]) -> Option<FastErrors> {
+        let per_group: Vec<Option<(Vec<PoseError>, [PoseError; LANES])>> = (self.groups.par_iter())
+            .map(|g| {
+                let mut at = vec![PoseError::default(); g.queries.len()];
+                let ends = self.walk_group(g, res, runs, &mut |slot, e| at[slot] = e)?;
+                Some((at, ends))
+            })
+            .collect();
+        let mut out = FastErrors { at_queries: Vec::new(), ends: Vec::with_capacity(self.n_runs) };
+        for (g, r) in self.groups.iter().zip(per_group) {
+            let (at, ends) = r?;
+            out.at_queries.extend(at);
+            out.ends.extend_from_slice(&ends[..g.lanes]);
+        }
+        Some(out)
+    }
+
+    /// The end-pose error of every run (the Eq. 6 terms), in run order (any selection). `None` when `res`
+    /// needs the literal walk.
+    pub fn end_pose_errors(&self, res: &Resolved<'_>, runs: &[Run]) -> Option<Vec<PoseError>> {
+        let per_group: Vec<Option<[PoseError; LANES]>> =
+            self.groups.par_iter().map(|g| self.walk_group(g, res, runs, &mut |_, _| {})).collect();
+        let mut out = Vec::with_capacity(self.n_runs);
+        for (g, ends) in self.groups.iter().zip(per_group) {
+            out.extend_from_slice(&ends?[..g.lanes]);
+        }
+        Some(out)
+    }
+
+    /// Visits, in run order, each run's errors at the selected poses and their Jacobian with respect to the
+    /// IK matrix entries (3 rows per pose: dx, dy, dθ; columns in row-major order `m11 … m3N`), unscaled,
+    /// by forward-mode differentiation of the step recurrence; the sensor pose is held fixed. Only
+    /// [`BLOCK_RUNS`] runs' rows are held at a time; the runs of a batch are differentiated in parallel
+    /// and visited sequentially. `None` (before any visit) when `res` needs the literal walk or has
+    /// wheel-stage effects.
+    pub fn ik_jacobian_rows(
+        &self,
+        res: &Resolved<'_>,
+        runs: &[Run],
+        visit: &mut dyn FnMut(JacobianRows<'_>),
+    ) -> Option<()> {
+        let m = res.ik.entries();
+        let ok = self.supports(res) && res.wheel_effects.is_empty() && runs.len() == self.n_runs;
+        if !ok || !self.groups.iter().all(|g| in_range(m, g.u_max())) {
+            return None;
+        }
+        let (arc, sensor, n) = (res.scheme == Scheme::ExactArc, res.sensor_from_body, self.n_wheels);
+        for batch in self.groups.chunks(BLOCK_RUNS / LANES) {
+            let rows: Option<Vec<Vec<jacobian::LaneRows>>> = (batch.par_iter())
+                .map(|g| {
+                    self.with_increments(g, res, runs, |inc| {
+                        (0..g.lanes)
+                            .map(|lane| {
+                                by_wheels!(n, arc, jacobian::lane_rows(g, inc, lane, m, sensor, self.selection))
+                            })
+                            .collect::<Option<Vec<_>>>()
+                    })?
+                })
+                .collect();
+            for (g, lanes) in batch.iter().zip(rows?) {
+                for (lane, r) in lanes.iter().enumerate() {
+                    visit(JacobianRows { run: g.first_run + lane, errors: &r.errors, jacobian: &r.jacobian });
+                }
+            }
+        }
+        Some(())
+    }
+
+    /// Walks one group: calls `on_query(slot, error)` for each query and returns the end-pose errors.
+    fn walk_group(
+        &self,
+        g: &Group,
+        res: &Resolved<'_>,
+        runs: &[Run],
+        on_query: &mut dyn FnMut(usize, PoseError),
+    ) -> Option<[PoseError; LANES]> {
+        if !self.supports(res) {
+            return None;
+        }
+        let (m, arc, sensor) = (res.ik.entries(), res.scheme == Scheme::ExactArc, res.sensor_from_body);
+        self.with_increments(g, res, runs, |inc| {
+            by_wheels!(self.n_wheels, arc, kernel::walk(g, inc, m, sensor, on_query))
+        })?
+    }
+
+    /// Calls `f` with the increments of group `g` for `res`: the kept ones, ones redone from the runs'
+    /// wheel speeds into this thread's buffer, or ones redone from speeds rewritten by `res`'s wheel-stage
+    /// effects. `None` when a step angle may exceed [`MAX_STEP_ANGLE_RAD`] or `runs` are not the
+    /// prepared runs.
+    fn with_increments<R>(
+        &self,
+        g: &Group,
+        res: &Resolved<'_>,
+        runs: &[Run],
+        f: impl FnOnce(&Increments<'_>) -> R,
+    ) -> Option<R> {
+        let m = res.ik.entries();
+        let chunk = g.runs(runs)?;
+        let rewritten: Option<Vec<_>> =
+            (!res.wheel_effects.is_empty()).then(|| chunk.iter().map(|r| wheel_speeds(res, r)).collect());
+        if rewritten.is_none() && !in_range(m, g.u_max()) {
+            return None;
+        }
+        if let (None, Some(inc)) = (&rewritten, g.kept()) {
+            return Some(f(&inc));
+        }
+        SCRATCH.with(|cell| {
+            let mut u = cell.take();
+            let out = match &rewritten {
+                Some(speeds) => {
+                    let wheels: Vec<&[f64]> = speeds.iter().map(|w| w.as_ref()).collect();
+                    g.fill_steps(&wheels, &mut u);
+                    let u_max = max_per_wheel(&u, self.n_wheels);
+                    let query_u = g.fill_queries(&wheels);
+                    in_range(m, &u_max).then(|| f(&Increments { u: &u, query_u: &query_u }))
+                }
+                None => {
+                    let wheels: Vec<&[f64]> = chunk.iter().map(Run::wheel_rad_s).collect();
+                    g.fill_steps(&wheels, &mut u);
+                    Some(f(&g.redone(&u)))
+                }
+            };
+            cell.replace(u);
+            out
+        })
+    }
+}
+
+/// True when no step angle can exceed [`MAX_STEP_ANGLE_RAD`]: `Σ_j |m3j| max|u_j|` bounds it.
+fn in_range(m: &[f64], u_max: &[f64]) -> bool {
+    let n = u_max.len();
+    let bound: f64 = (0..n).map(|j| m[2 * n + j].abs() * u_max[j]).sum();
+    bound <= MAX_STEP_ANGLE_RAD && bound.is_finite()
+}
+
+#[cfg(test)]
+mod tests;

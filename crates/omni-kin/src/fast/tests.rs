@@ -1,0 +1,381 @@
+//! The fast path against the literal walk, through the evaluator (the only caller).
+#![allow(clippy::unwrap_used)]
+
+use super::*;
+use crate::cost::CostKind;
+use crate::effect::EffectKind;
+use crate::evaluate::{Evaluator, IkBlock, Route};
+use crate::geometry::RobotGeometry;
+use crate::ik::IkMatrix;
+use crate::model::{FittedModel, Integration, Model};
+use crate::pose::{Pose2, StampedPose};
+use crate::run::RunData;
+use crate::simulate::{SimConfig, simulate};
+
+fn paper_size() -> Vec<Run> {
+    let truth = FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated()));
+    simulate(&SimConfig { seed: 3, ..SimConfig::default() }, &truth, "t/").unwrap()
+}
+
+/// Largest difference between the fast and the literal errors over every run and selected pose (and
+/// every end pose), and the number of poses compared.
+fn max_gap(model: &Model, params: &[f64], runs: &[Run], selection: Selection) -> (f64, usize) {
+    let res = model.resolve(params).unwrap();
+    let fast = Evaluator::new(model, runs, selection).unwrap();
+    assert!(fast.is_fast(&res), "the fast path should serve {selection:?}");
+    let walk = Evaluator::with_route(model, runs, selection, Route::Walk).unwrap();
+    assert!(!walk.is_fast(&res));
+    let (f, w) = (fast.errors(&res), walk.errors(&res));
+    let ends = fast.end_pose_errors(&res);
+    let (mut gap, mut count) = (0.0f64, 0);
+    let mut at = |a: &PoseError, b: &PoseError| {
+        gap = gap.max((a.dx_m - b.dx_m).abs()).max((a.dy_m - b.dy_m).abs()).max((a.dtheta_rad - b.dtheta_rad).abs());
+    };
+    for (i, end) in ends.iter().enumerate() {
+        assert_eq!(f.run(i).len(), w.run(i).len());
+        for (a, b) in f.run(i).iter().zip(w.run(i)) {
+            at(a, b);
+            count += 1;
+        }
+        at(&f.ends()[i], &w.ends()[i]);
+        at(end, &w.ends()[i]);
+    }
+    (gap, count)
+}
+
+#[test]
+fn agrees_with_the_literal_walk_on_a_paper_size_set() {
+    let runs = paper_size();
+    assert_eq!(runs.len(), 180);
+    for ik in [IkMatrix::paper_design(), IkMatrix::paper_calibrated(), IkMatrix::paper_parametric()] {
+        for integration in [Integration::PAPER, Integration::DEFAULT] {
+            let model = Model::ik(ik.clone()).with_integration(integration);
+            let p = model.nominal();
+            for selection in [Selection::End, Selection::Path(1), Selection::Path(4)] {
+                let (gap, count) = max_gap(&model, &p, &runs, selection);
+                eprintln!("{:?} {selection:?}: largest gap {gap:.1e} m", integration.scheme);
+                assert!(gap < 1e-9, "{integration:?} {selection:?}: gap {gap:e} m");
+                assert!(count >= 180);
+            }
+        }
+    }
+}
+
+/// A run of `n` wheels with smooth speeds (100 Hz, 6 s) and ground truth every 0.1 s off the sample
+/// stamps (the poses only need to exist: the fast path and the walk are compared with each other).
+fn synthetic_run(n: usize, seed: usize) -> Run {
+    let wheel_t_s: Vec<f64> = (0..600).map(|k| 0.01 * k as f64).collect();
+    let wheel_rad_s = (wheel_t_s.iter())
+        .flat_map(|t| (0..n).map(move |j| 1.0 + 2.0 * (0.7 * t + j as f64 + seed as f64).sin()))
+        .collect();
+    let truth = (0..58)
+        .map(|k| {
+            let t = 0.003 + 0.1 * k as f64;
+            StampedPose { t_s: t, pose: Pose2::new(0.1 * t, 0.01 * t * t, 0.05 * t) }
+        })
+        .collect();
+    let data =
+        RunData { name: format!("n{n}-{seed}"), wheel_t_s, wheel_rad_s, n_wheels: n, truth, ..Default::default() };
+    Run::new(data).unwrap()
+}
+
+/// An IK matrix of `n` wheels spread around the base (3 × n; small step angles).
+fn spread_ik(n: usize) -> IkMatrix {
+    let angle = |j: usize| 2.0 * std::f64::consts::PI * j as f64 / n as f64 + 0.3;
+    let entries = (0..3 * n)
+        .map(|i| match i / n {
+            0 => 0.03 * angle(i % n).cos(),
+            1 => 0.03 * angle(i % n).sin(),
+            _ => 0.08 + 0.001 * (i % n) as f64,
+        })
+        .collect();
+    IkMatrix::new(n, entries).unwrap()
+}
+
+#[test]
+fn serves_any_wheel_count_as_the_walk_does() {
+    for n in [2, 3, 4, 6] {
+        let runs: Vec<Run> = (0..6).map(|s| synthetic_run(n, s)).collect();
+        for integration in [Integration::PAPER, Integration::DEFAULT] {
+            let model = Model::ik(spread_ik(n)).with_integration(integration);
+            for selection in [Selection::End, Selection::Path(1), Selection::Path(3)] {
+                let (gap, count) = max_gap(&model, &model.nominal(), &runs, selection);
+                assert!(gap < 1e-9, "{n} wheels {integration:?} {selection:?}: gap {gap:e} m");
+                assert!(count >= 6, "{count} poses");
+            }
+        }
+    }
+}
+
+#[test]
+fn serves_simulated_four_and_six_wheel_robots() {
+    for n in [4, 6] {
+        let design = RobotGeometry::omni_regular(n, 0.05, 0.2, 0.4);
+        let truth = FittedModel::nominal(Model::ik(design.twist_from_wheels().unwrap()));
+        let cfg = SimConfig { design, duration_s: 3.0, runs_per_command: 1, ..SimConfig::default() };
+        let runs = simulate(&cfg, &truth, "s/").unwrap();
+        let model = truth.model.clone().with_integration(Integration::DEFAULT);
+        let (gap, _) = max_gap(&model, &truth.params, &runs, Selection::Path(1));
+        assert!(gap < 1e-9, "{n} wheels: gap {gap:e} m");
+    }
+}
+
+#[test]
+fn agrees_with_a_sensor_offset() {
+    let runs: Vec<Run> = paper_size().into_iter().take(9).collect();
+    let model = Model::ik(IkMatrix::paper_design()).with_effect(EffectKind::from_id("sensor_offset_yaw", 3).unwrap());
+    let mut p = model.nominal();
+    p[9..].copy_from_slice(&[0.03, -0.02, 0.1]);
+    let (gap, count) = max_gap(&model, &p, &runs, Selection::Path(1));
+    assert!(gap < 1e-9, "gap {gap:e}");
+    assert!(count > 9 * 30, "{count} poses");
+}
+
+#[test]
+fn agrees_with_wheel_stage_effects() {
+    let runs: Vec<Run> = paper_size().into_iter().take(10).collect();
+    for (id, values) in [
+        ("wheel_asymmetry", vec![0.05, -0.03, 0.02]),
+        ("speed_scale", vec![0.01, -0.02, 0.015]),
+        ("accel_slip", vec![0.05, 0.02, -0.03]),
+        ("backlash", vec![0.02, 0.01, 0.03]),
+        ("wheel_eccentricity", vec![0.02, -0.01, 0.01, 0.015, 0.0, -0.02]),
+    ] {
+        let model = Model::ik(IkMatrix::paper_design()).with_effect(EffectKind::from_id(id, 3).unwrap());
+        let mut p = model.nominal();
+        p[9..].copy_from_slice(&values);
+        for selection in [Selection::End, Selection::Path(1)] {
+            let (gap, _) = max_gap(&model, &p, &runs, selection);
+            assert!(gap < 1e-9, "{id} {selection:?}: gap {gap:e}");
+        }
+    }
+}
+
+#[test]
+fn declines_what_it_cannot_do() {
+    let runs: Vec<Run> = paper_size().into_iter().take(5).collect();
+    let prepared = PreparedRuns::new(&runs, None, Selection::End);
+    let lagged = Model::ik(IkMatrix::paper_design()).with_effect(EffectKind::from_id("time_offset", 3).unwrap());
+    let mut p = lagged.nominal();
+    assert!(prepared.errors(&lagged.resolve(&p).unwrap(), &runs).is_some(), "no lag at τ = 0");
+    p[9] = 0.01;
+    assert!(prepared.errors(&lagged.resolve(&p).unwrap(), &runs).is_none());
+    let twist = Model::ik(IkMatrix::paper_design()).with_effect(EffectKind::from_id("rotation_slip", 3).unwrap());
+    assert!(prepared.errors(&twist.resolve(&twist.nominal()).unwrap(), &runs).is_none());
+    let paper_step = Model::ik(IkMatrix::paper_design()).with_integration(Integration::PAPER);
+    assert!(prepared.errors(&paper_step.resolve(&paper_step.nominal()).unwrap(), &runs).is_none(), "other step");
+    // A step angle beyond the polynomials' range.
+    let fast = Model::ik(IkMatrix::new(3, vec![0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 50.0, 50.0, 50.0]).unwrap());
+    assert!(prepared.errors(&fast.resolve(&fast.nominal()).unwrap(), &runs).is_none());
+    // Other runs than the prepared ones.
+    assert!(prepared.errors(&fast.resolve(&fast.nominal()).unwrap(), &runs[..2]).is_none());
+}
+
+/// Every error's bits, in run order.
+fn bits(e: &FastErrors) -> Vec<u64> {
+    (e.at_queries.iter().chain(&e.ends)).flat_map(|e| [e.dx_m, e.dy_m, e.dtheta_rad].map(f64::to_bits)).collect()
+}
+
+/// The residuals and IK Jacobian of `kind`, the evaluator's blocks stacked.
+fn stacked(ev: &Evaluator<'_>, res: &crate::model::Resolved<'_>, kind: CostKind) -> (Vec<f64>, DMatrix<f64>) {
+    let mut blocks: Vec<(Vec<f64>, DMatrix<f64>)> = Vec::new();
+    ev.ik_jacobian_blocks(res, kind, &mut |b: IkBlock<'_>| blocks.push((b.residuals.to_vec(), b.jacobian.clone())))
+        .unwrap();
+    let rows: usize = blocks.iter().map(|b| b.0.len()).sum();
+    let mut jac = DMatrix::zeros(rows, blocks.first().map_or(0, |b| b.1.ncols()));
+    let mut r = Vec::new();
+    for (res, j) in blocks {
+        jac.rows_mut(r.len(), res.len()).copy_from(&j);
+        r.extend(res);
+    }
+    (r, jac)
+}
+
+#[test]
+fn redone_increments_give_the_same_bits_as_kept_ones() {
+    let runs: Vec<Run> = paper_size().into_iter().take(23).collect();
+    for (effect, values) in [(None, vec![]), (Some("speed_scale"), vec![0.01, -0.02, 0.015])] {
+        let mut model = Model::ik(IkMatrix::paper_design()).with_integration(Integration::DEFAULT);
+        if let Some(id) = effect {
+            model = model.with_effect(EffectKind::from_id(id, 3).unwrap());
+        }
+        let mut p = IkMatrix::paper_calibrated().entries().to_vec();
+        p.extend(&values);
+        let res = model.resolve(&p).unwrap();
+        for sel in [Selection::End, Selection::Path(1)] {
+            let kept = PreparedRuns::new(&runs, None, sel);
+            let redone = PreparedRuns::with_increment_budget(&runs, None, sel, 0);
+            assert!(kept.increments_kept() && !redone.increments_kept());
+            assert_eq!(bits(&kept.errors(&res, &runs).unwrap()), bits(&redone.errors(&res, &runs).unwrap()));
+            let ends = |p: &PreparedRuns| p.end_pose_errors(&res, &runs).unwrap();
+            assert_eq!(ends(&kept), ends(&redone));
+            if effect.is_none() {
+                let rows = |p: &PreparedRuns| {
+                    let mut out = Vec::new();
+                    (p.ik_jacobian_rows(&res, &runs, &mut |r| {
+                        out.push((r.run, r.errors.to_vec(), r.jacobian.clone()))
+                    }))
+                    .unwrap();
+                    out
+                };
+                assert_eq!(rows(&kept), rows(&redone));
+            }
+        }
+    }
+}
+
+#[test]
+fn jacobian_blocks_come_in_run_order_across_batches() {
+    let runs: Vec<Run> = paper_size().into_iter().cycle().take(BLOCK_RUNS + 2 * LANES + 1).collect();
+    let model = Model::ik(IkMatrix::paper_design());
+    let ev = Evaluator::new(&model, &runs, Selection::Path(1)).unwrap();
+    let x = IkMatrix::paper_calibrated().entries().to_vec();
+    let res = model.resolve(&x).unwrap();
+    let full = ev.residual_vector(&res, CostKind::PATH);
+    let (mut next, mut row) = (0, 0);
+    ev.ik_jacobian_blocks(&res, CostKind::PATH, &mut |b| {
+        assert_eq!(b.run, next);
+        let rows = 3 * (runs[b.run].truth().len() - 1);
+        assert_eq!((b.residuals.len(), b.jacobian.nrows(), b.jacobian.ncols()), (rows, rows, 9));
+        for (a, f) in b.residuals.iter().zip(&full[row..row + rows]) {
+            assert!((a - f).abs() < 1e-15, "run {}: {a} vs {f}", b.run);
+        }
+        next += 1;
+        row += rows;
+    })
+    .unwrap();
+    assert_eq!((next, row), (runs.len(), full.len()));
+}
+
+#[test]
+fn ik_jacobian_matches_central_differences() {
+    let runs: Vec<Run> = paper_size().into_iter().step_by(15).collect();
+    for (integration, kind) in [
+        (Integration::PAPER, CostKind::EndPose),
+        (Integration::DEFAULT, CostKind::EndPose),
+        (Integration::DEFAULT, CostKind::PATH),
+        (Integration::PAPER, CostKind::Path { every: 3, heading_weight_m_per_rad: 0.5 }),
+    ] {
+        let model = Model::ik(IkMatrix::paper_design())
+            .with_integration(integration)
+            .with_effect(EffectKind::from_id("sensor_offset", 3).unwrap());
+        let ev = Evaluator::for_cost(&model, &runs, kind).unwrap();
+        let mut x = IkMatrix::paper_calibrated().entries().to_vec();
+        x.extend([0.02, -0.01]);
+        let res = model.resolve(&x).unwrap();
+        let (r, j) = stacked(&ev, &res, kind);
+        let fast = ev.residual_vector(&res, kind);
+        assert!(r.iter().zip(&fast).all(|(a, b)| (a - b).abs() < 1e-12), "residuals differ");
+        assert_eq!(j.ncols(), 9);
+        let mut worst = 0.0f64;
+        for c in 0..9 {
+            let h = 1e-6 * x[c].abs().max(0.05);
+            let mut xp = x.clone();
+            xp[c] += h;
+            let mut xm = x.clone();
+            xm[c] -= h;
+            let rp = ev.residual_vector(&model.resolve(&xp).unwrap(), kind);
+            let rm = ev.residual_vector(&model.resolve(&xm).unwrap(), kind);
+            // Relative to the column's largest entry: tiny entries carry the differences' rounding noise.
+            let col_max = (0..r.len()).map(|i| j[(i, c)].abs()).fold(0.0f64, f64::max);
+            assert!(col_max > 1e-3, "column {c} is flat");
+            for i in 0..r.len() {
+                let fd = (rp[i] - rm[i]) / (2.0 * h);
+                let err = (fd - j[(i, c)]).abs() / col_max;
+                worst = worst.max(err);
+            }
+        }
+        assert!(worst < 1e-6, "{integration:?} {kind:?}: worst relative gap {worst:e}");
+    }
+}
+
+#[test]
+fn ik_jacobian_serves_six_wheels() {
+    let runs: Vec<Run> = (0..5).map(|s| synthetic_run(6, s)).collect();
+    let model = Model::ik(spread_ik(6)).with_integration(Integration::DEFAULT);
+    let ev = Evaluator::for_cost(&model, &runs, CostKind::PATH).unwrap();
+    let x = model.nominal();
+    let (r, j) = stacked(&ev, &model.resolve(&x).unwrap(), CostKind::PATH);
+    assert_eq!(j.ncols(), 18);
+    for c in [0, 7, 14, 17] {
+        let h = 1e-6 * x[c].abs().max(0.01);
+        let (mut xp, mut xm) = (x.clone(), x.clone());
+        xp[c] += h;
+        xm[c] -= h;
+        let rp = ev.residual_vector(&model.resolve(&xp).unwrap(), CostKind::PATH);
+        let rm = ev.residual_vector(&model.resolve(&xm).unwrap(), CostKind::PATH);
+        let col_max = (0..r.len()).map(|i| j[(i, c)].abs()).fold(0.0f64, f64::max);
+        for i in 0..r.len() {
+            let fd = (rp[i] - rm[i]) / (2.0 * h);
+            assert!((fd - j[(i, c)]).abs() < 1e-6 * col_max, "column {c} row {i}: {fd} vs {}", j[(i, c)]);
+        }
+    }
+}
+
+/// The robot-type models off their design values: a differential drive as robot.toml describes one (left
+/// wheel first, at +y, driving backward at positive speed; 2 wheels) and a slightly asymmetric mecanum base
+/// (4 wheels).
+fn robot_type_models() -> Vec<(Model, Vec<f64>)> {
+    use crate::geometry::Wheel;
+    use crate::kinematics::KinematicsKind;
+    use std::f64::consts::{FRAC_PI_2, PI};
+    let wheel = |r, angle, offset| Wheel {
+        radius_m: r,
+        distance_m: 0.105,
+        angle_rad: angle,
+        drive_offset_rad: offset,
+        roller_angle_rad: 0.0,
+    };
+    let wheels = vec![wheel(0.041, FRAC_PI_2, PI), wheel(0.043, -FRAC_PI_2, 0.0)];
+    let diff = RobotGeometry { wheel_names: vec!["left".into(), "right".into()], wheels };
+    let mut mecanum = RobotGeometry::mecanum4(0.05, 0.2, 0.15);
+    mecanum.wheels[1].radius_m = 0.051;
+    let off_design = |kind, g: &RobotGeometry| {
+        let model = Model::design(kind, Some(g)).unwrap().with_integration(Integration::DEFAULT);
+        let p: Vec<f64> =
+            model.nominal().iter().enumerate().map(|(i, v)| v * (1.0 + 0.02 * (i as f64 - 1.5))).collect();
+        (model, p)
+    };
+    vec![off_design(KinematicsKind::Diff, &diff), off_design(KinematicsKind::Mecanum, &mecanum)]
+}
+
+#[test]
+fn serves_diff_and_mecanum_models_as_the_walk_does() {
+    for (model, p) in robot_type_models() {
+        let n = model.n_wheels();
+        let runs: Vec<Run> = (0..5).map(|s| synthetic_run(n, s)).collect();
+        for selection in [Selection::End, Selection::Path(1), Selection::Path(3)] {
+            let (gap, count) = max_gap(&model, &p, &runs, selection);
+            assert!(gap < 1e-9, "{} ({n} wheels) {selection:?}: gap {gap:e} m", model.kinematics.id());
+            assert!(count >= 5);
+        }
+    }
+}
+
+/// The fast path's IK Jacobian chained through the model's `twist_from_wheels_jacobian` (what the LM
+/// polish uses for parametric models) against central differences in the model's own parameters.
+#[test]
+fn chained_jacobian_of_diff_and_mecanum_models_matches_central_differences() {
+    for (model, x) in robot_type_models() {
+        let runs: Vec<Run> = (0..4).map(|s| synthetic_run(model.n_wheels(), s)).collect();
+        let ev = Evaluator::for_cost(&model, &runs, CostKind::PATH).unwrap();
+        let (r, j_ik) = stacked(&ev, &model.resolve(&x).unwrap(), CostKind::PATH);
+        let j = j_ik * model.kinematics.twist_from_wheels_jacobian(&x).unwrap();
+        assert_eq!(j.ncols(), x.len());
+        for c in 0..x.len() {
+            let h = 1e-6 * x[c].abs();
+            let (mut xp, mut xm) = (x.clone(), x.clone());
+            xp[c] += h;
+            xm[c] -= h;
+            let rp = ev.residual_vector(&model.resolve(&xp).unwrap(), CostKind::PATH);
+            let rm = ev.residual_vector(&model.resolve(&xm).unwrap(), CostKind::PATH);
+            let col_max = (0..r.len()).map(|i| j[(i, c)].abs()).fold(0.0f64, f64::max);
+            assert!(col_max > 1e-3, "{}: column {c} is flat", model.kinematics.id());
+            for i in 0..r.len() {
+                let fd = (rp[i] - rm[i]) / (2.0 * h);
+                let gap = (fd - j[(i, c)]).abs() / col_max;
+                assert!(gap < 1e-6, "{} column {c} row {i}: {fd} vs {}", model.kinematics.id(), j[(i, c)]);
+            }
+        }
+    }
+}
