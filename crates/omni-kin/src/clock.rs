@@ -452,14 +452,14 @@ mod tests {
             }
             t += dt;
             step += 1;
-            if step % 100 == 0 && t > 0.0 {
+            if step.is_multiple_of(100) && t > 0.0 {
                 wheel_t.push(t);
                 rates.extend((0..3).map(|w| (wheel[w] - last_wheel[w]) / 0.01));
             }
-            if step % 100 == 0 {
+            if step.is_multiple_of(100) {
                 last_wheel = wheel;
             }
-            if step % 80 == 0 {
+            if step.is_multiple_of(80) {
                 truth.push(StampedPose {
                     t_s: t - offset,
                     pose: Pose2 { x_m: pose[0], y_m: pose[1], theta_rad: pose[2] },
