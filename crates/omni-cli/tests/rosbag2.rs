@@ -281,3 +281,44 @@ fn bad_ground_truth_files_exit_2_naming_the_file_and_row() {
     assert_eq!(code, 2);
     assert!(err.contains("no ground truth"), "{err}");
 }
+
+#[test]
+#[cfg_attr(
+    not(python_bag_tools),
+    ignore = "needs rosbags and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
+)]
+fn parallel_loading_gives_the_serial_order_and_results() {
+    let (dir, _) = fixtures();
+    let paths: Vec<PathBuf> = ["several", "ref/rec.mcap", "db3/rec", "bad/truncated_blob.db3", "split_mcap", "bare"]
+        .iter()
+        .map(|p| dir.join(p))
+        .collect();
+    let opts = LoadOptions {
+        skip_invalid: true,
+        mcap: McapOptions { split: Some(1.0), ..Default::default() },
+        ..Default::default()
+    };
+    let load = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| dataset::load(&paths, &opts).unwrap())
+    };
+    let serial = load(1);
+    let names: Vec<&str> = serial.runs.iter().map(|r| r.name()).collect();
+    assert_eq!(
+        names,
+        [
+            "a#1", "a#2", "a#3", "b#1", "b#2", "b#3", "rec#1", "rec#2", "rec#3", "rec#1", "rec#2", "rec#3", "rec#1",
+            "rec#2", "rec#3", "rec#1", "rec#2", "rec#3"
+        ]
+    );
+    assert_eq!(serial.skipped.len(), 1);
+    assert!(serial.skipped[0].source.ends_with("truncated_blob.db3"), "{:?}", serial.skipped);
+    for threads in [2, 4] {
+        let parallel = load(threads);
+        assert_eq!(parallel.runs, serial.runs, "{threads} threads");
+        assert_eq!(parallel.notes, serial.notes);
+        let reasons =
+            |d: &dataset::Dataset| d.skipped.iter().map(|s| (s.source.clone(), s.reason.clone())).collect::<Vec<_>>();
+        assert_eq!(reasons(&parallel), reasons(&serial));
+    }
+}

@@ -10,6 +10,7 @@ pub mod optiodom;
 pub mod rosbag2;
 
 use omni_kin::{KinError, RobotGeometry, Run};
+use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -79,12 +80,16 @@ pub fn load(paths: &[PathBuf], opts: &LoadOptions) -> Result<Dataset, DatasetErr
         expand(p, &mut inputs);
     }
     check_one_truth_file(&inputs, opts)?;
+    // The inputs are read in parallel (one file or recording per task) and merged in their order, so the
+    // dataset, its notes and the first error are those of a serial load whatever the thread count.
+    let reads: Vec<_> = inputs.par_iter().map(|i| i.as_ref().ok().map(|i| read_input(i, opts))).collect();
     let mut ds = Dataset::default();
-    for input in inputs {
+    for (input, read) in inputs.into_iter().zip(reads) {
         // A path that is no input (unreadable, unsupported) stops the load where it stands in the order.
         let input = input?;
-        let read = read_input(&input, opts)?;
-        merge(&mut ds, opts, input.path(), read)?;
+        if let Some(read) = read {
+            merge(&mut ds, opts, input.path(), read?)?;
+        }
     }
     if ds.runs.is_empty() {
         let what = paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ");

@@ -3,7 +3,7 @@
 //!
 //! | storage | files | how it is read |
 //! |---|---|---|
-//! | `sqlite3` (default up to ROS 2 Iron) | `rec_0.db3`, `rec_1.db3`, … | tables `topics` and `messages` ([`sqlite`]) |
+//! | `sqlite3` (default up to ROS 2 Iron) | `rec_0.db3`, `rec_1.db3`, … | tables `topics` and `messages` (`sqlite.rs`) |
 //! | `mcap` (default from ROS 2 Jazzy) | `rec_0.mcap`, `rec_1.mcap`, … | as a bare `.mcap` ([`crate::dataset::mcap`]) |
 //!
 //! All files of a recording are read, in the order `relative_file_paths` lists them, into **one** recording
