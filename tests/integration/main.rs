@@ -1,5 +1,6 @@
 //! End-to-end tests through the library: simulate → train → eval, determinism, diagnosis.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers panic on failure by design
+mod choices;
 mod common;
 mod determinism;
 mod hidden_effect;

@@ -8,6 +8,7 @@ pub mod atomic;
 pub mod cli;
 pub mod cmd;
 pub mod dataset;
+pub mod design;
 pub mod entry;
 pub mod init;
 pub mod interrupt;

@@ -77,7 +77,7 @@ pub struct EffectEntry {
 pub struct ModelFile {
     /// Always [`FORMAT`].
     pub format: String,
-    /// `ik` or `geometry`.
+    /// `ik` or `geometry` ([`KinematicsKind`]).
     pub kinematics: String,
     /// Wheel (joint) names in column order.
     pub wheel_names: Vec<String>,

@@ -53,6 +53,11 @@ pub enum Preset {
     Default,
 }
 
+omni_kin::choice!(Preset, default = Default, {
+    Paper => "paper": "The paper's method, reproduced: Eq. 6 end-pose cost, Eq. 1 Euler at 10 ms, MATLAB-default GA, ±10 % box",
+    Default => "default": "Ours: path cost, exact arcs, short GA then Levenberg–Marquardt",
+});
+
 /// How the GA's search box is set around the start.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -67,18 +72,22 @@ pub enum BoxRule {
 
 /// What a fit does along directions of parameter space the training runs do not constrain
 /// ([`crate::identify`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Unexcited {
     /// Truncated update (default preset): after the GA, the parameters are projected back onto the start
     /// along every unconstrained direction, and the polish moves only within the constrained subspace, so
     /// the fit keeps the start (design) values where the data cannot tell, and is never worse than the
     /// start on motions the training runs did not contain.
-    #[default]
     Hold,
     /// Move freely (the paper's GA): unconstrained directions end wherever the search left them.
     Move,
 }
+
+omni_kin::choice!(Unexcited, default = Hold, {
+    Hold => "hold": "Keep the start (design) values there: truncated update (default preset)",
+    Move => "move": "Let the optimizer move them (paper preset)",
+});
 
 /// A calibration recipe.
 #[derive(Clone, Debug, Serialize, Deserialize)]

@@ -33,7 +33,7 @@ use omni_kin::cost::{self, CostKind};
 use omni_kin::effect::{Effect, Stage};
 use omni_kin::evaluate::Evaluator;
 use omni_kin::odometry::Selection;
-use omni_kin::{EffectKind, FittedModel, PoseError, Run};
+use omni_kin::{EffectKind, FittedModel, Run};
 use serde::{Deserialize, Serialize};
 
 /// Diagnosis settings.
@@ -514,13 +514,12 @@ fn compare(
     let (mut gp, mut gh, mut gn) = (vec![0.0; BINS], vec![0.0; BINS], vec![0usize; BINS]);
     for (i, r) in runs.iter().enumerate() {
         let (path, dpath) = (fitted.run(i), designed.run(i));
-        let rms = |v: &[PoseError]| (v.iter().map(|e| e.norm().powi(2)).sum::<f64>() / v.len().max(1) as f64).sqrt();
         let (end, dend) = (fitted.ends()[i], designed.ends()[i]);
         reports.push(RunReport {
             name: r.name().into(),
             command: r.command().map(|c| c.label()),
-            path_rms: rms(path),
-            design_path_rms: rms(dpath),
+            path_rms: cost::path_rms(path),
+            design_path_rms: cost::path_rms(dpath),
             end_error: end.norm(),
             design_end_error: dend.norm(),
         });

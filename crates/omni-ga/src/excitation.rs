@@ -37,6 +37,11 @@ pub enum RunSet {
     Greedy,
 }
 
+omni_kin::choice!(RunSet, default = Greedy, {
+    Greedy => "greedy": "D-optimal greedy pick from a library of commands (several speeds, both turn directions)",
+    Flower => "flower": "The paper's 36 flower commands",
+});
+
 /// What to plan for.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct PlanRequest {
@@ -73,7 +78,7 @@ impl Default for PlanRequest {
             truth_noise_rad: 0.003,
             runs: 12,
             repetitions: 1,
-            set: RunSet::Greedy,
+            set: RunSet::default(),
             identify: IdentifyOptions::default(),
         }
     }

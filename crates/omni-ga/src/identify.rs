@@ -34,7 +34,7 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct IdentifyOptions {
     /// A direction whose standard error exceeds this fraction of the parameters' scale is unconstrained.
-    /// Default 0.01.
+    /// Default 0.05.
     pub max_std_error: f64,
     /// A direction whose singular value is below this fraction of the largest is unconstrained whatever
     /// the noise: the runs move the residuals along it 100× less than along the best-excited direction.

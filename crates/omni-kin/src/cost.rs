@@ -33,8 +33,21 @@ pub enum CostKind {
 }
 
 impl CostKind {
+    /// The path cost's default pose step: every ground-truth pose.
+    pub const PATH_EVERY: usize = 1;
+    /// The path cost's default heading weight (as Eq. 6). m/rad.
+    pub const PATH_HEADING_WEIGHT_M_PER_RAD: f64 = 1.0;
     /// The path cost over every pose with heading weight 1 m/rad.
-    pub const PATH: CostKind = CostKind::Path { every: 1, heading_weight_m_per_rad: 1.0 };
+    pub const PATH: CostKind =
+        CostKind::Path { every: Self::PATH_EVERY, heading_weight_m_per_rad: Self::PATH_HEADING_WEIGHT_M_PER_RAD };
+
+    /// Which cost this is, without its settings.
+    pub fn cost_name(&self) -> CostName {
+        match self {
+            CostKind::EndPose => CostName::EndPose,
+            CostKind::Path { .. } => CostName::Path,
+        }
+    }
 
     /// The ground-truth poses the cost reads.
     pub fn selection(&self) -> Selection {
@@ -54,9 +67,32 @@ impl CostKind {
 
     /// Short name for tables: `end_pose` or `path`.
     pub fn name(&self) -> &'static str {
+        self.cost_name().id()
+    }
+}
+
+/// Which cost, without its settings: what the command line's `--objective` and tables name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CostName {
+    /// [`CostKind::EndPose`].
+    EndPose,
+    /// [`CostKind::Path`].
+    Path,
+}
+
+crate::choice!(CostName, {
+    EndPose => "end_pose": "The paper's Eq. 6: mean end-pose error (m and rad mixed)",
+    Path => "path": "RMS error over every ground-truth pose (1 m/rad)",
+});
+
+impl CostName {
+    /// The cost with these path settings (the end-pose cost has none): every `every`-th ground-truth
+    /// pose, heading weighted by `heading_weight_m_per_rad` (m/rad).
+    pub fn with_path_settings(self, every: usize, heading_weight_m_per_rad: f64) -> CostKind {
         match self {
-            CostKind::EndPose => "end_pose",
-            CostKind::Path { .. } => "path",
+            CostName::EndPose => CostKind::EndPose,
+            CostName::Path => CostKind::Path { every, heading_weight_m_per_rad },
         }
     }
 }
@@ -67,6 +103,13 @@ pub fn mean_end_pose_error(errors: &[PoseError]) -> f64 {
         return 0.0;
     }
     errors.iter().map(PoseError::norm).sum::<f64>() / errors.len() as f64
+}
+
+/// One run's path RMS from its pose errors: `sqrt(mean |e|²)` over the poses, with `|e|² = dx² + dy² + dθ²`
+/// (heading 1 m/rad). m. 0 without errors. What diagnosis and Python report per run
+/// (`RunErrors::run(i)` of a path selection).
+pub fn path_rms(errors: &[PoseError]) -> f64 {
+    (errors.iter().map(|e| e.norm().powi(2)).sum::<f64>() / errors.len().max(1) as f64).sqrt()
 }
 
 /// The cost `kind` of `model` at `params` over `runs`, through [`Evaluator::for_report`]. Checks wheel

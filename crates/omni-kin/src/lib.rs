@@ -9,6 +9,7 @@
 //! Units follow ROS REP-103: metres, seconds, radians, rad/s; x forward, y left, yaw counter-clockwise.
 #![deny(missing_docs)]
 
+pub mod choice;
 pub mod clock;
 pub mod controller;
 pub mod cost;
@@ -27,7 +28,8 @@ pub mod robot;
 pub mod run;
 pub mod simulate;
 
-pub use cost::CostKind;
+pub use choice::Choice;
+pub use cost::{CostKind, CostName};
 pub use effect::{Effect, EffectKind, ParamSpec, Stage};
 pub use error::KinError;
 pub use geometry::{RobotGeometry, Wheel};

@@ -22,7 +22,6 @@ use crate::ik::IkMatrix;
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{FRAC_PI_2, PI};
-use std::fmt;
 use thiserror::Error;
 
 /// Two descriptions closer than this (m, rad) are the same robot (used to recognise APR-02).
@@ -44,14 +43,16 @@ pub enum BaseKind {
     Diff,
 }
 
+crate::choice!(BaseKind, {
+    Omni => "omni": "N ≥ 3 omni wheels",
+    Mecanum => "mecanum": "Four mecanum wheels",
+    Diff => "diff": "Differential drive",
+});
+
 impl BaseKind {
-    /// The name used in `robot.toml`: `omni`, `mecanum`, `diff`.
+    /// The name used in `robot.toml`: `omni`, `mecanum`, `diff` (its [`crate::Choice`] id).
     pub fn name(self) -> &'static str {
-        match self {
-            Self::Omni => "omni",
-            Self::Mecanum => "mecanum",
-            Self::Diff => "diff",
-        }
+        self.id()
     }
 
     /// Degrees of freedom of the body twist the base can produce (rank of its forward matrix).
@@ -60,12 +61,6 @@ impl BaseKind {
             Self::Omni | Self::Mecanum => 3,
             Self::Diff => 2,
         }
-    }
-}
-
-impl fmt::Display for BaseKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
     }
 }
 

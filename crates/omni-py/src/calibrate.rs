@@ -9,6 +9,7 @@ use numpy::PyArray2;
 use omni_ga::calibrate::{Calibration, Plan, Preset, calibrate};
 use omni_ga::observe::{Control, Iteration, Observer};
 use omni_kin::FittedModel;
+use omni_kin::choice::UnknownChoice;
 use pyo3::exceptions::{PyKeyboardInterrupt, PyUserWarning};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -111,6 +112,8 @@ pub struct PyCalibration {
     /// Eq. 6 cost on the training runs at the fit.
     #[pyo3(get)]
     cost_fitted: f64,
+    /// Relative fall of the Eq. 6 cost from start to fit, in %.
+    improvement_pct: f64,
     /// Cost evaluations (GA + polish).
     #[pyo3(get)]
     evaluations: usize,
@@ -177,7 +180,7 @@ impl PyCalibration {
         d.set_item("cost_fitted", self.cost_fitted)?;
         d.set_item("objective_start", self.objective_start)?;
         d.set_item("objective_fitted", self.objective_fitted)?;
-        d.set_item("improvement_pct", 100.0 * (1.0 - self.cost_fitted / self.cost_start))?;
+        d.set_item("improvement_pct", self.improvement_pct)?;
         Ok(d)
     }
     /// What the training runs constrain, as plain data: per-parameter standard errors (``params``: name,
@@ -205,14 +208,6 @@ impl PyCalibration {
     }
 }
 
-fn preset_from(name: &str) -> PyResult<Preset> {
-    match name {
-        "default" => Ok(Preset::Default),
-        "paper" => Ok(Preset::Paper),
-        other => Err(value_error(format!("preset {other:?}: expected \"default\" or \"paper\""))),
-    }
-}
-
 /// Fit a model to training runs.
 ///
 /// The start is ``model`` (default: the data's design model, else the paper's Eq. 7) plus ``effects``
@@ -231,7 +226,7 @@ pub fn train(
     seed: u64,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<PyCalibration> {
-    let preset = preset_from(preset)?;
+    let preset: Preset = preset.parse().map_err(|e: UnknownChoice| value_error(format!("preset {e}")))?;
     let (runs, design) = runs_from(runs, "runs")?;
     let (mut start, mut adapters) = model_or(model, || design.unwrap_or_else(FittedModel::paper_design))?;
     for e in &effects {
@@ -270,6 +265,7 @@ pub fn train(
         objective_fitted: c.objective_fitted,
         cost_start: c.end_pose_start,
         cost_fitted: c.end_pose_fitted,
+        improvement_pct: c.improvement_pct(),
         evaluations: c.evaluations,
         seconds: c.seconds,
         at_bound: c.at_bound,

@@ -3,8 +3,9 @@
 
 use crate::effect::{EffectErrors, effect_from};
 use crate::errors::PyResultExt;
-use crate::model::{PyModel, design_for, model_or};
+use crate::model::{PyModel, model_or};
 use crate::run::runs_from;
+use omni_cli::design::design_for;
 use omni_ga::diagnose::{Candidate, Costs, DiagnoseOptions, Diagnosis, ParamValue, diagnose as rs_diagnose};
 use omni_kin::FittedModel;
 use omni_kin::effect::Effect;

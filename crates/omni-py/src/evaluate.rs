@@ -120,7 +120,7 @@ pub fn evaluate(py: Python<'_>, runs: &Bound<'_, PyAny>, model: Option<&Bound<'_
         .zip(residuals)
         .enumerate()
         .map(|(i, (r, residuals))| {
-            let (path_rms, end) = (errors.path_mse(i, w).sqrt(), errors.ends()[i]);
+            let (path_rms, end) = (cost::path_rms(errors.run(i)), errors.ends()[i]);
             Py::new(py, PyRunResiduals { name: r.name().to_string(), path_rms, residuals, end })
         })
         .collect::<PyResult<_>>()?;

@@ -273,11 +273,6 @@ pub fn effect_catalogue(py: Python<'_>, n_wheels: usize) -> PyResult<Vec<Bound<'
     Ok(out)
 }
 
-/// The design model (same base kinematics and wheels, nominal parameters, no effects) of a model.
-pub fn design_for(model: &FittedModel) -> FittedModel {
-    omni_cli::cmd::diagnose::design_for(model)
-}
-
 /// A model argument: a `Model`, or None for `default`.
 pub fn model_or(
     obj: Option<&Bound<'_, PyAny>>,

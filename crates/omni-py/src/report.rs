@@ -2,8 +2,9 @@
 
 use crate::effect::EffectErrors;
 use crate::errors::{OmnicalError, PyResultExt};
-use crate::model::{design_for, model_or};
+use crate::model::model_or;
 use crate::run::runs_from;
+use omni_cli::design::design_for;
 use omni_cli::report::{self as rs_report, ReportInput};
 use omni_ga::diagnose::DiagnoseOptions;
 use omni_kin::FittedModel;

@@ -6,7 +6,7 @@ use crate::errors::{PyResultExt, value_error};
 use crate::model::PyModel;
 use numpy::{PyArray1, PyArray2};
 use omni_cli::dataset::{self, LoadOptions, mcap::McapOptions};
-use omni_kin::{Command, FittedModel, Model, Run, RunData};
+use omni_kin::{Command, FittedModel, Run, RunData};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use std::path::PathBuf;
@@ -176,14 +176,6 @@ impl PyDataset {
     }
 }
 
-/// The design model a dataset declares: its geometry, else the paper's APR-02 (Eq. 7).
-pub fn design_of(robot: Option<&omni_kin::RobotGeometry>) -> FittedModel {
-    match robot {
-        Some(g) => FittedModel::nominal(Model::geometry(g.clone())),
-        None => FittedModel::paper_design(),
-    }
-}
-
 /// Load runs from files and folders: omnical CSV (``.csv``), ROS 2 bags (``.mcap``), folders of them,
 /// or OptiOdom set folders. Options mirror the CLI's data flags.
 #[pyfunction]
@@ -218,7 +210,11 @@ pub fn load(
     }
     let opts = LoadOptions { skip_invalid, ticks_per_rev, mcap, ..LoadOptions::default() };
     let ds = py.detach(|| dataset::load(&paths, &opts)).py()?;
-    let design = design_of(ds.robot.as_ref());
+    // The same lookup as the CLI's `--model design`; where the data names no robot, Python still falls back
+    // to the paper's APR-02 design (Eq. 7), where the CLI asks for a robot description.
+    let design = omni_cli::design::declared(&ds)
+        .map_err(|e| value_error(format!("{e:#}")))?
+        .unwrap_or_else(FittedModel::paper_design);
     Ok(PyDataset {
         runs: ds.runs,
         notes: ds.notes,

@@ -4,7 +4,6 @@ use crate::errors::PyResultExt;
 use crate::model::model_or;
 use crate::run::PyRun;
 use omni_kin::simulate::{SimConfig, simulate as rs_simulate};
-use omni_kin::{FittedModel, IkMatrix, Model};
 use pyo3::prelude::*;
 
 /// Simulate the flower benchmark (36 commands × ``runs_per_command``) on the true robot ``truth``
@@ -24,7 +23,7 @@ pub fn simulate(
     sample_drop_probability: f64,
     sample_jitter_s: f64,
 ) -> PyResult<Vec<PyRun>> {
-    let (truth, adapters) = model_or(truth, || FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated())))?;
+    let (truth, adapters) = model_or(truth, omni_cli::design::paper_calibrated)?;
     let mut config = SimConfig {
         runs_per_command,
         duration_s,

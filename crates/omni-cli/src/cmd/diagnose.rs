@@ -1,41 +1,42 @@
 //! `omnical diagnose`: compare, locate, and name the missing effect; `--auto` climbs the error ladder.
 
-use super::{load_runs, resolve_model};
-use crate::cli::DataArgs;
+use super::{DataArgs, load_runs, resolve_model};
+use crate::design::design_for;
 use crate::{atomic, model_file};
 use anyhow::Context;
 use omni_ga::diagnose::{DiagnoseOptions, Diagnosis, diagnose};
-use omni_kin::{FittedModel, Model};
 use std::path::PathBuf;
 
 /// Arguments of `omnical diagnose`.
-#[derive(Debug)]
+#[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Model file (or `design`).
+    /// Model file (from `train --out`) or `design`.
+    #[arg(long)]
     pub model: String,
-    /// Training runs.
+    /// Training runs (the ones the model was fitted on).
+    #[arg(required = true)]
     pub runs: Vec<PathBuf>,
-    /// Held-out runs.
+    /// Held-out runs (default: 2-fold cross-validation over repetitions).
+    #[arg(long, num_args = 1..)]
     pub validate: Vec<PathBuf>,
-    /// Climb the ladder.
+    /// Add effects one at a time while the held-out cost falls, and print the error ladder.
+    #[arg(long)]
     pub auto: bool,
-    /// JSON output.
-    pub json: bool,
-    /// Restrict candidates.
+    /// Candidate effects (default: the whole catalogue), comma-separated.
+    #[arg(long, value_delimiter = ',')]
     pub candidates: Vec<String>,
-    /// Minimum held-out gain.
+    /// Minimum relative fall of the held-out path cost to recommend an effect.
+    #[arg(long, default_value_t = DiagnoseOptions::default().min_gain)]
     pub min_gain: f64,
-    /// Write the final model (with added effects) here.
+    /// Write the final model (with effects added by --auto) here.
+    #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Print JSON (top-level `verdict`, `ranking`, `ladder`, …).
+    #[arg(long)]
+    pub json: bool,
     /// Data options.
+    #[command(flatten)]
     pub data: DataArgs,
-}
-
-/// The design model matching a fitted model's base (same wheels), at nominal parameters.
-pub fn design_for(model: &FittedModel) -> FittedModel {
-    let base =
-        Model { kinematics: model.model.kinematics.clone(), effects: Vec::new(), integration: model.model.integration };
-    FittedModel::nominal(base)
 }
 
 /// Runs `omnical diagnose`.

@@ -1,15 +1,32 @@
 //! `omnical eval`: the cost of a model on runs, with per-run end-pose errors.
 
-use super::{load_runs, resolve_model};
-use crate::cli::DataArgs;
+use super::{DataArgs, load_runs, resolve_model};
 use omni_kin::cost::CostKind;
 use omni_kin::evaluate::Evaluator;
 use serde_json::json;
 use std::path::PathBuf;
 
+/// Arguments of `omnical eval`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// `design` (the data's design model, or the paper's Eq. 7) or a model file.
+    #[arg(long, default_value = "design")]
+    pub model: String,
+    /// Run files or folders.
+    #[arg(required = true)]
+    pub runs: Vec<PathBuf>,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// Data options.
+    #[command(flatten)]
+    pub data: DataArgs,
+}
+
 /// Runs `omnical eval`.
-pub fn run(model: &str, paths: &[PathBuf], as_json: bool, data: &DataArgs) -> anyhow::Result<()> {
-    let ds = load_runs(paths, data)?;
+pub fn run(a: &Args) -> anyhow::Result<()> {
+    let (model, as_json) = (a.model.as_str(), a.json);
+    let ds = load_runs(&a.runs, &a.data)?;
     let fm = resolve_model(model, &ds)?;
     let evaluator = Evaluator::for_report(&fm.model, &ds.runs, CostKind::PATH.selection())?;
     let all = evaluator.errors(&fm.model.resolve(&fm.params)?);

@@ -1,10 +1,9 @@
 //! `omnical export`: trajectories for other tools — TUM files for evo, MCAP bags with the calibrated
 //! odometry for Foxglove.
 
-use super::diagnose::design_for;
-use super::{load_runs_with_odometry, resolve_model, wheel_joints};
-use crate::cli::DataArgs;
+use super::{DataArgs, load_runs_with_odometry, resolve_model, wheel_joints};
 use crate::dataset::mcap::{WriteOptions, write_run};
+use crate::design::design_for;
 use crate::report::tum;
 use crate::{atomic, robot_config};
 use anyhow::Context;
@@ -13,21 +12,32 @@ use omni_kin::{FittedModel, Run, StampedPose};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `omnical export`.
-#[derive(Debug)]
+#[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Model file (or `design`).
+    /// Model file (from `train --out`) or `design`.
+    #[arg(long)]
     pub model: String,
-    /// Runs.
+    /// Run files or folders.
+    #[arg(required = true)]
     pub runs: Vec<PathBuf>,
-    /// TUM output folder.
+    /// Write `<run>.gt.tum`, `<run>.design.tum` and `<run>.calibrated.tum` into this folder.
+    #[arg(long, value_name = "DIR")]
     pub tum: Option<PathBuf>,
-    /// MCAP output folder.
+    /// Write one MCAP bag per run into this folder, with the calibrated odometry added.
+    #[arg(long, value_name = "DIR")]
     pub mcap: Option<PathBuf>,
-    /// Robot configuration output folder (`--robot-config`).
+    /// Write the calibration for the robot into this folder: the matrix as ROS 2 parameters
+    /// (omnical_odometry.yaml) and as a C header (omnical_odometry.h), and the parameters of the
+    /// matching ros2_controllers drive controller (ros2_controllers.yaml) from the nearest parametric fit,
+    /// with the accuracy it gives up on the runs (docs/applying.md).
+    #[arg(long, value_name = "DIR")]
     pub robot_config: Option<PathBuf>,
-    /// Controller for the robot configuration (default: the one that matches the base).
+    /// Drive controller for --robot-config: diff_drive_controller, mecanum_drive_controller or
+    /// omni_wheel_drive_controller (default: the one that matches the base).
+    #[arg(long, value_name = "NAME")]
     pub controller: Option<omni_kin::controller::ControllerKind>,
-    /// Wheel joint names for the MCAP output.
+    /// Data options.
+    #[command(flatten)]
     pub data: DataArgs,
 }
 

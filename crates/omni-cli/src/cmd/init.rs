@@ -1,6 +1,10 @@
 //! `omnical init`: inspect a recording, read the robot's URDF, and write a commented robot.toml.
 
-use crate::dataset::mcap::{self, Inventory};
+use crate::cli::choice;
+use crate::dataset::{
+    self,
+    mcap::{self, Inventory},
+};
 use crate::init::{self, UrdfSource, urdf};
 use crate::{atomic, robot_file};
 use anyhow::{Context, bail};
@@ -8,20 +12,25 @@ use omni_kin::robot::BaseKind;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `omnical init`.
-#[derive(Debug)]
+#[derive(Debug, clap::Args)]
 pub struct Args {
     /// The recording (ROS 2 MCAP).
     pub recording: PathBuf,
-    /// The URDF file (default: the recording's `/robot_description`).
+    /// The robot's URDF (default: the recording's /robot_description topic).
+    #[arg(long, value_name = "FILE")]
     pub urdf: Option<PathBuf>,
-    /// Where to write.
+    /// The file to write.
+    #[arg(long, default_value = robot_file::FILE_NAME)]
     pub out: PathBuf,
-    /// The base kind, instead of the guess.
+    /// The base kind, instead of the guess (2 wheels: diff; 4 named mecanum: mecanum; else omni).
+    #[arg(long, value_parser = choice::<BaseKind>())]
     pub kind: Option<BaseKind>,
-    /// Overwrite an existing file.
+    /// Replace an existing file.
+    #[arg(long)]
     pub force: bool,
-    /// Refuse recordings larger than this. Bytes.
-    pub max_file_bytes: u64,
+    /// Refuse a recording larger than this; it is read into memory whole. MiB.
+    #[arg(long, value_name = "MIB", default_value_t = dataset::DEFAULT_MAX_FILE_BYTES >> 20)]
+    pub max_file_mb: u64,
 }
 
 /// The URDF text and where it came from.
@@ -50,7 +59,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     if a.out.exists() && !a.force {
         bail!("{} exists; pass --force to replace it, or --out another file", a.out.display());
     }
-    let inv = mcap::inspect(&a.recording, a.max_file_bytes)?;
+    let inv = mcap::inspect(&a.recording, a.max_file_mb.saturating_mul(1 << 20))?;
     let (text, source, urdf_path) = urdf_text(a, &inv)?;
     let found = urdf::wheels(&text).map_err(|e| anyhow::anyhow!("{}: {e}", source.label))?;
     let recording = a.recording.display().to_string();

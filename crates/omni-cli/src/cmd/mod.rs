@@ -10,12 +10,71 @@ pub mod report;
 pub mod simulate;
 pub mod train;
 
-use crate::cli::DataArgs;
 use crate::dataset::{self, Dataset, LoadOptions};
-use crate::robot_file::{self, Design};
-use anyhow::Context;
-use omni_kin::{FittedModel, IkMatrix, KinematicsKind, Model, RobotGeometry};
-use std::path::{Path, PathBuf};
+use crate::robot_file;
+use omni_kin::FittedModel;
+use std::path::PathBuf;
+
+/// The robot the data was recorded on (docs/formats.md, "Robot description").
+#[derive(Debug, Default, clap::Args)]
+pub struct RobotArgs {
+    /// The robot description: a robot.toml file, or `apr02` for the paper's robot. Default: a robot.toml
+    /// beside the data (the first RUNS argument's folder) or in the working directory.
+    #[arg(long, value_name = "FILE|apr02")]
+    pub robot: Option<String>,
+}
+
+/// Options shared by commands that read runs.
+#[derive(Debug, clap::Args)]
+pub struct DataArgs {
+    /// The robot description (design geometry, joint names, topics).
+    #[command(flatten)]
+    pub robot: RobotArgs,
+    /// Wheel joint names in wheel order (MCAP JointState), comma-separated. Default: the robot
+    /// description's joints, else wheel_a,wheel_b,wheel_c.
+    #[arg(long, value_delimiter = ',')]
+    pub joints: Option<Vec<String>>,
+    /// MCAP topic of the wheel JointState (default: the only one).
+    #[arg(long)]
+    pub joints_topic: Option<String>,
+    /// MCAP topic of the ground truth (default: the only map/world-frame pose source).
+    #[arg(long)]
+    pub gt_topic: Option<String>,
+    /// Parent frame of the ground truth in a TF topic (MCAP), e.g. `map`.
+    #[arg(long)]
+    pub gt_parent_frame: Option<String>,
+    /// Child frame of the ground truth in a TF topic (MCAP), e.g. `base_link`.
+    #[arg(long)]
+    pub gt_child_frame: Option<String>,
+    /// Ground truth from a separate file instead of a topic: a TUM (`t x y z qx qy qz qw`) or CSV file for
+    /// one recording, or a folder of files named after the recordings (`rec.tum`, `rec.csv`). Default: the
+    /// robot description's `[ground_truth] file`, else a topic of the recording.
+    #[arg(long, value_name = "FILE|DIR")]
+    pub gt: Option<PathBuf>,
+    /// Clock offset of the `--gt` file: wheel time = ground-truth time + SECONDS. Default: estimated from
+    /// the data (reported with its standard error).
+    #[arg(long, value_name = "SECONDS", allow_hyphen_values = true)]
+    pub gt_time_offset: Option<f64>,
+    /// CSV columns of the `--gt` file, e.g. `t=stamp_ns,x=pos_x_mm,y=pos_y_mm,yaw=heading_deg` (default t, x,
+    /// y, yaw, or a quaternion qx, qy, qz, qw).
+    #[arg(long, value_delimiter = ',', value_name = "KEY=COLUMN")]
+    pub gt_columns: Vec<String>,
+    /// Units of the `--gt` CSV columns, e.g. `time=ns,length=mm,angle=deg` (default s, m, rad).
+    #[arg(long, value_delimiter = ',', value_name = "KEY=UNIT")]
+    pub gt_units: Vec<String>,
+    /// Cut MCAP files into runs where the robot stands still at least this long. s.
+    #[arg(long)]
+    pub split: Option<f64>,
+    /// Skip runs that fail to load (they are listed) instead of stopping.
+    #[arg(long)]
+    pub skip_invalid: bool,
+    /// Encoder ticks per wheel revolution, for CSV files with tick columns.
+    #[arg(long)]
+    pub ticks_per_rev: Option<f64>,
+    /// Refuse input files (CSV, MCAP) larger than this; each is read into memory whole. MiB.
+    #[arg(long, value_name = "MIB", default_value_t = dataset::DEFAULT_MAX_FILE_BYTES >> 20)]
+    pub max_file_mb: u64,
+}
 
 /// Load runs from files/folders, printing what was skipped or noticed on stderr. The runs' recorded
 /// odometry is left out (no command but `export` shows it, and it would take as much memory as the wheel
@@ -92,7 +151,7 @@ fn ground_truth_options(
         (Some(p), _) => p.clone(),
         (None, Some((r, file))) => match &r.source {
             robot_file::Source::Flag(p) | robot_file::Source::Discovered(p) => {
-                p.parent().unwrap_or(Path::new("")).join(file)
+                p.parent().unwrap_or(std::path::Path::new("")).join(file)
             }
             robot_file::Source::Builtin => PathBuf::from(file),
         },
@@ -124,47 +183,9 @@ fn ground_truth_options(
     Ok(Some(dataset::ground_truth::GroundTruthOptions { path, time_offset_s, csv }))
 }
 
-/// The design model of `kind` for a dataset's robot: `--robot`, else the data's own geometry (OptiOdom), else
-/// a found robot.toml; none of them is an error saying how to describe the robot. A robot description's
-/// `ik` design is its design matrix (the paper's Eq. 7 for APR-02; the closed form for diff).
-pub fn design_model(kind: KinematicsKind, ds: &Dataset) -> anyhow::Result<Model> {
-    match robot_file::design(ds) {
-        Some(Design::File(f)) if kind == KinematicsKind::Ik => {
-            Ok(Model::ik(f.description.design_ik().with_context(|| format!("robot {}", f.source))?))
-        }
-        Some(Design::File(f)) => {
-            let g = f.description.to_geometry().with_context(|| format!("robot {}", f.source))?;
-            Ok(Model::design(kind, Some(&g))?)
-        }
-        Some(Design::Data(g)) => Ok(Model::design(kind, Some(g))?),
-        None => Err(robot_file::no_design("the design model")),
-    }
-}
-
-/// The design geometry of a dataset's robot (`--robot`, the data's geometry, or a found robot.toml).
-pub fn design_geometry(ds: &Dataset) -> anyhow::Result<RobotGeometry> {
-    match robot_file::design(ds) {
-        Some(Design::File(f)) => f.description.to_geometry().with_context(|| format!("robot {}", f.source)),
-        Some(Design::Data(g)) => Ok(g.clone()),
-        None => Err(robot_file::no_design("the design geometry")),
-    }
-}
-
-/// `design` / `paper` or a model file.
+/// `design` / `paper` or a model file ([`crate::design::resolve`]), for the data's robot.
 pub fn resolve_model(spec: &str, ds: &Dataset) -> anyhow::Result<FittedModel> {
-    match spec {
-        "design" => match robot_file::design(ds) {
-            Some(Design::File(_)) => Ok(FittedModel::nominal(design_model(KinematicsKind::Ik, ds)?)),
-            // A two-wheel base (OptiOdom's diff) has no omnidirectional geometry model: its own.
-            Some(Design::Data(g)) if g.n_wheels() == 2 => {
-                Ok(FittedModel::nominal(Model::design(KinematicsKind::Diff, Some(g))?))
-            }
-            Some(Design::Data(g)) => Ok(FittedModel::nominal(Model::geometry(g.clone()))),
-            None => Err(robot_file::no_design("--model design")),
-        },
-        "paper" => Ok(FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated()))),
-        path => crate::model_file::read(Path::new(path)).context("reading the model"),
-    }
+    crate::design::resolve(spec, ds)
 }
 
 /// The wheel joint names the runs were read with: `--joints`, else the robot description's, else the

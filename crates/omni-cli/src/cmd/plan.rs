@@ -1,43 +1,92 @@
 //! `omnical plan`: propose calibration runs that excite every parameter.
 
-use super::{design_geometry, load_runs};
-use crate::cli::{DataArgs, ModelKind};
-use crate::{atomic, robot_file};
+use super::{DataArgs, load_runs};
+use crate::cli::choice;
+use crate::{atomic, design, robot_file};
 use anyhow::Context;
 use omni_ga::excitation::{self, PlanRequest, RunPlan, RunSet};
 use omni_kin::simulate::SimConfig;
-use omni_kin::{EffectKind, FittedModel, Model, RobotGeometry};
+use omni_kin::{EffectKind, FittedModel, KinematicsKind, Model, RobotGeometry};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-/// Arguments of `omnical plan`.
-#[derive(Debug)]
+/// Arguments of `omnical plan`: what to plan for (defaults: [`PlanRequest::default`]) and where.
+#[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Base model.
-    pub model: ModelKind,
-    /// Effect ids.
+    /// Base model to plan for.
+    #[arg(long, value_parser = choice::<KinematicsKind>(), default_value_t = KinematicsKind::default())]
+    pub model: KinematicsKind,
+    /// Effects to plan for (catalogue ids). Repeatable.
+    #[arg(long = "effect", value_name = "NAME")]
     pub effects: Vec<String>,
-    /// Runs whose robot geometry to use.
+    /// Take the robot's geometry from these runs (OptiOdom metadata), when there is no --robot.
+    #[arg(long = "robot-from", value_name = "RUNS", num_args = 1..)]
     pub robot_from: Vec<PathBuf>,
-    /// What to plan for: set, runs, speeds, duration, ground-truth rate and noise.
-    pub request: PlanRequest,
-    /// CSV output.
+    /// Which set: a D-optimal pick from a library of commands, or the paper's 36 flower commands.
+    #[arg(long, value_parser = choice::<RunSet>(), default_value_t = RunSet::default())]
+    pub set: RunSet,
+    /// Distinct commands to pick (greedy).
+    #[arg(long, default_value_t = PlanRequest::default().runs)]
+    pub runs: usize,
+    /// Repetitions of each command.
+    #[arg(long, default_value_t = PlanRequest::default().repetitions)]
+    pub repetitions: usize,
+    /// Translation speed of the commands. m/s.
+    #[arg(long = "speed", default_value_t = PlanRequest::default().speed_m_s, value_name = "M_S")]
+    pub speed_m_s: f64,
+    /// Turn rate of the commands. rad/s.
+    #[arg(long = "omega", default_value_t = PlanRequest::default().omega_rad_s, value_name = "RAD_S")]
+    pub omega_rad_s: f64,
+    /// How long each command is held. s.
+    #[arg(long = "duration", default_value_t = PlanRequest::default().duration_s, value_name = "S")]
+    pub duration_s: f64,
+    /// Ground-truth rate. Hz.
+    #[arg(long = "truth-rate", default_value_t = PlanRequest::default().truth_rate_hz, value_name = "HZ")]
+    pub truth_rate_hz: f64,
+    /// Ground-truth position noise per axis. m.
+    #[arg(long, default_value_t = PlanRequest::default().truth_noise_m, value_name = "M")]
+    pub truth_noise_m: f64,
+    /// Ground-truth heading noise. rad.
+    #[arg(long, default_value_t = PlanRequest::default().truth_noise_rad, value_name = "RAD")]
+    pub truth_noise_rad: f64,
+    /// Write the planned commands as CSV here (v_m_s, alpha_deg, omega_rad_s, repetitions).
+    #[arg(long)]
     pub out: Option<PathBuf>,
-    /// JSON output.
+    /// Print JSON.
+    #[arg(long)]
     pub json: bool,
-    /// Data options.
+    /// Data options (for --robot-from).
+    #[command(flatten)]
     pub data: DataArgs,
+}
+
+impl Args {
+    /// The library's request: these arguments over [`PlanRequest::default`].
+    pub fn request(&self) -> PlanRequest {
+        PlanRequest {
+            speed_m_s: self.speed_m_s,
+            omega_rad_s: self.omega_rad_s,
+            duration_s: self.duration_s,
+            truth_rate_hz: self.truth_rate_hz,
+            truth_noise_m: self.truth_noise_m,
+            truth_noise_rad: self.truth_noise_rad,
+            runs: self.runs,
+            repetitions: self.repetitions,
+            set: self.set,
+            ..PlanRequest::default()
+        }
+    }
 }
 
 /// Runs `omnical plan`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
     let robot = plan_robot(a)?;
-    let mut model = FittedModel::nominal(Model::design(a.model.into(), Some(&robot))?);
+    let mut model = FittedModel::nominal(Model::design(a.model, Some(&robot))?);
     for id in &a.effects {
         model = model
             .with_effect(EffectKind::from_id(id, model.model.n_wheels()).with_context(|| format!("--effect {id}"))?);
     }
-    let req = &a.request;
+    let req = &a.request();
     let sim = SimConfig { design: robot, ..SimConfig::default() };
     let plan = excitation::plan(&model, &sim, req)?;
     // The paper's flower set beside a greedy plan, for comparison.
@@ -64,7 +113,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
 /// them or in the working directory. Plan needs it to turn commands into wheel speeds.
 fn plan_robot(a: &Args) -> anyhow::Result<RobotGeometry> {
     if !a.robot_from.is_empty() {
-        return design_geometry(&load_runs(&a.robot_from, &a.data)?);
+        return design::geometry(&load_runs(&a.robot_from, &a.data)?);
     }
     match robot_file::resolve(a.data.robot.robot.as_deref(), &[])? {
         Some(r) => {

@@ -1,36 +1,41 @@
 //! `omnical report`: the HTML report of a model on runs (diagnosis included unless `--no-diagnose`).
 
-use super::diagnose::design_for;
-use super::{load_runs, resolve_model};
-use crate::cli::DataArgs;
+use super::{DataArgs, load_runs, resolve_model};
+use crate::design::design_for;
 use crate::progress;
 use crate::report::{self, ReportInput};
 use omni_ga::diagnose::{DiagnoseOptions, diagnose};
 use std::path::PathBuf;
 
 /// Arguments of `omnical report`.
-#[derive(Debug)]
+#[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Model file (or `design`).
+    /// Model file (from `train --out`) or `design`.
+    #[arg(long)]
     pub model: String,
-    /// Training runs.
+    /// Training runs (the ones the model was fitted on).
+    #[arg(required = true)]
     pub runs: Vec<PathBuf>,
-    /// Held-out runs.
+    /// Held-out runs: the figures use them (default: the training runs, 2-fold cross-validation in the
+    /// diagnosis).
+    #[arg(long, num_args = 1..)]
     pub validate: Vec<PathBuf>,
-    /// HTML output.
+    /// The HTML file to write.
+    #[arg(long, default_value = "report.html")]
     pub out: PathBuf,
-    /// PNG folder.
+    /// Also write each figure as PNG into this folder.
+    #[arg(long, value_name = "DIR")]
     pub png: Option<PathBuf>,
-    /// Skip the diagnosis.
+    /// Skip the diagnosis (faster; no ranking, ladder of the given model only).
+    #[arg(long)]
     pub no_diagnose: bool,
     /// Data options.
+    #[command(flatten)]
     pub data: DataArgs,
-    /// No progress display.
-    pub quiet: bool,
 }
 
-/// Runs `omnical report`.
-pub fn run(a: &Args) -> anyhow::Result<()> {
+/// Runs `omnical report`; `quiet` hides the progress display.
+pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     let ds = load_runs(&a.runs, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
     let val = if a.validate.is_empty() { Vec::new() } else { load_runs(&a.validate, &a.data)?.runs };
@@ -38,7 +43,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let diagnosis = if a.no_diagnose {
         None
     } else {
-        let spinner = progress::spinner("diagnosing: refitting each candidate effect", a.quiet);
+        let spinner = progress::spinner("diagnosing: refitting each candidate effect", quiet);
         let opts = DiagnoseOptions { auto: true, ..DiagnoseOptions::default() };
         let held_out = if val.is_empty() { None } else { Some(val.as_slice()) };
         let d = diagnose(&model, &design, &ds.runs, held_out, &opts)?;
@@ -56,7 +61,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         diagnosis: diagnosis.as_ref(),
         sources,
     };
-    let spinner = progress::spinner("drawing the report", a.quiet);
+    let spinner = progress::spinner("drawing the report", quiet);
     let w = report::write(&input, &a.out, a.png.as_deref())?;
     spinner.finish_and_clear();
     print_written(&w, &a.out);

@@ -1,8 +1,7 @@
 //! `omnical simulate`: write a flower-benchmark dataset from a true robot with optional hidden effects.
 
-use crate::cli::Format;
 use crate::robot_file::{self, RobotFile};
-use crate::{atomic, dataset, model_file};
+use crate::{atomic, dataset, design, model_file};
 use anyhow::{Context, bail};
 use omni_kin::cost::{self, CostKind};
 use omni_kin::effect::Effect;
@@ -14,29 +13,50 @@ use std::path::{Path, PathBuf};
 /// ROS time of the simulator's t = 0 in MCAP output (2023-11-14T22:13:20Z). s.
 pub const SIM_EPOCH_S: i64 = 1_700_000_000;
 
+/// Seed of the training split (validation: seed + 1), here and in `demo`.
+pub const DEFAULT_SEED: u64 = 7;
+
+/// Dataset file format for writing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Format {
+    /// omnical CSV, one file per run (docs/formats.md).
+    Csv,
+    /// ROS 2 MCAP bag, one file per run.
+    Mcap,
+}
+
 /// Arguments of `omnical simulate`.
-#[derive(Debug)]
+#[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Output folder.
+    /// Output folder: writes train/, validation/, truth.json and truth_model.toml.
+    #[arg(long)]
     pub out: PathBuf,
-    /// Seed.
+    /// Seed (training uses it, validation seed + 1).
+    #[arg(long, default_value_t = DEFAULT_SEED)]
     pub seed: u64,
-    /// Repetitions per command.
+    /// Repetitions of each of the 36 commands.
+    #[arg(long, default_value_t = SimConfig::default().runs_per_command)]
     pub runs_per_command: usize,
-    /// Command duration. s.
+    /// Duration of each command. s.
+    #[arg(long = "duration", value_name = "DURATION", default_value_t = SimConfig::default().duration_s)]
     pub duration_s: f64,
-    /// `NAME=V1,V2` effect specs.
+    /// Inject an effect into the true robot: NAME=V1,V2,… in the effect's parameter order
+    /// (`sample_timing=DROP_PROBABILITY,JITTER_S`). Repeatable.
+    #[arg(long = "effect", value_name = "NAME=VALUES")]
     pub effects: Vec<String>,
-    /// `paper`, `design` or a model file.
+    /// True robot: `paper` (Eq. 9, APR-02 only), `design` (the robot's design) or a model file.
+    #[arg(long, default_value = "paper")]
     pub truth: String,
-    /// `apr02` or a robot description file.
+    /// The robot: its design drives the simulated controller and is written as robot.toml beside the
+    /// runs. Default: `apr02`, the paper's robot.
+    #[arg(long, value_name = "FILE|apr02", default_value = robot_file::BUILTIN_APR02)]
     pub robot: String,
     /// Output format.
+    #[arg(long, value_enum, default_value_t = Format::Mcap)]
     pub format: Format,
-    /// No quantisation, no noise.
+    /// No encoder quantisation and no noise.
+    #[arg(long)]
     pub noise_free: bool,
-    /// Less output.
-    pub quiet: bool,
 }
 
 /// Parse `NAME=V1,V2,…` and add the effect to `truth` (or, for `sample_timing`, to the simulator config).
@@ -103,7 +123,7 @@ fn design_and_truth(a: &Args) -> anyhow::Result<(RobotFile, RobotGeometry, Fitte
              --truth design (the design itself) or --truth FILE (a model file)",
             robot.source
         ),
-        "paper" => FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated())),
+        "paper" => design::paper_calibrated(),
         "design" => design.clone(),
         path => model_file::read(Path::new(path)).context("reading --truth")?,
     };
@@ -135,8 +155,8 @@ fn write_robot(dir: &Path, robot: &RobotFile) -> anyhow::Result<()> {
     atomic::write_atomic(&path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))
 }
 
-/// Runs `omnical simulate`.
-pub fn run(a: &Args) -> anyhow::Result<()> {
+/// Runs `omnical simulate`; `quiet` hides the progress display.
+pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     let (robot, geometry, design, mut truth) = design_and_truth(a)?;
     let mut config = SimConfig {
         design: geometry,
@@ -154,7 +174,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let mut summary = serde_json::Map::new();
     for (split, seed) in [("train", a.seed), ("validation", a.seed.wrapping_add(1))] {
         let cfg = SimConfig { seed, ..config.clone() };
-        let spinner = crate::progress::spinner(format!("simulating and writing {split} runs"), a.quiet);
+        let spinner = crate::progress::spinner(format!("simulating and writing {split} runs"), quiet);
         let runs = simulate(&cfg, &truth, &format!("{split}/"))?;
         write_split(&a.out.join(split), &runs, a.format, &wheel_names)?;
         write_robot(&a.out.join(split), &robot)?;

@@ -1,40 +1,75 @@
 //! `omnical train`: fit a model to training runs.
 
-use super::{design_model, load_runs};
-use crate::cli::{CostArg, DataArgs, FitArgs, ModelKind, PresetArg, UnexcitedArg};
-use crate::{atomic, interrupt, model_file, progress};
+use super::{DataArgs, load_runs};
+use crate::cli::choice;
+use crate::{atomic, design, interrupt, model_file, progress};
 use anyhow::Context;
 use omni_ga::calibrate::{Calibration, Plan, Preset, Unexcited, calibrate};
-use omni_kin::cost::CostKind;
-use omni_kin::{EffectKind, FittedModel};
+use omni_ga::identify::IdentifyOptions;
+use omni_kin::cost::{CostKind, CostName};
+use omni_kin::{EffectKind, FittedModel, KinematicsKind};
 use serde_json::json;
 use std::path::PathBuf;
 
 /// Arguments of `omnical train`.
-#[derive(Debug)]
+#[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Training runs.
+    /// Training run files or folders.
+    #[arg(required = true)]
     pub runs: Vec<PathBuf>,
-    /// Base model.
-    pub model: ModelKind,
-    /// Start model file.
+    /// Base model to fit.
+    #[arg(long, value_parser = choice::<KinematicsKind>(), default_value_t = KinematicsKind::default())]
+    pub model: KinematicsKind,
+    /// Start from this model file instead of the design.
+    #[arg(long)]
     pub start: Option<PathBuf>,
     /// Recipe.
-    pub preset: PresetArg,
+    #[arg(long, value_parser = choice::<Preset>(), default_value_t = Preset::default())]
+    pub preset: Preset,
     /// GA seed.
+    #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Effect ids to fit.
+    /// Add effects to fit (catalogue ids). Repeatable.
+    #[arg(long = "effect", value_name = "NAME")]
     pub effects: Vec<String>,
-    /// Output model file.
+    /// Write the fitted model here (TOML; read back by `--model FILE`).
+    #[arg(long)]
     pub out: Option<PathBuf>,
-    /// JSON summary.
+    /// Print a JSON summary instead of text.
+    #[arg(long)]
     pub json: bool,
     /// Objective and unconstrained directions.
+    #[command(flatten)]
     pub fit: FitArgs,
     /// Data options.
+    #[command(flatten)]
     pub data: DataArgs,
-    /// Less output.
-    pub quiet: bool,
+}
+
+/// Overrides of a preset's objective and its handling of unconstrained directions.
+#[derive(Debug, clap::Args)]
+pub struct FitArgs {
+    /// Objective (default: the preset's; paper: end-pose, default: path).
+    #[arg(long, value_parser = choice::<CostName>())]
+    pub objective: Option<CostName>,
+    /// Path objective: use every k-th ground-truth pose (odometry is evaluated at its stamp).
+    #[arg(long, default_value_t = CostKind::PATH_EVERY, value_name = "K")]
+    pub every: usize,
+    /// Path objective: weight of heading errors against position errors. m/rad.
+    #[arg(long, default_value_t = CostKind::PATH_HEADING_WEIGHT_M_PER_RAD, value_name = "M_PER_RAD")]
+    pub heading_weight: f64,
+    /// Directions the runs do not constrain: hold them at the start or let them move (default: the
+    /// preset's; paper: move, default: hold).
+    #[arg(long, value_parser = choice::<Unexcited>())]
+    pub unexcited: Option<Unexcited>,
+    /// A direction is unconstrained when its standard error exceeds this fraction of the parameters'
+    /// scale.
+    #[arg(long, default_value_t = IdentifyOptions::default().max_std_error, value_name = "FRACTION")]
+    pub max_std_error: f64,
+    /// A direction is unconstrained when its singular value (scaled Jacobian) is below this fraction of
+    /// the largest.
+    #[arg(long, default_value_t = IdentifyOptions::default().min_excitation, value_name = "FRACTION")]
+    pub min_excitation: f64,
 }
 
 /// The fit summary as JSON (also written into the model file's `[fit]` table).
@@ -88,10 +123,7 @@ pub fn fixed_step_mismatch(plan: &Plan, runs: &[omni_kin::Run]) -> Option<String
         format!(
             "the {} preset integrates fixed {:.0} ms steps (Eq. 1), but these runs are sampled every {:.0} ms: \
              odometry is off by a factor {:.2}; use --preset default (each run's own step)",
-            match plan.preset {
-                Preset::Paper => "paper",
-                Preset::Default => "default",
-            },
+            plan.preset,
             1e3 * step,
             1e3 * median,
             step / median
@@ -110,22 +142,9 @@ pub fn apply_fit_args(mut plan: Plan, f: &FitArgs) -> anyhow::Result<Plan> {
     if !(f.max_std_error.is_finite() && f.max_std_error > 0.0) {
         anyhow::bail!("--max-std-error must be a finite fraction > 0, got {}", f.max_std_error);
     }
-    match f.objective {
-        Some(CostArg::EndPose) => plan.objective = CostKind::EndPose,
-        Some(CostArg::Path) => {
-            plan.objective = CostKind::Path { every: f.every, heading_weight_m_per_rad: f.heading_weight }
-        }
-        None => {
-            if let CostKind::Path { .. } = plan.objective {
-                plan.objective = CostKind::Path { every: f.every, heading_weight_m_per_rad: f.heading_weight };
-            }
-        }
-    }
-    match f.unexcited {
-        Some(UnexcitedArg::Hold) => plan.unexcited = Unexcited::Hold,
-        Some(UnexcitedArg::Move) => plan.unexcited = Unexcited::Move,
-        None => {}
-    }
+    let objective = f.objective.unwrap_or(plan.objective.cost_name());
+    plan.objective = objective.with_path_settings(f.every, f.heading_weight);
+    plan.unexcited = f.unexcited.unwrap_or(plan.unexcited);
     if !(f.min_excitation.is_finite() && (0.0..1.0).contains(&f.min_excitation)) {
         anyhow::bail!("--min-excitation must be a fraction in [0, 1), got {}", f.min_excitation);
     }
@@ -134,8 +153,8 @@ pub fn apply_fit_args(mut plan: Plan, f: &FitArgs) -> anyhow::Result<Plan> {
     Ok(plan)
 }
 
-/// Runs `omnical train`.
-pub fn run(a: &Args) -> anyhow::Result<()> {
+/// Runs `omnical train`; `quiet` hides the progress display.
+pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     // Ctrl-C while loading ends the command; during the fit it stops the GA at its next generation and the
     // best model so far is reported and written.
     interrupt::install();
@@ -145,22 +164,19 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     }
     let mut start = match &a.start {
         Some(p) => model_file::read(p).context("reading --start")?,
-        None => FittedModel::nominal(design_model(a.model.into(), &ds)?),
+        None => FittedModel::nominal(design::model(a.model, &ds)?),
     };
     for id in &a.effects {
         start = start
             .with_effect(EffectKind::from_id(id, start.model.n_wheels()).with_context(|| format!("--effect {id}"))?);
     }
-    let (preset, preset_name) = match a.preset {
-        PresetArg::Paper => (Preset::Paper, "paper"),
-        PresetArg::Default => (Preset::Default, "default"),
-    };
-    let plan = apply_fit_args(Plan::preset(preset, start.model.n_params()).seed(a.seed), &a.fit)?;
+    let preset_name = a.preset.id();
+    let plan = apply_fit_args(Plan::preset(a.preset, start.model.n_params()).seed(a.seed), &a.fit)?;
     if let Some(w) = fixed_step_mismatch(&plan, &ds.runs) {
         eprintln!("warning: {w}");
     }
-    let mut bar = progress::ProgressObserver::new(plan.ga.as_ref().map_or(0, |g| g.max_generations), a.quiet);
-    if !a.quiet {
+    let mut bar = progress::ProgressObserver::new(plan.ga.as_ref().map_or(0, |g| g.max_generations), quiet);
+    if !quiet {
         eprintln!(
             "training on {} runs: preset {preset_name}, seed {} (Ctrl-C stops early and keeps the best so far)",
             ds.runs.len(),

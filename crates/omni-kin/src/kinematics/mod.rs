@@ -34,8 +34,6 @@ use crate::geometry::{RobotGeometry, Wheel};
 use crate::ik::IkMatrix;
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
-use std::fmt;
-use std::str::FromStr;
 
 /// A typical wheel lever arm when a model does not know its wheel positions (an IK matrix). m.
 pub const DEFAULT_LEVER_ARM_M: f64 = 0.2;
@@ -129,48 +127,12 @@ pub enum KinematicsKind {
     Mecanum,
 }
 
-impl KinematicsKind {
-    /// Every kind, in the order help texts list them.
-    pub const ALL: [KinematicsKind; 4] =
-        [KinematicsKind::Ik, KinematicsKind::Geometry, KinematicsKind::Diff, KinematicsKind::Mecanum];
-
-    /// The id: `ik`, `geometry`, `diff`, `mecanum`.
-    pub fn id(self) -> &'static str {
-        match self {
-            Self::Ik => "ik",
-            Self::Geometry => "geometry",
-            Self::Diff => "diff",
-            Self::Mecanum => "mecanum",
-        }
-    }
-}
-
-impl fmt::Display for KinematicsKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.id())
-    }
-}
-
-/// An id that names no [`KinematicsKind`]. Displays as `"x": expected "ik", "geometry", "diff" or "mecanum"`.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct UnknownKinematics(pub String);
-
-impl fmt::Display for UnknownKinematics {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let ids: Vec<String> = KinematicsKind::ALL.iter().map(|k| format!("{:?}", k.id())).collect();
-        let (last, rest) = ids.split_last().map_or(("", &[][..]), |(l, r)| (l.as_str(), r));
-        write!(f, "{:?}: expected {} or {last}", self.0, rest.join(", "))
-    }
-}
-
-impl std::error::Error for UnknownKinematics {}
-
-impl FromStr for KinematicsKind {
-    type Err = UnknownKinematics;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        Self::ALL.into_iter().find(|k| k.id() == s).ok_or_else(|| UnknownKinematics(s.to_string()))
-    }
-}
+crate::choice!(KinematicsKind, default = Ik, {
+    Ik => "ik": "Every entry of the IK matrix (the paper)",
+    Geometry => "geometry": "Wheel radii, distances and angles (the paper's ref. [17])",
+    Diff => "diff": "A differential drive: both wheel radii and the separation",
+    Mecanum => "mecanum": "Four wheels on a rectangle (mecanum, omni X): per-wheel radius and the half-extents",
+});
 
 /// What a model file stores about the base kinematics (the keys of `omnical-model/1` besides `format`,
 /// `kinematics`, `integration`, `effects` and `fit`). Each model uses the keys it needs.
