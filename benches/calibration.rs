@@ -105,7 +105,7 @@ fn benches(c: &mut Criterion) {
     let plan = Plan::preset(Preset::Default, 9);
     // The polish alone, from the default preset's GA result.
     if let Ok(cal) = calibrate(&start, &runs, &plan, &mut NoopObserver)
-        && let Some(ga) = &cal.ga
+        && let Some(ga) = cal.solution("ga")
     {
         let model = start.model.clone().with_integration(plan.integration);
         if let Ok(bounds) = search_box(&model, &start.params, plan.box_rule)

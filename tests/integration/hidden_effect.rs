@@ -28,7 +28,7 @@ fn config() -> SimConfig {
 fn fit_matrix(train: &[Run]) -> FittedModel {
     let start = FittedModel::nominal(Model::ik(IkMatrix::paper_design()));
     let mut plan = Plan::preset(Preset::Default, 9);
-    plan.ga = None;
+    plan.stages.retain(|s| s.name() != "ga");
     calibrate(&start, train, &plan, &mut NoopObserver).expect("calibrate").fitted
 }
 
@@ -123,7 +123,7 @@ fn sensor_offset_is_absorbed_by_ik_and_found_with_geometry() {
     let (train, val) = dataset(&gt, &config());
     let start = FittedModel::nominal(Model::geometry(RobotGeometry::apr02()));
     let mut plan = Plan::preset(Preset::Default, 9);
-    plan.ga = None;
+    plan.stages.retain(|s| s.name() != "ga");
     let fitted = calibrate(&start, &train, &plan, &mut NoopObserver).expect("calibrate").fitted;
     let d = diagnose(&fitted, &start, &train, Some(&val), &DiagnoseOptions::default()).expect("diagnose");
     let c = d.ranking.iter().find(|c| c.effect == "sensor_offset").expect("candidate");

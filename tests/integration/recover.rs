@@ -38,7 +38,7 @@ fn paper_preset_lowers_the_cost_like_the_paper() {
     let start = FittedModel::nominal(Model::ik(IkMatrix::paper_design()));
     let mut plan = Plan::preset(Preset::Paper, 9).seed(1);
     // A smaller population keeps the test fast; the full preset runs in the benchmarks.
-    if let Some(ga) = plan.ga.as_mut() {
+    if let Some(ga) = plan.ga_mut() {
         ga.population = 60;
         ga.elite = 3;
     }

@@ -1,41 +1,28 @@
-//! Errors of the optimizers.
-use thiserror::Error;
+//! The crate's error, [`Error`]: what calibration, diagnosis and planning return. The optimizer layer
+//! reports with its own [`OptimizeError`], which converts into it.
 
-/// An optimizer refused its inputs.
-#[derive(Debug, Error, Clone, PartialEq)]
-pub enum OptimizeError {
-    /// Start point and bounds disagree in size.
-    #[error("start point has {start} parameters but bounds have {bounds}")]
-    DimensionMismatch {
-        /// Entries of the start point.
-        start: usize,
-        /// Entries of the bounds.
-        bounds: usize,
-    },
-    /// A start entry is NaN or infinite.
-    #[error("start point entry {index} is {value}, not finite")]
-    StartNotFinite {
-        /// Index.
-        index: usize,
-        /// Value.
-        value: f64,
-    },
-    /// A bound pair is invalid.
-    #[error("bounds of parameter {index}: lower {lower} > upper {upper} or not a number")]
-    BadBounds {
-        /// Index.
-        index: usize,
-        /// Lower bound.
-        lower: f64,
-        /// Upper bound.
-        upper: f64,
-    },
-    /// A configuration value is invalid.
-    #[error("{what}: {why}")]
-    BadConfig {
-        /// The setting.
+pub use crate::optimizer::error::OptimizeError;
+use omni_kin::KinError;
+use thiserror::Error as ThisError;
+
+/// A calibration, diagnosis or plan failed.
+#[derive(Debug, ThisError)]
+pub enum Error {
+    /// The model or runs are not usable.
+    #[error(transparent)]
+    Kin(#[from] KinError),
+    /// The optimizer refused its inputs.
+    #[error(transparent)]
+    Optimize(#[from] OptimizeError),
+    /// Nothing to fit.
+    #[error("no training runs")]
+    NoRuns,
+    /// A run-planning request is out of range ([`crate::science::excitation::PlanRequest`]).
+    #[error("plan {what}: {why}")]
+    BadPlanRequest {
+        /// The settings concerned.
         what: &'static str,
-        /// Why.
-        why: String,
+        /// What they must satisfy.
+        why: &'static str,
     },
 }

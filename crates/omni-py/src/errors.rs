@@ -2,7 +2,7 @@
 //!
 //! | Rust | Python |
 //! |---|---|
-//! | bad shape, NaN, non-increasing stamps, unknown name (`KinError`, binding checks) | `ValueError` |
+//! | bad shape, NaN, non-increasing stamps, unknown name (`KinError`, no runs or a bad plan request (`omni_ga::Error`), binding checks) | `ValueError` |
 //! | a file that does not exist | `FileNotFoundError` |
 //! | other I/O | `OSError` |
 //! | `DatasetError` (a file that does not parse or does not make runs) | `omnical.DatasetError` |
@@ -13,8 +13,7 @@
 
 use omni_cli::dataset::DatasetError as RsDatasetError;
 use omni_cli::model_file::ModelFileError as RsModelFileError;
-use omni_ga::OptimizeError;
-use omni_ga::calibrate::CalibrateError;
+use omni_ga::{Error as GaError, OptimizeError};
 use omni_kin::KinError;
 use pyo3::exceptions::{PyException, PyFileNotFoundError, PyOSError, PyValueError};
 use pyo3::{PyErr, create_exception};
@@ -66,12 +65,12 @@ impl ToPyErr for OptimizeError {
     }
 }
 
-impl ToPyErr for CalibrateError {
+impl ToPyErr for GaError {
     fn to_py_err(self) -> PyErr {
         match self {
-            CalibrateError::Kin(e) => e.to_py_err(),
-            CalibrateError::Optimize(e) => e.to_py_err(),
-            CalibrateError::NoRuns => PyValueError::new_err(self.to_string()),
+            GaError::Kin(e) => e.to_py_err(),
+            GaError::Optimize(e) => e.to_py_err(),
+            GaError::NoRuns | GaError::BadPlanRequest { .. } => PyValueError::new_err(self.to_string()),
         }
     }
 }

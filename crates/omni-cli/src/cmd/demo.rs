@@ -44,7 +44,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     let start = FittedModel::nominal(Model::ik(IkMatrix::paper_design()));
     let preset = Preset::Default;
     let plan = Plan::preset(preset, 9).seed(0);
-    let mut bar = progress::ProgressObserver::new(plan.ga.as_ref().map_or(0, |g| g.max_generations), quiet);
+    let mut bar = progress::ProgressObserver::new(plan.ga().map_or(0, |g| g.max_generations), quiet);
     let fit = calibrate(&start, &train, &plan, &mut bar)?;
     bar.finish();
     print_summary(&fit, preset.id(), train.len());

@@ -175,7 +175,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     if let Some(w) = fixed_step_mismatch(&plan, &ds.runs) {
         eprintln!("warning: {w}");
     }
-    let mut bar = progress::ProgressObserver::new(plan.ga.as_ref().map_or(0, |g| g.max_generations), quiet);
+    let mut bar = progress::ProgressObserver::new(plan.ga().map_or(0, |g| g.max_generations), quiet);
     if !quiet {
         eprintln!(
             "training on {} runs: preset {preset_name}, seed {} (Ctrl-C stops early and keeps the best so far)",

@@ -15,12 +15,13 @@
 //!
 //! Expected standard errors count ground-truth noise only: wheel-speed noise integrates along a path
 //! into correlated drift, which makes real standard errors larger (on the simulator's defaults, 3–4×:
-//! see [`crate::identify`]).
+//! see [`crate::science::identify`]).
 
-use crate::calibrate::{CalibrateError, CalibrationProblem};
-use crate::diagnose::differentiable_start;
-use crate::identify::{self, Identifiability, IdentifyOptions};
-use crate::problem::Bounds;
+use crate::error::Error;
+use crate::fit::CalibrationProblem;
+use crate::optimizer::problem::Bounds;
+use crate::science::diagnose::differentiable_start;
+use crate::science::identify::{self, Identifiability, IdentifyOptions};
 use nalgebra::DMatrix;
 use omni_kin::cost::CostKind;
 use omni_kin::simulate::{SimConfig, flower_commands, simulate};
@@ -122,10 +123,8 @@ pub fn candidate_commands(speed_m_s: f64, omega_rad_s: f64) -> Vec<Command> {
     v
 }
 
-fn check(req: &PlanRequest) -> Result<(), CalibrateError> {
-    let bad = |what: &str, why: &str| {
-        Err(CalibrateError::Kin(omni_kin::KinError::Invalid { what: format!("plan {what}"), why: why.into() }))
-    };
+fn check(req: &PlanRequest) -> Result<(), Error> {
+    let bad = |what, why| Err(Error::BadPlanRequest { what, why });
     let pos = |x: f64| x.is_finite() && x > 0.0;
     if !(pos(req.speed_m_s) && pos(req.omega_rad_s) && pos(req.duration_s) && pos(req.truth_rate_hz)) {
         return bad("speeds/duration/rate", "speed, ω, duration and ground-truth rate must be finite and > 0");
@@ -141,7 +140,7 @@ fn check(req: &PlanRequest) -> Result<(), CalibrateError> {
 
 /// Plan calibration runs for `model` (its parameters at their design/null values) on a robot whose
 /// controller uses `sim.design`. `sim` supplies the robot and timing; its noise settings are ignored.
-pub fn plan(model: &FittedModel, sim: &SimConfig, req: &PlanRequest) -> Result<RunPlan, CalibrateError> {
+pub fn plan(model: &FittedModel, sim: &SimConfig, req: &PlanRequest) -> Result<RunPlan, Error> {
     check(req)?;
     let commands = match req.set {
         RunSet::Flower => flower_commands()
@@ -193,15 +192,9 @@ struct Block {
     info_scaled: DMatrix<f64>,
 }
 
-fn information_blocks(
-    model: &FittedModel,
-    x: &[f64],
-    runs: &[Run],
-    req: &PlanRequest,
-) -> Result<Vec<Block>, CalibrateError> {
+fn information_blocks(model: &FittedModel, x: &[f64], runs: &[Run], req: &PlanRequest) -> Result<Vec<Block>, Error> {
     let n = x.len();
-    let bounds = Bounds::new(vec![f64::NEG_INFINITY; n], vec![f64::INFINITY; n])?;
-    let problem = CalibrationProblem::new(&model.model, runs, CostKind::PATH, bounds)?;
+    let problem = CalibrationProblem::new(&model.model, runs, CostKind::PATH, Bounds::unbounded(n))?;
     let scales = identify::param_scales(&model.model);
     let g = runs.len() as f64;
     let mut out = Vec::with_capacity(runs.len());

@@ -19,10 +19,10 @@
 //! equations, each residual vector and each set of normal equations counts one). The observer is called
 //! once, after the solve.
 
-use crate::error::OptimizeError;
-use crate::observe::{Iteration, Observer};
+use crate::optimizer::error::OptimizeError;
+use crate::optimizer::observe::{Iteration, Observer};
+use crate::optimizer::problem::{LeastSquares, NormalEquations};
 use crate::optimizer::{Optimizer, Solution, Termination, check_start};
-use crate::problem::LeastSquares;
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt as Solver};
 use nalgebra::storage::Owned;
 use nalgebra::{DMatrix, DVector, Dyn};
@@ -121,92 +121,139 @@ impl LevenbergMarquardt {
     /// plus one set of normal equations per kept step.
     fn solve_normal_equations<P: LeastSquares + ?Sized>(&self, problem: &P, start: &[f64]) -> (Vec<f64>, usize) {
         let cfg = &self.config;
-        let n = start.len();
-        let mut x = DVector::from_column_slice(start);
-        let mut ne = problem.normal_equations(start);
+        let ne = problem.normal_equations(start);
         let mut evaluations = 1;
         let mut trials = 0;
-        if !ne.is_finite() || n == 0 {
+        if !ne.is_finite() || start.is_empty() {
             return (start.to_vec(), evaluations);
         }
-        let mut scale = DVector::from_fn(n, |i, _| ne.jtj[(i, i)]);
-        let mut mu = INITIAL_DAMPING;
-        let mut nu = 2.0;
+        let mut m = Marquardt::new(start, ne);
         while trials < cfg.max_evaluations {
-            let f = ne.rtr;
-            // Converged when the residuals are orthogonal to every column of J (MINPACK's gtol test).
-            let cosine = (0..n)
-                .filter(|&i| ne.jtj[(i, i)] > 0.0)
-                .map(|i| ne.jtr[i].abs() / (ne.jtj[(i, i)] * f).sqrt())
-                .fold(0.0f64, f64::max);
-            if f == 0.0 || cosine <= cfg.gtol {
+            if m.converged(cfg.gtol) {
                 break;
             }
-            let top = scale.max();
-            if top <= 0.0 {
-                break; // J = 0: nothing moves the residuals.
-            }
-            let d = scale.map(|v| v.max(f64::EPSILON * top).sqrt());
-            let b = DVector::from_fn(n, |i, _| -ne.jtr[i] / d[i]);
-            let mut a = DMatrix::from_fn(n, n, |i, j| ne.jtj[(i, j)] / (d[i] * d[j]));
-            for i in 0..n {
-                a[(i, i)] += mu;
-            }
-            let Some(y) = a.cholesky().map(|c| c.solve(&b)) else {
+            let t = match m.propose(cfg.xtol) {
+                Proposal::Nothing => break,
                 // Not positive definite at this damping (rounding on a near-singular JᵀJ): damp more.
-                mu *= nu;
-                nu *= 2.0;
-                if mu > MAX_DAMPING {
-                    break;
-                }
-                continue;
+                Proposal::Singular if m.damp_more() => continue,
+                Proposal::Singular => break,
+                Proposal::Step(t) => t,
             };
-            let step = DVector::from_fn(n, |i, _| y[i] / d[i]);
-            let scaled_x = x.component_mul(&d).norm();
-            let small_step = y.norm() <= cfg.xtol * scaled_x.max(cfg.xtol);
-            let x_new = &x + &step;
-            let r_new = problem.residuals(x_new.as_slice());
+            let f = m.ne.rtr;
+            let f_new = sum_of_squares(&problem.residuals(t.x.as_slice()));
             evaluations += 1;
             trials += 1;
-            let f_new = if r_new.iter().all(|v| v.is_finite()) {
-                r_new.iter().map(|v| v * v).sum::<f64>()
-            } else {
-                f64::INFINITY
-            };
-            drop(r_new);
-            // Predicted decrease of rᵀr by the linear model: yᵀb + μ yᵀy.
-            let predicted = y.dot(&b) + mu * y.dot(&y);
-            if f_new < f && predicted > 0.0 {
-                let rho = (f - f_new) / predicted;
-                let converged = f - f_new <= cfg.ftol * f || small_step;
-                let next = problem.normal_equations(x_new.as_slice());
+            if f_new < f && t.predicted > 0.0 {
+                let rho = (f - f_new) / t.predicted;
+                let converged = f - f_new <= cfg.ftol * f || t.small;
+                let next = problem.normal_equations(t.x.as_slice());
                 evaluations += 1;
                 if !next.is_finite() {
-                    x = x_new;
+                    m.x = t.x;
                     break;
                 }
-                x = x_new;
-                ne = next;
-                for i in 0..n {
-                    scale[i] = scale[i].max(ne.jtj[(i, i)]);
-                }
-                mu *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
-                nu = 2.0;
+                m.accept(t.x, next, rho);
                 if converged {
                     break;
                 }
-            } else {
-                if small_step {
-                    break;
-                }
-                mu *= nu;
-                nu *= 2.0;
-                if mu > MAX_DAMPING {
-                    break;
-                }
+            } else if t.small || !m.damp_more() {
+                break;
             }
         }
-        (x.iter().copied().collect(), evaluations)
+        (m.x.iter().copied().collect(), evaluations)
+    }
+}
+
+/// `rᵀr`, or `inf` when a residual is not finite.
+fn sum_of_squares(r: &[f64]) -> f64 {
+    if r.iter().all(|v| v.is_finite()) { r.iter().map(|v| v * v).sum::<f64>() } else { f64::INFINITY }
+}
+
+/// The state of Marquardt's method on the normal equations: the point, its normal equations, the largest
+/// diagonal of `JᵀJ` seen so far (`D²`) and the damping `μ` with its growth factor `ν`.
+struct Marquardt {
+    x: DVector<f64>,
+    ne: NormalEquations,
+    scale: DVector<f64>,
+    mu: f64,
+    nu: f64,
+}
+
+/// A damped step to try.
+struct Trial {
+    /// The point it leads to.
+    x: DVector<f64>,
+    /// Decrease of `rᵀr` the linear model predicts.
+    predicted: f64,
+    /// The step is below `xtol` (relative, scaled).
+    small: bool,
+}
+
+/// What the damped system gives at the current damping.
+enum Proposal {
+    /// `J = 0`: nothing moves the residuals.
+    Nothing,
+    /// The damped matrix is not positive definite.
+    Singular,
+    /// A step to try.
+    Step(Trial),
+}
+
+impl Marquardt {
+    fn new(start: &[f64], ne: NormalEquations) -> Self {
+        let scale = DVector::from_fn(start.len(), |i, _| ne.jtj[(i, i)]);
+        Self { x: DVector::from_column_slice(start), ne, scale, mu: INITIAL_DAMPING, nu: 2.0 }
+    }
+
+    /// Converged when `rᵀr = 0` or the residuals are orthogonal to every column of J (MINPACK's gtol test).
+    fn converged(&self, gtol: f64) -> bool {
+        let (ne, f) = (&self.ne, self.ne.rtr);
+        let cosine = (0..self.x.len())
+            .filter(|&i| ne.jtj[(i, i)] > 0.0)
+            .map(|i| ne.jtr[i].abs() / (ne.jtj[(i, i)] * f).sqrt())
+            .fold(0.0f64, f64::max);
+        f == 0.0 || cosine <= gtol
+    }
+
+    /// The step solving `(Â + μI) y = −D⁻¹Jᵀr` (see the module docs).
+    fn propose(&self, xtol: f64) -> Proposal {
+        let (n, ne) = (self.x.len(), &self.ne);
+        let top = self.scale.max();
+        if top <= 0.0 {
+            return Proposal::Nothing;
+        }
+        let d = self.scale.map(|v| v.max(f64::EPSILON * top).sqrt());
+        let b = DVector::from_fn(n, |i, _| -ne.jtr[i] / d[i]);
+        let mut a = DMatrix::from_fn(n, n, |i, j| ne.jtj[(i, j)] / (d[i] * d[j]));
+        for i in 0..n {
+            a[(i, i)] += self.mu;
+        }
+        let Some(y) = a.cholesky().map(|c| c.solve(&b)) else { return Proposal::Singular };
+        let step = DVector::from_fn(n, |i, _| y[i] / d[i]);
+        let scaled_x = self.x.component_mul(&d).norm();
+        let small = y.norm() <= xtol * scaled_x.max(xtol);
+        // Predicted decrease of rᵀr by the linear model: yᵀb + μ yᵀy.
+        let predicted = y.dot(&b) + self.mu * y.dot(&y);
+        Proposal::Step(Trial { x: &self.x + &step, predicted, small })
+    }
+
+    /// After a rejected step: more damping. False once it is past [`MAX_DAMPING`] (the step would be nil).
+    fn damp_more(&mut self) -> bool {
+        self.mu *= self.nu;
+        self.nu *= 2.0;
+        self.mu <= MAX_DAMPING
+    }
+
+    /// Keeps a step with gain ratio `rho`: moves to `x` with its normal equations `ne`, and relaxes the
+    /// damping (Nielsen).
+    fn accept(&mut self, x: DVector<f64>, ne: NormalEquations, rho: f64) {
+        self.x = x;
+        self.ne = ne;
+        for i in 0..self.x.len() {
+            self.scale[i] = self.scale[i].max(self.ne.jtj[(i, i)]);
+        }
+        self.mu *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
+        self.nu = 2.0;
     }
 }
 
@@ -253,8 +300,8 @@ impl<P: LeastSquares + ?Sized> Optimizer<P> for LevenbergMarquardt {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::observe::NoopObserver;
-    use crate::problem::{Bounds, Problem};
+    use crate::optimizer::observe::NoopObserver;
+    use crate::optimizer::problem::{Bounds, Problem};
 
     /// Fit y = a·exp(−b·t) + c.
     struct Decay {
@@ -338,31 +385,6 @@ mod tests {
         assert!((ne.jtj.clone() - j.transpose() * &j).abs().max() < 1e-12);
         assert!((ne.jtr.clone() - j.transpose() * DVector::from_vec(r.clone())).abs().max() < 1e-12);
         assert!((ne.rtr - r.iter().map(|v| v * v).sum::<f64>()).abs() < 1e-12);
-    }
-
-    /// On a calibration (the default preset's objective and integration, 36 short runs), the
-    /// normal-equations polish lands where the crate's does.
-    #[test]
-    fn both_solvers_polish_a_calibration_alike() {
-        use crate::calibrate::{BoxRule, CalibrationProblem, search_box};
-        use omni_kin::simulate::{SimConfig, simulate};
-        use omni_kin::{FittedModel, IkMatrix, Integration, Model};
-        let truth = FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated()));
-        let runs = simulate(&SimConfig { duration_s: 3.0, runs_per_command: 1, ..SimConfig::default() }, &truth, "t/")
-            .unwrap();
-        let model = Model::ik(IkMatrix::paper_design()).with_integration(Integration::DEFAULT);
-        let start = model.nominal();
-        let bounds = search_box(&model, &start, BoxRule::PerRow(0.1)).unwrap();
-        let problem = CalibrationProblem::new(&model, &runs, omni_kin::CostKind::PATH, bounds).unwrap();
-        let by_crate = LevenbergMarquardt::default().minimize(&problem, &start, &mut NoopObserver).unwrap();
-        let by_normal = on_normal_equations().minimize(&problem, &start, &mut NoopObserver).unwrap();
-        let start_cost = problem.cost(&start);
-        assert!(by_crate.cost < 0.5 * start_cost, "{} → {}", start_cost, by_crate.cost);
-        let gap = (by_normal.cost - by_crate.cost).abs() / by_crate.cost;
-        assert!(gap < 1e-6, "crate {} vs normal equations {} ({gap:e})", by_crate.cost, by_normal.cost);
-        for (a, b) in by_crate.params.iter().zip(&by_normal.params) {
-            assert!((a - b).abs() < 1e-6 * a.abs().max(1.0), "{:?} vs {:?}", by_crate.params, by_normal.params);
-        }
     }
 
     #[test]

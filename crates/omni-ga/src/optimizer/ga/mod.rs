@@ -24,10 +24,11 @@
 //! Determinism: one `ChaCha8Rng::seed_from_u64(seed)` on the calling thread, drawn in a fixed order; the
 //! only parallel step collects costs in order. Same seed ⇒ bit-identical result whatever the thread count.
 
-use crate::error::OptimizeError;
-use crate::observe::{Control, Iteration, Observer};
+use crate::optimizer::bounds::Bounds;
+use crate::optimizer::error::OptimizeError;
+use crate::optimizer::observe::{Control, Iteration, Observer};
+use crate::optimizer::problem::Problem;
 use crate::optimizer::{Optimizer, Solution, Termination, check_start};
-use crate::problem::Problem;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -162,6 +163,150 @@ pub fn stall_measure(best: &[f64], window: usize, rule: StallRule) -> Option<f64
     Some(sum / wsum)
 }
 
+impl GaConfig {
+    /// Why the run stops after a generation, by the caps and the stall rule (the observer is asked
+    /// first); `None` to go on. `next_evaluations` is the count after one more generation.
+    fn stop_rule(
+        &self,
+        history: &[f64],
+        generation: usize,
+        next_evaluations: usize,
+        t0: Instant,
+    ) -> Option<Termination> {
+        if stall_measure(history, self.stall_generations, self.stall_rule).is_some_and(|m| m <= self.function_tolerance)
+        {
+            return Some(Termination::Converged);
+        }
+        if generation >= self.max_generations {
+            return Some(Termination::MaxIterations);
+        }
+        if self.max_evaluations.is_some_and(|m| next_evaluations > m) {
+            return Some(Termination::MaxEvaluations);
+        }
+        if self.max_seconds.is_some_and(|s| t0.elapsed().as_secs_f64() >= s) {
+            return Some(Termination::MaxTime);
+        }
+        None
+    }
+}
+
+/// A cost as a sort key: NaN ranks last.
+fn key(c: f64) -> f64 {
+    if c.is_nan() { f64::INFINITY } else { c }
+}
+
+/// Mean of the finite costs (`inf` when none is finite).
+fn mean_finite(costs: &[f64]) -> f64 {
+    let finite: Vec<f64> = costs.iter().copied().filter(|c| c.is_finite()).collect();
+    if finite.is_empty() { f64::INFINITY } else { finite.iter().sum::<f64>() / finite.len() as f64 }
+}
+
+/// Individual 0 is `x0`; the others are uniform in the box shrunk around `x0` by `initial_spread`.
+fn initial_population(cfg: &GaConfig, b: &Bounds, x0: &[f64], width: &[f64], rng: &mut ChaCha8Rng) -> Vec<Vec<f64>> {
+    let mut pop: Vec<Vec<f64>> = Vec::with_capacity(cfg.population);
+    pop.push(x0.to_vec());
+    while pop.len() < cfg.population {
+        let ind = (0..x0.len())
+            .map(|i| {
+                if b.is_fixed(i) {
+                    return b.lower[i];
+                }
+                let half = 0.5 * width[i] * cfg.initial_spread;
+                let lo = (x0[i] - half).max(b.lower[i]);
+                let hi = (x0[i] + half).min(b.upper[i]);
+                if hi > lo { rng.random_range(lo..hi) } else { lo }
+            })
+            .collect();
+        pop.push(ind);
+    }
+    pop
+}
+
+/// `count` parents (indices into the population) by stochastic-uniform sampling of rank-scaled fitness
+/// (∝ 1/√rank) over `order` (best first), then shuffled.
+fn select_parents(order: &[usize], count: usize, rng: &mut ChaCha8Rng) -> Vec<usize> {
+    let n = order.len();
+    let weights: Vec<f64> = (0..n).map(|r| 1.0 / ((r + 1) as f64).sqrt()).collect();
+    let total: f64 = weights.iter().sum();
+    let step = total / count.max(1) as f64;
+    let mut pointer = rng.random_range(0.0..step);
+    let mut parents = Vec::with_capacity(count);
+    let (mut acc, mut r) = (weights[0], 0);
+    for _ in 0..count {
+        while pointer > acc && r + 1 < n {
+            r += 1;
+            acc += weights[r];
+        }
+        parents.push(order[r]);
+        pointer += step;
+    }
+    for i in (1..parents.len()).rev() {
+        let j = rng.random_range(0..=i);
+        parents.swap(i, j);
+    }
+    parents
+}
+
+/// One generation's breeding state: the current population ranked, the box and the mutation size.
+struct Breeding<'a> {
+    cfg: &'a GaConfig,
+    b: &'a Bounds,
+    width: &'a [f64],
+    pop: &'a [Vec<f64>],
+    costs: &'a [f64],
+    /// Population indices, best first.
+    order: &'a [usize],
+    /// Mutation scale, as a fraction of each width.
+    sigma: f64,
+}
+
+impl Breeding<'_> {
+    /// The next population: the elite (with their known costs), then crossover children, then mutants
+    /// (costs `None`: still to evaluate).
+    fn next(&self, rng: &mut ChaCha8Rng) -> (Vec<Vec<f64>>, Vec<Option<f64>>) {
+        let (cfg, order, dim) = (self.cfg, self.order, self.b.len());
+        let children = self.pop.len() - cfg.elite;
+        let n_cross = ((cfg.crossover_fraction * children as f64).round() as usize).min(children);
+        let n_mut = children - n_cross;
+        let mut p = select_parents(order, 2 * n_cross + n_mut, rng).into_iter();
+        let mut next: Vec<Vec<f64>> = order[..cfg.elite].iter().map(|&i| self.pop[i].clone()).collect();
+        let mut next_costs: Vec<Option<f64>> = order[..cfg.elite].iter().map(|&i| Some(self.costs[i])).collect();
+        for _ in 0..n_cross {
+            let (a, c) = (p.next().unwrap_or(order[0]), p.next().unwrap_or(order[0]));
+            let (pa, pc) = (&self.pop[a], &self.pop[c]);
+            next.push((0..dim).map(|i| if rng.random_range(0.0..1.0) < 0.5 { pa[i] } else { pc[i] }).collect());
+            next_costs.push(None);
+        }
+        for _ in 0..n_mut {
+            let a = p.next().unwrap_or(order[0]);
+            next.push(self.mutant(&self.pop[a], rng));
+            next_costs.push(None);
+        }
+        (next, next_costs)
+    }
+
+    /// Gaussian mutation of `parent`, reflected into the box; fixed genes stay.
+    fn mutant(&self, parent: &[f64], rng: &mut ChaCha8Rng) -> Vec<f64> {
+        let b = self.b;
+        (0..b.len())
+            .map(|i| {
+                if b.is_fixed(i) {
+                    return b.lower[i];
+                }
+                reflect(parent[i] + self.sigma * self.width[i] * gauss(rng), b.lower[i], b.upper[i])
+            })
+            .collect()
+    }
+}
+
+/// The costs of a new population: known ones kept, the others evaluated in one parallel batch.
+fn fill_costs<P: Problem + ?Sized>(problem: &P, pop: &[Vec<f64>], known: Vec<Option<f64>>) -> (Vec<f64>, usize) {
+    let fresh: Vec<Vec<f64>> = pop.iter().zip(&known).filter(|(_, c)| c.is_none()).map(|(x, _)| x.clone()).collect();
+    let mut fc = problem.costs(&fresh).into_iter();
+    let costs = known.into_iter().map(|c| c.unwrap_or_else(|| fc.next().unwrap_or(f64::INFINITY))).collect();
+    (costs, fresh.len())
+}
+
 impl<P: Problem + ?Sized> Optimizer<P> for Ga {
     fn name(&self) -> &'static str {
         "ga"
@@ -180,33 +325,16 @@ impl<P: Problem + ?Sized> Optimizer<P> for Ga {
         // Scales: box widths (or a size from the start value where the box is unbounded).
         let width: Vec<f64> =
             (0..dim).map(|i| if b.width(i).is_finite() { b.width(i) } else { 0.2 * x0[i].abs().max(1.0) }).collect();
-        let mut pop: Vec<Vec<f64>> = Vec::with_capacity(cfg.population);
-        pop.push(x0.clone());
-        while pop.len() < cfg.population {
-            let ind = (0..dim)
-                .map(|i| {
-                    if b.is_fixed(i) {
-                        return b.lower[i];
-                    }
-                    let half = 0.5 * width[i] * cfg.initial_spread;
-                    let lo = (x0[i] - half).max(b.lower[i]);
-                    let hi = (x0[i] + half).min(b.upper[i]);
-                    if hi > lo { rng.random_range(lo..hi) } else { lo }
-                })
-                .collect();
-            pop.push(ind);
-        }
+        let mut pop = initial_population(cfg, b, &x0, &width, &mut rng);
         let mut costs = problem.costs(&pop);
         let mut evaluations = pop.len();
-        let mut best_x = x0.clone();
-        let mut best_c = f64::INFINITY;
+        let (mut best_x, mut best_c) = (x0, f64::INFINITY);
         let mut history: Vec<f64> = Vec::new();
         let mut sigma = cfg.mutation_scale;
         let mut generation = 0;
         let termination = loop {
             generation += 1;
             let mut order: Vec<usize> = (0..pop.len()).collect();
-            let key = |c: f64| if c.is_nan() { f64::INFINITY } else { c };
             order.sort_by(|&a, &b| key(costs[a]).total_cmp(&key(costs[b])));
             let improved = key(costs[order[0]]) < best_c;
             if improved {
@@ -214,13 +342,11 @@ impl<P: Problem + ?Sized> Optimizer<P> for Ga {
                 best_x = pop[order[0]].clone();
             }
             history.push(best_c);
-            let finite: Vec<f64> = costs.iter().copied().filter(|c| c.is_finite()).collect();
-            let mean = if finite.is_empty() { f64::INFINITY } else { finite.iter().sum::<f64>() / finite.len() as f64 };
             let it = Iteration {
                 optimizer: "ga",
                 iteration: generation,
                 best_cost: best_c,
-                mean_cost: mean,
+                mean_cost: mean_finite(&costs),
                 evaluations,
                 elapsed_s: t0.elapsed().as_secs_f64(),
                 best_params: best_x.clone(),
@@ -228,76 +354,15 @@ impl<P: Problem + ?Sized> Optimizer<P> for Ga {
             if observer.on_iteration(&it) == Control::Stop {
                 break Termination::Stopped;
             }
-            if let Some(m) = stall_measure(&history, cfg.stall_generations, cfg.stall_rule)
-                && m <= cfg.function_tolerance
-            {
-                break Termination::Converged;
-            }
-            if generation >= cfg.max_generations {
-                break Termination::MaxGenerations;
-            }
-            if cfg.max_evaluations.is_some_and(|m| evaluations + pop.len() > m) {
-                break Termination::MaxEvaluations;
-            }
-            if cfg.max_seconds.is_some_and(|s| t0.elapsed().as_secs_f64() >= s) {
-                break Termination::MaxTime;
+            if let Some(t) = cfg.stop_rule(&history, generation, evaluations + pop.len(), t0) {
+                break t;
             }
             sigma = if improved { (sigma * 1.2).min(0.5) } else { (sigma * 0.8).max(1e-6) };
-
-            // Rank scaling and stochastic-uniform selection.
-            let n = pop.len();
-            let children = n - cfg.elite;
-            let n_cross = ((cfg.crossover_fraction * children as f64).round() as usize).min(children);
-            let n_mut = children - n_cross;
-            let n_parents = 2 * n_cross + n_mut;
-            let weights: Vec<f64> = (0..n).map(|r| 1.0 / ((r + 1) as f64).sqrt()).collect();
-            let total: f64 = weights.iter().sum();
-            let step = total / n_parents.max(1) as f64;
-            let mut pointer = rng.random_range(0.0..step);
-            let mut parents = Vec::with_capacity(n_parents);
-            let (mut acc, mut r) = (weights[0], 0);
-            for _ in 0..n_parents {
-                while pointer > acc && r + 1 < n {
-                    r += 1;
-                    acc += weights[r];
-                }
-                parents.push(order[r]);
-                pointer += step;
-            }
-            for i in (1..parents.len()).rev() {
-                let j = rng.random_range(0..=i);
-                parents.swap(i, j);
-            }
-            let mut next: Vec<Vec<f64>> = order[..cfg.elite].iter().map(|&i| pop[i].clone()).collect();
-            let mut next_costs: Vec<Option<f64>> = order[..cfg.elite].iter().map(|&i| Some(costs[i])).collect();
-            let mut p = parents.into_iter();
-            for _ in 0..n_cross {
-                let (a, c) = (p.next().unwrap_or(order[0]), p.next().unwrap_or(order[0]));
-                let child =
-                    (0..dim).map(|i| if rng.random_range(0.0..1.0) < 0.5 { pop[a][i] } else { pop[c][i] }).collect();
-                next.push(child);
-                next_costs.push(None);
-            }
-            for _ in 0..n_mut {
-                let a = p.next().unwrap_or(order[0]);
-                let child = (0..dim)
-                    .map(|i| {
-                        if b.is_fixed(i) {
-                            return b.lower[i];
-                        }
-                        reflect(pop[a][i] + sigma * width[i] * gauss(&mut rng), b.lower[i], b.upper[i])
-                    })
-                    .collect();
-                next.push(child);
-                next_costs.push(None);
-            }
-            let fresh: Vec<Vec<f64>> =
-                next.iter().zip(&next_costs).filter(|(_, c)| c.is_none()).map(|(x, _)| x.clone()).collect();
-            let fresh_costs = problem.costs(&fresh);
-            evaluations += fresh.len();
-            let mut fc = fresh_costs.into_iter();
-            costs = next_costs.into_iter().map(|c| c.unwrap_or_else(|| fc.next().unwrap_or(f64::INFINITY))).collect();
-            pop = next;
+            let breeding = Breeding { cfg, b, width: &width, pop: &pop, costs: &costs, order: &order, sigma };
+            let (next, known) = breeding.next(&mut rng);
+            let (next_costs, fresh) = fill_costs(problem, &next, known);
+            evaluations += fresh;
+            (pop, costs) = (next, next_costs);
         };
         let solution = Solution {
             params: best_x,
@@ -315,8 +380,8 @@ impl<P: Problem + ?Sized> Optimizer<P> for Ga {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::observe::{FnObserver, NoopObserver};
-    use crate::problem::Bounds;
+    use crate::optimizer::observe::{FnObserver, NoopObserver};
+    use crate::optimizer::problem::Bounds;
     use std::sync::Mutex;
 
     struct Sphere {

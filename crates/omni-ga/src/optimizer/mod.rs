@@ -1,26 +1,51 @@
-//! The optimizer interface and its result.
+//! The optimizer layer: what is minimised ([`Problem`], [`LeastSquares`] within [`Bounds`]), who minimises
+//! it ([`Optimizer`]: the genetic algorithm [`Ga`], Levenberg–Marquardt [`LevenbergMarquardt`]), who
+//! watches ([`Observer`]), and what comes back ([`Solution`]).
+//!
+//! Nothing here knows about robots, runs or models: this layer depends on no other crate of the workspace,
+//! so an optimizer is written and tested against plain functions (see the tests of [`ga`] and [`lm`]).
+//!
+//! [`Ga`]: ga::Ga
+//! [`LevenbergMarquardt`]: lm::LevenbergMarquardt
+//! [`Observer`]: observe::Observer
+//! [`Problem`]: problem::Problem
+//! [`LeastSquares`]: problem::LeastSquares
 
-use crate::error::OptimizeError;
-use crate::observe::Observer;
+pub mod bounds;
+pub mod error;
+pub mod ga;
+pub mod lm;
+pub mod observe;
+pub mod problem;
+pub mod subspace;
+
+pub use bounds::Bounds;
+pub use error::OptimizeError;
+pub use ga::{Ga, GaConfig, StallRule};
+pub use lm::{LevenbergMarquardt, LmConfig};
+pub use observe::{Control, FnObserver, Iteration, NoopObserver, Observer};
+pub use problem::{LeastSquares, NormalEquations, Problem};
 use serde::{Deserialize, Serialize};
+pub use subspace::Subspace;
 
-/// Why an optimizer stopped.
+/// Why an optimizer stopped. The reasons are shared by every optimizer (each reports those that apply to
+/// it), so a new optimizer needs no new variant.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Termination {
-    /// The stall rule was met.
+    /// Its convergence test was met (the GA's stall rule).
     Converged,
-    /// Generation cap.
-    MaxGenerations,
+    /// Iteration cap (GA generations).
+    MaxIterations,
     /// Evaluation cap.
     MaxEvaluations,
     /// Time cap.
     MaxTime,
     /// The observer asked to stop.
     Stopped,
-    /// Levenberg–Marquardt converged.
+    /// A local method ended at a point no worse than its start (Levenberg–Marquardt).
     LocalMinimum,
-    /// Levenberg–Marquardt could not improve on its start, which is returned.
+    /// It could not improve on its start, which is returned.
     NoImprovement,
 }
 

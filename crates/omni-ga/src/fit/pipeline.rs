@@ -1,0 +1,160 @@
+//! The fit pipeline: the plan's stages in order over the calibration problem, each from the best point so
+//! far, then the truncated update. It knows stages only through [`Stage`]'s interface, so a new optimizer
+//! needs no change here.
+//!
+//! - A stage's result is kept when its cost is no higher than the current point's; the GA box is checked
+//!   for parameters left on a bound after each stage that searches within it.
+//! - A stage the observer stopped (Ctrl-C, a progress callback) ends the pipeline: the caller wants the best
+//!   so far, not the remaining stages.
+//! - Truncated update ([`Unexcited::Hold`]): what the runs do not constrain is found at the (unrestricted)
+//!   fit, where the residuals measure noise rather than the start's misfit; it is reset to the start, and
+//!   the refining stages run again within the constrained subspace.
+
+use crate::error::Error;
+use crate::fit::plan::{Plan, Unexcited};
+use crate::fit::problem::CalibrationProblem;
+use crate::fit::stage::Stage;
+use crate::optimizer::problem::{Bounds, Problem};
+use crate::optimizer::subspace::Subspace;
+use crate::optimizer::{Observer, Solution, Termination};
+use crate::science::identify::WeakDirection;
+use nalgebra::{DMatrix, DVector};
+
+/// One stage's result within a calibration.
+#[derive(Clone, Debug)]
+pub struct StageOutcome {
+    /// The stage's optimizer (`ga`, `lm`).
+    pub name: &'static str,
+    /// It ran within the constrained subspace of the truncated update ([`Unexcited::Hold`]); its
+    /// parameters are nevertheless the full problem's.
+    pub held_subspace: bool,
+    /// Its result.
+    pub solution: Solution,
+}
+
+/// What the pipeline did.
+#[derive(Debug)]
+pub(crate) struct Fitted {
+    /// The parameters it ends at.
+    pub x: Vec<f64>,
+    /// Cost evaluations of the stages.
+    pub evaluations: usize,
+    /// Parameters left on a bound of the box by the last stage that searches within it.
+    pub at_bound: Vec<String>,
+    /// Every stage run, in order.
+    pub stages: Vec<StageOutcome>,
+    /// Directions held at the start by the truncated update.
+    pub held: Vec<WeakDirection>,
+}
+
+/// Runs `plan`'s stages on `problem` from `start` (whose cost is `objective_start`); `names` are the
+/// parameters' names.
+pub(crate) fn run(
+    problem: &CalibrationProblem<'_>,
+    plan: &Plan,
+    start: &[f64],
+    objective_start: f64,
+    names: &[String],
+    observer: &mut dyn Observer,
+) -> Result<Fitted, Error> {
+    let mut fit =
+        Fitted { x: start.to_vec(), evaluations: 0, at_bound: Vec::new(), stages: Vec::new(), held: Vec::new() };
+    let stopped = run_stages(problem, &plan.stages, objective_start, names, &mut fit, observer)?;
+    if plan.unexcited == Unexcited::Hold && !stopped {
+        hold(problem, plan, start, &mut fit, observer)?;
+    }
+    Ok(fit)
+}
+
+/// The stages on the whole problem. Returns whether the observer stopped one.
+fn run_stages(
+    problem: &CalibrationProblem<'_>,
+    stages: &[Stage],
+    objective_start: f64,
+    names: &[String],
+    fit: &mut Fitted,
+    observer: &mut dyn Observer,
+) -> Result<bool, Error> {
+    let mut moved = false;
+    for stage in stages {
+        let s = stage.minimize(problem, &fit.x, observer)?;
+        fit.evaluations += s.evaluations;
+        let current = if moved { problem.cost(&fit.x) } else { objective_start };
+        if s.cost <= current {
+            fit.x = s.params.clone();
+            moved = true;
+        }
+        if stage.within_box() {
+            fit.at_bound = at_bound(names, problem.bounds(), &fit.x);
+        }
+        let stopped = s.termination == Termination::Stopped;
+        fit.stages.push(StageOutcome { name: stage.name(), held_subspace: false, solution: s });
+        if stopped {
+            return Ok(true);
+        }
+    }
+    Ok(false)
+}
+
+/// The truncated update: unconstrained directions back to `start`, then the refining stages within the
+/// constrained subspace.
+fn hold(
+    problem: &CalibrationProblem<'_>,
+    plan: &Plan,
+    start: &[f64],
+    fit: &mut Fitted,
+    observer: &mut dyn Observer,
+) -> Result<(), Error> {
+    let id = problem.identifiability(&fit.x, &plan.identify);
+    if id.weak.is_empty() {
+        return Ok(());
+    }
+    let (projected, basis) = hold_unexcited(&fit.x, start, &id.scales(), &id.weak_basis());
+    fit.x = projected;
+    fit.held = id.weak;
+    for stage in plan.stages.iter().filter(|s| s.refines_held()) {
+        let sub = Subspace::new(problem, fit.x.clone(), basis.clone());
+        let s = stage.minimize(&sub, &vec![0.0; sub.dim()], observer)?;
+        fit.evaluations += s.evaluations;
+        let xs = sub.point(&s.params);
+        if s.cost <= problem.cost(&fit.x) {
+            fit.x = xs.clone();
+        }
+        fit.stages.push(StageOutcome {
+            name: stage.name(),
+            held_subspace: true,
+            solution: Solution { params: xs, ..s },
+        });
+    }
+    Ok(())
+}
+
+/// The names of the parameters of `x` on a bound of `bounds` (to a relative 1e-9 of the interval; fixed
+/// parameters excepted).
+fn at_bound(names: &[String], bounds: &Bounds, x: &[f64]) -> Vec<String> {
+    names
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| {
+            let (lo, hi) = (bounds.lower[i], bounds.upper[i]);
+            let tol = 1e-9 * (hi - lo).abs().max(1e-12);
+            hi > lo && (x[i] - lo <= tol || hi - x[i] <= tol)
+        })
+        .map(|(_, n)| n.clone())
+        .collect()
+}
+
+/// The truncated update: `x` with its component along the unconstrained directions `weak` (scaled space,
+/// orthonormal columns) reset to `start`'s, and a basis (parameter units) of the constrained subspace.
+fn hold_unexcited(x: &[f64], start: &[f64], scales: &[f64], weak: &DMatrix<f64>) -> (Vec<f64>, DMatrix<f64>) {
+    let n = x.len();
+    let d = DVector::from_fn(n, |i, _| (x[i] - start[i]) / scales[i]);
+    let kept = &d - weak * (weak.transpose() * &d);
+    let projected = (0..n).map(|i| start[i] + scales[i] * kept[i]).collect();
+    // Orthonormal complement of `weak`: eigenvectors of I − W Wᵀ with eigenvalue 1.
+    let p = DMatrix::identity(n, n) - weak * weak.transpose();
+    let eig = p.symmetric_eigen();
+    let cols: Vec<usize> = (0..n).filter(|&i| eig.eigenvalues[i] > 0.5).collect();
+    let basis = DMatrix::from_fn(n, cols.len(), |r, c| eig.eigenvectors[(r, cols[c])] * scales[r]);
+    (projected, basis)
+}

@@ -1,0 +1,260 @@
+//! Step 2 of a diagnosis: the evidence for one candidate effect — the first-order test at the current fit
+//! (how much of the residual it could explain, whether the model already absorbs it) and a refit with it,
+//! judged on the held-out runs.
+
+use super::compare::{costs_of, path_kind};
+use super::noise::wheel_excitation;
+use super::{Candidate, Costs, DiagnoseOptions, NoiseFloor, ParamValue};
+use crate::error::Error;
+use crate::fit::CalibrationProblem;
+use crate::optimizer::Optimizer;
+use crate::optimizer::lm::{LevenbergMarquardt, LmConfig};
+use crate::optimizer::observe::NoopObserver;
+use crate::optimizer::problem::{Bounds, LeastSquares, Problem};
+use crate::science::text;
+use nalgebra::{DMatrix, DVector};
+use omni_kin::effect::{Effect, Stage};
+use omni_kin::{EffectKind, FittedModel, Model, Run};
+
+/// Separability below which an effect counts as absorbed by the model.
+const ABSORBED: f64 = 0.05;
+
+/// The path-residual problem of `model` over `runs`, with no bounds (the diagnosis explores freely).
+pub(crate) fn unbounded<'a>(model: &'a Model, runs: &'a [Run], every: usize) -> Result<CalibrationProblem<'a>, Error> {
+    CalibrationProblem::new(model, runs, path_kind(every), Bounds::unbounded(model.n_params()))
+}
+
+/// `model`'s parameters, with effect parameters whose value is the lower end of their range (backlash
+/// b ≥ 0 at its null value) moved 2 % inside it, where the model is differentiable.
+pub fn differentiable_start(model: &FittedModel) -> Vec<f64> {
+    let mut x = model.params.clone();
+    for (i, s) in model.model.params().iter().enumerate() {
+        if i >= model.model.n_base() && x[i] == s.lower && s.upper > s.lower {
+            x[i] = s.lower + 0.02 * (s.upper - s.lower);
+        }
+    }
+    x
+}
+
+/// Refit all parameters of `start` on `train` by Levenberg–Marquardt on the path residuals.
+pub fn refit(start: &FittedModel, train: &[Run], every: usize) -> Result<FittedModel, Error> {
+    let x0 = differentiable_start(start);
+    let problem = unbounded(&start.model, train, every)?;
+    let mut lm = LevenbergMarquardt { config: LmConfig::default() };
+    let s = lm.minimize(&problem, &x0, &mut NoopObserver)?;
+    // LM never returns worse than its start; also never worse than the given parameters.
+    let params = if problem.cost(&s.params) <= problem.cost(&start.params) { s.params } else { start.params.clone() };
+    Ok(FittedModel::new(start.model.clone(), params)?)
+}
+
+/// Projection residual: ‖(I − Q Qᵀ) v‖ for an orthonormal basis Q.
+fn orth_residual(q: &DMatrix<f64>, v: &DVector<f64>) -> DVector<f64> {
+    if q.ncols() == 0 {
+        return v.clone();
+    }
+    v - q * (q.transpose() * v)
+}
+
+/// Orthonormal basis of the column space (SVD, relative tolerance 1e-9).
+fn basis(m: &DMatrix<f64>) -> DMatrix<f64> {
+    if m.ncols() == 0 {
+        return DMatrix::zeros(m.nrows(), 0);
+    }
+    if !m.iter().all(|v| v.is_finite()) {
+        return DMatrix::zeros(m.nrows(), 0);
+    }
+    let svd = m.clone().svd(true, false);
+    let Some(u) = svd.u else { return DMatrix::zeros(m.nrows(), 0) };
+    let smax = svd.singular_values.iter().fold(0.0f64, |a, &b| a.max(b));
+    let keep: Vec<usize> = (0..svd.singular_values.len()).filter(|&i| svd.singular_values[i] > 1e-9 * smax).collect();
+    DMatrix::from_fn(m.nrows(), keep.len(), |r, c| u[(r, keep[c])])
+}
+
+/// Standard errors `sqrt(diag(s² (JᵀJ)⁻¹))` with `s² = ‖r‖² / (m − p)`.
+pub fn standard_errors(j: &DMatrix<f64>, r: &[f64]) -> Option<Vec<f64>> {
+    let (m, p) = (j.nrows(), j.ncols());
+    if m <= p {
+        return None;
+    }
+    let s2 = r.iter().map(|v| v * v).sum::<f64>() / (m - p) as f64;
+    let jtj = j.transpose() * j;
+    let inv = jtj.try_inverse()?;
+    Some((0..p).map(|i| (s2 * inv[(i, i)]).max(0.0).sqrt()).collect())
+}
+
+/// The first-order test of one effect at the current fit.
+struct FirstOrder {
+    /// Share of the training residual the effect could explain (0…1; NaN without parameters).
+    explained: f64,
+    /// Smallest share of the effect's sensitivity outside the model's (NaN: not excited at all).
+    separability: f64,
+    /// Effect values the model's change from design implies.
+    implied: Vec<ParamValue>,
+}
+
+/// First-order evidence of one effect at the current fit.
+fn first_order(
+    current: &FittedModel,
+    design: &FittedModel,
+    effect: &EffectKind,
+    train: &[Run],
+    every: usize,
+) -> Result<FirstOrder, Error> {
+    let ext = current.with_effect(effect.clone());
+    let n = ext.params.len();
+    let nm = current.params.len();
+    let problem = unbounded(&ext.model, train, every)?;
+    let r = DVector::from_vec(problem.residuals(&ext.params));
+    let j = problem.jacobian(&ext.params);
+    let jm = j.columns(0, nm).into_owned();
+    let je = j.columns(nm, n - nm).into_owned();
+    let qm = basis(&jm);
+    let rm = orth_residual(&qm, &r);
+    let q_all = basis(&j);
+    let r_all = orth_residual(&q_all, &r);
+    let rr = r.norm_squared().max(1e-300);
+    let explained = ((rm.norm_squared() - r_all.norm_squared()) / rr).clamp(0.0, 1.0);
+    // Columns with no sensitivity at all (the runs do not excite the effect) say nothing about
+    // separability; if every column is such, the effect is unexcited, not absorbed (NaN).
+    let mut separability = f64::INFINITY;
+    for c in 0..je.ncols() {
+        let col = je.column(c).into_owned();
+        let norm = col.norm();
+        if norm > 1e-12 * j.norm().max(1e-300) {
+            separability = separability.min(orth_residual(&qm, &col).norm() / norm);
+        }
+    }
+    if !separability.is_finite() {
+        separability = f64::NAN;
+    }
+    let implied = implied_values(current, design, effect, &jm, &je);
+    Ok(FirstOrder { explained, separability, implied })
+}
+
+/// Implied effect values: min ‖J_e e − J_m Δx‖, Δx = fit − design (same base structure only).
+fn implied_values(
+    current: &FittedModel,
+    design: &FittedModel,
+    effect: &EffectKind,
+    jm: &DMatrix<f64>,
+    je: &DMatrix<f64>,
+) -> Vec<ParamValue> {
+    let mut implied = Vec::new();
+    if design.params.len() == current.model.n_base() || design.model.n_base() == current.model.n_base() {
+        let nb = current.model.n_base();
+        let dx = DVector::from_fn(jm.ncols(), |i, _| if i < nb { current.params[i] - design.params[i] } else { 0.0 });
+        let target = jm * dx;
+        let finite = je.iter().chain(target.iter()).all(|v| v.is_finite());
+        if let Some(Ok(sol)) = finite.then(|| je.clone().svd(true, true).solve(&target, 1e-12)) {
+            for (s, v) in effect.params().iter().zip(sol.iter()) {
+                implied.push(ParamValue { name: s.name.clone(), value: *v, unit: s.unit.clone(), std_error: None });
+            }
+        }
+    }
+    implied
+}
+
+/// A candidate by id: a user effect from `opts.custom`, else the built-in catalogue's.
+pub(super) fn candidate_effect(
+    id: &str,
+    n_wheels: usize,
+    opts: &DiagnoseOptions,
+) -> Result<EffectKind, omni_kin::KinError> {
+    match opts.custom.iter().find(|e| e.id() == id) {
+        Some(e) => Ok(e.clone()),
+        None => EffectKind::from_id(id, n_wheels),
+    }
+}
+
+/// Where a candidate is judged: the current model, the runs and the noise floor.
+pub(super) struct Bench<'a> {
+    /// The design model (for implied values).
+    pub design: &'a FittedModel,
+    /// Runs fitted on.
+    pub fit_runs: &'a [Run],
+    /// Runs judged on.
+    pub held_runs: &'a [Run],
+    /// Every k-th ground-truth pose.
+    pub every: usize,
+    /// The measurement noise floor, when the data has standstills.
+    pub noise: Option<&'a NoiseFloor>,
+}
+
+impl Bench<'_> {
+    /// All the evidence for `effect` (id `id`) added to `current`, whose costs are `current_costs`.
+    pub(super) fn assess(
+        &self,
+        id: &str,
+        effect: &EffectKind,
+        current: &FittedModel,
+        current_costs: &Costs,
+    ) -> Result<Candidate, Error> {
+        let fo = if effect.params().is_empty() {
+            FirstOrder { explained: f64::NAN, separability: 1.0, implied: Vec::new() }
+        } else {
+            first_order(current, self.design, effect, self.fit_runs, self.every)?
+        };
+        let absorbed = fo.separability < ABSORBED;
+        let gap = if effect.stage() == Stage::Wheel {
+            wheel_excitation(self.fit_runs, &current.model.kinematics.wheel_names())
+        } else {
+            None
+        };
+        let mut cand = Candidate {
+            effect: id.to_string(),
+            physics: effect.describe(),
+            first_order_explained: fo.explained,
+            separability: fo.separability,
+            absorbed,
+            implied: if absorbed { fo.implied } else { Vec::new() },
+            refit: None,
+            held_out_gain: 0.0,
+            excess_closed: f64::NAN,
+            params: Vec::new(),
+            not_excited: gap.as_ref().map(text::excitation_gap),
+            excitation_gap: gap,
+        };
+        if !absorbed
+            && cand.excitation_gap.is_none()
+            && let Ok(fit) = refit(&current.with_effect(effect.clone()), self.fit_runs, self.every)
+        {
+            self.judge_refit(&mut cand, effect, &fit, current_costs)?;
+        }
+        Ok(cand)
+    }
+
+    /// The held-out gain, the share of the excess error closed and the effect's parameters (with
+    /// standard errors) of a refit with the effect.
+    fn judge_refit(
+        &self,
+        cand: &mut Candidate,
+        effect: &EffectKind,
+        fit: &FittedModel,
+        current_costs: &Costs,
+    ) -> Result<(), Error> {
+        let c = costs_of(fit, self.fit_runs, self.held_runs, self.every)?;
+        cand.held_out_gain = 1.0 - c.held_out_path / current_costs.held_out_path.max(1e-300);
+        if let Some(nf) = self.noise {
+            let (b, a, f) = (current_costs.held_out_path, c.held_out_path, nf.path_rms);
+            cand.excess_closed = (b * b - a * a) / (b * b - f * f).max(1e-300);
+        }
+        // Standard errors of the effect parameters at the refit.
+        let n = fit.params.len();
+        let p = unbounded(&fit.model, self.fit_runs, self.every)?;
+        let se = standard_errors(&p.jacobian(&fit.params), &p.residuals(&fit.params));
+        let r = fit.model.effect_ranges().last().cloned().unwrap_or(n..n);
+        cand.params = effect
+            .params()
+            .iter()
+            .zip(r)
+            .map(|(s, i)| ParamValue {
+                name: s.name.clone(),
+                value: fit.params[i],
+                unit: s.unit.clone(),
+                std_error: se.as_ref().map(|v| v[i]),
+            })
+            .collect();
+        cand.refit = Some(c);
+        Ok(())
+    }
+}

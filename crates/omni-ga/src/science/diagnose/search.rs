@@ -1,0 +1,124 @@
+//! Step 3 of a diagnosis: rank the candidate effects by held-out gain and, with `auto`, climb the error
+//! ladder (add the best one, refit, rank again); then check the winner on kinds of path left out of its fit.
+
+use super::compare::{Turn, costs_of, path_kind};
+use super::evidence::{Bench, candidate_effect, refit};
+use super::{Candidate, Costs, DiagnoseOptions, KindOut, Rung, RungKind};
+use crate::error::Error;
+use crate::science::text;
+use omni_kin::cost;
+use omni_kin::effect::Effect;
+use omni_kin::{EffectKind, FittedModel, Run};
+
+/// An effect helps enough to be added: separable and the held-out path cost falls by `min_gain`.
+pub(super) fn passes(c: &Candidate, opts: &DiagnoseOptions) -> bool {
+    !c.absorbed && c.not_excited.is_none() && c.held_out_gain >= opts.min_gain
+}
+
+/// An effect is named with confidence when it also removes at least `min_excess_closed` of the held-out
+/// error variance above the noise floor (always, when no floor could be estimated).
+pub(super) fn confident(c: &Candidate, opts: &DiagnoseOptions) -> bool {
+    c.excess_closed.is_nan() || c.excess_closed >= opts.min_excess_closed
+}
+
+/// What the search found.
+pub(super) struct Climb {
+    /// The candidates for the model as given, best held-out gain first.
+    pub ranking: Vec<Candidate>,
+    /// Design, model, then each effect added by `auto`.
+    pub ladder: Vec<Rung>,
+    /// The model at the top of the ladder.
+    pub top: FittedModel,
+}
+
+/// A rung of the ladder.
+pub(super) fn rung(kind: RungKind, costs: &Costs) -> Rung {
+    Rung { label: text::rung(&kind), costs: costs.clone() }
+}
+
+/// Ranks the candidates for `model` (costs `costs`); with `opts.auto`, adds the best passing one and
+/// ranks again, up to `opts.max_added` effects.
+pub(super) fn climb(
+    bench: &Bench<'_>,
+    model: &FittedModel,
+    costs: &Costs,
+    design_costs: &Costs,
+    opts: &DiagnoseOptions,
+) -> Result<Climb, Error> {
+    let mut ladder = vec![rung(RungKind::Design, design_costs), rung(RungKind::Model, costs)];
+    let mut current = model.clone();
+    let mut current_costs = costs.clone();
+    let mut first_ranking: Option<Vec<Candidate>> = None;
+    let mut added = 0;
+    loop {
+        let ranking = rank(bench, &current, &current_costs, opts)?;
+        let best = ranking.first().filter(|c| passes(c, opts)).cloned();
+        if first_ranking.is_none() {
+            first_ranking = Some(ranking);
+        }
+        match best {
+            Some(b) if opts.auto && added < opts.max_added => {
+                let effect = candidate_effect(&b.effect, current.model.n_wheels(), opts)?;
+                current = refit(&current.with_effect(effect), bench.fit_runs, bench.every)?;
+                current_costs = costs_of(&current, bench.fit_runs, bench.held_runs, bench.every)?;
+                ladder.push(rung(RungKind::Added(b.effect), &current_costs));
+                added += 1;
+            }
+            _ => break,
+        }
+        if !opts.auto {
+            break;
+        }
+    }
+    Ok(Climb { ranking: first_ranking.unwrap_or_default(), ladder, top: current })
+}
+
+/// Every candidate not yet in `current`, assessed, best held-out gain first.
+fn rank(
+    bench: &Bench<'_>,
+    current: &FittedModel,
+    current_costs: &Costs,
+    opts: &DiagnoseOptions,
+) -> Result<Vec<Candidate>, Error> {
+    let present: Vec<String> = current.model.effects.iter().map(|e| e.id().replace("_yaw", "")).collect();
+    let ids = opts.candidates.iter().cloned().chain(opts.custom.iter().map(|e| e.id().to_string()));
+    let mut ranking = Vec::new();
+    for id in &ids.collect::<Vec<_>>() {
+        if present.iter().any(|p| p == id) {
+            continue;
+        }
+        let effect = candidate_effect(id, current.model.n_wheels(), opts)?;
+        ranking.push(bench.assess(id, &effect, current, current_costs)?);
+    }
+    ranking.sort_by(|a, b| b.held_out_gain.total_cmp(&a.held_out_gain));
+    Ok(ranking)
+}
+
+/// Fit `model + effect` on all kinds of path but one and compare path costs on the kind left out (`None`
+/// when the runs have fewer than two kinds, or a run has no command).
+pub(super) fn kind_out(
+    model: &FittedModel,
+    effect: &EffectKind,
+    runs: &[Run],
+    every: usize,
+) -> Result<Option<KindOut>, Error> {
+    let mut kinds: Vec<Turn> = runs.iter().filter_map(Turn::of_run).collect();
+    kinds.sort();
+    kinds.dedup();
+    if kinds.len() < 2 || runs.iter().any(|r| Turn::of_run(r).is_none()) {
+        return Ok(None);
+    }
+    let (mut before, mut after) = (0.0, 0.0);
+    let mut folds = Vec::new();
+    for kind in kinds {
+        let (test, fit): (Vec<Run>, Vec<Run>) = runs.iter().cloned().partition(|r| Turn::of_run(r) == Some(kind));
+        let base = refit(model, &fit, every)?;
+        let with = refit(&model.with_effect(effect.clone()), &fit, every)?;
+        let b = cost::cost(&base.model, &base.params, &test, path_kind(every))?;
+        let a = cost::cost(&with.model, &with.params, &test, path_kind(every))?;
+        before += b * b;
+        after += a * a;
+        folds.push((text::path_kind(kind).to_string(), b, a));
+    }
+    Ok(Some(KindOut { effect: effect.id().to_string(), folds, gain: 1.0 - (after / before.max(1e-300)).sqrt() }))
+}

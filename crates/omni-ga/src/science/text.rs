@@ -1,0 +1,233 @@
+//! Every sentence the science layer says, made from its facts in one place: the diagnosis's findings and
+//! verdict, the held-out protocol, labels of groups, kinds of path and ladder rungs, why runs do not excite
+//! an effect, and what an unconstrained direction is and which runs would constrain it.
+//!
+//! Nothing else in the science layer writes words for people, and nothing branches on these words: they
+//! are made last, from the structured findings ([`Finding`], [`Verdict`], [`WeakDirection`], …), and stored
+//! beside them in the results so that JSON, the CLI and Python show the same text.
+
+use crate::science::diagnose::{Conclusion, ExcitationGap, Finding, GapKind, HeldOut, RungKind, Turn, Verdict};
+use crate::science::identify::{Advice, MotionParts, PatternPresence, WeakDirection, WheelEvidence};
+
+/// How the held-out costs were obtained.
+pub fn held_out(protocol: HeldOut) -> &'static str {
+    match protocol {
+        HeldOut::ValidationSet => "validation set",
+        HeldOut::TrainingRuns => "training runs (too few to hold any out)",
+        HeldOut::CrossValidation => "2-fold cross-validation over repetitions (even → odd)",
+    }
+}
+
+/// The label of a command group: `α=30° ω>0` (direction of travel in degrees, turn), or `all` for runs
+/// without a command.
+pub fn command_group(group: Option<(f64, Turn)>) -> String {
+    match group {
+        Some((alpha_deg, turn)) => {
+            let turn = match turn {
+                Turn::Left => "ω>0",
+                Turn::Right => "ω<0",
+                Turn::Straight => "ω=0",
+            };
+            format!("α={alpha_deg:.0}° {turn}")
+        }
+        None => "all".into(),
+    }
+}
+
+/// The name of a kind of path.
+pub fn path_kind(turn: Turn) -> &'static str {
+    match turn {
+        Turn::Straight => "straight",
+        Turn::Left => "turning left",
+        Turn::Right => "turning right",
+    }
+}
+
+/// The label of a rung of the error ladder: `design`, `model`, `+ time_offset`.
+pub fn rung(kind: &RungKind) -> String {
+    match kind {
+        RungKind::Design => "design".into(),
+        RungKind::Model => "model".into(),
+        RungKind::Added(effect) => format!("+ {effect}"),
+    }
+}
+
+/// Why the runs cannot tell a wheel-stage effect, wheel by wheel.
+pub fn excitation_gap(gap: &ExcitationGap) -> String {
+    let wheels: Vec<String> = gap
+        .wheels
+        .iter()
+        .map(|w| match w.kind {
+            GapKind::OneWay { forward_pct } => format!("{} turns one way only ({forward_pct:.0} % forward)", w.wheel),
+            GapKind::OneSpeed { low_rad_s, high_rad_s } => {
+                format!("{} runs at one speed only (|ω| {low_rad_s:.2}–{high_rad_s:.2} rad/s)", w.wheel)
+            }
+        })
+        .collect();
+    wheels.join("; ")
+}
+
+/// One finding of a diagnosis.
+pub fn finding(f: &Finding) -> String {
+    match f {
+        Finding::WorstRun { run, command, path_rms_m, design_path_rms_m } => format!(
+            "worst run {run} ({}): path RMS {path_rms_m:.4} m (design {design_path_rms_m:.4})",
+            command.as_deref().unwrap_or("-")
+        ),
+        Finding::SystematicGroups { systematic, groups, largest } => format!(
+            "{systematic} of {groups} command groups end with a systematic error (bias beyond the repeat scatter); largest: {} bias {:.4}, scatter {:.4}",
+            largest.group, largest.bias, largest.scatter
+        ),
+        Finding::ErrorGrowth { early_m, late_m } => {
+            format!("position error grows from {early_m:.4} m early to {late_m:.4} m late in the runs")
+        }
+        Finding::Absorbed { effect, implied } => {
+            let vals: Vec<String> = implied.iter().map(|p| format!("{} = {:.4} {}", p.name, p.value, p.unit)).collect();
+            format!(
+                "{effect}: indistinguishable from the model on these runs (absorbed by it, or not excited: equivalent {})",
+                vals.join(", ")
+            )
+        }
+        Finding::NotExcited { effect, gap } => {
+            format!("{effect}: not tested, the training runs do not excite it ({})", excitation_gap(gap))
+        }
+        Finding::Unconstrained(w) => format!("the model itself: {}", warning(w)),
+        Finding::RepeatabilityFloor { scatter } => format!(
+            "repeatability floor: end-pose errors scatter by {scatter:.4} between repeats of the same command (no deterministic effect removes that part)"
+        ),
+    }
+}
+
+/// The verdict of a diagnosis, with the remaining error against the noise floor.
+pub fn verdict(v: &Verdict) -> String {
+    let mut text = match &v.conclusion {
+        Conclusion::Add { effect, gain, before_m, after_m } => {
+            format!("add {effect}: held-out path cost falls {:.1} % ({before_m:.4} → {after_m:.4} m)", 100.0 * gain)
+        }
+        Conclusion::Partial { effect, gain, excess_closed } => format!(
+            "no catalogued effect explains most of the remaining error ({effect} helps: held-out path cost −{:.1} %, but it removes only {:.0} % of the error above the noise floor)",
+            100.0 * gain,
+            100.0 * excess_closed
+        ),
+        Conclusion::Nothing => "no catalogued effect explains the remaining error".into(),
+        Conclusion::NotOnNewKinds { effect, gain } => format!(
+            "{effect} helps on repeats of the training paths but not on new kinds of path (left-out kinds: path cost {:+.1} %), so it is not recommended",
+            -100.0 * gain
+        ),
+    };
+    if let Some(r) = &v.remaining {
+        let (remaining, ratio, floor) = (r.held_out_m, r.ratio, r.floor_m);
+        if r.missing {
+            text.push_str(&format!(
+                "; the remaining held-out error ({remaining:.4} m) is {ratio:.1}× the measurement noise floor ({floor:.4} m): something physical is still missing"
+            ));
+        } else {
+            text.push_str(&format!(
+                "; the remaining held-out error ({remaining:.4} m) is close to the measurement noise floor ({floor:.4} m, ratio {ratio:.1})"
+            ));
+        }
+    }
+    text
+}
+
+/// An unconstrained direction in words: the parameters carrying it, how badly it is constrained, and the
+/// wheel-speed pattern behind it.
+pub fn weak_direction(w: &WeakDirection) -> String {
+    let names: Vec<&str> = w.loadings.iter().map(|(n, _)| n.as_str()).collect();
+    let same_sign = w.loadings.iter().all(|(_, d)| *d > 0.0);
+    let who = match names.len() {
+        1 => format!("{} is", names[0]),
+        2 if same_sign => format!("{} and {} move together and are", names[0], names[1]),
+        2 => format!("{} and {} trade off (one up, the other down) and are", names[0], names[1]),
+        _ => {
+            let signed: Vec<String> =
+                w.loadings.iter().map(|(n, d)| format!("{}{n}", if *d > 0.0 { "+" } else { "−" })).collect();
+            format!("the combination {} is", signed.join(" "))
+        }
+    };
+    let how = match w.std_error {
+        None => "not excited at all".to_string(),
+        Some(se) => format!("poorly constrained (±{:.1} % of scale)", 100.0 * se),
+    };
+    let mut text = format!("{who} {how}");
+    if let (Some(e), Some(u)) = (&w.evidence, &w.wheel_pattern) {
+        text.push_str(&format!(": {}", wheel_evidence(e, u)));
+    }
+    text
+}
+
+/// What the runs say about the wheel-speed pattern `u` of a direction.
+fn wheel_evidence(e: &WheelEvidence, u: &[f64]) -> String {
+    let named: Vec<String> = e.wheels.iter().zip(u).map(|(w, x)| format!("{w} {x:+.2}")).collect();
+    let motion = if e.moves_nowhere {
+        "the wheels fighting each other, a pattern that moves the robot nowhere".to_string()
+    } else {
+        motion_name(e.motion)
+    };
+    let named = named.join(", ");
+    match e.presence {
+        PatternPresence::Present(share) => format!(
+            "the runs contain the wheel-speed pattern ({named}) — {motion} under the design matrix — ({:.0} % of the wheel motion), but the residuals barely respond to how the robot answers it",
+            100.0 * share
+        ),
+        PatternPresence::Scarce(share) => format!(
+            "the runs hardly contain the wheel-speed pattern ({named}) — {motion} under the design matrix — ({:.0} % of the wheel motion), so the robot's response to it is not measured",
+            100.0 * share
+        ),
+        PatternPresence::Unknown => format!(
+            "the robot's response to the wheel-speed pattern ({named}) — {motion} under the design matrix — is not measured"
+        ),
+    }
+}
+
+/// The translational components of a motion, in words.
+fn translations(m: MotionParts) -> Vec<&'static str> {
+    let mut parts = Vec::new();
+    if m.forward {
+        parts.push("forward/backward (vx)");
+    }
+    if m.sideways {
+        parts.push("sideways (vy)");
+    }
+    parts
+}
+
+/// A design motion: "moving sideways (vy) while rotating (ω)".
+fn motion_name(m: MotionParts) -> String {
+    let translate = translations(m);
+    match (translate.is_empty(), m.rotating) {
+        (true, true) => "rotating on the spot (ω)".into(),
+        (false, false) => format!("moving {}", translate.join(" and ")),
+        (false, true) => format!("moving {} while rotating (ω)", translate.join(" and ")),
+        (true, false) => "no motion".into(),
+    }
+}
+
+/// Which runs would constrain a direction.
+pub fn advice(a: &Advice) -> String {
+    match a {
+        Advice::PathObjective => {
+            "fit the path objective (every ground-truth pose), or add runs along different paths".to_string()
+        }
+        Advice::AddRuns { motion, alpha_deg } => {
+            let translate = translations(*motion);
+            let what = match (translate.is_empty(), motion.rotating) {
+                (true, true) => "turning on the spot in both directions (ω ≠ 0)".to_string(),
+                (false, false) => format!("translating {} in both directions", translate.join(" and ")),
+                (false, true) => format!("with ω ≠ 0 while translating {}", translate.join(" and ")),
+                (true, false) => "with other motions".to_string(),
+            };
+            let rotation = if motion.rotating { " with rotation" } else { "" };
+            format!("add runs {what} (e.g. a command along α ≈ {alpha_deg:.0}°{rotation})")
+        }
+        Advice::OtherMotions => "add runs with other motions (see `omnical plan`)".into(),
+        Advice::ExerciseEffects(effects) => {
+            format!("add runs that exercise {} (see `omnical plan --effect …`)", effects.join(", "))
+        }
+    }
+}
+
+/// One warning line for an unconstrained direction: its text and advice.
+pub fn warning(w: &WeakDirection) -> String {
+    format!("{}; {}", w.text, w.advice)
+}
