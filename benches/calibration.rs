@@ -23,6 +23,7 @@ fn pool(threads: usize) -> Option<rayon::ThreadPool> {
     rayon::ThreadPoolBuilder::new().num_threads(threads).build().ok()
 }
 
+/// long: the benchmark list, one `bench_function` after another over shared prepared data.
 fn benches(c: &mut Criterion) {
     let runs = paper_size(1, "train/");
     let validation = paper_size(2, "validation/");

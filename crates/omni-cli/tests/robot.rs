@@ -113,7 +113,7 @@ fn joint_names_and_a_four_wheel_design_come_from_the_file() {
     let e = stderr(&out);
     assert!(e.contains("wheel_a") && e.contains("fl"), "{e}");
     // The paper's Eq. 9 is not this robot.
-    let out = omnical(&["simulate", "--out", "x", "--robot", "omni4.toml"], d);
+    let out = omnical(&["simulate", "--out", "x", "--robot", "omni4.toml", "--truth", "paper"], d);
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("--truth paper is the paper's Eq. 9"), "{}", stderr(&out));
 }

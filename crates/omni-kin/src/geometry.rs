@@ -159,6 +159,28 @@ impl RobotGeometry {
         Self { wheel_names: default_wheel_names(4), wheels }
     }
 
+    /// A differential drive: two wheels on one axle across y, `separation_m` apart, the left (at +y,
+    /// the first column) and the right (at −y), both driving forward at positive speed (the layout of a
+    /// `kind = "diff"` robot description). Names `wheel_a` (left), `wheel_b` (right).
+    pub fn diff_drive(left_radius_m: f64, right_radius_m: f64, separation_m: f64) -> Self {
+        let half = 0.5 * separation_m;
+        let wheel = |radius_m, angle_rad, drive_offset_rad| Wheel {
+            radius_m,
+            distance_m: half,
+            angle_rad,
+            drive_offset_rad,
+            roller_angle_rad: 0.0,
+        };
+        Self {
+            wheel_names: default_wheel_names(2),
+            wheels: vec![
+                // Left: δ = 90°, tangent 180°, turned by 180° to drive forward. Right: δ = −90°, tangent 0°.
+                wheel(left_radius_m, FRAC_PI_2, std::f64::consts::PI),
+                wheel(right_radius_m, -FRAC_PI_2, 0.0),
+            ],
+        }
+    }
+
     /// Number of wheels.
     pub fn n_wheels(&self) -> usize {
         self.wheels.len()

@@ -117,6 +117,31 @@ impl IkMatrix {
         self.entries[r * self.n_wheels + c]
     }
 
+    /// The matrix with wheel column `c` times `factor`: the same robot with wheel `c`'s radius times
+    /// `factor` (every column of a twist-from-wheel-speeds matrix is proportional to its wheel's radius).
+    /// A column beyond the wheels leaves it unchanged.
+    pub fn with_column_scaled(&self, c: usize, factor: f64) -> Self {
+        let mut m = self.clone();
+        if c < self.n_wheels {
+            for r in 0..3 {
+                m.entries[r * self.n_wheels + c] *= factor;
+            }
+        }
+        m
+    }
+
+    /// The matrix with twist row `r` (0 = vx, 1 = vy, 2 = ω) times `factor`; a differential drive's ω row
+    /// divided by `1 + e` is its wheel separation `1 + e` times longer.
+    pub fn with_row_scaled(&self, r: usize, factor: f64) -> Self {
+        let mut m = self.clone();
+        if r < 3 {
+            for v in &mut m.entries[r * self.n_wheels..(r + 1) * self.n_wheels] {
+                *v *= factor;
+            }
+        }
+        m
+    }
+
     /// Row `r` as a slice.
     pub fn row(&self, r: usize) -> &[f64] {
         &self.entries[r * self.n_wheels..(r + 1) * self.n_wheels]

@@ -376,7 +376,7 @@ impl WheelSpec {
 
 impl DiffSpec {
     /// The two wheels as geometry (left at +y, right at −y, both driving forward), checked.
-    fn to_wheels(&self) -> Result<[Wheel; 2], RobotError> {
+    fn to_wheels(&self) -> Result<Vec<Wheel>, RobotError> {
         for (f, j) in [("diff.left_joint", &self.left_joint), ("diff.right_joint", &self.right_joint)] {
             if j.trim().is_empty() {
                 return Err(err(f, RobotProblem::EmptyJoint));
@@ -391,23 +391,7 @@ impl DiffSpec {
         let half = positive("diff.wheel_separation_m".into(), self.wheel_separation_m)? / 2.0;
         let left = positive("diff.left_radius_m".into(), self.left_radius_m)?;
         let right = positive("diff.right_radius_m".into(), self.right_radius_m)?;
-        // Left: δ = 90°, tangent 180°, turned by 180° to drive forward. Right: δ = −90°, tangent 0°.
-        Ok([
-            Wheel {
-                radius_m: left,
-                distance_m: half,
-                angle_rad: FRAC_PI_2,
-                drive_offset_rad: PI,
-                roller_angle_rad: 0.0,
-            },
-            Wheel {
-                radius_m: right,
-                distance_m: half,
-                angle_rad: -FRAC_PI_2,
-                drive_offset_rad: 0.0,
-                roller_angle_rad: 0.0,
-            },
-        ])
+        Ok(RobotGeometry::diff_drive(left, right, 2.0 * half).wheels)
     }
 }
 
@@ -477,7 +461,7 @@ impl RobotDescription {
                 let d = self.diff.as_ref().ok_or_else(|| {
                     err("diff", RobotProblem::Layout("a diff base needs a [diff] table (wheel_separation_m, …)"))
                 })?;
-                d.to_wheels()?.to_vec()
+                d.to_wheels()?
             }
             kind => {
                 if self.diff.is_some() {

@@ -111,6 +111,8 @@ fn check_stamps(run: &str, what: &'static str, t: impl Iterator<Item = f64>) -> 
 
 impl Run {
     /// Validates and builds a run.
+    ///
+    /// long: a flat list of checks, each with its own error naming the run and field; read top to bottom.
     pub fn new(mut d: RunData) -> Result<Self, KinError> {
         let run = d.name.as_str();
         if d.n_wheels == 0 {

@@ -38,6 +38,109 @@ pub fn flower_commands() -> Vec<Command> {
     v
 }
 
+/// Forward speed of [`diff_commands`]. m/s.
+pub const DIFF_SPEED_M_S: f64 = 0.2;
+/// Turn rates of [`diff_commands`]' arcs. rad/s.
+pub const DIFF_TURN_RATES_RAD_S: [f64; 5] = [-0.7, -0.35, 0.0, 0.35, 0.7];
+
+/// A differential drive's benchmark: the commands it can perform (it cannot move sideways). Forward
+/// (α = 0°) and backward (α = 180°) at [`DIFF_SPEED_M_S`] on arcs of each of [`DIFF_TURN_RATES_RAD_S`]
+/// (straight, gentle and tight turns both ways: 10 commands), then turns on the spot at ±0.7 rad/s (2):
+/// 12 commands, which excite both wheel radii (straight runs: their mean and difference) and the wheel
+/// separation (turns).
+pub fn diff_commands() -> Vec<Command> {
+    let mut v = Vec::with_capacity(12);
+    for alpha_deg in [0.0f64, 180.0] {
+        for omega in DIFF_TURN_RATES_RAD_S {
+            v.push(Command { v_m_s: DIFF_SPEED_M_S, alpha_rad: alpha_deg.to_radians(), omega_rad_s: omega });
+        }
+    }
+    for omega in [0.7, -0.7] {
+        v.push(Command { v_m_s: 0.0, alpha_rad: 0.0, omega_rad_s: omega });
+    }
+    v
+}
+
+/// The benchmark commands for a robot: the paper's 36 [`flower_commands`] for a base that drives every
+/// planar twist (omni, mecanum), [`diff_commands`] for a two-wheel base (which cannot move sideways).
+pub fn benchmark_commands(design: &RobotGeometry) -> Vec<Command> {
+    if design.n_wheels() == 2 { diff_commands() } else { flower_commands() }
+}
+
+/// The twist rank a base of `n_wheels` wheels needs: 2 for two wheels on one axle (a differential
+/// drive drives forward and turns), 3 (every planar twist) otherwise.
+pub fn needed_rank(n_wheels: usize) -> usize {
+    if n_wheels == 2 { 2 } else { crate::geometry::PLANAR_TWIST_DIMENSIONS }
+}
+
+/// The part of each command's twist that the base `design` cannot produce, as a twist error (vx m/s, vy
+/// m/s, ω rad/s): the command turned into wheel speeds and back through the design's inverse, minus the
+/// command. Zero (to rounding) for every command of an omnidirectional base; a differential drive's is
+/// the sideways speed `vy = v sin α` it was asked for.
+pub fn unreachable_twists(design: &RobotGeometry, commands: &[Command]) -> Result<Vec<[f64; 3]>, KinError> {
+    let fwd = design.wheels_from_twist();
+    let ik = design.twist_from_wheels()?;
+    Ok(commands
+        .iter()
+        .map(|c| {
+            let (s, co) = c.alpha_rad.sin_cos();
+            let twist = [c.v_m_s * co, c.v_m_s * s, c.omega_rad_s];
+            let wheels: Vec<f64> =
+                (0..design.n_wheels()).map(|i| (0..3).map(|j| fwd[(i, j)] * twist[j]).sum()).collect();
+            let back = ik.twist(&wheels);
+            [back.vx_m_s - twist[0], back.vy_m_s - twist[1], back.omega_rad_s - twist[2]]
+        })
+        .collect())
+}
+
+/// Largest twist error (m/s or rad/s) [`unreachable_twists`] tolerates: rounding, not a command.
+pub const UNREACHABLE_TOL: f64 = 1e-9;
+
+/// Checks that the base `design` can perform every command; the error names the first that it cannot
+/// (`commands[i]`) and the speed it cannot produce.
+pub fn check_commands(design: &RobotGeometry, commands: &[Command]) -> Result<(), KinError> {
+    for (i, c) in commands.iter().enumerate() {
+        for (f, v) in [("v_m_s", c.v_m_s), ("alpha_rad", c.alpha_rad), ("omega_rad_s", c.omega_rad_s)] {
+            if !v.is_finite() {
+                return Err(KinError::Invalid {
+                    what: format!("simulator commands[{i}].{f}"),
+                    why: format!("{v} is not finite"),
+                });
+            }
+        }
+    }
+    let misses = unreachable_twists(design, commands)?;
+    match misses.iter().position(|m| m.iter().any(|x| x.abs() > UNREACHABLE_TOL)) {
+        None => Ok(()),
+        Some(i) => Err(KinError::Invalid {
+            what: format!("simulator commands[{i}].alpha_rad"),
+            why: unreachable_message(design.n_wheels(), &commands[i], &misses[i]),
+        }),
+    }
+}
+
+/// Why a command `c` that misses the twist `miss` (from [`unreachable_twists`]) cannot be driven by a
+/// base of `n_wheels` wheels: the command's twist and the components the base cannot produce.
+pub fn unreachable_message(n_wheels: usize, c: &Command, miss: &[f64; 3]) -> String {
+    let (s, co) = c.alpha_rad.sin_cos();
+    let missing: Vec<String> = [("vx", "m/s"), ("vy", "m/s"), ("ω", "rad/s")]
+        .iter()
+        .zip(miss)
+        .filter(|(_, m)| m.abs() > UNREACHABLE_TOL)
+        .map(|((name, unit), m)| format!("{name} {:.4} {unit}", -m))
+        .collect();
+    format!(
+        "α = {:.1}° asks for vx {:.4} m/s, vy {:.4} m/s, ω {:.4} rad/s, and a base with {n_wheels} wheels cannot \
+         produce {} of it; a differential drive moves forward or backward (α = 0° or 180°) and turns, never \
+         sideways",
+        c.alpha_rad.to_degrees(),
+        c.v_m_s * co,
+        c.v_m_s * s,
+        c.omega_rad_s,
+        missing.join(", "),
+    )
+}
+
 /// Simulator settings. Defaults stand in for the paper's APR-02 recordings.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct SimConfig {
@@ -99,6 +202,11 @@ impl Default for SimConfig {
 }
 
 impl SimConfig {
+    /// The defaults on the robot `design`, with its [`benchmark_commands`].
+    pub fn for_robot(design: RobotGeometry) -> Self {
+        Self { commands: benchmark_commands(&design), design, ..Self::default() }
+    }
+
     /// A noise-free configuration (no quantisation, no noise): the model should then fit to integration
     /// error only.
     pub fn noise_free(mut self) -> Self {
@@ -132,7 +240,8 @@ impl SimConfig {
         if self.controller_tau_s <= 0.0 || self.rest_s < 0.0 {
             return bad("controller_tau_s / rest_s", "need tau > 0 and rest ≥ 0");
         }
-        self.design.validate()
+        self.design.validate_for(needed_rank(self.design.n_wheels()))?;
+        check_commands(&self.design, &self.commands)
     }
 }
 
@@ -167,6 +276,9 @@ fn gauss(rng: &mut ChaCha8Rng, sigma: f64) -> f64 {
 }
 
 /// Simulate one run on random stream `stream`.
+///
+/// long: one fine-step loop applying every effect stage in order (clock, wheel speeds, twist, integration,
+/// measurement) on shared per-step state; to split into stage helpers (issue 15 leftover).
 pub fn simulate_run(
     config: &SimConfig,
     truth: &FittedModel,
@@ -354,6 +466,7 @@ pub fn simulate_run(
 mod tests {
     use super::*;
     use crate::cost::{CostKind, cost};
+    use crate::geometry::RobotGeometry;
     use crate::ik::IkMatrix;
     use crate::model::Model;
 
@@ -371,6 +484,48 @@ mod tests {
         let design = FittedModel::paper_design();
         let d = cost(&design.model, &design.params, &runs, CostKind::EndPose).unwrap();
         assert!(d > 0.05, "design cost {d}");
+    }
+
+    #[test]
+    fn a_diff_drive_runs_its_own_benchmark_and_refuses_sideways_commands() {
+        let design = RobotGeometry::diff_drive(0.033, 0.033, 0.287);
+        let commands = benchmark_commands(&design);
+        assert_eq!(commands, diff_commands());
+        assert_eq!(commands.len(), 12);
+        // Every command is forward/backward or a turn on the spot: no sideways speed.
+        assert!(commands.iter().all(|c| (c.v_m_s * c.alpha_rad.sin()).abs() < 1e-15));
+        assert!(unreachable_twists(&design, &commands).unwrap().iter().flatten().all(|m| m.abs() < 1e-12));
+        // The true robot: right wheel 1.5 % larger than the design (its IK column 1.5 % larger).
+        let ik = design.twist_from_wheels().unwrap().with_column_scaled(1, 1.015);
+        assert_eq!(ik.row(1), [0.0, 0.0]);
+        let truth = FittedModel::nominal(Model::ik(ik));
+        let config =
+            SimConfig { runs_per_command: 1, duration_s: 4.0, seed: 2, ..SimConfig::for_robot(design.clone()) };
+        let runs = simulate(&config.clone().noise_free(), &truth, "d/").unwrap();
+        assert_eq!(runs.len(), 12);
+        let oracle = cost(&truth.model, &truth.params, &runs, CostKind::EndPose).unwrap();
+        let nominal = FittedModel::nominal(Model::ik(design.twist_from_wheels().unwrap()));
+        let d = cost(&nominal.model, &nominal.params, &runs, CostKind::EndPose).unwrap();
+        assert!(oracle < 1e-3 && d > 20.0 * oracle, "oracle {oracle}, design {d}");
+        // A sideways command is refused, naming it.
+        let mut sideways = config;
+        sideways.commands[3].alpha_rad = 90f64.to_radians();
+        let e = simulate(&sideways, &truth, "d/").unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "simulator commands[3].alpha_rad: α = 90.0° asks for vx 0.0000 m/s, vy 0.2000 m/s, ω 0.3500 rad/s, and a \
+             base with 2 wheels cannot produce vy 0.2000 m/s of it; a differential drive moves forward or backward \
+             (α = 0° or 180°) and turns, never sideways"
+        );
+    }
+
+    #[test]
+    fn omnidirectional_bases_run_the_flower_on_any_wheel_count() {
+        for n in [3, 4, 6] {
+            let design = RobotGeometry::omni_regular(n, 0.05, 0.2, 0.3);
+            assert_eq!(benchmark_commands(&design), flower_commands());
+            assert!(unreachable_twists(&design, &flower_commands()).unwrap().iter().flatten().all(|m| m.abs() < 1e-12));
+        }
     }
 
     #[test]

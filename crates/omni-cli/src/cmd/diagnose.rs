@@ -63,6 +63,8 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
 }
 
 /// Human-readable diagnosis.
+///
+/// long: the printed report's sections in order (compare, evidence, search, verdict), plain printing.
 pub fn print_diagnosis(d: &Diagnosis) {
     println!("1. compare (held out: {})", d.held_out);
     println!(

@@ -7,6 +7,7 @@ pub mod export;
 pub mod init;
 pub mod plan;
 pub mod report;
+pub mod sim_spec;
 pub mod simulate;
 pub mod train;
 

@@ -102,7 +102,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
-    print_plan(&plan, flower.as_ref(), req);
+    print_plan(&plan, flower.as_ref(), req, benchmark_name(model.model.n_wheels()));
     if let Some(out) = &a.out {
         println!("plan written to {}", out.display());
     }
@@ -144,10 +144,20 @@ fn worst_relative_se(plan: &RunPlan) -> Option<f64> {
     plan.expected.params.iter().map(|p| p.std_error.map(|s| s / p.scale)).try_fold(0.0f64, |m, s| s.map(|s| m.max(s)))
 }
 
-fn print_plan(plan: &RunPlan, flower: Option<&RunPlan>, req: &PlanRequest) {
+/// What `--set flower` is on a robot of `n_wheels` wheels: the paper's flower, or a differential drive's
+/// own benchmark (it cannot drive the flower's sideways petals).
+fn benchmark_name(n_wheels: usize) -> &'static str {
+    if n_wheels == 2 {
+        "the diff benchmark set (forward/backward arcs, turns on the spot)"
+    } else {
+        "the paper's flower set"
+    }
+}
+
+fn print_plan(plan: &RunPlan, flower: Option<&RunPlan>, req: &PlanRequest, benchmark: &str) {
     let name = match plan.set {
         RunSet::Greedy => "D-optimal pick",
-        RunSet::Flower => "the paper's flower set",
+        RunSet::Flower => benchmark,
     };
     println!(
         "{name}: {} runs of {:.0} s ({} distinct commands), ground truth at {} Hz with σ {} m / {} rad",
@@ -183,15 +193,14 @@ fn print_plan(plan: &RunPlan, flower: Option<&RunPlan>, req: &PlanRequest) {
     if let Some(f) = flower {
         match (worst_relative_se(plan), worst_relative_se(f)) {
             (Some(a), Some(b)) => println!(
-                "for comparison, the paper's flower set ({} runs): worst standard error {:.3} % of scale vs {:.3} % here",
+                "for comparison, {benchmark} ({} runs): worst standard error {:.3} % of scale vs {:.3} % here",
                 f.total_runs,
                 100.0 * b,
                 100.0 * a
             ),
-            (Some(_), None) => println!(
-                "for comparison, the paper's flower set ({} runs) leaves some parameters undetermined",
-                f.total_runs
-            ),
+            (Some(_), None) => {
+                println!("for comparison, {benchmark} ({} runs) leaves some parameters undetermined", f.total_runs)
+            }
             _ => {}
         }
     }

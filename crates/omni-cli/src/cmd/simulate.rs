@@ -1,12 +1,13 @@
 //! `omnical simulate`: write a flower-benchmark dataset from a true robot with optional hidden effects.
 
+use super::sim_spec;
 use crate::robot_file::{self, RobotFile};
 use crate::{atomic, dataset, design, model_file};
 use anyhow::{Context, bail};
 use omni_kin::cost::{self, CostKind};
-use omni_kin::effect::Effect;
+use omni_kin::robot::RobotDescription;
 use omni_kin::simulate::{SimConfig, simulate};
-use omni_kin::{EffectKind, FittedModel, IkMatrix, Model, RobotGeometry, Run};
+use omni_kin::{FittedModel, IkMatrix, Model, RobotGeometry, Run};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
@@ -34,19 +35,27 @@ pub struct Args {
     /// Seed (training uses it, validation seed + 1).
     #[arg(long, default_value_t = DEFAULT_SEED)]
     pub seed: u64,
-    /// Repetitions of each of the 36 commands.
+    /// Repetitions of each command.
     #[arg(long, default_value_t = SimConfig::default().runs_per_command)]
     pub runs_per_command: usize,
     /// Duration of each command. s.
     #[arg(long = "duration", value_name = "DURATION", default_value_t = SimConfig::default().duration_s)]
     pub duration_s: f64,
     /// Inject an effect into the true robot: NAME=V1,V2,… in the effect's parameter order
-    /// (`sample_timing=DROP_PROBABILITY,JITTER_S`). Repeatable.
-    #[arg(long = "effect", value_name = "NAME=VALUES")]
+    /// (`sample_timing=DROP_PROBABILITY,JITTER_S`); one wheel's: NAME:WHEEL=V (WHEEL: its letter a, b, …
+    /// or joint name). The true base: wheel_radius:WHEEL=E (radius 1 + E times the design's),
+    /// wheel_separation=E (a diff base's axle). Repeatable.
+    #[arg(long = "effect", value_name = "NAME[:WHEEL]=VALUES")]
     pub effects: Vec<String>,
-    /// True robot: `paper` (Eq. 9, APR-02 only), `design` (the robot's design) or a model file.
-    #[arg(long, default_value = "paper")]
-    pub truth: String,
+    /// Commands to simulate, a `plan --out` CSV (v_m_s,alpha_deg,omega_rad_s,repetitions), instead of the
+    /// robot's benchmark (the paper's 36 flower commands; a diff base's 12 forward/backward arcs and turns
+    /// on the spot).
+    #[arg(long, value_name = "CSV")]
+    pub commands: Option<PathBuf>,
+    /// True robot: `paper` (Eq. 9, APR-02 only), `design` (the robot's design) or a model file. Default:
+    /// `paper` on APR-02, `design` on any other robot.
+    #[arg(long)]
+    pub truth: Option<String>,
     /// The robot: its design drives the simulated controller and is written as robot.toml beside the
     /// runs. Default: `apr02`, the paper's robot.
     #[arg(long, value_name = "FILE|apr02", default_value = robot_file::BUILTIN_APR02)]
@@ -57,37 +66,6 @@ pub struct Args {
     /// No encoder quantisation and no noise.
     #[arg(long)]
     pub noise_free: bool,
-}
-
-/// Parse `NAME=V1,V2,…` and add the effect to `truth` (or, for `sample_timing`, to the simulator config).
-pub fn apply_effect_spec(spec: &str, truth: &mut FittedModel, config: &mut SimConfig) -> anyhow::Result<()> {
-    let (name, values) = spec.split_once('=').unwrap_or((spec, ""));
-    let values: Vec<f64> = values
-        .split(',')
-        .filter(|s| !s.trim().is_empty())
-        .map(|s| s.trim().parse::<f64>().with_context(|| format!("--effect {spec}: {s:?} is not a number")))
-        .collect::<anyhow::Result<_>>()?;
-    let n_wheels = truth.model.n_wheels();
-    let id = if name == "sensor_offset" && values.len() == 3 { "sensor_offset_yaw" } else { name };
-    let effect = EffectKind::from_id(id, n_wheels).with_context(|| format!("--effect {spec}"))?;
-    if id == "sample_timing" {
-        if values.is_empty() || values.len() > 2 {
-            bail!("--effect {spec}: sample_timing takes DROP_PROBABILITY[,JITTER_S], e.g. sample_timing=0.05,0.002");
-        }
-        config.sample_drop_probability = values[0];
-        config.sample_jitter_s = values.get(1).copied().unwrap_or(0.0);
-        *truth = truth.with_effect(effect);
-        return Ok(());
-    }
-    let specs = effect.params();
-    if values.len() != specs.len() {
-        let names: Vec<String> = specs.iter().map(|p| format!("{} ({})", p.name, p.unit)).collect();
-        bail!("--effect {spec}: {id} takes {} values: {}", specs.len(), names.join(", "));
-    }
-    let start = truth.params.len();
-    *truth = truth.with_effect(effect);
-    truth.params[start..].copy_from_slice(&values);
-    Ok(())
 }
 
 fn write_split(dir: &Path, runs: &[Run], format: Format, wheel_names: &[String]) -> anyhow::Result<()> {
@@ -117,7 +95,9 @@ fn design_and_truth(a: &Args) -> anyhow::Result<(RobotFile, RobotGeometry, Fitte
     let geometry = robot.description.to_geometry().with_context(|| format!("--robot {}", robot.source))?;
     let design_ik = robot.description.design_ik().with_context(|| format!("--robot {}", robot.source))?;
     let design = FittedModel::nominal(Model::ik(design_ik.clone()));
-    let truth = match a.truth.as_str() {
+    // Default: the paper's calibration on APR-02, the design itself on any other robot.
+    let default = if design_ik == IkMatrix::paper_design() { "paper" } else { "design" };
+    let truth = match a.truth.as_deref().unwrap_or(default) {
         "paper" if design_ik != IkMatrix::paper_design() => bail!(
             "--truth paper is the paper's Eq. 9, a calibration of APR-02, and --robot {} is another robot: give \
              --truth design (the design itself) or --truth FILE (a model file)",
@@ -140,8 +120,30 @@ fn design_and_truth(a: &Args) -> anyhow::Result<(RobotFile, RobotGeometry, Fitte
     Ok((robot, geometry, design, truth))
 }
 
+/// The description with the topics the simulator writes (MCAP): a topic the robot names otherwise (its
+/// real recordings' `/tf`, say) is replaced by the simulator's, and the TF frames are dropped with it, so
+/// that the robot.toml beside the runs reads them. Topics the robot leaves open stay open.
+fn written_topics(d: &RobotDescription, format: Format) -> RobotDescription {
+    let mut d = d.clone();
+    if format != Format::Mcap {
+        return d;
+    }
+    use dataset::mcap::{COMMAND_TOPIC, JOINTS_TOPIC, TRUTH_TOPIC};
+    for (slot, topic) in [
+        (&mut d.topics.joint_states, JOINTS_TOPIC),
+        (&mut d.topics.ground_truth, TRUTH_TOPIC),
+        (&mut d.topics.command, COMMAND_TOPIC),
+    ] {
+        if slot.as_deref().is_some_and(|t| t != topic) {
+            *slot = Some(topic.to_string());
+        }
+    }
+    d.frames = Default::default();
+    d
+}
+
 /// Writes `robot.toml` into a split's folder, so that commands reading the runs find the robot.
-fn write_robot(dir: &Path, robot: &RobotFile) -> anyhow::Result<()> {
+fn write_robot(dir: &Path, robot: &RobotFile, format: Format) -> anyhow::Result<()> {
     let comments = robot_file::Comments {
         header: vec![format!(
             "The robot these simulated runs were made with (omnical simulate --robot {}): its design, joint names \
@@ -151,15 +153,21 @@ fn write_robot(dir: &Path, robot: &RobotFile) -> anyhow::Result<()> {
         ..Default::default()
     };
     let path = dir.join(robot_file::FILE_NAME);
-    let text = robot_file::to_toml(&robot.description, &comments);
+    let text = robot_file::to_toml(&written_topics(&robot.description, format), &comments);
     atomic::write_atomic(&path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))
 }
 
 /// Runs `omnical simulate`; `quiet` hides the progress display.
 pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     let (robot, geometry, design, mut truth) = design_and_truth(a)?;
+    let wheel_names = robot.description.joints();
+    let commands = match &a.commands {
+        Some(path) => sim_spec::read_commands(path, &geometry)?,
+        None => omni_kin::simulate::benchmark_commands(&geometry),
+    };
     let mut config = SimConfig {
         design: geometry,
+        commands,
         runs_per_command: a.runs_per_command,
         duration_s: a.duration_s,
         ..SimConfig::default()
@@ -168,16 +176,15 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         config = config.noise_free();
     }
     for spec in &a.effects {
-        apply_effect_spec(spec, &mut truth, &mut config)?;
+        sim_spec::apply_effect_spec(spec, &mut truth, &mut config, &wheel_names)?;
     }
-    let wheel_names = robot.description.joints();
     let mut summary = serde_json::Map::new();
     for (split, seed) in [("train", a.seed), ("validation", a.seed.wrapping_add(1))] {
         let cfg = SimConfig { seed, ..config.clone() };
         let spinner = crate::progress::spinner(format!("simulating and writing {split} runs"), quiet);
         let runs = simulate(&cfg, &truth, &format!("{split}/"))?;
         write_split(&a.out.join(split), &runs, a.format, &wheel_names)?;
-        write_robot(&a.out.join(split), &robot)?;
+        write_robot(&a.out.join(split), &robot, a.format)?;
         spinner.finish_and_clear();
         let costs: Vec<(String, f64)> = [CostKind::EndPose, CostKind::PATH]
             .iter()

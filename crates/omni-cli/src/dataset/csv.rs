@@ -42,6 +42,9 @@ pub fn read_run(path: &Path, ticks_per_rev: Option<f64>) -> Result<Run, DatasetE
 
 /// Parse one omnical CSV run from its bytes; `path` only names the source in errors. `ticks_per_rev`
 /// overrides the file's.
+///
+/// long: one pass over header and rows, each check with its own message naming file, line and column;
+/// to split into header, row and ground-truth parts (issue 15 leftover).
 pub fn parse_run(path: &Path, bytes: &[u8], ticks_per_rev: Option<f64>) -> Result<Run, DatasetError> {
     let text = std::str::from_utf8(bytes).map_err(|e| {
         DatasetError::file(path, format!("is not UTF-8 text (invalid byte at offset {})", e.valid_up_to()))

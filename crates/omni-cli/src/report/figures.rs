@@ -294,6 +294,8 @@ fn by_command(r: &Report) -> (Vec<f64>, Vec<f64>, Vec<Vec<Vec<f64>>>) {
 }
 
 /// End-point errors by command: one polar "flower" per ω, radius = mean end position error at angle α.
+///
+/// long: one plotters drawing (axes, rings, one series per ω, legend) in drawing order.
 pub fn flower(r: &Report) -> anyhow::Result<Figure> {
     let (alphas, omegas, mean) = by_command(r);
     // The design's errors are often ten times the fitted models'; leave it out so theirs stay readable.

@@ -142,6 +142,8 @@ pub struct Report {
 impl Report {
     /// Computes the report's content. Fails only when a model cannot be evaluated on the runs (wrong wheel
     /// count, singular geometry).
+    ///
+    /// long: assembles every section of the page from already computed parts, in page order.
     pub fn build(input: &ReportInput<'_>) -> Result<Report, KinError> {
         let fig_runs = if input.held_out.is_empty() { input.train } else { input.held_out };
         let figure_runs = if input.held_out.is_empty() {

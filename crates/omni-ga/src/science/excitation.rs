@@ -7,11 +7,13 @@
 //! noise (position per axis `σ_p` m, heading `σ_θ` rad): its information matrix is `J_gᵀ J_g`. A plan's
 //! expected covariance is the inverse of the summed information (times the repetitions).
 //!
-//! - `flower`: the paper's 36 commands (12 directions × ω ∈ {−ω, 0, +ω}).
+//! - `flower`: the paper's 36 commands (12 directions × ω ∈ {−ω, 0, +ω}); on a differential drive, its
+//!   benchmark of forward/backward arcs and turns on the spot ([`omni_kin::simulate::diff_commands`]).
 //! - `greedy` (default): D-optimal selection from a library (12 directions × ω ∈ {−ω, 0, +ω} × speeds
 //!   {v, v/2}, plus rotations on the spot at ±ω and ±ω/2): repeatedly add the candidate that most
 //!   increases `log det` of the scaled information, so few runs excite every direction, including the
-//!   effects' (both turning directions, several speeds).
+//!   effects' (both turning directions, several speeds). Only commands the base can drive are candidates
+//!   (a differential drive: directions 0° and 180°).
 //!
 //! Expected standard errors count ground-truth noise only: wheel-speed noise integrates along a path
 //! into correlated drift, which makes real standard errors larger (on the simulator's defaults, 3–4×:
@@ -24,8 +26,8 @@ use crate::science::diagnose::differentiable_start;
 use crate::science::identify::{self, Identifiability, IdentifyOptions};
 use nalgebra::DMatrix;
 use omni_kin::cost::CostKind;
-use omni_kin::simulate::{SimConfig, flower_commands, simulate};
-use omni_kin::{Command, FittedModel, Run};
+use omni_kin::simulate::{SimConfig, UNREACHABLE_TOL, benchmark_commands, simulate, unreachable_twists};
+use omni_kin::{Command, FittedModel, RobotGeometry, Run};
 use serde::{Deserialize, Serialize};
 
 /// Which set of runs to propose.
@@ -123,6 +125,20 @@ pub fn candidate_commands(speed_m_s: f64, omega_rad_s: f64) -> Vec<Command> {
     v
 }
 
+/// The flower's turn rate, against which the benchmark's turn rates are scaled to the request's. rad/s.
+const FLOWER_OMEGA: f64 = 0.35;
+
+/// The candidates the base can drive (a differential drive: no sideways ones).
+fn performable(design: &RobotGeometry, candidates: Vec<Command>) -> Result<Vec<Command>, Error> {
+    let misses = unreachable_twists(design, &candidates)?;
+    Ok(candidates
+        .into_iter()
+        .zip(misses)
+        .filter(|(_, m)| m.iter().all(|x| x.abs() <= UNREACHABLE_TOL))
+        .map(|(c, _)| c)
+        .collect())
+}
+
 fn check(req: &PlanRequest) -> Result<(), Error> {
     let bad = |what, why| Err(Error::BadPlanRequest { what, why });
     let pos = |x: f64| x.is_finite() && x > 0.0;
@@ -143,15 +159,16 @@ fn check(req: &PlanRequest) -> Result<(), Error> {
 pub fn plan(model: &FittedModel, sim: &SimConfig, req: &PlanRequest) -> Result<RunPlan, Error> {
     check(req)?;
     let commands = match req.set {
-        RunSet::Flower => flower_commands()
+        // The robot's benchmark (the flower; a diff drive's arcs), at the requested speed and turn rate.
+        RunSet::Flower => benchmark_commands(&sim.design)
             .into_iter()
             .map(|c| Command {
-                v_m_s: req.speed_m_s,
-                omega_rad_s: if c.omega_rad_s == 0.0 { 0.0 } else { req.omega_rad_s * c.omega_rad_s.signum() },
+                v_m_s: if c.v_m_s == 0.0 { 0.0 } else { req.speed_m_s },
+                omega_rad_s: if c.omega_rad_s == 0.0 { 0.0 } else { req.omega_rad_s * (c.omega_rad_s / FLOWER_OMEGA) },
                 ..c
             })
             .collect(),
-        RunSet::Greedy => candidate_commands(req.speed_m_s, req.omega_rad_s),
+        RunSet::Greedy => performable(&sim.design, candidate_commands(req.speed_m_s, req.omega_rad_s))?,
     };
     let dt = 1.0 / req.truth_rate_hz;
     let cfg = SimConfig {

@@ -220,6 +220,9 @@ pub fn advice(a: &Advice) -> String {
             let rotation = if motion.rotating { " with rotation" } else { "" };
             format!("add runs {what} (e.g. a command along α ≈ {alpha_deg:.0}°{rotation})")
         }
+        Advice::HeldAtDesign => "no run can show it: it stays at the design (the default fit holds it; \
+                                 `--unexcited move` lets it drift with the noise)"
+            .into(),
         Advice::OtherMotions => "add runs with other motions (see `omnical plan`)".into(),
         Advice::ExerciseEffects(effects) => {
             format!("add runs that exercise {} (see `omnical plan --effect …`)", effects.join(", "))

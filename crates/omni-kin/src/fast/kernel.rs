@@ -106,6 +106,8 @@ fn unpack<O: LaneOps>(o: O, v: &[O::V; 5]) -> [LaneState; LANES] {
     std::array::from_fn(|l| LaneState { x: x[l], y: y[l], th: th[l], c: c[l], s: s[l] })
 }
 
+/// long: the hot step loop stays one function so that the lanes' state lives in registers across the
+/// loop (inlined, const generics per wheel count); splitting it measurably slows every evaluation.
 #[inline(always)]
 fn kernel<O: LaneOps, const N: usize, const ARC: bool>(
     o: O,

@@ -75,6 +75,7 @@ use omni_kin::{Run, StampedPose};
 use std::path::Path;
 
 pub use inspect::{Inventory, ROBOT_DESCRIPTION_TOPIC, TopicSummary, inspect, inspect_bytes};
+pub use write::{COMMAND_TOPIC, JOINTS_TOPIC, TRUTH_TOPIC};
 
 /// The default wheel joint names, in wheel order.
 pub const DEFAULT_WHEEL_JOINTS: [&str; 3] = ["wheel_a", "wheel_b", "wheel_c"];

@@ -308,6 +308,8 @@ impl Bag<'_> {
         None
     }
 
+    /// long: the ground-truth channel, named (`--gt-topic`) or found, with errors that list every
+    /// transform or pose topic seen; kept together so the messages can name them.
     fn truth(&self, opts: &McapOptions) -> Result<Truth, DatasetError> {
         let (parent, child) = (opts.truth_parent_frame.as_deref(), opts.truth_child_frame.as_deref());
         if let Some(topic) = &opts.truth_topic {

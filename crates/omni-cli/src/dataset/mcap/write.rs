@@ -17,12 +17,12 @@ use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-/// The topics written, in channel order.
-pub(super) const JOINTS_TOPIC: &str = "/joint_states";
+/// The topics written, in channel order: the wheels.
+pub const JOINTS_TOPIC: &str = "/joint_states";
 /// Ground truth.
-pub(super) const TRUTH_TOPIC: &str = "/ground_truth/pose";
+pub const TRUTH_TOPIC: &str = "/ground_truth/pose";
 /// The command.
-pub(super) const COMMAND_TOPIC: &str = "/cmd_vel";
+pub const COMMAND_TOPIC: &str = "/cmd_vel";
 /// The robot's own (design) odometry.
 pub(super) const ODOM_TOPIC: &str = "/odom";
 /// The calibrated odometry (`omnical export --mcap`).

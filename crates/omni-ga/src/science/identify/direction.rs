@@ -39,6 +39,7 @@ pub(super) fn describe(
     loadings.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
     let pattern = wheel_pattern(model, params, scales, &dir, wheel_moment);
     let remedy = match &pattern {
+        Some(p) if p.evidence.moves_nowhere => Advice::HeldAtDesign,
         Some(p) if matches!(p.evidence.presence, PatternPresence::Present(_)) => Advice::PathObjective,
         Some(p) => {
             Advice::AddRuns { motion: p.evidence.motion, alpha_deg: p.motion[1].atan2(p.motion[0]).to_degrees() }

@@ -164,6 +164,9 @@ pub enum Advice {
         /// Direction of travel of the motion. deg.
         alpha_deg: f64,
     },
+    /// Nothing: the wheel pattern moves the robot nowhere (the wheels fighting each other), no command asks
+    /// for it, and the fit holds it at the design.
+    HeldAtDesign,
     /// Add runs with other motions (the direction touches neither the base kinematics nor an effect).
     #[default]
     OtherMotions,
