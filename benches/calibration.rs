@@ -6,6 +6,7 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use omnical::ga::calibrate::{BoxRule, CalibrationProblem, Plan, Preset, calibrate, search_box};
 use omnical::ga::diagnose::{DiagnoseOptions, diagnose};
 use omnical::ga::{LevenbergMarquardt, LmConfig, NoopObserver, Optimizer, Problem};
+use omnical::kin::RobotGeometry;
 use omnical::kin::cost::{CostKind, mean_end_pose_error};
 use omnical::kin::evaluate::{Evaluator, Route};
 use omnical::kin::fast::PreparedRuns;
@@ -143,5 +144,34 @@ fn benches(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(calibration, benches);
+/// The cost kernel (fast path, Eq. 6 with exact arcs, one thread) on a differential drive (2 wheels) and
+/// on omni bases with 3, 4 and 6 wheels, each on its own benchmark set (`SimConfig::for_robot`: the flower
+/// for omni bases, forward arcs and turns for the diff drive; 5 repetitions, 10 s runs). Throughput counts
+/// time samples (each carrying one speed per wheel), so the figures show what a wheel more costs.
+fn by_wheel_count(c: &mut Criterion) {
+    let robots = [
+        ("diff, 2 wheels", RobotGeometry::diff_drive(0.0335, 0.0335, 0.29)),
+        ("omni, 3 wheels", RobotGeometry::omni_regular(3, 0.05, 0.2, 0.0)),
+        ("omni, 4 wheels", RobotGeometry::omni_regular(4, 0.05, 0.2, std::f64::consts::FRAC_PI_4)),
+        ("omni, 6 wheels", RobotGeometry::omni_regular(6, 0.05, 0.2, 0.0)),
+    ];
+    let mut g = c.benchmark_group("cost kernel by wheel count");
+    let Some(pool) = pool(1) else { return };
+    for (name, geometry) in robots {
+        let Ok(ik) = geometry.twist_from_wheels() else { continue };
+        let truth = FittedModel::nominal(Model::ik(ik));
+        let Ok(runs) = simulate(&SimConfig { seed: 1, ..SimConfig::for_robot(geometry) }, &truth, "bench/") else {
+            continue;
+        };
+        let Ok(res) = truth.model.resolve(&truth.params) else { continue };
+        let Ok(ev) = Evaluator::new(&truth.model, &runs, Selection::End) else { continue };
+        g.throughput(Throughput::Elements(runs.iter().map(Run::n_samples).sum::<usize>() as u64));
+        g.bench_function(format!("{name}, {} runs, fast, Eq. 6, 1 thread", runs.len()), |b| {
+            pool.install(|| b.iter(|| black_box(ev.cost(&res, CostKind::EndPose))))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(calibration, benches, by_wheel_count);
 criterion_main!(calibration);

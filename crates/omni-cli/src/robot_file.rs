@@ -303,6 +303,17 @@ pub fn to_toml(d: &RobotDescription, comments: &Comments) -> String {
         text(&mut s, "ground_truth_parent", &f.ground_truth_parent);
         text(&mut s, "ground_truth_child", &f.ground_truth_child);
     }
+    if let Some(g) = &d.ground_truth {
+        s.push_str("\n[ground_truth]\n");
+        text(&mut s, "file", &g.file);
+        num(&mut s, "time_offset_s", g.time_offset_s);
+        for (key, map) in [("columns", &g.columns), ("units", &g.units)] {
+            if !map.is_empty() {
+                let items: Vec<String> = map.iter().map(|(k, v)| format!("{k} = {}", quoted(v))).collect();
+                let _ = writeln!(s, "{key} = {{ {} }}", items.join(", "));
+            }
+        }
+    }
     if let Some(p) = &d.priors {
         s.push_str("\n[priors]\n");
         num(&mut s, "radius_std_m", p.radius_std_m);

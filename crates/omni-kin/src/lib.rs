@@ -10,6 +10,7 @@
 #![deny(missing_docs)]
 
 pub mod choice;
+pub mod clock;
 pub mod controller;
 pub mod cost;
 pub mod effect;

@@ -85,6 +85,9 @@ pub struct RobotDescription {
     /// Frames of the ground truth in a TF topic.
     #[serde(default, skip_serializing_if = "Frames::is_empty")]
     pub frames: Frames,
+    /// Ground truth from a separate file instead of a topic (`--gt`). Optional.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ground_truth: Option<GroundTruthFile>,
     /// How well the design values are known. Optional.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub priors: Option<Priors>,
@@ -174,6 +177,27 @@ impl Frames {
     fn is_empty(&self) -> bool {
         *self == Self::default()
     }
+}
+
+/// Ground truth from a separate file (`[ground_truth]`): a TUM or CSV trajectory, e.g. from motion capture.
+/// Command-line flags (`--gt`, `--gt-time-offset`, `--gt-columns`, `--gt-units`) override each entry.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GroundTruthFile {
+    /// The file (one recording) or a folder of files named after the recordings, relative to the robot
+    /// description's folder.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+    /// Forced clock offset, `t_wheel = t_truth + offset`. s. Default: estimated from the data.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_offset_s: Option<f64>,
+    /// CSV column names: keys `t`, `x`, `y`, `yaw`. Default: the columns named `t`, `x`, `y`, `yaw` (or a
+    /// quaternion `qx`, `qy`, `qz`, `qw`).
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub columns: std::collections::BTreeMap<String, String>,
+    /// CSV units: `time` (s, ms, us, ns), `length` (m, cm, mm), `angle` (rad, deg). Default s, m, rad.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub units: std::collections::BTreeMap<String, String>,
 }
 
 /// One-sigma uncertainties of the design values, as measured or as the drawings promise. Checked (finite,
@@ -406,6 +430,7 @@ impl RobotDescription {
             diff: None,
             topics: Topics::default(),
             frames: Frames::default(),
+            ground_truth: None,
             priors: None,
         }
     }

@@ -46,10 +46,11 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
                 })
             })
             .collect();
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&json!({ "cost": c, "path_cost": path, "model": model, "runs": runs }))?
-        );
+        let mut out = json!({ "cost": c, "path_cost": path, "model": model, "runs": runs });
+        if !ds.ground_truth_clocks.is_empty() {
+            out["ground_truth_clock"] = ds.ground_truth_clocks.iter().map(|g| g.to_json()).collect();
+        }
+        println!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());
     }
     println!("{:<28} {:>18} {:>9} {:>9} {:>10} {:>9}", "run", "command", "dx m", "dy m", "dθ rad", "error");

@@ -51,6 +51,22 @@ pub struct DataArgs {
     /// Child frame of the ground truth in a TF topic (MCAP), e.g. `base_link`.
     #[arg(long)]
     pub gt_child_frame: Option<String>,
+    /// Ground truth from a separate file instead of a topic: a TUM (`t x y z qx qy qz qw`) or CSV file for
+    /// one recording, or a folder of files named after the recordings (`rec.tum`, `rec.csv`). Default: the
+    /// robot description's `[ground_truth] file`, else a topic of the recording.
+    #[arg(long, value_name = "FILE|DIR")]
+    pub gt: Option<PathBuf>,
+    /// Clock offset of the `--gt` file: wheel time = ground-truth time + SECONDS (s). Default: estimated from
+    /// the data (reported with its standard error).
+    #[arg(long, value_name = "SECONDS", allow_hyphen_values = true)]
+    pub gt_time_offset: Option<f64>,
+    /// CSV columns of the `--gt` file, e.g. `t=stamp_ns,x=pos_x_mm,y=pos_y_mm,yaw=heading_deg` (default t, x,
+    /// y, yaw, or a quaternion qx, qy, qz, qw).
+    #[arg(long, value_delimiter = ',', value_name = "KEY=COLUMN")]
+    pub gt_columns: Vec<String>,
+    /// Units of the `--gt` CSV columns, e.g. `time=ns,length=mm,angle=deg` (default s, m, rad).
+    #[arg(long, value_delimiter = ',', value_name = "KEY=UNIT")]
+    pub gt_units: Vec<String>,
     /// Cut MCAP files into runs where the robot stands still at least this long (s).
     #[arg(long)]
     pub split: Option<f64>,
@@ -100,6 +116,7 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
         mcap,
         recorded_odometry,
         max_file_bytes: data.max_file_mb.saturating_mul(1 << 20),
+        ground_truth: ground_truth_options(data, robot.as_ref())?,
     };
     let mut ds = dataset::load(paths, &opts)?;
     ds.robot_file = robot;
@@ -122,7 +139,53 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
     for s in &ds.skipped {
         eprintln!("skipped {}: {}", s.source, s.reason);
     }
+    for c in &ds.ground_truth_clocks {
+        eprintln!("{}", c.describe());
+    }
     Ok(ds)
+}
+
+/// `--gt` and its options, over the robot description's `[ground_truth]` (its `file` relative to the
+/// description's folder).
+fn ground_truth_options(
+    data: &DataArgs,
+    robot: Option<&robot_file::RobotFile>,
+) -> anyhow::Result<Option<dataset::ground_truth::GroundTruthOptions>> {
+    let from_robot = robot.and_then(|r| r.description.ground_truth.as_ref().map(|g| (r, g)));
+    let path = match (&data.gt, from_robot.and_then(|(r, g)| g.file.as_ref().map(|f| (r, f)))) {
+        (Some(p), _) => p.clone(),
+        (None, Some((r, file))) => match &r.source {
+            robot_file::Source::Flag(p) | robot_file::Source::Discovered(p) => {
+                p.parent().unwrap_or(std::path::Path::new("")).join(file)
+            }
+            robot_file::Source::Builtin => PathBuf::from(file),
+        },
+        (None, None) => return Ok(None),
+    };
+    let mut csv = dataset::ground_truth::CsvColumns::default();
+    let settings = |list: &[String]| -> Vec<(String, String)> {
+        list.iter()
+            .filter_map(|kv| kv.split_once('=').map(|(k, v)| (k.trim().to_string(), v.trim().to_string())))
+            .collect()
+    };
+    let (mut columns, mut units) = (Vec::new(), Vec::new());
+    if let Some((_, g)) = from_robot {
+        columns.extend(g.columns.iter().map(|(k, v)| (k.clone(), v.clone())));
+        units.extend(g.units.iter().map(|(k, v)| (k.clone(), v.clone())));
+    }
+    for kv in data.gt_columns.iter().chain(&data.gt_units) {
+        anyhow::ensure!(kv.contains('='), "--gt-columns/--gt-units {kv:?}: expected KEY=VALUE");
+    }
+    columns.extend(settings(&data.gt_columns));
+    units.extend(settings(&data.gt_units));
+    for (k, v) in &columns {
+        csv.set_column(k, v).map_err(anyhow::Error::msg)?;
+    }
+    for (k, v) in &units {
+        csv.set_unit(k, v).map_err(anyhow::Error::msg)?;
+    }
+    let time_offset_s = data.gt_time_offset.or(from_robot.and_then(|(_, g)| g.time_offset_s));
+    Ok(Some(dataset::ground_truth::GroundTruthOptions { path, time_offset_s, csv }))
 }
 
 /// `design` / `paper` or a model file ([`crate::design::resolve`]), for the data's robot.

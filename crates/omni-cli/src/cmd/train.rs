@@ -198,6 +198,9 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))?;
     }
     if a.json {
+        if !ds.ground_truth_clocks.is_empty() {
+            s["ground_truth_clock"] = ds.ground_truth_clocks.iter().map(|g| g.to_json()).collect();
+        }
         println!("{}", serde_json::to_string_pretty(&s)?);
     } else {
         if interrupted {

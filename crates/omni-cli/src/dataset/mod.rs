@@ -1,12 +1,16 @@
-//! Datasets: runs loaded from files (CSV, OptiOdom folders, ROS 2 MCAP bags) and written back.
+//! Datasets: runs loaded from files (CSV, OptiOdom folders, ROS 2 MCAP bags, rosbag2 recordings in sqlite3
+//! or MCAP) and written back.
 //!
 //! Every error names the file and, where it applies, the line, topic, message, run and field.
 
 pub mod csv;
+pub mod ground_truth;
 pub mod mcap;
 pub mod optiodom;
+pub mod rosbag2;
 
 use omni_kin::{KinError, RobotGeometry, Run};
+use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -24,6 +28,8 @@ pub struct Dataset {
     /// The robot description the data was read with (`--robot`, or a `robot.toml` found beside it), if any.
     /// Set by the command line, not by [`load`].
     pub robot_file: Option<crate::robot_file::RobotFile>,
+    /// The clock offsets of ground truths read from separate files (`--gt`), one per recording.
+    pub ground_truth_clocks: Vec<ground_truth::GtClock>,
 }
 
 /// The default cap on one input file's size (`--max-file-mb`). Bytes: 1 GiB.
@@ -46,6 +52,8 @@ pub struct LoadOptions {
     /// decompressed one at a time), so the cap keeps a huge or mistaken input from exhausting memory.
     /// Bytes. Default [`DEFAULT_MAX_FILE_BYTES`].
     pub max_file_bytes: u64,
+    /// Ground truth from separate files (`--gt`) instead of a topic of the recordings. Default none.
+    pub ground_truth: Option<ground_truth::GroundTruthOptions>,
 }
 
 impl Default for LoadOptions {
@@ -56,18 +64,32 @@ impl Default for LoadOptions {
             mcap: mcap::McapOptions::default(),
             recorded_odometry: true,
             max_file_bytes: DEFAULT_MAX_FILE_BYTES,
+            ground_truth: None,
         }
     }
 }
 
 /// Supported inputs, for messages.
-pub const SUPPORTED: &str = ".csv (omnical run), .mcap (ROS 2 bag), or a folder of them / an OptiOdom set folder";
+pub const SUPPORTED: &str = ".csv (omnical run), .mcap (ROS 2 bag), .db3 (rosbag2 sqlite3), a rosbag2 recording \
+                             folder (metadata.yaml), or a folder of them / an OptiOdom set folder";
 
 /// Load runs from files and folders, in the order given (folders: files sorted by name).
 pub fn load(paths: &[PathBuf], opts: &LoadOptions) -> Result<Dataset, DatasetError> {
-    let mut ds = Dataset::default();
+    let mut inputs = Vec::new();
     for p in paths {
-        load_path(p, opts, &mut ds)?;
+        expand(p, &mut inputs);
+    }
+    check_one_truth_file(&inputs, opts)?;
+    // The inputs are read in parallel (one file or recording per task) and merged in their order, so the
+    // dataset, its notes and the first error are those of a serial load whatever the thread count.
+    let reads: Vec<_> = inputs.par_iter().map(|i| i.as_ref().ok().map(|i| read_input(i, opts))).collect();
+    let mut ds = Dataset::default();
+    for (input, read) in inputs.into_iter().zip(reads) {
+        // A path that is no input (unreadable, unsupported) stops the load where it stands in the order.
+        let input = input?;
+        if let Some(read) = read {
+            merge(&mut ds, opts, input.path(), read?)?;
+        }
     }
     if ds.runs.is_empty() {
         let what = paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ");
@@ -82,19 +104,144 @@ pub fn load(paths: &[PathBuf], opts: &LoadOptions) -> Result<Dataset, DatasetErr
     Ok(ds)
 }
 
-fn keep_or_fail(ds: &mut Dataset, opts: &LoadOptions, source: &Path, e: DatasetError) -> Result<(), DatasetError> {
-    if opts.skip_invalid {
-        ds.skipped.push(Skipped { source: source.display().to_string(), reason: e.to_string() });
-        Ok(())
-    } else {
-        Err(e)
+/// One thing to read: it gives runs on its own.
+#[derive(Clone, Debug)]
+enum Input {
+    /// An omnical CSV run.
+    Csv(PathBuf),
+    /// A bare MCAP file.
+    Mcap(PathBuf),
+    /// A bare rosbag2 sqlite3 file.
+    Db3(PathBuf),
+    /// A rosbag2 recording folder (metadata.yaml).
+    Recording(PathBuf),
+    /// An OptiOdom set folder.
+    OptiOdom(PathBuf),
+}
+
+impl Input {
+    fn path(&self) -> &Path {
+        match self {
+            Self::Csv(p) | Self::Mcap(p) | Self::Db3(p) | Self::Recording(p) | Self::OptiOdom(p) => p,
+        }
     }
 }
 
-fn load_path(p: &Path, opts: &LoadOptions, ds: &mut Dataset) -> Result<(), DatasetError> {
-    let meta = std::fs::metadata(p).map_err(|e| DatasetError::io(p, e))?;
+/// What one input gave.
+#[derive(Debug, Default)]
+struct Loaded {
+    runs: Vec<Run>,
+    skipped: Vec<Skipped>,
+    notes: Vec<String>,
+    robot: Option<RobotGeometry>,
+    clock: Option<ground_truth::GtClock>,
+}
+
+/// `--gt FILE` is one recording's ground truth: it cannot serve several.
+fn check_one_truth_file(inputs: &[Result<Input, DatasetError>], opts: &LoadOptions) -> Result<(), DatasetError> {
+    let Some(gt) = &opts.ground_truth else { return Ok(()) };
+    let recordings =
+        inputs.iter().filter(|i| matches!(i, Ok(Input::Mcap(_) | Input::Db3(_) | Input::Recording(_)))).count();
+    if recordings > 1 && !gt.path.is_dir() {
+        return Err(DatasetError::file(
+            &gt.path,
+            format!(
+                "--gt names one ground-truth file but {recordings} recordings were given; give a folder of files \
+                 named after the recordings (<recording>.tum or <recording>.csv)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The recording's name, for matching ground-truth files: a folder's name, a file's stem.
+fn recording_name(p: &Path, folder: bool) -> String {
+    let name = if folder { p.file_name() } else { p.file_stem() };
+    name.map_or_else(|| p.display().to_string(), |s| s.to_string_lossy().into_owned())
+}
+
+/// The inputs under `p`, in order: a folder's entries sorted by name, recursively; a recording folder or an
+/// OptiOdom set is one input. A path that is no input is an error in its place.
+fn expand(p: &Path, out: &mut Vec<Result<Input, DatasetError>>) {
+    let meta = match std::fs::metadata(p) {
+        Ok(m) => m,
+        Err(e) => return out.push(Err(DatasetError::io(p, e))),
+    };
     if meta.is_dir() {
         if optiodom::metadata_file(p).is_some() {
+            return out.push(Ok(Input::OptiOdom(p.to_path_buf())));
+        }
+        if rosbag2::is_recording(p) {
+            return out.push(Ok(Input::Recording(p.to_path_buf())));
+        }
+        let entries = match std::fs::read_dir(p) {
+            Ok(entries) => entries,
+            Err(e) => return out.push(Err(DatasetError::io(p, e))),
+        };
+        let mut entries: Vec<PathBuf> = entries
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|q| q.is_dir() || q.extension().is_some_and(|e| e == "csv" || e == "mcap" || e == "db3"))
+            .collect();
+        entries.sort();
+        for e in entries {
+            expand(&e, out);
+        }
+        return;
+    }
+    out.push(match p.extension().and_then(|e| e.to_str()) {
+        Some("csv") => Ok(Input::Csv(p.to_path_buf())),
+        Some("mcap") => Ok(Input::Mcap(p.to_path_buf())),
+        Some("db3") => Ok(Input::Db3(p.to_path_buf())),
+        _ => Err(DatasetError::file(p, format!("unsupported input (expected {SUPPORTED})"))),
+    });
+}
+
+/// Reads one input. The outer error always stops the load (a file above the size cap); the inner one is
+/// the input's own failure, which [`merge`] lists as skipped under `skip_invalid`.
+fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, DatasetError>, DatasetError> {
+    let mo = mcap::McapOptions {
+        skip_invalid: opts.skip_invalid,
+        recorded_odometry: opts.recorded_odometry,
+        ..opts.mcap.clone()
+    };
+    let from_bag = |r: mcap::McapRead| Loaded {
+        runs: r.runs,
+        skipped: r.skipped.into_iter().map(|(source, reason)| Skipped { source, reason }).collect(),
+        notes: r.notes,
+        robot: None,
+        clock: r.ground_truth_clock,
+    };
+    // The ground-truth file of a ROS recording, when --gt is given.
+    let truth = |p: &Path, folder: bool| -> Result<Option<ground_truth::ExternalTruth>, DatasetError> {
+        opts.ground_truth.as_ref().map(|g| ground_truth::read_for(g, p, &recording_name(p, folder))).transpose()
+    };
+    if opts.ground_truth.is_some() && matches!(input, Input::Csv(_) | Input::OptiOdom(_)) {
+        return Err(DatasetError::file(
+            input.path(),
+            "--gt gives the ground truth of ROS recordings (.mcap, .db3, rosbag2 folders); this input has its own",
+        ));
+    }
+    match input {
+        Input::Csv(p) => {
+            check_size(p, opts.max_file_bytes)?;
+            Ok(csv::read_run(p, opts.ticks_per_rev).map(|r| Loaded {
+                runs: vec![if opts.recorded_odometry { r } else { r.without_recorded_odometry() }],
+                ..Default::default()
+            }))
+        }
+        Input::Mcap(p) => {
+            check_size(p, opts.max_file_bytes)?;
+            Ok(truth(p, false).and_then(|t| mcap::read_file_with_truth(p, &mo, t.as_ref())).map(from_bag))
+        }
+        Input::Db3(p) => {
+            Ok(truth(p, false).and_then(|t| rosbag2::read_db3(p, &mo, opts.max_file_bytes, t.as_ref())).map(from_bag))
+        }
+        Input::Recording(p) => Ok(truth(p, true)
+            .and_then(|t| rosbag2::read_recording(p, &mo, opts.max_file_bytes, t.as_ref()))
+            .map(from_bag)),
+        Input::OptiOdom(p) => {
+            // The set's runs are checked one by one (skipped under skip_invalid); a failure of the set
+            // itself stops the load.
             let mut skipped = Vec::new();
             let (runs, robot) = optiodom::read_set(p, |e| {
                 if opts.skip_invalid {
@@ -104,58 +251,55 @@ fn load_path(p: &Path, opts: &LoadOptions, ds: &mut Dataset) -> Result<(), Datas
                     Err(e)
                 }
             })?;
-            ds.skipped.extend(skipped);
-            ds.runs.extend(runs);
-            ds.robot = Some(robot);
-            return Ok(());
+            Ok(Ok(Loaded { runs, skipped, notes: Vec::new(), robot: Some(robot), clock: None }))
         }
-        let mut entries: Vec<PathBuf> = std::fs::read_dir(p)
-            .map_err(|e| DatasetError::io(p, e))?
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|q| q.is_dir() || q.extension().is_some_and(|e| e == "csv" || e == "mcap"))
-            .collect();
-        entries.sort();
-        for e in entries {
-            load_path(&e, opts, ds)?;
-        }
-        return Ok(());
     }
-    let ext = p.extension().and_then(|e| e.to_str());
-    if matches!(ext, Some("csv" | "mcap")) && meta.len() > opts.max_file_bytes {
-        return Err(DatasetError::file(
-            p,
-            format!(
-                "the file is {:.1} MiB, above the limit of {:.1} MiB per input file (files are read into memory \
-                 whole); raise the limit with --max-file-mb if the machine has the memory",
-                meta.len() as f64 / MIB,
-                opts.max_file_bytes as f64 / MIB
-            ),
-        ));
-    }
-    match ext {
-        Some("csv") => match csv::read_run(p, opts.ticks_per_rev) {
-            Ok(r) if opts.recorded_odometry => ds.runs.push(r),
-            Ok(r) => ds.runs.push(r.without_recorded_odometry()),
-            Err(e) => keep_or_fail(ds, opts, p, e)?,
-        },
-        Some("mcap") => {
-            let mo = mcap::McapOptions {
-                skip_invalid: opts.skip_invalid,
-                recorded_odometry: opts.recorded_odometry,
-                ..opts.mcap.clone()
-            };
-            match mcap::read_file(p, &mo) {
-                Ok(r) => {
-                    ds.runs.extend(r.runs);
-                    ds.notes.extend(r.notes);
-                    ds.skipped.extend(r.skipped.into_iter().map(|(source, reason)| Skipped { source, reason }));
-                }
-                Err(e) => keep_or_fail(ds, opts, p, e)?,
+}
+
+/// Adds what one input gave to the dataset; a failed input stops the load, or is listed as skipped with
+/// `skip_invalid`.
+fn merge(
+    ds: &mut Dataset,
+    opts: &LoadOptions,
+    source: &Path,
+    read: Result<Loaded, DatasetError>,
+) -> Result<(), DatasetError> {
+    match read {
+        Ok(l) => {
+            ds.runs.extend(l.runs);
+            ds.skipped.extend(l.skipped);
+            ds.notes.extend(l.notes);
+            if l.robot.is_some() {
+                ds.robot = l.robot;
             }
+            ds.ground_truth_clocks.extend(l.clock);
+            Ok(())
         }
-        _ => return Err(DatasetError::file(p, format!("unsupported input (expected {SUPPORTED})"))),
+        Err(e) if opts.skip_invalid => {
+            ds.skipped.push(Skipped { source: source.display().to_string(), reason: e.to_string() });
+            Ok(())
+        }
+        Err(e) => Err(e),
     }
-    Ok(())
+}
+
+/// A file above the size cap is refused before it is read.
+fn check_size(p: &Path, max_file_bytes: u64) -> Result<(), DatasetError> {
+    let len = std::fs::metadata(p).map_err(|e| DatasetError::io(p, e))?.len();
+    if len > max_file_bytes { Err(too_large(p, len, max_file_bytes)) } else { Ok(()) }
+}
+
+/// The error for a file of `len` bytes above the cap `max_file_bytes` (`--max-file-mb`).
+pub(crate) fn too_large(p: &Path, len: u64, max_file_bytes: u64) -> DatasetError {
+    DatasetError::file(
+        p,
+        format!(
+            "the file is {:.1} MiB, above the limit of {:.1} MiB per input file (files are read into memory \
+             whole); raise the limit with --max-file-mb if the machine has the memory",
+            len as f64 / MIB,
+            max_file_bytes as f64 / MIB
+        ),
+    )
 }
 
 const MIB: f64 = (1u64 << 20) as f64;

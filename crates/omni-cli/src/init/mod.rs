@@ -281,6 +281,7 @@ pub fn draft(
         diff: None,
         topics,
         frames: Frames::default(),
+        ground_truth: None,
         priors: None,
     };
     let wheel_notes = match kind {

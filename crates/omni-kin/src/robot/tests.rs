@@ -31,6 +31,7 @@ fn base(kind: BaseKind, wheels: Vec<WheelSpec>) -> RobotDescription {
         diff: None,
         topics: Topics::default(),
         frames: Frames::default(),
+        ground_truth: None,
         priors: None,
     }
 }

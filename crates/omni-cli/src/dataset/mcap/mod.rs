@@ -63,13 +63,14 @@ mod joint_state;
 mod odometry;
 mod pose_stamped;
 mod poses;
-mod read;
+pub(crate) mod read;
 pub mod split;
 mod tf;
 mod twist;
 mod write;
 
 use crate::dataset::DatasetError;
+use crate::dataset::ground_truth::{ExternalTruth, GtClock};
 use omni_kin::{Run, StampedPose};
 use std::path::Path;
 
@@ -135,6 +136,8 @@ pub struct McapRead {
     /// Run times are seconds since this instant: the whole second (`header.stamp.sec`) of the first wheel
     /// message. s since the epoch (or since sim-time start).
     pub origin_s: i64,
+    /// The clock offset of a ground truth read from a separate file ([`read_file_with_truth`]).
+    pub ground_truth_clock: Option<GtClock>,
 }
 
 /// How to write a bag.
@@ -175,13 +178,23 @@ impl Default for WriteOptions {
 /// # Ok::<(), omni_cli::dataset::DatasetError>(())
 /// ```
 pub fn read_file(path: &Path, opts: &McapOptions) -> Result<McapRead, DatasetError> {
-    read::read_file(path, opts)
+    read::read_file(path, opts, None)
+}
+
+/// [`read_file`] with the ground truth from a separate file (`--gt`) instead of a topic: its clock offset is
+/// forced or estimated ([`omni_kin::clock`]) and reported in [`McapRead::ground_truth_clock`].
+pub fn read_file_with_truth(
+    path: &Path,
+    opts: &McapOptions,
+    truth: Option<&ExternalTruth>,
+) -> Result<McapRead, DatasetError> {
+    read::read_file(path, opts, truth)
 }
 
 /// Reads the runs of one ROS 2 MCAP bag held in memory: as [`read_file`], with `path` only naming the bag
 /// in messages and runs (the file stem is the run name).
 pub fn read_bytes(path: &Path, bytes: &[u8], opts: &McapOptions) -> Result<McapRead, DatasetError> {
-    read::read_bytes(path, bytes, opts)
+    read::read_bytes(path, bytes, opts, None)
 }
 
 /// Writes one run as a ROS 2 MCAP bag, atomically (temporary file, then rename).

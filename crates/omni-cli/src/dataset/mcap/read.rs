@@ -14,8 +14,10 @@ use super::tf::{self, TfMessage, TfPairs};
 use super::twist::{self, Commands, TwistStamped};
 use super::{McapOptions, McapRead, split};
 use crate::dataset::DatasetError;
+use crate::dataset::ground_truth::{ExternalTruth, GtClock, TruthSample};
 use mcap::sans_io::LinearReaderOptions;
-use omni_kin::{KinError, Run, RunData, StampedPose};
+use omni_kin::clock::ClockAlignment;
+use omni_kin::{KinError, Pose2, Run, RunData, StampedPose};
 use std::path::Path;
 
 /// Schema encodings whose type names this reader knows. `ros2idl` names the same types with the same CDR
@@ -86,8 +88,8 @@ struct Channel {
 }
 
 impl Channel {
-    fn new(ch: &mcap::Channel<'_>) -> Self {
-        let (schema, schema_encoding) = ch.schema.as_ref().map_or(("", ""), |s| (s.name.as_str(), s.encoding.as_str()));
+    /// A topic as its storage declares it: schema (type) name, schema encoding, message encoding.
+    fn new(topic: &str, schema: &str, schema_encoding: &str, message_encoding: &str) -> Self {
         let msg_type = MsgType::of(schema);
         let content = match msg_type {
             MsgType::JointState => Content::Joints(JointSeries::default()),
@@ -99,18 +101,18 @@ impl Channel {
             MsgType::Other => Content::Nothing,
         };
         let problem = (msg_type != MsgType::Other
-            && !(SCHEMA_ENCODINGS.contains(&schema_encoding) && ch.message_encoding == MESSAGE_ENCODING))
+            && !(SCHEMA_ENCODINGS.contains(&schema_encoding) && message_encoding == MESSAGE_ENCODING))
             .then(|| {
                 (
                     None,
                     format!(
                         "schema encoding {schema_encoding:?} with message encoding {:?} is not supported \
                          (expected schema encoding \"ros2msg\" and message encoding \"cdr\", as rosbag2 records)",
-                        ch.message_encoding
+                        message_encoding
                     ),
                 )
             });
-        Self { topic: ch.topic.clone(), schema: schema.to_string(), msg_type, messages: 0, content, problem }
+        Self { topic: topic.to_string(), schema: schema.to_string(), msg_type, messages: 0, content, problem }
     }
 
     /// Takes the next message.
@@ -593,22 +595,92 @@ fn check_chunks(buf: &[u8]) -> Result<(), String> {
     Ok(())
 }
 
-/// Decodes every channel of the file.
-fn scan<'a>(path: &'a Path, buf: &[u8], wheel_joints: &[String]) -> Result<Bag<'a>, DatasetError> {
+/// The channels of one recording, filled message by message from any storage (MCAP files, rosbag2 sqlite3
+/// files, several split files of one recording): the one message pipeline behind every reader. Topics are
+/// matched by name, so the split files of a recording feed the same channels.
+pub(crate) struct Recording {
+    wheel_joints: Vec<String>,
+    channels: Vec<Channel>,
+    /// Every message payload is zstd-compressed on its own (rosbag2's `compression_mode: MESSAGE`).
+    pub(crate) zstd_messages: bool,
+}
+
+impl Recording {
+    /// An empty recording whose JointState topics are read for these wheel joints (in wheel order).
+    pub(crate) fn new(wheel_joints: &[String]) -> Self {
+        Self { wheel_joints: wheel_joints.to_vec(), channels: Vec::new(), zstd_messages: false }
+    }
+
+    /// The channel of `topic`, declared on its first sight (a later declaration of the same topic, in another
+    /// split file, keeps the first one's type).
+    pub(crate) fn channel(
+        &mut self,
+        topic: &str,
+        schema: &str,
+        schema_encoding: &str,
+        message_encoding: &str,
+    ) -> usize {
+        match self.channels.iter().position(|c| c.topic == topic) {
+            Some(i) => i,
+            None => {
+                self.channels.push(Channel::new(topic, schema, schema_encoding, message_encoding));
+                self.channels.len() - 1
+            }
+        }
+    }
+
+    /// Messages taken on `topic` (`None`: no such topic).
+    pub(crate) fn messages_on(&self, topic: &str) -> Option<usize> {
+        self.channels.iter().find(|c| c.topic == topic).map(|c| c.messages)
+    }
+
+    /// Takes the next message of channel `i` (an index from [`Self::channel`]).
+    pub(crate) fn message(&mut self, i: usize, data: &[u8], log_time_ns: u64) {
+        let c = &mut self.channels[i];
+        if self.zstd_messages && c.msg_type != MsgType::Other && c.problem.is_none() {
+            match zstd::stream::decode_all(data) {
+                Ok(plain) => return c.take(&plain, log_time_ns, &self.wheel_joints),
+                Err(e) => {
+                    c.problem =
+                        Some((Some(c.messages), format!("the zstd-compressed message does not decompress: {e}")));
+                    c.messages += 1;
+                    return;
+                }
+            }
+        }
+        c.take(data, log_time_ns, &self.wheel_joints);
+    }
+}
+
+/// Feeds every message of an MCAP file, in file order, into `rec`.
+pub(crate) fn feed_mcap(path: &Path, buf: &[u8], rec: &mut Recording) -> Result<(), DatasetError> {
+    // mcap 0.26 can still panic on some damaged files (an integer overflow on a record longer than its
+    // uncompressed chunk, in builds with overflow checks): a damaged file is an error, never a crash.
+    let mut rec = std::panic::AssertUnwindSafe(rec);
+    std::panic::catch_unwind(move || scan(path, buf, &mut rec))
+        .unwrap_or_else(|_| Err(DatasetError::file(path, "the file is damaged: the MCAP reader panicked on it")))
+}
+
+fn scan(path: &Path, buf: &[u8], rec: &mut Recording) -> Result<(), DatasetError> {
     if !buf.starts_with(mcap::MAGIC) {
         return Err(DatasetError::file(path, "not an MCAP file (it does not start with the MCAP magic bytes)"));
     }
     check_chunks(buf).map_err(|what| DatasetError::file(path, format!("the file is corrupted: {what}")))?;
-    let mut channels = Vec::new();
-    let mut ids: Vec<u16> = Vec::new();
+    // This file's channel ids and the recording's channels they feed.
+    let mut ids: Vec<(u16, usize)> = Vec::new();
+    let declare = |rec: &mut Recording, ids: &mut Vec<(u16, usize)>, ch: &mcap::Channel<'_>| {
+        let (schema, encoding) = ch.schema.as_ref().map_or(("", ""), |s| (s.name.as_str(), s.encoding.as_str()));
+        let i = rec.channel(&ch.topic, schema, encoding, &ch.message_encoding);
+        ids.push((ch.id, i));
+        i
+    };
     // The summary lists every channel, also those without messages. A damaged summary is ignored here: the
     // pass over the messages below reports what is wrong with the file.
     if let Ok(Some(summary)) = mcap::Summary::read(buf) {
         let mut all: Vec<_> = summary.channels.values().collect();
         all.sort_by_key(|c| c.id);
         for c in all {
-            ids.push(c.id);
-            channels.push(Channel::new(c));
+            declare(rec, &mut ids, c);
         }
     }
     // A cap on record lengths: a corrupted length then fails cleanly instead of overflowing inside the
@@ -617,46 +689,104 @@ fn scan<'a>(path: &'a Path, buf: &[u8], wheel_joints: &[String]) -> Result<Bag<'
     let options = LinearReaderOptions::default().with_validate_chunk_crcs(true).with_record_length_limit(limit);
     for m in mcap::io::MessageReader::new_with_options(std::io::Cursor::new(buf), options) {
         let m = m.map_err(|e| mcap_error(path, e))?;
-        let id = m.channel.id;
-        let i = match ids.iter().position(|&c| c == id) {
-            Some(i) => i,
-            None => {
-                ids.push(id);
-                channels.push(Channel::new(&m.channel));
-                channels.len() - 1
-            }
+        let i = match ids.iter().find(|(id, _)| *id == m.channel.id) {
+            Some(&(_, i)) => i,
+            None => declare(rec, &mut ids, &m.channel),
         };
-        channels[i].take(&m.data, m.log_time, wheel_joints);
+        rec.message(i, &m.data, m.log_time);
     }
-    Ok(Bag { path, channels })
+    Ok(())
 }
 
 /// Reads one bag. See the module docs of [`super`].
-pub(super) fn read_file(path: &Path, opts: &McapOptions) -> Result<McapRead, DatasetError> {
+pub(super) fn read_file(
+    path: &Path,
+    opts: &McapOptions,
+    external: Option<&ExternalTruth>,
+) -> Result<McapRead, DatasetError> {
     let buf = std::fs::read(path).map_err(|e| DatasetError::io(path, e))?;
-    read_bytes(path, &buf, opts)
+    read_bytes(path, &buf, opts, external)
 }
 
 /// Reads one bag from its bytes; `path` only names it in messages and runs.
+pub(super) fn read_bytes(
+    path: &Path,
+    buf: &[u8],
+    opts: &McapOptions,
+    external: Option<&ExternalTruth>,
+) -> Result<McapRead, DatasetError> {
+    let mut rec = Recording::new(&opts.wheel_joints);
+    feed_mcap(path, buf, &mut rec)?;
+    let stem = path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned());
+    runs(path, &stem, rec, opts, external)
+}
+
+/// The poses of a ground-truth file on the wheel clock (seconds since `origin_s`), with the clock offset:
+/// the forced one, or one estimated from the wheel data (`omni_kin::clock`). Errors name the file.
+fn external_truth(
+    ext: &ExternalTruth,
+    recording: &str,
+    origin_s: i64,
+    t_s: &[f64],
+    rad_s: &[f64],
+    n_wheels: usize,
+) -> Result<(Vec<StampedPose>, GtClock), DatasetError> {
+    let pose =
+        |s: &TruthSample, t_s: f64| StampedPose { t_s, pose: Pose2 { x_m: s.x_m, y_m: s.y_m, theta_rad: s.yaw_rad } };
+    let clock = |offset_s: f64, estimate: Option<ClockAlignment>| GtClock {
+        recording: recording.to_string(),
+        file: ext.path.clone(),
+        offset_s,
+        estimate,
+    };
+    if let Some(offset_s) = ext.time_offset_s {
+        let poses = ext.samples.iter().map(|s| pose(s, seconds_since(s.t_ns, origin_s) + offset_s)).collect();
+        return Ok((poses, clock(offset_s, None)));
+    }
+    // The truth's times relative to its own first whole second (small numbers for the estimate).
+    let truth_origin_s = ext.samples.first().map_or(0, |s| s.t_ns.div_euclid(NS_PER_S));
+    let own: Vec<StampedPose> = ext.samples.iter().map(|s| pose(s, seconds_since(s.t_ns, truth_origin_s))).collect();
+    let a = omni_kin::clock::align_clocks(t_s, rad_s, n_wheels, &own).map_err(|e| {
+        DatasetError::file(&ext.path, format!("cannot align its clock with recording {recording:?}: {e}"))
+    })?;
+    // own + a.offset_s is on the wheel clock since origin_s.
+    let poses = own.iter().map(|p| StampedPose { t_s: p.t_s + a.offset_s, ..*p }).collect();
+    // t_wheel = t_truth + offset in absolute time: the relative offset less the origins' difference.
+    let origins_s = (origin_s - truth_origin_s) as f64;
+    let offset_s = a.offset_s + origins_s;
+    let estimate = ClockAlignment { offset_s, coarse_offset_s: a.coarse_offset_s + origins_s, ..a };
+    Ok((poses, clock(offset_s, Some(estimate))))
+}
+
+/// The runs of a recording whose messages are all in `rec`; `path` names it in messages, `stem` names its
+/// runs (`stem`, or `stem#1`, `stem#2`, … when split). See the module docs of [`super`].
 ///
-/// long: the bag's channels (wheel joints, ground truth, command) in turn, each failure naming file, topic
-/// and message; to split per channel (issue 15 leftover).
-pub(super) fn read_bytes(path: &Path, buf: &[u8], opts: &McapOptions) -> Result<McapRead, DatasetError> {
-    // mcap 0.26 can still panic on some damaged files (an integer overflow on a record longer than its
-    // uncompressed chunk, in builds with overflow checks): a damaged file is an error, never a crash.
-    let mut bag = std::panic::catch_unwind(|| scan(path, buf, &opts.wheel_joints))
-        .unwrap_or_else(|_| Err(DatasetError::file(path, "the file is damaged: the MCAP reader panicked on it")))?;
+/// With `external`, the ground truth comes from that file (its clock aligned to the wheels', see
+/// [`external_truth`]) and the recording needs no ground-truth topic.
+pub(crate) fn runs(
+    path: &Path,
+    stem: &str,
+    rec: Recording,
+    opts: &McapOptions,
+    external: Option<&ExternalTruth>,
+) -> Result<McapRead, DatasetError> {
+    let mut bag = Bag { path, channels: rec.channels };
     let mut notes = Vec::new();
 
     let j = bag.joints(opts)?;
     bag.check(j)?;
-    let truth_src = bag.truth(opts)?;
-    let truth_ch = match truth_src {
-        Truth::Poses(i) | Truth::Tf(i, _) => i,
+    let truth_src = match external {
+        Some(_) => None,
+        None => Some(bag.truth(opts)?),
     };
-    bag.check(truth_ch)?;
+    let truth_ch = truth_src.map(|t| match t {
+        Truth::Poses(i) | Truth::Tf(i, _) => i,
+    });
+    if let Some(i) = truth_ch {
+        bag.check(i)?;
+    }
     let odom = if opts.recorded_odometry { bag.recorded_odometry(&mut notes) } else { None };
-    let odom = odom.filter(|&i| i != truth_ch);
+    let odom = odom.filter(|&i| Some(i) != truth_ch);
     let cmd = bag.commands(opts.command_topic.as_deref(), &mut notes);
 
     // Wheels.
@@ -680,19 +810,35 @@ pub(super) fn read_bytes(path: &Path, buf: &[u8], opts: &McapOptions) -> Result<
     }
 
     // Ground truth, trimmed to the wheel data's span.
-    let truth_topic = bag.channels[truth_ch].topic.clone();
-    let poses = match (truth_src, bag.take(truth_ch)) {
-        (Truth::Tf(_, k), Content::Tf(mut pairs)) => {
-            let pair = pairs.pairs.swap_remove(k);
-            if let Some((m, what)) = pair.problem {
-                return Err(DatasetError::at(path, format!("topic {truth_topic:?}, message {m}"), what));
-            }
-            pair.poses
+    let n_wheels = opts.wheel_joints.len();
+    let (all_truth, truth_where, truth_label, clock) = match (truth_src, truth_ch, external) {
+        (Some(src), Some(ch), _) => {
+            let truth_topic = bag.channels[ch].topic.clone();
+            let poses = match (src, bag.take(ch)) {
+                (Truth::Tf(_, k), Content::Tf(mut pairs)) => {
+                    let pair = pairs.pairs.swap_remove(k);
+                    if let Some((m, what)) = pair.problem {
+                        return Err(DatasetError::at(path, format!("topic {truth_topic:?}, message {m}"), what));
+                    }
+                    pair.poses
+                }
+                (_, Content::Poses(p)) => p,
+                _ => unreachable!("truth() returns pose channels or TF pairs"),
+            };
+            (poses.stamped(origin_s), format!("on {truth_topic:?}"), format!("topic {truth_topic:?}"), None)
         }
-        (_, Content::Poses(p)) => p,
-        _ => unreachable!("truth() returns pose channels or TF pairs"),
+        (_, _, Some(ext)) => {
+            let (poses, clock) = external_truth(ext, stem, origin_s, &t_s, &wheels.rad_s, n_wheels)?;
+            let file = ext.path.display();
+            (
+                poses,
+                format!("in {file} ({:+.4} s clock offset)", clock.offset_s),
+                format!("ground truth {file}"),
+                Some(clock),
+            )
+        }
+        _ => unreachable!("the ground truth comes from a topic or a file"),
     };
-    let all_truth = poses.stamped(origin_s);
     let (w0, w1) = (t_s[0], t_s[t_s.len() - 1]);
     let truth: Vec<StampedPose> = all_truth.iter().copied().filter(|p| (w0..=w1).contains(&p.t_s)).collect();
     if truth.is_empty() {
@@ -703,7 +849,7 @@ pub(super) fn read_bytes(path: &Path, buf: &[u8], opts: &McapOptions) -> Result<
         return Err(DatasetError::file(
             path,
             format!(
-                "wheel data on {joints_topic:?} spans {w0}..{w1} s but the ground truth on {truth_topic:?} {span}: \
+                "wheel data on {joints_topic:?} spans {w0}..{w1} s but the ground truth {truth_where} {span}: \
                  no ground-truth pose lies within the wheel data"
             ),
         ));
@@ -711,7 +857,7 @@ pub(super) fn read_bytes(path: &Path, buf: &[u8], opts: &McapOptions) -> Result<
     let dropped = all_truth.len() - truth.len();
     if dropped > 0 {
         notes.push(format!(
-            "{}: topic {truth_topic:?}: dropped {dropped} ground-truth poses outside the wheel data's time span \
+            "{}: {truth_label}: dropped {dropped} ground-truth poses outside the wheel data's time span \
              ({w0}..{w1} s)",
             path.display()
         ));
@@ -726,16 +872,14 @@ pub(super) fn read_bytes(path: &Path, buf: &[u8], opts: &McapOptions) -> Result<
     };
 
     // Runs.
-    let n_wheels = opts.wheel_joints.len();
-    let stem = path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned());
     let pieces = match opts.split {
         Some(min_s) => split::pieces(&t_s, &wheels.rad_s, n_wheels, &truth, min_s),
         None => vec![(0, t_s.len() - 1)],
     };
-    let mut out = McapRead { runs: Vec::new(), notes, skipped: Vec::new(), origin_s };
+    let mut out = McapRead { runs: Vec::new(), notes, skipped: Vec::new(), origin_s, ground_truth_clock: clock };
     let last_piece = pieces.len() - 1;
     for (p, &(lo, hi)) in pieces.iter().enumerate() {
-        let name = if opts.split.is_some() { format!("{stem}#{}", p + 1) } else { stem.clone() };
+        let name = if opts.split.is_some() { format!("{stem}#{}", p + 1) } else { stem.to_string() };
         let span = t_s[lo]..=t_s[hi];
         let within = |poses: &[StampedPose]| {
             let mut v: Vec<StampedPose> = poses.iter().copied().filter(|q| span.contains(&q.t_s)).collect();

@@ -1,0 +1,53 @@
+#!/usr/bin/env python3
+"""Loading speed (issue 17), printed as a table for benches/README.md: the paper-size simulated set
+(`omnical simulate` defaults: 180 training runs of ~12 s, 1,180 JointState + ~48 PoseStamped messages each)
+as bare MCAP files, as rosbag2 sqlite3 recordings and as rosbag2 MCAP recordings, read by
+`omnical eval DIR` (loading, then the Eq. 6 cost of the design model, which takes ~10 ms) on 1 and 2 worker
+threads. Each figure is the median wall time of REPEATS runs of the release binary.
+
+    bash benches/loading.sh [DATA_DIR]      (builds the release binary, then runs this)
+
+Needs a Python with rosbags (scripts/test.sh sets up .venv) to convert the set.
+"""
+
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+REPEATS = 7
+
+
+def wall(cmd):
+    t = time.perf_counter()
+    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return time.perf_counter() - t
+
+
+def main(binary, data):
+    data = Path(data)
+    here = Path(__file__).parent
+    if not (data / 'train').is_dir():
+        subprocess.run([binary, 'simulate', '--out', str(data)], check=True, stdout=subprocess.DEVNULL)
+    for storage in ['sqlite3', 'mcap']:
+        out = data / f'train_{storage}'
+        if not out.is_dir():
+            subprocess.run([sys.executable, str(here / 'mcap_to_rosbag2.py'), str(data / 'train'), str(out), storage],
+                           check=True)
+    sets = [('bare MCAP files (180 × .mcap)', data / 'train'),
+            ('rosbag2 sqlite3 (180 folders, .db3)', data / 'train_sqlite3'),
+            ('rosbag2 MCAP (180 folders)', data / 'train_mcap')]
+    print('| input | 1 thread | 2 threads |')
+    print('|---|---|---|')
+    for label, d in sets:
+        row = []
+        for threads in [1, 2]:
+            cmd = [binary, '--threads', str(threads), 'eval', str(d)]
+            wall(cmd)  # warm the page cache
+            row.append(statistics.median(wall(cmd) for _ in range(REPEATS)))
+        print(f'| {label} | {row[0]:.3f} s | {row[1]:.3f} s |')
+
+
+if __name__ == '__main__':
+    main(sys.argv[1], sys.argv[2])

@@ -1,0 +1,472 @@
+//! Ground truth from a separate file (`--gt PATH`, or `[ground_truth] file` in robot.toml): a motion
+//! capture or SLAM trajectory recorded apart from the robot, usually on another clock.
+//!
+//! # Formats (by extension)
+//! - **TUM** (`.tum`, `.txt`; evo's `read_tum_trajectory_file`): `t x y z qx qy qz qw` per line, space
+//!   separated, exactly 8 columns; `#` comments and blank lines are skipped. t in s (read as a decimal, exact
+//!   to the nanosecond whatever the epoch; exponent notation as float64), x, y in m, quaternion with **qw
+//!   last**. z is ignored.
+//! - **CSV** (`.csv`) with a header row. Columns by name ([`CsvColumns`], from `--gt-columns` or
+//!   robot.toml): time, x, y and either a heading (`yaw`) or a quaternion (`qx`, `qy`, `qz`, `qw`), in the
+//!   units given (`--gt-units time=ns,length=mm,angle=deg`; default s, m, rad). Other columns are ignored.
+//!
+//! The heading is unwrapped so it is continuous. Rows must have strictly increasing times and finite values;
+//! errors name the file, the line and the column.
+//!
+//! # Matching files to recordings
+//! `PATH` is a file when one recording is read, or a folder holding `<recording>.tum` or `<recording>.csv`
+//! per recording (the recording's folder name, or the bag file's stem).
+//!
+//! The clock offset between the file and the wheel data is estimated ([`omni_kin::clock`]) unless
+//! [`GroundTruthOptions::time_offset_s`] forces it.
+
+use crate::dataset::DatasetError;
+use std::path::{Path, PathBuf};
+
+/// Ground truth from files.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GroundTruthOptions {
+    /// A file (one recording) or a folder of files named after the recordings.
+    pub path: PathBuf,
+    /// Force the clock offset `t_wheel = t_truth + offset` instead of estimating it. s. Default: estimated.
+    pub time_offset_s: Option<f64>,
+    /// CSV column names and units.
+    pub csv: CsvColumns,
+}
+
+/// Time units of a CSV time column.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TimeUnit {
+    /// Seconds.
+    #[default]
+    S,
+    /// Milliseconds.
+    Ms,
+    /// Microseconds.
+    Us,
+    /// Nanoseconds.
+    Ns,
+}
+
+impl TimeUnit {
+    fn ns(self) -> i64 {
+        match self {
+            Self::S => 1_000_000_000,
+            Self::Ms => 1_000_000,
+            Self::Us => 1_000,
+            Self::Ns => 1,
+        }
+    }
+}
+
+/// CSV column names and units.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CsvColumns {
+    /// Time column. Default `t`.
+    pub t: String,
+    /// x column. Default `x`.
+    pub x: String,
+    /// y column. Default `y`.
+    pub y: String,
+    /// Heading column; when the header has no such column, a quaternion `qx`, `qy`, `qz`, `qw` is read.
+    /// Default `yaw`.
+    pub yaw: String,
+    /// Unit of the time column. Default s.
+    pub time_unit: TimeUnit,
+    /// Metres per unit of x and y (1 for m, 0.001 for mm). Default 1.
+    pub m_per_length_unit: f64,
+    /// Radians per unit of the heading (1 for rad, π/180 for deg). Default 1.
+    pub rad_per_angle_unit: f64,
+}
+
+impl Default for CsvColumns {
+    fn default() -> Self {
+        Self {
+            t: "t".into(),
+            x: "x".into(),
+            y: "y".into(),
+            yaw: "yaw".into(),
+            time_unit: TimeUnit::S,
+            m_per_length_unit: 1.0,
+            rad_per_angle_unit: 1.0,
+        }
+    }
+}
+
+impl CsvColumns {
+    /// Sets a column name: `t`, `x`, `y` or `yaw` (as in `--gt-columns t=stamp_ns`).
+    pub fn set_column(&mut self, key: &str, name: &str) -> Result<(), String> {
+        let slot = match key {
+            "t" | "time" => &mut self.t,
+            "x" => &mut self.x,
+            "y" => &mut self.y,
+            "yaw" => &mut self.yaw,
+            _ => return Err(format!("unknown ground-truth column {key:?} (expected t, x, y or yaw)")),
+        };
+        *slot = name.to_string();
+        Ok(())
+    }
+
+    /// Sets a unit: `time` (s, ms, us, ns), `length` (m, cm, mm) or `angle` (rad, deg).
+    pub fn set_unit(&mut self, key: &str, unit: &str) -> Result<(), String> {
+        match (key, unit) {
+            ("time", "s") => self.time_unit = TimeUnit::S,
+            ("time", "ms") => self.time_unit = TimeUnit::Ms,
+            ("time", "us") => self.time_unit = TimeUnit::Us,
+            ("time", "ns") => self.time_unit = TimeUnit::Ns,
+            ("length", "m") => self.m_per_length_unit = 1.0,
+            ("length", "cm") => self.m_per_length_unit = 0.01,
+            ("length", "mm") => self.m_per_length_unit = 0.001,
+            ("angle", "rad") => self.rad_per_angle_unit = 1.0,
+            ("angle", "deg") => self.rad_per_angle_unit = std::f64::consts::PI / 180.0,
+            _ => {
+                return Err(format!(
+                    "unknown ground-truth unit {key}={unit} (expected time=s|ms|us|ns, length=m|cm|mm, angle=rad|deg)"
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One ground-truth pose, on the file's clock.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TruthSample {
+    /// Time. ns (on the file's clock).
+    pub t_ns: i64,
+    /// Position. m.
+    pub x_m: f64,
+    /// Position. m.
+    pub y_m: f64,
+    /// Heading, unwrapped. rad.
+    pub yaw_rad: f64,
+}
+
+/// A ground-truth file, read, for one recording.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExternalTruth {
+    /// The file.
+    pub path: PathBuf,
+    /// Its poses, in time order.
+    pub samples: Vec<TruthSample>,
+    /// The forced clock offset, if any. s.
+    pub time_offset_s: Option<f64>,
+}
+
+/// The clock offset a recording's ground-truth file was read with.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GtClock {
+    /// The recording's name.
+    pub recording: String,
+    /// The ground-truth file.
+    pub file: PathBuf,
+    /// `t_wheel = t_truth + offset_s`: added to the file's stamps. s.
+    pub offset_s: f64,
+    /// The estimate (offset, standard error, fit), or `None` when the offset was forced.
+    pub estimate: Option<omni_kin::clock::ClockAlignment>,
+}
+
+impl GtClock {
+    /// One line for stderr: `ground truth F for recording R: clock offset +3.2170 s ± 0.4 ms (estimated …)`.
+    pub fn describe(&self) -> String {
+        let head = format!(
+            "ground truth {} for recording {}: clock offset {:+.4} s",
+            self.file.display(),
+            self.recording,
+            self.offset_s
+        );
+        match &self.estimate {
+            None => format!("{head} (forced; wheel time = ground-truth time + offset)"),
+            Some(a) => format!(
+                "{head} ± {:.2} ms (estimated: coarse {:+.3} s on a {:.0} ms grid, refined; explains {:.1} % of the \
+                 ground truth's motion over {:.1} s; wheel time = ground-truth time + offset)",
+                a.std_error_s * 1e3,
+                a.coarse_offset_s,
+                a.step_s * 1e3,
+                a.r_squared * 100.0,
+                a.overlap_s
+            ),
+        }
+    }
+
+    /// The JSON object of `--json` outputs.
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "recording": self.recording,
+            "file": self.file.display().to_string(),
+            "offset_s": self.offset_s,
+            "std_error_s": self.estimate.map(|a| a.std_error_s),
+            "estimated": self.estimate.is_some(),
+            "r_squared": self.estimate.map(|a| a.r_squared),
+        })
+    }
+}
+
+/// The ground-truth file for the recording named `name` at `recording`: `opts.path` itself when it is a
+/// file, else `<name>.tum`, `<name>.txt` or `<name>.csv` in that folder.
+pub fn file_for(opts: &GroundTruthOptions, recording: &Path, name: &str) -> Result<PathBuf, DatasetError> {
+    if !opts.path.is_dir() {
+        return Ok(opts.path.clone());
+    }
+    for ext in ["tum", "txt", "csv"] {
+        let p = opts.path.join(format!("{name}.{ext}"));
+        if p.is_file() {
+            return Ok(p);
+        }
+    }
+    Err(DatasetError::file(
+        recording,
+        format!(
+            "no ground-truth file for recording {name:?} in --gt folder {} (expected {name}.tum, {name}.txt or \
+             {name}.csv)",
+            opts.path.display()
+        ),
+    ))
+}
+
+/// Reads the ground truth for the recording named `name` at `recording`.
+pub fn read_for(opts: &GroundTruthOptions, recording: &Path, name: &str) -> Result<ExternalTruth, DatasetError> {
+    let path = file_for(opts, recording, name)?;
+    let samples = read(&path, &opts.csv)?;
+    Ok(ExternalTruth { path, samples, time_offset_s: opts.time_offset_s })
+}
+
+/// Reads a ground-truth file (TUM or CSV, by extension).
+pub fn read(path: &Path, csv: &CsvColumns) -> Result<Vec<TruthSample>, DatasetError> {
+    let text = std::fs::read_to_string(path).map_err(|e| DatasetError::io(path, e))?;
+    let mut samples = match path.extension().and_then(|e| e.to_str()) {
+        Some("csv") => read_csv(path, &text, csv)?,
+        _ => read_tum(path, &text)?,
+    };
+    if samples.len() < 2 {
+        return Err(DatasetError::file(path, format!("has {} poses; at least 2 are needed", samples.len())));
+    }
+    unwrap_yaw(&mut samples);
+    Ok(samples)
+}
+
+fn read_tum(path: &Path, text: &str) -> Result<Vec<TruthSample>, DatasetError> {
+    const COLUMNS: [&str; 8] = ["t", "x", "y", "z", "qx", "qy", "qz", "qw"];
+    let mut out: Vec<TruthSample> = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line_no = i + 1;
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let fields: Vec<&str> = line.split_whitespace().collect();
+        let at = |col: &str| format!("line {line_no}, column {col}");
+        if fields.len() != 8 {
+            return Err(DatasetError::at(
+                path,
+                format!("line {line_no}"),
+                format!("has {} columns; TUM has 8: t x y z qx qy qz qw", fields.len()),
+            ));
+        }
+        let t_ns = parse_stamp_ns(fields[0], 1_000_000_000)
+            .ok_or_else(|| DatasetError::at(path, at("t"), format!("{:?} is not a time in seconds", fields[0])))?;
+        let mut v = [0.0; 8];
+        for c in 1..8 {
+            v[c] = finite(path, &at(COLUMNS[c]), fields[c])?;
+        }
+        let yaw = yaw_of(path, &format!("line {line_no}"), [v[4], v[5], v[6], v[7]])?;
+        push(path, &mut out, line_no, TruthSample { t_ns, x_m: v[1], y_m: v[2], yaw_rad: yaw })?;
+    }
+    Ok(out)
+}
+
+fn read_csv(path: &Path, text: &str, cols: &CsvColumns) -> Result<Vec<TruthSample>, DatasetError> {
+    let mut rdr = ::csv::ReaderBuilder::new().trim(::csv::Trim::All).from_reader(text.as_bytes());
+    let header: Vec<String> = rdr
+        .headers()
+        .map_err(|e| DatasetError::file(path, format!("cannot read the header row: {e}")))?
+        .iter()
+        .map(String::from)
+        .collect();
+    let find = |name: &str| header.iter().position(|h| h == name);
+    let need = |name: &str, what: &str| {
+        find(name).ok_or_else(|| {
+            DatasetError::file(
+                path,
+                format!(
+                    "no column {name:?} for the {what} (columns: {}); name it with --gt-columns or [ground_truth] in \
+                     robot.toml",
+                    header.join(", ")
+                ),
+            )
+        })
+    };
+    let (ti, xi, yi) = (need(&cols.t, "time")?, need(&cols.x, "x position")?, need(&cols.y, "y position")?);
+    let heading = match find(&cols.yaw) {
+        Some(i) => Heading::Yaw(i),
+        None => Heading::Quaternion([
+            need("qx", "heading")?,
+            need("qy", "heading")?,
+            need("qz", "heading")?,
+            need("qw", "heading")?,
+        ]),
+    };
+    let mut out = Vec::new();
+    for (r, record) in rdr.records().enumerate() {
+        let line_no = r + 2;
+        let record = record.map_err(|e| DatasetError::at(path, format!("line {line_no}"), e.to_string()))?;
+        let field = |i: usize| record.get(i).unwrap_or("");
+        let at = |i: usize| format!("line {line_no}, column {}", header[i]);
+        let t_ns = parse_stamp_ns(field(ti), cols.time_unit.ns())
+            .ok_or_else(|| DatasetError::at(path, at(ti), format!("{:?} is not a time", field(ti))))?;
+        let x = finite(path, &at(xi), field(xi))? * cols.m_per_length_unit;
+        let y = finite(path, &at(yi), field(yi))? * cols.m_per_length_unit;
+        let yaw = match heading {
+            Heading::Yaw(i) => finite(path, &at(i), field(i))? * cols.rad_per_angle_unit,
+            Heading::Quaternion(q) => {
+                let mut v = [0.0; 4];
+                for (k, &i) in q.iter().enumerate() {
+                    v[k] = finite(path, &at(i), field(i))?;
+                }
+                yaw_of(path, &format!("line {line_no}"), v)?
+            }
+        };
+        push(path, &mut out, line_no, TruthSample { t_ns, x_m: x, y_m: y, yaw_rad: yaw })?;
+    }
+    Ok(out)
+}
+
+#[derive(Clone, Copy)]
+enum Heading {
+    Yaw(usize),
+    Quaternion([usize; 4]),
+}
+
+/// Appends a sample whose time must be after the previous one's.
+fn push(path: &Path, out: &mut Vec<TruthSample>, line_no: usize, s: TruthSample) -> Result<(), DatasetError> {
+    if let Some(prev) = out.last()
+        && s.t_ns <= prev.t_ns
+    {
+        return Err(DatasetError::at(
+            path,
+            format!("line {line_no}"),
+            format!(
+                "time {} s is not after the previous row's {} s (times must increase)",
+                seconds_text(s.t_ns),
+                seconds_text(prev.t_ns)
+            ),
+        ));
+    }
+    out.push(s);
+    Ok(())
+}
+
+fn seconds_text(ns: i64) -> String {
+    format!("{}.{:09}", ns.div_euclid(1_000_000_000), ns.rem_euclid(1_000_000_000))
+}
+
+fn finite(path: &Path, at: &str, text: &str) -> Result<f64, DatasetError> {
+    match text.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(v) => Err(DatasetError::at(path, at, format!("value {v} is not finite"))),
+        Err(_) => Err(DatasetError::at(path, at, format!("{text:?} is not a number"))),
+    }
+}
+
+/// Heading of a quaternion `[qx, qy, qz, qw]` (rotation about z). rad.
+fn yaw_of(path: &Path, at: &str, q: [f64; 4]) -> Result<f64, DatasetError> {
+    let [x, y, z, w] = q;
+    let norm = (x * x + y * y + z * z + w * w).sqrt();
+    if !(0.9..=1.1).contains(&norm) {
+        return Err(DatasetError::at(path, at, format!("the quaternion has norm {norm}, not 1")));
+    }
+    // As the MCAP reader computes it (common.rs), so the same poses give the same bits.
+    Ok((2.0 * (w * z + x * y)).atan2(w * w + x * x - y * y - z * z))
+}
+
+fn unwrap_yaw(samples: &mut [TruthSample]) {
+    use std::f64::consts::{PI, TAU};
+    for k in 1..samples.len() {
+        let prev = samples[k - 1].yaw_rad;
+        let d = samples[k].yaw_rad - prev;
+        samples[k].yaw_rad = prev + (d + PI).rem_euclid(TAU) - PI;
+    }
+}
+
+/// A time in `unit_ns` nanoseconds per unit, read as a decimal (exact to the nanosecond); exponent notation
+/// is read as float64.
+pub fn parse_stamp_ns(text: &str, unit_ns: i64) -> Option<i64> {
+    let text = text.trim();
+    if text.contains(['e', 'E']) {
+        let v = text.parse::<f64>().ok().filter(|v| v.is_finite())? * unit_ns as f64;
+        return (v.abs() < 9.2e18).then(|| v.round() as i64);
+    }
+    let (neg, digits) = match text.strip_prefix('-') {
+        Some(rest) => (true, rest),
+        None => (false, text.strip_prefix('+').unwrap_or(text)),
+    };
+    let (int, frac) = digits.split_once('.').unwrap_or((digits, ""));
+    if (int.is_empty() && frac.is_empty()) || !int.bytes().chain(frac.bytes()).all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    let int: i128 = if int.is_empty() { 0 } else { int.parse().ok()? };
+    let frac = &frac[..frac.len().min(18)];
+    let frac_ns: i128 = if frac.is_empty() {
+        0
+    } else {
+        let scale = 10i128.pow(frac.len() as u32);
+        (frac.parse::<i128>().ok()? * i128::from(unit_ns) + scale / 2) / scale
+    };
+    let ns = int.checked_mul(i128::from(unit_ns))? + frac_ns;
+    i64::try_from(if neg { -ns } else { ns }).ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stamps_are_exact_decimals() {
+        assert_eq!(parse_stamp_ns("1700000000.250000001", 1_000_000_000), Some(1_700_000_000_250_000_001));
+        assert_eq!(parse_stamp_ns("1700000000036.5", 1_000_000), Some(1_700_000_000_036_500_000));
+        assert_eq!(parse_stamp_ns("-1.5", 1_000_000_000), Some(-1_500_000_000));
+        assert_eq!(parse_stamp_ns("1.700000000019999981e+09", 1_000_000_000), Some(1_700_000_000_020_000_000));
+        assert_eq!(parse_stamp_ns("12a", 1), None);
+        assert_eq!(parse_stamp_ns("nan", 1), None);
+    }
+
+    #[test]
+    fn tum_and_csv_give_the_same_poses() {
+        let tum = "# t x y z qx qy qz qw\n1.0 1 2 0 0 0 0 1\n2.5 1.5 2 0 0 0 0.7071067811865476 0.7071067811865476\n";
+        let a = read_tum(Path::new("a.tum"), tum).unwrap();
+        let csv = "n,stamp_ms,px,py,heading\n0,1000,1000,2000,0\n1,2500,1500,2000,90\n";
+        let mut cols = CsvColumns::default();
+        for (k, v) in [("t", "stamp_ms"), ("x", "px"), ("y", "py"), ("yaw", "heading")] {
+            cols.set_column(k, v).unwrap();
+        }
+        for (k, v) in [("time", "ms"), ("length", "mm"), ("angle", "deg")] {
+            cols.set_unit(k, v).unwrap();
+        }
+        let b = read_csv(Path::new("a.csv"), csv, &cols).unwrap();
+        assert_eq!(a.len(), 2);
+        for (p, q) in a.iter().zip(&b) {
+            assert_eq!(p.t_ns, q.t_ns);
+            assert!((p.x_m - q.x_m).abs() < 1e-12 && (p.y_m - q.y_m).abs() < 1e-12);
+            assert!((p.yaw_rad - q.yaw_rad).abs() < 1e-12, "{p:?} {q:?}");
+        }
+        assert!((a[1].yaw_rad - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn bad_rows_are_named() {
+        let err = |text: &str| read_tum(Path::new("g.tum"), text).unwrap_err().to_string();
+        assert_eq!(err("1 0 0 0 0 0 0 1\n2 nan 0 0 0 0 0 1\n"), "g.tum: line 2, column x: value NaN is not finite");
+        assert_eq!(
+            err("1 0 0 0 0 0 0 1\n0.5 0 0 0 0 0 0 1\n"),
+            "g.tum: line 2: time 0.500000000 s is not after the previous row's 1.000000000 s (times must increase)"
+        );
+        assert_eq!(err("1 0 0 0 0 0 1\n"), "g.tum: line 1: has 7 columns; TUM has 8: t x y z qx qy qz qw");
+        assert_eq!(err("1 0 0 0 0 0 0 0\n"), "g.tum: line 1: the quaternion has norm 0, not 1");
+        let e = read_csv(Path::new("g.csv"), "a,b\n1,2\n", &CsvColumns::default()).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "g.csv: no column \"t\" for the time (columns: a, b); name it with --gt-columns or [ground_truth] in \
+             robot.toml"
+        );
+    }
+}

@@ -1,0 +1,145 @@
+//! rosbag2 recordings as `ros2 bag record` leaves them: a folder with a `metadata.yaml` ([`metadata`]) and
+//! one or more storage files (split by size or duration), in either storage:
+//!
+//! | storage | files | how it is read |
+//! |---|---|---|
+//! | `sqlite3` (default up to ROS 2 Iron) | `rec_0.db3`, `rec_1.db3`, … | tables `topics` and `messages` (`sqlite.rs`) |
+//! | `mcap` (default from ROS 2 Jazzy) | `rec_0.mcap`, `rec_1.mcap`, … | as a bare `.mcap` ([`crate::dataset::mcap`]) |
+//!
+//! All files of a recording are read, in the order `relative_file_paths` lists them, into **one** recording
+//! (topics matched by name), which is then one run named after the folder, or cut into runs at standstills
+//! with `--split` exactly as a single MCAP file is. Both storages feed the same message pipeline and CDR
+//! decoders, so the same messages give the same runs, bit for bit, whatever the storage.
+//!
+//! Compression: rosbag2's `zstd` in mode `FILE` (each storage file is one zstd stream, `rec_0.db3.zstd`,
+//! decompressed in memory) and in mode `MESSAGE` (each payload is a zstd stream); any other format is
+//! refused with the key and value. MCAP's own chunk compression (zstd, lz4) is read as for a bare `.mcap`.
+//!
+//! A bare `.db3` file (a split file on its own, or a recording whose `metadata.yaml` was lost) is read as
+//! a recording of that one file, named after its stem.
+//!
+//! Errors name the file (the `metadata.yaml` and its key, or the storage file) and what is wrong; message
+//! problems name the recording, topic and message index (0-based within its topic over the whole
+//! recording).
+
+pub mod metadata;
+mod sqlite;
+
+use crate::dataset::DatasetError;
+use crate::dataset::ground_truth::ExternalTruth;
+use crate::dataset::mcap::McapOptions;
+use crate::dataset::mcap::McapRead;
+use crate::dataset::mcap::read::{self, Recording};
+use metadata::{Compression, Storage};
+use std::io::Read;
+use std::path::Path;
+
+/// Whether `dir` is a rosbag2 recording (it holds a `metadata.yaml`).
+pub fn is_recording(dir: &Path) -> bool {
+    dir.join(metadata::FILE_NAME).is_file()
+}
+
+/// Reads the recording in folder `dir` (see the module docs). Each storage file (decompressed, for `FILE`
+/// compression) may be at most `max_file_bytes` long.
+///
+/// With `truth`, the ground truth comes from that file instead of a topic (see
+/// [`crate::dataset::mcap::read_file_with_truth`]).
+pub fn read_recording(
+    dir: &Path,
+    opts: &McapOptions,
+    max_file_bytes: u64,
+    truth: Option<&ExternalTruth>,
+) -> Result<McapRead, DatasetError> {
+    let meta = metadata::read(dir)?;
+    let meta_path = dir.join(metadata::FILE_NAME);
+    let mut rec = Recording::new(&opts.wheel_joints);
+    rec.zstd_messages = meta.compression == Compression::MessageZstd;
+    for file in &meta.files {
+        if !file.is_file() {
+            return Err(DatasetError::at(
+                &meta_path,
+                "key relative_file_paths",
+                format!("lists {}, which does not exist", file.display()),
+            ));
+        }
+        let file_zstd = meta.compression == Compression::FileZstd;
+        match meta.storage {
+            Storage::Mcap => {
+                let buf = read_file(file, file_zstd, max_file_bytes)?;
+                read::feed_mcap(file, &buf, &mut rec)?;
+            }
+            Storage::Sqlite3 if file_zstd => {
+                let image = read_file(file, true, max_file_bytes)?;
+                sqlite::feed(file, Some(image), &mut rec)?;
+            }
+            Storage::Sqlite3 => {
+                check_size(file, max_file_bytes)?;
+                sqlite::feed(file, None, &mut rec)?;
+            }
+        }
+    }
+    let mut notes = Vec::new();
+    for t in &meta.topics {
+        let held = rec.messages_on(&t.name).unwrap_or(0);
+        if held as u64 != t.message_count {
+            notes.push(format!(
+                "{}: topic {:?}: metadata.yaml lists {} messages, the files hold {held}",
+                dir.display(),
+                t.name,
+                t.message_count
+            ));
+        }
+        // Topics the metadata lists but no file declares are still listed in messages.
+        rec.channel(&t.name, &t.msg_type, "ros2msg", &t.serialization_format);
+    }
+    let name = dir.file_name().map_or_else(|| dir.display().to_string(), |s| s.to_string_lossy().into_owned());
+    let mut out = read::runs(dir, &name, rec, opts, truth)?;
+    out.notes.splice(0..0, notes);
+    Ok(out)
+}
+
+/// Reads a bare rosbag2 sqlite3 file (`.db3`) as a recording of that one file, named after its stem.
+pub fn read_db3(
+    path: &Path,
+    opts: &McapOptions,
+    max_file_bytes: u64,
+    truth: Option<&ExternalTruth>,
+) -> Result<McapRead, DatasetError> {
+    check_size(path, max_file_bytes)?;
+    let mut rec = Recording::new(&opts.wheel_joints);
+    sqlite::feed(path, None, &mut rec)?;
+    let stem = path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned());
+    read::runs(path, &stem, rec, opts, truth)
+}
+
+fn check_size(path: &Path, max_file_bytes: u64) -> Result<(), DatasetError> {
+    let len = std::fs::metadata(path).map_err(|e| DatasetError::io(path, e))?.len();
+    if len > max_file_bytes {
+        return Err(crate::dataset::too_large(path, len, max_file_bytes));
+    }
+    Ok(())
+}
+
+/// The bytes of a storage file, zstd-decompressed when `zstd` (at most `max_file_bytes` either way).
+fn read_file(path: &Path, zstd: bool, max_file_bytes: u64) -> Result<Vec<u8>, DatasetError> {
+    check_size(path, max_file_bytes)?;
+    let file = std::fs::File::open(path).map_err(|e| DatasetError::io(path, e))?;
+    if !zstd {
+        let mut buf = Vec::new();
+        std::io::BufReader::new(file).read_to_end(&mut buf).map_err(|e| DatasetError::io(path, e))?;
+        return Ok(buf);
+    }
+    let not_zstd = |e: std::io::Error| {
+        DatasetError::file(path, format!("the file does not decompress as zstd (metadata.yaml says FILE zstd): {e}"))
+    };
+    let mut buf = Vec::new();
+    zstd::stream::read::Decoder::new(file)
+        .map_err(not_zstd)?
+        .take(max_file_bytes.saturating_add(1))
+        .read_to_end(&mut buf)
+        .map_err(not_zstd)?;
+    if buf.len() as u64 > max_file_bytes {
+        return Err(crate::dataset::too_large(path, buf.len() as u64, max_file_bytes));
+    }
+    Ok(buf)
+}
