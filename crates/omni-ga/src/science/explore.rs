@@ -288,8 +288,10 @@ fn gauss_newton(
             for (k, &j) in free.iter().enumerate() {
                 y[j] += t * delta[k];
             }
-            let ry = residuals(&y)?;
-            if sq(&ry) < cost {
+            // A step to parameters the model refuses (a negative wheel radius) counts as a worse one.
+            if let Ok(ry) = residuals(&y)
+                && sq(&ry) < cost
+            {
                 (x, r, accepted) = (y, ry, true);
                 break;
             }
@@ -327,13 +329,16 @@ fn jacobian(
     Ok(jac)
 }
 
+/// Relative singular value below which a direction of the unit-column Jacobian counts as undetermined.
+const RCOND: f64 = 1e-7;
+
 /// Column norms of `j` (1 for an empty column, which then stays out of the solution).
 fn column_scales(j: &DMatrix<f64>) -> Vec<f64> {
     j.column_iter().map(|c| c.norm()).map(|n| if n > 0.0 && n.is_finite() { n } else { 1.0 }).collect()
 }
 
-/// Least-squares step `δ` minimising `|r + J δ|`, on unit-norm columns, singular values below 1e-9 of the
-/// largest dropped (directions the runs do not determine stay put).
+/// Least-squares step `δ` minimising `|r + J δ|`, on unit-norm columns, singular values below
+/// [`RCOND`] of the largest dropped (directions the runs do not determine stay put).
 fn solve(j: &DMatrix<f64>, r: &[f64]) -> Vec<f64> {
     let d = column_scales(j);
     let mut js = j.clone();
@@ -342,7 +347,7 @@ fn solve(j: &DMatrix<f64>, r: &[f64]) -> Vec<f64> {
     }
     let svd = js.svd(true, true);
     let rhs = -DVector::from_column_slice(r);
-    let tol = 1e-9 * svd.singular_values.max();
+    let tol = RCOND * svd.singular_values.max();
     match svd.solve(&rhs, tol) {
         Ok(z) => z.iter().zip(&d).map(|(z, d)| if z.is_finite() { z / d } else { 0.0 }).collect(),
         Err(_) => vec![0.0; j.ncols()],
@@ -359,7 +364,9 @@ fn cluster_std_errors(j: &DMatrix<f64>, r: &[f64], run_rows: &[usize]) -> Vec<f6
     }
     let m = Moments::from_dense(&js, r, run_rows);
     let g = m.scores.len() as f64;
-    let Ok(b) = m.jtj.clone().pseudo_inverse(1e-9 * m.jtj.norm()) else { return vec![f64::NAN; j.ncols()] };
+    let Ok(b) = m.jtj.clone().pseudo_inverse(RCOND * RCOND * m.jtj.norm()) else {
+        return vec![f64::NAN; j.ncols()];
+    };
     let mut meat = DMatrix::zeros(j.ncols(), j.ncols());
     for s in &m.scores {
         meat += s * s.transpose();

@@ -271,7 +271,7 @@ pub fn explore_hint(f: &FamilyResult) -> String {
         Family::Wheel => wheel_hint(f, top),
         Family::Body => body_hint(top),
         Family::Time => format!(
-            "{} grows with the time since the run started ({} = {:+.3} {}): a ground-truth frame that drifts, tyres or motors warming, a falling battery voltage",
+            "{} grows with the time since the run started ({} = {:+.3e} {}): a ground-truth frame that drifts, tyres or motors warming, a falling battery voltage",
             if top.name.starts_with("drift") {
                 "a world-frame drift"
             } else if top.name.starts_with("omega") {
@@ -315,9 +315,16 @@ fn wheel_hint(f: &FamilyResult, top: &Term) -> String {
             "wheel {wheel} covers {:+.2} % more distance per turn one way than the other: a forward/backward radius difference",
             100.0 * top.value
         ),
+        // δω = θ dω/dt ≈ ω(t + θ) − ω(t): θ < 0, the wheel moves |θ| after its encoder reads.
+        _ if top.value < 0.0 => format!(
+            "wheel {wheel} moves {:.1} ms after its encoder reads (accel_{wheel} = {:+.4} s): compliance in the drive (belt, coupling, tyre)",
+            -1e3 * top.value,
+            top.value
+        ),
         _ => format!(
-            "wheel {wheel} follows its encoder {:+.1} ms late: compliance in the drive (belt, coupling)",
-            1e3 * top.value
+            "wheel {wheel}'s encoder reads {:.1} ms after the wheel moves (accel_{wheel} = {:+.4} s): a late encoder sample or filter",
+            1e3 * top.value,
+            top.value
         ),
     }
 }
