@@ -301,7 +301,7 @@ pub fn write(
     write_with(input, html_path, png_dir, "")
 }
 
-/// [`write`] with `extra` HTML sections (e.g. [`explore::section`]) at the end of the page, before `</body>`.
+/// [`write()`] with `extra` HTML sections (e.g. [`explore::section`]) at the end of the page, before `</body>`.
 pub fn write_with(
     input: &ReportInput<'_>,
     html_path: &std::path::Path,
