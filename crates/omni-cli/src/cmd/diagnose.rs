@@ -6,6 +6,8 @@ use crate::design::design_for;
 use crate::{atomic, model_file};
 use anyhow::Context;
 use omni_ga::diagnose::{DiagnoseOptions, Diagnosis, diagnose};
+use omni_ga::explore::{Exploration, ExploreOptions, explore};
+use omni_ga::science::text;
 use std::path::PathBuf;
 
 /// Arguments of `omnical diagnose`.
@@ -58,12 +60,56 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         let text = model_file::to_toml(fm, None).map_err(anyhow::Error::msg)?;
         atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))?;
     }
+    // The explorer stage of `--auto`: only when the catalogue leaves a systematic error unexplained, on the
+    // same training and held-out runs, starting from the model the ladder ended with.
+    let exploration = match (&val, a.auto && d.unexplained) {
+        (Some(v), true) => Some(explore(d.final_model.as_ref().unwrap_or(&model), &ds.runs, v, &ExploreOptions::default())?),
+        _ => None,
+    };
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&d)?);
+        match &exploration {
+            Some(e) => {
+                let doc = WithExplore { diagnosis: &d, explore: super::explore::to_json(e) };
+                println!("{}", serde_json::to_string_pretty(&doc)?);
+            }
+            None => println!("{}", serde_json::to_string_pretty(&d)?),
+        }
     } else {
         print_diagnosis(&d);
+        if a.auto && d.unexplained {
+            print_explore_stage(exploration.as_ref());
+        }
     }
     Ok(())
+}
+
+/// `diagnose --auto --json` with the explorer stage: the diagnosis's fields, then `explore` (the document
+/// of `omnical explore --json`).
+#[derive(serde::Serialize)]
+struct WithExplore<'a> {
+    #[serde(flatten)]
+    diagnosis: &'a Diagnosis,
+    explore: serde_json::Value,
+}
+
+/// The explorer stage in text: the ranking and the best family's hint (or why it did not run).
+fn print_explore_stage(e: Option<&Exploration>) {
+    let Some(e) = e else {
+        println!("5. explore: skipped (the explorer judges families on held-out runs: give --validate)");
+        return;
+    };
+    println!("5. explore: beyond the catalogue (families fitted on the training runs, judged on the held-out runs)");
+    let lines = text::exploration(e);
+    let (conclusion, ranking) = lines.split_last().map_or((None, &lines[..]), |(c, r)| (Some(c), r));
+    for l in ranking {
+        println!("   {l}");
+    }
+    if let Some(best) = e.best() {
+        println!("   best: learned:{}: {}", best.family.id(), text::explore_hint(best));
+    }
+    if let Some(c) = conclusion {
+        println!("   {c}");
+    }
 }
 
 /// Human-readable diagnosis.
