@@ -63,7 +63,9 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     // The explorer stage of `--auto`: only when the catalogue leaves a systematic error unexplained, on the
     // same training and held-out runs, starting from the model the ladder ended with.
     let exploration = match (&val, a.auto && d.unexplained) {
-        (Some(v), true) => Some(explore(d.final_model.as_ref().unwrap_or(&model), &ds.runs, v, &ExploreOptions::default())?),
+        (Some(v), true) => {
+            Some(explore(d.final_model.as_ref().unwrap_or(&model), &ds.runs, v, &ExploreOptions::default())?)
+        }
         _ => None,
     };
     if a.json {
