@@ -3,12 +3,12 @@
 
 use crate::effect::{EffectErrors, effect_from};
 use crate::errors::{PyResultExt, value_error};
-use crate::model::{PyModel, model_or};
+use crate::model::PyModel;
+use crate::robot::model_or_design;
 use crate::run::runs_from;
 use numpy::PyArray2;
 use omni_ga::calibrate::{Calibration, Plan, Preset, calibrate};
 use omni_ga::observe::{Control, Iteration, Observer};
-use omni_kin::FittedModel;
 use omni_kin::choice::UnknownChoice;
 use pyo3::exceptions::{PyKeyboardInterrupt, PyUserWarning};
 use pyo3::prelude::*;
@@ -210,17 +210,25 @@ impl PyCalibration {
 
 /// Fit a model to training runs.
 ///
-/// The start is ``model`` (default: the data's design model, else the paper's Eq. 7) plus ``effects``
-/// (catalogue ids or Python effects). ``preset="default"`` (path cost, short GA + Levenberg–Marquardt) or
+/// The start is ``model``, else the design model of ``robot`` (a ``robot.toml`` path or ``"apr02"``, the
+/// paper's robot), else the design of the data's robot (a Dataset's ``design``), plus ``effects``
+/// (catalogue ids or Python effects). With none of them (runs from ``simulate`` or ``Run(...)``, data
+/// without a robot description) it raises ``ValueError`` saying how to describe the robot: there is no
+/// default robot. ``preset="default"`` (path cost, short GA + Levenberg–Marquardt) or
 /// ``"paper"`` (the paper's Eq. 6 GA). ``progress(dict)`` is called after each iteration; returning False
 /// stops. Ctrl-C stops the GA and returns the best so far (``interrupted`` is True). The GIL is released
 /// while the search runs.
+///
+/// >>> fit = omnical.train(omnical.load("runs/"), robot="robot.toml", seed=0)  # doctest: +SKIP
+/// >>> fit.model.save("fit.toml")  # wheel names: the robot's joints  # doctest: +SKIP
 #[pyfunction]
-#[pyo3(signature = (runs, *, model = None, effects = Vec::new(), preset = "default", seed = 0, progress = None))]
+#[pyo3(signature = (runs, *, model = None, robot = None, effects = Vec::new(), preset = "default", seed = 0, progress = None))]
+#[allow(clippy::too_many_arguments)]
 pub fn train(
     py: Python<'_>,
     runs: &Bound<'_, PyAny>,
     model: Option<&Bound<'_, PyAny>>,
+    robot: Option<std::path::PathBuf>,
     effects: Vec<Bound<'_, PyAny>>,
     preset: &str,
     seed: u64,
@@ -228,7 +236,7 @@ pub fn train(
 ) -> PyResult<PyCalibration> {
     let preset: Preset = preset.parse().map_err(|e: UnknownChoice| value_error(format!("preset {e}")))?;
     let (runs, design) = runs_from(runs, "runs")?;
-    let (mut start, mut adapters) = model_or(model, || design.unwrap_or_else(FittedModel::paper_design))?;
+    let (mut start, mut adapters) = model_or_design(model, robot.as_ref(), design, "omnical.train")?;
     for e in &effects {
         let (kind, adapter) = effect_from(e, start.model.n_wheels())?;
         start = start.with_effect(kind);

@@ -20,6 +20,7 @@ mod errors;
 mod evaluate;
 mod model;
 mod report;
+mod robot;
 mod run;
 mod simulate;
 

@@ -81,6 +81,28 @@ pub struct DataArgs {
     pub max_file_mb: u64,
 }
 
+impl Default for DataArgs {
+    /// No flag given: what the command line parses from no data options.
+    fn default() -> Self {
+        Self {
+            robot: RobotArgs::default(),
+            joints: None,
+            joints_topic: None,
+            gt_topic: None,
+            gt_parent_frame: None,
+            gt_child_frame: None,
+            gt: None,
+            gt_time_offset: None,
+            gt_columns: Vec::new(),
+            gt_units: Vec::new(),
+            split: None,
+            skip_invalid: false,
+            ticks_per_rev: None,
+            max_file_mb: dataset::DEFAULT_MAX_FILE_BYTES >> 20,
+        }
+    }
+}
+
 /// Load runs from files/folders, printing what was skipped or noticed on stderr. The runs' recorded
 /// odometry is left out (no command but `export` shows it, and it would take as much memory as the wheel
 /// data).
@@ -98,6 +120,20 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
     if let Some(r) = &robot {
         robot_file::announce(&r.source);
     }
+    let ds = load_for_robot(paths, data, recorded_odometry, robot)?;
+    print_load_notes(&ds);
+    Ok(ds)
+}
+
+/// Reads runs as [`load_runs`] does for the robot `robot` (resolved from `data` by
+/// [`robot_file::resolve`]: its joints, topics and ground-truth file fill what `data` leaves open), printing
+/// nothing: notes, skipped inputs and ground-truth clocks stay in the dataset. The Python binding's `load`.
+pub fn load_for_robot(
+    paths: &[PathBuf],
+    data: &DataArgs,
+    recorded_odometry: bool,
+    robot: Option<robot_file::RobotFile>,
+) -> anyhow::Result<Dataset> {
     let mut mcap = dataset::mcap::McapOptions {
         wheel_joints: data.joints.clone().unwrap_or_default(),
         joints_topic: data.joints_topic.clone(),
@@ -120,7 +156,12 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
     };
     let mut ds = dataset::load(paths, &opts)?;
     ds.robot_file = robot;
-    // The same note from many files is printed once, with a count.
+    Ok(ds)
+}
+
+/// Prints a dataset's notes (the same note from many files once, with a count), skipped inputs and
+/// ground-truth clocks on stderr.
+fn print_load_notes(ds: &Dataset) {
     let mut seen: Vec<(String, String, usize)> = Vec::new();
     for n in &ds.notes {
         let key = n.split_once(": ").map_or(n.as_str(), |(_, rest)| rest).to_string();
@@ -142,7 +183,6 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
     for c in &ds.ground_truth_clocks {
         eprintln!("{}", c.describe());
     }
-    Ok(ds)
 }
 
 /// `--gt` and its options, over the robot description's `[ground_truth]` (its `file` relative to the
