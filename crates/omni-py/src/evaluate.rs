@@ -5,13 +5,13 @@ use crate::errors::PyResultExt;
 use crate::robot::model_or_design;
 use crate::run::{PyRun, runs_from};
 use numpy::{PyArray1, PyArray2};
+use omni_kin::PoseError;
 use omni_kin::cost::{self, CostKind};
 use omni_kin::evaluate::Evaluator;
 use omni_kin::odometry::{self, Residual};
-use omni_kin::PoseError;
-use std::path::PathBuf;
 use pyo3::prelude::*;
 use rayon::prelude::*;
+use std::path::PathBuf;
 
 /// One run's residuals at every ground-truth pose after the first.
 #[pyclass(frozen, name = "RunResiduals", module = "omnical._omnical")]

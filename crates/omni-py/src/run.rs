@@ -4,8 +4,8 @@
 use crate::arrays::{matrix, matrix_to_poses, poses_to_matrix, shape_text, to_matrix, to_vector, vector};
 use crate::errors::{PyResultExt, ToPyErr, value_error};
 use crate::model::PyModel;
-use numpy::{PyArray1, PyArray2};
 use crate::robot::robot_error;
+use numpy::{PyArray1, PyArray2};
 use omni_cli::cmd::{self, DataArgs, RobotArgs};
 use omni_cli::dataset;
 use omni_cli::robot_file::{self, RobotFileError};
