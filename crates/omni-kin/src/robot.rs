@@ -200,9 +200,9 @@ pub struct GroundTruthFile {
     pub units: std::collections::BTreeMap<String, String>,
 }
 
-/// One-sigma uncertainties of the design values, as measured or as the drawings promise. Checked (finite,
-/// > 0). A parametric fit (`geometry`, `diff`, `mecanum`) searches the design ± [`PRIOR_BOX_SIGMAS`] σ of
-/// each parameter they cover ([`Priors::std_of`]) instead of ±10 %, and reports its fitted values in σ.
+/// One-sigma uncertainties of the design values, as measured or as the drawings promise. Checked: finite
+/// and positive. A parametric fit (`geometry`, `diff`, `mecanum`) searches the design ± [`PRIOR_BOX_SIGMAS`]
+/// σ of each parameter they cover ([`Priors::std_of`]) instead of ±10 %, and reports its fitted values in σ.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Priors {
