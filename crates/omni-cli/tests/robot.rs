@@ -141,6 +141,39 @@ fn joint_names_go_into_the_model_file_and_the_exported_config() {
     assert!(header.contains(r#"OMNICAL_WHEEL_NAMES[OMNICAL_N_WHEELS] = {"fl", "rl", "rr", "fr"};"#), "{header}");
 }
 
+#[test]
+fn csv_wheel_columns_follow_the_robots_joints() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::write(d.join("omni4.toml"), OMNI4).unwrap();
+    simulate(d, "sim4", &["--robot", "omni4.toml", "--truth", "design", "--format", "csv"]);
+    let cost = |robot: &str| {
+        let out = ok(omnical(&["eval", "sim4/validation", "--json", "--robot", robot], d));
+        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()["path_cost"].as_f64().unwrap()
+    };
+    let as_written = cost("omni4.toml");
+    // The same robot with its wheels listed in another order: the CSV columns are read in that order too,
+    // so the design's columns still meet their wheels' data.
+    let blocks: Vec<&str> = OMNI4.split("[[wheels]]\n").collect();
+    let reordered = [blocks[0], blocks[4], blocks[1], blocks[2], blocks[3]].join("[[wheels]]\n");
+    std::fs::write(d.join("reordered.toml"), &reordered).unwrap();
+    let again = cost("reordered.toml");
+    assert!((again - as_written).abs() <= 1e-12 * as_written, "{again} vs {as_written}");
+    // A joint the files do not have: exit 2, naming the file, the missing column and both lists.
+    std::fs::write(d.join("renamed.toml"), OMNI4.replace(r#""fl""#, r#""front_left""#)).unwrap();
+    let out = omnical(&["eval", "sim4/validation", "--robot", "renamed.toml"], d);
+    assert_eq!(out.status.code(), Some(2));
+    let e = stderr(&out);
+    assert!(e.contains("00-r0.csv: line "), "{e}");
+    assert!(
+        e.contains(
+            ": no column front_left_rad_s (the robot's joints: front_left, rl, rr, fr; the file's wheel columns: \
+             fl, rl, rr, fr)"
+        ),
+        "{e}"
+    );
+}
+
 const DIFF: &str = r#"kind = "diff"
 [diff]
 wheel_separation_m = 0.287

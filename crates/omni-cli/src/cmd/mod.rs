@@ -153,6 +153,7 @@ pub fn load_for_robot(
         recorded_odometry,
         max_file_bytes: data.max_file_mb.saturating_mul(1 << 20),
         ground_truth: ground_truth_options(data, robot.as_ref())?,
+        csv_joints: data.joints.clone().or_else(|| robot.as_ref().map(|r| r.description.joints())).unwrap_or_default(),
     };
     let mut ds = dataset::load(paths, &opts)?;
     ds.robot_file = robot;

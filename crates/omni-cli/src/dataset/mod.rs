@@ -54,6 +54,10 @@ pub struct LoadOptions {
     pub max_file_bytes: u64,
     /// Ground truth from separate files (`--gt`) instead of a topic of the recordings. Default none.
     pub ground_truth: Option<ground_truth::GroundTruthOptions>,
+    /// The wheel joints, in the model's column order, that CSV runs must have (`<joint>_rad_s` or
+    /// `<joint>_ticks` columns, read in this order): a robot description's or `--joints`. Default empty:
+    /// each file's own column order.
+    pub csv_joints: Vec<String>,
 }
 
 impl Default for LoadOptions {
@@ -65,6 +69,7 @@ impl Default for LoadOptions {
             recorded_odometry: true,
             max_file_bytes: DEFAULT_MAX_FILE_BYTES,
             ground_truth: None,
+            csv_joints: Vec::new(),
         }
     }
 }
@@ -224,7 +229,7 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
     match input {
         Input::Csv(p) => {
             check_size(p, opts.max_file_bytes)?;
-            Ok(csv::read_run(p, opts.ticks_per_rev).map(|r| Loaded {
+            Ok(csv::read_run_for(p, opts.ticks_per_rev, &opts.csv_joints).map(|r| Loaded {
                 runs: vec![if opts.recorded_odometry { r } else { r.without_recorded_odometry() }],
                 ..Default::default()
             }))
