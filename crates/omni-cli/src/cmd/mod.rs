@@ -153,11 +153,18 @@ pub fn load_for_robot(
         recorded_odometry,
         max_file_bytes: data.max_file_mb.saturating_mul(1 << 20),
         ground_truth: ground_truth_options(data, robot.as_ref())?,
-        csv_joints: data.joints.clone().or_else(|| robot.as_ref().map(|r| r.description.joints())).unwrap_or_default(),
+        csv_joints: csv_joints(data, robot.as_ref()),
     };
     let mut ds = dataset::load(paths, &opts)?;
     ds.robot_file = robot;
     Ok(ds)
+}
+
+/// The joints CSV runs are read by: `--joints`, else a robot description file's. The built-in `apr02`'s
+/// names are the simulator's placeholders, so with it each file keeps its own column order.
+fn csv_joints(data: &DataArgs, robot: Option<&robot_file::RobotFile>) -> Vec<String> {
+    let from_file = robot.filter(|r| r.source != robot_file::Source::Builtin).map(|r| r.description.joints());
+    data.joints.clone().or(from_file).unwrap_or_default()
 }
 
 /// Prints a dataset's notes (the same note from many files once, with a count), skipped inputs and
