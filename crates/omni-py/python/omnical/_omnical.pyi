@@ -32,6 +32,7 @@ __all__ = [
     "__version__",
     "cli_main",
     "diagnose",
+    "diagnose_files",
     "effect_catalogue",
     "evaluate",
     "integrate",
@@ -40,6 +41,7 @@ __all__ = [
     "report",
     "simulate",
     "train",
+    "train_files",
 ]
 
 __version__: str
@@ -342,3 +344,12 @@ def cli_main(argv: list[str]) -> int:
     handler (a first Ctrl-C stops the search with the best model so far, exit status 130; a second one
     exits the process), so call it from the ``omnical`` console command rather than an interactive
     session."""
+def train_files(args: list[str]) -> dict[str, Any]:
+    """``omnical train ARGS...`` (without the program and subcommand names) inside this process, the
+    command's own code path (the ``--out`` model file is byte-identical), printing nothing and installing no
+    Ctrl-C handler. Returns ``summary`` (``--json``'s), ``design`` (name -> start value), ``start_s`` /
+    ``end_s`` [s], ``runs``, ``notes``, ``skipped``, ``warnings``. ``ValueError`` for bad arguments,
+    ``OmnicalError`` with the command's message for a failed load or fit."""
+
+def diagnose_files(args: list[str]) -> dict[str, Any]:
+    """``omnical diagnose ARGS...`` inside this process; returns what ``--json`` prints."""
