@@ -27,7 +27,7 @@ Needs ``dask[distributed]`` (``pip install "omnical[fleet]"``); the rest of omni
 from __future__ import annotations
 
 import csv
-import html
+import logging
 import math
 import os
 import re
@@ -51,7 +51,7 @@ OUTLIER_Z = 3.5
 """Robust z-score (median / MAD, Iglewicz and Hoaglin) above which a robot is an outlier."""
 TREND_T = 3.0
 """A trend is flagged when its slope is this many standard errors from zero ..."""
-MIN_RADIUS_SLOPE_PCT = 0.2
+MIN_RADIUS_SLOPE_PCT = 0.3
 """... and, for a wheel's effective radius, at least this large [% of design per session]."""
 MIN_EFFECT_SLOPE_REL = 0.1
 """... and, for an effect's parameter, at least this fraction of its largest |value| per session."""
@@ -140,26 +140,32 @@ def train_args(session: Session, model_path: str, *, preset: str, seed: int, mod
 
 
 def calibrate_session(task: dict[str, Any]) -> dict[str, Any]:
-    """One robot-session on a worker: train (writing the model file atomically) and, when asked, diagnose.
-    Never raises for bad data: the row's ``status`` is ``"error"`` and ``error`` holds the message."""
+    """One robot-session on a worker: train (writing the model file atomically) and, when ``task["diagnose"]``
+    is true, diagnose (``"only"``: diagnose the model file a first task wrote). Never raises for bad data:
+    the row's ``status`` is ``"error"`` and ``error`` holds the message. ``seconds``: the task's wall time."""
     t0 = time.perf_counter()
     session = Session(**{k: task[k] for k in (*_TASK_KEYS, "robot_toml")})
     row: dict[str, Any] = {"robot": session.robot, "session": session.session, "status": "ok", "error": ""}
     model_path = os.path.join(task["out"], session.robot, session.session, MODEL_FILE)
-    try:
-        os.makedirs(os.path.dirname(model_path), exist_ok=True)
-        args = train_args(
-            session, model_path, preset=task["preset"], seed=task["seed"], model=task["model"], extra=task["extra"]
-        )
-        trained = _omnical.train_files(args)
-        row.update(_row_from_training(trained))
-        row["model_file"] = os.path.relpath(model_path, task["out"])
-        if task.get("diagnose"):
+    if task.get("diagnose") != "only":
+        try:
+            os.makedirs(os.path.dirname(model_path), exist_ok=True)
+            args = train_args(
+                session, model_path, preset=task["preset"], seed=task["seed"], model=task["model"], extra=task["extra"]
+            )
+            row.update(_row_from_training(_omnical.train_files(args)))
+            row["model_file"] = os.path.relpath(model_path, task["out"])
+        except Exception as e:  # a bad recording, a failed fit: reported in the row, the fleet goes on
+            row["status"] = "error"
+            row["error"] = f"{type(e).__name__}: {e}".strip()
+        row["seconds"] = time.perf_counter() - t0
+    if task.get("diagnose") and row["status"] == "ok":
+        t1 = time.perf_counter()
+        try:
             row.update(diagnose_session(session, model_path))
-    except Exception as e:  # a bad recording, a failed fit: reported in the row, the fleet goes on
-        row["status"] = "error"
-        row["error"] = f"{type(e).__name__}: {e}".strip()
-    row["seconds"] = time.perf_counter() - t0
+        except Exception as e:  # the fit stands; the row says why it has no diagnosis
+            row["diagnose_error"] = f"{type(e).__name__}: {e}".strip()
+        row["diagnose_seconds"] = time.perf_counter() - t1
     return row
 
 
@@ -289,6 +295,8 @@ def calibrate_fleet(
                 _diagnose_off_sessions(c, tasks, rows, show, on_row)
         except KeyboardInterrupt:
             interrupted = True
+    if not interrupted:
+        _remove_stale_temporaries(out, sessions)
     rows = order_sessions(rows)
     analysis = analyse(rows)
     files = write_fleet_view(rows, analysis, out, interrupted=interrupted)
@@ -297,6 +305,14 @@ def calibrate_fleet(
         print(f"omnical fleet: interrupted (Ctrl-C): {len(rows)} finished robot-sessions written to {files[0]}", file=sys.stderr)
         raise KeyboardInterrupt
     return result
+
+
+def _remove_stale_temporaries(out: Path, sessions: Sequence[Session]) -> None:
+    """Removes the temporary model files of workers killed while writing (``.model.toml.tmp-<pid>``; the
+    task ran again and renamed its own), once every task has finished."""
+    for s in sessions:
+        for tmp in (out / s.robot / s.session).glob(f".{MODEL_FILE}.tmp-*"):
+            tmp.unlink(missing_ok=True)
 
 
 class _DaskClient:
@@ -329,6 +345,9 @@ class _DaskClient:
             threads_per_worker=1,
             dashboard_address=None,
             env={"RAYON_NUM_THREADS": str(threads)},
+            # The workers' own log lines (a heartbeat cut short while the cluster closes) are noise here:
+            # every task's outcome is in its row.
+            silence_logs=logging.CRITICAL,
         )
         c = Client(cluster)
         self.owned += [c, cluster]
@@ -369,13 +388,15 @@ def _run_tasks(
             try:
                 row = fut.result()
             except Exception as e:  # KilledWorker, a lost connection: the session's row says so
-                row = {"robot": t["robot"], "session": t["session"], "status": "error", "error": f"{type(e).__name__}: {e}"}
+                why = f"{type(e).__name__}: {e}"
+                row = {"robot": t["robot"], "session": t["session"]}
+                row.update({"diagnose_error": why} if replace else {"status": "error", "error": why})
             k = (row["robot"], row["session"])
             if k in index:
                 rows[index[k]] = {**rows[index[k]], **row}
             else:
                 rows.append(row)
-            bar.update(row["status"] != "ok")
+            bar.update(row.get("status", "ok") != "ok")
             if on_row is not None:
                 on_row(row)
     except KeyboardInterrupt:
@@ -393,7 +414,7 @@ def _diagnose_off_sessions(
     on_row: Optional[Callable[[dict[str, Any]], None]],
 ) -> None:
     """``diagnose="auto"``: a second wave over the sessions whose fitted path objective is off (see
-    :data:`DIAGNOSE_COST_RATIO`); their training is repeated (same seed, same bytes) before diagnosing."""
+    :data:`DIAGNOSE_COST_RATIO`), each diagnosing the model file its training wrote."""
     ok = [r for r in rows if r.get("status") == "ok" and r.get("objective_fitted") is not None]
     values = [r["objective_fitted"] for r in ok]
     if not values:
@@ -403,7 +424,7 @@ def _diagnose_off_sessions(
     off = {(r["robot"], r["session"]) for r, zi in zip(ok, z) if r["objective_fitted"] > DIAGNOSE_COST_RATIO * med or zi > OUTLIER_Z}
     for r in ok:
         r["diagnosed"] = False
-    again = [{**t, "diagnose": True} for t in tasks if (t["robot"], t["session"]) in off]
+    again = [{**t, "diagnose": "only"} for t in tasks if (t["robot"], t["session"]) in off]
     _run_tasks(client, again, rows, "diagnosing", show, on_row, replace=True)
 
 
@@ -617,7 +638,10 @@ def _columns(rows: Sequence[dict[str, Any]]) -> list[str]:
 def _atomic_write(path: Path, write: Callable[[Any], None], mode: str = "w") -> None:
     """Writes through a temporary file in the same folder and renames it (never half written)."""
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    umask = os.umask(0)
+    os.umask(umask)
     try:
+        os.chmod(tmp, 0o666 & ~umask)  # as open() would create it (mkstemp makes it private)
         if "b" in mode:
             with os.fdopen(fd, "wb") as fb:
                 write(fb)
@@ -693,9 +717,10 @@ def simulate_fleet(
     duration_s: float = 2.0,
 ) -> dict[str, Any]:
     """Write a simulated fleet ``OUT/<robot>/<session>/*.csv`` (the paper's APR-02 flower benchmark, one
-    run per command) with ``OUT/robot.toml`` and ``OUT/truth.json``, and return the truth.
+    run of ``duration_s`` per command) with ``OUT/robot.toml`` and ``OUT/truth.json``, and return the truth.
 
-    Every robot's wheels differ from the design by a random relative radius (normal, sd ``spread``); the
+    Every robot is the design but for its wheels' radii, each off by a random fraction (normal, sd
+    ``spread``, the same in every session); the
     first ``n_wearing`` robots after ``r00`` lose ``wear_per_session`` of wheel b's radius per session,
     the next ``n_lagging`` have a wheel-clock lag growing by ``lag_per_session_s`` per session (0 in the
     first). ``truth["degrading"]`` names them.
@@ -748,7 +773,7 @@ def _simulate_session(session_dir: Path, seed: int, effects: list[str], duration
     """``omnical simulate`` into ``session_dir/.sim`` (its summary lines silenced) and its training runs
     moved up into the session (its robot.toml stays in ``.sim``)."""
     sim = session_dir / ".sim"
-    args = ["omnical", "simulate", "--out", str(sim), "--seed", str(seed), "--format", "csv", "--quiet"]
+    args = ["omnical", "simulate", "--out", str(sim), "--seed", str(seed), "--format", "csv", "--quiet", "--truth", "design"]
     args += ["--runs-per-command", "1", "--duration", repr(duration_s)]
     for e in effects:
         args += ["--effect", e]
