@@ -82,11 +82,13 @@ def test_fleet_finds_the_degrading_robots_and_no_others(fleet_run: fleet.FleetRe
     assert {e["effect"] for e in r.analysis["effects"]["r02"]} == {"time_offset"}
     taus = {row["session"]: row.get("time_offset.tau_s") for row in r.rows if row["robot"] == "r02"}
     assert taus["s02"] == pytest.approx(0.06, abs=0.005)
-    # The spread robots' fitted radii match their true ones (design: the paper's robot, radii relative).
+    # The steady robots' fitted wheel radii match their true ones within 0.5 % (36 runs of 2 s a session;
+    # the first-order standard errors, 0.07–0.18 %, ignore the entries' correlations).
     for row in r.rows:
-        if row["robot"] in ("r03", "r04", "r05"):
-            true_b = 100 * truth["robots"][row["robot"]][row["session"]]["wheel_radius"]["b"]
-            assert row["radius_b_pct"] == pytest.approx(true_b, abs=0.3)
+        if row["robot"] in ("r00", "r03", "r04", "r05"):
+            for w in "abc":
+                true = 100 * truth["robots"][row["robot"]][row["session"]]["wheel_radius"][w]
+                assert row[f"radius_{w}_pct"] == pytest.approx(true, abs=0.5), (row["robot"], row["session"], w)
 
 
 def test_fleet_outputs(fleet_run: fleet.FleetResult) -> None:
@@ -180,7 +182,10 @@ def test_trend_and_robust_z() -> None:
     assert t is not None and t["slope"] == pytest.approx(-1.0) and t["slope_se"] == pytest.approx(0.1 / 2**0.5)
     assert fleet.trend([0], [1.0], [None]) is None
     z = fleet.robust_z([0.0, 1.0, -1.0, 0.5, 10.0])
-    assert z[4] == pytest.approx(0.6745 * 10.0 / 1.0) and abs(z[0]) < 1e-12
+    # median 0.5, absolute deviations (0.5, 0.5, 1.5, 0, 9.5): MAD 0.5
+    assert z == pytest.approx([-0.6745, 0.6745, -2.0235, 0.0, 0.6745 * 9.5 / 0.5])
+    assert fleet.robust_z([1.0, 1.0, 1.0, 5.0]) == [0.0] * 4  # MAD 0 and no floor: no outliers
+    assert fleet.robust_z([1.0, 1.0, 1.0, 5.0], floor=0.5)[3] == pytest.approx(0.6745 * 4 / 0.5)
 
 
 def test_fleet_command(sim_fleet: tuple[Path, dict[str, Any]], tmp_path: Path) -> None:

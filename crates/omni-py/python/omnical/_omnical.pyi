@@ -42,6 +42,10 @@ __all__ = [
     "simulate",
     "train",
     "train_files",
+    "_calibration_from_state",
+    "_dataset_from_state",
+    "_model_from_toml",
+    "_run_from_bytes",
 ]
 
 __version__: str
@@ -353,3 +357,9 @@ def train_files(args: list[str]) -> dict[str, Any]:
 
 def diagnose_files(args: list[str]) -> dict[str, Any]:
     """``omnical diagnose ARGS...`` inside this process; returns what ``--json`` prints."""
+
+# Unpickling (the targets of the classes' __reduce__).
+def _run_from_bytes(data: bytes) -> Run: ...
+def _dataset_from_state(runs: list[bytes], notes: list[str], skipped: list[tuple[str, str]], design: str) -> Dataset: ...
+def _model_from_toml(text: str, effects: list[Any] = ...) -> Model: ...
+def _calibration_from_state(state: dict[str, Any]) -> Calibration: ...
