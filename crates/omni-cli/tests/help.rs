@@ -139,7 +139,9 @@ fn fleet_is_the_python_wheels_and_the_native_binary_says_so() {
         let err = String::from_utf8_lossy(&out.stderr);
         let what = if args[0] == "fleet" { "omnical fleet" } else { "omnical simulate --fleet" };
         assert!(
-            err.starts_with(&format!("error: {what} runs on Dask from the Python wheel: `pip install \"omnical[fleet]\"`")),
+            err.starts_with(&format!(
+                "error: {what} runs on Dask from the Python wheel: `pip install \"omnical[fleet]\"`"
+            )),
             "{args:?}: {err}"
         );
     }

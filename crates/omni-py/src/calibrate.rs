@@ -216,7 +216,7 @@ impl PyCalibration {
         self.steps.iter().map(|s| s.dict(py)).collect()
     }
     /// Pickling: every field in a dict (the models pickle through their model file text, floats exactly).
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyDict>,))> {
+    fn __reduce__<'py>(&self, py: Python<'py>) -> crate::pickle::Reduced<'py, (Bound<'py, PyDict>,)> {
         let d = PyDict::new(py);
         d.set_item("model", self.model.clone_ref(py))?;
         d.set_item("start", self.start.clone_ref(py))?;

@@ -201,7 +201,7 @@ impl PyModel {
 
     /// Pickling: the model file text (exact: floats are written in their shortest round-trip form) and the
     /// Python effect objects it names (pickled by Python).
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String, Vec<Py<PyAny>>))> {
+    fn __reduce__<'py>(&self, py: Python<'py>) -> crate::pickle::Reduced<'py, (String, Vec<Py<PyAny>>)> {
         let rebuild = py.import("omnical._omnical")?.getattr("_model_from_toml")?;
         let effects = self.py_effects.iter().map(|e| e.object(py).unbind()).collect();
         Ok((rebuild, (self.to_toml()?, effects)))

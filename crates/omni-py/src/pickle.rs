@@ -7,6 +7,9 @@ use crate::errors::{PyResultExt, value_error};
 use omni_kin::{Command, Pose2, Run, RunData, StampedPose};
 use pyo3::PyResult;
 
+/// What a `__reduce__` returns: the function that rebuilds the object, and its arguments.
+pub type Reduced<'py, Args> = PyResult<(pyo3::Bound<'py, pyo3::PyAny>, Args)>;
+
 /// The first bytes of a pickled run (format version 1).
 const MAGIC: &[u8; 8] = b"omnrun1\0";
 

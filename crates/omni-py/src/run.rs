@@ -114,7 +114,7 @@ impl PyRun {
         self.inner.repetition()
     }
     /// Pickling: every field as compact bytes (see `pickle.rs`), validated again on the way back.
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+    fn __reduce__<'py>(&self, py: Python<'py>) -> crate::pickle::Reduced<'py, (Bound<'py, PyBytes>,)> {
         let rebuild = py.import("omnical._omnical")?.getattr("_run_from_bytes")?;
         Ok((rebuild, (PyBytes::new(py, &crate::pickle::run_to_bytes(&self.inner)),)))
     }
@@ -178,11 +178,7 @@ impl PyDataset {
         Ok(PyRun { inner: self.runs[i as usize].clone() })
     }
     /// Pickling: the runs (as `Run` pickles them), notes, skipped inputs and the design's model file text.
-    #[allow(clippy::type_complexity)]
-    fn __reduce__<'py>(
-        &self,
-        py: Python<'py>,
-    ) -> PyResult<(Bound<'py, PyAny>, (Vec<Bound<'py, PyBytes>>, Vec<String>, Vec<(String, String)>, String))> {
+    fn __reduce__<'py>(&self, py: Python<'py>) -> crate::pickle::Reduced<'py, DatasetState<'py>> {
         let rebuild = py.import("omnical._omnical")?.getattr("_dataset_from_state")?;
         let runs = self.runs.iter().map(|r| PyBytes::new(py, &crate::pickle::run_to_bytes(r))).collect();
         let design = omni_cli::model_file::to_toml(&self.design, None).map_err(value_error)?;
@@ -192,6 +188,9 @@ impl PyDataset {
         format!("Dataset({} runs, {} skipped)", self.runs.len(), self.skipped.len())
     }
 }
+
+/// A pickled `Dataset`: its runs' bytes, notes, skipped inputs, design model file text.
+type DatasetState<'py> = (Vec<Bound<'py, PyBytes>>, Vec<String>, Vec<(String, String)>, String);
 
 /// Unpickling a `Run`.
 #[pyfunction]
