@@ -60,7 +60,7 @@ pub enum Command {
     /// The whole story on built-in simulated data with a hidden effect: simulate, train, diagnose, add the
     /// effect, retrain, print the error ladder.
     Demo(cmd::demo::Args),
-    /// Calibrate every robot-session of a fleet (FLEET_DIR/<robot>/<session>/) on Dask and write the fleet
+    /// Calibrate every robot-session of a fleet (`FLEET_DIR/<robot>/<session>/`) on Dask and write the fleet
     /// view: the Python wheel's `omnical` only (`pip install "omnical[fleet]"`).
     Fleet(cmd::FleetArgs),
 }

@@ -72,7 +72,7 @@ pub struct Args {
     /// No encoder quantisation and no noise.
     #[arg(long)]
     pub noise_free: bool,
-    /// Write a simulated fleet of N robots instead (OUT/<robot>/<session>/, spread geometry, a wearing wheel
+    /// Write a simulated fleet of N robots instead (`OUT/<robot>/<session>/`, spread geometry, a wearing wheel
     /// and a growing clock lag, OUT/truth.json): the Python wheel's `omnical` only.
     #[arg(long, value_name = "N")]
     pub fleet: Option<usize>,

@@ -245,7 +245,7 @@ pub struct Trained {
 
 /// `omnical train` without a terminal, for callers that run many trainings in one process (the Python
 /// wheel's fleet workers): the same loading, start model, plan and fit as [`run`], and the same model file
-/// written to `--out` (byte-identical: [`write_model`] either way), but nothing printed, no progress bar
+/// written to `--out` (byte-identical: the same `write_model` either way), but nothing printed, no progress bar
 /// and no Ctrl-C handler installed.
 pub fn train_quietly(a: &Args) -> anyhow::Result<Trained> {
     let (ds, start, plan) = prepare(a)?;

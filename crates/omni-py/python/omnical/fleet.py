@@ -585,7 +585,7 @@ def analyse(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
             reasons.setdefault(o["robot"], []).append(f"{_label(q)} {_fmt(o['value'], q)} is an outlier (robust z {o['z']:+.1f})")
     for tr in trends:
         if tr["flagged"]:
-            reasons.setdefault(tr["robot"], []).append(_trend_text(tr))
+            reasons.setdefault(tr["robot"], []).append(_trend_text(tr, with_robot=False))
     for rb, es in effects.items():
         names = sorted({e["effect"] for e in es})
         reasons.setdefault(rb, []).append(
@@ -614,12 +614,14 @@ def _fmt(v: float, q: str) -> str:
     return f"{v:+.2f} %" if q.endswith("_pct") else f"{v:.4g}"
 
 
-def _trend_text(t: dict[str, Any]) -> str:
+def _trend_text(t: dict[str, Any], with_robot: bool = True) -> str:
+    """"robot r17, wheel b: effective radius -0.90 ± 0.05 % per session, wear"."""
     q = t["quantity"]
+    who = f"robot {t['robot']}, " if with_robot else ""
     if q.startswith("radius_"):
         what = "wear" if t["slope"] < 0 else "growing"
-        return f"robot {t['robot']}, {_label(q)} {t['slope']:+.2f} ± {t['slope_se']:.2f} % per session, {what}"
-    return f"robot {t['robot']}, {q} {t['slope']:+.4g} ± {t['slope_se']:.2g} per session, drift"
+        return f"{who}{_label(q)} {t['slope']:+.2f} ± {t['slope_se']:.2f} % per session, {what}"
+    return f"{who}{q} {t['slope']:+.4g} ± {t['slope_se']:.2g} per session, drift"
 
 
 # ------------------------------------------------------------------------------------------- the view
@@ -851,7 +853,7 @@ def main(argv: Sequence[str]) -> int:
         print(f"  error: {bad['robot']}/{bad['session']}: {bad['error']}")
     for rb in r.flagged:
         for why in r.analysis["reasons"][rb]:
-            print(f"  robot {rb}: {why}" if not why.startswith("robot ") else f"  {why}")
+            print(f"  robot {rb}: {why}")
     for f in r.files:
         print(f"  {f}")
     return 0
