@@ -18,6 +18,7 @@ mod diagnose;
 mod effect;
 mod errors;
 mod evaluate;
+mod explore;
 mod model;
 mod pickle;
 mod report;
@@ -37,6 +38,8 @@ mod _omnical {
     use crate::diagnose::{PyDiagnosis, diagnose};
     #[pymodule_export]
     use crate::evaluate::{PyEvaluation, PyRunResiduals, evaluate, integrate};
+    #[pymodule_export]
+    use crate::explore::{PyExploration, explore};
     #[pymodule_export]
     use crate::model::{_model_from_toml, PyModel, effect_catalogue, load_model};
     #[pymodule_export]
