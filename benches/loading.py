@@ -8,6 +8,9 @@ threads. Each figure is the median wall time of REPEATS runs of the release bina
 after), the CPU time much less.
 
     bash benches/loading.sh [DATA_DIR]      (builds the release binary, then runs this)
+    LOADING_RT=1 bash benches/loading.sh    (each run under `chrt -f 50`, SCHED_FIFO: on a shared machine the
+                                             other processes then wait, and the figures are an idle machine's;
+                                             needs root or CAP_SYS_NICE)
 
 Needs a Python with rosbags (scripts/test.sh sets up .venv) to convert the set.
 """
@@ -28,8 +31,12 @@ def cpu_children():
     return r.ru_utime + r.ru_stime
 
 
+RT = ['chrt', '-f', '50'] if os.environ.get('LOADING_RT') else []
+
+
 def timed(cmd):
     """Wall and CPU time of one run. s."""
+    cmd = RT + cmd
     c, t = cpu_children(), time.perf_counter()
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     return time.perf_counter() - t, cpu_children() - c
@@ -52,7 +59,7 @@ def main(binary, data):
     sets = [('bare MCAP files (180 × .mcap)', data / 'train'),
             ('rosbag2 sqlite3 (180 folders, .db3)', data / 'train_sqlite3'),
             ('rosbag2 MCAP (180 folders)', data / 'train_mcap')]
-    print(f'load average before: {load()}')
+    print(f'load average before: {load()}' + (' (runs under chrt -f 50)' if RT else ''))
     print('| input | 1 thread: wall (CPU) | 2 threads: wall (CPU) |')
     print('|---|---|---|')
     for label, d in sets:
