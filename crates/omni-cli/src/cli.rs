@@ -44,6 +44,9 @@ pub enum Command {
     Train(cmd::train::Args),
     /// Compare a model with measurements, find where it fails, and name the missing physical effect.
     Diagnose(cmd::diagnose::Args),
+    /// Find which family of physical features (wheel, body, world, time, ground truth) explains the error a
+    /// model leaves: each fitted on the training runs, judged on the held-out runs.
+    Explore(cmd::explore::Args),
     /// Write an HTML report (inline SVG figures): costs, error ladder, trajectory overlays, errors by command,
     /// error growth, and the diagnosis ranking.
     Report(cmd::report::Args),
@@ -93,6 +96,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Eval(a) => cmd::eval::run(&a),
         Command::Train(a) => cmd::train::run(&a, cli.quiet),
         Command::Diagnose(a) => cmd::diagnose::run(&a),
+        Command::Explore(a) => cmd::explore::run(&a),
         Command::Report(a) => cmd::report::run(&a, cli.quiet),
         Command::Export(a) => cmd::export::run(&a),
         Command::Plan(a) => cmd::plan::run(&a),

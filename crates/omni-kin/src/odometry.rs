@@ -12,7 +12,7 @@
 //! exactly on SE(2): `Δ = [S vx − C vy, C vx + S vy, ω h]` in the body frame with `S = sin(ωh)/ω`,
 //! `C = (1 − cos ωh)/ω`.
 
-use crate::effect::Effect;
+use crate::effect::{Effect, TwistAt};
 use crate::model::{Resolved, Scheme};
 use crate::plan::{StepPlan, interval, wheel_speeds};
 use crate::pose::{Pose2, PoseError, Twist2};
@@ -95,12 +95,13 @@ pub fn step(scheme: Scheme, p: Pose2, v: Twist2, h: f64) -> Pose2 {
     }
 }
 
-/// The body twist of sample `w` through the IK matrix and twist-stage effects.
+/// The body twist of sample `w` through the IK matrix and twist-stage effects, for a step that starts
+/// at `at`.
 #[inline]
-fn twist_of(res: &Resolved<'_>, w: &[f64]) -> Twist2 {
+fn twist_of(res: &Resolved<'_>, w: &[f64], at: &TwistAt) -> Twist2 {
     let mut t = res.ik.twist(w);
     for (e, p) in &res.twist_effects {
-        t = e.twist(p, t, w);
+        t = e.twist_at(p, t, w, at);
     }
     t
 }
@@ -132,7 +133,8 @@ pub(crate) fn walk(
         let k = plan.first_sample + i;
         let (a_k, s_k) = interval(t, lag, median, k);
         let h = if res.stamps { s_k - a_k } else { fixed };
-        let v = twist_of(res, &wheels[k * n_w..(k + 1) * n_w]);
+        let at = TwistAt { pose: body, since_start_s: (0.5 * (a_k + s_k) - truth[0].t_s).max(0.0) };
+        let v = twist_of(res, &wheels[k * n_w..(k + 1) * n_w], &at);
         while let Some(q) = queries.next_if(|q| q.step == i) {
             let at = match q.fraction {
                 Some(f) => step(res.scheme, body, v, f * h),

@@ -337,8 +337,10 @@ pub fn simulate_run(
         if k > 0 {
             let w = &effective[k * n_w..(k + 1) * n_w];
             let mut tw = res.ik.twist(w);
+            // Ground truth starts at t = 0 on the true clock.
+            let at = crate::effect::TwistAt { pose, since_start_s: (fine_t[k] - 0.5 * h).max(0.0) };
             for (e, p) in &res.twist_effects {
-                tw = crate::effect::Effect::twist(*e, p, tw, w);
+                tw = crate::effect::Effect::twist_at(*e, p, tw, w, &at);
             }
             pose = step(Scheme::ExactArc, pose, tw, h);
         }

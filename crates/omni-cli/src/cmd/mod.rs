@@ -3,6 +3,7 @@
 pub mod demo;
 pub mod diagnose;
 pub mod eval;
+pub mod explore;
 pub mod export;
 pub mod init;
 pub mod plan;

@@ -63,7 +63,10 @@ pub fn apply_effect_spec(
     wheels: &[String],
 ) -> anyhow::Result<()> {
     let (head, values) = spec.split_once('=').unwrap_or((spec, ""));
-    let (name, wheel) = match head.split_once(':') {
+    // `learned:world=…` is an effect id with a colon; `learned:wheel:b=…` one wheel of it.
+    let learned = head.starts_with(omni_kin::effect::learned::PREFIX);
+    let split = if learned { head.rsplit_once(':').filter(|(n, _)| n.contains(':')) } else { head.split_once(':') };
+    let (name, wheel) = match split {
         Some((n, w)) => (n, Some(wheel_index(spec, w, wheels)?)),
         None => (head, None),
     };

@@ -6,5 +6,6 @@
 
 pub mod diagnose;
 pub mod excitation;
+pub mod explore;
 pub mod identify;
 pub mod text;

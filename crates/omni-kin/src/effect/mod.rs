@@ -7,7 +7,7 @@
 //! |---|---|---|
 //! | clock | [`Effect::clock_lag_s`] | `time_offset` |
 //! | wheel speeds (per run, may carry state) | [`Effect::wheel_rates`] | `wheel_asymmetry`, `backlash`, `wheel_eccentricity` |
-//! | body twist (per sample) | [`Effect::twist`] | `rotation_slip` |
+//! | body twist (per sample) | [`Effect::twist`], [`Effect::twist_at`] (with pose and time) | `rotation_slip`, `learned:world` |
 //! | integration | [`Effect::uses_stamps`] | `sample_timing` |
 //! | measurement | [`Effect::sensor_from_body`] | `sensor_offset` |
 //!
@@ -16,6 +16,9 @@
 //! leaves the trajectory bit-identical.
 
 mod builtin;
+pub mod learned;
+
+pub use learned::{Family, Learned};
 
 pub use builtin::{
     AccelSlip, Backlash, RotationSlip, SampleTiming, SensorOffset, SpeedScale, TimeOffset, WheelAsymmetry,
@@ -79,6 +82,16 @@ pub struct WheelContext<'a> {
     pub start_angle_rad: &'a [f64],
 }
 
+/// Where the robot is when a twist-stage effect acts on one step: what the odometry walk (and the
+/// simulator) knows besides the twist and the wheel speeds.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TwistAt {
+    /// Body pose in the ground-truth (world) frame at the start of the step (m, m, rad).
+    pub pose: Pose2,
+    /// Time since the run's first ground-truth pose, at the middle of the step. s.
+    pub since_start_s: f64,
+}
+
 /// A physical effect that the IK matrix cannot express. Implement only the hook of its stage.
 ///
 /// Downstream crates implement this trait for their own effects and add them with [`EffectKind::Custom`].
@@ -96,6 +109,11 @@ pub trait Effect: fmt::Debug + Send + Sync {
     /// Twist stage: change one sample's body twist (the wheel speeds it came from are given).
     fn twist(&self, _p: &[f64], twist: Twist2, _wheel_rad_s: &[f64]) -> Twist2 {
         twist
+    }
+    /// Twist stage, for effects that depend on where the robot is (its heading in the world frame, the
+    /// time since the run started): change one step's body twist. By default [`Effect::twist`].
+    fn twist_at(&self, p: &[f64], twist: Twist2, wheel_rad_s: &[f64], _at: &TwistAt) -> Twist2 {
+        self.twist(p, twist, wheel_rad_s)
     }
     /// Clock stage: how late the wheel stamps run against the ground-truth clock. s.
     fn clock_lag_s(&self, _p: &[f64]) -> f64 {
@@ -134,6 +152,8 @@ pub enum EffectKind {
     WheelEccentricity(WheelEccentricity),
     /// Integrate with measured stamps.
     SampleTiming(SampleTiming),
+    /// A correction learned by the explorer over one family of features (`learned:world`, …).
+    Learned(Learned),
     /// A user effect (not stored in model files by value; only its id is).
     #[serde(skip)]
     Custom(Arc<dyn Effect>),
@@ -167,6 +187,7 @@ impl EffectKind {
             "backlash" => Self::Backlash(Backlash { n_wheels }),
             "wheel_eccentricity" => Self::WheelEccentricity(WheelEccentricity { n_wheels }),
             "sample_timing" => Self::SampleTiming(SampleTiming {}),
+            other if other.starts_with(learned::PREFIX) => Self::Learned(Learned::from_id(other, n_wheels)?),
             other => {
                 return Err(KinError::Unknown {
                     what: "effect",
@@ -193,6 +214,7 @@ impl EffectKind {
             Self::Backlash(e) => e,
             Self::WheelEccentricity(e) => e,
             Self::SampleTiming(e) => e,
+            Self::Learned(e) => e,
             Self::Custom(e) => e.as_ref(),
         }
     }
@@ -220,7 +242,16 @@ impl Effect for EffectKind {
     fn twist(&self, p: &[f64], twist: Twist2, w: &[f64]) -> Twist2 {
         match self {
             Self::RotationSlip(e) => e.twist(p, twist, w),
+            Self::Learned(e) => e.twist(p, twist, w),
             Self::Custom(e) => e.twist(p, twist, w),
+            _ => twist,
+        }
+    }
+    fn twist_at(&self, p: &[f64], twist: Twist2, w: &[f64], at: &TwistAt) -> Twist2 {
+        match self {
+            Self::RotationSlip(e) => e.twist(p, twist, w),
+            Self::Learned(e) => e.twist_at(p, twist, w, at),
+            Self::Custom(e) => e.twist_at(p, twist, w, at),
             _ => twist,
         }
     }
