@@ -138,7 +138,8 @@ fn no_effect_no_false_positive() {
     let fitted = fit_matrix(&train);
     let d = diagnose(&fitted, &design(), &train, Some(&val), &DiagnoseOptions::default()).expect("diagnose");
     assert_eq!(d.verdict, None, "{:?}", d.ranking.iter().map(|c| (&c.effect, c.held_out_gain)).collect::<Vec<_>>());
-    assert!(d.verdict_text.contains("close to the measurement noise floor"), "{}", d.verdict_text);
+    assert!(!d.unexplained, "{}", d.verdict_text);
+    assert!(d.verdict_text.contains("no systematic error remains, decided by the repeats"), "{}", d.verdict_text);
 }
 
 #[test]
@@ -194,5 +195,6 @@ fn unknown_effect_is_not_claimed_and_error_stays_above_noise() {
     let d = diagnose(&fitted, &design(), &train, Some(&val), &DiagnoseOptions::default()).expect("diagnose");
     let ranked: Vec<_> = d.ranking.iter().map(|c| (&c.effect, c.held_out_gain, c.excess_closed)).collect();
     assert_eq!(d.verdict, None, "{ranked:?}");
+    assert!(d.unexplained, "{}", d.verdict_text);
     assert!(d.verdict_text.contains("something physical is still missing"), "{}", d.verdict_text);
 }

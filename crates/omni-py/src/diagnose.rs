@@ -68,6 +68,22 @@ impl PyDiagnosis {
     fn verdict_text(&self) -> String {
         self.inner.verdict_text.clone()
     }
+    /// A systematic error remains that no accepted effect removes (decided by the share of command groups
+    /// biased beyond their repeat scatter, or without repeats by the noise-floor ratio).
+    #[getter]
+    fn unexplained(&self) -> bool {
+        self.inner.unexplained
+    }
+    /// The figures behind ``unexplained``: decided_by (``repeats``, ``noise_floor_ratio`` or ``undecided``),
+    /// groups_biased, groups_total, share_biased, chance_probability, repeatability_floor,
+    /// remaining_held_out_m [m], noise_floor_m [m], ratio, growth, early_m [m], late_m [m] (None where
+    /// not measured).
+    #[getter]
+    fn unexplained_evidence<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let text = serde_json::to_string(&self.inner.unexplained_evidence)
+            .map_err(|e| crate::errors::value_error(e.to_string()))?;
+        py.import("json")?.call_method1("loads", (text,))
+    }
     /// How held-out costs were obtained.
     #[getter]
     fn held_out(&self) -> String {

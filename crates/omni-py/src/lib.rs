@@ -18,6 +18,7 @@ mod diagnose;
 mod effect;
 mod errors;
 mod evaluate;
+mod explore;
 mod model;
 mod report;
 mod run;
@@ -35,6 +36,8 @@ mod _omnical {
     use crate::diagnose::{PyDiagnosis, diagnose};
     #[pymodule_export]
     use crate::evaluate::{PyEvaluation, PyRunResiduals, evaluate, integrate};
+    #[pymodule_export]
+    use crate::explore::{PyExploration, explore};
     #[pymodule_export]
     use crate::model::{PyModel, effect_catalogue, load_model};
     #[pymodule_export]

@@ -6,7 +6,9 @@
 //! are made last, from the structured findings ([`Finding`], [`Verdict`], [`WeakDirection`], …), and stored
 //! beside them in the results so that JSON, the CLI and Python show the same text.
 
-use crate::science::diagnose::{Conclusion, ExcitationGap, Finding, GapKind, HeldOut, RungKind, Turn, Verdict};
+use crate::science::diagnose::{
+    Conclusion, DecidedBy, ExcitationGap, Finding, GapKind, HeldOut, RungKind, Turn, UnexplainedEvidence, Verdict,
+};
 use crate::science::identify::{Advice, MotionParts, PatternPresence, WeakDirection, WheelEvidence};
 
 /// How the held-out costs were obtained.
@@ -115,19 +117,58 @@ pub fn verdict(v: &Verdict) -> String {
             -100.0 * gain
         ),
     };
-    if let Some(r) = &v.remaining {
-        let (remaining, ratio, floor) = (r.held_out_m, r.ratio, r.floor_m);
-        if r.missing {
-            text.push_str(&format!(
-                "; the remaining held-out error ({remaining:.4} m) is {ratio:.1}× the measurement noise floor ({floor:.4} m): something physical is still missing"
-            ));
-        } else {
-            text.push_str(&format!(
-                "; the remaining held-out error ({remaining:.4} m) is close to the measurement noise floor ({floor:.4} m, ratio {ratio:.1})"
-            ));
+    text.push_str("; ");
+    text.push_str(&unexplained(v));
+    text
+}
+
+/// A probability: two decimals, or in powers of ten below 1 %.
+fn probability(p: f64) -> String {
+    if p >= 0.01 { format!("{p:.2}") } else { format!("{p:.0e}") }
+}
+
+/// Whether a systematic error remains, and which evidence decided it.
+fn unexplained(v: &Verdict) -> String {
+    let e = &v.evidence;
+    let floor = match &v.remaining {
+        Some(r) => format!(
+            "the remaining held-out error ({:.4} m) is {:.1}× the measurement noise floor ({:.4} m)",
+            r.held_out_m, r.ratio, r.floor_m
+        ),
+        None => {
+            format!("the remaining held-out error is {:.4} m (no standstills: no noise floor)", e.remaining_held_out_m)
+        }
+    };
+    let growth = match (e.early_m, e.late_m) {
+        (Some(a), Some(b)) => format!("; position error {a:.4} m early, {b:.4} m late in the runs"),
+        _ => String::new(),
+    };
+    let repeats = |e: &UnexplainedEvidence| {
+        format!(
+            "{} of {} command groups end biased beyond their repeat scatter (t-test at 5 %: {:.1} expected by chance, as many with probability {})",
+            e.groups_biased,
+            e.groups_total,
+            0.05 * e.groups_total as f64,
+            probability(e.chance_probability.unwrap_or(1.0))
+        )
+    };
+    match (e.decided_by, v.unexplained) {
+        (DecidedBy::Repeats, true) => {
+            format!("something physical is still missing, decided by the repeats: {}; {floor}{growth}", repeats(e))
+        }
+        (DecidedBy::Repeats, false) => format!(
+            "no systematic error remains, decided by the repeats: {}{}; {floor}",
+            repeats(e),
+            e.repeatability_floor.map_or(String::new(), |f| format!(", repeatability floor {f:.4}"))
+        ),
+        (DecidedBy::NoiseFloorRatio, missing) => format!(
+            "no command was repeated, so the repeat test could not be made; decided by the noise floor alone: {floor}{}",
+            if missing { ": something physical is still missing" } else { ", close to it" }
+        ),
+        (DecidedBy::Undecided, _) => {
+            format!("{floor}; without repeats or a noise floor, whether something is missing cannot be decided")
         }
     }
-    text
 }
 
 /// An unconstrained direction in words: the parameters carrying it, how badly it is constrained, and the

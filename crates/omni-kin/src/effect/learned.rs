@@ -107,8 +107,16 @@ const TIME_TERMS: [(&str, &str); 4] =
 
 const GROUND_TRUTH_TERMS: [(&str, &str); 3] = [("lever_x_m", "m"), ("lever_y_m", "m"), ("yaw_rad", "rad")];
 
-/// Search bound of every term (|θ| ≤ 1 in its unit, 0.5 m for a lever arm).
-const BOUND: f64 = 1.0;
+/// Search bound of a term by its unit: what training's box (the GA's search space) allows. A box much
+/// wider than any physical value lets the GA settle in a far local minimum.
+fn bound(unit: &str) -> f64 {
+    match unit {
+        "m/s" | "rad/s" => 0.05,
+        "m/s²" | "rad/s²" | "1/s" => 0.01,
+        "m" | "rad" | "s/m" => 0.5,
+        _ => 0.2,
+    }
+}
 
 impl Learned {
     /// `learned:<family>` for a robot with `n_wheels` wheels.
@@ -183,7 +191,7 @@ impl Effect for Learned {
         self.terms()
             .into_iter()
             .map(|(name, unit)| {
-                let b = if unit == "m" { 0.5 } else { BOUND };
+                let b = bound(unit);
                 ParamSpec::new(name, unit, 0.0, -b, b)
             })
             .collect()

@@ -24,6 +24,7 @@ __all__ = [
     "DatasetError",
     "Diagnosis",
     "Evaluation",
+    "Exploration",
     "Model",
     "ModelFileError",
     "OmnicalError",
@@ -34,6 +35,7 @@ __all__ = [
     "diagnose",
     "effect_catalogue",
     "evaluate",
+    "explore",
     "integrate",
     "load",
     "load_model",
@@ -253,6 +255,10 @@ class Diagnosis:
     @property
     def verdict_text(self) -> str: ...
     @property
+    def unexplained(self) -> bool: ...
+    @property
+    def unexplained_evidence(self) -> dict[str, Any]: ...
+    @property
     def held_out(self) -> str: ...
     @property
     def costs(self) -> dict[str, float]: ...
@@ -269,6 +275,32 @@ class Diagnosis:
     @property
     def final_model(self) -> Optional[Model]: ...
     def to_dict(self) -> dict[str, Any]: ...
+
+@final
+class Exploration:
+    """The outcome of ``explore``: each family of features (wheel, body, world, time, ground_truth) fitted
+    on the training runs and judged by its held-out gain."""
+
+    @property
+    def families(self) -> list[dict[str, Any]]: ...
+    @property
+    def unexplained(self) -> bool: ...
+    @property
+    def best(self) -> Optional[str]: ...
+    @property
+    def conclusion(self) -> str: ...
+    @property
+    def model(self) -> Optional[Model]: ...
+    def to_dict(self) -> dict[str, Any]: ...
+
+def explore(model: Model, runs: _Runs, validation: _Runs, *, min_gain: float = 0.05) -> Exploration:
+    """Which family of physical features explains the error ``model`` leaves on ``runs``, judged on the
+    held-out ``validation`` runs::
+
+        e = omnical.explore(fit.model, train_runs, held_out_runs)
+        print(e.best, e.families[0]["terms"], e.conclusion)
+        fit2 = omnical.train(train_runs, effects=[f"learned:{e.best}"])  # add it, watch the error fall
+    """
 
 def load(
     *paths: _Path,

@@ -1,6 +1,7 @@
 //! Step 1 of a diagnosis: compare the model with the design and the measurements — costs on training and
 //! held-out runs, per-run errors, per-command-group bias and scatter, and how the error grows along a run.
 
+use super::unexplained::{GROUP_ALPHA, group_p_value};
 use super::{Costs, GroupReport, Growth, RunReport};
 use crate::error::Error;
 use crate::science::text;
@@ -100,19 +101,23 @@ pub(super) fn compare(f: &FittedModel, design: &FittedModel, runs: &[Run], every
     Ok(Comparison { runs: reports, groups, growth: bins.growth() })
 }
 
-/// Bias and scatter of the end-pose errors `v` (dx m, dy m, dθ rad) of one command group.
+/// Bias and scatter of the end-pose errors `v` (dx m, dy m, dθ rad) of one command group, and whether the
+/// bias is beyond the repeat scatter ([`group_p_value`]).
 fn group_report(group: String, v: &[[f64; 3]]) -> GroupReport {
     let n = v.len() as f64;
     let mean = [0, 1, 2].map(|i| v.iter().map(|e| e[i]).sum::<f64>() / n);
     let bias = mean.iter().map(|m| m * m).sum::<f64>().sqrt();
     let scatter = (v.iter().map(|e| (0..3).map(|i| (e[i] - mean[i]).powi(2)).sum::<f64>()).sum::<f64>() / n).sqrt();
+    let sd = [0, 1, 2].map(|i| (v.iter().map(|e| (e[i] - mean[i]).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)).sqrt());
+    let p_value = group_p_value(&mean, &sd, v.len());
     GroupReport {
         group,
         runs: v.len(),
         mean_end_error: mean,
         bias,
         scatter,
-        systematic: bias > 2.0 * scatter / n.sqrt(),
+        p_value,
+        systematic: p_value.is_some_and(|p| p < GROUP_ALPHA),
     }
 }
 

@@ -213,6 +213,7 @@ impl Bench<'_> {
             params: Vec::new(),
             not_excited: gap.as_ref().map(text::excitation_gap),
             excitation_gap: gap,
+            fitted: None,
         };
         if !absorbed
             && cand.excitation_gap.is_none()
@@ -255,6 +256,7 @@ impl Bench<'_> {
             })
             .collect();
         cand.refit = Some(c);
+        cand.fitted = Some(fit.clone());
         Ok(())
     }
 }

@@ -3,11 +3,9 @@
 
 use super::noise::ExcitationGap;
 use super::search::passes;
+use super::unexplained::{MISSING_RATIO, UnexplainedEvidence, decide};
 use super::{Candidate, Costs, DiagnoseOptions, GroupReport, Growth, KindOut, NoiseFloor, ParamValue, RunReport};
 use crate::science::identify::{Identifiability, WeakDirection};
-
-/// Ratio of the remaining held-out error to the noise floor above which something physical is missing.
-const MISSING_RATIO: f64 = 3.0;
 
 /// One fact about where the model fails.
 #[derive(Clone, Debug)]
@@ -107,17 +105,22 @@ pub struct Remaining {
     pub floor_m: f64,
     /// `held_out_m / floor_m`.
     pub ratio: f64,
-    /// The ratio is above 3: something physical is still missing.
+    /// The ratio is above 3.
     pub missing: bool,
 }
 
-/// The verdict as facts: the conclusion and, when the data has standstills, the remaining error.
+/// The verdict as facts: the conclusion, the remaining error against the noise floor (when the data has
+/// standstills), and whether a systematic error remains that no accepted effect removes.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Verdict {
     /// What to do.
     pub conclusion: Conclusion,
     /// The remaining held-out error against the noise floor.
     pub remaining: Option<Remaining>,
+    /// A systematic error remains that no accepted effect removes.
+    pub unexplained: bool,
+    /// The figures behind `unexplained` and which of them decided.
+    pub evidence: UnexplainedEvidence,
 }
 
 /// Where the model fails, in report order.
@@ -180,6 +183,12 @@ pub(super) struct Judgement<'a> {
     pub top: &'a Costs,
     /// The measurement noise floor.
     pub noise: Option<&'a NoiseFloor>,
+    /// Command groups of the training runs with the accepted effects (the verdict's, or `auto`'s).
+    pub groups: &'a [GroupReport],
+    /// Error growth along the training runs with the accepted effects.
+    pub growth: &'a Growth,
+    /// Repeatability floor with the accepted effects.
+    pub repeat_floor: Option<f64>,
 }
 
 impl Judgement<'_> {
@@ -208,6 +217,7 @@ impl Judgement<'_> {
             let ratio = held_out_m / nf.path_rms.max(1e-12);
             Remaining { held_out_m, floor_m: nf.path_rms, ratio, missing: ratio > MISSING_RATIO }
         });
-        Verdict { conclusion, remaining }
+        let (unexplained, evidence) = decide(self.groups, self.growth, self.repeat_floor, held_out_m, self.noise);
+        Verdict { conclusion, remaining, unexplained, evidence }
     }
 }

@@ -19,7 +19,10 @@
 //!    least `min_gain` (default 5 %) and removes most (≥ 50 %) of the held-out error variance above the
 //!    noise floor (otherwise it is reported as helping only in part, and no verdict is claimed).
 //! 3. **Noise floor**: the scatter of ground-truth poses while the robot stands still (rests at the start
-//!    and end of runs). A held-out error well above it (3×) means something physical is still missing.
+//!    and end of runs).
+//! 4. **Something unexplained?** (`unexplained.rs`) With the accepted effects, the share of command groups
+//!    whose mean end-pose error is biased beyond their repeat scatter (a t-test per group, the share judged
+//!    against chance); without repeats, the remaining held-out error against the noise floor (3×).
 //!
 //! Evidence comes from the path (every ground-truth pose), since the end pose alone cannot see some
 //! effects (a clock offset when the robot rests at both ends); the paper's Eq. 6 is reported beside it.
@@ -31,12 +34,14 @@ mod evidence;
 mod findings;
 mod noise;
 mod search;
+mod unexplained;
 
 pub use compare::{Turn, costs_of};
 pub(crate) use evidence::unbounded;
 pub use evidence::{differentiable_start, refit, standard_errors};
 pub use findings::{Conclusion, Finding, Remaining, Verdict};
 pub use noise::{ExcitationGap, GapKind, WheelGap, noise_floor, wheel_excitation, wheel_excitation_gap};
+pub use unexplained::{DecidedBy, UnexplainedEvidence};
 
 use crate::error::Error;
 use crate::science::identify::{Identifiability, IdentifyOptions};
@@ -128,7 +133,10 @@ pub struct GroupReport {
     pub bias: f64,
     /// Scatter between runs (RMS deviation from the mean): the random part.
     pub scatter: f64,
-    /// `bias > 2 · scatter / sqrt(runs)`.
+    /// Smallest two-sided p-value of the t-tests of the mean's components (dx, dy, dθ) against their
+    /// standard errors from the repeats, Bonferroni-corrected (×3); `None` for a single run.
+    pub p_value: Option<f64>,
+    /// The bias is beyond the repeat scatter: `p_value` below 5 % (never for a single run).
     pub systematic: bool,
 }
 
@@ -174,6 +182,9 @@ pub struct Candidate {
     /// Why the training runs cannot tell this effect, as facts.
     #[serde(skip)]
     pub excitation_gap: Option<ExcitationGap>,
+    /// The refit model with the effect (None when absorbed, not excited or the refit failed).
+    #[serde(skip)]
+    pub fitted: Option<FittedModel>,
 }
 
 /// A named value with unit and optional standard error.
@@ -229,6 +240,12 @@ pub struct Diagnosis {
     pub verdict: Option<String>,
     /// The verdict in words (`conclusion`, worded by [`text::verdict`]).
     pub verdict_text: String,
+    /// A systematic error remains that no accepted effect (the verdict's, or those `auto` added) removes:
+    /// decided by the share of command groups biased beyond their repeat scatter, or, without repeats, by
+    /// the remaining held-out error against the noise floor (see `unexplained_evidence.decided_by`).
+    pub unexplained: bool,
+    /// The figures behind `unexplained`.
+    pub unexplained_evidence: UnexplainedEvidence,
     /// How held-out costs were obtained, in words (`protocol`): `validation set` or `2-fold cross-validation
     /// over repetitions`.
     pub held_out: String,
@@ -366,6 +383,14 @@ pub fn diagnose(
         .map(|p| p.identifiability(&model.params, &IdentifyOptions::default()));
     let repeat_floor = repeatability_floor(&cmp.groups);
     let facts = findings(&cmp.runs, &cmp.groups, &cmp.growth, &climb.ranking, identifiability.as_ref(), repeat_floor);
+    // The repeat structure with the accepted effects: the verdict's (refitted), or those `auto` added.
+    let accepted = match (&verdict, climb.ranking.first(), opts.auto) {
+        (Some(_), Some(Candidate { fitted: Some(f), .. }), false) => Some(f),
+        (_, _, true) if climb.ladder.len() > 2 => Some(&climb.top),
+        _ => None,
+    };
+    let after = accepted.map(|f| compare(f, design, train, every)).transpose()?;
+    let (groups_after, growth_after) = after.as_ref().map_or((&cmp.groups, &cmp.growth), |c| (&c.groups, &c.growth));
     let conclusion = Judgement {
         ranking: &climb.ranking,
         verdict: verdict.as_deref(),
@@ -373,11 +398,16 @@ pub fn diagnose(
         costs: &costs,
         top: climb.ladder.last().map_or(&costs, |r| &r.costs),
         noise: noise.as_ref(),
+        groups: groups_after,
+        growth: growth_after,
+        repeat_floor: repeatability_floor(groups_after),
     }
     .verdict(opts);
     Ok(Diagnosis {
         verdict,
         verdict_text: text::verdict(&conclusion),
+        unexplained: conclusion.unexplained,
+        unexplained_evidence: conclusion.evidence.clone(),
         held_out: text::held_out(protocol).to_string(),
         costs,
         design_costs,

@@ -1,0 +1,284 @@
+//! Step 6 of a diagnosis: does a systematic error remain that no accepted effect removes?
+//!
+//! The decision rests on the repeat structure of the training runs, with the model that includes the
+//! accepted effect (the verdict's, or the ladder's top with `auto`):
+//! - **Repeat test** (per command group of ≥ 2 runs): each component of the mean end-pose error (dx, dy, dθ)
+//!   against its standard error from the repeats, `t = mean / (s / √n)` with `n − 1` degrees of freedom
+//!   (Student's t, two-sided); the group is *biased* when its smallest p-value, Bonferroni-corrected for the
+//!   three components, is below [`GROUP_ALPHA`] (5 %). On clean data about 5 % of the groups (or fewer) are
+//!   biased by chance.
+//! - **Share test**: a systematic error remains when the number of biased groups is beyond chance (binomial
+//!   tail `P(X ≥ k | G, 5 %)` below [`SHARE_ALPHA`], 1 %) *and* at least [`MIN_SHARE`] (25 %) of the groups
+//!   are biased.
+//! - Without repeats (no command group of ≥ 2 runs) the repeat test cannot be made; the decision falls back
+//!   to the remaining held-out path error against the measurement noise floor (above [`MISSING_RATIO`], 3×),
+//!   and says so.
+//!
+//! The repeatability floor, the error growth along the path and the noise-floor ratio are reported beside
+//! the decision as evidence ([`UnexplainedEvidence`]).
+
+use super::{GroupReport, Growth, NoiseFloor};
+use serde::{Deserialize, Serialize};
+
+/// Size of the per-group test (Bonferroni over dx, dy, dθ).
+pub const GROUP_ALPHA: f64 = 0.05;
+/// Size of the test that more groups are biased than chance gives.
+pub const SHARE_ALPHA: f64 = 0.01;
+/// Smallest share of biased groups that counts as a systematic error.
+pub const MIN_SHARE: f64 = 0.25;
+/// Ratio of the remaining held-out error to the noise floor above which something physical is missing,
+/// when the runs have no repeats.
+pub const MISSING_RATIO: f64 = 3.0;
+
+/// Which evidence decided `unexplained`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DecidedBy {
+    /// The share of command groups biased beyond their repeat scatter.
+    Repeats,
+    /// No repeats: the remaining held-out error against the noise floor.
+    NoiseFloorRatio,
+    /// Neither repeats nor standstills: nothing to decide with (`unexplained` false).
+    #[default]
+    Undecided,
+}
+
+/// The figures behind `Diagnosis::unexplained`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct UnexplainedEvidence {
+    /// Which evidence decided.
+    pub decided_by: DecidedBy,
+    /// Command groups (of ≥ 2 runs) whose mean end-pose error is biased beyond their repeat scatter.
+    pub groups_biased: usize,
+    /// Command groups of ≥ 2 runs (0: the repeat test could not be made).
+    pub groups_total: usize,
+    /// `groups_biased / groups_total` (None without repeats).
+    pub share_biased: Option<f64>,
+    /// Probability of at least `groups_biased` biased groups by chance alone (binomial, 5 % each).
+    pub chance_probability: Option<f64>,
+    /// Scatter of the end-pose error between repeats (Eq. 6 units), with the accepted effect.
+    pub repeatability_floor: Option<f64>,
+    /// Held-out path RMS after the accepted effect (or the ladder's top). m.
+    pub remaining_held_out_m: f64,
+    /// The noise floor's path RMS. m.
+    pub noise_floor_m: Option<f64>,
+    /// `remaining_held_out_m / noise_floor_m`.
+    pub ratio: Option<f64>,
+    /// Mean position error in the last tenth of the runs over the first tenth (training runs, with the
+    /// accepted effect).
+    pub growth: Option<f64>,
+    /// Mean position error in the first tenth of the runs. m.
+    pub early_m: Option<f64>,
+    /// Mean position error in the last tenth of the runs. m.
+    pub late_m: Option<f64>,
+}
+
+/// The decision and its evidence.
+pub(super) fn decide(
+    groups: &[GroupReport],
+    growth: &Growth,
+    repeatability_floor: Option<f64>,
+    remaining_held_out_m: f64,
+    noise: Option<&NoiseFloor>,
+) -> (bool, UnexplainedEvidence) {
+    let tested: Vec<&GroupReport> = groups.iter().filter(|g| g.p_value.is_some()).collect();
+    let groups_total = tested.len();
+    let groups_biased = tested.iter().filter(|g| g.systematic).count();
+    let ratio = noise.map(|nf| remaining_held_out_m / nf.path_rms.max(1e-12));
+    let (early_m, late_m) = (growth.position_m.first().copied(), growth.position_m.last().copied());
+    let mut ev = UnexplainedEvidence {
+        decided_by: DecidedBy::Undecided,
+        groups_biased,
+        groups_total,
+        share_biased: None,
+        chance_probability: None,
+        repeatability_floor,
+        remaining_held_out_m,
+        noise_floor_m: noise.map(|nf| nf.path_rms),
+        ratio,
+        growth: early_m.zip(late_m).filter(|(e, _)| *e > 0.0).map(|(e, l)| l / e),
+        early_m,
+        late_m,
+    };
+    let unexplained = if groups_total > 0 {
+        let share = groups_biased as f64 / groups_total as f64;
+        let chance = binomial_tail(groups_total, groups_biased, GROUP_ALPHA);
+        ev.share_biased = Some(share);
+        ev.chance_probability = Some(chance);
+        ev.decided_by = DecidedBy::Repeats;
+        chance < SHARE_ALPHA && share >= MIN_SHARE
+    } else if let Some(r) = ratio {
+        ev.decided_by = DecidedBy::NoiseFloorRatio;
+        r > MISSING_RATIO
+    } else {
+        false
+    };
+    (unexplained, ev)
+}
+
+/// Whether one command group's mean end-pose error `mean` is biased beyond the scatter of its `n` repeats
+/// (`sd`: sample standard deviation per component, `n − 1` in the denominator): the Bonferroni-corrected
+/// smallest two-sided p-value of the three t-tests (`None` for fewer than 2 runs).
+pub(super) fn group_p_value(mean: &[f64; 3], sd: &[f64; 3], n: usize) -> Option<f64> {
+    if n < 2 {
+        return None;
+    }
+    let dof = (n - 1) as f64;
+    let p_min = mean
+        .iter()
+        .zip(sd)
+        .map(|(&m, &s)| {
+            let se = s / (n as f64).sqrt();
+            if se > 0.0 {
+                student_t_two_sided(m / se, dof)
+            } else if m != 0.0 {
+                0.0
+            } else {
+                1.0
+            }
+        })
+        .fold(1.0f64, f64::min);
+    Some((3.0 * p_min).min(1.0))
+}
+
+/// Two-sided p-value of Student's t with `dof` degrees of freedom: `I_{ν/(ν+t²)}(ν/2, 1/2)`.
+pub(crate) fn student_t_two_sided(t: f64, dof: f64) -> f64 {
+    if !t.is_finite() {
+        return if t.is_nan() { 1.0 } else { 0.0 };
+    }
+    regularized_beta(dof / (dof + t * t), 0.5 * dof, 0.5)
+}
+
+/// `P(X ≥ k)` for `X ~ Binomial(n, p)`.
+pub(crate) fn binomial_tail(n: usize, k: usize, p: f64) -> f64 {
+    if k == 0 {
+        return 1.0;
+    }
+    let (lp, lq) = (p.ln(), (1.0 - p).ln());
+    let sum: f64 = (k..=n)
+        .map(|i| {
+            let log_choose = ln_gamma(n as f64 + 1.0) - ln_gamma(i as f64 + 1.0) - ln_gamma((n - i) as f64 + 1.0);
+            (log_choose + i as f64 * lp + (n - i) as f64 * lq).exp()
+        })
+        .sum();
+    sum.min(1.0)
+}
+
+/// `ln Γ(x)` for `x > 0` (Lanczos, g = 7, 9 terms; relative error below 1e-13).
+fn ln_gamma(x: f64) -> f64 {
+    const G: f64 = 7.0;
+    const C: [f64; 9] = [
+        0.999_999_999_999_809_9,
+        676.520_368_121_885_1,
+        -1_259.139_216_722_402_8,
+        771.323_428_777_653_1,
+        -176.615_029_162_140_6,
+        12.507_343_278_686_905,
+        -0.138_571_095_265_720_12,
+        9.984_369_578_019_572e-6,
+        1.505_632_735_149_311_6e-7,
+    ];
+    if x < 0.5 {
+        // Reflection: Γ(x) Γ(1 − x) = π / sin(πx).
+        return (std::f64::consts::PI / (std::f64::consts::PI * x).sin()).ln() - ln_gamma(1.0 - x);
+    }
+    let x = x - 1.0;
+    let mut a = C[0];
+    let t = x + G + 0.5;
+    for (i, c) in C.iter().enumerate().skip(1) {
+        a += c / (x + i as f64);
+    }
+    0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
+}
+
+/// The regularized incomplete beta function `I_x(a, b)` (continued fraction, Lentz's method).
+fn regularized_beta(x: f64, a: f64, b: f64) -> f64 {
+    if x <= 0.0 {
+        return 0.0;
+    }
+    if x >= 1.0 {
+        return 1.0;
+    }
+    let front = (ln_gamma(a + b) - ln_gamma(a) - ln_gamma(b) + a * x.ln() + b * (1.0 - x).ln()).exp();
+    // The continued fraction converges fast for x < (a + 1) / (a + b + 2); use the symmetry otherwise.
+    if x < (a + 1.0) / (a + b + 2.0) {
+        front * beta_fraction(x, a, b) / a
+    } else {
+        1.0 - front * beta_fraction(1.0 - x, b, a) / b
+    }
+}
+
+/// The continued fraction of the incomplete beta function.
+fn beta_fraction(x: f64, a: f64, b: f64) -> f64 {
+    const TINY: f64 = 1e-300;
+    let (qab, qap, qam) = (a + b, a + 1.0, a - 1.0);
+    let mut c = 1.0;
+    let mut d = 1.0 - qab * x / qap;
+    if d.abs() < TINY {
+        d = TINY;
+    }
+    d = 1.0 / d;
+    let mut h = d;
+    for m in 1..300 {
+        let m = m as f64;
+        let m2 = 2.0 * m;
+        for aa in [m * (b - m) * x / ((qam + m2) * (a + m2)), -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2))] {
+            d = 1.0 + aa * d;
+            if d.abs() < TINY {
+                d = TINY;
+            }
+            c = 1.0 + aa / c;
+            if c.abs() < TINY {
+                c = TINY;
+            }
+            d = 1.0 / d;
+            h *= d * c;
+        }
+        if (d * c - 1.0).abs() < 1e-15 {
+            break;
+        }
+    }
+    h
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn student_t_matches_tables() {
+        // Two-sided critical values: t(0.975, 4) = 2.776445, t(0.995, 1) = 63.65674, t(0.975, 30) = 2.042272.
+        assert!((student_t_two_sided(2.776445, 4.0) - 0.05).abs() < 1e-6);
+        assert!((student_t_two_sided(63.65674, 1.0) - 0.01).abs() < 1e-6);
+        assert!((student_t_two_sided(-2.042272, 30.0) - 0.05).abs() < 1e-6);
+        assert_eq!(student_t_two_sided(0.0, 3.0), 1.0);
+        // One degree of freedom is Cauchy: p = 1 − 2 atan(t) / π.
+        let t: f64 = 1.7;
+        assert!((student_t_two_sided(t, 1.0) - (1.0 - 2.0 * t.atan() / std::f64::consts::PI)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn binomial_tail_matches_direct_sums() {
+        // P(X ≥ 1 | 10, 0.05) = 1 − 0.95^10.
+        assert!((binomial_tail(10, 1, 0.05) - (1.0 - 0.95f64.powi(10))).abs() < 1e-12);
+        assert!((binomial_tail(2, 2, 0.05) - 0.0025).abs() < 1e-12);
+        // P(X ≥ 9 | 36, 0.05) = 5.34854744042316e-5 (exact sum of integer binomial coefficients).
+        assert!(
+            (binomial_tail(36, 9, 0.05) / 5.34854744042316e-5 - 1.0).abs() < 1e-9,
+            "{}",
+            binomial_tail(36, 9, 0.05)
+        );
+        assert_eq!(binomial_tail(5, 0, 0.05), 1.0);
+    }
+
+    #[test]
+    fn a_group_is_biased_when_its_mean_is_far_beyond_its_standard_error() {
+        // Mean 3 mm, scatter 1 mm over 5 repeats: t = 6.7 (4 dof), p = 0.0026 per component, 0.0077 corrected.
+        let p = group_p_value(&[0.003, 0.0, 0.0], &[0.001, 0.001, 0.001], 5).unwrap();
+        assert!((p - 3.0 * student_t_two_sided(0.003 / (0.001 / 5f64.sqrt()), 4.0)).abs() < 1e-15);
+        assert!(p < GROUP_ALPHA && p > 0.005, "{p}");
+        // Mean 1 mm: t = 2.24, p = 0.089 per component: not biased.
+        assert!(group_p_value(&[0.001, 0.0, 0.0], &[0.001, 0.001, 0.001], 5).unwrap() > GROUP_ALPHA);
+        assert_eq!(group_p_value(&[0.001, 0.0, 0.0], &[0.0; 3], 1), None);
+    }
+}

@@ -1,0 +1,83 @@
+//! `explore`: which family of physical features (wheel, body, world, time, ground truth) explains the error
+//! a model leaves, fitted on training runs and judged on held-out runs (issue 18). The records are the
+//! CLI's `explore --json`.
+
+use crate::errors::PyResultExt;
+use crate::model::{PyModel, model_or};
+use crate::run::runs_from;
+use omni_ga::explore::{Exploration, ExploreOptions, explore as rs_explore};
+use omni_kin::FittedModel;
+use pyo3::prelude::*;
+
+/// The outcome of ``explore``.
+#[pyclass(frozen, name = "Exploration", module = "omnical._omnical")]
+pub struct PyExploration {
+    inner: Exploration,
+    json: String,
+}
+
+impl PyExploration {
+    fn record<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        py.import("json")?.call_method1("loads", (self.json.as_str(),))
+    }
+}
+
+#[pymethods]
+impl PyExploration {
+    /// Every family, largest held-out gain first: dicts with family, effect (``learned:<family>``),
+    /// held_out_gain (fraction), gain_std_error, passes, held_out_cost_m, terms (name, value, std_error,
+    /// unit), hint, curve.
+    #[getter]
+    fn families<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.record(py)?.get_item("families")
+    }
+    /// True when no family passes and the held-out error is well above the measurement noise floor.
+    #[getter]
+    fn unexplained(&self) -> bool {
+        self.inner.unexplained
+    }
+    /// The best passing family's id (``world``, ``wheel``, …), or None.
+    #[getter]
+    fn best(&self) -> Option<String> {
+        self.inner.best().map(|f| f.family.id().to_string())
+    }
+    /// The conclusion in words (as the CLI prints it).
+    #[getter]
+    fn conclusion(&self) -> String {
+        omni_ga::science::text::explore_conclusion(&self.inner)
+    }
+    /// The model with the best passing family's learned effect at its fitted values, or None.
+    #[getter]
+    fn model(&self, py: Python<'_>) -> PyResult<Option<Py<PyModel>>> {
+        self.inner.best().map(|f| Py::new(py, PyModel::from_fitted(f.fitted.clone(), Vec::new()))).transpose()
+    }
+    /// Everything as plain data (the CLI's ``--json``).
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.record(py)
+    }
+    fn __repr__(&self) -> String {
+        let best = self.inner.best().map_or("None".to_string(), |f| format!("'{}'", f.family.id()));
+        format!("Exploration(best={best}, unexplained={})", if self.inner.unexplained { "True" } else { "False" })
+    }
+}
+
+/// Explore which family of features explains what ``model`` leaves on ``runs``, judged on ``validation``
+/// (held-out runs, required). ``min_gain``: the smallest held-out gain that passes (it must also exceed two
+/// standard errors). The GIL is released.
+#[pyfunction]
+#[pyo3(signature = (model, runs, validation, *, min_gain = 0.05))]
+pub fn explore(
+    py: Python<'_>,
+    model: &Bound<'_, PyAny>,
+    runs: &Bound<'_, PyAny>,
+    validation: &Bound<'_, PyAny>,
+    min_gain: f64,
+) -> PyResult<PyExploration> {
+    let (train, _) = runs_from(runs, "runs")?;
+    let (held_out, _) = runs_from(validation, "validation")?;
+    let (fm, _) = model_or(Some(model), FittedModel::paper_design)?;
+    let opts = ExploreOptions { min_gain, ..ExploreOptions::default() };
+    let e = py.detach(|| rs_explore(&fm, &train, &held_out, &opts)).py()?;
+    let json = omni_cli::cmd::explore::to_json(&e).to_string();
+    Ok(PyExploration { inner: e, json })
+}
