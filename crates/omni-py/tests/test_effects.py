@@ -117,3 +117,17 @@ def test_bad_effect_definitions() -> None:
 
     with pytest.raises(ValueError, match=r"params\[0\] must be \(name, unit, null, lower, upper\)"):
         omnical.Model.design().with_effect(BadParams())
+
+
+def test_world_drift_from_python() -> None:
+    # A tilted floor: (+3.9, −2.1) mm/s in the world frame while the robot moves.
+    assert "world_drift" in omnical.CATALOGUE
+    truth = omnical.Model.paper().with_effect("world_drift", drift_x_m_s=0.0039, drift_y_m_s=-0.0021)
+    runs = omnical.simulate(truth, runs_per_command=1, duration_s=2.5, seed=31)
+    validation = omnical.simulate(truth, runs_per_command=1, duration_s=2.5, seed=32, prefix="validation/")
+    d = omnical.diagnose(omnical.Model.paper(), runs, validation=validation, candidates=["world_drift", "time_offset"])
+    assert d.verdict == "world_drift", d.verdict_text
+    dx, dy = d.ranking[0]["params"]
+    assert dx["name"] == "drift_x_m_s" and dx["unit"] == "m/s" and abs(dx["value"] - 0.0039) < 3e-4
+    assert dy["name"] == "drift_y_m_s" and abs(dy["value"] + 0.0021) < 3e-4
+    assert truth.effects == ["world_drift"]

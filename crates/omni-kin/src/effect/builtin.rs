@@ -1,7 +1,7 @@
 //! The built-in effect catalogue. Each effect documents its physics, its parameters (unit, null value,
 //! bounds) and its stage. Per-wheel parameters are suffixed with the wheel letter: `a_a`, `a_b`, …
 
-use super::{Effect, ParamSpec, Stage, WheelContext};
+use super::{Effect, ParamSpec, Stage, TwistAt, WheelContext};
 use crate::pose::{Pose2, Twist2};
 use serde::{Deserialize, Serialize};
 
@@ -315,6 +315,45 @@ impl Effect for WheelEccentricity {
                 phi += v * h;
             }
         }
+    }
+}
+
+/// Wheel speed above which `world_drift` counts the robot as moving: any wheel faster than this. rad/s.
+pub const WORLD_DRIFT_MOVING_RAD_S: f64 = 0.05;
+
+/// `world_drift`: a constant velocity in the world frame while the robot moves — a tilted floor the robot
+/// creeps down, or a ground-truth frame that moves (a mocap or SLAM map drifting). Twist stage, with the
+/// heading ψ at the start of each step ([`Effect::twist_at`]): while any wheel turns faster than 0.05 rad/s
+/// ([`WORLD_DRIFT_MOVING_RAD_S`]; the measured wheel speeds in the odometry, the true ones in the
+/// simulator), the world-frame velocity `(drift_x, drift_y)` is turned into the body frame and added to
+/// the body twist: `(vx, vy) += R(−ψ) (drift_x, drift_y)`. At rest it does nothing.
+///
+/// Parameters: `drift_x_m_s`, `drift_y_m_s` (m/s, world frame, null 0, bounds ±0.1).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct WorldDrift {}
+
+impl Effect for WorldDrift {
+    fn id(&self) -> &str {
+        "world_drift"
+    }
+    fn describe(&self) -> String {
+        "a constant world-frame drift while moving (a tilted floor, or a moving ground-truth frame)".into()
+    }
+    fn stage(&self) -> Stage {
+        Stage::Twist
+    }
+    fn params(&self) -> Vec<ParamSpec> {
+        vec![ParamSpec::new("drift_x_m_s", "m/s", 0.0, -0.1, 0.1), ParamSpec::new("drift_y_m_s", "m/s", 0.0, -0.1, 0.1)]
+    }
+    fn twist(&self, p: &[f64], t: Twist2, w: &[f64]) -> Twist2 {
+        self.twist_at(p, t, w, &TwistAt::default())
+    }
+    fn twist_at(&self, p: &[f64], t: Twist2, w: &[f64], at: &TwistAt) -> Twist2 {
+        if (p[0] == 0.0 && p[1] == 0.0) || !w.iter().any(|v| v.abs() > WORLD_DRIFT_MOVING_RAD_S) {
+            return t;
+        }
+        let (s, c) = at.pose.theta_rad.sin_cos();
+        Twist2 { vx_m_s: t.vx_m_s + c * p[0] + s * p[1], vy_m_s: t.vy_m_s - s * p[0] + c * p[1], ..t }
     }
 }
 

@@ -7,7 +7,7 @@
 //! |---|---|---|
 //! | clock | [`Effect::clock_lag_s`] | `time_offset` |
 //! | wheel speeds (per run, may carry state) | [`Effect::wheel_rates`] | `wheel_asymmetry`, `backlash`, `wheel_eccentricity` |
-//! | body twist (per sample) | [`Effect::twist`], [`Effect::twist_at`] (with pose and time) | `rotation_slip`, `learned:world` |
+//! | body twist (per sample) | [`Effect::twist`], [`Effect::twist_at`] (with pose and time) | `rotation_slip`, `world_drift`, `learned:world` |
 //! | integration | [`Effect::uses_stamps`] | `sample_timing` |
 //! | measurement | [`Effect::sensor_from_body`] | `sensor_offset` |
 //!
@@ -21,8 +21,8 @@ pub mod learned;
 pub use learned::{Family, Learned};
 
 pub use builtin::{
-    AccelSlip, Backlash, RotationSlip, SampleTiming, SensorOffset, SpeedScale, TimeOffset, WheelAsymmetry,
-    WheelEccentricity,
+    AccelSlip, Backlash, RotationSlip, SampleTiming, SensorOffset, SpeedScale, TimeOffset, WORLD_DRIFT_MOVING_RAD_S,
+    WheelAsymmetry, WheelEccentricity, WorldDrift,
 };
 
 use crate::error::KinError;
@@ -152,6 +152,8 @@ pub enum EffectKind {
     WheelEccentricity(WheelEccentricity),
     /// Integrate with measured stamps.
     SampleTiming(SampleTiming),
+    /// World-frame drift while moving.
+    WorldDrift(WorldDrift),
     /// A correction learned by the explorer over one family of features (`learned:world`, …).
     Learned(Learned),
     /// A user effect (not stored in model files by value; only its id is).
@@ -170,6 +172,7 @@ pub const CATALOGUE: &[&str] = &[
     "backlash",
     "wheel_eccentricity",
     "sample_timing",
+    "world_drift",
 ];
 
 impl EffectKind {
@@ -187,6 +190,7 @@ impl EffectKind {
             "backlash" => Self::Backlash(Backlash { n_wheels }),
             "wheel_eccentricity" => Self::WheelEccentricity(WheelEccentricity { n_wheels }),
             "sample_timing" => Self::SampleTiming(SampleTiming {}),
+            "world_drift" => Self::WorldDrift(WorldDrift {}),
             other if other.starts_with(learned::PREFIX) => Self::Learned(Learned::from_id(other, n_wheels)?),
             other => {
                 return Err(KinError::Unknown {
@@ -214,6 +218,7 @@ impl EffectKind {
             Self::Backlash(e) => e,
             Self::WheelEccentricity(e) => e,
             Self::SampleTiming(e) => e,
+            Self::WorldDrift(e) => e,
             Self::Learned(e) => e,
             Self::Custom(e) => e.as_ref(),
         }
@@ -242,6 +247,7 @@ impl Effect for EffectKind {
     fn twist(&self, p: &[f64], twist: Twist2, w: &[f64]) -> Twist2 {
         match self {
             Self::RotationSlip(e) => e.twist(p, twist, w),
+            Self::WorldDrift(e) => e.twist(p, twist, w),
             Self::Learned(e) => e.twist(p, twist, w),
             Self::Custom(e) => e.twist(p, twist, w),
             _ => twist,
@@ -250,6 +256,7 @@ impl Effect for EffectKind {
     fn twist_at(&self, p: &[f64], twist: Twist2, w: &[f64], at: &TwistAt) -> Twist2 {
         match self {
             Self::RotationSlip(e) => e.twist(p, twist, w),
+            Self::WorldDrift(e) => e.twist_at(p, twist, w, at),
             Self::Learned(e) => e.twist_at(p, twist, w, at),
             Self::Custom(e) => e.twist_at(p, twist, w, at),
             _ => twist,
