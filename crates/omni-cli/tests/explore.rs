@@ -62,6 +62,22 @@ fn explore_names_a_world_drift_and_writes_the_learned_model() {
     let trained = path_rms("t.toml", "sim/validation", d);
     assert!(trained <= 1.1 * truth, "trained {trained}, truth {truth}");
 
+    // The report's explorer section: the ranking and the best family's residual against its strongest term.
+    let out = omnical(
+        &["report", "--model", "design", "sim/train", "--validate", "sim/validation", "--explore", "--no-diagnose"],
+        d,
+    );
+    ok(&out);
+    let page = std::fs::read_to_string(d.join("report.html")).unwrap();
+    assert!(page.contains("<h2 id=\"explore\">Beyond the catalogue (explore)</h2>"));
+    assert!(page.contains("<figcaption>Training residual against drift_x"), "the world family's strongest term");
+    let out =
+        omnical(&["report", "--model", "design", "sim/train", "--explore", "--no-diagnose", "--out", "n.html"], d);
+    assert!(!out.status.success());
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("--explore: the explorer judges each family on held-out runs")
+    );
+
     // Clean data: nothing passes, and --out refuses, saying why, and writes nothing.
     ok(&omnical(&[&["simulate", "--out", "clean", "--seed", "6"][..], &sim].concat(), d));
     let out = omnical(&["explore", "--model", "design", "clean/train", "--validate", "clean/validation", "--json"], d);

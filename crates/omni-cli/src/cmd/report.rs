@@ -29,6 +29,10 @@ pub struct Args {
     /// Skip the diagnosis (faster; no ranking, ladder of the given model only).
     #[arg(long)]
     pub no_diagnose: bool,
+    /// Add the explorer's section (which family of features explains the remaining error; needs
+    /// `--validate`).
+    #[arg(long)]
+    pub explore: bool,
     /// Data options.
     #[command(flatten)]
     pub data: DataArgs,
@@ -61,8 +65,21 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         diagnosis: diagnosis.as_ref(),
         sources,
     };
+    let extra = if a.explore {
+        if val.is_empty() {
+            anyhow::bail!(
+                "--explore: the explorer judges each family on held-out runs; give them with --validate PATH"
+            );
+        }
+        let spinner = progress::spinner("exploring: fitting each family of features", quiet);
+        let e = omni_ga::explore::explore(&model, &ds.runs, &val, &omni_ga::explore::ExploreOptions::default())?;
+        spinner.finish_and_clear();
+        report::explore::section(&e)
+    } else {
+        String::new()
+    };
     let spinner = progress::spinner("drawing the report", quiet);
-    let w = report::write(&input, &a.out, a.png.as_deref())?;
+    let w = report::write_with(&input, &a.out, a.png.as_deref(), &extra)?;
     spinner.finish_and_clear();
     print_written(&w, &a.out);
     Ok(())

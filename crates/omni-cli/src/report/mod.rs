@@ -8,6 +8,7 @@
 //! Which runs: every figure uses the *held-out* runs (the validation set when given, otherwise the
 //! training runs, said so in the report), because a model is judged where it was not fitted.
 
+pub mod explore;
 pub mod figures;
 pub mod html;
 pub mod png;
@@ -297,10 +298,25 @@ pub fn write(
     html_path: &std::path::Path,
     png_dir: Option<&std::path::Path>,
 ) -> anyhow::Result<Written> {
+    write_with(input, html_path, png_dir, "")
+}
+
+/// [`write()`] with `extra` HTML sections (e.g. [`explore::section`]) at the end of the page, before `</body>`.
+pub fn write_with(
+    input: &ReportInput<'_>,
+    html_path: &std::path::Path,
+    png_dir: Option<&std::path::Path>,
+    extra: &str,
+) -> anyhow::Result<Written> {
     use anyhow::Context;
     let report = Report::build(input).context("evaluating the models for the report")?;
     let (figs, notes) = figures::all(&report, input.diagnosis).context("drawing the figures")?;
-    let page = html::render(&report, &figs, &notes, input.diagnosis);
+    let mut page = html::render(&report, &figs, &notes, input.diagnosis);
+    if !extra.is_empty()
+        && let Some(at) = page.rfind("</body>")
+    {
+        page.insert_str(at, extra);
+    }
     if let Some(dir) = html_path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
