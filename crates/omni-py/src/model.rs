@@ -199,6 +199,14 @@ impl PyModel {
             .map_err(|error| ModelFileError::Io { path: path.display().to_string(), error }.to_py_err())
     }
 
+    /// Pickling: the model file text (exact: floats are written in their shortest round-trip form) and the
+    /// Python effect objects it names (pickled by Python).
+    fn __reduce__<'py>(&self, py: Python<'py>) -> crate::pickle::Reduced<'py, (String, Vec<Py<PyAny>>)> {
+        let rebuild = py.import("omnical._omnical")?.getattr("_model_from_toml")?;
+        let effects = self.py_effects.iter().map(|e| e.object(py).unbind()).collect();
+        Ok((rebuild, (self.to_toml()?, effects)))
+    }
+
     fn __repr__(&self) -> String {
         let effects = self.effects();
         format!("Model({}, {} wheels, effects [{}])", self.kinematics(), self.n_wheels(), effects.join(", "))
@@ -218,12 +226,24 @@ pub fn load_model(py: Python<'_>, path: PathBuf, effects: Vec<Bound<'_, PyAny>>)
     let text = py
         .detach(|| std::fs::read_to_string(&path))
         .map_err(|error| ModelFileError::Io { path: name.clone(), error }.to_py_err())?;
+    model_from_text(&text, &name, &effects)
+}
+
+/// Unpickling a `Model`: the model file text and the Python effects it names.
+#[pyfunction]
+#[pyo3(signature = (text, effects = Vec::new()))]
+pub fn _model_from_toml(text: &str, effects: Vec<Bound<'_, PyAny>>) -> PyResult<PyModel> {
+    model_from_text(text, "pickled model", &effects)
+}
+
+/// A model from model file text (`name` for messages) with the Python effects it names by id.
+fn model_from_text(text: &str, name: &str, effects: &[Bound<'_, PyAny>]) -> PyResult<PyModel> {
     let invalid = |message: String| PyModelFileError::new_err(format!("{name}: {message}"));
-    let file: ModelFile = toml::from_str(&text).map_err(|e| invalid(e.to_string().trim().to_string()))?;
+    let file: ModelFile = toml::from_str(text).map_err(|e| invalid(e.to_string().trim().to_string()))?;
     // Python effects by id; the file's other effects must be built-ins.
     let mut custom: BTreeMap<String, (EffectKind, Arc<PyEffect>)> = BTreeMap::new();
     let n_wheels = file.wheel_names.len();
-    for e in &effects {
+    for e in effects {
         if let (kind, Some(adapter)) = effect_from(e, n_wheels)? {
             custom.insert(kind.id().to_string(), (kind, adapter));
         }
@@ -231,6 +251,9 @@ pub fn load_model(py: Python<'_>, path: PathBuf, effects: Vec<Bound<'_, PyAny>>)
     let mut builtin = file.clone();
     builtin.effects.retain(|e| !custom.contains_key(&e.id));
     let base = builtin.to_fitted().map_err(invalid)?;
+    if custom.is_empty() {
+        return Ok(PyModel::from_fitted(base, Vec::new()));
+    }
     let nb = base.model.n_base();
     let mut params = base.params[..nb].to_vec();
     let mut model =

@@ -9,6 +9,7 @@ use omni_cli::dataset::{self, LoadOptions, mcap::McapOptions};
 use omni_kin::{Command, FittedModel, Run, RunData};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
+use pyo3::types::PyBytes;
 use std::path::PathBuf;
 
 /// One recorded (or simulated) run: wheel-speed samples, ground-truth poses and the command.
@@ -112,6 +113,11 @@ impl PyRun {
     fn repetition(&self) -> Option<u32> {
         self.inner.repetition()
     }
+    /// Pickling: every field as compact bytes (see `pickle.rs`), validated again on the way back.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> crate::pickle::Reduced<'py, (Bound<'py, PyBytes>,)> {
+        let rebuild = py.import("omnical._omnical")?.getattr("_run_from_bytes")?;
+        Ok((rebuild, (PyBytes::new(py, &crate::pickle::run_to_bytes(&self.inner)),)))
+    }
     fn __repr__(&self) -> String {
         format!(
             "Run({:?}, {} samples × {} wheels, {} truth poses, {:.2} s)",
@@ -171,9 +177,40 @@ impl PyDataset {
         }
         Ok(PyRun { inner: self.runs[i as usize].clone() })
     }
+    /// Pickling: the runs (as `Run` pickles them), notes, skipped inputs and the design's model file text.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> crate::pickle::Reduced<'py, DatasetState<'py>> {
+        let rebuild = py.import("omnical._omnical")?.getattr("_dataset_from_state")?;
+        let runs = self.runs.iter().map(|r| PyBytes::new(py, &crate::pickle::run_to_bytes(r))).collect();
+        let design = omni_cli::model_file::to_toml(&self.design, None).map_err(value_error)?;
+        Ok((rebuild, (runs, self.notes.clone(), self.skipped.clone(), design)))
+    }
     fn __repr__(&self) -> String {
         format!("Dataset({} runs, {} skipped)", self.runs.len(), self.skipped.len())
     }
+}
+
+/// A pickled `Dataset`: its runs' bytes, notes, skipped inputs, design model file text.
+type DatasetState<'py> = (Vec<Bound<'py, PyBytes>>, Vec<String>, Vec<(String, String)>, String);
+
+/// Unpickling a `Run`.
+#[pyfunction]
+pub fn _run_from_bytes(data: &[u8]) -> PyResult<PyRun> {
+    Ok(PyRun { inner: crate::pickle::run_from_bytes(data)? })
+}
+
+/// Unpickling a `Dataset`.
+#[pyfunction]
+pub fn _dataset_from_state(
+    runs: Vec<Vec<u8>>,
+    notes: Vec<String>,
+    skipped: Vec<(String, String)>,
+    design: &str,
+) -> PyResult<PyDataset> {
+    let runs = runs.iter().map(|b| crate::pickle::run_from_bytes(b)).collect::<PyResult<Vec<Run>>>()?;
+    let file: omni_cli::model_file::ModelFile =
+        toml::from_str(design).map_err(|e| value_error(format!("pickled dataset: design model: {e}")))?;
+    let design = file.to_fitted().map_err(|e| value_error(format!("pickled dataset: design model: {e}")))?;
+    Ok(PyDataset { runs, notes, skipped, design })
 }
 
 /// Load runs from files and folders: omnical CSV (``.csv``), ROS 2 bags (``.mcap``), folders of them,

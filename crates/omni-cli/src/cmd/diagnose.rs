@@ -45,6 +45,18 @@ pub struct Args {
 
 /// Runs `omnical diagnose`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
+    let d = diagnose_quietly(a)?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&d)?);
+    } else {
+        print_diagnosis(&d);
+    }
+    Ok(())
+}
+
+/// `omnical diagnose` without printing (the Python wheel's fleet workers): loads, diagnoses and writes
+/// `--out` as [`run`] does, and returns the diagnosis.
+pub fn diagnose_quietly(a: &Args) -> anyhow::Result<Diagnosis> {
     let ds = load_runs(&a.runs, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
     let val = if a.validate.is_empty() { None } else { Some(load_runs(&a.validate, &a.data)?.runs) };
@@ -58,12 +70,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         let text = model_file::to_toml(fm, None).map_err(anyhow::Error::msg)?;
         atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))?;
     }
-    if a.json {
-        println!("{}", serde_json::to_string_pretty(&d)?);
-    } else {
-        print_diagnosis(&d);
-    }
-    Ok(())
+    Ok(d)
 }
 
 /// Human-readable diagnosis.

@@ -17,6 +17,23 @@ use crate::robot_file;
 use omni_kin::FittedModel;
 use std::path::PathBuf;
 
+/// Arguments of `omnical fleet`, which the Python wheel's console command runs (omnical.fleet, on Dask);
+/// the native binary only says where to find it.
+#[derive(Debug, clap::Args)]
+pub struct FleetArgs {
+    /// FLEET_DIR and the options of the wheel's `omnical fleet --help`.
+    #[arg(trailing_var_arg = true, allow_hyphen_values = true, value_name = "ARGS")]
+    pub args: Vec<String>,
+}
+
+/// The error of a Python-side command asked of the native binary.
+pub fn python_only(what: &str) -> anyhow::Error {
+    anyhow::anyhow!(
+        "{what} runs on Dask from the Python wheel: `pip install \"omnical[fleet]\"` (or `pip install \".[fleet]\"` \
+         from the repository) and run the `omnical` command it installs; this native binary has no Python"
+    )
+}
+
 /// The help heading of [`DataArgs`].
 pub const DATA_OPTIONS: &str = "Data options";
 

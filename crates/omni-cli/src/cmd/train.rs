@@ -2,6 +2,7 @@
 
 use super::{DataArgs, load_runs};
 use crate::cli::{choice, effect_help};
+use crate::dataset::Dataset;
 use crate::{atomic, design, interrupt, model_file, progress};
 use anyhow::Context;
 use omni_ga::calibrate::{Calibration, Plan, Preset, Unexcited, calibrate};
@@ -158,20 +159,8 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     // Ctrl-C while loading ends the command; during the fit it stops the GA at its next generation and the
     // best model so far is reported and written.
     interrupt::install();
-    let ds = load_runs(&a.runs, &a.data)?;
-    if interrupt::requested() {
-        return Err(interrupt::Interrupted.into());
-    }
-    let mut start = match &a.start {
-        Some(p) => model_file::read(p).context("reading --start")?,
-        None => FittedModel::nominal(design::model(a.model, &ds)?),
-    };
-    for id in &a.effects {
-        start = start
-            .with_effect(EffectKind::from_id(id, start.model.n_wheels()).with_context(|| format!("--effect {id}"))?);
-    }
+    let (ds, start, plan) = prepare(a)?;
     let preset_name = a.preset.id();
-    let plan = apply_fit_args(Plan::preset(a.preset, start.model.n_params()).seed(a.seed), &a.fit)?;
     if let Some(w) = fixed_step_mismatch(&plan, &ds.runs) {
         eprintln!("warning: {w}");
     }
@@ -191,11 +180,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         s["interrupted"] = json!(true);
     }
     if let Some(out) = &a.out {
-        // Everything but the wall time: the same data, preset and seed give a byte-identical file.
-        let mut fit: toml::Table = toml::Table::try_from(toml_safe(s.clone())).context("fit summary")?;
-        fit.remove("seconds");
-        let text = model_file::to_toml(&c.fitted, Some(fit)).map_err(anyhow::Error::msg)?;
-        atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))?;
+        write_model(&c, &s, out)?;
     }
     if a.json {
         if !ds.ground_truth_clocks.is_empty() {
@@ -216,6 +201,61 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         return Err(interrupt::Interrupted.into());
     }
     Ok(())
+}
+
+/// Loads the runs and builds the start model and the plan, as `omnical train` does. A Ctrl-C (when the
+/// handler is installed) during loading ends it with [`interrupt::Interrupted`].
+fn prepare(a: &Args) -> anyhow::Result<(Dataset, FittedModel, Plan)> {
+    let ds = load_runs(&a.runs, &a.data)?;
+    if interrupt::requested() {
+        return Err(interrupt::Interrupted.into());
+    }
+    let mut start = match &a.start {
+        Some(p) => model_file::read(p).context("reading --start")?,
+        None => FittedModel::nominal(design::model(a.model, &ds)?),
+    };
+    for id in &a.effects {
+        start = start
+            .with_effect(EffectKind::from_id(id, start.model.n_wheels()).with_context(|| format!("--effect {id}"))?);
+    }
+    let plan = apply_fit_args(Plan::preset(a.preset, start.model.n_params()).seed(a.seed), &a.fit)?;
+    Ok((ds, start, plan))
+}
+
+/// Writes the model file of a fit with its summary `s` as the `[fit]` table, atomically. Everything but the
+/// wall time goes in: the same data, preset and seed give a byte-identical file.
+fn write_model(c: &Calibration, s: &serde_json::Value, out: &std::path::Path) -> anyhow::Result<()> {
+    let mut fit: toml::Table = toml::Table::try_from(toml_safe(s.clone())).context("fit summary")?;
+    fit.remove("seconds");
+    let text = model_file::to_toml(&c.fitted, Some(fit)).map_err(anyhow::Error::msg)?;
+    atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))
+}
+
+/// What [`train_quietly`] gives back.
+pub struct Trained {
+    /// The fit.
+    pub calibration: Calibration,
+    /// The JSON summary that `--json` prints (without the ground-truth clocks) and the model file holds.
+    pub summary: serde_json::Value,
+    /// The dataset the runs came from (notes, skipped inputs, ground-truth clocks).
+    pub dataset: Dataset,
+    /// What `omnical train` would print as `warning:` lines before training.
+    pub warnings: Vec<String>,
+}
+
+/// `omnical train` without a terminal, for callers that run many trainings in one process (the Python
+/// wheel's fleet workers): the same loading, start model, plan and fit as [`run`], and the same model file
+/// written to `--out` (byte-identical: the same `write_model` either way), but nothing printed, no progress bar
+/// and no Ctrl-C handler installed.
+pub fn train_quietly(a: &Args) -> anyhow::Result<Trained> {
+    let (ds, start, plan) = prepare(a)?;
+    let warnings = fixed_step_mismatch(&plan, &ds.runs).into_iter().collect();
+    let c = calibrate(&start, &ds.runs, &plan, &mut omni_ga::observe::NoopObserver)?;
+    let s = summary(&c, a.preset.id(), a.seed, ds.runs.len())?;
+    if let Some(out) = &a.out {
+        write_model(&c, &s, out)?;
+    }
+    Ok(Trained { calibration: c, summary: s, dataset: ds, warnings })
 }
 
 /// Human-readable fit summary on stdout.

@@ -33,6 +33,7 @@ __all__ = [
     "__version__",
     "cli_main",
     "diagnose",
+    "diagnose_files",
     "effect_catalogue",
     "evaluate",
     "explore",
@@ -42,6 +43,11 @@ __all__ = [
     "report",
     "simulate",
     "train",
+    "train_files",
+    "_calibration_from_state",
+    "_dataset_from_state",
+    "_model_from_toml",
+    "_run_from_bytes",
 ]
 
 __version__: str
@@ -374,3 +380,18 @@ def cli_main(argv: list[str]) -> int:
     handler (a first Ctrl-C stops the search with the best model so far, exit status 130; a second one
     exits the process), so call it from the ``omnical`` console command rather than an interactive
     session."""
+def train_files(args: list[str]) -> dict[str, Any]:
+    """``omnical train ARGS...`` (without the program and subcommand names) inside this process, the
+    command's own code path (the ``--out`` model file is byte-identical), printing nothing and installing no
+    Ctrl-C handler. Returns ``summary`` (``--json``'s), ``design`` (name -> start value), ``start_s`` /
+    ``end_s`` [s], ``runs``, ``notes``, ``skipped``, ``warnings``. ``ValueError`` for bad arguments,
+    ``OmnicalError`` with the command's message for a failed load or fit."""
+
+def diagnose_files(args: list[str]) -> dict[str, Any]:
+    """``omnical diagnose ARGS...`` inside this process; returns what ``--json`` prints."""
+
+# Unpickling (the targets of the classes' __reduce__).
+def _run_from_bytes(data: bytes) -> Run: ...
+def _dataset_from_state(runs: list[bytes], notes: list[str], skipped: list[tuple[str, str]], design: str) -> Dataset: ...
+def _model_from_toml(text: str, effects: list[Any] = ...) -> Model: ...
+def _calibration_from_state(state: dict[str, Any]) -> Calibration: ...
