@@ -3,13 +3,20 @@
 (`omnical simulate` defaults: 180 training runs of ~12 s, 1,180 JointState + ~48 PoseStamped messages each)
 as bare MCAP files, as rosbag2 sqlite3 recordings and as rosbag2 MCAP recordings, read by
 `omnical eval DIR` (loading, then the Eq. 6 cost of the design model, which takes ~10 ms) on 1 and 2 worker
-threads. Each figure is the median wall time of REPEATS runs of the release binary.
+threads. Each figure is the median wall time of REPEATS runs of the release binary, with the median CPU time
+(user + system) in parentheses: on a shared machine the wall time depends on the load (printed before and
+after), the CPU time much less.
 
     bash benches/loading.sh [DATA_DIR]      (builds the release binary, then runs this)
+    LOADING_RT=1 bash benches/loading.sh    (each run under `chrt -f 50`, SCHED_FIFO: on a shared machine the
+                                             other processes then wait, and the figures are an idle machine's;
+                                             needs root or CAP_SYS_NICE)
 
 Needs a Python with rosbags (scripts/test.sh sets up .venv) to convert the set.
 """
 
+import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -19,10 +26,24 @@ from pathlib import Path
 REPEATS = 7
 
 
-def wall(cmd):
-    t = time.perf_counter()
+def cpu_children():
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+RT = ['chrt', '-f', '50'] if os.environ.get('LOADING_RT') else []
+
+
+def timed(cmd):
+    """Wall and CPU time of one run. s."""
+    cmd = RT + cmd
+    c, t = cpu_children(), time.perf_counter()
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    return time.perf_counter() - t
+    return time.perf_counter() - t, cpu_children() - c
+
+
+def load():
+    return ', '.join(f'{x:.2f}' for x in os.getloadavg())
 
 
 def main(binary, data):
@@ -38,15 +59,20 @@ def main(binary, data):
     sets = [('bare MCAP files (180 × .mcap)', data / 'train'),
             ('rosbag2 sqlite3 (180 folders, .db3)', data / 'train_sqlite3'),
             ('rosbag2 MCAP (180 folders)', data / 'train_mcap')]
-    print('| input | 1 thread | 2 threads |')
+    print(f'load average before: {load()}' + (' (runs under chrt -f 50)' if RT else ''))
+    print('| input | 1 thread: wall (CPU) | 2 threads: wall (CPU) |')
     print('|---|---|---|')
     for label, d in sets:
         row = []
         for threads in [1, 2]:
             cmd = [binary, '--threads', str(threads), 'eval', str(d)]
-            wall(cmd)  # warm the page cache
-            row.append(statistics.median(wall(cmd) for _ in range(REPEATS)))
-        print(f'| {label} | {row[0]:.3f} s | {row[1]:.3f} s |')
+            timed(cmd)  # warm the page cache
+            runs = [timed(cmd) for _ in range(REPEATS)]
+            wall = statistics.median(r[0] for r in runs)
+            cpu = statistics.median(r[1] for r in runs)
+            row.append(f'{wall:.3f} s ({cpu:.3f} s)')
+        print(f'| {label} | {row[0]} | {row[1]} |')
+    print(f'load average after: {load()}')
 
 
 if __name__ == '__main__':

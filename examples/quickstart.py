@@ -41,11 +41,11 @@ def main() -> None:
     print(f"simulated {len(train_runs)} training and {len(val_runs)} validation runs "
           f"(first: {train_runs[0].n_samples} samples x {train_runs[0].n_wheels} wheels)")
 
-    design = omnical.Model.design()
+    design = omnical.Model.design("apr02")  # the simulated robot is the paper's APR-02
     print(f"design model (Eq. 7): held-out Eq. 6 cost {omnical.evaluate(val_runs, design).cost:.4f}")
 
     # 2. Fit the 9 matrix entries.
-    fit = omnical.train(train_runs, seed=0, progress=lambda it: None)
+    fit = omnical.train(train_runs, robot="apr02", seed=0, progress=lambda it: None)
     print(f"fitted matrix: held-out Eq. 6 cost {omnical.evaluate(val_runs, fit.model).cost:.4f}")
     print(np.array2string(fit.matrix, precision=5))
 
@@ -60,7 +60,7 @@ def main() -> None:
 
     # 4. Add the named effect and retrain: the cost falls.
     effect = d.verdict or "time_offset"
-    fit2 = omnical.train(train_runs, effects=[effect], seed=0)
+    fit2 = omnical.train(train_runs, robot="apr02", effects=[effect], seed=0)
     before = omnical.evaluate(val_runs, fit.model)
     after = omnical.evaluate(val_runs, fit2.model)
     print(f"\nheld-out cost, Eq. 6:  design {omnical.evaluate(val_runs, design).cost:.4f}"

@@ -63,6 +63,9 @@ pub enum Command {
     /// The whole story on built-in simulated data with a hidden effect: simulate, train, diagnose, add the
     /// effect, retrain, print the error ladder.
     Demo(cmd::demo::Args),
+    /// Calibrate every robot-session of a fleet (`FLEET_DIR/<robot>/<session>/`) on Dask and write the fleet
+    /// view: the Python wheel's `omnical` only (`pip install "omnical[fleet]"`).
+    Fleet(cmd::FleetArgs),
 }
 
 /// The built-in effect ids, for help texts: `sensor_offset, sensor_offset_yaw, time_offset, …`.
@@ -102,5 +105,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Plan(a) => cmd::plan::run(&a),
         Command::Init(a) => cmd::init::run(&a),
         Command::Demo(a) => cmd::demo::run(&a, cli.quiet),
+        Command::Fleet(_) => Err(cmd::python_only("omnical fleet")),
     }
 }

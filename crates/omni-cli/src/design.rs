@@ -6,7 +6,7 @@
 //! ([`robot_file::design`]).
 
 use crate::dataset::Dataset;
-use crate::robot_file::{self, Design};
+use crate::robot_file::{self, Design, RobotFile};
 use anyhow::Context;
 use omni_kin::{FittedModel, IkMatrix, KinematicsKind, Model, RobotGeometry};
 use std::path::Path;
@@ -15,16 +15,22 @@ use std::path::Path;
 /// description's `ik` design is its design matrix (the paper's Eq. 7 for APR-02; the closed form for diff).
 pub fn model_of(kind: KinematicsKind, ds: &Dataset) -> anyhow::Result<Option<Model>> {
     Ok(Some(match robot_file::design(ds) {
-        Some(Design::File(f)) if kind == KinematicsKind::Ik => {
-            Model::ik(f.description.design_ik().with_context(|| format!("robot {}", f.source))?)
-        }
-        Some(Design::File(f)) => {
-            let g = f.description.to_geometry().with_context(|| format!("robot {}", f.source))?;
-            Model::design(kind, Some(&g))?
-        }
+        Some(Design::File(f)) => robot_model(kind, f)?,
         Some(Design::Data(g)) => Model::design(kind, Some(g))?,
         None => return Ok(None),
     }))
+}
+
+/// The design model of `kind` for a robot description, its wheels named after the description's joints
+/// (model files carry them): `ik` around its design matrix, the other kinds around its geometry.
+pub fn robot_model(kind: KinematicsKind, f: &RobotFile) -> anyhow::Result<Model> {
+    let context = || format!("robot {}", f.source);
+    if kind == KinematicsKind::Ik {
+        let ik = f.description.design_ik().with_context(context)?;
+        return Ok(Model::ik(ik).with_wheel_names(&f.description.joints())?);
+    }
+    let g = f.description.to_geometry().with_context(context)?;
+    Ok(Model::design(kind, Some(&g))?)
 }
 
 /// [`model_of`], where no robot is an error saying how to describe it.

@@ -218,12 +218,35 @@ pub fn design(ds: &Dataset) -> Option<Design<'_>> {
 
 /// The error of a command that needs the robot's design and has none: how to give one.
 pub fn no_design(what: &str) -> anyhow::Error {
-    anyhow::anyhow!(
-        "{what} needs the robot's design (its wheel geometry), and none is given: no --robot, no geometry in \
-         the data, no {FILE_NAME} beside the data or in the working directory. Describe the robot once in a \
+    anyhow::anyhow!(no_design_text(what, &Spelling::COMMAND_LINE))
+}
+
+/// How a caller names the robot: the command line's `--robot`, Python's `robot=`.
+#[derive(Clone, Copy, Debug)]
+pub struct Spelling<'a> {
+    /// What was not given (`--robot`).
+    pub none: &'a str,
+    /// How to pass a file (`--robot FILE`).
+    pub file: &'a str,
+    /// How to pass the built-in APR-02 (`--robot apr02`).
+    pub apr02: &'a str,
+}
+
+impl Spelling<'_> {
+    /// The command line's: `--robot FILE`, `--robot apr02`.
+    pub const COMMAND_LINE: Spelling<'static> =
+        Spelling { none: "--robot", file: "--robot FILE", apr02: "--robot apr02" };
+}
+
+/// [`no_design`]'s message, with `spelling`'s names for the robot argument.
+pub fn no_design_text(what: &str, spelling: &Spelling<'_>) -> String {
+    let Spelling { none, file, apr02 } = spelling;
+    format!(
+        "{what} needs the robot's design (its wheel geometry), and none is given: no {none}, no geometry in the \
+         data, no {FILE_NAME} beside the data or in the working directory. Describe the robot once in a \
          {FILE_NAME} (docs/formats.md, \"Robot description\"; `omnical init RECORDING --urdf FILE` drafts one \
-         from a recording and the robot's URDF) and put it beside the data or pass --robot FILE; for the \
-         paper's APR-02 robot pass --robot {BUILTIN_APR02}"
+         from a recording and the robot's URDF) and put it beside the data or pass {file}; for the paper's \
+         APR-02 robot pass {apr02}"
     )
 }
 

@@ -128,3 +128,21 @@ fn validate_parses_one_path_per_flag() {
     let Command::Report(r) = cli.command else { panic!("report") };
     assert_eq!((r.validate.len(), r.runs.len()), (1, 2));
 }
+
+#[test]
+fn fleet_is_the_python_wheels_and_the_native_binary_says_so() {
+    let top = help(&["--help"]);
+    assert!(top.contains("  fleet ") && top.contains("omnical[fleet]"), "{top}");
+    for args in [&["fleet", "robots/", "--out", "out"][..], &["simulate", "--fleet", "3", "--out", "out"][..]] {
+        let out = omnical(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        let what = if args[0] == "fleet" { "omnical fleet" } else { "omnical simulate --fleet" };
+        assert!(
+            err.starts_with(&format!(
+                "error: {what} runs on Dask from the Python wheel: `pip install \"omnical[fleet]\"`"
+            )),
+            "{args:?}: {err}"
+        );
+    }
+}

@@ -119,6 +119,117 @@ fn joint_names_and_a_four_wheel_design_come_from_the_file() {
 }
 
 #[test]
+fn joint_names_go_into_the_model_file_and_the_exported_config() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::write(d.join("omni4.toml"), OMNI4).unwrap();
+    simulate(d, "sim4", &["--robot", "omni4.toml", "--truth", "design", "--format", "csv"]);
+    let names = r#"wheel_names = ["fl", "rl", "rr", "fr"]"#;
+    // Trained around the robot found beside the runs: the matrix model and the geometry model both name
+    // their columns after the robot's joints.
+    for (kind, file) in [("ik", "fit.toml"), ("geometry", "geo.toml")] {
+        ok(omnical(&["train", "sim4/train", "-q", "--model", kind, "--out", file], d));
+        let text = std::fs::read_to_string(d.join(file)).unwrap();
+        assert!(text.contains(names), "{kind}: {text}");
+    }
+    // Exported without the robot description (CSV runs, no robot.toml): the wheel order is the model's.
+    std::fs::remove_file(d.join("sim4/validation/robot.toml")).unwrap();
+    ok(omnical(&["export", "--model", "fit.toml", "--robot-config", "rc", "sim4/validation", "-q"], d));
+    let yaml = std::fs::read_to_string(d.join("rc/omnical_odometry.yaml")).unwrap();
+    assert!(yaml.contains(r#"wheel_names: ["fl", "rl", "rr", "fr"]"#), "{yaml}");
+    let header = std::fs::read_to_string(d.join("rc/omnical_odometry.h")).unwrap();
+    assert!(header.contains(r#"OMNICAL_WHEEL_NAMES[OMNICAL_N_WHEELS] = {"fl", "rl", "rr", "fr"};"#), "{header}");
+}
+
+#[test]
+fn csv_wheel_columns_follow_the_robots_joints() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::write(d.join("omni4.toml"), OMNI4).unwrap();
+    simulate(d, "sim4", &["--robot", "omni4.toml", "--truth", "design", "--format", "csv"]);
+    let cost = |robot: &str| {
+        let out = ok(omnical(&["eval", "sim4/validation", "--json", "--robot", robot], d));
+        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()["path_cost"].as_f64().unwrap()
+    };
+    let as_written = cost("omni4.toml");
+    // The same robot with its wheels listed in another order: the CSV columns are read in that order too,
+    // so the design's columns still meet their wheels' data.
+    let blocks: Vec<&str> = OMNI4.split("[[wheels]]\n").collect();
+    let reordered = [blocks[0], blocks[4], blocks[1], blocks[2], blocks[3]].join("[[wheels]]\n");
+    std::fs::write(d.join("reordered.toml"), &reordered).unwrap();
+    let again = cost("reordered.toml");
+    assert!((again - as_written).abs() <= 1e-12 * as_written, "{again} vs {as_written}");
+    // A joint the files do not have: exit 2, naming the file, the missing column and both lists.
+    std::fs::write(d.join("renamed.toml"), OMNI4.replace(r#""fl""#, r#""front_left""#)).unwrap();
+    let out = omnical(&["eval", "sim4/validation", "--robot", "renamed.toml"], d);
+    assert_eq!(out.status.code(), Some(2));
+    let e = stderr(&out);
+    assert!(e.contains("00-r0.csv: line "), "{e}");
+    assert!(
+        e.contains(
+            ": no column front_left_rad_s (the robot's joints: front_left, rl, rr, fr; the file's wheel columns: \
+             fl, rl, rr, fr)"
+        ),
+        "{e}"
+    );
+}
+
+const DIFF: &str = r#"kind = "diff"
+[diff]
+wheel_separation_m = 0.287
+left_joint = "wheel_left_joint"
+right_joint = "wheel_right_joint"
+left_radius_m = 0.033
+right_radius_m = 0.033
+"#;
+
+#[test]
+fn priors_bound_the_parametric_search_and_are_reported() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    // The true robot's left wheel is 1 mm (3 %) larger than its description says.
+    std::fs::write(d.join("true.toml"), DIFF.replace("left_radius_m = 0.033", "left_radius_m = 0.034")).unwrap();
+    simulate(d, "sim", &["--robot", "true.toml", "--truth", "design", "--noise-free", "--format", "csv"]);
+    let priors = "[priors]\nradius_std_m = 0.0001\nseparation_std_m = 0.003\n";
+    std::fs::write(d.join("sim/train/robot.toml"), format!("{DIFF}{priors}")).unwrap();
+    let fit = |extra: &[&str]| {
+        let out = ok(omnical(&[&["train", "sim/train", "-q", "--json"][..], extra].concat(), d));
+        (serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap(), stderr(&out))
+    };
+    let (v, _) = fit(&["--model", "diff"]);
+    let p = v["priors"].as_array().unwrap();
+    let names: Vec<&str> = p.iter().map(|p| p["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["r_right", "r_left", "b"]);
+    let left = &p[1];
+    assert_eq!((left["design"].as_f64(), left["std"].as_f64()), (Some(0.033), Some(0.0001)));
+    // The GA stays within design ± 3 σ (0.3 mm); the polish finds the true radius beyond it, 10 σ from the
+    // design, and says it left the box.
+    let fitted = left["fitted"].as_f64().unwrap();
+    assert!((fitted - 0.034).abs() < 2e-5, "fitted r_left {fitted}");
+    assert!((left["sigmas"].as_f64().unwrap() - 10.0).abs() < 0.2, "{left}");
+    assert_eq!(v["outside_box"], serde_json::json!(["r_left"]));
+    let text = ok(omnical(&["train", "sim/train", "-q", "--model", "diff"], d));
+    let line =
+        String::from_utf8_lossy(&text.stdout).lines().find(|l| l.starts_with("prior r_left")).unwrap().to_string();
+    assert!(line.starts_with("prior r_left: design 0.033 ± 0.0001 m (GA box ±3 σ), fitted 0.0340"), "{line}");
+    assert!(line.ends_with(" σ)") && line.contains("(+"), "{line}");
+    // Without priors: the ±10 % box holds the true radius, nothing is reported.
+    std::fs::write(d.join("sim/train/robot.toml"), DIFF).unwrap();
+    let (v, _) = fit(&["--model", "diff"]);
+    assert!(v.get("priors").is_none() && v["outside_box"] == serde_json::json!([]), "{v}");
+    // The ik matrix's entries are not geometry: the priors are unused, and that is said.
+    std::fs::write(d.join("sim/train/robot.toml"), format!("{DIFF}{priors}")).unwrap();
+    let (v, e) = fit(&[]);
+    assert!(v.get("priors").is_none(), "{v}");
+    assert!(
+        e.contains(
+            "note: the [priors] of sim/train/robot.toml (found beside the data) bound the parametric models' search"
+        ),
+        "{e}"
+    );
+}
+
+#[test]
 fn bad_robot_files_name_the_file_line_and_field() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();

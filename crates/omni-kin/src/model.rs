@@ -87,7 +87,7 @@ impl Model {
 
     /// The paper's `ik` model around `design`, with default integration.
     pub fn ik(design: IkMatrix) -> Self {
-        Self::new(Kinematics::Ik(MatrixKinematics { design }))
+        Self::new(Kinematics::Ik(MatrixKinematics::new(design)))
     }
 
     /// The `geometry` model around `design`, with default integration.
@@ -100,6 +100,13 @@ impl Model {
     /// its geometry.
     pub fn design(kind: KinematicsKind, robot: Option<&RobotGeometry>) -> Result<Self, KinError> {
         Ok(Self::new(Kinematics::design(kind, robot)?))
+    }
+
+    /// This model with these wheel (joint) names in column order (a robot description's joints), written
+    /// into model files; one per wheel, else `KinError::Shape`.
+    pub fn with_wheel_names(mut self, names: &[String]) -> Result<Self, KinError> {
+        self.kinematics = self.kinematics.with_wheel_names(names)?;
+        Ok(self)
     }
 
     /// This model with another effect appended.

@@ -3,12 +3,12 @@
 
 use crate::effect::{EffectErrors, effect_from};
 use crate::errors::{PyResultExt, value_error};
-use crate::model::{PyModel, model_or};
+use crate::model::PyModel;
+use crate::robot::model_or_design;
 use crate::run::runs_from;
 use numpy::PyArray2;
 use omni_ga::calibrate::{Calibration, Plan, Preset, calibrate};
 use omni_ga::observe::{Control, Iteration, Observer};
-use omni_kin::FittedModel;
 use omni_kin::choice::UnknownChoice;
 use pyo3::exceptions::{PyKeyboardInterrupt, PyUserWarning};
 use pyo3::prelude::*;
@@ -17,7 +17,7 @@ use pyo3::types::PyDict;
 /// One iteration as recorded for `Calibration.history` and passed to the progress callback.
 #[derive(Clone, Debug)]
 struct Step {
-    optimizer: &'static str,
+    optimizer: String,
     iteration: usize,
     best_cost: f64,
     mean_cost: f64,
@@ -28,7 +28,7 @@ struct Step {
 impl Step {
     fn dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
-        d.set_item("optimizer", self.optimizer)?;
+        d.set_item("optimizer", &self.optimizer)?;
         d.set_item("iteration", self.iteration)?;
         d.set_item("best_cost", self.best_cost)?;
         d.set_item("mean_cost", self.mean_cost)?;
@@ -36,6 +36,25 @@ impl Step {
         d.set_item("elapsed_s", self.elapsed_s)?;
         Ok(d)
     }
+
+    fn from_dict(d: &Bound<'_, PyDict>) -> PyResult<Self> {
+        Ok(Self {
+            optimizer: item(d, "optimizer")?,
+            iteration: item(d, "iteration")?,
+            best_cost: item(d, "best_cost")?,
+            mean_cost: item(d, "mean_cost")?,
+            evaluations: item(d, "evaluations")?,
+            elapsed_s: item(d, "elapsed_s")?,
+        })
+    }
+}
+
+/// A required entry of a pickled state dict.
+fn item<'py, T: pyo3::conversion::FromPyObjectOwned<'py>>(d: &Bound<'py, PyDict>, key: &str) -> PyResult<T> {
+    d.get_item(key)?
+        .ok_or_else(|| value_error(format!("pickled calibration: missing {key:?}")))?
+        .extract::<T>()
+        .map_err(|e| value_error(format!("pickled calibration: {key:?}: {}", Into::<PyErr>::into(e))))
 }
 
 /// Takes the GIL once per iteration (a GA generation evaluates a whole population, so this is cheap): checks
@@ -52,7 +71,7 @@ struct PyObserver<'a> {
 impl Observer for PyObserver<'_> {
     fn on_iteration(&mut self, it: &Iteration) -> Control {
         let step = Step {
-            optimizer: it.optimizer,
+            optimizer: it.optimizer.to_string(),
             iteration: it.iteration,
             best_cost: it.best_cost,
             mean_cost: it.mean_cost,
@@ -196,6 +215,30 @@ impl PyCalibration {
     fn history<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         self.steps.iter().map(|s| s.dict(py)).collect()
     }
+    /// Pickling: every field in a dict (the models pickle through their model file text, floats exactly).
+    fn __reduce__<'py>(&self, py: Python<'py>) -> crate::pickle::Reduced<'py, (Bound<'py, PyDict>,)> {
+        let d = PyDict::new(py);
+        d.set_item("model", self.model.clone_ref(py))?;
+        d.set_item("start", self.start.clone_ref(py))?;
+        d.set_item("objective", &self.objective)?;
+        d.set_item("objective_start", self.objective_start)?;
+        d.set_item("objective_fitted", self.objective_fitted)?;
+        d.set_item("cost_start", self.cost_start)?;
+        d.set_item("cost_fitted", self.cost_fitted)?;
+        d.set_item("improvement_pct", self.improvement_pct)?;
+        d.set_item("evaluations", self.evaluations)?;
+        d.set_item("seconds", self.seconds)?;
+        d.set_item("at_bound", self.at_bound.clone())?;
+        d.set_item("outside_box", self.outside_box.clone())?;
+        d.set_item("interrupted", self.interrupted)?;
+        d.set_item("stopped", self.stopped)?;
+        d.set_item("warnings", self.warnings.clone())?;
+        d.set_item("held", self.held.clone())?;
+        d.set_item("identifiability", &self.identifiability)?;
+        d.set_item("history", self.history(py)?)?;
+        let rebuild = py.import("omnical._omnical")?.getattr("_calibration_from_state")?;
+        Ok((rebuild, (d,)))
+    }
     fn __repr__(&self) -> String {
         format!(
             "Calibration(Eq. 6 cost {:.5} -> {:.5}, {} evaluations, {:.2} s{})",
@@ -208,19 +251,53 @@ impl PyCalibration {
     }
 }
 
+/// Unpickling a `Calibration` (the dict of its `__reduce__`).
+#[pyfunction]
+pub fn _calibration_from_state(state: &Bound<'_, PyDict>) -> PyResult<PyCalibration> {
+    let history: Vec<Bound<'_, PyDict>> = item(state, "history")?;
+    Ok(PyCalibration {
+        model: item(state, "model")?,
+        start: item(state, "start")?,
+        objective: item(state, "objective")?,
+        objective_start: item(state, "objective_start")?,
+        objective_fitted: item(state, "objective_fitted")?,
+        cost_start: item(state, "cost_start")?,
+        cost_fitted: item(state, "cost_fitted")?,
+        improvement_pct: item(state, "improvement_pct")?,
+        evaluations: item(state, "evaluations")?,
+        seconds: item(state, "seconds")?,
+        at_bound: item(state, "at_bound")?,
+        outside_box: item(state, "outside_box")?,
+        interrupted: item(state, "interrupted")?,
+        stopped: item(state, "stopped")?,
+        warnings: item(state, "warnings")?,
+        held: item(state, "held")?,
+        identifiability: item(state, "identifiability")?,
+        steps: history.iter().map(Step::from_dict).collect::<PyResult<_>>()?,
+    })
+}
+
 /// Fit a model to training runs.
 ///
-/// The start is ``model`` (default: the data's design model, else the paper's Eq. 7) plus ``effects``
-/// (catalogue ids or Python effects). ``preset="default"`` (path cost, short GA + Levenberg–Marquardt) or
+/// The start is ``model``, else the design model of ``robot`` (a ``robot.toml`` path or ``"apr02"``, the
+/// paper's robot), else the design of the data's robot (a Dataset's ``design``), plus ``effects``
+/// (catalogue ids or Python effects). With none of them (runs from ``simulate`` or ``Run(...)``, data
+/// without a robot description) it raises ``ValueError`` saying how to describe the robot: there is no
+/// default robot. ``preset="default"`` (path cost, short GA + Levenberg–Marquardt) or
 /// ``"paper"`` (the paper's Eq. 6 GA). ``progress(dict)`` is called after each iteration; returning False
 /// stops. Ctrl-C stops the GA and returns the best so far (``interrupted`` is True). The GIL is released
 /// while the search runs.
+///
+/// >>> fit = omnical.train(omnical.load("runs/"), robot="robot.toml", seed=0)  # doctest: +SKIP
+/// >>> fit.model.save("fit.toml")  # wheel names: the robot's joints  # doctest: +SKIP
 #[pyfunction]
-#[pyo3(signature = (runs, *, model = None, effects = Vec::new(), preset = "default", seed = 0, progress = None))]
+#[pyo3(signature = (runs, *, model = None, robot = None, effects = Vec::new(), preset = "default", seed = 0, progress = None))]
+#[allow(clippy::too_many_arguments)]
 pub fn train(
     py: Python<'_>,
     runs: &Bound<'_, PyAny>,
     model: Option<&Bound<'_, PyAny>>,
+    robot: Option<std::path::PathBuf>,
     effects: Vec<Bound<'_, PyAny>>,
     preset: &str,
     seed: u64,
@@ -228,7 +305,7 @@ pub fn train(
 ) -> PyResult<PyCalibration> {
     let preset: Preset = preset.parse().map_err(|e: UnknownChoice| value_error(format!("preset {e}")))?;
     let (runs, design) = runs_from(runs, "runs")?;
-    let (mut start, mut adapters) = model_or(model, || design.unwrap_or_else(FittedModel::paper_design))?;
+    let (mut start, mut adapters) = model_or_design(model, robot.as_ref(), design, "omnical.train")?;
     for e in &effects {
         let (kind, adapter) = effect_from(e, start.model.n_wheels())?;
         start = start.with_effect(kind);

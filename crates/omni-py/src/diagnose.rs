@@ -3,11 +3,10 @@
 
 use crate::effect::{EffectErrors, effect_from};
 use crate::errors::PyResultExt;
-use crate::model::{PyModel, model_or};
+use crate::model::{PyModel, model_arg};
 use crate::run::runs_from;
 use omni_cli::design::design_for;
 use omni_ga::diagnose::{Candidate, Costs, DiagnoseOptions, Diagnosis, ParamValue, diagnose as rs_diagnose};
-use omni_kin::FittedModel;
 use omni_kin::effect::Effect;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -176,7 +175,7 @@ pub fn diagnose(
 ) -> PyResult<PyDiagnosis> {
     let (train, _) = runs_from(runs, "runs")?;
     let validation = validation.map(|v| runs_from(v, "validation")).transpose()?.map(|(r, _)| r);
-    let (fm, mut adapters) = model_or(Some(model), FittedModel::paper_design)?;
+    let (fm, mut adapters) = model_arg(model)?;
     let mut opts = DiagnoseOptions { auto, min_gain, every, ..DiagnoseOptions::default() };
     if let Some(cands) = candidates {
         opts.candidates.clear();

@@ -46,7 +46,7 @@ impl<T, E: ToPyErr> PyResultExt<T> for Result<T, E> {
     }
 }
 
-fn io_error(message: String, error: &std::io::Error) -> PyErr {
+pub(crate) fn io_error(message: String, error: &std::io::Error) -> PyErr {
     match error.kind() {
         std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
         _ => PyOSError::new_err(message),

@@ -2,15 +2,16 @@
 
 use crate::arrays::{to_matrix, to_vector};
 use crate::errors::PyResultExt;
-use crate::model::model_or;
+use crate::robot::model_or_design;
 use crate::run::{PyRun, runs_from};
 use numpy::{PyArray1, PyArray2};
+use omni_kin::PoseError;
 use omni_kin::cost::{self, CostKind};
 use omni_kin::evaluate::Evaluator;
 use omni_kin::odometry::{self, Residual};
-use omni_kin::{FittedModel, PoseError};
 use pyo3::prelude::*;
 use rayon::prelude::*;
+use std::path::PathBuf;
 
 /// One run's residuals at every ground-truth pose after the first.
 #[pyclass(frozen, name = "RunResiduals", module = "omnical._omnical")]
@@ -98,12 +99,21 @@ impl PyEvaluation {
 }
 
 /// Evaluate a model on runs: the Eq. 6 cost, the path cost, and per-run residuals as arrays. ``model``
-/// defaults to the data's design model (else the paper's Eq. 7). The GIL is released.
+/// defaults to the design model of ``robot`` (a ``robot.toml`` path or ``"apr02"``), else of the data's
+/// robot (a Dataset's ``design``); with none of them it raises ``ValueError`` saying how to describe the
+/// robot. The GIL is released.
+///
+/// >>> omnical.evaluate(runs, robot="apr02").path_cost  # the paper's design on these runs  # doctest: +SKIP
 #[pyfunction]
-#[pyo3(signature = (runs, model = None))]
-pub fn evaluate(py: Python<'_>, runs: &Bound<'_, PyAny>, model: Option<&Bound<'_, PyAny>>) -> PyResult<PyEvaluation> {
+#[pyo3(signature = (runs, model = None, *, robot = None))]
+pub fn evaluate(
+    py: Python<'_>,
+    runs: &Bound<'_, PyAny>,
+    model: Option<&Bound<'_, PyAny>>,
+    robot: Option<PathBuf>,
+) -> PyResult<PyEvaluation> {
     let (runs, design) = runs_from(runs, "runs")?;
-    let (fm, adapters) = model_or(model, || design.unwrap_or_else(FittedModel::paper_design))?;
+    let (fm, adapters) = model_or_design(model, robot.as_ref(), design, "omnical.evaluate")?;
     let errors = crate::effect::EffectErrors::new(adapters);
     let out = py.detach(|| -> Result<_, omni_kin::KinError> {
         let evaluator = Evaluator::for_report(&fm.model, &runs, CostKind::PATH.selection())?;
@@ -128,17 +138,19 @@ pub fn evaluate(py: Python<'_>, runs: &Bound<'_, PyAny>, model: Option<&Bound<'_
     Ok(PyEvaluation { cost: c, path_cost: path, runs })
 }
 
-/// Integrate one run's wheel speeds through a model, from its first ground-truth pose. Returns (N, 4):
-/// t_s [s], x_m [m], y_m [m], theta_rad [rad] of the measured point at the sample times.
+/// Integrate one run's wheel speeds through a model (or the design model of ``robot``, a ``robot.toml``
+/// path or ``"apr02"``; one of them is needed), from its first ground-truth pose. Returns (N, 4): t_s [s],
+/// x_m [m], y_m [m], theta_rad [rad] of the measured point at the sample times.
 #[pyfunction]
-#[pyo3(signature = (run, model = None))]
+#[pyo3(signature = (run, model = None, *, robot = None))]
 pub fn integrate<'py>(
     py: Python<'py>,
     run: &Bound<'py, PyRun>,
     model: Option<&Bound<'py, PyAny>>,
+    robot: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let run = run.get().inner.clone();
-    let (fm, adapters) = model_or(model, FittedModel::paper_design)?;
+    let (fm, adapters) = model_or_design(model, robot.as_ref(), None, "omnical.integrate")?;
     let errors = crate::effect::EffectErrors::new(adapters);
     let traj = py.detach(|| -> Result<_, omni_kin::KinError> {
         cost::check_runs(&fm.model, std::slice::from_ref(&run))?;

@@ -3,10 +3,9 @@
 //! CLI's `explore --json`.
 
 use crate::errors::PyResultExt;
-use crate::model::{PyModel, model_or};
+use crate::model::{PyModel, model_arg};
 use crate::run::runs_from;
 use omni_ga::explore::{Exploration, ExploreOptions, explore as rs_explore};
-use omni_kin::FittedModel;
 use pyo3::prelude::*;
 
 /// The outcome of ``explore``.
@@ -75,7 +74,7 @@ pub fn explore(
 ) -> PyResult<PyExploration> {
     let (train, _) = runs_from(runs, "runs")?;
     let (held_out, _) = runs_from(validation, "validation")?;
-    let (fm, _) = model_or(Some(model), FittedModel::paper_design)?;
+    let (fm, _) = model_arg(model)?;
     let opts = ExploreOptions { min_gain, ..ExploreOptions::default() };
     let e = py.detach(|| rs_explore(&fm, &train, &held_out, &opts)).py()?;
     let json = omni_cli::cmd::explore::to_json(&e).to_string();

@@ -20,8 +20,11 @@ mod errors;
 mod evaluate;
 mod explore;
 mod model;
+mod pickle;
 mod report;
+mod robot;
 mod run;
+mod session;
 mod simulate;
 
 use pyo3::prelude::*;
@@ -29,7 +32,7 @@ use pyo3::prelude::*;
 #[pymodule]
 mod _omnical {
     #[pymodule_export]
-    use crate::calibrate::{PyCalibration, train};
+    use crate::calibrate::{_calibration_from_state, PyCalibration, train};
     #[pymodule_export]
     use crate::cli::cli_main;
     #[pymodule_export]
@@ -39,11 +42,13 @@ mod _omnical {
     #[pymodule_export]
     use crate::explore::{PyExploration, explore};
     #[pymodule_export]
-    use crate::model::{PyModel, effect_catalogue, load_model};
+    use crate::model::{_model_from_toml, PyModel, effect_catalogue, load_model};
     #[pymodule_export]
     use crate::report::report;
     #[pymodule_export]
-    use crate::run::{PyDataset, PyRun, load};
+    use crate::run::{_dataset_from_state, _run_from_bytes, PyDataset, PyRun, load};
+    #[pymodule_export]
+    use crate::session::{diagnose_files, train_files};
     #[pymodule_export]
     use crate::simulate::simulate;
 

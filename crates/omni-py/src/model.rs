@@ -66,14 +66,22 @@ fn ik_model(matrix_obj: &Bound<'_, PyAny>, name: &str) -> PyResult<IkMatrix> {
 
 #[pymethods]
 impl PyModel {
-    /// The design model of the paper's APR-02 robot (Eq. 7): ``kinematics="ik"`` fits the 9 matrix
-    /// entries, ``"geometry"`` fits per-wheel radius r [m], distance R [m] and angle delta [rad].
+    /// The design model of a robot, at its design values: ``robot`` is the path of a robot description
+    /// (``robot.toml``, docs/formats.md) or ``"apr02"``, the paper's APR-02 robot (Eq. 7), built in.
+    /// ``kinematics="ik"`` fits the 3 × W matrix entries (around the robot's design matrix); the
+    /// parametric models fit the geometry: ``"geometry"`` (omni: per-wheel radius r [m], distance R [m],
+    /// angle delta [rad]), ``"diff"`` (both radii and the separation [m]), ``"mecanum"`` (radii and the
+    /// half-extents [m]). The model's wheel names are the description's joints (model files carry them).
+    ///
+    /// >>> omnical.Model.design("robot.toml").design_matrix  # doctest: +SKIP
+    /// >>> omnical.Model.design("apr02", kinematics="geometry").param_names[:3]
+    /// ['r_a', 'r_b', 'r_c']
     #[staticmethod]
-    #[pyo3(signature = (*, kinematics = "ik"))]
-    fn design(kinematics: &str) -> PyResult<Self> {
+    #[pyo3(signature = (robot = PathBuf::from(omni_cli::robot_file::BUILTIN_APR02), *, kinematics = "ik"), text_signature = "(robot='apr02', *, kinematics='ik')")]
+    fn design(robot: PathBuf, kinematics: &str) -> PyResult<Self> {
         let kind: KinematicsKind = kinematics.parse().map_err(|e| value_error(format!("kinematics {e}")))?;
-        let m = FittedModel::nominal(Model::design(kind, None).py()?);
-        Ok(Self::from_fitted(m, Vec::new()))
+        let r = omni_cli::robot_file::from_arg(&robot.to_string_lossy()).map_err(crate::robot::robot_error)?;
+        Ok(Self::from_fitted(crate::robot::robot_design(&r, kind)?, Vec::new()))
     }
 
     /// The paper's calibrated APR-02 matrix (Eq. 9), around the Eq. 7 design.
@@ -110,6 +118,12 @@ impl PyModel {
     #[getter]
     fn n_wheels(&self) -> usize {
         self.inner.model.n_wheels()
+    }
+    /// Wheel (joint) names in column order: a robot description's joints, else ``wheel_a``, ``wheel_b``, ….
+    /// Model files carry them; ``omnical export`` writes them beside the matrix.
+    #[getter]
+    fn wheel_names(&self) -> Vec<String> {
+        self.inner.model.kinematics.wheel_names()
     }
     /// (3, W) IK matrix: rows vx [m/s], vy [m/s], omega [rad/s] per wheel speed [rad/s].
     #[getter]
@@ -199,6 +213,14 @@ impl PyModel {
             .map_err(|error| ModelFileError::Io { path: path.display().to_string(), error }.to_py_err())
     }
 
+    /// Pickling: the model file text (exact: floats are written in their shortest round-trip form) and the
+    /// Python effect objects it names (pickled by Python).
+    fn __reduce__<'py>(&self, py: Python<'py>) -> crate::pickle::Reduced<'py, (String, Vec<Py<PyAny>>)> {
+        let rebuild = py.import("omnical._omnical")?.getattr("_model_from_toml")?;
+        let effects = self.py_effects.iter().map(|e| e.object(py).unbind()).collect();
+        Ok((rebuild, (self.to_toml()?, effects)))
+    }
+
     fn __repr__(&self) -> String {
         let effects = self.effects();
         format!("Model({}, {} wheels, effects [{}])", self.kinematics(), self.n_wheels(), effects.join(", "))
@@ -218,12 +240,24 @@ pub fn load_model(py: Python<'_>, path: PathBuf, effects: Vec<Bound<'_, PyAny>>)
     let text = py
         .detach(|| std::fs::read_to_string(&path))
         .map_err(|error| ModelFileError::Io { path: name.clone(), error }.to_py_err())?;
+    model_from_text(&text, &name, &effects)
+}
+
+/// Unpickling a `Model`: the model file text and the Python effects it names.
+#[pyfunction]
+#[pyo3(signature = (text, effects = Vec::new()))]
+pub fn _model_from_toml(text: &str, effects: Vec<Bound<'_, PyAny>>) -> PyResult<PyModel> {
+    model_from_text(text, "pickled model", &effects)
+}
+
+/// A model from model file text (`name` for messages) with the Python effects it names by id.
+fn model_from_text(text: &str, name: &str, effects: &[Bound<'_, PyAny>]) -> PyResult<PyModel> {
     let invalid = |message: String| PyModelFileError::new_err(format!("{name}: {message}"));
-    let file: ModelFile = toml::from_str(&text).map_err(|e| invalid(e.to_string().trim().to_string()))?;
+    let file: ModelFile = toml::from_str(text).map_err(|e| invalid(e.to_string().trim().to_string()))?;
     // Python effects by id; the file's other effects must be built-ins.
     let mut custom: BTreeMap<String, (EffectKind, Arc<PyEffect>)> = BTreeMap::new();
     let n_wheels = file.wheel_names.len();
-    for e in &effects {
+    for e in effects {
         if let (kind, Some(adapter)) = effect_from(e, n_wheels)? {
             custom.insert(kind.id().to_string(), (kind, adapter));
         }
@@ -231,6 +265,9 @@ pub fn load_model(py: Python<'_>, path: PathBuf, effects: Vec<Bound<'_, PyAny>>)
     let mut builtin = file.clone();
     builtin.effects.retain(|e| !custom.contains_key(&e.id));
     let base = builtin.to_fitted().map_err(invalid)?;
+    if custom.is_empty() {
+        return Ok(PyModel::from_fitted(base, Vec::new()));
+    }
     let nb = base.model.n_base();
     let mut params = base.params[..nb].to_vec();
     let mut model =
@@ -273,22 +310,14 @@ pub fn effect_catalogue(py: Python<'_>, n_wheels: usize) -> PyResult<Vec<Bound<'
     Ok(out)
 }
 
-/// A model argument: a `Model`, or None for `default`.
-pub fn model_or(
-    obj: Option<&Bound<'_, PyAny>>,
-    default: impl FnOnce() -> FittedModel,
-) -> PyResult<(FittedModel, Vec<Arc<PyEffect>>)> {
-    match obj {
-        None => Ok((default(), Vec::new())),
-        Some(o) => {
-            let m = o.cast::<PyModel>().map_err(|_| {
-                pyo3::exceptions::PyTypeError::new_err(format!(
-                    "model must be an omnical.Model, got {}",
-                    o.get_type().name().map(|n| n.to_string()).unwrap_or_default()
-                ))
-            })?;
-            let m = m.get();
-            Ok((m.inner.clone(), m.py_effects.clone()))
-        }
-    }
+/// A model argument: an `omnical.Model` (else `TypeError`), and its Python effects.
+pub fn model_arg(o: &Bound<'_, PyAny>) -> PyResult<(FittedModel, Vec<Arc<PyEffect>>)> {
+    let m = o.cast::<PyModel>().map_err(|_| {
+        pyo3::exceptions::PyTypeError::new_err(format!(
+            "model must be an omnical.Model, got {}",
+            o.get_type().name().map(|n| n.to_string()).unwrap_or_default()
+        ))
+    })?;
+    let m = m.get();
+    Ok((m.inner.clone(), m.py_effects.clone()))
 }

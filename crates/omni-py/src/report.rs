@@ -2,12 +2,11 @@
 
 use crate::effect::EffectErrors;
 use crate::errors::{OmnicalError, PyResultExt};
-use crate::model::model_or;
+use crate::model::model_arg;
 use crate::run::runs_from;
 use omni_cli::design::design_for;
 use omni_cli::report::{self as rs_report, ReportInput};
 use omni_ga::diagnose::DiagnoseOptions;
-use omni_kin::FittedModel;
 use pyo3::exceptions::{PyFileNotFoundError, PyOSError};
 use pyo3::prelude::*;
 use std::path::PathBuf;
@@ -31,7 +30,7 @@ pub fn report(
 ) -> PyResult<Vec<String>> {
     let (train, _) = runs_from(runs, "runs")?;
     let held_out = validation.map(|v| runs_from(v, "validation")).transpose()?.map(|(r, _)| r).unwrap_or_default();
-    let (fm, adapters) = model_or(Some(model), FittedModel::paper_design)?;
+    let (fm, adapters) = model_arg(model)?;
     let errors = EffectErrors::new(adapters.iter().cloned());
     let design = design_for(&fm);
     let d = if diagnose {

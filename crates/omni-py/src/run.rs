@@ -2,13 +2,17 @@
 //! `omni_kin::Run::new` either way.
 
 use crate::arrays::{matrix, matrix_to_poses, poses_to_matrix, shape_text, to_matrix, to_vector, vector};
-use crate::errors::{PyResultExt, value_error};
+use crate::errors::{PyResultExt, ToPyErr, value_error};
 use crate::model::PyModel;
+use crate::robot::robot_error;
 use numpy::{PyArray1, PyArray2};
-use omni_cli::dataset::{self, LoadOptions, mcap::McapOptions};
+use omni_cli::cmd::{self, DataArgs, RobotArgs};
+use omni_cli::dataset;
+use omni_cli::robot_file::{self, RobotFileError};
 use omni_kin::{Command, FittedModel, Run, RunData};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
+use pyo3::types::PyBytes;
 use std::path::PathBuf;
 
 /// One recorded (or simulated) run: wheel-speed samples, ground-truth poses and the command.
@@ -112,6 +116,11 @@ impl PyRun {
     fn repetition(&self) -> Option<u32> {
         self.inner.repetition()
     }
+    /// Pickling: every field as compact bytes (see `pickle.rs`), validated again on the way back.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> crate::pickle::Reduced<'py, (Bound<'py, PyBytes>,)> {
+        let rebuild = py.import("omnical._omnical")?.getattr("_run_from_bytes")?;
+        Ok((rebuild, (PyBytes::new(py, &crate::pickle::run_to_bytes(&self.inner)),)))
+    }
     fn __repr__(&self) -> String {
         format!(
             "Run({:?}, {} samples × {} wheels, {} truth poses, {:.2} s)",
@@ -124,7 +133,8 @@ impl PyRun {
     }
 }
 
-/// Runs loaded from files, with what was skipped or noticed, and the design model the data declares.
+/// Runs loaded from files, with what was skipped or noticed, the robot description they were read with and
+/// the design model of their robot (None when the data names no robot).
 ///
 /// Behaves as a sequence of :class:`Run` (``len``, indexing, iteration) and is accepted wherever runs
 /// are.
@@ -133,7 +143,8 @@ pub struct PyDataset {
     pub runs: Vec<Run>,
     notes: Vec<String>,
     skipped: Vec<(String, String)>,
-    pub design: FittedModel,
+    pub design: Option<FittedModel>,
+    robot: Option<String>,
 }
 
 #[pymethods]
@@ -143,7 +154,8 @@ impl PyDataset {
     fn runs(&self) -> Vec<PyRun> {
         self.runs.iter().map(|r| PyRun { inner: r.clone() }).collect()
     }
-    /// Things to know about the data (e.g. "velocity empty: differentiated position").
+    /// Things to know about the data (e.g. "velocity empty: differentiated position", "robot: data/robot.toml
+    /// (found beside the data)").
     #[getter]
     fn notes(&self) -> Vec<String> {
         self.notes.clone()
@@ -153,10 +165,20 @@ impl PyDataset {
     fn skipped(&self) -> Vec<(String, String)> {
         self.skipped.clone()
     }
-    /// The design model of the data: its declared geometry (OptiOdom metadata), else the paper's Eq. 7.
+    /// The design model of the data's robot, at its design values: the ``robot=`` description's (its
+    /// design matrix), else the geometry the data declares (OptiOdom metadata), else a ``robot.toml``
+    /// found beside the data or in the working directory. None when the data names no robot: ``train``
+    /// and ``evaluate`` then need ``robot=`` or ``model=``.
     #[getter]
-    fn design(&self) -> PyModel {
-        PyModel::from_fitted(self.design.clone(), Vec::new())
+    fn design(&self) -> Option<PyModel> {
+        self.design.as_ref().map(|d| PyModel::from_fitted(d.clone(), Vec::new()))
+    }
+    /// The robot description the runs were read with (its joints, topics and design): the ``robot=``
+    /// file, ``"apr02 (built in: the paper's APR-02)"``, or ``"PATH (found beside the data)"``; None when
+    /// there is none.
+    #[getter]
+    fn robot(&self) -> Option<String> {
+        self.robot.clone()
     }
     fn __len__(&self) -> usize {
         self.runs.len()
@@ -171,19 +193,69 @@ impl PyDataset {
         }
         Ok(PyRun { inner: self.runs[i as usize].clone() })
     }
+    /// Pickling: the runs (as `Run` pickles them), notes, skipped inputs and the design's model file text.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> crate::pickle::Reduced<'py, DatasetState<'py>> {
+        let rebuild = py.import("omnical._omnical")?.getattr("_dataset_from_state")?;
+        let runs = self.runs.iter().map(|r| PyBytes::new(py, &crate::pickle::run_to_bytes(r))).collect();
+        let design = match &self.design {
+            Some(d) => omni_cli::model_file::to_toml(d, None).map_err(value_error)?,
+            None => String::new(),
+        };
+        Ok((rebuild, (runs, self.notes.clone(), self.skipped.clone(), design, self.robot.clone())))
+    }
     fn __repr__(&self) -> String {
         format!("Dataset({} runs, {} skipped)", self.runs.len(), self.skipped.len())
     }
 }
 
-/// Load runs from files and folders: omnical CSV (``.csv``), ROS 2 bags (``.mcap``), folders of them,
-/// or OptiOdom set folders. Options mirror the CLI's data flags.
+/// A pickled `Dataset`: its runs' bytes, notes, skipped inputs, design model file text ("" when none),
+/// robot description.
+type DatasetState<'py> = (Vec<Bound<'py, PyBytes>>, Vec<String>, Vec<(String, String)>, String, Option<String>);
+
+/// Unpickling a `Run`.
 #[pyfunction]
-#[pyo3(signature = (*paths, joints = None, joints_topic = None, gt_topic = None, gt_parent_frame = None, gt_child_frame = None, split_s = None, skip_invalid = false, ticks_per_rev = None))]
+pub fn _run_from_bytes(data: &[u8]) -> PyResult<PyRun> {
+    Ok(PyRun { inner: crate::pickle::run_from_bytes(data)? })
+}
+
+/// Unpickling a `Dataset`.
+#[pyfunction]
+#[pyo3(signature = (runs, notes, skipped, design, robot = None))]
+pub fn _dataset_from_state(
+    runs: Vec<Vec<u8>>,
+    notes: Vec<String>,
+    skipped: Vec<(String, String)>,
+    design: &str,
+    robot: Option<String>,
+) -> PyResult<PyDataset> {
+    let runs = runs.iter().map(|b| crate::pickle::run_from_bytes(b)).collect::<PyResult<Vec<Run>>>()?;
+    let design = if design.is_empty() {
+        None
+    } else {
+        let file: omni_cli::model_file::ModelFile =
+            toml::from_str(design).map_err(|e| value_error(format!("pickled dataset: design model: {e}")))?;
+        Some(file.to_fitted().map_err(|e| value_error(format!("pickled dataset: design model: {e}")))?)
+    };
+    Ok(PyDataset { runs, notes, skipped, design, robot })
+}
+
+/// Load runs from files and folders: omnical CSV (``.csv``), ROS 2 bags (``.mcap``, rosbag2 folders),
+/// folders of them, or OptiOdom set folders. Options mirror the CLI's data flags.
+///
+/// ``robot``: the robot description (``robot.toml``, docs/formats.md) or ``"apr02"`` (the paper's robot);
+/// default: a ``robot.toml`` beside the data (the first path's folder, or that folder itself) or in the
+/// working directory, as the CLI's ``--robot``. Its joint names, topics, frames and ground-truth file fill
+/// what the other options leave open, and its design becomes ``Dataset.design``.
+///
+/// >>> ds = omnical.load("runs/", robot="robot.toml")  # doctest: +SKIP
+/// >>> ds.design.design_matrix  # doctest: +SKIP
+#[pyfunction]
+#[pyo3(signature = (*paths, robot = None, joints = None, joints_topic = None, gt_topic = None, gt_parent_frame = None, gt_child_frame = None, split_s = None, skip_invalid = false, ticks_per_rev = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn load(
     py: Python<'_>,
     paths: Vec<PathBuf>,
+    robot: Option<PathBuf>,
     joints: Option<Vec<String>>,
     joints_topic: Option<String>,
     gt_topic: Option<String>,
@@ -196,31 +268,47 @@ pub fn load(
     if paths.is_empty() {
         return Err(value_error("load() needs at least one path"));
     }
-    let mut mcap = McapOptions {
+    let data = DataArgs {
+        robot: RobotArgs { robot: robot.map(|r| r.to_string_lossy().into_owned()) },
+        joints,
         joints_topic,
-        truth_topic: gt_topic,
-        truth_parent_frame: gt_parent_frame,
-        truth_child_frame: gt_child_frame,
+        gt_topic,
+        gt_parent_frame,
+        gt_child_frame,
         split: split_s,
         skip_invalid,
-        ..McapOptions::default()
+        ticks_per_rev,
+        ..DataArgs::default()
     };
-    if let Some(j) = joints {
-        mcap.wheel_joints = j;
+    // The CLI's lookup: robot=, else a robot.toml beside the data or in the working directory.
+    let robot = robot_file::resolve(data.robot.robot.as_deref(), &paths).map_err(robot_error)?;
+    let ds = py.detach(|| cmd::load_for_robot(&paths, &data, false, robot)).map_err(load_error)?;
+    let design = omni_cli::design::declared(&ds).map_err(|e| value_error(format!("{e:#}")))?;
+    let source = ds.robot_file.as_ref().map(|f| f.source.clone());
+    let mut notes = ds.notes;
+    if let Some(s @ robot_file::Source::Discovered(_)) = &source {
+        notes.insert(0, format!("robot: {s}"));
     }
-    let opts = LoadOptions { skip_invalid, ticks_per_rev, mcap, ..LoadOptions::default() };
-    let ds = py.detach(|| dataset::load(&paths, &opts)).py()?;
-    // The same lookup as the CLI's `--model design`; where the data names no robot, Python still falls back
-    // to the paper's APR-02 design (Eq. 7), where the CLI asks for a robot description.
-    let design = omni_cli::design::declared(&ds)
-        .map_err(|e| value_error(format!("{e:#}")))?
-        .unwrap_or_else(FittedModel::paper_design);
     Ok(PyDataset {
         runs: ds.runs,
-        notes: ds.notes,
+        notes,
         skipped: ds.skipped.into_iter().map(|s| (s.source, s.reason)).collect(),
         design,
+        robot: source.map(|s| s.to_string()),
     })
+}
+
+/// An error of the CLI's loading as the Python exception of its cause (`DatasetError`, `FileNotFoundError`,
+/// `ValueError` for a robot description or a bad option).
+fn load_error(e: anyhow::Error) -> PyErr {
+    let e = match e.downcast::<dataset::DatasetError>() {
+        Ok(d) => return d.to_py_err(),
+        Err(e) => e,
+    };
+    match e.downcast::<RobotFileError>() {
+        Ok(r) => robot_error(r),
+        Err(e) => value_error(format!("{e:#}")),
+    }
 }
 
 /// Runs from a `Dataset`, a `Run` or an iterable of `Run`s, and the design model the data declares (a
@@ -228,7 +316,7 @@ pub fn load(
 pub fn runs_from(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(Vec<Run>, Option<FittedModel>)> {
     if let Ok(ds) = obj.cast::<PyDataset>() {
         let ds = ds.get();
-        return Ok((ds.runs.clone(), Some(ds.design.clone())));
+        return Ok((ds.runs.clone(), ds.design.clone()));
     }
     if let Ok(r) = obj.cast::<PyRun>() {
         return Ok((vec![r.get().inner.clone()], None));

@@ -57,7 +57,7 @@ def test_clock_effect_matches_the_builtin(runs: list[omnical.Run]) -> None:
 
 
 def test_diagnose_ranks_a_python_effect(runs: list[omnical.Run], validation: list[omnical.Run]) -> None:
-    fit = omnical.train(runs, seed=0)
+    fit = omnical.train(runs, robot="apr02", seed=0)
     d = omnical.diagnose(fit.model, runs, validation=validation, candidates=[Lag(), "sensor_offset"])
     assert d.verdict == "py_lag"
     assert d.ranking[0]["physics"] == "A clock lag, in Python."
@@ -93,7 +93,7 @@ class WrongShape(Raises):
 
 def test_exceptions_in_effects_surface(runs: list[omnical.Run]) -> None:
     with pytest.raises(ZeroDivisionError, match="bad physics"):
-        omnical.train(runs, effects=[Raises()])
+        omnical.train(runs, robot="apr02", effects=[Raises()])
     with pytest.raises(ZeroDivisionError, match="bad physics"):
         omnical.evaluate(runs, omnical.Model.design().with_effect(Raises()))
     with pytest.raises(ValueError, match=r"effect wrong_shape: wheel_rates must return shape \(\d+, 3\), got \(\d+, 2\)"):

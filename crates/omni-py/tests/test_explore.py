@@ -20,6 +20,6 @@ def test_explore_finds_a_world_drift_and_the_learned_effect_trains() -> None:
     assert abs(terms["drift_y"]["value"] + 0.0021) < 4e-4
     assert e.to_dict()["schema_version"] == 1
     assert e.model is not None and "learned:world.drift_x" in e.model.param_names
-    fit = omnical.train(train, effects=["learned:world"], seed=0)
+    fit = omnical.train(train, robot="apr02", effects=["learned:world"], seed=0)
     true_cost = omnical.evaluate(held_out, truth).path_cost
     assert omnical.evaluate(held_out, fit.model).path_cost <= 1.1 * true_cost

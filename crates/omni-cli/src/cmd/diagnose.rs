@@ -8,6 +8,7 @@ use anyhow::Context;
 use omni_ga::diagnose::{DiagnoseOptions, Diagnosis, diagnose};
 use omni_ga::explore::{Exploration, ExploreOptions, explore};
 use omni_ga::science::text;
+use omni_kin::{FittedModel, Run};
 use std::path::PathBuf;
 
 /// Arguments of `omnical diagnose`.
@@ -47,24 +48,13 @@ pub struct Args {
 
 /// Runs `omnical diagnose`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
-    let ds = load_runs(&a.runs, &a.data)?;
-    let model = resolve_model(&a.model, &ds)?;
-    let val = if a.validate.is_empty() { None } else { Some(load_runs(&a.validate, &a.data)?.runs) };
-    let mut opts = DiagnoseOptions { auto: a.auto, min_gain: a.min_gain, ..DiagnoseOptions::default() };
-    if !a.candidates.is_empty() {
-        opts.candidates = a.candidates.clone();
-    }
-    let design = design_for(&model);
-    let d = diagnose(&model, &design, &ds.runs, val.as_deref(), &opts)?;
-    if let (Some(out), Some(fm)) = (&a.out, &d.final_model) {
-        let text = model_file::to_toml(fm, None).map_err(anyhow::Error::msg)?;
-        atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))?;
-    }
+    let (d, loaded) = diagnose_loaded(a)?;
     // The explorer stage of `--auto`: only when the catalogue leaves a systematic error unexplained, on the
     // same training and held-out runs, starting from the model the ladder ended with.
-    let exploration = match (&val, a.auto && d.unexplained) {
+    let exploration = match (&loaded.validate, a.auto && d.unexplained) {
         (Some(v), true) => {
-            Some(explore(d.final_model.as_ref().unwrap_or(&model), &ds.runs, v, &ExploreOptions::default())?)
+            let from = d.final_model.as_ref().unwrap_or(&loaded.model);
+            Some(explore(from, &loaded.train, v, &ExploreOptions::default())?)
         }
         _ => None,
     };
@@ -83,6 +73,37 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// `omnical diagnose` without printing (the Python wheel's fleet workers): loads, diagnoses and writes
+/// `--out` as [`run`] does, and returns the diagnosis.
+pub fn diagnose_quietly(a: &Args) -> anyhow::Result<Diagnosis> {
+    Ok(diagnose_loaded(a)?.0)
+}
+
+/// What [`diagnose_loaded`] loaded: the training runs, the held-out runs (if given) and the model.
+struct Loaded {
+    train: Vec<Run>,
+    validate: Option<Vec<Run>>,
+    model: FittedModel,
+}
+
+/// Loads, diagnoses and writes `--out`; returns the diagnosis and what it was computed on.
+fn diagnose_loaded(a: &Args) -> anyhow::Result<(Diagnosis, Loaded)> {
+    let ds = load_runs(&a.runs, &a.data)?;
+    let model = resolve_model(&a.model, &ds)?;
+    let val = if a.validate.is_empty() { None } else { Some(load_runs(&a.validate, &a.data)?.runs) };
+    let mut opts = DiagnoseOptions { auto: a.auto, min_gain: a.min_gain, ..DiagnoseOptions::default() };
+    if !a.candidates.is_empty() {
+        opts.candidates = a.candidates.clone();
+    }
+    let design = design_for(&model);
+    let d = diagnose(&model, &design, &ds.runs, val.as_deref(), &opts)?;
+    if let (Some(out), Some(fm)) = (&a.out, &d.final_model) {
+        let text = model_file::to_toml(fm, None).map_err(anyhow::Error::msg)?;
+        atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))?;
+    }
+    Ok((d, Loaded { train: ds.runs, validate: val, model }))
 }
 
 /// `diagnose --auto --json` with the explorer stage: the diagnosis's fields, then `explore` (the document

@@ -14,7 +14,8 @@ use std::path::{Path, PathBuf};
 /// Arguments of `omnical init`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The recording (ROS 2 MCAP).
+    /// The recording: a ROS 2 bag (.mcap, .db3), a rosbag2 folder (metadata.yaml), or a folder of them
+    /// (the first is inspected).
     pub recording: PathBuf,
     /// The robot's URDF (default: the recording's /robot_description topic).
     #[arg(long, value_name = "FILE")]
@@ -33,8 +34,8 @@ pub struct Args {
     pub max_file_mb: u64,
 }
 
-/// The URDF text and where it came from.
-fn urdf_text(a: &Args, inv: &Inventory) -> anyhow::Result<(String, UrdfSource, PathBuf)> {
+/// The URDF text and where it came from; `recording` is the one inspected.
+fn urdf_text(a: &Args, recording: &Path, inv: &Inventory) -> anyhow::Result<(String, UrdfSource, PathBuf)> {
     if let Some(p) = &a.urdf {
         let text = std::fs::read_to_string(p).with_context(|| format!("{}", p.display()))?;
         return Ok((text, UrdfSource { label: p.display().to_string() }, p.clone()));
@@ -42,13 +43,13 @@ fn urdf_text(a: &Args, inv: &Inventory) -> anyhow::Result<(String, UrdfSource, P
     match &inv.robot_description {
         Some(text) => Ok((
             text.clone(),
-            UrdfSource { label: format!("topic {} of {}", mcap::ROBOT_DESCRIPTION_TOPIC, a.recording.display()) },
-            a.recording.clone(),
+            UrdfSource { label: format!("topic {} of {}", mcap::ROBOT_DESCRIPTION_TOPIC, recording.display()) },
+            recording.to_path_buf(),
         )),
         None => bail!(
             "{}: the recording has no {} topic (std_msgs/msg/String) with the robot's URDF; give it with --urdf FILE \
              (for a .xacro, run `xacro robot.urdf.xacro > robot.urdf` first)",
-            a.recording.display(),
+            recording.display(),
             mcap::ROBOT_DESCRIPTION_TOPIC
         ),
     }
@@ -59,8 +60,17 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     if a.out.exists() && !a.force {
         bail!("{} exists; pass --force to replace it, or --out another file", a.out.display());
     }
-    let inv = mcap::inspect(&a.recording, a.max_file_mb.saturating_mul(1 << 20))?;
-    let (text, source, urdf_path) = urdf_text(a, &inv)?;
+    let found = dataset::inspect(&a.recording, a.max_file_mb.saturating_mul(1 << 20))?;
+    if found.recordings > 1 {
+        println!(
+            "{} holds {} recordings; inspecting the first, {}",
+            a.recording.display(),
+            found.recordings,
+            found.recording.display()
+        );
+    }
+    let inv = found.inventory;
+    let (text, source, urdf_path) = urdf_text(a, &found.recording, &inv)?;
     let found = urdf::wheels(&text).map_err(|e| anyhow::anyhow!("{}: {e}", source.label))?;
     let recording = a.recording.display().to_string();
     let d = init::draft(&inv, &recording, &found, &source, a.kind)

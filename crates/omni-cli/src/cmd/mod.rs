@@ -17,6 +17,23 @@ use crate::robot_file;
 use omni_kin::FittedModel;
 use std::path::PathBuf;
 
+/// Arguments of `omnical fleet`, which the Python wheel's console command runs (omnical.fleet, on Dask);
+/// the native binary only says where to find it.
+#[derive(Debug, clap::Args)]
+pub struct FleetArgs {
+    /// FLEET_DIR and the options of the wheel's `omnical fleet --help`.
+    #[arg(trailing_var_arg = true, allow_hyphen_values = true, value_name = "ARGS")]
+    pub args: Vec<String>,
+}
+
+/// The error of a Python-side command asked of the native binary.
+pub fn python_only(what: &str) -> anyhow::Error {
+    anyhow::anyhow!(
+        "{what} runs on Dask from the Python wheel: `pip install \"omnical[fleet]\"` (or `pip install \".[fleet]\"` \
+         from the repository) and run the `omnical` command it installs; this native binary has no Python"
+    )
+}
+
 /// The help heading of [`DataArgs`].
 pub const DATA_OPTIONS: &str = "Data options";
 
@@ -82,6 +99,28 @@ pub struct DataArgs {
     pub max_file_mb: u64,
 }
 
+impl Default for DataArgs {
+    /// No flag given: what the command line parses from no data options.
+    fn default() -> Self {
+        Self {
+            robot: RobotArgs::default(),
+            joints: None,
+            joints_topic: None,
+            gt_topic: None,
+            gt_parent_frame: None,
+            gt_child_frame: None,
+            gt: None,
+            gt_time_offset: None,
+            gt_columns: Vec::new(),
+            gt_units: Vec::new(),
+            split: None,
+            skip_invalid: false,
+            ticks_per_rev: None,
+            max_file_mb: dataset::DEFAULT_MAX_FILE_BYTES >> 20,
+        }
+    }
+}
+
 /// Load runs from files/folders, printing what was skipped or noticed on stderr. The runs' recorded
 /// odometry is left out (no command but `export` shows it, and it would take as much memory as the wheel
 /// data).
@@ -99,6 +138,20 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
     if let Some(r) = &robot {
         robot_file::announce(&r.source);
     }
+    let ds = load_for_robot(paths, data, recorded_odometry, robot)?;
+    print_load_notes(&ds);
+    Ok(ds)
+}
+
+/// Reads runs as [`load_runs`] does for the robot `robot` (resolved from `data` by
+/// [`robot_file::resolve`]: its joints, topics and ground-truth file fill what `data` leaves open), printing
+/// nothing: notes, skipped inputs and ground-truth clocks stay in the dataset. The Python binding's `load`.
+pub fn load_for_robot(
+    paths: &[PathBuf],
+    data: &DataArgs,
+    recorded_odometry: bool,
+    robot: Option<robot_file::RobotFile>,
+) -> anyhow::Result<Dataset> {
     let mut mcap = dataset::mcap::McapOptions {
         wheel_joints: data.joints.clone().unwrap_or_default(),
         joints_topic: data.joints_topic.clone(),
@@ -118,10 +171,23 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
         recorded_odometry,
         max_file_bytes: data.max_file_mb.saturating_mul(1 << 20),
         ground_truth: ground_truth_options(data, robot.as_ref())?,
+        csv_joints: csv_joints(data, robot.as_ref()),
     };
     let mut ds = dataset::load(paths, &opts)?;
     ds.robot_file = robot;
-    // The same note from many files is printed once, with a count.
+    Ok(ds)
+}
+
+/// The joints CSV runs are read by: `--joints`, else a robot description file's. The built-in `apr02`'s
+/// names are the simulator's placeholders, so with it each file keeps its own column order.
+fn csv_joints(data: &DataArgs, robot: Option<&robot_file::RobotFile>) -> Vec<String> {
+    let from_file = robot.filter(|r| r.source != robot_file::Source::Builtin).map(|r| r.description.joints());
+    data.joints.clone().or(from_file).unwrap_or_default()
+}
+
+/// Prints a dataset's notes (the same note from many files once, with a count), skipped inputs and
+/// ground-truth clocks on stderr.
+fn print_load_notes(ds: &Dataset) {
     let mut seen: Vec<(String, String, usize)> = Vec::new();
     for n in &ds.notes {
         let key = n.split_once(": ").map_or(n.as_str(), |(_, rest)| rest).to_string();
@@ -143,7 +209,6 @@ fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::
     for c in &ds.ground_truth_clocks {
         eprintln!("{}", c.describe());
     }
-    Ok(ds)
 }
 
 /// `--gt` and its options, over the robot description's `[ground_truth]` (its `file` relative to the

@@ -72,6 +72,13 @@ pub struct Args {
     /// No encoder quantisation and no noise.
     #[arg(long)]
     pub noise_free: bool,
+    /// Write a simulated fleet of N robots instead (`OUT/<robot>/<session>/`, spread geometry, a wearing wheel
+    /// and a growing clock lag, OUT/truth.json): the Python wheel's `omnical` only.
+    #[arg(long, value_name = "N")]
+    pub fleet: Option<usize>,
+    /// With --fleet: sessions per robot.
+    #[arg(long, value_name = "S", requires = "fleet")]
+    pub sessions: Option<usize>,
 }
 
 fn write_split(dir: &Path, runs: &[Run], format: Format, wheel_names: &[String]) -> anyhow::Result<()> {
@@ -165,6 +172,9 @@ fn write_robot(dir: &Path, robot: &RobotFile, format: Format) -> anyhow::Result<
 
 /// Runs `omnical simulate`; `quiet` hides the progress display.
 pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
+    if a.fleet.is_some() {
+        return Err(super::python_only("omnical simulate --fleet"));
+    }
     let (robot, geometry, design, mut truth) = design_and_truth(a)?;
     let wheel_names = robot.description.joints();
     let commands = match &a.commands {

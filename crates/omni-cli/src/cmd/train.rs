@@ -2,12 +2,15 @@
 
 use super::{DataArgs, load_runs};
 use crate::cli::{choice, effect_help};
+use crate::dataset::Dataset;
+use crate::robot_file::{self, Design};
 use crate::{atomic, design, interrupt, model_file, progress};
 use anyhow::Context;
 use omni_ga::calibrate::{Calibration, Plan, Preset, Unexcited, calibrate};
 use omni_ga::identify::IdentifyOptions;
 use omni_kin::cost::{CostKind, CostName};
-use omni_kin::{EffectKind, FittedModel, KinematicsKind};
+use omni_kin::robot::PRIOR_BOX_SIGMAS;
+use omni_kin::{EffectKind, FittedModel, KinematicsKind, Model};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -153,25 +156,97 @@ pub fn apply_fit_args(mut plan: Plan, f: &FitArgs) -> anyhow::Result<Plan> {
     Ok(plan)
 }
 
+/// A robot description's prior on one parameter of the fit (docs/formats.md, `[priors]`).
+struct PriorUse {
+    /// The parameter (`r_left`).
+    name: String,
+    /// Its unit.
+    unit: String,
+    /// Its design value (the start).
+    design: f64,
+    /// The prior's one-sigma uncertainty, in the parameter's unit.
+    std: f64,
+}
+
+impl PriorUse {
+    /// How many σ the fitted value lies from the design.
+    fn sigmas(&self, fitted: &FittedModel) -> f64 {
+        fitted.get(&self.name).map_or(f64::NAN, |v| (v - self.design) / self.std)
+    }
+
+    fn to_json(&self, fitted: &FittedModel) -> serde_json::Value {
+        json!({
+            "name": self.name, "unit": self.unit, "design": self.design, "std": self.std,
+            "fitted": fitted.get(&self.name), "sigmas": self.sigmas(fitted),
+        })
+    }
+
+    fn describe(&self, fitted: &FittedModel) -> String {
+        format!(
+            "prior {}: design {} ± {} {} (GA box ±{PRIOR_BOX_SIGMAS} σ), fitted {:.6} ({:+.1} σ)",
+            self.name,
+            self.design,
+            self.std,
+            self.unit,
+            fitted.get(&self.name).unwrap_or(f64::NAN),
+            self.sigmas(fitted)
+        )
+    }
+}
+
+/// The `[priors]` of the robot description the design came from, on the start's base parameters they
+/// cover (the parametric models' radii, positions, angles, separation). An `ik` matrix has none: a note
+/// says the priors are not used then.
+fn robot_priors(start: &FittedModel, ds: &crate::dataset::Dataset) -> Vec<PriorUse> {
+    let Some(Design::File(f)) = robot_file::design(ds) else { return Vec::new() };
+    let Some(priors) = &f.description.priors else { return Vec::new() };
+    let specs = start.model.params();
+    let found: Vec<PriorUse> = specs[..start.model.n_base()]
+        .iter()
+        .zip(&start.params)
+        .filter_map(|(s, v)| {
+            let std = priors.std_of(&s.name)?;
+            Some(PriorUse { name: s.name.clone(), unit: s.unit.clone(), design: *v, std })
+        })
+        .collect();
+    if found.is_empty() {
+        eprintln!(
+            "note: the [priors] of {} bound the parametric models' search (--model geometry, diff or mecanum); \
+             the {} model's parameters keep the preset's box",
+            f.source,
+            start.model.kinematics.id()
+        );
+    }
+    found
+}
+
+/// The design model with its columns named: the robot description's joints (already), else `--joints`
+/// (the order the runs were read in); the model file carries them. `--joints` in another order than the
+/// robot description's is warned about: the design's columns follow the description.
+fn named_columns(design: Model, joints: Option<&[String]>) -> anyhow::Result<Model> {
+    let Some(joints) = joints.filter(|j| j.len() == design.n_wheels()) else { return Ok(design) };
+    let names = design.kinematics.wheel_names();
+    if names == omni_kin::geometry::default_wheel_names(names.len()) {
+        return Ok(design.with_wheel_names(joints)?);
+    }
+    if names != joints {
+        eprintln!(
+            "warning: --joints reads the wheels as {}, but the design's columns are the robot's {}: give the \
+             joints in the robot description's order",
+            joints.join(", "),
+            names.join(", ")
+        );
+    }
+    Ok(design)
+}
+
 /// Runs `omnical train`; `quiet` hides the progress display.
 pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     // Ctrl-C while loading ends the command; during the fit it stops the GA at its next generation and the
     // best model so far is reported and written.
     interrupt::install();
-    let ds = load_runs(&a.runs, &a.data)?;
-    if interrupt::requested() {
-        return Err(interrupt::Interrupted.into());
-    }
-    let mut start = match &a.start {
-        Some(p) => model_file::read(p).context("reading --start")?,
-        None => FittedModel::nominal(design::model(a.model, &ds)?),
-    };
-    for id in &a.effects {
-        start = start
-            .with_effect(EffectKind::from_id(id, start.model.n_wheels()).with_context(|| format!("--effect {id}"))?);
-    }
+    let (ds, start, plan, priors) = prepare(a)?;
     let preset_name = a.preset.id();
-    let plan = apply_fit_args(Plan::preset(a.preset, start.model.n_params()).seed(a.seed), &a.fit)?;
     if let Some(w) = fixed_step_mismatch(&plan, &ds.runs) {
         eprintln!("warning: {w}");
     }
@@ -187,15 +262,14 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     bar.finish();
     let interrupted = interrupt::requested();
     let mut s = summary(&c, preset_name, a.seed, ds.runs.len())?;
+    if !priors.is_empty() {
+        s["priors"] = priors.iter().map(|p| p.to_json(&c.fitted)).collect();
+    }
     if interrupted {
         s["interrupted"] = json!(true);
     }
     if let Some(out) = &a.out {
-        // Everything but the wall time: the same data, preset and seed give a byte-identical file.
-        let mut fit: toml::Table = toml::Table::try_from(toml_safe(s.clone())).context("fit summary")?;
-        fit.remove("seconds");
-        let text = model_file::to_toml(&c.fitted, Some(fit)).map_err(anyhow::Error::msg)?;
-        atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))?;
+        write_model(&c, &s, out)?;
     }
     if a.json {
         if !ds.ground_truth_clocks.is_empty() {
@@ -207,6 +281,9 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
             println!("interrupted (Ctrl-C): the best model found so far (the GA stopped early; no polish)");
         }
         print_summary(&c, preset_name, ds.runs.len());
+        for p in &priors {
+            println!("{}", p.describe(&c.fitted));
+        }
         if let Some(out) = &a.out {
             let what = if interrupted { "best-so-far model" } else { "model" };
             println!("{what} written to {}", out.display());
@@ -216,6 +293,63 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         return Err(interrupt::Interrupted.into());
     }
     Ok(())
+}
+
+/// Loads the runs and builds the start model and the plan, as `omnical train` does. A Ctrl-C (when the
+/// handler is installed) during loading ends it with [`interrupt::Interrupted`].
+fn prepare(a: &Args) -> anyhow::Result<(Dataset, FittedModel, Plan, Vec<PriorUse>)> {
+    let ds = load_runs(&a.runs, &a.data)?;
+    if interrupt::requested() {
+        return Err(interrupt::Interrupted.into());
+    }
+    let mut start = match &a.start {
+        Some(p) => model_file::read(p).context("reading --start")?,
+        None => FittedModel::nominal(named_columns(design::model(a.model, &ds)?, a.data.joints.as_deref())?),
+    };
+    for id in &a.effects {
+        start = start
+            .with_effect(EffectKind::from_id(id, start.model.n_wheels()).with_context(|| format!("--effect {id}"))?);
+    }
+    let mut plan = apply_fit_args(Plan::preset(a.preset, start.model.n_params()).seed(a.seed), &a.fit)?;
+    let priors = if a.start.is_none() { robot_priors(&start, &ds) } else { Vec::new() };
+    plan.half_widths = priors.iter().map(|p| (p.name.clone(), PRIOR_BOX_SIGMAS * p.std)).collect();
+    Ok((ds, start, plan, priors))
+}
+
+/// Writes the model file of a fit with its summary `s` as the `[fit]` table, atomically. Everything but the
+/// wall time goes in: the same data, preset and seed give a byte-identical file.
+fn write_model(c: &Calibration, s: &serde_json::Value, out: &std::path::Path) -> anyhow::Result<()> {
+    let mut fit: toml::Table = toml::Table::try_from(toml_safe(s.clone())).context("fit summary")?;
+    fit.remove("seconds");
+    let text = model_file::to_toml(&c.fitted, Some(fit)).map_err(anyhow::Error::msg)?;
+    atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))
+}
+
+/// What [`train_quietly`] gives back.
+pub struct Trained {
+    /// The fit.
+    pub calibration: Calibration,
+    /// The JSON summary that `--json` prints (without the ground-truth clocks) and the model file holds.
+    pub summary: serde_json::Value,
+    /// The dataset the runs came from (notes, skipped inputs, ground-truth clocks).
+    pub dataset: Dataset,
+    /// What `omnical train` would print as `warning:` lines before training.
+    pub warnings: Vec<String>,
+}
+
+/// `omnical train` without a terminal, for callers that run many trainings in one process (the Python
+/// wheel's fleet workers): the same loading, start model, plan and fit as [`run`], and the same model file
+/// written to `--out` (byte-identical: the same `write_model` either way), but nothing printed, no progress bar
+/// and no Ctrl-C handler installed.
+pub fn train_quietly(a: &Args) -> anyhow::Result<Trained> {
+    let (ds, start, plan, _priors) = prepare(a)?;
+    let warnings = fixed_step_mismatch(&plan, &ds.runs).into_iter().collect();
+    let c = calibrate(&start, &ds.runs, &plan, &mut omni_ga::observe::NoopObserver)?;
+    let s = summary(&c, a.preset.id(), a.seed, ds.runs.len())?;
+    if let Some(out) = &a.out {
+        write_model(&c, &s, out)?;
+    }
+    Ok(Trained { calibration: c, summary: s, dataset: ds, warnings })
 }
 
 /// Human-readable fit summary on stdout.

@@ -34,18 +34,76 @@ fn parse_num(path: &Path, line: usize, col: &str, cell: &str) -> Result<f64, Dat
         .map_err(|_| DatasetError::at(path, format!("line {line}, column {col}"), format!("{cell:?} is not a number")))
 }
 
+/// The wheel columns `cols` (of `headers`, ending in `_ticks` when `ticks`, else `_rad_s`) in the order of
+/// `joints`; `cols` unchanged when `joints` is empty. An error names the file, the header line, the joint
+/// without a column, and both lists of joints.
+fn joint_columns(
+    path: &Path,
+    header_line: usize,
+    headers: &[String],
+    cols: Vec<usize>,
+    ticks: bool,
+    joints: &[String],
+) -> Result<Vec<usize>, DatasetError> {
+    if joints.is_empty() {
+        return Ok(cols);
+    }
+    let suffix = if ticks { "_ticks" } else { "_rad_s" };
+    let in_file: Vec<&str> = cols.iter().map(|&c| headers[c].strip_suffix(suffix).unwrap_or(&headers[c])).collect();
+    let mismatch = |what: String| {
+        DatasetError::at(
+            path,
+            format!("line {header_line}"),
+            format!(
+                "{what} (the robot's joints: {}; the file's wheel columns: {})",
+                joints.join(", "),
+                in_file.join(", ")
+            ),
+        )
+    };
+    if in_file.len() != joints.len() {
+        return Err(mismatch(format!("{} wheel columns for {} joints", in_file.len(), joints.len())));
+    }
+    joints
+        .iter()
+        .map(|j| {
+            in_file
+                .iter()
+                .position(|f| f == j)
+                .map(|i| cols[i])
+                .ok_or_else(|| mismatch(format!("no column {j}{suffix}")))
+        })
+        .collect()
+}
+
 /// Read one omnical CSV run. `ticks_per_rev` overrides the file's.
 pub fn read_run(path: &Path, ticks_per_rev: Option<f64>) -> Result<Run, DatasetError> {
+    read_run_for(path, ticks_per_rev, &[])
+}
+
+/// [`read_run`] with the wheel columns in the order of `joints` (a robot description's or `--joints`:
+/// columns `<joint>_rad_s` or `<joint>_ticks`); empty `joints`: the file's order.
+pub fn read_run_for(path: &Path, ticks_per_rev: Option<f64>, joints: &[String]) -> Result<Run, DatasetError> {
     let bytes = std::fs::read(path).map_err(|e| DatasetError::io(path, e))?;
-    parse_run(path, &bytes, ticks_per_rev)
+    parse_run_for(path, &bytes, ticks_per_rev, joints)
 }
 
 /// Parse one omnical CSV run from its bytes; `path` only names the source in errors. `ticks_per_rev`
 /// overrides the file's.
+pub fn parse_run(path: &Path, bytes: &[u8], ticks_per_rev: Option<f64>) -> Result<Run, DatasetError> {
+    parse_run_for(path, bytes, ticks_per_rev, &[])
+}
+
+/// [`parse_run`] with the wheel columns in the order of `joints` ([`read_run_for`]).
 ///
 /// long: one pass over header and rows, each check with its own message naming file, line and column;
 /// to split into header, row and ground-truth parts (issue 15 leftover).
-pub fn parse_run(path: &Path, bytes: &[u8], ticks_per_rev: Option<f64>) -> Result<Run, DatasetError> {
+pub fn parse_run_for(
+    path: &Path,
+    bytes: &[u8],
+    ticks_per_rev: Option<f64>,
+    joints: &[String],
+) -> Result<Run, DatasetError> {
     let text = std::str::from_utf8(bytes).map_err(|e| {
         DatasetError::file(path, format!("is not UTF-8 text (invalid byte at offset {})", e.valid_up_to()))
     })?;
@@ -114,6 +172,7 @@ pub fn parse_run(path: &Path, bytes: &[u8], ticks_per_rev: Option<f64>) -> Resul
             return Err(DatasetError::at(path, format!("line {header_line}"), "mixes _rad_s and _ticks wheel columns"));
         }
     };
+    let wheel_cols = joint_columns(path, header_line, &headers, wheel_cols, ticks, joints)?;
     let tpr = match (ticks, ticks_per_rev.or(meta_num("ticks_per_rev")?)) {
         (true, None) => {
             return Err(DatasetError::file(

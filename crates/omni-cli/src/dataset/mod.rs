@@ -54,6 +54,10 @@ pub struct LoadOptions {
     pub max_file_bytes: u64,
     /// Ground truth from separate files (`--gt`) instead of a topic of the recordings. Default none.
     pub ground_truth: Option<ground_truth::GroundTruthOptions>,
+    /// The wheel joints, in the model's column order, that CSV runs must have (`<joint>_rad_s` or
+    /// `<joint>_ticks` columns, read in this order): a robot description's or `--joints`. Default empty:
+    /// each file's own column order.
+    pub csv_joints: Vec<String>,
 }
 
 impl Default for LoadOptions {
@@ -65,6 +69,7 @@ impl Default for LoadOptions {
             recorded_odometry: true,
             max_file_bytes: DEFAULT_MAX_FILE_BYTES,
             ground_truth: None,
+            csv_joints: Vec::new(),
         }
     }
 }
@@ -102,6 +107,45 @@ pub fn load(paths: &[PathBuf], opts: &LoadOptions) -> Result<Dataset, DatasetErr
         });
     }
     Ok(ds)
+}
+
+/// What `omnical init` inspected: one ROS recording and what it holds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Inspected {
+    /// The recording inspected: the first under the path given, in the order [`load`] reads them.
+    pub recording: PathBuf,
+    /// Its topics, joint names and URDF.
+    pub inventory: mcap::Inventory,
+    /// How many ROS recordings the path holds (1 for a file or a recording folder).
+    pub recordings: usize,
+}
+
+/// Inspects the first ROS recording under `path` (a `.mcap` or `.db3` file, a rosbag2 recording folder, or
+/// a folder of them: whatever [`load`] reads as recordings), reading it whole; each file at most
+/// `max_file_bytes` long.
+pub fn inspect(path: &Path, max_file_bytes: u64) -> Result<Inspected, DatasetError> {
+    let mut inputs = Vec::new();
+    expand(path, &mut inputs);
+    let mut recordings = Vec::new();
+    for input in inputs {
+        match input? {
+            i @ (Input::Mcap(_) | Input::Db3(_) | Input::Recording(_)) => recordings.push(i),
+            Input::Csv(_) | Input::OptiOdom(_) => {}
+        }
+    }
+    let Some(first) = recordings.first() else {
+        return Err(DatasetError::file(
+            path,
+            "no ROS 2 recording here (init reads .mcap and .db3 files and rosbag2 recording folders with a \
+             metadata.yaml)",
+        ));
+    };
+    let inventory = match first {
+        Input::Db3(p) => rosbag2::inspect_db3(p, max_file_bytes)?,
+        Input::Recording(p) => rosbag2::inspect_recording(p, max_file_bytes)?,
+        mcap => mcap::inspect(mcap.path(), max_file_bytes)?,
+    };
+    Ok(Inspected { recording: first.path().to_path_buf(), inventory, recordings: recordings.len() })
 }
 
 /// One thing to read: it gives runs on its own.
@@ -224,7 +268,7 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
     match input {
         Input::Csv(p) => {
             check_size(p, opts.max_file_bytes)?;
-            Ok(csv::read_run(p, opts.ticks_per_rev).map(|r| Loaded {
+            Ok(csv::read_run_for(p, opts.ticks_per_rev, &opts.csv_joints).map(|r| Loaded {
                 runs: vec![if opts.recorded_odometry { r } else { r.without_recorded_odometry() }],
                 ..Default::default()
             }))

@@ -19,6 +19,13 @@ frame `map`), stored as:
     several/a/, several/b/        two recordings in one folder (b is the same motion, db3)
     nogt/rec/                     sqlite3 without the motion-capture topic (ground truth from a file)
     gt/...                        ground truth files (TUM, CSV) on other clocks, see expected.json
+    urdf/rec/                     sqlite3 with the robot's URDF on /robot_description (std_msgs/msg/String);
+    urdf/omni3.urdf               the same URDF as a file
+    reversed_ids/rec.db3          the sqlite3 file with its message ids renumbered backwards (id order is not
+                                  time order: read in (timestamp, id) order all the same)
+    wal_clean/rec.db3             the sqlite3 file in WAL mode, closed cleanly (no log beside it)
+    wal_pending/rec.db3           in WAL mode, its writer killed: the log (-wal) still holds a change (message
+                                  5 of /joint_states cut to 40 bytes, as bad/truncated_blob.db3)
     bad/...                       broken inputs
 
 Wheel speeds follow omnical's convention: sample k is the mean speed over (t_{k-1}, t_k] (the difference of
@@ -31,6 +38,7 @@ import json
 import math
 import shutil
 import sqlite3
+import subprocess
 import sys
 from pathlib import Path
 
@@ -137,7 +145,7 @@ def messages():
     return out, truth
 
 
-TYPES = {'/joint_states': JOINT_STATE, '/mocap/pose': POSE_STAMPED}
+TYPES = {'/joint_states': JOINT_STATE, '/mocap/pose': POSE_STAMPED, '/robot_description': 'std_msgs/msg/String'}
 
 
 def write_bag(path, msgs, storage, compression=None):
@@ -195,6 +203,22 @@ def stamp_text(ns):
     return f'{ns // 10**9}.{ns % 10**9:09d}'
 
 
+def omni3_urdf():
+    """The simulated robot as a URDF: each wheel's joint frame yawed to its angle, turning about -x (the axle
+    points inwards), so positive speed pushes along the counter-clockwise tangent, as in `twist`."""
+    parts = []
+    for name, a in zip(WHEELS, WHEEL_ANGLES):
+        a = float(a)
+        parts.append(
+            f'<link name="{name}_link"><collision><origin xyz="0 0 0" rpy="0 1.5707963267948966 0"/>\n'
+            f'  <geometry><cylinder radius="{RADIUS_M!r}" length="0.03"/></geometry></collision></link>\n'
+            f'<joint name="{name}" type="continuous"><parent link="base_link"/><child link="{name}_link"/>\n'
+            f'  <origin xyz="{DISTANCE_M * math.cos(a)!r} {DISTANCE_M * math.sin(a)!r} 0.0" rpy="0 0 {a!r}"/>'
+            f'<axis xyz="-1 0 0"/></joint>\n')
+    return ('<?xml version="1.0"?>\n<robot name="omni3">\n<link name="base_link"/>\n' + ''.join(parts)
+            + '</robot>\n')
+
+
 def write_tum(path, truth, offset_ns):
     """TUM (evo): `t x y z qx qy qz qw`, t on the ground truth's clock = wheel clock - offset."""
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -212,6 +236,20 @@ def write_csv(path, truth, offset_ns):
         f.write('frame,stamp_ns,pos_x_mm,pos_y_mm,pos_z_mm,heading_deg\n')
         for i, (ns, x, y, yaw) in enumerate(truth):
             f.write(f'{i},{ns - offset_ns},{x * 1000.0!r},{y * 1000.0!r},0.0,{math.degrees(yaw)!r}\n')
+
+
+# A writer killed after a commit in WAL mode: the change stays in the log, not in the database file.
+PENDING = """
+import os, sqlite3, sys
+db = sqlite3.connect(sys.argv[1])
+db.execute('PRAGMA journal_mode=WAL')
+db.execute('PRAGMA wal_autocheckpoint=0')
+tid = db.execute("SELECT id FROM topics WHERE name = '/joint_states'").fetchone()[0]
+ids = [r[0] for r in db.execute('SELECT id FROM messages WHERE topic_id = ? ORDER BY timestamp, id', (tid,))]
+db.execute('UPDATE messages SET data = substr(data, 1, 40) WHERE id = ?', (ids[5],))
+db.commit()
+os._exit(0)
+"""
 
 
 def main(out):
@@ -238,6 +276,12 @@ def main(out):
     write_bag(out / 'several' / 'a', msgs, StoragePlugin.MCAP)
     write_bag(out / 'several' / 'b', msgs, StoragePlugin.SQLITE3)
     write_bag(out / 'nogt' / 'rec', [m for m in msgs if m[1] == '/joint_states'], StoragePlugin.SQLITE3)
+    urdf = omni3_urdf()
+    (out / 'urdf').mkdir()
+    (out / 'urdf' / 'omni3.urdf').write_text(urdf)
+    description = (T0_NS - 1_000_000, '/robot_description',
+                   TS.serialize_cdr(T['std_msgs/msg/String'](data=urdf), 'std_msgs/msg/String'))
+    write_bag(out / 'urdf' / 'rec', [description] + msgs, StoragePlugin.SQLITE3)
 
     expected = {'origin_s': ORIGIN_S, 'offsets_s': OFFSETS_S, 'split_at_s': SPLIT_AT_S,
                 'n_wheel': N_WHEEL, 'n_truth': len(truth),
@@ -247,6 +291,21 @@ def main(out):
         write_tum(out / 'gt' / f'tum_{name}' / 'rec.tum', truth, off_ns)
         write_csv(out / 'gt' / f'csv_{name}' / 'rec.csv', truth, off_ns)
     write_tum(out / 'gt' / 'same_clock.tum', truth, 0)
+
+    for d in ['wal_clean', 'wal_pending', 'reversed_ids']:
+        (out / d).mkdir()
+        shutil.copy(out / 'db3' / 'rec' / 'rec.db3', out / d / 'rec.db3')
+    db = sqlite3.connect(out / 'wal_clean' / 'rec.db3')
+    db.execute('PRAGMA journal_mode=WAL')
+    db.close()
+    subprocess.run([sys.executable, '-c', PENDING, str(out / 'wal_pending' / 'rec.db3')], check=True)
+    assert (out / 'wal_pending' / 'rec.db3-wal').stat().st_size > 0
+    db = sqlite3.connect(out / 'reversed_ids' / 'rec.db3')
+    top = db.execute('SELECT max(id) FROM messages').fetchone()[0]
+    db.execute('UPDATE messages SET id = -id')
+    db.execute('UPDATE messages SET id = ? + id', (top + 1,))
+    db.commit()
+    db.close()
 
     bad = out / 'bad'
     write_bag(bad / 'missing_file', msgs, StoragePlugin.SQLITE3)

@@ -4,7 +4,7 @@ use crate::error::Error;
 use crate::fit::pipeline::{self, StageOutcome};
 use crate::fit::plan::Plan;
 use crate::fit::problem::CalibrationProblem;
-use crate::fit::search_box::search_box;
+use crate::fit::search_box::search_box_with;
 use crate::optimizer::Solution;
 use crate::optimizer::observe::Observer;
 use crate::optimizer::problem::{Bounds, Problem};
@@ -71,7 +71,7 @@ pub fn calibrate(
     let t0 = Instant::now();
     let model = start.model.clone().with_integration(plan.integration);
     let start_fm = FittedModel::new(model.clone(), start.params.clone())?;
-    let bounds = search_box(&model, &start.params, plan.box_rule)?;
+    let bounds = search_box_with(&model, &start.params, plan.box_rule, &plan.half_widths)?;
     let problem = CalibrationProblem::new(&model, train, plan.objective, bounds.clone())?;
     let objective_start = problem.cost(&start.params);
     let names: Vec<String> = model.params().into_iter().map(|p| p.name).collect();

@@ -31,7 +31,7 @@ pub use calibration::{Calibration, calibrate};
 pub use pipeline::StageOutcome;
 pub use plan::{Plan, Preset, Unexcited};
 pub use problem::{CalibrationProblem, RunBlock};
-pub use search_box::{BoxRule, search_box};
+pub use search_box::{BoxRule, search_box, search_box_with};
 pub use stage::Stage;
 
 #[cfg(test)]

@@ -9,6 +9,7 @@ use crate::science::identify::IdentifyOptions;
 use omni_kin::Integration;
 use omni_kin::cost::CostKind;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 
 /// Which recipe to use.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -58,6 +59,10 @@ pub struct Plan {
     pub stages: Vec<Stage>,
     /// Search box of the stages that stay within a box ([`Stage::within_box`]: the GA).
     pub box_rule: BoxRule,
+    /// Base parameters whose GA box is instead the start ± this half-width (the parameter's unit), by
+    /// name: a robot description's priors (3 σ of the design values). Empty: `box_rule` for every one.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub half_widths: BTreeMap<String, f64>,
     /// What to do along unconstrained directions.
     #[serde(default)]
     pub unexcited: Unexcited,
@@ -76,6 +81,7 @@ impl Plan {
                 integration: Integration::PAPER,
                 stages: vec![Stage::Ga(GaConfig::matlab_defaults(n_params))],
                 box_rule: BoxRule::PerValue(0.10),
+                half_widths: BTreeMap::new(),
                 unexcited: Unexcited::Move,
                 identify: IdentifyOptions::default(),
             },
@@ -93,6 +99,7 @@ impl Plan {
                     integration: Integration::DEFAULT,
                     stages: vec![Stage::Ga(ga), Stage::Lm(LmConfig::default())],
                     box_rule: BoxRule::PerRow(0.10),
+                    half_widths: BTreeMap::new(),
                     unexcited: Unexcited::Hold,
                     identify: IdentifyOptions::default(),
                 }

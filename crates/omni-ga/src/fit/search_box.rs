@@ -4,6 +4,7 @@ use crate::optimizer::error::OptimizeError;
 use crate::optimizer::problem::Bounds;
 use omni_kin::Model;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 
 /// How the GA's search box is set around the start.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -19,6 +20,17 @@ pub enum BoxRule {
 
 /// The GA search box around `start` for `model`.
 pub fn search_box(model: &Model, start: &[f64], rule: BoxRule) -> Result<Bounds, OptimizeError> {
+    search_box_with(model, start, rule, &BTreeMap::new())
+}
+
+/// [`search_box`], where the base parameters named in `half_widths` get the start ± their half-width
+/// (their unit; a robot description's priors, [`omni_kin::robot::Priors`]) instead of `rule`'s.
+pub fn search_box_with(
+    model: &Model,
+    start: &[f64],
+    rule: BoxRule,
+    half_widths: &BTreeMap<String, f64>,
+) -> Result<Bounds, OptimizeError> {
     let specs = model.params();
     let nb = model.n_base();
     let scales = model.kinematics.param_scales(&start[..nb]);
@@ -31,6 +43,8 @@ pub fn search_box(model: &Model, start: &[f64], rule: BoxRule) -> Result<Bounds,
             lower.push(s.lower.min(v));
             upper.push(s.upper.max(v));
             continue;
+        } else if let Some(h) = half_widths.get(&s.name) {
+            *h
         } else {
             match rule {
                 BoxRule::PerValue(f) => f * v.abs(),

@@ -20,9 +20,38 @@ use serde::{Deserialize, Serialize};
 pub struct MatrixKinematics {
     /// Design matrix (the start and centre of the search).
     pub design: IkMatrix,
+    /// Wheel (joint) names in column order, when known (a robot description's joints, `--joints`); empty
+    /// for the default names `wheel_a`, `wheel_b`, ….
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub wheel_names: Vec<String>,
 }
 
 impl MatrixKinematics {
+    /// The model around `design`, with the default wheel names.
+    pub fn new(design: IkMatrix) -> Self {
+        Self { design, wheel_names: Vec::new() }
+    }
+
+    /// Names to store: empty when they are the defaults (so that a model read back from a file equals the
+    /// one written).
+    fn stored_names(names: &[String], n_wheels: usize) -> Vec<String> {
+        if names.len() != n_wheels || names == default_wheel_names(n_wheels).as_slice() {
+            Vec::new()
+        } else {
+            names.to_vec()
+        }
+    }
+
+    /// This model with these wheel names (column order); `KinError::Shape` unless there is one per wheel.
+    pub fn with_wheel_names(mut self, names: &[String]) -> Result<Self, KinError> {
+        let n = self.design.n_wheels();
+        if names.len() != n {
+            return Err(KinError::Shape { what: "wheel_names".into(), got: names.len(), expected: n });
+        }
+        self.wheel_names = Self::stored_names(names, n);
+        Ok(self)
+    }
+
     /// Indices (row-major, into [`IkMatrix::entries`]) of the entries that are parameters: all but the
     /// rows that are zero throughout the design.
     fn free_entries(&self) -> Vec<usize> {
@@ -53,9 +82,13 @@ impl BaseKinematics for MatrixKinematics {
         self.design.n_wheels()
     }
 
-    /// The default names `wheel_a`, `wheel_b`, … (a matrix does not name its wheels).
+    /// The names it was given (a robot description's joints), else `wheel_a`, `wheel_b`, ….
     fn wheel_names(&self) -> Vec<String> {
-        default_wheel_names(self.design.n_wheels())
+        if self.wheel_names.len() == self.design.n_wheels() {
+            self.wheel_names.clone()
+        } else {
+            default_wheel_names(self.design.n_wheels())
+        }
     }
 
     fn n_params(&self) -> usize {
@@ -120,7 +153,7 @@ impl BaseKinematics for MatrixKinematics {
         "matrix"
     }
 
-    /// `matrix` (at `p`) and `design_matrix`, rows vx, vy, ω; default wheel names.
+    /// `matrix` (at `p`) and `design_matrix`, rows vx, vy, ω; the wheel names.
     fn record(&self, p: &[f64]) -> Result<BaseRecord, KinError> {
         Ok(BaseRecord {
             wheel_names: self.wheel_names(),
@@ -141,7 +174,8 @@ impl BaseKinematics for MatrixKinematics {
         if design.n_wheels() != fitted.n_wheels() {
             return Err(RecordError::WheelCounts { design_key: "design_matrix", key: "matrix" });
         }
-        let model = Self { design };
+        let wheel_names = Self::stored_names(&record.wheel_names, design.n_wheels());
+        let model = Self { design, wheel_names };
         let free = model.free_entries();
         let e = fitted.entries();
         if let Some(i) = (0..e.len()).find(|i| e[*i] != 0.0 && !free.contains(i)) {
@@ -159,12 +193,11 @@ impl BaseKinematics for MatrixKinematics {
         Ok((model, p))
     }
 
-    /// The robot's IK matrix (Eq. 3) when its geometry is known, else the paper's Eq. 7.
+    /// The robot's IK matrix (Eq. 3) and wheel names when its geometry is known, else the paper's Eq. 7.
     fn design_for(robot: Option<&RobotGeometry>) -> Result<Self, KinError> {
-        let design = match robot {
-            Some(g) => g.twist_from_wheels()?,
-            None => IkMatrix::paper_design(),
-        };
-        Ok(Self { design })
+        match robot {
+            Some(g) => Self::new(g.twist_from_wheels()?).with_wheel_names(&g.wheel_names),
+            None => Ok(Self::new(IkMatrix::paper_design())),
+        }
     }
 }

@@ -298,6 +298,24 @@ impl Kinematics {
         })
     }
 
+    /// This model with these wheel (joint) names, in column order: one per wheel, else `KinError::Shape`.
+    pub fn with_wheel_names(self, names: &[String]) -> Result<Self, KinError> {
+        let n = self.n_wheels();
+        if names.len() != n {
+            return Err(KinError::Shape { what: "wheel_names".into(), got: names.len(), expected: n });
+        }
+        let named = |mut g: RobotGeometry| {
+            g.wheel_names = names.to_vec();
+            g
+        };
+        Ok(match self {
+            Self::Ik(k) => Self::Ik(k.with_wheel_names(names)?),
+            Self::Geometry(k) => Self::Geometry(GeometryKinematics { design: named(k.design) }),
+            Self::Diff(k) => Self::Diff(DiffKinematics { design: named(k.design) }),
+            Self::Mecanum(k) => Self::Mecanum(MecanumKinematics { design: named(k.design) }),
+        })
+    }
+
     /// The id: `ik`, `geometry`.
     pub fn id(&self) -> &'static str {
         self.kind().id()

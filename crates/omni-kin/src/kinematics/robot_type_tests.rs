@@ -185,7 +185,7 @@ fn records_round_trip_and_refuse_tampered_wheels() {
 fn a_zero_design_row_is_held_at_zero_by_the_matrix_model() {
     let design = DiffKinematics::new(diff_left_first(0.041, 0.043, 0.21)).unwrap();
     let d: Vec<f64> = design.params().iter().map(|s| s.null).collect();
-    let k = Kinematics::Ik(MatrixKinematics { design: design.twist_from_wheels(&d).unwrap() });
+    let k = Kinematics::Ik(MatrixKinematics::new(design.twist_from_wheels(&d).unwrap()));
     let names: Vec<String> = k.params().into_iter().map(|s| s.name).collect();
     assert_eq!(names, ["m11", "m12", "m31", "m32"], "no vy-row parameters");
     assert!(!k.params_are_ik_entries());

@@ -5,14 +5,14 @@ use std::f64::consts::PI;
 
 fn models() -> Vec<Kinematics> {
     vec![
-        Kinematics::Ik(MatrixKinematics { design: IkMatrix::paper_design() }),
+        Kinematics::Ik(MatrixKinematics::new(IkMatrix::paper_design())),
         Kinematics::Geometry(GeometryKinematics { design: RobotGeometry::apr02() }),
         Kinematics::Geometry(GeometryKinematics { design: RobotGeometry::omni_regular(4, 0.05, 0.25, 0.3) }),
         Kinematics::Geometry(GeometryKinematics { design: RobotGeometry::omni_regular(6, 0.05, 0.3, 0.1) }),
         Kinematics::Geometry(GeometryKinematics { design: RobotGeometry::mecanum4(0.05, 0.2, 0.15) }),
-        Kinematics::Ik(MatrixKinematics {
-            design: RobotGeometry::omni_regular(6, 0.05, 0.3, 0.1).twist_from_wheels().unwrap(),
-        }),
+        Kinematics::Ik(MatrixKinematics::new(
+            RobotGeometry::omni_regular(6, 0.05, 0.3, 0.1).twist_from_wheels().unwrap(),
+        )),
         Kinematics::Diff(DiffKinematics::new(super::robot_type_tests::diff_left_first(0.041, 0.043, 0.21)).unwrap()),
         Kinematics::Mecanum(MecanumKinematics::new(RobotGeometry::mecanum4(0.05, 0.2, 0.15)).unwrap()),
     ]
@@ -180,8 +180,7 @@ fn geometry_ik_for_2_3_4_6_wheels() {
         err.to_string(),
         "robot with 2 wheels cannot produce every planar twist (the wheel matrix has rank 2 < 3)"
     );
-    let ik2 =
-        Kinematics::Ik(MatrixKinematics { design: IkMatrix::new(2, vec![0.1, 0.2, 0.0, 0.0, 0.3, -0.3]).unwrap() });
+    let ik2 = Kinematics::Ik(MatrixKinematics::new(IkMatrix::new(2, vec![0.1, 0.2, 0.0, 0.0, 0.3, -0.3]).unwrap()));
     assert_eq!(ik2.twist_from_wheels(&nominal(&ik2)).unwrap().n_wheels(), 2);
 }
 

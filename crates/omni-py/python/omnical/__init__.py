@@ -5,10 +5,14 @@ The same steps as the ``omnical`` command, on numpy arrays::
 
     import omnical
     runs = omnical.simulate(omnical.Model.paper().with_effect("time_offset", tau_s=0.06), seed=7)
-    fit = omnical.train(runs, seed=0)              # fit the 3 x W IK matrix
+    fit = omnical.train(runs, robot="apr02", seed=0)  # fit the 3 x W IK matrix around APR-02's design
     print(fit.matrix, fit.costs)
     d = omnical.diagnose(fit.model, runs)         # which effect is missing?
     print(d.verdict, d.ranking[0])
+
+Real data: ``omnical.load("bags/", robot="robot.toml")`` (a robot.toml beside the data is picked up
+without it, as by the CLI); ``train``, ``evaluate`` and ``integrate`` start from the design of the data's
+robot, or of ``robot=``, and raise ``ValueError`` saying how to describe the robot when none is known.
 
 Units are SI (m, s, rad, rad/s). Long calls release the GIL; Ctrl-C stops ``train`` and keeps the best
 fit so far. Errors: ``ValueError`` for bad input (shapes, NaN, unknown names), ``FileNotFoundError`` /

@@ -33,6 +33,7 @@ __all__ = [
     "__version__",
     "cli_main",
     "diagnose",
+    "diagnose_files",
     "effect_catalogue",
     "evaluate",
     "explore",
@@ -42,6 +43,11 @@ __all__ = [
     "report",
     "simulate",
     "train",
+    "train_files",
+    "_calibration_from_state",
+    "_dataset_from_state",
+    "_model_from_toml",
+    "_run_from_bytes",
 ]
 
 __version__: str
@@ -105,8 +111,13 @@ class Dataset:
     def skipped(self) -> list[tuple[str, str]]:
         """(source, reason) per skipped input."""
     @property
-    def design(self) -> Model:
-        """The design model the data declares (else the paper's Eq. 7)."""
+    def design(self) -> Optional[Model]:
+        """The design model of the data's robot (``robot=``, the data's geometry, or a ``robot.toml`` found
+        beside the data); None when the data names no robot."""
+    @property
+    def robot(self) -> Optional[str]:
+        """The robot description the runs were read with (``"PATH (found beside the data)"``, a path, or
+        ``"apr02 (built in: the paper's APR-02)"``), or None."""
     def __len__(self) -> int: ...
     def __getitem__(self, key: int, /) -> Run: ...
 
@@ -115,8 +126,9 @@ class Model:
     """Base kinematics (``ik`` matrix or ``geometry``) plus effects, with parameter values. Immutable."""
 
     @staticmethod
-    def design(*, kinematics: str = "ik") -> Model:
-        """The paper's APR-02 design model (Eq. 7); ``kinematics`` is ``"ik"`` or ``"geometry"``."""
+    def design(robot: _Path = "apr02", *, kinematics: str = "ik") -> Model:
+        """The design model of ``robot`` (a robot.toml path, or ``"apr02"``: the paper's robot, Eq. 7);
+        ``kinematics`` is ``"ik"``, ``"geometry"``, ``"diff"`` or ``"mecanum"``. Wheel names: its joints."""
     @staticmethod
     def paper() -> Model:
         """The paper's calibrated matrix (Eq. 9)."""
@@ -127,6 +139,9 @@ class Model:
     def kinematics(self) -> str: ...
     @property
     def n_wheels(self) -> int: ...
+    @property
+    def wheel_names(self) -> list[str]:
+        """Wheel (joint) names in column order (a robot description's joints, else wheel_a, ...)."""
     @property
     def matrix(self) -> _F64:
         """(3, W) IK matrix: rows vx [m/s], vy [m/s], omega [rad/s] per wheel speed [rad/s]."""
@@ -304,6 +319,7 @@ def explore(model: Model, runs: _Runs, validation: _Runs, *, min_gain: float = 0
 
 def load(
     *paths: _Path,
+    robot: Optional[_Path] = None,
     joints: Optional[Sequence[str]] = None,
     joints_topic: Optional[str] = None,
     gt_topic: Optional[str] = None,
@@ -313,7 +329,8 @@ def load(
     skip_invalid: bool = False,
     ticks_per_rev: Optional[float] = None,
 ) -> Dataset:
-    """Load runs from .csv, .mcap, folders of them or OptiOdom set folders."""
+    """Load runs from .csv, .mcap, folders of them or OptiOdom set folders. ``robot``: a robot.toml or
+    ``"apr02"`` (default: a robot.toml beside the data or in the working directory, as the CLI)."""
 
 def load_model(path: _Path, *, effects: Sequence[Any] = ...) -> Model:
     """Read a model file (TOML); ``effects``: Python effects it names."""
@@ -322,6 +339,7 @@ def effect_catalogue(*, n_wheels: int = 3) -> list[dict[str, Any]]: ...
 def simulate(
     truth: Optional[Model] = None,
     *,
+    robot: Optional[_Path] = None,
     runs_per_command: int = 1,
     duration_s: float = 4.0,
     seed: int = 0,
@@ -330,22 +348,26 @@ def simulate(
     sample_drop_probability: float = 0.0,
     sample_jitter_s: float = 0.0,
 ) -> list[Run]:
-    """The flower benchmark (36 commands x runs_per_command) on the true robot ``truth``."""
+    """The benchmark commands x runs_per_command of ``robot`` (default ``"apr02"``: the flower) on the true
+    robot ``truth`` (default: Eq. 9 on APR-02, else the robot's design)."""
 
 def train(
     runs: _Runs,
     *,
     model: Optional[Model] = None,
+    robot: Optional[_Path] = None,
     effects: Sequence[_EffectArg] = ...,
     preset: str = "default",
     seed: int = 0,
     progress: Optional[Callable[[dict[str, Any]], Optional[bool]]] = None,
 ) -> Calibration:
-    """Fit a model to training runs; Ctrl-C keeps the best so far."""
+    """Fit a model to training runs, starting from ``model``, else ``robot``'s design, else the data's
+    (``ValueError`` when none is known); Ctrl-C keeps the best so far."""
 
-def evaluate(runs: _Runs, model: Optional[Model] = None) -> Evaluation: ...
-def integrate(run: Run, model: Optional[Model] = None) -> _F64:
-    """(N, 4) t_s [s], x_m [m], y_m [m], theta_rad [rad]."""
+def evaluate(runs: _Runs, model: Optional[Model] = None, *, robot: Optional[_Path] = None) -> Evaluation:
+    """Costs of ``model`` (else ``robot``'s design, else the data's; ``ValueError`` when none is known)."""
+def integrate(run: Run, model: Optional[Model] = None, *, robot: Optional[_Path] = None) -> _F64:
+    """(N, 4) t_s [s], x_m [m], y_m [m], theta_rad [rad] through ``model`` or ``robot``'s design."""
 
 def diagnose(
     model: Model,
@@ -374,3 +396,20 @@ def cli_main(argv: list[str]) -> int:
     handler (a first Ctrl-C stops the search with the best model so far, exit status 130; a second one
     exits the process), so call it from the ``omnical`` console command rather than an interactive
     session."""
+def train_files(args: list[str]) -> dict[str, Any]:
+    """``omnical train ARGS...`` (without the program and subcommand names) inside this process, the
+    command's own code path (the ``--out`` model file is byte-identical), printing nothing and installing no
+    Ctrl-C handler. Returns ``summary`` (``--json``'s), ``design`` (name -> start value), ``start_s`` /
+    ``end_s`` [s], ``runs``, ``notes``, ``skipped``, ``warnings``. ``ValueError`` for bad arguments,
+    ``OmnicalError`` with the command's message for a failed load or fit."""
+
+def diagnose_files(args: list[str]) -> dict[str, Any]:
+    """``omnical diagnose ARGS...`` inside this process; returns what ``--json`` prints."""
+
+# Unpickling (the targets of the classes' __reduce__).
+def _run_from_bytes(data: bytes) -> Run: ...
+def _dataset_from_state(
+    runs: list[bytes], notes: list[str], skipped: list[tuple[str, str]], design: str, robot: Optional[str] = None
+) -> Dataset: ...
+def _model_from_toml(text: str, effects: list[Any] = ...) -> Model: ...
+def _calibration_from_state(state: dict[str, Any]) -> Calibration: ...

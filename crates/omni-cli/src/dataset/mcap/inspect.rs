@@ -1,14 +1,16 @@
 //! What a recording holds, for `omnical init`: every topic with its message type, count and rate, the
 //! joint names of each `sensor_msgs/msg/JointState` topic, and the robot's URDF if a `std_msgs/msg/String`
 //! topic `/robot_description` carries it.
+//!
+//! Gathered by [`InventorySink`] from the same storage readers as the runs ([`MessageSink`]), so whatever
+//! `train` reads can be inspected: a bare `.mcap` here, a `.db3` or a rosbag2 folder in
+//! [`crate::dataset::rosbag2`], any of them under a folder in [`crate::dataset::inspect`].
 
 use super::common::{RosString, decode};
 use super::joint_state::{self, JointState};
-use super::read::{MAX_RECORD_LIMIT, MIN_RECORD_LIMIT};
+use super::read::{self, MessageSink};
 use crate::dataset::DatasetError;
-use mcap::sans_io::LinearReaderOptions;
-use std::path::Path;
-
+use std::path::{Path, PathBuf};
 /// The topic `robot_state_publisher` publishes the URDF on.
 pub const ROBOT_DESCRIPTION_TOPIC: &str = "/robot_description";
 
@@ -61,56 +63,102 @@ pub fn inspect(path: &Path, max_bytes: u64) -> Result<Inventory, DatasetError> {
 
 /// [`inspect`] on a file held in memory; `path` names it in errors.
 pub fn inspect_bytes(path: &Path, buf: &[u8]) -> Result<Inventory, DatasetError> {
-    // The mcap crate can panic on some damaged files (see the reader): an error, never a crash.
-    std::panic::catch_unwind(|| scan(path, buf))
-        .unwrap_or_else(|_| Err(DatasetError::file(path, "the file is damaged: the MCAP reader panicked on it")))
+    let mut inv = InventorySink::new(path);
+    read::feed_mcap(path, buf, &mut inv)?;
+    inv.finish()
 }
 
-fn scan(path: &Path, buf: &[u8]) -> Result<Inventory, DatasetError> {
-    if !buf.starts_with(mcap::MAGIC) {
-        return Err(DatasetError::file(path, "not an MCAP file (it does not start with the MCAP magic bytes)"));
+/// Gathers an [`Inventory`] message by message. JointState topics and `/robot_description` are decoded; the
+/// first message that does not decode is the error (naming the recording, topic and message index, 0-based
+/// within its topic).
+pub(crate) struct InventorySink {
+    /// The recording, for errors.
+    path: PathBuf,
+    inv: Inventory,
+    /// Every message payload is zstd-compressed on its own (rosbag2's `compression_mode: MESSAGE`).
+    pub(crate) zstd_messages: bool,
+    error: Option<DatasetError>,
+}
+
+impl InventorySink {
+    /// An empty inventory of the recording at `path`.
+    pub(crate) fn new(path: &Path) -> Self {
+        Self { path: path.to_path_buf(), inv: Inventory::default(), zstd_messages: false, error: None }
     }
-    let mut inv = Inventory::default();
-    let mut index: Vec<(u16, usize)> = Vec::new();
-    // Damaged files fail cleanly (as in the reader): a cap on record lengths, and a panic is an error.
-    let limit = buf.len().saturating_mul(64).clamp(MIN_RECORD_LIMIT, MAX_RECORD_LIMIT);
-    let options = LinearReaderOptions::default().with_validate_chunk_crcs(true).with_record_length_limit(limit);
-    let reader = mcap::io::MessageReader::new_with_options(std::io::Cursor::new(buf), options);
-    for (n, m) in reader.enumerate() {
-        let m = m.map_err(|e| DatasetError::file(path, format!("cannot read the MCAP file: {e}")))?;
-        let i = match index.iter().find(|(id, _)| *id == m.channel.id) {
-            Some(&(_, i)) => i,
-            None => {
-                let msg_type = m.channel.schema.as_ref().map(|s| s.name.clone()).unwrap_or_default();
-                inv.topics.push(TopicSummary {
-                    topic: m.channel.topic.clone(),
-                    msg_type,
-                    count: 0,
-                    first_ns: m.log_time,
-                    last_ns: m.log_time,
-                    joint_names: Vec::new(),
-                });
-                index.push((m.channel.id, inv.topics.len() - 1));
-                inv.topics.len() - 1
-            }
+
+    /// The inventory: topics with at least one message, sorted by name; or the first decoding error.
+    pub(crate) fn finish(mut self) -> Result<Inventory, DatasetError> {
+        if let Some(e) = self.error {
+            return Err(e);
+        }
+        self.inv.topics.retain(|t| t.count > 0);
+        self.inv.topics.sort_by(|a, b| a.topic.cmp(&b.topic));
+        Ok(self.inv)
+    }
+
+    /// Decodes what the inventory keeps of a message of topic `i`.
+    fn decode(&mut self, i: usize, data: &[u8]) -> Result<(), String> {
+        let t = &mut self.inv.topics[i];
+        let is_urdf = t.topic == ROBOT_DESCRIPTION_TOPIC && t.msg_type == "std_msgs/msg/String";
+        if t.msg_type != joint_state::NAME && !is_urdf {
+            return Ok(());
+        }
+        let plain;
+        let data = if self.zstd_messages {
+            plain = zstd::stream::decode_all(data)
+                .map_err(|e| format!("the zstd-compressed message does not decompress: {e}"))?;
+            &plain[..]
+        } else {
+            data
         };
-        let t = &mut inv.topics[i];
-        t.count += 1;
-        t.first_ns = t.first_ns.min(m.log_time);
-        t.last_ns = t.last_ns.max(m.log_time);
-        let at = |e: String| DatasetError::at(path, format!("topic {:?}, message {n}", t.topic), e);
-        if t.msg_type == joint_state::NAME {
-            let js: JointState = decode(&m.data).map_err(at)?;
+        if is_urdf {
+            let text: RosString = decode(data)?;
+            self.inv.robot_description = Some(text.0);
+        } else {
+            let js: JointState = decode(data)?;
             for name in js.name {
                 if !t.joint_names.contains(&name.0) {
                     t.joint_names.push(name.0);
                 }
             }
-        } else if t.topic == ROBOT_DESCRIPTION_TOPIC && t.msg_type == "std_msgs/msg/String" {
-            let text: RosString = decode(&m.data).map_err(at)?;
-            inv.robot_description = Some(text.0);
+        }
+        Ok(())
+    }
+}
+
+impl MessageSink for InventorySink {
+    fn channel(&mut self, topic: &str, schema: &str, _schema_encoding: &str, _message_encoding: &str) -> usize {
+        match self.inv.topics.iter().position(|t| t.topic == topic) {
+            Some(i) => i,
+            None => {
+                self.inv.topics.push(TopicSummary {
+                    topic: topic.to_string(),
+                    msg_type: schema.to_string(),
+                    count: 0,
+                    first_ns: 0,
+                    last_ns: 0,
+                    joint_names: Vec::new(),
+                });
+                self.inv.topics.len() - 1
+            }
         }
     }
-    inv.topics.sort_by(|a, b| a.topic.cmp(&b.topic));
-    Ok(inv)
+
+    fn message(&mut self, i: usize, data: &[u8], log_time_ns: u64) {
+        if self.error.is_some() {
+            return;
+        }
+        let t = &mut self.inv.topics[i];
+        let index = t.count;
+        if index == 0 {
+            (t.first_ns, t.last_ns) = (log_time_ns, log_time_ns);
+        }
+        t.count += 1;
+        t.first_ns = t.first_ns.min(log_time_ns);
+        t.last_ns = t.last_ns.max(log_time_ns);
+        if let Err(e) = self.decode(i, data) {
+            let topic = &self.inv.topics[i].topic;
+            self.error = Some(DatasetError::at(&self.path, format!("topic {topic:?}, message {index}"), e));
+        }
+    }
 }

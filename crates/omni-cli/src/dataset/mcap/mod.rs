@@ -74,6 +74,7 @@ use crate::dataset::ground_truth::{ExternalTruth, GtClock};
 use omni_kin::{Run, StampedPose};
 use std::path::Path;
 
+pub(crate) use inspect::InventorySink;
 pub use inspect::{Inventory, ROBOT_DESCRIPTION_TOPIC, TopicSummary, inspect, inspect_bytes};
 pub use write::{COMMAND_TOPIC, JOINTS_TOPIC, TRUTH_TOPIC};
 

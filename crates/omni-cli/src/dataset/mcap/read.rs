@@ -595,6 +595,17 @@ fn check_chunks(buf: &[u8]) -> Result<(), String> {
     Ok(())
 }
 
+/// Where the storage readers (MCAP files, rosbag2 sqlite3 files) put a recording's topics and messages:
+/// [`Recording`] (the runs) or an inventory of the topics (`omnical init`, [`super::inspect`]).
+pub(crate) trait MessageSink {
+    /// The channel of `topic`, declared on its first sight (a later declaration of the same topic, in another
+    /// split file, keeps the first one's type).
+    fn channel(&mut self, topic: &str, schema: &str, schema_encoding: &str, message_encoding: &str) -> usize;
+    /// Takes the next message of channel `i` (an index from [`Self::channel`]), logged at `log_time_ns` (ns
+    /// since the epoch).
+    fn message(&mut self, i: usize, data: &[u8], log_time_ns: u64);
+}
+
 /// The channels of one recording, filled message by message from any storage (MCAP files, rosbag2 sqlite3
 /// files, several split files of one recording): the one message pipeline behind every reader. Topics are
 /// matched by name, so the split files of a recording feed the same channels.
@@ -611,15 +622,14 @@ impl Recording {
         Self { wheel_joints: wheel_joints.to_vec(), channels: Vec::new(), zstd_messages: false }
     }
 
-    /// The channel of `topic`, declared on its first sight (a later declaration of the same topic, in another
-    /// split file, keeps the first one's type).
-    pub(crate) fn channel(
-        &mut self,
-        topic: &str,
-        schema: &str,
-        schema_encoding: &str,
-        message_encoding: &str,
-    ) -> usize {
+    /// Messages taken on `topic` (`None`: no such topic).
+    pub(crate) fn messages_on(&self, topic: &str) -> Option<usize> {
+        self.channels.iter().find(|c| c.topic == topic).map(|c| c.messages)
+    }
+}
+
+impl MessageSink for Recording {
+    fn channel(&mut self, topic: &str, schema: &str, schema_encoding: &str, message_encoding: &str) -> usize {
         match self.channels.iter().position(|c| c.topic == topic) {
             Some(i) => i,
             None => {
@@ -629,13 +639,7 @@ impl Recording {
         }
     }
 
-    /// Messages taken on `topic` (`None`: no such topic).
-    pub(crate) fn messages_on(&self, topic: &str) -> Option<usize> {
-        self.channels.iter().find(|c| c.topic == topic).map(|c| c.messages)
-    }
-
-    /// Takes the next message of channel `i` (an index from [`Self::channel`]).
-    pub(crate) fn message(&mut self, i: usize, data: &[u8], log_time_ns: u64) {
+    fn message(&mut self, i: usize, data: &[u8], log_time_ns: u64) {
         let c = &mut self.channels[i];
         if self.zstd_messages && c.msg_type != MsgType::Other && c.problem.is_none() {
             match zstd::stream::decode_all(data) {
@@ -653,22 +657,22 @@ impl Recording {
 }
 
 /// Feeds every message of an MCAP file, in file order, into `rec`.
-pub(crate) fn feed_mcap(path: &Path, buf: &[u8], rec: &mut Recording) -> Result<(), DatasetError> {
+pub(crate) fn feed_mcap(path: &Path, buf: &[u8], rec: &mut impl MessageSink) -> Result<(), DatasetError> {
     // mcap 0.26 can still panic on some damaged files (an integer overflow on a record longer than its
     // uncompressed chunk, in builds with overflow checks): a damaged file is an error, never a crash.
     let mut rec = std::panic::AssertUnwindSafe(rec);
-    std::panic::catch_unwind(move || scan(path, buf, &mut rec))
+    std::panic::catch_unwind(move || scan(path, buf, &mut **rec))
         .unwrap_or_else(|_| Err(DatasetError::file(path, "the file is damaged: the MCAP reader panicked on it")))
 }
 
-fn scan(path: &Path, buf: &[u8], rec: &mut Recording) -> Result<(), DatasetError> {
+fn scan<S: MessageSink>(path: &Path, buf: &[u8], rec: &mut S) -> Result<(), DatasetError> {
     if !buf.starts_with(mcap::MAGIC) {
         return Err(DatasetError::file(path, "not an MCAP file (it does not start with the MCAP magic bytes)"));
     }
     check_chunks(buf).map_err(|what| DatasetError::file(path, format!("the file is corrupted: {what}")))?;
     // This file's channel ids and the recording's channels they feed.
     let mut ids: Vec<(u16, usize)> = Vec::new();
-    let declare = |rec: &mut Recording, ids: &mut Vec<(u16, usize)>, ch: &mcap::Channel<'_>| {
+    let declare = |rec: &mut S, ids: &mut Vec<(u16, usize)>, ch: &mcap::Channel<'_>| {
         let (schema, encoding) = ch.schema.as_ref().map_or(("", ""), |s| (s.name.as_str(), s.encoding.as_str()));
         let i = rec.channel(&ch.topic, schema, encoding, &ch.message_encoding);
         ids.push((ch.id, i));

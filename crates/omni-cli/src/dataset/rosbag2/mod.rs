@@ -29,7 +29,8 @@ use crate::dataset::DatasetError;
 use crate::dataset::ground_truth::ExternalTruth;
 use crate::dataset::mcap::McapOptions;
 use crate::dataset::mcap::McapRead;
-use crate::dataset::mcap::read::{self, Recording};
+use crate::dataset::mcap::read::{self, MessageSink, Recording};
+use crate::dataset::mcap::{Inventory, InventorySink};
 use metadata::{Compression, Storage};
 use std::io::Read;
 use std::path::Path;
@@ -51,33 +52,9 @@ pub fn read_recording(
     truth: Option<&ExternalTruth>,
 ) -> Result<McapRead, DatasetError> {
     let meta = metadata::read(dir)?;
-    let meta_path = dir.join(metadata::FILE_NAME);
     let mut rec = Recording::new(&opts.wheel_joints);
     rec.zstd_messages = meta.compression == Compression::MessageZstd;
-    for file in &meta.files {
-        if !file.is_file() {
-            return Err(DatasetError::at(
-                &meta_path,
-                "key relative_file_paths",
-                format!("lists {}, which does not exist", file.display()),
-            ));
-        }
-        let file_zstd = meta.compression == Compression::FileZstd;
-        match meta.storage {
-            Storage::Mcap => {
-                let buf = read_file(file, file_zstd, max_file_bytes)?;
-                read::feed_mcap(file, &buf, &mut rec)?;
-            }
-            Storage::Sqlite3 if file_zstd => {
-                let image = read_file(file, true, max_file_bytes)?;
-                sqlite::feed(file, Some(image), &mut rec)?;
-            }
-            Storage::Sqlite3 => {
-                check_size(file, max_file_bytes)?;
-                sqlite::feed(file, None, &mut rec)?;
-            }
-        }
-    }
+    feed_files(dir, &meta, max_file_bytes, &mut rec)?;
     let mut notes = Vec::new();
     for t in &meta.topics {
         let held = rec.messages_on(&t.name).unwrap_or(0);
@@ -96,6 +73,61 @@ pub fn read_recording(
     let mut out = read::runs(dir, &name, rec, opts, truth)?;
     out.notes.splice(0..0, notes);
     Ok(out)
+}
+
+/// Feeds the messages of every storage file of the recording in folder `dir` (metadata `meta`) into `sink`,
+/// file after file in the order `relative_file_paths` lists them. `sink` must already decompress messages
+/// for `MESSAGE` compression; `FILE` compression is undone here.
+fn feed_files(
+    dir: &Path,
+    meta: &metadata::Metadata,
+    max_file_bytes: u64,
+    sink: &mut impl MessageSink,
+) -> Result<(), DatasetError> {
+    let meta_path = dir.join(metadata::FILE_NAME);
+    let file_zstd = meta.compression == Compression::FileZstd;
+    for file in &meta.files {
+        if !file.is_file() {
+            return Err(DatasetError::at(
+                &meta_path,
+                "key relative_file_paths",
+                format!("lists {}, which does not exist", file.display()),
+            ));
+        }
+        match meta.storage {
+            Storage::Mcap => {
+                let buf = read_file(file, file_zstd, max_file_bytes)?;
+                read::feed_mcap(file, &buf, sink)?;
+            }
+            Storage::Sqlite3 if file_zstd => {
+                let image = read_file(file, true, max_file_bytes)?;
+                sqlite::feed(file, Some(image), sink)?;
+            }
+            Storage::Sqlite3 => {
+                check_size(file, max_file_bytes)?;
+                sqlite::feed(file, None, sink)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// What the recording in folder `dir` holds (topics, types, counts, joint names, URDF), for `omnical init`;
+/// all its files are read as [`read_recording`] reads them.
+pub fn inspect_recording(dir: &Path, max_file_bytes: u64) -> Result<Inventory, DatasetError> {
+    let meta = metadata::read(dir)?;
+    let mut inv = InventorySink::new(dir);
+    inv.zstd_messages = meta.compression == Compression::MessageZstd;
+    feed_files(dir, &meta, max_file_bytes, &mut inv)?;
+    inv.finish()
+}
+
+/// What a bare rosbag2 sqlite3 file (`.db3`) holds, for `omnical init`.
+pub fn inspect_db3(path: &Path, max_file_bytes: u64) -> Result<Inventory, DatasetError> {
+    check_size(path, max_file_bytes)?;
+    let mut inv = InventorySink::new(path);
+    sqlite::feed(path, None, &mut inv)?;
+    inv.finish()
 }
 
 /// Reads a bare rosbag2 sqlite3 file (`.db3`) as a recording of that one file, named after its stem.

@@ -1,0 +1,64 @@
+//! `train_files`: `omnical train` on files, inside a Python process that runs many of them (the fleet's
+//! Dask workers). The same code path as the command (`omni_cli::cmd::train::train_quietly`), so the model
+//! file it writes is byte-identical to `omnical train … --out FILE`; nothing is printed and no Ctrl-C
+//! handler is installed (the host process keeps its own).
+
+use crate::errors::{OmnicalError, value_error};
+use omni_cli::cli::{Cli, Command};
+use omni_cli::cmd::{diagnose, train};
+use omni_kin::FittedModel;
+use pyo3::prelude::*;
+use serde_json::json;
+
+/// Trains as ``omnical train ARGS...`` would (``args`` without the program and subcommand names, e.g.
+/// ``["rec/", "--seed", "3", "--out", "model.toml"]``) and returns plain data: ``summary`` (what
+/// ``--json`` prints), ``design`` (parameter name → start value), ``start_s`` / ``end_s`` (the earliest and
+/// latest wheel stamps of the runs [s]), ``runs``, ``notes``, ``skipped`` ([source, reason]) and
+/// ``warnings``. Bad arguments raise ``ValueError``; a failed load or fit raises ``OmnicalError`` with the
+/// command's message. The GIL is released while it runs.
+#[pyfunction]
+pub fn train_files<'py>(py: Python<'py>, args: Vec<String>) -> PyResult<Bound<'py, PyAny>> {
+    let argv = ["omnical".to_string(), "train".to_string()].into_iter().chain(args);
+    let cli = <Cli as clap::Parser>::try_parse_from(argv).map_err(|e| value_error(e.render().to_string()))?;
+    let Command::Train(a) = cli.command else {
+        return Err(value_error("train_files: the arguments did not parse as `omnical train`"));
+    };
+    let t = py.detach(|| train::train_quietly(&a)).map_err(|e| OmnicalError::new_err(format!("{e:#}")))?;
+    let text = serde_json::to_string(&session_json(&t)).map_err(|e| value_error(e.to_string()))?;
+    py.import("json")?.call_method1("loads", (text,))
+}
+
+/// Diagnoses as ``omnical diagnose ARGS...`` would (``args`` without the program and subcommand names, e.g.
+/// ``["--model", "model.toml", "rec/"]``) and returns what ``--json`` prints (``verdict``, ``verdict_text``,
+/// ``ranking``, ``ladder``, ...). Errors as :func:`train_files`. The GIL is released while it runs.
+#[pyfunction]
+pub fn diagnose_files<'py>(py: Python<'py>, args: Vec<String>) -> PyResult<Bound<'py, PyAny>> {
+    let argv = ["omnical".to_string(), "diagnose".to_string()].into_iter().chain(args);
+    let cli = <Cli as clap::Parser>::try_parse_from(argv).map_err(|e| value_error(e.render().to_string()))?;
+    let Command::Diagnose(a) = cli.command else {
+        return Err(value_error("diagnose_files: the arguments did not parse as `omnical diagnose`"));
+    };
+    let d = py.detach(|| diagnose::diagnose_quietly(&a)).map_err(|e| OmnicalError::new_err(format!("{e:#}")))?;
+    let text = serde_json::to_string(&d).map_err(|e| value_error(e.to_string()))?;
+    py.import("json")?.call_method1("loads", (text,))
+}
+
+/// The plain data [`train_files`] returns.
+fn session_json(t: &train::Trained) -> serde_json::Value {
+    let start: &FittedModel = &t.calibration.start;
+    let design: serde_json::Map<String, serde_json::Value> =
+        start.model.params().into_iter().zip(&start.params).map(|(s, v)| (s.name, json!(v))).collect();
+    let runs = &t.dataset.runs;
+    let first = runs.iter().filter_map(|r| r.wheel_t_s().first().copied()).fold(f64::INFINITY, f64::min);
+    let last = runs.iter().filter_map(|r| r.wheel_t_s().last().copied()).fold(f64::NEG_INFINITY, f64::max);
+    json!({
+        "summary": t.summary,
+        "design": design,
+        "start_s": first.is_finite().then_some(first),
+        "end_s": last.is_finite().then_some(last),
+        "runs": runs.len(),
+        "notes": t.dataset.notes,
+        "skipped": t.dataset.skipped.iter().map(|s| [&s.source, &s.reason]).collect::<Vec<_>>(),
+        "warnings": t.warnings,
+    })
+}
