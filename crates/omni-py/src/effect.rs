@@ -9,6 +9,9 @@
 //!     whole columns: `p` (P,) parameters, `t_s` (N,) sample times on the ground-truth clock [s],
 //!     `dt_s` (N,) integrated step of each sample [s], `wheel_rad_s` (N, W) [rad/s];
 //!   - twist: `twist(p, twist, wheel_rad_s) -> (vx_m_s, vy_m_s, omega_rad_s)`, once per **sample** (slow);
+//!     or, when the object has it, `twist_at(p, twist, wheel_rad_s, heading_rad, since_start_s)` with the
+//!     body's world heading at the start of the step [rad] and the time since the run's first
+//!     ground-truth pose [s] (for world-frame physics: a tilted floor, a drifting ground-truth frame);
 //!   - clock: `clock_lag_s(p) -> float` [s], once per cost evaluation;
 //!   - measurement: `sensor_from_body(p) -> (x_m, y_m, theta_rad)`, once per cost evaluation.
 //!
@@ -19,7 +22,7 @@
 
 use crate::arrays::{matrix, to_matrix, to_vector};
 use crate::errors::value_error;
-use omni_kin::effect::{Effect, ParamSpec, Stage, WheelContext};
+use omni_kin::effect::{Effect, ParamSpec, Stage, TwistAt, WheelContext};
 use omni_kin::{EffectKind, Pose2, Twist2};
 use pyo3::prelude::*;
 use std::fmt;
@@ -32,6 +35,8 @@ pub struct PyEffect {
     physics: String,
     stage: Stage,
     specs: Vec<ParamSpec>,
+    /// The object has `twist_at` (with heading and time), called instead of `twist`.
+    has_twist_at: bool,
     /// The first exception raised by a hook since the last [`PyEffect::take_error`].
     error: Mutex<Option<PyErr>>,
 }
@@ -99,14 +104,15 @@ impl PyEffect {
             Stage::Clock => "clock_lag_s",
             _ => "sensor_from_body",
         };
-        if !obj.hasattr(hook)? {
+        let has_twist_at = stage == Stage::Twist && obj.hasattr("twist_at")?;
+        if !has_twist_at && !obj.hasattr(hook)? {
             return Err(value_error(format!("effect {id}: stage {:?} needs a method `{hook}`", stage_name(stage))));
         }
         let physics = match obj.getattr("describe") {
             Ok(d) if d.is_callable() => d.call0()?.extract()?,
             _ => String::new(),
         };
-        Ok(Self { obj: obj.clone().unbind(), id, physics, stage, specs, error: Mutex::new(None) })
+        Ok(Self { obj: obj.clone().unbind(), id, physics, stage, specs, has_twist_at, error: Mutex::new(None) })
     }
 
     /// The Python object.
@@ -215,6 +221,21 @@ impl Effect for PyEffect {
             let t = (twist.vx_m_s, twist.vy_m_s, twist.omega_rad_s);
             let r = obj.call_method1("twist", (to_vector(py, p.to_vec()), t, to_vector(py, w.to_vec())))?;
             self.three("twist", &r)
+        });
+        match out {
+            Some([vx_m_s, vy_m_s, omega_rad_s]) => Twist2 { vx_m_s, vy_m_s, omega_rad_s },
+            None => Twist2 { vx_m_s: f64::NAN, vy_m_s: f64::NAN, omega_rad_s: f64::NAN },
+        }
+    }
+    fn twist_at(&self, p: &[f64], twist: Twist2, w: &[f64], at: &TwistAt) -> Twist2 {
+        if self.stage != Stage::Twist || !self.has_twist_at {
+            return self.twist(p, twist, w);
+        }
+        let out = self.call(|py, obj| {
+            let t = (twist.vx_m_s, twist.vy_m_s, twist.omega_rad_s);
+            let args = (to_vector(py, p.to_vec()), t, to_vector(py, w.to_vec()), at.pose.theta_rad, at.since_start_s);
+            let r = obj.call_method1("twist_at", args)?;
+            self.three("twist_at", &r)
         });
         match out {
             Some([vx_m_s, vy_m_s, omega_rad_s]) => Twist2 { vx_m_s, vy_m_s, omega_rad_s },

@@ -108,7 +108,11 @@ class Effect:
     Set ``id``, ``stage`` and ``params`` and override the hook of the stage:
 
     - ``"wheel"``: :meth:`wheel_rates`, called once per run and cost evaluation on whole columns;
-    - ``"twist"``: :meth:`twist`, called once per wheel sample (slow: use it on small data);
+    - ``"twist"``: :meth:`twist`, called once per wheel sample (slow: use it on small data); or, for
+      world-frame physics (a tilted floor, a drifting ground-truth frame), define
+      ``twist_at(p, twist, wheel_rad_s, heading_rad, since_start_s)`` instead, which also gets the body's
+      world heading at the start of the step [rad] and the time since the run's first ground-truth pose
+      [s] (see examples/floor_slope.py);
     - ``"clock"``: :meth:`clock_lag_s`; ``"measurement"``: :meth:`sensor_from_body` (once per evaluation).
 
     At the ``null`` parameter values the effect must change nothing. The hooks run on omnical's worker
