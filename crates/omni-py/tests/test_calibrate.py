@@ -103,6 +103,16 @@ def test_progress_false_stops_and_keeps_the_best(runs: list[omnical.Run]) -> Non
 
 
 def test_ctrl_c_stops_training_and_keeps_the_best(runs: list[omnical.Run]) -> None:
+    # Python leaves SIGINT ignored when it starts as a background job of a non-interactive shell (as a CI
+    # step may be): install Python's own Ctrl-C handler, as an interactive session has, and restore it after.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        _press_ctrl_c_during_training(runs)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _press_ctrl_c_during_training(runs: list[omnical.Run]) -> None:
     def press_ctrl_c(it: dict) -> None:
         if it["iteration"] == 2:
             os.kill(os.getpid(), signal.SIGINT)
