@@ -192,13 +192,7 @@ impl BaseKinematics for DiffKinematics {
 
     /// `[[wheels]]` (at `p`) and `[[design_wheels]]`, as `geometry`.
     fn record(&self, p: &[f64]) -> Result<BaseRecord, KinError> {
-        Ok(BaseRecord {
-            wheel_names: self.design.wheel_names.clone(),
-            matrix: None,
-            design_matrix: None,
-            wheels: Some(self.at(p)?.wheels),
-            design_wheels: Some(self.design.wheels.clone()),
-        })
+        Ok(BaseRecord::of_wheels(&self.design, self.at(p)?))
     }
 
     /// The design from `[[design_wheels]]`; the parameters from `[[wheels]]`, which must be the design's

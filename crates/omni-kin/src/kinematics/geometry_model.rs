@@ -126,13 +126,7 @@ impl BaseKinematics for GeometryKinematics {
 
     /// `[[wheels]]` (at `p`) and `[[design_wheels]]`, with the design's wheel names.
     fn record(&self, p: &[f64]) -> Result<BaseRecord, KinError> {
-        Ok(BaseRecord {
-            wheel_names: self.design.wheel_names.clone(),
-            matrix: None,
-            design_matrix: None,
-            wheels: Some(self.at(p)?.wheels),
-            design_wheels: Some(self.design.wheels.clone()),
-        })
+        Ok(BaseRecord::of_wheels(&self.design, self.at(p)?))
     }
 
     fn from_record(record: &BaseRecord) -> Result<(Self, Vec<f64>), RecordError> {

@@ -151,6 +151,19 @@ pub struct BaseRecord {
 }
 
 impl BaseRecord {
+    /// The record of a model whose parameters are wheel positions, radii and angles (`geometry`, `diff`,
+    /// `mecanum`): the design's wheel names, the fitted wheels `fitted` (wheels in m and rad) and the
+    /// design's wheels; no matrix.
+    pub fn of_wheels(design: &RobotGeometry, fitted: RobotGeometry) -> Self {
+        BaseRecord {
+            wheel_names: design.wheel_names.clone(),
+            matrix: None,
+            design_matrix: None,
+            wheels: Some(fitted.wheels),
+            design_wheels: Some(design.wheels.clone()),
+        }
+    }
+
     /// The model of `kind` this record describes, and its parameters ([`Kinematics::from_record`]).
     pub fn read(&self, kind: KinematicsKind) -> Result<(Kinematics, Vec<f64>), RecordError> {
         Kinematics::from_record(kind, self)

@@ -103,6 +103,24 @@ fn records_round_trip_exactly() {
     }
 }
 
+/// The wheel-based models (geometry, diff, mecanum) share one record: the fitted wheels under `wheels`,
+/// the design's under `design_wheels`, the design's names, no matrix.
+#[test]
+fn wheel_models_record_fitted_and_design_wheels_apart() {
+    for k in models().into_iter().filter(|k| k.kind() != KinematicsKind::Ik) {
+        let p = perturbed(&k);
+        let rec = k.record(&p).unwrap();
+        let design = k.record(&nominal(&k)).unwrap();
+        assert_eq!((rec.matrix.as_ref(), rec.design_matrix.as_ref()), (None, None), "{}", k.id());
+        assert_eq!(rec.design_wheels, design.wheels, "{}", k.id());
+        assert_ne!(rec.wheels, rec.design_wheels, "{}: the fitted wheels are the perturbed ones", k.id());
+        assert_eq!(
+            rec,
+            BaseRecord::of_wheels(&k.geometry_at(&nominal(&k)).unwrap().unwrap(), k.geometry_at(&p).unwrap().unwrap())
+        );
+    }
+}
+
 #[test]
 fn record_errors_name_the_key() {
     let text = |k: KinematicsKind, r: &BaseRecord| Kinematics::from_record(k, r).unwrap_err().to_string();
