@@ -82,10 +82,32 @@ fn report_shows_every_figure_and_the_error_falling_with_the_hidden_effect() {
     }
     assert!(html.contains("Verdict.") && html.contains("add time_offset"), "verdict missing");
     assert!(html.contains("time_offset.tau_s"), "fitted effect parameter missing");
+    // The ranking: sample_timing (no parameters; the simulated samples are all at the nominal step) is left
+    // out with its reason, and no cell reads NaN or -0.0 (issue 19).
+    let row = html.lines().find(|l| l.starts_with("<tr><td class=\"l\">sample_timing</td>")).unwrap();
+    assert!(row.contains("not identifiable on these runs"), "{row}");
+    for bad in ["NaN", "-0.0 %", ">-0.0<"] {
+        assert!(!html.contains(bad), "report contains {bad}");
+    }
     assert!(
         html.contains("What the runs can calibrate") && html.contains("condition number"),
         "identifiability missing"
     );
+}
+
+/// `omnical diagnose`'s ranking: every row has numbers or a reason, never `NaN` or `-0.0`; sample_timing,
+/// which changes nothing on runs whose samples are all at the nominal step, says why it is left out.
+#[test]
+fn diagnose_ranking_shows_numbers_or_a_reason_never_nan() {
+    let (_keep, root) = fitted();
+    let out = omnical(&["diagnose", "--model", "fit.toml", "sim/train", "--validate", "sim/validation"], root);
+    let stdout = ok(&out);
+    let row = stdout.lines().find(|l| l.trim_start().starts_with("sample_timing ")).unwrap();
+    assert_eq!(row.split_whitespace().take(5).collect::<Vec<_>>(), ["sample_timing", "-", "-", "-", "not"], "{row}");
+    assert!(row.ends_with("(not identifiable on these runs)"), "{row}");
+    for bad in ["NaN", " -0.0 "] {
+        assert!(!stdout.contains(bad), "diagnose printed {bad}:\n{stdout}");
+    }
 }
 
 #[test]

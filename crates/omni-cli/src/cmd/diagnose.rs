@@ -191,19 +191,19 @@ pub fn print_diagnosis(d: &Diagnosis) {
         };
         if let Some(why) = &c.not_excited {
             println!(
-                "   {:<20} {:>9} {:>11.1} {:>9}  not excited: {why}",
+                "   {:<20} {:>9} {:>11} {:>9}  not excited: {why}",
                 c.effect,
                 "-",
-                100.0 * c.first_order_explained,
+                text::percent_1(c.first_order_explained),
                 "-"
             );
             continue;
         }
         println!(
-            "   {:<20} {:>9.1} {:>11.1} {:>9}  {}{}",
+            "   {:<20} {:>9} {:>11} {:>9}  {}{}",
             c.effect,
-            100.0 * c.held_out_gain,
-            100.0 * c.first_order_explained,
+            text::percent_1(c.held_out_gain),
+            text::percent_1(c.first_order_explained),
             if c.absorbed { "absorbed".to_string() } else { format!("{:.2}", c.separability) },
             if c.absorbed { "equivalent " } else { "" },
             params.join(", ")

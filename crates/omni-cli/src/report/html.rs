@@ -203,6 +203,14 @@ fn identifiability(h: &mut String, d: &Diagnosis) {
     }
 }
 
+/// A share (0…1) in percent with one decimal and its sign, `-` when not measured (never `NaN` or `-0.0`).
+fn pct(share: f64) -> String {
+    match omni_ga::science::text::percent_1(share) {
+        p if p == "-" => p,
+        p => format!("{p} %"),
+    }
+}
+
 fn ranking_table(h: &mut String, d: &Diagnosis) {
     let _ = writeln!(
         h,
@@ -221,14 +229,26 @@ fn ranking_table(h: &mut String, d: &Diagnosis) {
                 None => format!("{} = {:.4} {} (undetermined)", p.name, p.value, p.unit),
             })
             .collect();
+        if let Some(why) = &c.not_excited {
+            let _ = writeln!(
+                h,
+                "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td>-</td><td>{}</td><td>-</td>\
+                 <td class=\"l\">not excited: {}</td></tr>",
+                escape(&c.effect),
+                escape(&c.physics),
+                pct(c.first_order_explained),
+                escape(why)
+            );
+            continue;
+        }
         let _ = writeln!(
             h,
-            "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{:.1} %</td><td>{:.1} %</td><td>{}</td>\
+            "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{}</td><td>{}</td><td>{}</td>\
              <td class=\"l\">{}{}</td></tr>",
             escape(&c.effect),
             escape(&c.physics),
-            100.0 * c.held_out_gain,
-            100.0 * c.first_order_explained,
+            pct(c.held_out_gain),
+            pct(c.first_order_explained),
             if c.absorbed { "absorbed".into() } else { format!("{:.2}", c.separability) },
             if c.absorbed { "equivalent to " } else { "" },
             escape(&params.join(", "))

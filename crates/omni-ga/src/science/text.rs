@@ -54,6 +54,29 @@ pub fn rung(kind: &RungKind) -> String {
     }
 }
 
+/// A share (0…1) as a percentage with one decimal: `-` when it is not a number (nothing measured), and
+/// `0.0` for a share that rounds to zero from below (never `-0.0`).
+pub fn percent_1(share: f64) -> String {
+    if !share.is_finite() {
+        return "-".into();
+    }
+    let p = 100.0 * share;
+    if p.abs() < 0.05 { "0.0".into() } else { format!("{p:.1}") }
+}
+
+/// Why the runs cannot tell an effect without parameters (`sample_timing`): switching it on changes no
+/// predicted pose, so no refit or share can say anything about it. `uses_stamps`: it integrates with the
+/// measured sample stamps (then every sample is at the nominal step).
+pub fn changes_nothing(uses_stamps: bool) -> String {
+    if uses_stamps {
+        "every wheel sample is at the nominal step, so integrating with the measured stamps changes no \
+         predicted pose (not identifiable on these runs)"
+            .into()
+    } else {
+        "it has no parameters and changes no predicted pose (not identifiable on these runs)".into()
+    }
+}
+
 /// Why the runs cannot tell a wheel-stage effect, wheel by wheel.
 pub fn excitation_gap(gap: &ExcitationGap) -> String {
     let wheels: Vec<String> = gap
@@ -440,5 +463,19 @@ pub fn explore_conclusion(e: &Exploration) -> String {
             "no family passes on held-out runs; the held-out path error ({:.4} m) is {floor}: nothing systematic is left to explain",
             e.baseline_held_out_cost
         ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::percent_1;
+
+    #[test]
+    fn shares_print_as_percentages_never_nan_or_negative_zero() {
+        assert_eq!(percent_1(0.3834), "38.3");
+        assert_eq!(percent_1(-0.004), "-0.4");
+        assert_eq!(percent_1(-1e-6), "0.0");
+        assert_eq!(percent_1(-0.0), "0.0");
+        assert_eq!(percent_1(f64::NAN), "-");
     }
 }

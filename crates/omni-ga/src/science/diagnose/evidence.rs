@@ -73,7 +73,8 @@ fn basis(m: &DMatrix<f64>) -> DMatrix<f64> {
 
 /// The first-order test of one effect at the current fit.
 struct FirstOrder {
-    /// Share of the training residual the effect could explain (0…1; NaN without parameters).
+    /// Share of the training residual the effect could explain (0…1; without parameters, the exact share
+    /// switching it on removes; NaN when that changes no residual).
     explained: f64,
     /// Smallest share of the effect's sensitivity outside the model's (NaN: not excited at all).
     separability: f64,
@@ -118,6 +119,22 @@ fn first_order(
     }
     let implied = implied_values(current, design, effect, &jm, &je);
     Ok(FirstOrder { explained, separability, implied })
+}
+
+/// Share of the training residual (0…1) that switching on `effect` (no parameters) at `current`'s fit
+/// removes: `1 − ‖r_on‖² / ‖r_off‖²`, clamped at 0 when it adds residual. NaN when it changes no residual
+/// beyond rounding (1e-9 of the largest): the runs cannot tell it.
+fn switched_on_share(current: &FittedModel, effect: &EffectKind, train: &[Run], every: usize) -> Result<f64, Error> {
+    let off = unbounded(&current.model, train, every)?.residuals(&current.params);
+    let on_model = current.with_effect(effect.clone());
+    let on = unbounded(&on_model.model, train, every)?.residuals(&on_model.params);
+    let scale = off.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let changed = on.len() != off.len() || on.iter().zip(&off).any(|(a, b)| (a - b).abs() > 1e-9 * scale);
+    if !changed {
+        return Ok(f64::NAN);
+    }
+    let norm2 = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
+    Ok((1.0 - norm2(&on) / norm2(&off).max(1e-300)).clamp(0.0, 1.0))
 }
 
 /// Implied effect values: min ‖J_e e − J_m Δx‖, Δx = fit − design (same base structure only).
@@ -179,7 +196,10 @@ impl Bench<'_> {
         current_costs: &Costs,
     ) -> Result<Candidate, Error> {
         let fo = if effect.params().is_empty() {
-            FirstOrder { explained: f64::NAN, separability: 1.0, implied: Vec::new() }
+            // Nothing to fit and nothing the model could absorb: the exact share of the training residual
+            // that switching the effect on removes (NaN: it changes no residual at all).
+            let explained = switched_on_share(current, effect, self.fit_runs, self.every)?;
+            FirstOrder { explained, separability: 1.0, implied: Vec::new() }
         } else {
             first_order(current, self.design, effect, self.fit_runs, self.every)?
         };
@@ -200,12 +220,16 @@ impl Bench<'_> {
             held_out_gain: 0.0,
             excess_closed: f64::NAN,
             params: Vec::new(),
-            not_excited: gap.as_ref().map(text::excitation_gap),
+            not_excited: match &gap {
+                Some(g) => Some(text::excitation_gap(g)),
+                None if fo.explained.is_nan() => Some(text::changes_nothing(effect.uses_stamps())),
+                None => None,
+            },
             excitation_gap: gap,
             fitted: None,
         };
         if !absorbed
-            && cand.excitation_gap.is_none()
+            && cand.not_excited.is_none()
             && let Ok(fit) = refit(&current.with_effect(effect.clone()), self.fit_runs, self.every)
         {
             self.judge_refit(&mut cand, effect, &fit, current_costs)?;

@@ -159,7 +159,9 @@ pub struct Candidate {
     pub effect: String,
     /// Physics in one line.
     pub physics: String,
-    /// Share of the training residual the effect could explain to first order (0…1).
+    /// Share of the training residual the effect could explain to first order (0…1); for an effect without
+    /// parameters (`sample_timing`), the exact share switching it on removes; NaN (JSON null) when switching
+    /// it on changes no residual (then `not_excited` says so).
     pub first_order_explained: f64,
     /// Smallest share of the effect's sensitivity outside the model's (0 = fully absorbed).
     pub separability: f64,
