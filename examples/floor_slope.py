@@ -16,7 +16,7 @@ import numpy.typing as npt
 
 import omnical
 
-# omni_kin::effect::learned: "moving" is faster than 5 mm/s or 0.02 rad/s.
+# omni_kin::effect::moving (world_drift and learned:world): "moving" is faster than 5 mm/s or 0.02 rad/s.
 MOVING_SPEED_M_S = 0.005
 MOVING_OMEGA_RAD_S = 0.02
 

@@ -318,15 +318,13 @@ impl Effect for WheelEccentricity {
     }
 }
 
-/// Wheel speed above which `world_drift` counts the robot as moving: any wheel faster than this. rad/s.
-pub const WORLD_DRIFT_MOVING_RAD_S: f64 = 0.05;
-
 /// `world_drift`: a constant velocity in the world frame while the robot moves — a tilted floor the robot
 /// creeps down, or a ground-truth frame that moves (a mocap or SLAM map drifting). Twist stage, with the
-/// heading ψ at the start of each step ([`Effect::twist_at`]): while any wheel turns faster than 0.05 rad/s
-/// ([`WORLD_DRIFT_MOVING_RAD_S`]; the measured wheel speeds in the odometry, the true ones in the
-/// simulator), the world-frame velocity `(drift_x, drift_y)` is turned into the body frame and added to
-/// the body twist: `(vx, vy) += R(−ψ) (drift_x, drift_y)`. At rest it does nothing.
+/// heading ψ at the start of each step ([`Effect::twist_at`]): while the robot moves ([`super::moving`]:
+/// the body twist from the wheels faster than 5 mm/s or 0.02 rad/s; the measured wheel speeds in the
+/// odometry, the true ones in the simulator), the world-frame velocity `(drift_x, drift_y)` is turned into
+/// the body frame and added to the body twist: `(vx, vy) += R(−ψ) (drift_x, drift_y)`. At rest it does
+/// nothing.
 ///
 /// Parameters: `drift_x_m_s`, `drift_y_m_s` (m/s, world frame, null 0, bounds ±0.1).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -348,8 +346,8 @@ impl Effect for WorldDrift {
     fn twist(&self, p: &[f64], t: Twist2, w: &[f64]) -> Twist2 {
         self.twist_at(p, t, w, &TwistAt::default())
     }
-    fn twist_at(&self, p: &[f64], t: Twist2, w: &[f64], at: &TwistAt) -> Twist2 {
-        if (p[0] == 0.0 && p[1] == 0.0) || !w.iter().any(|v| v.abs() > WORLD_DRIFT_MOVING_RAD_S) {
+    fn twist_at(&self, p: &[f64], t: Twist2, _w: &[f64], at: &TwistAt) -> Twist2 {
+        if (p[0] == 0.0 && p[1] == 0.0) || !super::moving(&t) {
             return t;
         }
         let (s, c) = at.pose.theta_rad.sin_cos();

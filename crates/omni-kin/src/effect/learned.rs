@@ -22,15 +22,9 @@ use serde::{Deserialize, Serialize};
 
 /// Prefix of every learned effect id: `learned:world`.
 pub const PREFIX: &str = "learned:";
-/// Body speed above which the robot counts as moving. m/s.
-pub const MOVING_SPEED_M_S: f64 = 0.005;
-/// Yaw rate above which the robot counts as moving. rad/s.
-pub const MOVING_OMEGA_RAD_S: f64 = 0.02;
-
-/// Whether a body twist counts as moving (world and time terms act only then).
-pub fn moving(t: &Twist2) -> bool {
-    t.vx_m_s.hypot(t.vy_m_s) > MOVING_SPEED_M_S || t.omega_rad_s.abs() > MOVING_OMEGA_RAD_S
-}
+/// The one "moving" predicate of every effect (world and time terms act only then; shared with
+/// `world_drift`).
+pub use super::{MOVING_OMEGA_RAD_S, MOVING_SPEED_M_S, moving};
 
 /// A family of features the explorer fits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -299,5 +293,29 @@ mod tests {
         assert!((t.vx_m_s - 0.2).abs() < 1e-15 && (t.vy_m_s + 0.01).abs() < 1e-15, "{t:?}");
         let rest = e.twist_at(&p, Twist2::default(), &[], &at);
         assert_eq!(rest, Twist2::default());
+    }
+
+    /// `world_drift` and `learned:world` act on exactly the same steps: the body twist above 5 mm/s or
+    /// 0.02 rad/s, whatever the wheels do (wheels fighting each other at 1 rad/s move the robot nowhere).
+    #[test]
+    fn world_drift_and_learned_world_share_one_moving_predicate() {
+        let learned = Learned::from_id("learned:world", 3).unwrap();
+        let catalogue = super::super::EffectKind::from_id("world_drift", 3).unwrap();
+        let at = TwistAt { pose: Pose2::new(0.0, 0.0, 0.0), since_start_s: 1.0 };
+        let fighting = [1.0, -1.0, 1.0];
+        let cases = [
+            (Twist2 { vx_m_s: 0.004, vy_m_s: 0.0, omega_rad_s: 0.0 }, false),
+            (Twist2 { vx_m_s: 0.0, vy_m_s: 0.006, omega_rad_s: 0.0 }, true),
+            (Twist2 { vx_m_s: 0.0, vy_m_s: 0.0, omega_rad_s: 0.019 }, false),
+            (Twist2 { vx_m_s: 0.0, vy_m_s: 0.0, omega_rad_s: -0.021 }, true),
+            (Twist2::default(), false),
+        ];
+        for (t, moves) in cases {
+            assert_eq!(moving(&t), moves, "{t:?}");
+            let a = learned.twist_at(&[0.01, 0.0, 0.0, 0.0], t, &fighting, &at);
+            let b = catalogue.twist_at(&[0.01, 0.0], t, &fighting, &at);
+            assert_eq!(a, b, "{t:?}");
+            assert_eq!(a.vx_m_s == t.vx_m_s + 0.01, moves, "{t:?}: {a:?}");
+        }
     }
 }

@@ -21,13 +21,29 @@ pub mod learned;
 pub use learned::{Family, Learned};
 
 pub use builtin::{
-    AccelSlip, Backlash, RotationSlip, SampleTiming, SensorOffset, SpeedScale, TimeOffset, WORLD_DRIFT_MOVING_RAD_S,
-    WheelAsymmetry, WheelEccentricity, WorldDrift,
+    AccelSlip, Backlash, RotationSlip, SampleTiming, SensorOffset, SpeedScale, TimeOffset, WheelAsymmetry,
+    WheelEccentricity, WorldDrift,
 };
 
 use crate::error::KinError;
 use crate::pose::{Pose2, Twist2};
 use serde::{Deserialize, Serialize};
+
+/// Body speed (`|(vx, vy)|`) above which the robot counts as moving. m/s. 5 mm/s: above the jitter of a
+/// standing robot's odometry (wheel-speed noise of a few mrad/s × a 5 cm wheel is below 0.3 mm/s), below
+/// any commanded motion.
+pub const MOVING_SPEED_M_S: f64 = 0.005;
+/// Yaw rate above which the robot counts as moving. rad/s. 0.02 rad/s ≈ 1.1 °/s, the same order as
+/// [`MOVING_SPEED_M_S`] at a lever arm of 0.25 m.
+pub const MOVING_OMEGA_RAD_S: f64 = 0.02;
+
+/// Whether the robot moves, judged on its body twist `t` (m/s, rad/s) — the one predicate of every effect
+/// that acts only while moving (`world_drift`, the `learned:world` and `learned:time` terms): faster than
+/// [`MOVING_SPEED_M_S`] or turning faster than [`MOVING_OMEGA_RAD_S`]. On the body twist rather than the
+/// wheel speeds, so wheels fighting each other while the robot stands still do not count.
+pub fn moving(t: &Twist2) -> bool {
+    t.vx_m_s.hypot(t.vy_m_s) > MOVING_SPEED_M_S || t.omega_rad_s.abs() > MOVING_OMEGA_RAD_S
+}
 use std::fmt;
 use std::sync::Arc;
 
