@@ -85,7 +85,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     atomic::write_atomic(&a.out, toml.as_bytes()).with_context(|| format!("writing {}", a.out.display()))?;
     if a.output.json {
         for w in &d.warnings {
-            eprintln!("warning: {w}");
+            tracing::warn!("{w}");
         }
         let doc = serde_json::json!({
             "out": a.out,
@@ -105,7 +105,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         println!("{line}");
     }
     for w in &d.warnings {
-        eprintln!("warning: {w}");
+        tracing::warn!("{w}");
     }
     println!(
         "\nwrote {} ({} base, joints {}); check it, then e.g. `omnical eval --robot {} {}`",
