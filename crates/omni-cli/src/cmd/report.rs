@@ -43,6 +43,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     let ds = load_runs(&a.runs, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
     let val = if a.validate.is_empty() { Vec::new() } else { load_runs(&a.validate, &a.data)?.runs };
+    super::held_out::check("report", &a.runs, &ds.runs, &val)?;
     let design = design_for(&model);
     let diagnosis = if a.no_diagnose {
         None
