@@ -61,13 +61,13 @@ pub fn named_like_held_out(path: &Path) -> bool {
     name.split(|c: char| !c.is_ascii_alphabetic()).any(|w| HELD_OUT_WORDS.contains(&w))
 }
 
-/// The warning for training paths named like a held-out set (`None` when there is none).
+/// The warning (without its `warning: ` prefix) for training paths named like a held-out set (`None` when there is none).
 pub fn name_warning(command: &str, train_paths: &[PathBuf]) -> Option<String> {
     let odd: Vec<String> =
         train_paths.iter().filter(|p| named_like_held_out(p)).map(|p| p.display().to_string()).collect();
     (!odd.is_empty()).then(|| {
         format!(
-            "warning: {} {} read as training runs although named like a held-out set; {}",
+            "{} {} read as training runs although named like a held-out set; {}",
             odd.join(", "),
             if odd.len() == 1 { "is" } else { "are" },
             spelling(command)
@@ -75,13 +75,14 @@ pub fn name_warning(command: &str, train_paths: &[PathBuf]) -> Option<String> {
     })
 }
 
-/// Both checks: prints the name warning on stderr, fails on shared runs.
+/// Both checks: the name warning as a `tracing` warning (stderr, shown also with `-q`), an error on shared
+/// runs.
 pub fn check(command: &str, train_paths: &[PathBuf], train: &[Run], held_out: &[Run]) -> anyhow::Result<()> {
     if held_out.is_empty() {
         return Ok(());
     }
     if let Some(w) = name_warning(command, train_paths) {
-        eprintln!("{w}");
+        tracing::warn!("{w}");
     }
     check_disjoint(command, train, held_out)
 }
@@ -99,7 +100,7 @@ mod tests {
             assert!(!named_like_held_out(Path::new(p)), "{p}");
         }
         let w = name_warning("diagnose", &["sim/val2".into(), "sim/train".into()]).unwrap_or_default();
-        assert!(w.starts_with("warning: sim/val2 is read as training runs although named like a held-out set;"));
+        assert!(w.starts_with("sim/val2 is read as training runs although named like a held-out set;"));
         assert_eq!(name_warning("diagnose", &["sim/train".into()]), None);
     }
 }
