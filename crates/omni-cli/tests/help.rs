@@ -220,3 +220,36 @@ fn validate_old_spelling_is_caught() {
     assert!(out.status.success(), "{err}");
     assert!(!err.contains("warning:") && !err.contains("same recording"), "{err}");
 }
+
+/// `export --controller` is a choice table: each controller listed with its line, the package names taken
+/// as they are and the short forms as aliases; anything else refused with the list.
+#[test]
+fn export_controller_lists_each_choice() {
+    let text = help(&["export", "--help"]);
+    for line in [
+        "diff_drive_controller:       Two wheels (or two sides of wheels): wheel separation and left/right radii",
+        "mecanum_drive_controller:    Four mecanum wheels, rollers at ±45°: wheel radius and lx + ly",
+        "omni_wheel_drive_controller: Three or more omni wheels equally spaced on a circle",
+    ] {
+        assert!(text.contains(line), "{line}\n{text}");
+    }
+    use clap::Parser;
+    use omni_cli::cli::{Cli, Command};
+    use omni_kin::controller::ControllerKind;
+    for (given, want) in [
+        ("omni_wheel_drive_controller", ControllerKind::OmniWheelDrive),
+        ("mecanum", ControllerKind::MecanumDrive),
+        ("diff-drive-controller", ControllerKind::DiffDrive),
+    ] {
+        let cli = Cli::try_parse_from(["omnical", "export", "--model", "m", "r", "--controller", given]).unwrap();
+        let Command::Export(e) = cli.command else { panic!("export") };
+        assert_eq!(e.controller, Some(want), "{given}");
+    }
+    let out = omnical(&["export", "--model", "m", "r", "--controller", "ackermann"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("[possible values: diff_drive_controller, mecanum_drive_controller, omni_wheel_drive_controller]"),
+        "{err}"
+    );
+}
