@@ -81,14 +81,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     if let Some(dir) = &a.mcap {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         for run in &ds.runs {
-            let opts = WriteOptions {
-                wheel_joints: wheel_joints(&a.data, &ds),
-                design_odometry: (!run.recorded_odometry().is_empty()).then(|| run.recorded_odometry().to_vec()),
-                calibrated_odometry: Some(odometry_poses(&model, run)?),
-                ..WriteOptions::default()
-            };
-            let path = dir.join(format!("{}.mcap", tum::file_stem(run.name())));
-            write_run(&path, run, &opts)?;
+            write_mcap(dir, run, &model, &wheel_joints(&a.data, &ds))?;
         }
         println!(
             "wrote {} MCAP files to {} (topics /joint_states, /ground_truth/pose, /omnical/odometry, …)",
@@ -123,7 +116,32 @@ fn joint_names(model: &FittedModel, joints: &[String]) -> Vec<String> {
     }
 }
 
-fn write_tum(dir: &Path, run: &Run, design: &FittedModel, model: &FittedModel, spec: &str) -> anyhow::Result<()> {
+/// Writes one run's MCAP bag `DIR/<run>.mcap` (`--mcap`): its wheel data (joints `wheel_joints`), ground
+/// truth, recorded odometry if any, and `model`'s odometry on /omnical/odometry; a run whose clock starts
+/// before 0 s (a simulated one) is put at the simulator's epoch. Returns the path.
+pub fn write_mcap(dir: &Path, run: &Run, model: &FittedModel, wheel_joints: &[String]) -> anyhow::Result<PathBuf> {
+    let opts = WriteOptions {
+        wheel_joints: wheel_joints.to_vec(),
+        design_odometry: (!run.recorded_odometry().is_empty()).then(|| run.recorded_odometry().to_vec()),
+        calibrated_odometry: Some(odometry_poses(model, run)?),
+        // Simulated clocks start before 0 s (as `simulate` does): put them at its epoch.
+        origin_s: if run.wheel_t_s().first().is_some_and(|&t| t < 0.0) { super::simulate::SIM_EPOCH_S } else { 0 },
+    };
+    let path = dir.join(format!("{}.mcap", tum::file_stem(run.name())));
+    write_run(&path, run, &opts)?;
+    Ok(path)
+}
+
+/// Writes one run's TUM files (`--tum`): `DIR/<run>.gt.tum`, `.design.tum` and `.calibrated.tum`, the
+/// latter two the odometry of `design` and of `model` (named `spec` in the header). Returns the paths.
+pub fn write_tum(
+    dir: &Path,
+    run: &Run,
+    design: &FittedModel,
+    model: &FittedModel,
+    spec: &str,
+) -> anyhow::Result<Vec<PathBuf>> {
+    let mut written = Vec::new();
     let stem = tum::file_stem(run.name());
     let files = [
         ("gt", format!("run {}: ground truth", run.name()), run.truth().to_vec()),
@@ -134,6 +152,7 @@ fn write_tum(dir: &Path, run: &Run, design: &FittedModel, model: &FittedModel, s
         let path = dir.join(format!("{stem}.{kind}.tum"));
         let text = tum::to_tum(&format!("{comment}\ntimestamp tx ty tz qx qy qz qw (s, m, unit quaternion)"), &poses);
         atomic::write_atomic(&path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))?;
+        written.push(path);
     }
-    Ok(())
+    Ok(written)
 }
