@@ -6,7 +6,7 @@ use std::ffi::OsString;
 /// Run the ``omnical`` command line with ``argv`` (program name first); returns the exit status. The GIL
 /// is released while it runs. Its output goes to the process's stdout and stderr.
 ///
-/// >>> omnical.cli_main(["omnical", "eval", "no-such-run.csv"])  # "error: ..." on stderr
+/// >>> omnical._omnical.cli_main(["omnical", "eval", "no-such-run.csv"])  # "error: ..." on stderr
 /// 2
 #[pyfunction]
 pub fn cli_main(py: Python<'_>, argv: Vec<String>) -> i32 {

@@ -118,7 +118,7 @@ impl PyEvaluation {
 /// >>> runs = omnical.simulate(runs_per_command=1, duration_s=1.0)
 /// >>> ev = omnical.evaluate("design", runs, robot="apr02")  # the design (Eq. 7) on the true Eq. 9 robot
 /// >>> round(ev.path_cost, 3), len(ev.runs), ev.runs[0].error.shape[1]
-/// (0.008, 36, 3)
+/// (0.016, 36, 3)
 #[pyfunction]
 #[pyo3(signature = (model, runs, *, robot = None))]
 pub fn evaluate(
@@ -160,8 +160,8 @@ pub fn evaluate(
 ///
 /// >>> run = omnical.simulate(runs_per_command=1, duration_s=1.0)[0]
 /// >>> path = omnical.integrate("paper", run)
-/// >>> path.shape == (run.n_samples, 4)
-/// True
+/// >>> path.shape[1], bool(np.isfinite(path).all())
+/// (4, True)
 #[pyfunction]
 #[pyo3(signature = (model, run, *, robot = None))]
 pub fn integrate<'py>(

@@ -24,8 +24,8 @@ use std::path::{Path, PathBuf};
 /// >>> runs = omnical.simulate(runs_per_command=1, duration_s=1.0)[:2]
 /// >>> files = omnical.export("paper", runs, tum=tempfile.mkdtemp(), mcap=tempfile.mkdtemp())
 /// >>> [f.rsplit("/", 1)[1] for f in files]  # doctest: +NORMALIZE_WHITESPACE
-/// ['00-r0.gt.tum', '00-r0.design.tum', '00-r0.calibrated.tum', '01-r0.gt.tum', '01-r0.design.tum',
-///  '01-r0.calibrated.tum', '00-r0.mcap', '01-r0.mcap']
+/// ['train_00-r0.gt.tum', 'train_00-r0.design.tum', 'train_00-r0.calibrated.tum', 'train_01-r0.gt.tum',
+///  'train_01-r0.design.tum', 'train_01-r0.calibrated.tum', 'train_00-r0.mcap', 'train_01-r0.mcap']
 #[pyfunction]
 #[pyo3(signature = (model, runs, *, tum = None, mcap = None, robot = None))]
 pub fn export(

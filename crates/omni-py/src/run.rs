@@ -149,7 +149,7 @@ impl PyRun {
 ///
 /// >>> import tempfile
 /// >>> out = tempfile.mkdtemp()  # `omnical simulate` writes train/ and validation/ with a robot.toml
-/// >>> omnical.cli_main(["omnical", "simulate", "--out", out, "--runs-per-command", "1", "--duration", "1"])
+/// >>> omnical._omnical.cli_main(["omnical", "simulate", "--out", out, "--runs-per-command", "1", "--duration", "1"])
 /// 0
 /// >>> ds = omnical.load(out + "/train")
 /// >>> len(ds), ds[0].n_wheels, ds.robot.endswith("(found beside the data)"), ds.design.kinematics
@@ -283,7 +283,7 @@ pub fn _dataset_from_state(
 ///
 /// >>> import tempfile
 /// >>> out = tempfile.mkdtemp()
-/// >>> omnical.cli_main(["omnical", "simulate", "--out", out, "--runs-per-command", "1", "--duration", "1"])
+/// >>> omnical._omnical.cli_main(["omnical", "simulate", "--out", out, "--runs-per-command", "1", "--duration", "1"])
 /// 0
 /// >>> ds = omnical.load(out + "/train")  # MCAP bags and the robot.toml beside them
 /// >>> len(ds), ds[0].name, ds.design.n_wheels

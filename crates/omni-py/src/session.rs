@@ -19,7 +19,7 @@ use serde_json::json;
 ///
 /// >>> import tempfile
 /// >>> out = tempfile.mkdtemp()
-/// >>> omnical.cli_main(["omnical", "simulate", "--out", out, "--runs-per-command", "1", "--duration", "1"])
+/// >>> omnical._omnical.cli_main(["omnical", "simulate", "--out", out, "--runs-per-command", "1", "--duration", "1"])
 /// 0
 /// >>> t = omnical._omnical.train_files([out + "/train", "--seed", "0", "--out", out + "/fit.toml"])
 /// >>> t["runs"], t["summary"]["objective"], omnical.load_model(out + "/fit.toml").kinematics
@@ -43,7 +43,7 @@ pub fn train_files<'py>(py: Python<'py>, args: Vec<String>) -> PyResult<Bound<'p
 /// >>> import tempfile
 /// >>> out = tempfile.mkdtemp()
 /// >>> args = ["--effect", "time_offset=0.06", "--runs-per-command", "1", "--duration", "2"]
-/// >>> omnical.cli_main(["omnical", "simulate", "--out", out, *args])
+/// >>> omnical._omnical.cli_main(["omnical", "simulate", "--out", out, *args])
 /// 0
 /// >>> d = omnical._omnical.diagnose_files(["--model", "paper", out + "/train", "--candidates", "time_offset"])
 /// >>> d["verdict"]
