@@ -17,5 +17,6 @@ if [ -z "${OMNICAL_PYTHON:-}" ]; then
   fi
   export OMNICAL_PYTHON="$PWD/.venv/bin/python"
 fi
-cargo test --workspace
+# --no-fail-fast: one failing test binary does not hide the failures of the others.
+cargo test --workspace --no-fail-fast
 RUSTDOCFLAGS=-Dwarnings cargo doc --workspace --no-deps --quiet

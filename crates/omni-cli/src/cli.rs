@@ -25,9 +25,14 @@ pub struct Cli {
     /// Worker threads (default: all cores). Results do not depend on it.
     #[arg(long, global = true)]
     pub threads: Option<usize>,
-    /// Hide progress bars (they are also hidden when stderr is not a terminal); summaries still print.
+    /// Hide progress bars and notes (bars are also hidden when stderr is not a terminal); results and
+    /// warnings still print.
     #[arg(long, short, global = true)]
     pub quiet: bool,
+    /// Say more on stderr: -v adds what was read (files, the robot.toml picked up) and timings, -vv
+    /// debugging detail. RUST_LOG (e.g. RUST_LOG=debug), when set, overrides -q and -v.
+    #[arg(long, short, global = true, action = clap::ArgAction::Count, conflicts_with = "quiet")]
+    pub verbose: u8,
     /// The subcommand.
     #[command(subcommand)]
     pub command: Command,
@@ -91,9 +96,18 @@ pub fn choice<T: Choice>() -> impl TypedValueParser<Value = T> {
 
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
+    crate::logging::init(crate::logging::Verbosity::from_flags(cli.quiet, cli.verbose));
     if let Some(n) = cli.threads {
         rayon::ThreadPoolBuilder::new().num_threads(n).build_global()?;
     }
+    tracing::debug!("{} worker threads", rayon::current_num_threads());
+    let started = std::time::Instant::now();
+    let result = run_command(cli);
+    tracing::info!("finished in {:.2} s", started.elapsed().as_secs_f64());
+    result
+}
+
+fn run_command(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Simulate(a) => cmd::simulate::run(&a, cli.quiet),
         Command::Eval(a) => cmd::eval::run(&a),

@@ -12,6 +12,7 @@ pub mod design;
 pub mod entry;
 pub mod init;
 pub mod interrupt;
+pub mod logging;
 pub mod model_file;
 pub mod progress;
 pub mod report;

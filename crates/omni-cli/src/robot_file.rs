@@ -162,18 +162,17 @@ pub fn resolve(flag: Option<&str>, runs: &[PathBuf]) -> Result<Option<RobotFile>
     }
 }
 
-/// Prints `robot: PATH (found beside the data)` on stderr for a robot.toml that was picked up without being
-/// named, once per file in this process (a command may load several sets). `--robot` is not repeated back.
+/// Says `robot: PATH (found beside the data)` on stderr for a robot.toml that was picked up without being
+/// named, once per file in a command (a command may load several sets). `--robot` is not repeated back
+/// but for `-v`.
 pub fn announce(source: &Source) {
-    if !matches!(source, Source::Discovered(_)) {
+    let text = source.to_string();
+    if !crate::logging::first_in_command(&format!("robot: {text}")) {
         return;
     }
-    static SHOWN: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
-    let text = source.to_string();
-    let mut shown = SHOWN.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-    if !shown.contains(&text) {
-        eprintln!("robot: {text}");
-        shown.push(text);
+    match source {
+        Source::Discovered(_) => crate::note!("robot: {text}"),
+        Source::Flag(_) | Source::Builtin => tracing::info!("robot: {text}, named by --robot"),
     }
 }
 

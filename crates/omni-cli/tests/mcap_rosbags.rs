@@ -326,7 +326,7 @@ fn rosbags_and_mcap_read_what_we_write() {
     for (topic, schema, count) in [
         ("/joint_states", "sensor_msgs/msg/JointState", 201),
         ("/ground_truth/pose", "geometry_msgs/msg/PoseStamped", 51),
-        ("/cmd_vel", "geometry_msgs/msg/Twist", 2),
+        ("/cmd_vel", "geometry_msgs/msg/TwistStamped", 2),
         ("/odom", "nav_msgs/msg/Odometry", 51),
     ] {
         assert_eq!(topics[topic]["schema"], schema, "{topic}");
@@ -352,9 +352,17 @@ fn rosbags_and_mcap_read_what_we_write() {
     // The quaternion of yaw 1 rad: (z, w) = (sin 0.5, cos 0.5).
     let yaw = 2.0 * gt[5].as_f64().unwrap().atan2(gt[6].as_f64().unwrap());
     assert!((yaw - 1.0).abs() < 1e-12, "yaw {yaw}");
+    // The command is stamped (TwistStamped, body frame): at the first and the last wheel sample.
     let cmd = &seen["messages"]["/cmd_vel"];
-    close(&floats(&cmd[0])[1..], &[0.25 * 0.5f64.cos(), 0.25 * 0.5f64.sin(), -0.75], 1e-15, "command");
-    close(&floats(&cmd[1])[1..], &[0.0, 0.0, 0.0], 0.0, "final zero command");
+    assert_eq!(
+        (cmd[0][0].as_i64(), cmd[0][1].as_i64(), cmd[0][2].as_str()),
+        (Some(1_700_000_000), Some(0), Some("base_link"))
+    );
+    assert_eq!((cmd[1][0].as_i64(), cmd[1][1].as_i64()), (Some(1_700_000_002), Some(0)));
+    assert_eq!(cmd[0][3].as_i64(), Some(1_700_000_000_000_000_000), "log time = stamp");
+    let twist = |row: &Value| floats(&Value::from(row.as_array().unwrap()[4..].to_vec()));
+    close(&twist(&cmd[0]), &[0.25 * 0.5f64.cos(), 0.25 * 0.5f64.sin(), -0.75], 1e-15, "command");
+    close(&twist(&cmd[1]), &[0.0, 0.0, 0.0], 0.0, "final zero command");
     let od = &seen["messages"]["/odom"][0];
     assert_eq!((od[2].as_str(), od[3].as_str()), (Some("odom"), Some("base_link")));
 }

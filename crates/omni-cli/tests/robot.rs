@@ -217,13 +217,14 @@ fn priors_bound_the_parametric_search_and_are_reported() {
     std::fs::write(d.join("sim/train/robot.toml"), DIFF).unwrap();
     let (v, _) = fit(&["--model", "diff"]);
     assert!(v.get("priors").is_none() && v["outside_box"] == serde_json::json!([]), "{v}");
-    // The ik matrix's entries are not geometry: the priors are unused, and that is said.
+    // The ik matrix's entries are not geometry: the priors are unused, and that is said (a warning: shown
+    // with -q).
     std::fs::write(d.join("sim/train/robot.toml"), format!("{DIFF}{priors}")).unwrap();
     let (v, e) = fit(&[]);
     assert!(v.get("priors").is_none(), "{v}");
     assert!(
         e.contains(
-            "note: the [priors] of sim/train/robot.toml (found beside the data) bound the parametric models' search"
+            "warning: the [priors] of sim/train/robot.toml (found beside the data) bound the parametric models' search"
         ),
         "{e}"
     );

@@ -1,6 +1,6 @@
 //! `omnical diagnose`: compare, locate, and name the missing effect; `--auto` climbs the error ladder.
 
-use super::{DataArgs, load_runs, resolve_model};
+use super::{DataArgs, load_with_held_out, resolve_model};
 use crate::cli::effect_help;
 use crate::design::design_for;
 use crate::{atomic, model_file};
@@ -90,9 +90,9 @@ struct Loaded {
 
 /// Loads, diagnoses and writes `--out`; returns the diagnosis and what it was computed on.
 fn diagnose_loaded(a: &Args) -> anyhow::Result<(Diagnosis, Loaded)> {
-    let ds = load_runs(&a.runs, &a.data)?;
+    let (ds, val) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
-    let val = if a.validate.is_empty() { None } else { Some(load_runs(&a.validate, &a.data)?.runs) };
+    let val = val.map(|v| v.runs);
     let mut opts = DiagnoseOptions { auto: a.auto, min_gain: a.min_gain, ..DiagnoseOptions::default() };
     if !a.candidates.is_empty() {
         opts.candidates = a.candidates.clone();

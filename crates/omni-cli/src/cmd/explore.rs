@@ -1,7 +1,7 @@
 //! `omnical explore`: which family of physical features (wheel, body, world, time, ground truth) explains
 //! the error a model leaves, each fitted on the training runs and judged on the held-out runs.
 
-use super::{DataArgs, load_runs, resolve_model};
+use super::{DataArgs, load_with_held_out, resolve_model};
 use crate::{atomic, model_file};
 use anyhow::Context;
 use omni_ga::explore::{Exploration, ExploreOptions, FamilyResult, explore};
@@ -42,9 +42,9 @@ pub struct Args {
 
 /// Runs `omnical explore`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
-    let ds = load_runs(&a.runs, &a.data)?;
+    let (ds, val) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
-    let val = load_runs(&a.validate, &a.data)?.runs;
+    let val = val.map(|v| v.runs).unwrap_or_default();
     let opts = ExploreOptions { min_gain: a.min_gain, ..ExploreOptions::default() };
     let e = explore(&model, &ds.runs, &val, &opts)?;
     if let Some(out) = &a.out {

@@ -83,7 +83,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         println!("{line}");
     }
     for w in &d.warnings {
-        eprintln!("warning: {w}");
+        tracing::warn!("{w}");
     }
     println!(
         "\nwrote {} ({} base, joints {}); check it, then e.g. `omnical eval --robot {} {}`",

@@ -125,21 +125,45 @@ impl Default for DataArgs {
 /// odometry is left out (no command but `export` shows it, and it would take as much memory as the wheel
 /// data).
 pub fn load_runs(paths: &[PathBuf], data: &DataArgs) -> anyhow::Result<Dataset> {
-    load(paths, data, false)
+    let ds = load(paths, data, false)?;
+    say_load_notes(&[&ds]);
+    Ok(ds)
 }
 
 /// [`load_runs`], keeping the runs' recorded odometry.
 pub fn load_runs_with_odometry(paths: &[PathBuf], data: &DataArgs) -> anyhow::Result<Dataset> {
-    load(paths, data, true)
+    let ds = load(paths, data, true)?;
+    say_load_notes(&[&ds]);
+    Ok(ds)
+}
+
+/// Training runs and held-out runs (`None` when `held_out` is empty), read as [`load_runs`] does, with the
+/// notes of both said once: a note both sets raise is one line with the count of every file.
+pub fn load_with_held_out(
+    runs: &[PathBuf],
+    held_out: &[PathBuf],
+    data: &DataArgs,
+) -> anyhow::Result<(Dataset, Option<Dataset>)> {
+    let train = load(runs, data, false)?;
+    let held = if held_out.is_empty() { None } else { Some(load(held_out, data, false)?) };
+    say_load_notes(&[Some(&train), held.as_ref()].into_iter().flatten().collect::<Vec<_>>());
+    Ok((train, held))
 }
 
 fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::Result<Dataset> {
+    let started = std::time::Instant::now();
     let robot = robot_file::resolve(data.robot.robot.as_deref(), paths)?;
     if let Some(r) = &robot {
         robot_file::announce(&r.source);
     }
     let ds = load_for_robot(paths, data, recorded_odometry, robot)?;
-    print_load_notes(&ds);
+    tracing::info!(
+        "read {} run{} from {} in {:.2} s",
+        ds.runs.len(),
+        if ds.runs.len() == 1 { "" } else { "s" },
+        paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "),
+        started.elapsed().as_secs_f64()
+    );
     Ok(ds)
 }
 
@@ -185,29 +209,30 @@ fn csv_joints(data: &DataArgs, robot: Option<&robot_file::RobotFile>) -> Vec<Str
     data.joints.clone().or(from_file).unwrap_or_default()
 }
 
-/// Prints a dataset's notes (the same note from many files once, with a count), skipped inputs and
-/// ground-truth clocks on stderr.
-fn print_load_notes(ds: &Dataset) {
-    let mut seen: Vec<(String, String, usize)> = Vec::new();
-    for n in &ds.notes {
-        let key = n.split_once(": ").map_or(n.as_str(), |(_, rest)| rest).to_string();
+/// Says the datasets' notes on stderr, each distinct note once with the count of the files that raised it
+/// (the same note from many files differs only in the file name before its first `: `), then skipped
+/// inputs (shown even with `-q`) and ground-truth clocks.
+fn say_load_notes(sets: &[&Dataset]) {
+    let mut seen: Vec<(&str, &str, usize)> = Vec::new();
+    for n in sets.iter().flat_map(|ds| &ds.notes) {
+        let key = n.split_once(": ").map_or(n.as_str(), |(_, rest)| rest);
         match seen.iter_mut().find(|(k, _, _)| *k == key) {
             Some(entry) => entry.2 += 1,
-            None => seen.push((key, n.clone(), 1)),
+            None => seen.push((key, n, 1)),
         }
     }
-    for (_, first, count) in &seen {
-        if *count > 1 {
-            eprintln!("note: {first} (and {} more files)", count - 1);
-        } else {
-            eprintln!("note: {first}");
+    for (_, first, count) in seen {
+        match count {
+            1 => crate::note!("note: {first}"),
+            2 => crate::note!("note: {first} (and 1 more file)"),
+            _ => crate::note!("note: {first} (and {} more files)", count - 1),
         }
     }
-    for s in &ds.skipped {
-        eprintln!("skipped {}: {}", s.source, s.reason);
+    for s in sets.iter().flat_map(|ds| &ds.skipped) {
+        tracing::warn!(target: crate::logging::NOTE, "skipped {}: {}", s.source, s.reason);
     }
-    for c in &ds.ground_truth_clocks {
-        eprintln!("{}", c.describe());
+    for c in sets.iter().flat_map(|ds| &ds.ground_truth_clocks) {
+        crate::note!("{}", c.describe());
     }
 }
 

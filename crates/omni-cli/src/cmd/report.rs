@@ -1,6 +1,6 @@
 //! `omnical report`: the HTML report of a model on runs (diagnosis included unless `--no-diagnose`).
 
-use super::{DataArgs, load_runs, resolve_model};
+use super::{DataArgs, load_with_held_out, resolve_model};
 use crate::design::design_for;
 use crate::progress;
 use crate::report::{self, ReportInput};
@@ -40,9 +40,9 @@ pub struct Args {
 
 /// Runs `omnical report`; `quiet` hides the progress display.
 pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
-    let ds = load_runs(&a.runs, &a.data)?;
+    let (ds, val) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
-    let val = if a.validate.is_empty() { Vec::new() } else { load_runs(&a.validate, &a.data)?.runs };
+    let val = val.map(|v| v.runs).unwrap_or_default();
     let design = design_for(&model);
     let diagnosis = if a.no_diagnose {
         None

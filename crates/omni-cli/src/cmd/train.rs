@@ -201,8 +201,9 @@ fn robot_priors(start: &FittedModel, ds: &crate::dataset::Dataset) -> Vec<PriorU
     let Some(Design::File(f)) = robot_file::design(ds) else { return Vec::new() };
     let found = priors_of(start, ds);
     if found.is_empty() && f.description.priors.is_some() {
-        eprintln!(
-            "note: the [priors] of {} bound the parametric models' search (--model geometry, diff or mecanum); \
+        // A warning, not a note (shown with -q too): a setting of the user's file goes unused.
+        tracing::warn!(
+            "the [priors] of {} bound the parametric models' search (--model geometry, diff or mecanum); \
              the {} model's parameters keep the preset's box",
             f.source,
             start.model.kinematics.id()
@@ -243,8 +244,8 @@ fn named_columns(design: Model, joints: Option<&[String]>) -> anyhow::Result<Mod
         return Ok(design.with_wheel_names(joints)?);
     }
     if names != joints {
-        eprintln!(
-            "warning: --joints reads the wheels as {}, but the design's columns are the robot's {}: give the \
+        tracing::warn!(
+            "--joints reads the wheels as {}, but the design's columns are the robot's {}: give the \
              joints in the robot description's order",
             joints.join(", "),
             names.join(", ")
@@ -261,16 +262,14 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     let (ds, start, plan, priors) = prepare(a)?;
     let preset_name = a.preset.id();
     if let Some(w) = fixed_step_mismatch(&plan, &ds.runs) {
-        eprintln!("warning: {w}");
+        tracing::warn!("{w}");
     }
     let mut bar = progress::ProgressObserver::new(plan.ga().map_or(0, |g| g.max_generations), quiet);
-    if !quiet {
-        eprintln!(
-            "training on {} runs: preset {preset_name}, seed {} (Ctrl-C stops early and keeps the best so far)",
-            ds.runs.len(),
-            a.seed
-        );
-    }
+    crate::note!(
+        "training on {} runs: preset {preset_name}, seed {} (Ctrl-C stops early and keeps the best so far)",
+        ds.runs.len(),
+        a.seed
+    );
     let c = calibrate(&start, &ds.runs, &plan, &mut interrupt::StopOnInterrupt(&mut bar))?;
     bar.finish();
     let interrupted = interrupt::requested();

@@ -310,6 +310,21 @@ fn merge(
 ) -> Result<(), DatasetError> {
     match read {
         Ok(l) => {
+            tracing::info!(
+                "read {}: {} run{}",
+                source.display(),
+                l.runs.len(),
+                if l.runs.len() == 1 { "" } else { "s" }
+            );
+            for r in &l.runs {
+                tracing::debug!(
+                    "run {}: {} wheel samples over {:.3} s, {} ground-truth poses",
+                    r.name(),
+                    r.n_samples(),
+                    r.wheel_t_s().last().unwrap_or(&0.0) - r.wheel_t_s().first().unwrap_or(&0.0),
+                    r.truth().len()
+                );
+            }
             ds.runs.extend(l.runs);
             ds.skipped.extend(l.skipped);
             ds.notes.extend(l.notes);

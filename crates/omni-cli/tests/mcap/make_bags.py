@@ -454,6 +454,10 @@ def check(path):
                        p.position.x, p.position.y, p.orientation.z, p.orientation.w]
             elif conn.msgtype == TWIST:
                 row = [log_ns, m.linear.x, m.linear.y, m.angular.z]
+            elif conn.msgtype == TWIST_STAMPED:
+                t = m.twist
+                row = [m.header.stamp.sec, m.header.stamp.nanosec, m.header.frame_id, log_ns, t.linear.x, t.linear.y,
+                       t.angular.z]
             else:
                 row = [log_ns]
             msgs.setdefault(conn.topic, []).append(row)

@@ -4,7 +4,7 @@
 //! A run keeps the **first non-zero command** as its [`Command`]: `v = hypot(vx, vy)`, `α = atan2(vy, vx)`,
 //! `ω = wz` (the paper's (v, α, ω)). Twist has no header, so its time is the log time.
 
-use super::common::{Header, TWIST_DEF, Twist, VECTOR3_DEF, schema_text};
+use super::common::{HEADER_DEF, Header, TIME_DEF, TWIST_DEF, Twist, VECTOR3_DEF, schema_text};
 use omni_kin::Command;
 use serde::{Deserialize, Serialize};
 
@@ -23,9 +23,12 @@ pub(super) struct TwistStamped {
     pub twist: Twist,
 }
 
-/// The Twist schema text, as rosbag2 writes it.
-pub(super) fn schema() -> String {
-    schema_text(TWIST_DEF.text, &[&VECTOR3_DEF])
+/// The TwistStamped schema text, as rosbag2 writes it.
+pub(super) fn stamped_schema() -> String {
+    schema_text(
+        "std_msgs/Header header\ngeometry_msgs/Twist twist\n",
+        &[&HEADER_DEF, &TIME_DEF, &TWIST_DEF, &VECTOR3_DEF],
+    )
 }
 
 /// The non-zero commands of one topic.

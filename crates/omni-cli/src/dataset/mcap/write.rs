@@ -1,13 +1,15 @@
 //! Writing a run as a ROS 2 bag (one bare `.mcap`), laid out as rosbag2 records one: profile `ros2`,
 //! `ros2msg` schemas with their dependencies, little-endian CDR messages, zstd chunks with CRCs, a summary
-//! with chunk and message indexes. Messages are written in time order; log time = header stamp.
+//! with chunk and message indexes. Messages are written in time order; log time = header stamp. The
+//! command is a `TwistStamped` (as `diff_drive_controller` takes it since ROS 2 Jazzy), so its time is
+//! the stamp the simulator gave it, not a log time a reader has to trust.
 
 use super::WriteOptions;
 use super::common::{Header, Pose, RosString, Time, Twist, encode};
 use super::joint_state::{self, JointState};
 use super::odometry::{self, BASE_FRAME, ODOM_FRAME, Odometry, TwistWithCovariance};
 use super::pose_stamped::{self, PoseStamped, PoseWithCovariance};
-use super::twist::{self, twist_of};
+use super::twist::{self, TwistStamped, twist_of};
 use crate::dataset::DatasetError;
 use omni_kin::{Run, StampedPose};
 use serde::Serialize;
@@ -118,8 +120,10 @@ fn messages(path: &Path, run: &Run, w: &WriteOptions) -> Result<Vec<Pending>, Da
         m.push(msg.header.stamp, 1, &msg)?;
     }
     if let Some(c) = run.command() {
-        m.push(m.stamp(t[0])?, 2, &twist_of(&c))?;
-        m.push(m.stamp(t[t.len() - 1])?, 2, &Twist::default())?;
+        for (k, twist) in [(0, twist_of(&c)), (t.len() - 1, Twist::default())] {
+            let msg = TwistStamped { header: header(m.stamp(t[k])?, BASE_FRAME), twist };
+            m.push(msg.header.stamp, 2, &msg)?;
+        }
     }
     for (slot, odom) in [(3, &w.design_odometry), (4, &w.calibrated_odometry)] {
         let Some(odom) = odom else { continue };
@@ -188,7 +192,7 @@ fn write_file(tmp: &Path, run: &Run, w: &WriteOptions, pending: &[Pending]) -> R
     for (name, text, topic, used) in [
         (joint_state::NAME, joint_state::schema(), JOINTS_TOPIC, true),
         (pose_stamped::NAME, pose_stamped::schema(), TRUTH_TOPIC, true),
-        (twist::NAME, twist::schema(), COMMAND_TOPIC, run.command().is_some()),
+        (twist::STAMPED_NAME, twist::stamped_schema(), COMMAND_TOPIC, run.command().is_some()),
         (odometry::NAME, odometry::schema(), ODOM_TOPIC, w.design_odometry.is_some()),
         (odometry::NAME, odometry::schema(), CALIBRATED_TOPIC, w.calibrated_odometry.is_some()),
     ] {
