@@ -71,6 +71,10 @@ pub enum Command {
     /// Calibrate every robot-session of a fleet (`FLEET_DIR/<robot>/<session>/`) on Dask and write the fleet
     /// view: the Python wheel's `omnical` only (`pip install "omnical[fleet]"`).
     Fleet(cmd::FleetArgs),
+    /// Print a shell completion script (bash, zsh, fish, elvish, powershell) on stdout.
+    Completions(cmd::shell::CompletionsArgs),
+    /// Print the manual page (roff) on stdout, or write one page per command with `--out DIR`.
+    Man(cmd::shell::ManArgs),
 }
 
 /// The built-in effect ids, for help texts: `sensor_offset, sensor_offset_yaw, time_offset, …`.
@@ -120,5 +124,7 @@ fn run_command(cli: Cli) -> anyhow::Result<()> {
         Command::Init(a) => cmd::init::run(&a),
         Command::Demo(a) => cmd::demo::run(&a, cli.quiet),
         Command::Fleet(_) => Err(cmd::python_only("omnical fleet")),
+        Command::Completions(a) => cmd::shell::completions(&a),
+        Command::Man(a) => cmd::shell::man(&a),
     }
 }

@@ -8,6 +8,7 @@ pub mod export;
 pub mod init;
 pub mod plan;
 pub mod report;
+pub mod shell;
 pub mod sim_spec;
 pub mod simulate;
 pub mod train;
