@@ -33,6 +33,10 @@ pub struct Cli {
     /// debugging detail. RUST_LOG (e.g. RUST_LOG=debug), when set, overrides -q and -v.
     #[arg(long, short, global = true, action = clap::ArgAction::Count, conflicts_with = "quiet")]
     pub verbose: u8,
+    /// Project defaults (seed, preset, joints, topics, …: docs/formats.md) from this file instead of an
+    /// omnical.toml in the working directory. Options given on the command line win.
+    #[arg(long, global = true, value_name = "FILE")]
+    pub config: Option<std::path::PathBuf>,
     /// The subcommand.
     #[command(subcommand)]
     pub command: Command,
@@ -71,18 +75,24 @@ pub enum Command {
     /// Calibrate every robot-session of a fleet (`FLEET_DIR/<robot>/<session>/`) on Dask and write the fleet
     /// view: the Python wheel's `omnical` only (`pip install "omnical[fleet]"`).
     Fleet(cmd::FleetArgs),
+    /// Show the settings a command would use here (joints, topics, ground truth, frames, preset, seed,
+    /// threads, …), each with where it came from: the command line, omnical.toml, robot.toml (with the
+    /// line) or the default.
+    Config(cmd::config::Args),
     /// Print a shell completion script (bash, zsh, fish, elvish, powershell) on stdout.
     Completions(cmd::shell::CompletionsArgs),
     /// Print the manual page (roff) on stdout, or write one page per command with `--out DIR`.
     Man(cmd::shell::ManArgs),
 }
 
-/// The built-in effect ids, for help texts: `sensor_offset, sensor_offset_yaw, time_offset, …`.
+/// The effect ids, for help texts: the built-in catalogue (`sensor_offset, sensor_offset_yaw, time_offset,
+/// …`), then the explorer's learned corrections (`learned:wheel, …`).
 pub fn effect_ids() -> String {
-    let mut ids: Vec<&str> = omni_kin::effect::CATALOGUE.to_vec();
-    if let Some(i) = ids.iter().position(|&id| id == "sensor_offset") {
-        ids.insert(i + 1, "sensor_offset_yaw");
+    let mut ids: Vec<String> = omni_kin::effect::CATALOGUE.iter().map(|s| s.to_string()).collect();
+    if let Some(i) = ids.iter().position(|id| id == "sensor_offset") {
+        ids.insert(i + 1, "sensor_offset_yaw".into());
     }
+    ids.extend(omni_kin::effect::learned::ids());
     ids.join(", ")
 }
 
@@ -124,6 +134,7 @@ fn run_command(cli: Cli) -> anyhow::Result<()> {
         Command::Init(a) => cmd::init::run(&a),
         Command::Demo(a) => cmd::demo::run(&a, cli.quiet),
         Command::Fleet(_) => Err(cmd::python_only("omnical fleet")),
+        Command::Config(a) => cmd::config::run(&a, cli.threads, cli.config.as_deref()),
         Command::Completions(a) => cmd::shell::completions(&a),
         Command::Man(a) => cmd::shell::man(&a),
     }

@@ -82,6 +82,9 @@ fn effect_options_list_the_effect_ids() {
         let at = text.find(&format!("{flag} ")).unwrap_or_else(|| panic!("{cmd} {flag}:\n{text}"));
         let joined = text[at..].split_whitespace().collect::<Vec<_>>().join(" ");
         assert!(joined.contains(&format!("Effect ids: {EFFECT_IDS}")), "{cmd} {flag}:\n{text}");
+        // The explorer's learned corrections are effects too (`omnical explore` finds them).
+        let learned = "learned:wheel, learned:body, learned:world, learned:time, learned:ground_truth.";
+        assert!(joined.contains(&format!("sample_timing, world_drift, {learned}")), "{cmd} {flag}:\n{joined}");
     }
 }
 
