@@ -1,5 +1,6 @@
 //! Subcommand implementations: load, call the library, format.
 
+pub mod config;
 pub mod demo;
 pub mod diagnose;
 pub mod eval;
