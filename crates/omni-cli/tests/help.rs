@@ -202,3 +202,35 @@ fn man_pages_cover_every_subcommand() {
     assert!(train.contains(".TH omnical-train 1") && train.contains("\\-\\-preset"), "{train}");
     assert_eq!(std::fs::read_to_string(dir.path().join("pages/omnical.1")).unwrap(), top);
 }
+
+#[test]
+fn global_options_have_their_own_heading_and_the_top_help_guides_a_new_user() {
+    for cmd in all_subcommands() {
+        let text = help(&[&cmd, "--help"]);
+        let (own, global) = text.split_once("\nGlobal options:\n").unwrap_or_else(|| panic!("{cmd}:\n{text}"));
+        for flag in ["--threads <THREADS>", "-q, --quiet", "-v, --verbose", "--config <FILE>"] {
+            assert!(global.contains(flag) && !own.contains(flag), "{cmd}: {flag} outside Global options:\n{text}");
+        }
+    }
+    let top = help(&["--help"]);
+    for words in ["`omnical config` shows the ones in force", "(`-q` fewer, `-v` more)", "`omnical completions SHELL`"]
+    {
+        assert!(top.contains(words), "{words}:\n{top}");
+    }
+    // The one-liners say what a command does without the paper at hand.
+    let short = help(&["-h"]);
+    for (cmd, words) in [
+        ("simulate", "to try every command without a robot"),
+        ("eval", "how far its odometry ends from the ground truth (the mean end-pose error"),
+        ("train", "so that its odometry follows the ground truth; writes the fitted model"),
+        ("config", "each with where it came from"),
+        ("completions", "shell completion script"),
+        ("man", "manual page"),
+    ] {
+        let line = short.lines().find(|l| l.trim_start().starts_with(&format!("{cmd} "))).unwrap();
+        assert!(line.contains(words), "{cmd}: {line}");
+    }
+    let train = help(&["train", "--help"]);
+    assert!(train.contains("Training recipe: search method, objective and limits"), "{train}");
+    assert!(train.contains("the same seed gives the same model, whatever --threads"), "{train}");
+}
