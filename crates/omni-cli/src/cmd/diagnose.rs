@@ -184,7 +184,8 @@ pub fn print_diagnosis(d: &Diagnosis) {
                 .iter()
                 .map(|p| match p.std_error {
                     Some(se) => format!("{}={:.4}±{:.4} {}", p.name, p.value, se, p.unit),
-                    None => format!("{}={:.4} {}", p.name, p.value, p.unit),
+                    // Part of a direction the runs do not constrain (see the identifiability analysis).
+                    None => format!("{}={:.4} {} (undetermined)", p.name, p.value, p.unit),
                 })
                 .collect()
         };

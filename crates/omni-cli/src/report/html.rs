@@ -216,7 +216,9 @@ fn ranking_table(h: &mut String, d: &Diagnosis) {
             .iter()
             .map(|p| match p.std_error {
                 Some(se) => format!("{} = {:.4} ± {:.4} {}", p.name, p.value, se, p.unit),
-                None => format!("{} = {:.4} {}", p.name, p.value, p.unit),
+                // Implied values carry no standard error; a refit's value without one is undetermined.
+                None if c.absorbed => format!("{} = {:.4} {}", p.name, p.value, p.unit),
+                None => format!("{} = {:.4} {} (undetermined)", p.name, p.value, p.unit),
             })
             .collect();
         let _ = writeln!(

@@ -22,7 +22,7 @@
 
 use crate::error::Error;
 use crate::science::diagnose::noise_floor;
-use crate::science::identify::Moments;
+use crate::science::identify::{self, Moments};
 use nalgebra::{DMatrix, DVector};
 use omni_kin::effect::{Effect, EffectKind, Family, Learned};
 use omni_kin::evaluate::Evaluator;
@@ -354,31 +354,10 @@ fn solve(j: &DMatrix<f64>, r: &[f64]) -> Vec<f64> {
     }
 }
 
-/// Cluster-robust (per run) standard errors of every column of `j`, residuals `r`, `run_rows` rows per
-/// run: `V = B (Σ_g s_g s_gᵀ) B · G/(G−1)` with `B = (JᵀJ)⁺`, `s_g = J_gᵀ r_g`. NaN where undetermined.
+/// Standard errors of every column of `j`, residuals `r`, `run_rows` rows per run: the one computation
+/// of [`crate::identify`] ([`identify::column_std_errors`], per-run sandwich). NaN where undetermined.
 fn cluster_std_errors(j: &DMatrix<f64>, r: &[f64], run_rows: &[usize]) -> Vec<f64> {
-    let d = column_scales(j);
-    let mut js = j.clone();
-    for (k, mut c) in js.column_iter_mut().enumerate() {
-        c /= d[k];
-    }
-    let m = Moments::from_dense(&js, r, run_rows);
-    let g = m.scores.len() as f64;
-    let Ok(b) = m.jtj.clone().pseudo_inverse(RCOND * RCOND * m.jtj.norm()) else {
-        return vec![f64::NAN; j.ncols()];
-    };
-    let mut meat = DMatrix::zeros(j.ncols(), j.ncols());
-    for s in &m.scores {
-        meat += s * s.transpose();
-    }
-    let v = &b * meat * &b * if g > 1.0 { g / (g - 1.0) } else { f64::NAN };
-    (0..j.ncols())
-        .map(|k| {
-            let var = v[(k, k)];
-            let undetermined = b[(k, k)] > 1e6 || !var.is_finite();
-            if undetermined { f64::NAN } else { var.max(0.0).sqrt() / d[k] }
-        })
-        .collect()
+    identify::column_std_errors(&Moments::from_dense(j, r, run_rows), RCOND)
 }
 
 /// The term with the largest `|value| / std_error`.

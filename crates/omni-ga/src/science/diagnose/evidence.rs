@@ -11,6 +11,7 @@ use crate::optimizer::Optimizer;
 use crate::optimizer::lm::{LevenbergMarquardt, LmConfig};
 use crate::optimizer::observe::NoopObserver;
 use crate::optimizer::problem::{Bounds, LeastSquares, Problem};
+use crate::science::identify::IdentifyOptions;
 use crate::science::text;
 use nalgebra::{DMatrix, DVector};
 use omni_kin::effect::{Effect, Stage};
@@ -68,18 +69,6 @@ fn basis(m: &DMatrix<f64>) -> DMatrix<f64> {
     let smax = svd.singular_values.iter().fold(0.0f64, |a, &b| a.max(b));
     let keep: Vec<usize> = (0..svd.singular_values.len()).filter(|&i| svd.singular_values[i] > 1e-9 * smax).collect();
     DMatrix::from_fn(m.nrows(), keep.len(), |r, c| u[(r, keep[c])])
-}
-
-/// Standard errors `sqrt(diag(s² (JᵀJ)⁻¹))` with `s² = ‖r‖² / (m − p)`.
-pub fn standard_errors(j: &DMatrix<f64>, r: &[f64]) -> Option<Vec<f64>> {
-    let (m, p) = (j.nrows(), j.ncols());
-    if m <= p {
-        return None;
-    }
-    let s2 = r.iter().map(|v| v * v).sum::<f64>() / (m - p) as f64;
-    let jtj = j.transpose() * j;
-    let inv = jtj.try_inverse()?;
-    Some((0..p).map(|i| (s2 * inv[(i, i)]).max(0.0).sqrt()).collect())
 }
 
 /// The first-order test of one effect at the current fit.
@@ -239,10 +228,11 @@ impl Bench<'_> {
             let (b, a, f) = (current_costs.held_out_path, c.held_out_path, nf.path_rms);
             cand.excess_closed = (b * b - a * a) / (b * b - f * f).max(1e-300);
         }
-        // Standard errors of the effect parameters at the refit.
+        // Standard errors of the effect parameters at the refit: the identifiability analysis's (per-run
+        // sandwich), the same computation `train` reports.
         let n = fit.params.len();
         let p = unbounded(&fit.model, self.fit_runs, self.every)?;
-        let se = standard_errors(&p.jacobian(&fit.params), &p.residuals(&fit.params));
+        let id = p.identifiability(&fit.params, &IdentifyOptions::default());
         let r = fit.model.effect_ranges().last().cloned().unwrap_or(n..n);
         cand.params = effect
             .params()
@@ -252,7 +242,7 @@ impl Bench<'_> {
                 name: s.name.clone(),
                 value: fit.params[i],
                 unit: s.unit.clone(),
-                std_error: se.as_ref().map(|v| v[i]),
+                std_error: id.params.get(i).and_then(|u| u.std_error),
             })
             .collect();
         cand.refit = Some(c);

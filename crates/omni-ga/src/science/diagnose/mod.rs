@@ -26,8 +26,9 @@
 //!
 //! Evidence comes from the path (every ground-truth pose), since the end pose alone cannot see some
 //! effects (a clock offset when the robot rests at both ends); the paper's Eq. 6 is reported beside it.
-//! Parameter uncertainties are `sqrt(diag(s² (JᵀJ)⁻¹))`; residuals along a path are correlated, so they are
-//! optimistic.
+//! Parameter uncertainties are those of [`crate::identify`] at the refit (the per-run sandwich, robust to
+//! the correlation of residuals along a path; iid only with too few runs), the same numbers `train` reports
+//! for the same model on the same runs.
 
 mod compare;
 mod evidence;
@@ -38,7 +39,7 @@ mod unexplained;
 
 pub use compare::{Turn, costs_of};
 pub(crate) use evidence::unbounded;
-pub use evidence::{differentiable_start, refit, standard_errors};
+pub use evidence::{differentiable_start, refit};
 pub use findings::{Conclusion, Finding, Remaining, Verdict};
 pub use noise::{ExcitationGap, GapKind, WheelGap, noise_floor, wheel_excitation, wheel_excitation_gap};
 pub use unexplained::{DecidedBy, UnexplainedEvidence};

@@ -8,23 +8,23 @@ use nalgebra::{DMatrix, DVector};
 use omni_kin::Model;
 
 /// What the residuals say about the noise: counts, the noise variance and which covariance applies.
-struct Noise {
+pub(super) struct Noise {
     /// Residual rows.
-    rows: usize,
+    pub(super) rows: usize,
     /// Runs (groups of rows).
-    runs: usize,
+    pub(super) runs: usize,
     /// `rᵀr`.
-    rtr: f64,
+    pub(super) rtr: f64,
     /// Residual variance `s²` (1 for a stated noise level).
-    s2: f64,
+    pub(super) s2: f64,
     /// The covariance estimate used.
-    kind: CovarianceKind,
+    pub(super) kind: CovarianceKind,
     /// Small-sample factor of the sandwich, `G/(G − 1) · (m − 1)/(m − p)`.
-    cr1: f64,
+    pub(super) cr1: f64,
 }
 
 impl Noise {
-    fn new(moments: Option<&Moments>, n: usize) -> Self {
+    pub(super) fn new(moments: Option<&Moments>, n: usize) -> Self {
         let rows = moments.map_or(0, |mo| mo.rows);
         let runs = moments.map_or(0, |mo| mo.scores.len());
         let rtr = moments.map_or(0.0, |mo| mo.rtr);

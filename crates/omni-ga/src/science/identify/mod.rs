@@ -290,6 +290,45 @@ impl Moments {
     }
 }
 
+/// Each column's standard error from the residuals' [`Moments`] (parameter units; NaN where the runs do
+/// not determine it): the covariance [`analyse`] uses — the per-run sandwich
+/// `B (Σ_g s_g s_gᵀ) B · G/(G − 1) · (m − 1)/(m − p)` with `B = (JᵀJ)⁺` and `s_g = J_gᵀ r_g`, or `s² B`
+/// with fewer than `p + 2` runs — without [`analyse`]'s naming of weak directions, for fits whose columns
+/// are not a [`Model`]'s parameters (the explorer's free subset). `rcond`: relative singular value of the
+/// column-normalised Jacobian below which a direction is dropped; a column whose normalised `B` entry
+/// exceeds 1e6 is undetermined.
+pub fn column_std_errors(moments: &Moments, rcond: f64) -> Vec<f64> {
+    let n = moments.jtj.ncols();
+    let noise = analysis::Noise::new(Some(moments), n);
+    // Normalise the columns (d_k = ‖J_k‖) so the pseudo-inverse's tolerance is relative to each column.
+    let d: Vec<f64> =
+        (0..n).map(|k| moments.jtj[(k, k)].sqrt()).map(|v| if v > 0.0 && v.is_finite() { v } else { 1.0 }).collect();
+    let jtj = DMatrix::from_fn(n, n, |a, b| moments.jtj[(a, b)] / (d[a] * d[b]));
+    if !moments.finite || !jtj.iter().all(|v| v.is_finite()) {
+        return vec![f64::NAN; n];
+    }
+    let Ok(b) = jtj.clone().pseudo_inverse(rcond * rcond * jtj.norm()) else {
+        return vec![f64::NAN; n];
+    };
+    let v = match noise.kind {
+        CovarianceKind::PerRun => {
+            let mut meat = DMatrix::zeros(n, n);
+            for s in &moments.scores {
+                let s = DVector::from_fn(n, |k, _| s[k] / d[k]);
+                meat += &s * s.transpose();
+            }
+            &b * meat * &b * noise.cr1
+        }
+        CovarianceKind::Iid | CovarianceKind::Stated => &b * noise.s2,
+    };
+    (0..n)
+        .map(|k| {
+            let var = v[(k, k)];
+            if b[(k, k)] > 1e6 || !var.is_finite() { f64::NAN } else { var.max(0.0).sqrt() / d[k] }
+        })
+        .collect()
+}
+
 /// Analyse `model` at `params` from the residuals' [`Moments`]; `wheel_moment` is the runs' mean `w wᵀ`
 /// of the wheel speeds (rad²/s², `N × N`), used to say whether a wheel pattern is missing from the runs
 /// or present but unseen by the residuals.
