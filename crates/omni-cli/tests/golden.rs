@@ -102,7 +102,7 @@ fn outputs_are_byte_identical_to_the_golden_files() {
     for (name, model) in [("design", "design"), ("fit", "fit.toml"), ("geometry_tau", "geometry_tau.toml")] {
         let json = omnical(&["eval", "--model", model, "sim/validation", "--json"], d);
         check(&format!("eval_{name}.json"), &json_without_timing(&json), &mut failures);
-        let text = omnical(&["eval", "--model", model, "sim/validation"], d);
+        let text = omnical(&["eval", "--model", model, "sim/validation", "--per-run"], d);
         check(&format!("eval_{name}.txt"), &String::from_utf8_lossy(&text), &mut failures);
     }
     let diag = ["diagnose", "--model", "fit.toml", "sim/train", "--validate", "sim/validation"];

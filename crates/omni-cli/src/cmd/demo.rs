@@ -3,22 +3,27 @@
 
 use super::diagnose::print_diagnosis;
 use super::sim_spec::apply_effect_spec;
-use super::simulate::DEFAULT_SEED;
+use super::simulate::{self as simulate_cmd, DEFAULT_SEED, Format};
 use super::train::print_summary;
+use super::{DataArgs, OutputArgs};
 use crate::design::{design_for, paper_calibrated};
 use crate::report::{self, ReportInput};
+use crate::robot_file::RobotFile;
 use crate::{atomic, model_file, progress, robot_file};
 use anyhow::Context;
 use omni_ga::calibrate::{Plan, Preset, calibrate};
-use omni_ga::diagnose::{DiagnoseOptions, diagnose};
+use omni_ga::diagnose::{DiagnoseOptions, Diagnosis, diagnose};
 use omni_kin::simulate::{SimConfig, simulate};
-use omni_kin::{FittedModel, IkMatrix, Model};
-use std::path::PathBuf;
+use omni_kin::{FittedModel, IkMatrix, Model, Run};
+use serde_json::json;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `omnical demo`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Write the models, the diagnosis and the HTML report (report.html) here.
+    /// Write everything here: the simulated runs (train/ and validation/, each with its robot.toml), the
+    /// true model, the fitted models, diagnosis.json and report.html. The `omnical` commands that repeat
+    /// each step on these files are printed at the end.
     #[arg(long, default_value = "omnical-demo")]
     pub out: PathBuf,
     /// Repetitions of each command.
@@ -34,6 +39,10 @@ pub struct Args {
     /// its calibrated Eq. 9 as the true robot.
     #[arg(long, value_name = "FILE|apr02")]
     pub robot: Option<String>,
+    /// Output options (JSON: the costs, the verdict, the files written and the commands that repeat each
+    /// step; the story is not printed).
+    #[command(flatten)]
+    pub output: OutputArgs,
 }
 
 /// The simulated robot of a demo: its true model, the design it starts from, the simulator, and words.
@@ -41,12 +50,16 @@ struct Setup {
     truth: FittedModel,
     start: FittedModel,
     config: SimConfig,
+    /// The robot description (written beside the runs).
+    robot: RobotFile,
     /// Joint names in column order.
     wheels: Vec<String>,
     /// "the paper's Eq. 9 matrix", "robot.toml's design with …".
     true_robot: String,
     /// "36 flower commands", "12 forward/backward arcs and turns".
     commands: String,
+    /// The `omnical simulate` options that make the same true robot (before the hidden effect).
+    simulate_args: Vec<String>,
 }
 
 /// The paper's APR-02: its calibrated Eq. 9 is the true robot, the design Eq. 7 the start.
@@ -55,9 +68,14 @@ fn paper_setup(runs_per_command: usize) -> Setup {
         truth: paper_calibrated(),
         start: FittedModel::nominal(Model::ik(IkMatrix::paper_design())),
         config: SimConfig { runs_per_command, seed: DEFAULT_SEED, ..SimConfig::default() },
+        robot: RobotFile {
+            description: omni_kin::robot::RobotDescription::apr02(),
+            source: robot_file::Source::Builtin,
+        },
         wheels: omni_kin::geometry::default_wheel_names(3),
         true_robot: "the paper's Eq. 9 matrix".into(),
         commands: "36 flower commands".into(),
+        simulate_args: Vec::new(),
     }
 }
 
@@ -86,81 +104,212 @@ fn robot_setup(arg: &str, runs_per_command: usize) -> anyhow::Result<Setup> {
         apply_effect_spec(spec, &mut truth, &mut config, &wheels)?;
     }
     let commands = if wheels.len() == 2 { "12 forward/backward arcs and turns" } else { "36 flower commands" };
+    let mut simulate_args = vec!["--robot".to_string(), arg.to_string(), "--truth".into(), "design".into()];
+    simulate_args.extend(deviations.iter().flat_map(|d| ["--effect".to_string(), d.clone()]));
     Ok(Setup {
         truth,
         start,
         config,
         true_robot: format!("the design of {} with {}", robot.source, deviations.join(", ")),
         commands: commands.into(),
+        robot,
         wheels,
+        simulate_args,
     })
+}
+
+/// File names of the demo's outputs in `--out`.
+const TRAIN: &str = "train";
+const VALIDATION: &str = "validation";
+const TRUTH_MODEL: &str = "truth_model.toml";
+const FITTED_MATRIX: &str = "fitted_matrix.toml";
+const FITTED_WITH_EFFECTS: &str = "fitted_with_effects.toml";
+const DIAGNOSIS: &str = "diagnosis.json";
+const REPORT: &str = "report.html";
+
+/// Simulates the training (seed 7) and validation (seed 8) runs, writes them as MCAP bags with the robot's
+/// robot.toml into `dir`/train and `dir`/validation as `omnical simulate` does, and reads them back as the
+/// other commands read them, so that every step repeated on the files sees the same runs.
+fn simulate_and_keep(setup: &Setup, dir: &Path, quiet: bool) -> anyhow::Result<(Vec<Run>, Vec<Run>)> {
+    let spinner = progress::spinner("simulating", quiet);
+    let mut splits = Vec::with_capacity(2);
+    for (split, seed) in [(TRAIN, DEFAULT_SEED), (VALIDATION, DEFAULT_SEED + 1)] {
+        let runs = simulate(&SimConfig { seed, ..setup.config.clone() }, &setup.truth, &format!("{split}/"))?;
+        simulate_cmd::write_split(&dir.join(split), &runs, Format::Mcap, &setup.wheels)?;
+        simulate_cmd::write_robot(&dir.join(split), &setup.robot, Format::Mcap)?;
+        let paths = [dir.join(split)];
+        let robot = robot_file::resolve(None, &paths)?;
+        splits.push(super::load_for_robot(&paths, &DataArgs::default(), false, robot)?.runs);
+    }
+    spinner.finish_and_clear();
+    let val = splits.pop().unwrap_or_default();
+    Ok((splits.pop().unwrap_or_default(), val))
+}
+
+/// A path as a shell word: quoted when it holds anything but letters, digits and `_./:=,+-`.
+fn shell_word(s: &str) -> String {
+    if !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || "_./:=,+-".contains(c)) {
+        s.to_string()
+    } else {
+        format!("'{}'", s.replace('\'', "'\\''"))
+    }
+}
+
+/// The `omnical` commands that repeat each step of the demo on the files in `dir`: (step, command line).
+fn repeat_commands(a: &Args, setup: &Setup, dir: &Path, with_effects: bool) -> Vec<(&'static str, String)> {
+    let p = |name: &str| shell_word(&dir.join(name).display().to_string());
+    let out = shell_word(&dir.display().to_string());
+    let mut simulate = format!("omnical simulate --out {out} --runs-per-command {}", a.runs_per_command);
+    for w in &setup.simulate_args {
+        simulate.push(' ');
+        simulate.push_str(&shell_word(w));
+    }
+    simulate.push_str(&format!(" --effect {}", shell_word(&a.hidden)));
+    let mut v = vec![
+        ("simulate", simulate),
+        ("train", format!("omnical train {} --out {}", p(TRAIN), p(FITTED_MATRIX))),
+        (
+            "diagnose",
+            format!(
+                "omnical diagnose --model {} {} --validate {} --auto --out {}",
+                p(FITTED_MATRIX),
+                p(TRAIN),
+                p(VALIDATION),
+                p(FITTED_WITH_EFFECTS)
+            ),
+        ),
+    ];
+    if with_effects {
+        v.push(("eval", format!("omnical eval --model {} {}", p(FITTED_WITH_EFFECTS), p(VALIDATION))));
+    }
+    v.push((
+        "report",
+        format!(
+            "omnical report --model {} {} --validate {} --out {}",
+            p(FITTED_MATRIX),
+            p(TRAIN),
+            p(VALIDATION),
+            p(REPORT)
+        ),
+    ));
+    v
+}
+
+/// Writes the true model, the fitted models and the diagnosis into `dir`.
+fn write_models(dir: &Path, truth: &FittedModel, fitted: &FittedModel, d: &Diagnosis) -> anyhow::Result<()> {
+    let write = |name: &str, fm: &FittedModel| -> anyhow::Result<()> {
+        let text = model_file::to_toml(fm, None).map_err(anyhow::Error::msg)?;
+        atomic::write_atomic(&dir.join(name), text.as_bytes()).with_context(|| format!("writing {name}"))
+    };
+    write(TRUTH_MODEL, truth)?;
+    write(FITTED_MATRIX, fitted)?;
+    if let Some(f) = &d.final_model {
+        write(FITTED_WITH_EFFECTS, f)?;
+    }
+    atomic::write_atomic(&dir.join(DIAGNOSIS), serde_json::to_string_pretty(d)?.as_bytes())
+        .with_context(|| format!("writing {DIAGNOSIS}"))
 }
 
 /// Runs `omnical demo`: on the paper's APR-02, or on `--robot` (a robot.toml; `apr02` is the paper's);
 /// `quiet` hides the progress display.
+///
+/// long: the story's steps in order (simulate, train, diagnose, report, the commands), each printing.
 pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     let (dir, runs_per_command, hidden, robot) =
         (a.out.as_path(), a.runs_per_command, a.hidden.as_str(), a.robot.as_deref());
-    let Setup { mut truth, start, mut config, wheels, true_robot, commands } = match robot {
+    let text = !a.output.json;
+    let mut setup = match robot {
         None | Some(robot_file::BUILTIN_APR02) => paper_setup(runs_per_command),
         Some(arg) => robot_setup(arg, runs_per_command)?,
     };
-    apply_effect_spec(hidden, &mut truth, &mut config, &wheels)?;
-    println!("== simulate: true robot = {true_robot} + a hidden effect ({hidden})");
-    let spinner = progress::spinner("simulating", quiet);
-    let train = simulate(&config, &truth, "train/")?;
-    let val = simulate(&SimConfig { seed: DEFAULT_SEED + 1, ..config.clone() }, &truth, "validation/")?;
-    spinner.finish_and_clear();
-    println!("   {} training and {} validation runs", train.len(), val.len());
-    let n_base = start.model.n_base();
-    println!("== train: fit the {n_base}-entry IK matrix (preset default)");
+    apply_effect_spec(hidden, &mut setup.truth, &mut setup.config, &setup.wheels)?;
+    if text {
+        println!("== simulate: true robot = {} + a hidden effect ({hidden})", setup.true_robot);
+    }
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let (train, val) = simulate_and_keep(&setup, dir, quiet)?;
+    let n_base = setup.start.model.n_base();
+    if text {
+        println!("   {} training and {} validation runs in {}", train.len(), val.len(), dir.display());
+        println!("== train: fit the {n_base}-entry IK matrix (preset default)");
+    }
     let preset = Preset::Default;
     let plan = Plan::preset(preset, n_base).seed(0);
     let mut bar = progress::ProgressObserver::new(plan.ga().map_or(0, |g| g.max_generations), quiet);
-    let fit = calibrate(&start, &train, &plan, &mut bar)?;
+    let fit = calibrate(&setup.start, &train, &plan, &mut bar)?;
     bar.finish();
-    print_summary(&fit, preset.id(), train.len());
-    println!("== diagnose: which physical effect is missing? (--auto: add effects while held-out error falls)");
+    if text {
+        print_summary(&fit, preset.id(), train.len());
+        println!("== diagnose: which physical effect is missing? (--auto: add effects while held-out error falls)");
+    }
     let opts = DiagnoseOptions { auto: true, ..DiagnoseOptions::default() };
     let spinner = progress::spinner("diagnosing: refitting each candidate effect", quiet);
     let design = design_for(&fit.fitted);
     let d = diagnose(&fit.fitted, &design, &train, Some(&val), &opts)?;
     spinner.finish_and_clear();
-    print_diagnosis(&d);
-    {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        let write = |name: &str, fm: &FittedModel| -> anyhow::Result<()> {
-            let text = model_file::to_toml(fm, None).map_err(anyhow::Error::msg)?;
-            atomic::write_atomic(&dir.join(name), text.as_bytes()).with_context(|| format!("writing {name}"))
-        };
-        write("truth_model.toml", &truth)?;
-        write("fitted_matrix.toml", &fit.fitted)?;
-        if let Some(f) = &d.final_model {
-            write("fitted_with_effects.toml", f)?;
-        }
-        atomic::write_atomic(&dir.join("diagnosis.json"), serde_json::to_string_pretty(&d)?.as_bytes())?;
+    if text {
+        print_diagnosis(&d);
     }
-    println!("== report");
+    write_models(dir, &setup.truth, &fit.fitted, &d)?;
     let spinner = progress::spinner("drawing the report", quiet);
     let input = ReportInput {
         title: match robot {
             None | Some(robot_file::BUILTIN_APR02) => format!("omnical demo: Eq. 9 robot with a hidden {hidden}"),
-            Some(_) => format!("omnical demo: {true_robot} with a hidden {hidden}"),
+            Some(_) => format!("omnical demo: {} with a hidden {hidden}", setup.true_robot),
         },
         models: report::models_for(&design, &fit.fitted, Some(&d)),
         train: &train,
         held_out: &val,
         diagnosis: Some(&d),
         sources: vec![format!(
-            "simulated: {commands} × {runs_per_command} (train seed {DEFAULT_SEED}, validation seed {}), hidden \
-             {hidden}",
+            "simulated: {} × {runs_per_command} (train seed {DEFAULT_SEED}, validation seed {}), hidden {hidden}",
+            setup.commands,
             DEFAULT_SEED + 1
         )],
     };
-    let html = dir.join("report.html");
+    let html = dir.join(REPORT);
     let w = report::write(&input, &html, None)?;
     spinner.finish_and_clear();
+    let commands = repeat_commands(a, &setup, dir, d.final_model.is_some());
+    if !text {
+        let doc = demo_json(a, &setup, (&train, &val), &fit, &d, &w, &commands)?;
+        return super::print_json("demo", doc);
+    }
+    println!("== report");
     super::report::print_written(&w, &html);
-    println!("models and diagnosis.json written to {}", dir.display());
+    println!("runs, models and {DIAGNOSIS} written to {}", dir.display());
+    println!("== repeat each step by hand on these files:");
+    for (_, c) in &commands {
+        println!("   {c}");
+    }
     Ok(())
+}
+
+/// The `--json` document of `omnical demo`.
+fn demo_json(
+    a: &Args,
+    setup: &Setup,
+    (train, val): (&[Run], &[Run]),
+    fit: &omni_ga::calibrate::Calibration,
+    d: &Diagnosis,
+    w: &report::Written,
+    commands: &[(&str, String)],
+) -> anyhow::Result<serde_json::Value> {
+    let dir = &a.out;
+    let fitted_with_effects = d.final_model.as_ref().map(|_| dir.join(FITTED_WITH_EFFECTS));
+    Ok(json!({
+        "out": dir,
+        "hidden": a.hidden,
+        "true_robot": setup.true_robot,
+        "runs": { "train": train.len(), "validation": val.len() },
+        "train": super::train::summary(fit, Preset::Default.id(), 0, train.len())?,
+        "diagnosis": { "verdict": d.verdict, "verdict_text": d.verdict_text, "costs": d.costs, "ladder": d.ladder },
+        "report": super::report::written_json(w, &dir.join(REPORT)),
+        "written": {
+            "train": dir.join(TRAIN), "validation": dir.join(VALIDATION), "truth_model": dir.join(TRUTH_MODEL),
+            "fitted_matrix": dir.join(FITTED_MATRIX), "fitted_with_effects": fitted_with_effects,
+            "diagnosis": dir.join(DIAGNOSIS), "report": dir.join(REPORT),
+        },
+        "commands": commands.iter().map(|(step, c)| json!({ "step": step, "command": c })).collect::<Vec<_>>(),
+    }))
 }

@@ -1,6 +1,6 @@
 //! `omnical diagnose`: compare, locate, and name the missing effect; `--auto` climbs the error ladder.
 
-use super::{DataArgs, load_with_held_out, resolve_model};
+use super::{DataArgs, OutputArgs, load_with_held_out, resolve_model};
 use crate::cli::effect_help;
 use crate::design::design_for;
 use crate::{atomic, model_file};
@@ -38,9 +38,9 @@ pub struct Args {
     /// Write the final model (with effects added by --auto) here.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Print JSON (top-level `verdict`, `ranking`, `ladder`, …).
-    #[arg(long)]
-    pub json: bool,
+    /// Output options (JSON: top-level `verdict`, `ranking`, `ladder`, …).
+    #[command(flatten)]
+    pub output: OutputArgs,
     /// Data options.
     #[command(flatten)]
     pub data: DataArgs,
@@ -58,14 +58,14 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         }
         _ => None,
     };
-    if a.json {
-        match &exploration {
-            Some(e) => {
-                let doc = WithExplore { diagnosis: &d, explore: super::explore::to_json(e) };
-                println!("{}", serde_json::to_string_pretty(&doc)?);
-            }
-            None => println!("{}", serde_json::to_string_pretty(&d)?),
+    if a.output.json {
+        let mut doc = serde_json::to_value(&d)?;
+        if let Some(e) = &exploration {
+            doc["explore"] = super::explore::to_json(e);
         }
+        doc["out"] =
+            serde_json::json!(a.out.as_ref().filter(|_| d.final_model.is_some()).map(|p| p.display().to_string()));
+        super::print_json("diagnose", doc)?;
     } else {
         print_diagnosis(&d);
         if a.auto && d.unexplained {
@@ -104,15 +104,6 @@ fn diagnose_loaded(a: &Args) -> anyhow::Result<(Diagnosis, Loaded)> {
         atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))?;
     }
     Ok((d, Loaded { train: ds.runs, validate: val, model }))
-}
-
-/// `diagnose --auto --json` with the explorer stage: the diagnosis's fields, then `explore` (the document
-/// of `omnical explore --json`).
-#[derive(serde::Serialize)]
-struct WithExplore<'a> {
-    #[serde(flatten)]
-    diagnosis: &'a Diagnosis,
-    explore: serde_json::Value,
 }
 
 /// The explorer stage in text: the ranking and the best family's hint (or why it did not run).

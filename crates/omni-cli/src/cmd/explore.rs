@@ -1,7 +1,7 @@
 //! `omnical explore`: which family of physical features (wheel, body, world, time, ground truth) explains
 //! the error a model leaves, each fitted on the training runs and judged on the held-out runs.
 
-use super::{DataArgs, load_with_held_out, resolve_model};
+use super::{DataArgs, OutputArgs, load_with_held_out, resolve_model};
 use crate::{atomic, model_file};
 use anyhow::Context;
 use omni_ga::explore::{Exploration, ExploreOptions, FamilyResult, explore};
@@ -9,8 +9,8 @@ use omni_ga::science::text;
 use serde_json::{Value, json};
 use std::path::PathBuf;
 
-/// Version of the `--json` layout.
-pub const SCHEMA_VERSION: u32 = 1;
+/// Version of the `--json` layout: the one of every command's (docs/json.md).
+pub const SCHEMA_VERSION: u32 = super::JSON_SCHEMA_VERSION;
 
 /// Arguments of `omnical explore`.
 #[derive(Debug, clap::Args)]
@@ -32,9 +32,9 @@ pub struct Args {
     /// Write the model with the best passing family's learned effect (`learned:<family>`) here.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Print JSON (top level `schema_version`, `families`, `unexplained`, …).
-    #[arg(long)]
-    pub json: bool,
+    /// Output options (JSON: top level `families`, `unexplained`, …).
+    #[command(flatten)]
+    pub output: OutputArgs,
     /// Data options.
     #[command(flatten)]
     pub data: DataArgs,
@@ -57,8 +57,10 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         let text = model_file::to_toml(&best.fitted, None).map_err(anyhow::Error::msg)?;
         atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))?;
     }
-    if a.json {
-        println!("{}", serde_json::to_string_pretty(&to_json(&e))?);
+    if a.output.json {
+        let mut doc = to_json(&e);
+        doc["out"] = json!(a.out.as_ref().map(|p| p.display().to_string()));
+        super::print_json("explore", doc)?;
     } else {
         print_exploration(&e, a.min_gain);
     }

@@ -1,7 +1,7 @@
 //! `omnical export`: trajectories for other tools — TUM files for evo, MCAP bags with the calibrated
 //! odometry for Foxglove.
 
-use super::{DataArgs, load_runs_with_odometry, resolve_model, wheel_joints};
+use super::{DataArgs, OutputArgs, load_runs_with_odometry, resolve_model, wheel_joints};
 use crate::dataset::mcap::{WriteOptions, write_run};
 use crate::design::design_for;
 use crate::report::tum;
@@ -36,6 +36,9 @@ pub struct Args {
     /// omni_wheel_drive_controller (default: the one that matches the base).
     #[arg(long, value_name = "NAME")]
     pub controller: Option<omni_kin::controller::ControllerKind>,
+    /// Output options (JSON: the files written).
+    #[command(flatten)]
+    pub output: OutputArgs,
     /// Data options.
     #[command(flatten)]
     pub data: DataArgs,
@@ -63,38 +66,36 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let ds = load_runs_with_odometry(&a.runs, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
     let design = design_for(&model);
+    let mut doc = serde_json::json!({ "model": a.model, "runs": ds.runs.len() });
     if let Some(dir) = &a.tum {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let mut files = Vec::new();
         for run in &ds.runs {
-            write_tum(dir, run, &design, &model, &a.model)?;
+            files.extend(write_tum(dir, run, &design, &model, &a.model)?);
         }
-        println!(
-            "wrote {} runs × 3 TUM files (ground truth, design, calibrated) to {}; e.g. evo_ape tum {}",
-            ds.runs.len(),
-            dir.display(),
-            ds.runs.first().map_or_else(String::new, |r| {
-                let s = tum::file_stem(r.name());
-                format!("{0}/{s}.gt.tum {0}/{s}.calibrated.tum", dir.display())
-            })
-        );
+        doc["tum"] = serde_json::json!({ "dir": dir, "files": files });
+        if !a.output.json {
+            println!(
+                "wrote {} runs × 3 TUM files (ground truth, design, calibrated) to {}; e.g. evo_ape tum {}",
+                ds.runs.len(),
+                dir.display(),
+                ds.runs.first().map_or_else(String::new, |r| {
+                    let s = tum::file_stem(r.name());
+                    format!("{0}/{s}.gt.tum {0}/{s}.calibrated.tum", dir.display())
+                })
+            );
+        }
     }
     if let Some(dir) = &a.mcap {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        for run in &ds.runs {
-            let opts = WriteOptions {
-                wheel_joints: wheel_joints(&a.data, &ds),
-                design_odometry: (!run.recorded_odometry().is_empty()).then(|| run.recorded_odometry().to_vec()),
-                calibrated_odometry: Some(odometry_poses(&model, run)?),
-                ..WriteOptions::default()
-            };
-            let path = dir.join(format!("{}.mcap", tum::file_stem(run.name())));
-            write_run(&path, run, &opts)?;
+        let files = write_mcaps(dir, a, &ds, &model)?;
+        doc["mcap"] = serde_json::json!({ "dir": dir, "files": files });
+        if !a.output.json {
+            println!(
+                "wrote {} MCAP files to {} (topics /joint_states, /ground_truth/pose, /omnical/odometry, …)",
+                ds.runs.len(),
+                dir.display()
+            );
         }
-        println!(
-            "wrote {} MCAP files to {} (topics /joint_states, /ground_truth/pose, /omnical/odometry, …)",
-            ds.runs.len(),
-            dir.display()
-        );
     }
     if let Some(dir) = &a.robot_config {
         let request = robot_config::Request {
@@ -107,9 +108,76 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         };
         let config = robot_config::build(&request)?;
         robot_config::write(dir, &config)?;
-        print!("{}", robot_config::summary(&config, dir));
+        if a.output.json {
+            doc["robot_config"] = robot_config_json(&config, dir);
+        } else {
+            print!("{}", robot_config::summary(&config, dir));
+        }
+    }
+    if a.output.json {
+        return super::print_json("export", doc);
     }
     Ok(())
+}
+
+/// One MCAP bag per run in `dir` (created), with the calibrated odometry; returns the paths.
+fn write_mcaps(
+    dir: &Path,
+    a: &Args,
+    ds: &crate::dataset::Dataset,
+    model: &FittedModel,
+) -> anyhow::Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let mut files = Vec::with_capacity(ds.runs.len());
+    for run in &ds.runs {
+        let opts = WriteOptions {
+            wheel_joints: wheel_joints(&a.data, ds),
+            design_odometry: (!run.recorded_odometry().is_empty()).then(|| run.recorded_odometry().to_vec()),
+            calibrated_odometry: Some(odometry_poses(model, run)?),
+            ..WriteOptions::default()
+        };
+        let path = dir.join(format!("{}.mcap", tum::file_stem(run.name())));
+        write_run(&path, run, &opts)?;
+        files.push(path);
+    }
+    Ok(files)
+}
+
+/// `--robot-config` in JSON: the files, the controller and its parameters (SI units, unit-suffixed keys),
+/// and the accuracy of each model on the runs (Eq. 6; path RMS, m).
+fn robot_config_json(c: &robot_config::RobotConfig, dir: &Path) -> serde_json::Value {
+    use omni_kin::controller::ControllerParams as P;
+    let params = match c.fit.model.params {
+        P::DiffDrive { wheel_separation_m, left_wheel_radius_m, right_wheel_radius_m } => serde_json::json!({
+            "wheel_separation_m": wheel_separation_m, "left_wheel_radius_m": left_wheel_radius_m,
+            "right_wheel_radius_m": right_wheel_radius_m,
+        }),
+        P::MecanumDrive { wheels_radius_m, lx_plus_ly_m } => {
+            serde_json::json!({ "wheels_radius_m": wheels_radius_m, "lx_plus_ly_m": lx_plus_ly_m })
+        }
+        P::OmniWheelDrive { wheel_radius_m, robot_radius_m, wheel_offset_rad } => serde_json::json!({
+            "wheel_radius_m": wheel_radius_m, "robot_radius_m": robot_radius_m, "wheel_offset_rad": wheel_offset_rad,
+        }),
+    };
+    let acc = |a: &robot_config::Accuracy| serde_json::json!({ "end_pose": a.end_pose, "path_rms_m": a.path_rms });
+    let files: Vec<PathBuf> =
+        [robot_config::ODOMETRY_YAML, robot_config::ODOMETRY_HEADER, robot_config::CONTROLLER_YAML]
+            .iter()
+            .map(|f| dir.join(f))
+            .collect();
+    serde_json::json!({
+        "dir": dir,
+        "files": files,
+        "controller": c.kind().id(),
+        "controller_params": params,
+        "accuracy": {
+            "runs": c.n_runs,
+            "design": acc(&c.design_accuracy),
+            "model": acc(&c.model_accuracy),
+            "matrix": c.matrix_accuracy.as_ref().map(acc),
+            "controller": acc(&c.controller_accuracy),
+        },
+    })
 }
 
 /// Joint names in the model's column order: the model's own, or `--joints` when the model only has the
@@ -123,17 +191,26 @@ fn joint_names(model: &FittedModel, joints: &[String]) -> Vec<String> {
     }
 }
 
-fn write_tum(dir: &Path, run: &Run, design: &FittedModel, model: &FittedModel, spec: &str) -> anyhow::Result<()> {
+/// Writes the run's three TUM files (ground truth, design, `model`) into `dir`; returns their paths.
+fn write_tum(
+    dir: &Path,
+    run: &Run,
+    design: &FittedModel,
+    model: &FittedModel,
+    spec: &str,
+) -> anyhow::Result<Vec<PathBuf>> {
     let stem = tum::file_stem(run.name());
     let files = [
         ("gt", format!("run {}: ground truth", run.name()), run.truth().to_vec()),
         ("design", format!("run {}: odometry of the design model", run.name()), odometry_poses(design, run)?),
         ("calibrated", format!("run {}: odometry of {spec}", run.name()), odometry_poses(model, run)?),
     ];
+    let mut written = Vec::with_capacity(files.len());
     for (kind, comment, poses) in files {
         let path = dir.join(format!("{stem}.{kind}.tum"));
         let text = tum::to_tum(&format!("{comment}\ntimestamp tx ty tz qx qy qz qw (s, m, unit quaternion)"), &poses);
         atomic::write_atomic(&path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))?;
+        written.push(path);
     }
-    Ok(())
+    Ok(written)
 }

@@ -32,6 +32,9 @@ pub struct Args {
     /// Refuse a recording larger than this (MiB); it is read into memory whole.
     #[arg(long, value_name = "MIB", default_value_t = dataset::DEFAULT_MAX_FILE_BYTES >> 20)]
     pub max_file_mb: u64,
+    /// Output options (JSON: the drafted description's facts and what to check).
+    #[command(flatten)]
+    pub output: super::OutputArgs,
 }
 
 /// The URDF text and where it came from; `recording` is the one inspected.
@@ -61,7 +64,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         bail!("{} exists; pass --force to replace it, or --out another file", a.out.display());
     }
     let found = dataset::inspect(&a.recording, a.max_file_mb.saturating_mul(1 << 20))?;
-    if found.recordings > 1 {
+    if found.recordings > 1 && !a.output.json {
         println!(
             "{} holds {} recordings; inspecting the first, {}",
             a.recording.display(),
@@ -71,6 +74,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     }
     let inv = found.inventory;
     let (text, source, urdf_path) = urdf_text(a, &found.recording, &inv)?;
+    let (recordings, inspected) = (found.recordings, found.recording.clone());
     let found = urdf::wheels(&text).map_err(|e| anyhow::anyhow!("{}: {e}", source.label))?;
     let recording = a.recording.display().to_string();
     let d = init::draft(&inv, &recording, &found, &source, a.kind)
@@ -79,6 +83,24 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     // What is written must read back as written.
     robot_file::parse(&toml, &a.out).context("the drafted robot.toml does not read back (a bug)")?;
     atomic::write_atomic(&a.out, toml.as_bytes()).with_context(|| format!("writing {}", a.out.display()))?;
+    if a.output.json {
+        for w in &d.warnings {
+            tracing::warn!("{w}");
+        }
+        let doc = serde_json::json!({
+            "out": a.out,
+            "recording": a.recording,
+            "recordings": recordings,
+            "inspected": inspected,
+            "urdf": source.label,
+            "kind": d.description.kind.to_string(),
+            "joints": d.description.joints(),
+            "description": d.description,
+            "notes": d.comments.header.iter().filter(|l| !l.starts_with("  CHECK: ")).collect::<Vec<_>>(),
+            "warnings": d.warnings,
+        });
+        return super::print_json("init", doc);
+    }
     for line in d.comments.header.iter().filter(|l| !l.starts_with("  CHECK: ")) {
         println!("{line}");
     }

@@ -36,6 +36,39 @@ pub fn python_only(what: &str) -> anyhow::Error {
     )
 }
 
+/// Version of the layout of every `--json` document (docs/json.md): each carries it as `schema_version`,
+/// with the command's name as `command`. Raised when a field changes meaning or is removed.
+pub const JSON_SCHEMA_VERSION: u32 = 1;
+
+/// Commands that produce no results of their own, so take no `--json`: `fleet` (the Python wheel's).
+/// Every other subcommand flattens [`OutputArgs`]; tests/json.rs checks both lists against the parser.
+pub const WITHOUT_RESULTS: &[&str] = &["fleet"];
+
+/// The output options of every command that produces results (one definition, flattened into each).
+#[derive(Debug, Default, Clone, Copy, clap::Args)]
+pub struct OutputArgs {
+    /// Print the results as one JSON document on stdout instead of text (`schema_version`, `command`, and
+    /// the command's fields, SI units: docs/json.md). Notes and progress stay on stderr.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Prints `doc` (a JSON object) on stdout, pretty, with `schema_version` and `command` added.
+pub fn print_json(command: &str, doc: serde_json::Value) -> anyhow::Result<()> {
+    println!("{}", serde_json::to_string_pretty(&json_document(command, doc)?)?);
+    Ok(())
+}
+
+/// `doc` with `schema_version` ([`JSON_SCHEMA_VERSION`]) and `command` added.
+pub fn json_document(command: &str, doc: serde_json::Value) -> anyhow::Result<serde_json::Value> {
+    let serde_json::Value::Object(mut fields) = doc else {
+        anyhow::bail!("the --json document of {command} is not an object (a bug)");
+    };
+    fields.insert("schema_version".into(), JSON_SCHEMA_VERSION.into());
+    fields.insert("command".into(), command.into());
+    Ok(serde_json::Value::Object(fields))
+}
+
 /// The help heading of [`DataArgs`].
 pub const DATA_OPTIONS: &str = "Data options";
 

@@ -1,6 +1,6 @@
 //! `omnical plan`: propose calibration runs that excite every parameter.
 
-use super::{DataArgs, load_runs};
+use super::{DataArgs, OutputArgs, load_runs};
 use crate::cli::{choice, effect_help};
 use crate::{atomic, design, robot_file};
 use anyhow::Context;
@@ -52,9 +52,9 @@ pub struct Args {
     /// Write the planned commands as CSV here (v_m_s, alpha_deg, omega_rad_s, repetitions).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Print JSON.
-    #[arg(long)]
-    pub json: bool,
+    /// Output options.
+    #[command(flatten)]
+    pub output: OutputArgs,
     /// Data options (for --robot-from).
     #[command(flatten)]
     pub data: DataArgs,
@@ -97,10 +97,9 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     if let Some(out) = &a.out {
         atomic::write_atomic(out, plan_csv(&plan).as_bytes()).with_context(|| format!("writing {}", out.display()))?;
     }
-    if a.json {
-        let v = serde_json::json!({"plan": plan, "flower": flower});
-        println!("{}", serde_json::to_string_pretty(&v)?);
-        return Ok(());
+    if a.output.json {
+        let out = a.out.as_ref().map(|p| p.display().to_string());
+        return super::print_json("plan", serde_json::json!({"plan": plan, "flower": flower, "out": out}));
     }
     print_plan(&plan, flower.as_ref(), req, benchmark_name(model.model.n_wheels()));
     if let Some(out) = &a.out {

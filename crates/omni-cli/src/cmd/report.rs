@@ -1,6 +1,6 @@
 //! `omnical report`: the HTML report of a model on runs (diagnosis included unless `--no-diagnose`).
 
-use super::{DataArgs, load_with_held_out, resolve_model};
+use super::{DataArgs, OutputArgs, load_with_held_out, resolve_model};
 use crate::design::design_for;
 use crate::progress;
 use crate::report::{self, ReportInput};
@@ -33,6 +33,9 @@ pub struct Args {
     /// `--validate`).
     #[arg(long)]
     pub explore: bool,
+    /// Output options (JSON: the files written and each model's costs).
+    #[command(flatten)]
+    pub output: OutputArgs,
     /// Data options.
     #[command(flatten)]
     pub data: DataArgs,
@@ -81,8 +84,17 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     let spinner = progress::spinner("drawing the report", quiet);
     let w = report::write_with(&input, &a.out, a.png.as_deref(), &extra)?;
     spinner.finish_and_clear();
+    if a.output.json {
+        return super::print_json("report", written_json(&w, &a.out));
+    }
     print_written(&w, &a.out);
     Ok(())
+}
+
+/// What [`print_written`] says, as JSON: `html` (the page), `figures` (their ids), `png` (the PNG files),
+/// and `models` (label, matrix, parameters, `costs`: path RMS m and Eq. 6 on training and held-out runs).
+pub fn written_json(w: &report::Written, html: &std::path::Path) -> serde_json::Value {
+    serde_json::json!({ "html": html, "figures": w.figures, "png": w.png, "models": w.report.models })
 }
 
 /// One line per model and the files written.

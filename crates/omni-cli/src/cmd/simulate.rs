@@ -1,6 +1,6 @@
 //! `omnical simulate`: write a flower-benchmark dataset from a true robot with optional hidden effects.
 
-use super::sim_spec;
+use super::{OutputArgs, sim_spec};
 use crate::cli::effect_help;
 use crate::robot_file::{self, RobotFile};
 use crate::{atomic, dataset, design, model_file};
@@ -79,14 +79,29 @@ pub struct Args {
     /// With --fleet: sessions per robot.
     #[arg(long, value_name = "S", requires = "fleet")]
     pub sessions: Option<usize>,
+    /// Output options (JSON: what was written, with the design's and the true robot's costs).
+    #[command(flatten)]
+    pub output: OutputArgs,
 }
 
-fn write_split(dir: &Path, runs: &[Run], format: Format, wheel_names: &[String]) -> anyhow::Result<()> {
+/// Writes each run as one file of `format` into `dir` (created), named after the run; returns the paths.
+pub(crate) fn write_split(
+    dir: &Path,
+    runs: &[Run],
+    format: Format,
+    wheel_names: &[String],
+) -> anyhow::Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let mut written = Vec::with_capacity(runs.len());
     for r in runs {
         let stem = r.name().rsplit('/').next().unwrap_or(r.name());
+        let ext = match format {
+            Format::Csv => "csv",
+            Format::Mcap => "mcap",
+        };
+        let path = dir.join(format!("{stem}.{ext}"));
         match format {
-            Format::Csv => dataset::csv::write_run(&dir.join(format!("{stem}.csv")), r, wheel_names)?,
+            Format::Csv => dataset::csv::write_run(&path, r, wheel_names)?,
             Format::Mcap => {
                 let w = dataset::mcap::WriteOptions {
                     wheel_joints: wheel_names.to_vec(),
@@ -95,11 +110,12 @@ fn write_split(dir: &Path, runs: &[Run], format: Format, wheel_names: &[String])
                     origin_s: SIM_EPOCH_S,
                     ..Default::default()
                 };
-                dataset::mcap::write_run(&dir.join(format!("{stem}.mcap")), r, &w)?
+                dataset::mcap::write_run(&path, r, &w)?
             }
         }
+        written.push(path);
     }
-    Ok(())
+    Ok(written)
 }
 
 /// The simulated robot's design (from `--robot`) and its true model (from `--truth`).
@@ -156,7 +172,7 @@ fn written_topics(d: &RobotDescription, format: Format) -> RobotDescription {
 }
 
 /// Writes `robot.toml` into a split's folder, so that commands reading the runs find the robot.
-fn write_robot(dir: &Path, robot: &RobotFile, format: Format) -> anyhow::Result<()> {
+pub(crate) fn write_robot(dir: &Path, robot: &RobotFile, format: Format) -> anyhow::Result<()> {
     let comments = robot_file::Comments {
         header: vec![format!(
             "The robot these simulated runs were made with (omnical simulate --robot {}): its design, joint names \
@@ -168,6 +184,20 @@ fn write_robot(dir: &Path, robot: &RobotFile, format: Format) -> anyhow::Result<
     let path = dir.join(robot_file::FILE_NAME);
     let text = robot_file::to_toml(&written_topics(&robot.description, format), &comments);
     atomic::write_atomic(&path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))
+}
+
+/// The design's and the true robot's costs on `runs`: `design_end_pose`, `oracle_end_pose`, `design_path`,
+/// `oracle_path` (Eq. 6; path RMS, m), in that order.
+fn split_costs(design: &FittedModel, truth: &FittedModel, runs: &[Run]) -> anyhow::Result<Vec<(String, f64)>> {
+    [CostKind::EndPose, CostKind::PATH]
+        .iter()
+        .flat_map(|&k| {
+            let d = cost::cost(&design.model, &design.params, runs, k);
+            let o = cost::cost(&truth.model, &truth.params, runs, k);
+            [(format!("design_{}", k.name()), d), (format!("oracle_{}", k.name()), o)]
+        })
+        .map(|(n, c)| c.map(|c| (n, c)).map_err(anyhow::Error::from))
+        .collect()
 }
 
 /// Runs `omnical simulate`; `quiet` hides the progress display.
@@ -194,47 +224,68 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     for spec in &a.effects {
         sim_spec::apply_effect_spec(spec, &mut truth, &mut config, &wheel_names)?;
     }
-    let mut summary = serde_json::Map::new();
+    let (mut summary, mut written) = (serde_json::Map::new(), serde_json::Map::new());
     for (split, seed) in [("train", a.seed), ("validation", a.seed.wrapping_add(1))] {
         let cfg = SimConfig { seed, ..config.clone() };
         let spinner = crate::progress::spinner(format!("simulating and writing {split} runs"), quiet);
         let runs = simulate(&cfg, &truth, &format!("{split}/"))?;
-        write_split(&a.out.join(split), &runs, a.format, &wheel_names)?;
+        let files = write_split(&a.out.join(split), &runs, a.format, &wheel_names)?;
         write_robot(&a.out.join(split), &robot, a.format)?;
         spinner.finish_and_clear();
-        let costs: Vec<(String, f64)> = [CostKind::EndPose, CostKind::PATH]
-            .iter()
-            .flat_map(|&k| {
-                let d = cost::cost(&design.model, &design.params, &runs, k);
-                let o = cost::cost(&truth.model, &truth.params, &runs, k);
-                [(format!("design_{}", k.name()), d), (format!("oracle_{}", k.name()), o)]
-            })
-            .map(|(n, c)| c.map(|c| (n, c)))
-            .collect::<Result<_, _>>()?;
+        let costs = split_costs(&design, &truth, &runs)?;
         let entry: serde_json::Map<String, serde_json::Value> = costs
             .iter()
             .map(|(n, c)| (n.clone(), json!(c)))
             .chain([("seed".to_string(), json!(seed)), ("runs".to_string(), json!(runs.len()))])
             .collect();
         // The summary prints whatever --quiet says (it only hides progress).
-        println!(
-            "{split}: {} runs, design cost {:.4}, oracle cost {:.4} (Eq. 6; path: {:.4} vs {:.4})",
-            runs.len(),
-            costs[0].1,
-            costs[1].1,
-            costs[2].1,
-            costs[3].1
-        );
+        if !a.output.json {
+            println!(
+                "{split}: {} runs, design cost {:.4}, oracle cost {:.4} (Eq. 6; path: {:.4} vs {:.4})",
+                runs.len(),
+                costs[0].1,
+                costs[1].1,
+                costs[2].1,
+                costs[3].1
+            );
+        }
+        let mut listed = entry.clone();
+        listed.insert("dir".into(), json!(a.out.join(split)));
+        listed.insert("files".into(), json!(files));
+        listed.insert("robot".into(), json!(a.out.join(split).join(robot_file::FILE_NAME)));
+        written.insert(split.into(), listed.into());
         summary.insert(split.into(), serde_json::Value::Object(entry));
     }
-    let truth_toml = model_file::to_toml(&truth, None).map_err(anyhow::Error::msg)?;
+    write_truth(a, &truth, summary, &config)?;
+    if a.output.json {
+        let format = match a.format {
+            Format::Csv => "csv",
+            Format::Mcap => "mcap",
+        };
+        let (truth_json, truth_model) = (a.out.join("truth.json"), a.out.join("truth_model.toml"));
+        let doc = json!({ "out": a.out, "format": format, "splits": written, "truth_json": truth_json, "truth_model": truth_model });
+        return super::print_json("simulate", doc);
+    }
+    println!("wrote {}", a.out.display());
+    Ok(())
+}
+
+/// Writes `truth_model.toml` and `truth.json` (the costs of each split in `summary`, the true model, the
+/// simulator's settings) into `--out`.
+fn write_truth(
+    a: &Args,
+    truth: &FittedModel,
+    summary: serde_json::Map<String, serde_json::Value>,
+    config: &SimConfig,
+) -> anyhow::Result<()> {
+    let truth_toml = model_file::to_toml(truth, None).map_err(anyhow::Error::msg)?;
     atomic::write_atomic(&a.out.join("truth_model.toml"), truth_toml.as_bytes())
         .with_context(|| format!("writing {}", a.out.join("truth_model.toml").display()))?;
     let doc = json!({
         "design_cost": { "train": summary["train"]["design_end_pose"], "validation": summary["validation"]["design_end_pose"] },
         "oracle_cost": { "train": summary["train"]["oracle_end_pose"], "validation": summary["validation"]["oracle_end_pose"] },
         "splits": summary,
-        "true_model": model_file::ModelFile::from_fitted(&truth, None)?,
+        "true_model": model_file::ModelFile::from_fitted(truth, None)?,
         "effects": a.effects,
         "seed": a.seed,
         "simulator": config,
@@ -242,7 +293,5 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     });
     let text = serde_json::to_string_pretty(&doc)?;
     atomic::write_atomic(&a.out.join("truth.json"), text.as_bytes())
-        .with_context(|| format!("writing {}", a.out.join("truth.json").display()))?;
-    println!("wrote {}", a.out.display());
-    Ok(())
+        .with_context(|| format!("writing {}", a.out.join("truth.json").display()))
 }

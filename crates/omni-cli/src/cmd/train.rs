@@ -1,6 +1,6 @@
 //! `omnical train`: fit a model to training runs.
 
-use super::{DataArgs, load_runs};
+use super::{DataArgs, OutputArgs, load_runs};
 use crate::cli::{choice, effect_help};
 use crate::dataset::Dataset;
 use crate::robot_file::{self, Design};
@@ -39,9 +39,9 @@ pub struct Args {
     /// Write the fitted model here (TOML; read back by `--model FILE`).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Print a JSON summary instead of text.
-    #[arg(long)]
-    pub json: bool,
+    /// Output options.
+    #[command(flatten)]
+    pub output: OutputArgs,
     /// Objective and unconstrained directions.
     #[command(flatten)]
     pub fit: FitArgs,
@@ -271,11 +271,12 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     if let Some(out) = &a.out {
         write_model(&c, &s, out)?;
     }
-    if a.json {
+    if a.output.json {
         if !ds.ground_truth_clocks.is_empty() {
             s["ground_truth_clock"] = ds.ground_truth_clocks.iter().map(|g| g.to_json()).collect();
         }
-        println!("{}", serde_json::to_string_pretty(&s)?);
+        s["out"] = json!(a.out.as_ref().map(|p| p.display().to_string()));
+        super::print_json("train", s)?;
     } else {
         if interrupted {
             println!("interrupted (Ctrl-C): the best model found so far (the GA stopped early; no polish)");
@@ -375,7 +376,7 @@ pub fn print_summary(c: &Calibration, preset: &str, runs: usize) {
     if !base_shown || specs.len() > nb {
         for (i, s) in specs.iter().enumerate() {
             if i >= nb || !base_shown {
-                println!("  {:<28} {:>14.6} {}", s.name, c.fitted.params[i], s.unit);
+                println!("  {:<28} {}", s.name, value_text(c.fitted.params[i], &s.unit));
             }
         }
     }
@@ -387,6 +388,25 @@ pub fn print_summary(c: &Calibration, preset: &str, runs: usize) {
         println!("note: the polish left the GA box (the box was too small) for: {}", c.outside_box.join(", "));
     }
     print_identifiability(c);
+}
+
+/// A fitted value in its unit, right-aligned: an angle (unit `rad`) in degrees with radians in parentheses
+/// (`    -30.0123° (-0.523813 rad)`), anything else as `{value:>14.6} {unit}`.
+pub fn value_text(value: f64, unit: &str) -> String {
+    if unit == "rad" {
+        format!("{:>13.4}° ({value:.6} rad)", value.to_degrees())
+    } else {
+        format!("{value:>14.6} {unit}")
+    }
+}
+
+/// A standard error in its unit: an angle (unit `rad`) in degrees with radians in parentheses.
+fn std_error_text(std_error: f64, unit: &str) -> String {
+    if unit == "rad" {
+        format!("±{:.2e}° ({std_error:.2e} rad)", std_error.to_degrees())
+    } else {
+        format!("±{std_error:.2e} {unit}")
+    }
 }
 
 /// Standard errors, condition number, and a warning per unconstrained direction.
@@ -402,11 +422,19 @@ pub fn print_identifiability(c: &Calibration) {
             omni_ga::identify::CovarianceKind::Stated => "from the stated noise",
         }
     );
+    // The IK matrix's ω row is in rad per wheel rad, a ratio and not an angle: it keeps its unit.
+    let model = &c.fitted.model;
+    let ik_entries: Vec<String> = if model.kinematics.params_are_ik_entries() {
+        model.params().into_iter().take(model.n_base()).map(|s| s.name).collect()
+    } else {
+        Vec::new()
+    };
     let se: Vec<String> = id
         .params
         .iter()
         .map(|p| match p.std_error {
-            Some(s) => format!("{} ±{:.2e} {}", p.name, s, p.unit),
+            Some(s) if ik_entries.contains(&p.name) => format!("{} ±{:.2e} {}", p.name, s, p.unit),
+            Some(s) => format!("{} {}", p.name, std_error_text(s, &p.unit)),
             None => format!("{} undetermined", p.name),
         })
         .collect();
