@@ -79,6 +79,15 @@ fn config_shows_where_each_value_came_from() {
     let r = rows(&ok(&["config", "--robot", "robot.toml"], d));
     assert_eq!(row(&r, "gt_topic"), ("/mocap", format!("robot.toml:{line}").as_str()));
     assert_eq!(row(&r, "robot"), ("robot.toml", "command line"));
+    // The same rows as JSON.
+    let v: serde_json::Value = serde_json::from_str(&ok(&["config", "--robot", "robot.toml", "--json"], d)).unwrap();
+    assert_eq!((v["command"].as_str(), v["schema_version"].as_u64()), (Some("config"), Some(1)));
+    assert_eq!(v["project_file"], "omnical.toml");
+    let gt = v["settings"].as_array().unwrap().iter().find(|s| s["key"] == "gt_topic").unwrap();
+    assert_eq!(
+        (gt["value"].as_str(), gt["source"].as_str()),
+        (Some("/mocap"), Some(format!("robot.toml:{line}").as_str()))
+    );
 }
 
 #[test]

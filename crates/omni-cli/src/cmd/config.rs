@@ -3,7 +3,7 @@
 //! [`crate::robot_file`]) with its line, or the built-in default. Precedence, highest first: command
 //! line, omnical.toml (a `[command]` table over its top level), robot.toml, default.
 
-use super::DataArgs;
+use super::{DataArgs, OutputArgs};
 use crate::cli::choice;
 use crate::project_file::{self, ProjectFile};
 use crate::robot_file::{self, RobotFile, Source};
@@ -26,6 +26,9 @@ pub struct Args {
     /// Training objective.
     #[arg(long, value_parser = choice::<CostName>())]
     pub objective: Option<CostName>,
+    /// Output options.
+    #[command(flatten)]
+    pub output: OutputArgs,
     /// Data options.
     #[command(flatten)]
     pub data: DataArgs,
@@ -201,6 +204,12 @@ pub fn run(a: &Args, threads: Option<usize>, config: Option<&Path>) -> anyhow::R
         project_file::apply(crate::cli::Cli::command(), p)?;
     }
     let rows = rows(a, threads, project.as_ref())?;
+    if a.output.json {
+        let settings: Vec<_> =
+            rows.iter().map(|r| serde_json::json!({"key": r.key, "value": r.value, "source": r.source})).collect();
+        let file = project.as_ref().map(|p| p.path.display().to_string());
+        return super::print_json("config", serde_json::json!({"settings": settings, "project_file": file}));
+    }
     let w_key = rows.iter().map(|r| r.key.len()).max().unwrap_or(0).max(3);
     let w_value = rows.iter().map(|r| r.value.chars().count()).max().unwrap_or(0).max(5);
     println!("{:w_key$}  {:w_value$}  from", "key", "value");

@@ -40,9 +40,10 @@ pub fn python_only(what: &str) -> anyhow::Error {
 /// with the command's name as `command`. Raised when a field changes meaning or is removed.
 pub const JSON_SCHEMA_VERSION: u32 = 1;
 
-/// Commands that produce no results of their own, so take no `--json`: `fleet` (the Python wheel's).
+/// Commands that produce no results of their own, so take no `--json`: `fleet` (the Python wheel's),
+/// `completions` and `man` (their output is a script and a man page).
 /// Every other subcommand flattens [`OutputArgs`]; tests/json.rs checks both lists against the parser.
-pub const WITHOUT_RESULTS: &[&str] = &["fleet"];
+pub const WITHOUT_RESULTS: &[&str] = &["fleet", "completions", "man"];
 
 /// The output options of every command that produces results (one definition, flattened into each).
 #[derive(Debug, Default, Clone, Copy, clap::Args)]
