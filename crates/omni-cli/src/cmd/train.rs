@@ -26,10 +26,11 @@ pub struct Args {
     /// Start from this model file instead of the design.
     #[arg(long)]
     pub start: Option<PathBuf>,
-    /// Recipe.
+    /// Training recipe: search method, objective and limits.
     #[arg(long, value_parser = choice::<Preset>(), default_value_t = Preset::default())]
     pub preset: Preset,
-    /// GA seed.
+    /// Seed of the genetic algorithm's random search: the same seed gives the same model, whatever
+    /// --threads.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Add an effect to fit (an effect id). Repeatable.
