@@ -18,3 +18,4 @@ pub mod progress;
 pub mod report;
 pub mod robot_config;
 pub mod robot_file;
+pub mod units;
