@@ -90,8 +90,12 @@ pub fn effect_help(lead: &str) -> String {
 /// The value parser of a library [`Choice`] (a preset, an objective, …): its ids in kebab-case, each
 /// listed in `--help` with its line from [`Choice::describe`].
 pub fn choice<T: Choice>() -> impl TypedValueParser<Value = T> {
-    PossibleValuesParser::new(T::ALL.iter().map(|v| PossibleValue::new(v.flag_value()).help(v.describe())))
-        .try_map(|s| T::from_id(&s))
+    PossibleValuesParser::new(
+        T::ALL
+            .iter()
+            .map(|v| PossibleValue::new(v.flag_value()).help(v.describe()).aliases(v.aliases().iter().copied())),
+    )
+    .try_map(|s| T::from_id(&s))
 }
 
 /// Runs a parsed command line.

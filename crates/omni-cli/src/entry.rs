@@ -15,7 +15,7 @@ pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
         Ok(cli) => cli,
         Err(mut e) => {
             // `--help` and `--version` arrive here too; clap prints them on stdout and exits 0.
-            if let Some(tip) = validate_tip(&e, &args) {
+            if let Some(tip) = validate_tip(&e, &args).or_else(|| robot_from_tip(&e, &args)) {
                 e.insert(ContextKind::Suggested, ContextValue::StyledStrs(vec![tip.into()]));
             }
             let _ = e.print();
@@ -55,6 +55,17 @@ fn validate_tip(e: &Error, args: &[OsString]) -> Option<String> {
         "--validate takes one path (repeat it for more) and the training runs come without a flag: \
          omnical {command} --model MODEL TRAIN_RUNS... --validate HELD_OUT [--validate HELD_OUT]..."
     ))
+}
+
+/// When `plan` got paths it takes none of (an older spelling gave `--robot-from` several), the spelling that
+/// works.
+fn robot_from_tip(e: &Error, args: &[OsString]) -> Option<String> {
+    let plan = args.iter().skip(1).any(|a| a == "plan");
+    let robot_from = args.iter().any(|a| a.to_string_lossy().starts_with("--robot-from"));
+    (e.kind() == ErrorKind::UnknownArgument && plan && robot_from).then(|| {
+        "--robot-from takes one path (repeat it for more): omnical plan --robot-from RUNS [--robot-from RUNS]..."
+            .to_string()
+    })
 }
 
 /// The panic message of `print!`/`println!` when stdout is a closed pipe.

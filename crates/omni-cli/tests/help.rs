@@ -146,3 +146,110 @@ fn fleet_is_the_python_wheels_and_the_native_binary_says_so() {
         );
     }
 }
+
+#[test]
+fn plan_robot_from_takes_one_path_and_repeats() {
+    let text = help(&["plan", "--help"]);
+    assert!(text.contains("--robot-from <RUNS>"), "{text}");
+    assert!(text.contains("--robot-from A --robot-from B"), "{text}");
+    // One path per flag: both flags' paths are read (the first missing one is named).
+    let out = omnical(&["plan", "--robot-from", "missing-a", "--robot-from", "missing-b"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("missing-a"), "{err}");
+    // The old spelling, several paths after one flag: clap names the stray path, then the spelling that works.
+    let out = omnical(&["plan", "--robot-from", "runs-a", "runs-b"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("unexpected argument 'runs-b' found"), "{err}");
+    assert!(
+        err.contains(
+            "tip: --robot-from takes one path (repeat it for more): omnical plan --robot-from RUNS [--robot-from RUNS]..."
+        ),
+        "{err}"
+    );
+    // Other stray arguments get no such tip.
+    let out = omnical(&["plan", "stray"]);
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("tip: --robot-from"));
+}
+
+/// The old `--validate V1 V2 TRAIN` spelling reads V2 as training runs: a held-out run that is also a
+/// training run is an error, and a training path named like a held-out set a warning, both with the
+/// spelling that works.
+#[test]
+fn validate_old_spelling_is_caught() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir.path()).output().expect("run omnical")
+    };
+    let sim = ["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "2", "--seed", "5", "-q"];
+    assert!(run(&sim).status.success());
+    // A second copy of the validation set, as a user with two held-out folders would have.
+    std::fs::create_dir(dir.path().join("sim/val2")).unwrap();
+    for e in std::fs::read_dir(dir.path().join("sim/validation")).unwrap() {
+        let p = e.unwrap().path();
+        std::fs::copy(&p, dir.path().join("sim/val2").join(p.file_name().unwrap())).unwrap();
+    }
+    let spelling = "--validate takes one path (repeat it for more) and the training runs come without a flag: \
+                    omnical diagnose --model MODEL TRAIN_RUNS... --validate HELD_OUT [--validate HELD_OUT]...";
+    let out = run(&["diagnose", "--model", "design", "--validate", "sim/validation", "sim/val2", "sim/train"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&format!(
+            "warning: sim/val2 is read as training runs although named like a held-out set; {spelling}"
+        )),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!(
+            "error: held-out run 00-r0 is the same recording as training run 00-r0: a model cannot be judged on \
+             runs it was fitted on. {spelling}"
+        )),
+        "{err}"
+    );
+    // The same folder on both sides, whatever its name.
+    let out = run(&["report", "--model", "design", "sim/train", "--validate", "sim/train", "--no-diagnose"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("held-out run 00-r0 is the same recording as training run 00-r0"), "{err}");
+    assert!(!err.contains("warning:"), "{err}");
+    // The right spelling passes both checks quietly.
+    let out = run(&["report", "--model", "design", "sim/train", "--validate", "sim/validation", "--no-diagnose", "-q"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("warning:") && !err.contains("same recording"), "{err}");
+}
+
+/// `export --controller` is a choice table: each controller listed with its line, the package names taken
+/// as they are and the short forms as aliases; anything else refused with the list.
+#[test]
+fn export_controller_lists_each_choice() {
+    let text = help(&["export", "--help"]);
+    for line in [
+        "diff_drive_controller:       Two wheels (or two sides of wheels): wheel separation and left/right radii",
+        "mecanum_drive_controller:    Four mecanum wheels, rollers at ±45°: wheel radius and lx + ly",
+        "omni_wheel_drive_controller: Three or more omni wheels equally spaced on a circle",
+    ] {
+        assert!(text.contains(line), "{line}\n{text}");
+    }
+    use clap::Parser;
+    use omni_cli::cli::{Cli, Command};
+    use omni_kin::controller::ControllerKind;
+    for (given, want) in [
+        ("omni_wheel_drive_controller", ControllerKind::OmniWheelDrive),
+        ("mecanum", ControllerKind::MecanumDrive),
+        ("diff-drive-controller", ControllerKind::DiffDrive),
+    ] {
+        let cli = Cli::try_parse_from(["omnical", "export", "--model", "m", "r", "--controller", given]).unwrap();
+        let Command::Export(e) = cli.command else { panic!("export") };
+        assert_eq!(e.controller, Some(want), "{given}");
+    }
+    let out = omnical(&["export", "--model", "m", "r", "--controller", "ackermann"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("[possible values: diff_drive_controller, mecanum_drive_controller, omni_wheel_drive_controller]"),
+        "{err}"
+    );
+}

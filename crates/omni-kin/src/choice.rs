@@ -37,13 +37,18 @@ pub trait Choice: Copy + PartialEq + Sized + Send + Sync + 'static {
         self.id().replace('_', "-")
     }
 
-    /// The variant with this id (`-` and `_` alike), or an error listing the ids.
+    /// Other names the variant answers to (short forms), beside its id. Default none.
+    fn aliases(self) -> &'static [&'static str] {
+        &[]
+    }
+
+    /// The variant with this id or alias (`-` and `_` alike), or an error listing the ids.
     fn from_id(s: &str) -> Result<Self, UnknownChoice> {
         let wanted = s.replace('-', "_");
         Self::ALL
             .iter()
             .copied()
-            .find(|v| v.id() == wanted)
+            .find(|v| v.id() == wanted || v.aliases().iter().any(|a| a.replace('-', "_") == wanted))
             .ok_or_else(|| UnknownChoice { got: s.to_string(), expected: expected_ids::<Self>() })
     }
 }

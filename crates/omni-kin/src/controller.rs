@@ -31,6 +31,7 @@
 //! excite carry no weight and stay at that start. When the target is of the controller's form the fit
 //! reproduces it to rounding.
 
+use crate::choice::Choice;
 use crate::error::KinError;
 use crate::ik::IkMatrix;
 use crate::pose::Twist2;
@@ -108,6 +109,40 @@ impl ControllerKind {
     }
 }
 
+/// The choice table (command-line values and their help): the package names, which are also the ids
+/// written into ros2_controllers.yaml, so the command line takes them as they are (snake_case; the
+/// kebab-case and short forms `diff`, `diff_drive`, … as aliases).
+impl Choice for ControllerKind {
+    const ALL: &'static [Self] = &ControllerKind::ALL;
+    const DEFAULT: Option<Self> = None;
+
+    fn id(self) -> &'static str {
+        ControllerKind::id(self)
+    }
+
+    fn describe(self) -> &'static str {
+        match self {
+            Self::DiffDrive => "Two wheels (or two sides of wheels): wheel separation and left/right radii",
+            Self::MecanumDrive => "Four mecanum wheels, rollers at ±45°: wheel radius and lx + ly",
+            Self::OmniWheelDrive => {
+                "Three or more omni wheels equally spaced on a circle: wheel radius, robot radius, first wheel's angle"
+            }
+        }
+    }
+
+    fn flag_value(self) -> String {
+        self.id().to_string()
+    }
+
+    fn aliases(self) -> &'static [&'static str] {
+        match self {
+            Self::DiffDrive => &["diff", "diff_drive", "diff-drive-controller"],
+            Self::MecanumDrive => &["mecanum", "mecanum_drive", "mecanum-drive-controller"],
+            Self::OmniWheelDrive => &["omni", "omni_wheel_drive", "omni-wheel-drive-controller"],
+        }
+    }
+}
+
 impl fmt::Display for ControllerKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.id())
@@ -117,18 +152,13 @@ impl fmt::Display for ControllerKind {
 impl FromStr for ControllerKind {
     type Err = KinError;
 
-    /// Accepts the package names and `diff`, `mecanum`, `omni`.
+    /// Accepts the package names and their aliases ([`Choice::aliases`]: `diff`, `mecanum`, `omni`, …).
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s {
-            "diff" | "diff_drive" | "diff_drive_controller" => Ok(Self::DiffDrive),
-            "mecanum" | "mecanum_drive" | "mecanum_drive_controller" => Ok(Self::MecanumDrive),
-            "omni" | "omni_wheel_drive" | "omni_wheel_drive_controller" => Ok(Self::OmniWheelDrive),
-            other => Err(KinError::Unknown {
-                what: "controller",
-                name: other.into(),
-                known: "diff_drive_controller, mecanum_drive_controller, omni_wheel_drive_controller".into(),
-            }),
-        }
+        <Self as Choice>::from_id(s).map_err(|_| KinError::Unknown {
+            what: "controller",
+            name: s.into(),
+            known: "diff_drive_controller, mecanum_drive_controller, omni_wheel_drive_controller".into(),
+        })
     }
 }
 

@@ -94,6 +94,7 @@ fn diagnose_loaded(a: &Args) -> anyhow::Result<(Diagnosis, Loaded)> {
     let (ds, val) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
     let val = val.map(|v| v.runs);
+    super::held_out::check("diagnose", &a.runs, &ds.runs, val.as_deref().unwrap_or_default())?;
     let mut opts = DiagnoseOptions { auto: a.auto, min_gain: a.min_gain, ..DiagnoseOptions::default() };
     if !a.candidates.is_empty() {
         opts.candidates = a.candidates.clone();

@@ -45,6 +45,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let (ds, val) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
     let val = val.map(|v| v.runs).unwrap_or_default();
+    super::held_out::check("explore", &a.runs, &ds.runs, &val)?;
     let opts = ExploreOptions { min_gain: a.min_gain, ..ExploreOptions::default() };
     let e = explore(&model, &ds.runs, &val, &opts)?;
     if let Some(out) = &a.out {

@@ -32,9 +32,8 @@ pub struct Args {
     /// with the accuracy it gives up on the runs (docs/applying.md).
     #[arg(long, value_name = "DIR")]
     pub robot_config: Option<PathBuf>,
-    /// Drive controller for --robot-config: diff_drive_controller, mecanum_drive_controller or
-    /// omni_wheel_drive_controller (default: the one that matches the base).
-    #[arg(long, value_name = "NAME")]
+    /// Drive controller for --robot-config (default: the one that matches the base).
+    #[arg(long, value_name = "NAME", value_parser = crate::cli::choice::<omni_kin::controller::ControllerKind>())]
     pub controller: Option<omni_kin::controller::ControllerKind>,
     /// Output options (JSON: the files written).
     #[command(flatten)]

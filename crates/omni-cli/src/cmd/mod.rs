@@ -5,6 +5,7 @@ pub mod diagnose;
 pub mod eval;
 pub mod explore;
 pub mod export;
+pub mod held_out;
 pub mod init;
 pub mod plan;
 pub mod report;

@@ -19,8 +19,9 @@ pub struct Args {
     /// An effect to plan for (an effect id). Repeatable.
     #[arg(long = "effect", value_name = "NAME", help = effect_help("An effect to plan for. Repeatable."))]
     pub effects: Vec<String>,
-    /// Take the robot's geometry from these runs (OptiOdom metadata), when there is no --robot.
-    #[arg(long = "robot-from", value_name = "RUNS", num_args = 1..)]
+    /// Take the robot's geometry from these runs (OptiOdom metadata), when there is no --robot: a file or
+    /// folder; repeat for more (`--robot-from A --robot-from B`).
+    #[arg(long = "robot-from", value_name = "RUNS")]
     pub robot_from: Vec<PathBuf>,
     /// Which set: a D-optimal pick from a library of commands, or the paper's 36 flower commands.
     #[arg(long, value_parser = choice::<RunSet>(), default_value_t = RunSet::default())]

@@ -46,6 +46,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     let (ds, val) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
     let val = val.map(|v| v.runs).unwrap_or_default();
+    super::held_out::check("report", &a.runs, &ds.runs, &val)?;
     let design = design_for(&model);
     let diagnosis = if a.no_diagnose {
         None

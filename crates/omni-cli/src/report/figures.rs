@@ -313,7 +313,11 @@ pub fn flower(r: &Report) -> anyhow::Result<Figure> {
         * 1000.0;
     let ring = nice_step(rmax / 3.0);
     let rlim = (rmax / ring).ceil() * ring * 1.12;
-    let svg = draw((300 * nw as u32, 340), |root| {
+    let entries: Vec<(String, RGBColor)> =
+        r.models.iter().enumerate().skip(first_shown).map(|(i, m)| (m.label.clone(), colour(i))).collect();
+    let svg = draw((300 * nw as u32, 340 + LEGEND_STRIP_PX), |root| {
+        let (root, strip) = root.split_vertically(340);
+        legend_strip(&strip, "mean end position error of", &entries)?;
         let panels = root.split_evenly((1, nw));
         for (iw, area) in panels.iter().enumerate() {
             let Some(w) = omegas.get(iw) else { break };
@@ -380,6 +384,26 @@ pub fn flower(r: &Report) -> anyhow::Result<Figure> {
         ),
         svg,
     })
+}
+
+/// Height of the legend strip under a figure's panels. px.
+const LEGEND_STRIP_PX: u32 = 30;
+
+/// A one-line legend across `area`: `lead`, then a line sample and the label of each entry.
+fn legend_strip(area: &Area<'_>, lead: &str, entries: &[(String, RGBColor)]) -> anyhow::Result<()> {
+    let y = (LEGEND_STRIP_PX / 2) as i32;
+    let font = (FONT, 13).into_font().color(&BLACK).pos(left_mid());
+    let mut x = 12;
+    area.draw(&Text::new(format!("{lead}:"), (x, y), font.clone()))?;
+    // A rough advance per character (13 px sans-serif) is enough to space the entries.
+    x += 7 * lead.chars().count() as i32 + 18;
+    for (label, c) in entries {
+        area.draw(&PathElement::new([(x, y), (x + 22, y)], c.stroke_width(2)))?;
+        area.draw(&Circle::new((x + 11, y), 3, c.filled()))?;
+        area.draw(&Text::new(label.clone(), (x + 28, y), font.clone()))?;
+        x += 28 + 7 * label.chars().count() as i32 + 22;
+    }
+    Ok(())
 }
 
 fn colour_name(i: usize) -> &'static str {

@@ -432,6 +432,30 @@ mod tests {
     }
 
     #[test]
+    fn flower_and_overlays_have_legends() {
+        let runs = runs();
+        let r = Report::build(&input(&runs)).unwrap();
+        let (figs, _) = figures::all(&r, None).unwrap();
+        let svg = |id: &str| figs.iter().find(|f| f.id == id).map(|f| f.svg.clone()).unwrap();
+        // plotters writes each text element's content on a line of its own.
+        let text = |s: &str| format!(">\n{s}\n</text>");
+        // The flower leaves the design out (its errors are on another scale) and names the model it draws,
+        // in its colour (blue: the second model).
+        let flower = svg("flower");
+        assert!(flower.contains(&text("mean end position error of:")), "{flower}");
+        assert!(flower.contains(&text("truth")), "{flower}");
+        assert!(!flower.contains(&text("design")), "{flower}");
+        assert!(flower.contains(r##"stroke="#1F77B4""##), "{flower}");
+        // Each overlay names ground truth and every model's odometry.
+        for id in ["overlay-worst", "overlay-typical"] {
+            let o = svg(id);
+            for label in ["ground truth", "design", "truth"] {
+                assert!(o.contains(&text(label)), "{id}: no legend entry {label}");
+            }
+        }
+    }
+
+    #[test]
     fn thinning_keeps_the_last_pose() {
         let poses: Vec<Pose2> = (0..1001).map(|k| Pose2 { x_m: k as f64, y_m: 0.0, theta_rad: 0.0 }).collect();
         let t = thin(&poses);

@@ -58,9 +58,18 @@ pub(super) fn climb(
         }
         match best {
             Some(b) if opts.auto && added < opts.max_added => {
-                let effect = candidate_effect(&b.effect, current.model.n_wheels(), opts)?;
-                current = refit(&current.with_effect(effect), bench.fit_runs, bench.every)?;
-                current_costs = costs_of(&current, bench.fit_runs, bench.held_runs, bench.every)?;
+                // The candidate's own refit is the next rung: `assess` fitted `current + effect` on the same
+                // runs from the same start and judged it with `costs_of`, so it is taken as is (the same
+                // bits; refitting it again cost as much as the whole first ranking's slowest candidate).
+                (current, current_costs) = match (b.fitted, b.refit) {
+                    (Some(fitted), Some(costs)) => (fitted, costs),
+                    _ => {
+                        let effect = candidate_effect(&b.effect, current.model.n_wheels(), opts)?;
+                        let next = refit(&current.with_effect(effect), bench.fit_runs, bench.every)?;
+                        let costs = costs_of(&next, bench.fit_runs, bench.held_runs, bench.every)?;
+                        (next, costs)
+                    }
+                };
                 ladder.push(rung(RungKind::Added(b.effect), &current_costs));
                 added += 1;
             }
