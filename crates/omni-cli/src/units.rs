@@ -30,7 +30,7 @@ mod tests {
     fn angles_print_in_degrees_with_radians() {
         assert_eq!(value_text(1.055373, "rad"), "      60.4684° (1.055373 rad)");
         assert_eq!(value_text(-std::f64::consts::FRAC_PI_6, "rad"), "     -30.0000° (-0.523599 rad)");
-        assert_eq!(std_error_text(6.99e-4, "rad"), "±4.01e-2° (6.99e-4 rad)");
+        assert_eq!(std_error_text(7.0e-4, "rad"), "±4.01e-2° (7.00e-4 rad)");
     }
 
     #[test]
