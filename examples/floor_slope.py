@@ -50,15 +50,15 @@ class FloorSlope(omnical.Effect):
 def compare(drift_x: float = 0.0039, drift_y: float = -0.0021, seed: int = 11) -> dict[str, Any]:
     """Simulate runs with a world drift, fit `learned:world` and `FloorSlope`, judge both on held-out runs."""
     truth = omnical.Model.design().with_effect("learned:world", drift_x=drift_x, drift_y=drift_y)
-    train = omnical.simulate(truth, duration_s=3.0, seed=seed)
-    held_out = omnical.simulate(truth, duration_s=3.0, seed=seed + 1, prefix="validation/")
-    learned = omnical.train(train, robot="apr02", effects=["learned:world"], seed=0)
-    slope = omnical.train(train, robot="apr02", effects=[FloorSlope()], seed=0)
+    train = omnical.simulate(truth, runs_per_command=1, duration_s=3.0, seed=seed)
+    held_out = omnical.simulate(truth, runs_per_command=1, duration_s=3.0, seed=seed + 1, prefix="validation/")
+    learned = omnical.train("design", train, robot="apr02", effects=["learned:world"], seed=0)
+    slope = omnical.train("design", train, robot="apr02", effects=[FloorSlope()], seed=0)
     return {
-        "true_cost": omnical.evaluate(held_out, truth).path_cost,
-        "design_cost": omnical.evaluate(held_out, omnical.Model.design()).path_cost,
-        "learned_cost": omnical.evaluate(held_out, learned.model).path_cost,
-        "slope_cost": omnical.evaluate(held_out, slope.model).path_cost,
+        "true_cost": omnical.evaluate(truth, held_out).path_cost,
+        "design_cost": omnical.evaluate(omnical.Model.design(), held_out).path_cost,
+        "learned_cost": omnical.evaluate(learned.model, held_out).path_cost,
+        "slope_cost": omnical.evaluate(slope.model, held_out).path_cost,
         "learned": (learned.params["learned:world.drift_x"], learned.params["learned:world.drift_y"]),
         "slope": (slope.params["floor_slope.downhill_x"], slope.params["floor_slope.downhill_y"]),
     }

@@ -42,16 +42,15 @@ def main() -> None:
           f"(first: {train_runs[0].n_samples} samples x {train_runs[0].n_wheels} wheels)")
 
     design = omnical.Model.design("apr02")  # the simulated robot is the paper's APR-02
-    print(f"design model (Eq. 7): held-out Eq. 6 cost {omnical.evaluate(val_runs, design).cost:.4f}")
+    print(f"design model (Eq. 7): held-out Eq. 6 cost {omnical.evaluate(design, val_runs).cost:.4f}")
 
     # 2. Fit the 9 matrix entries.
-    fit = omnical.train(train_runs, robot="apr02", seed=0, progress=lambda it: None)
-    print(f"fitted matrix: held-out Eq. 6 cost {omnical.evaluate(val_runs, fit.model).cost:.4f}")
+    fit = omnical.train("design", train_runs, robot="apr02", seed=0, progress=lambda it: None)
+    print(f"fitted matrix: held-out Eq. 6 cost {omnical.evaluate(fit.model, val_runs).cost:.4f}")
     print(np.array2string(fit.matrix, precision=5))
 
     # 3. What is missing? Candidates: the built-in catalogue and our Python effect.
-    d = omnical.diagnose(fit.model, train_runs, validation=val_runs,
-                         candidates=[*omnical.CATALOGUE, BrakeDrag()])
+    d = omnical.diagnose(fit.model, train_runs, validate=val_runs, candidates=[*omnical.CATALOGUE, BrakeDrag()])
     print("\ndiagnosis (held-out gain of refitting with each effect):")
     for c in d.ranking[:4]:
         params = ", ".join(f"{p['name']}={p['value']:.4f} {p['unit']}" for p in c["params"])
@@ -60,10 +59,10 @@ def main() -> None:
 
     # 4. Add the named effect and retrain: the cost falls.
     effect = d.verdict or "time_offset"
-    fit2 = omnical.train(train_runs, robot="apr02", effects=[effect], seed=0)
-    before = omnical.evaluate(val_runs, fit.model)
-    after = omnical.evaluate(val_runs, fit2.model)
-    print(f"\nheld-out cost, Eq. 6:  design {omnical.evaluate(val_runs, design).cost:.4f}"
+    fit2 = omnical.train("design", train_runs, robot="apr02", effects=[effect], seed=0)
+    before = omnical.evaluate(fit.model, val_runs)
+    after = omnical.evaluate(fit2.model, val_runs)
+    print(f"\nheld-out cost, Eq. 6:  design {omnical.evaluate(design, val_runs).cost:.4f}"
           f"  ->  matrix {before.cost:.4f}  ->  matrix + {effect} {after.cost:.4f}")
     print(f"held-out path RMS [m]: matrix {before.path_cost:.4f}  ->  matrix + {effect} {after.path_cost:.4f}")
     found = {k: round(v, 4) for k, v in fit2.params.items() if k.startswith(effect + ".")}

@@ -19,33 +19,48 @@ use omni_kin::Choice;
 /// `omnical train RUNS --out fitted.toml`, `omnical eval --model fitted.toml OTHER_RUNS`,
 /// `omnical diagnose --model fitted.toml RUNS --validate OTHER_RUNS`, `omnical report …`,
 /// `omnical export …`. `omnical demo` shows the whole story on simulated data.
+///
+/// Settings you would repeat on every command (joint names, topics, seed, preset) live in robot.toml and
+/// omnical.toml: `omnical config` shows the ones in force and where each came from. Results go to stdout,
+/// notes and warnings to stderr (`-q` fewer, `-v` more); `omnical completions SHELL` sets up tab
+/// completion and `omnical man` writes man pages.
 #[derive(Debug, Parser)]
 #[command(name = "omnical", version)]
 pub struct Cli {
     /// Worker threads (default: all cores). Results do not depend on it.
-    #[arg(long, global = true)]
+    #[arg(long, global = true, help_heading = GLOBAL_OPTIONS)]
     pub threads: Option<usize>,
     /// Hide progress bars and notes (bars are also hidden when stderr is not a terminal); results and
     /// warnings still print.
-    #[arg(long, short, global = true)]
+    #[arg(long, short, global = true, help_heading = GLOBAL_OPTIONS)]
     pub quiet: bool,
     /// Say more on stderr: -v adds what was read (files, the robot.toml picked up) and timings, -vv
     /// debugging detail. RUST_LOG (e.g. RUST_LOG=debug), when set, overrides -q and -v.
-    #[arg(long, short, global = true, action = clap::ArgAction::Count, conflicts_with = "quiet")]
+    #[arg(long, short, global = true, help_heading = GLOBAL_OPTIONS, action = clap::ArgAction::Count, conflicts_with = "quiet")]
     pub verbose: u8,
+    /// Project defaults (seed, preset, joints, topics, …: docs/formats.md) from this file instead of an
+    /// omnical.toml in the working directory. Options given on the command line win.
+    #[arg(long, global = true, help_heading = GLOBAL_OPTIONS, value_name = "FILE")]
+    pub config: Option<std::path::PathBuf>,
     /// The subcommand.
     #[command(subcommand)]
     pub command: Command,
 }
 
+/// The help heading of the options every command takes.
+pub const GLOBAL_OPTIONS: &str = "Global options";
+
 /// Subcommands: each holds its own arguments (`cmd::<name>::Args`).
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Simulate the paper's flower benchmark on a true robot that differs from the design.
+    /// Write simulated runs of a robot that differs from its design, to try every command without a robot
+    /// (the paper's "flower": 12 directions × 3 turn rates, each repeated), with optional hidden effects.
     Simulate(cmd::simulate::Args),
-    /// Evaluate a model on runs: Eq. 6 cost and per-run end-pose errors.
+    /// Measure a model on runs: how far its odometry ends from the ground truth (the mean end-pose error,
+    /// the paper's Eq. 6 cost), overall and per run.
     Eval(cmd::eval::Args),
-    /// Fit a model to training runs.
+    /// Fit the robot's kinematic model (and any effects added with --effect) to training runs, so that its
+    /// odometry follows the ground truth; writes the fitted model.
     Train(cmd::train::Args),
     /// Compare a model with measurements, find where it fails, and name the missing physical effect.
     Diagnose(cmd::diagnose::Args),
@@ -71,14 +86,24 @@ pub enum Command {
     /// Calibrate every robot-session of a fleet (`FLEET_DIR/<robot>/<session>/`) on Dask and write the fleet
     /// view: the Python wheel's `omnical` only (`pip install "omnical[fleet]"`).
     Fleet(cmd::FleetArgs),
+    /// Show the settings a command would use here (joints, topics, ground truth, frames, preset, seed,
+    /// threads, …), each with where it came from: the command line, omnical.toml, robot.toml (with the
+    /// line) or the default.
+    Config(cmd::config::Args),
+    /// Print a shell completion script (bash, zsh, fish, elvish, powershell) on stdout.
+    Completions(cmd::shell::CompletionsArgs),
+    /// Print the manual page (roff) on stdout, or write one page per command with `--out DIR`.
+    Man(cmd::shell::ManArgs),
 }
 
-/// The built-in effect ids, for help texts: `sensor_offset, sensor_offset_yaw, time_offset, …`.
+/// The effect ids, for help texts: the built-in catalogue (`sensor_offset, sensor_offset_yaw, time_offset,
+/// …`), then the explorer's learned corrections (`learned:wheel, …`).
 pub fn effect_ids() -> String {
-    let mut ids: Vec<&str> = omni_kin::effect::CATALOGUE.to_vec();
-    if let Some(i) = ids.iter().position(|&id| id == "sensor_offset") {
-        ids.insert(i + 1, "sensor_offset_yaw");
+    let mut ids: Vec<String> = omni_kin::effect::CATALOGUE.iter().map(|s| s.to_string()).collect();
+    if let Some(i) = ids.iter().position(|id| id == "sensor_offset") {
+        ids.insert(i + 1, "sensor_offset_yaw".into());
     }
+    ids.extend(omni_kin::effect::learned::ids());
     ids.join(", ")
 }
 
@@ -124,5 +149,8 @@ fn run_command(cli: Cli) -> anyhow::Result<()> {
         Command::Init(a) => cmd::init::run(&a),
         Command::Demo(a) => cmd::demo::run(&a, cli.quiet),
         Command::Fleet(_) => Err(cmd::python_only("omnical fleet")),
+        Command::Config(a) => cmd::config::run(&a, cli.threads, cli.config.as_deref()),
+        Command::Completions(a) => cmd::shell::completions(&a),
+        Command::Man(a) => cmd::shell::man(&a),
     }
 }

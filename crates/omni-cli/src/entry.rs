@@ -3,7 +3,7 @@
 
 use crate::cli::{Cli, run};
 use clap::error::{ContextKind, ContextValue, Error, ErrorKind};
-use clap::{CommandFactory, Parser};
+use clap::{CommandFactory, FromArgMatches, Parser};
 use std::ffi::OsString;
 
 /// Parses `args` (the program name first, as `std::env::args_os`) and runs the command. Returns the exit
@@ -22,6 +22,10 @@ pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
             return e.exit_code();
         }
     };
+    let cli = match with_project_defaults(cli, &args) {
+        Ok(cli) => cli,
+        Err(status) => return status,
+    };
     match run_quiet_on_closed_pipe(cli) {
         Ok(()) => 0,
         Err(e) => {
@@ -39,6 +43,32 @@ pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
             2
         }
     }
+}
+
+/// The command line parsed again with the project file's values (`--config FILE` or ./omnical.toml) as
+/// the options' defaults; unchanged without one, and for `omnical config`, which shows the layers itself.
+/// `Err` is the exit status after the error was printed (2 for a bad project file).
+fn with_project_defaults(cli: Cli, args: &[OsString]) -> Result<Cli, i32> {
+    if matches!(cli.command, crate::cli::Command::Config(_)) {
+        return Ok(cli);
+    }
+    let cwd = std::env::current_dir().unwrap_or_default();
+    let project = match crate::project_file::find(cli.config.as_deref(), &cwd) {
+        Ok(Some(p)) => p,
+        Ok(None) => return Ok(cli),
+        Err(e) => {
+            eprintln!("error: {e}");
+            return Err(2);
+        }
+    };
+    let command = crate::project_file::apply(Cli::command(), &project).map_err(|e| {
+        eprintln!("error: {e}");
+        2
+    })?;
+    command.try_get_matches_from(args).and_then(|m| Cli::from_arg_matches(&m)).map_err(|e| {
+        let _ = e.print();
+        e.exit_code()
+    })
 }
 
 /// When the positional runs are missing from a command line that has `--validate` (an older spelling gave

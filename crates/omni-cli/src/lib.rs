@@ -15,6 +15,7 @@ pub mod interrupt;
 pub mod logging;
 pub mod model_file;
 pub mod progress;
+pub mod project_file;
 pub mod report;
 pub mod robot_config;
 pub mod robot_file;

@@ -129,6 +129,13 @@ pub fn read(path: &Path) -> Result<RobotDescription, RobotFileError> {
     parse(&text, path)
 }
 
+/// The line (1-based) of `field` (a TOML path such as `topics.joint_states` or `wheels[0].joint`) in the
+/// robot description file at `path`, if the file reads and has it.
+pub fn line_of_field(path: &Path, field: &str) -> Option<usize> {
+    let text = std::fs::read_to_string(path).ok()?;
+    locate::span_of(&text, field).map(|s| line_of(&text, s.start))
+}
+
 /// `--robot VALUE`: the built-in `apr02` or a file.
 pub fn from_arg(value: &str) -> Result<RobotFile, RobotFileError> {
     if value == BUILTIN_APR02 {

@@ -82,6 +82,9 @@ fn effect_options_list_the_effect_ids() {
         let at = text.find(&format!("{flag} ")).unwrap_or_else(|| panic!("{cmd} {flag}:\n{text}"));
         let joined = text[at..].split_whitespace().collect::<Vec<_>>().join(" ");
         assert!(joined.contains(&format!("Effect ids: {EFFECT_IDS}")), "{cmd} {flag}:\n{text}");
+        // The explorer's learned corrections are effects too (`omnical explore` finds them).
+        let learned = "learned:wheel, learned:body, learned:world, learned:time, learned:ground_truth.";
+        assert!(joined.contains(&format!("sample_timing, world_drift, {learned}")), "{cmd} {flag}:\n{joined}");
     }
 }
 
@@ -145,6 +148,91 @@ fn fleet_is_the_python_wheels_and_the_native_binary_says_so() {
             "{args:?}: {err}"
         );
     }
+}
+
+/// Every subcommand's name, from the parser itself.
+fn all_subcommands() -> Vec<String> {
+    use clap::CommandFactory;
+    omni_cli::cli::Cli::command().get_subcommands().map(|s| s.get_name().to_string()).collect()
+}
+
+#[test]
+fn completions_know_every_subcommand() {
+    let names = all_subcommands();
+    assert!(names.len() >= 13 && names.iter().any(|n| n == "completions") && names.iter().any(|n| n == "man"));
+    for (shell, marker) in
+        [("bash", "complete -F _omnical"), ("zsh", "#compdef omnical"), ("fish", "complete -c omnical")]
+    {
+        let script = help(&["completions", shell]);
+        assert!(script.contains(marker), "{shell}: {marker} missing");
+        for name in &names {
+            assert!(script.contains(name.as_str()), "{shell}: no {name}");
+        }
+        // Options of a subcommand and the global -v are completed too.
+        assert!(script.contains("validate") && script.contains("verbose") && script.contains("gt-topic"), "{shell}");
+    }
+    let out = omnical(&["completions", "tcsh"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("[possible values: bash, elvish, fish, powershell, zsh]"));
+}
+
+#[test]
+fn man_pages_cover_every_subcommand() {
+    let top = help(&["man"]);
+    assert!(top.contains(".TH omnical 1"), "{top}");
+    assert!(top.contains("Calibrate a wheeled robot"), "{top}");
+    let listed = top.split_once(".SH SUBCOMMANDS").unwrap().1;
+    for name in all_subcommands() {
+        assert!(listed.contains(&format!("omnical\\-{}", name.replace('-', "\\-"))), "{name} not listed:\n{listed}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out =
+        Command::new(env!("CARGO_BIN_EXE_omnical")).args(["man", "--out", "pages"]).current_dir(dir.path()).output();
+    assert!(out.unwrap().status.success());
+    let mut files: Vec<String> = std::fs::read_dir(dir.path().join("pages"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    files.sort();
+    let mut want: Vec<String> = all_subcommands().iter().map(|n| format!("omnical-{n}.1")).collect();
+    want.push("omnical.1".into());
+    want.sort();
+    assert_eq!(files, want);
+    let train = std::fs::read_to_string(dir.path().join("pages/omnical-train.1")).unwrap();
+    assert!(train.contains(".TH omnical-train 1") && train.contains("\\-\\-preset"), "{train}");
+    assert_eq!(std::fs::read_to_string(dir.path().join("pages/omnical.1")).unwrap(), top);
+}
+
+#[test]
+fn global_options_have_their_own_heading_and_the_top_help_guides_a_new_user() {
+    for cmd in all_subcommands() {
+        let text = help(&[&cmd, "--help"]);
+        let (own, global) = text.split_once("\nGlobal options:\n").unwrap_or_else(|| panic!("{cmd}:\n{text}"));
+        for flag in ["--threads <THREADS>", "-q, --quiet", "-v, --verbose", "--config <FILE>"] {
+            assert!(global.contains(flag) && !own.contains(flag), "{cmd}: {flag} outside Global options:\n{text}");
+        }
+    }
+    let top = help(&["--help"]);
+    for words in ["`omnical config` shows the ones in force", "(`-q` fewer, `-v` more)", "`omnical completions SHELL`"]
+    {
+        assert!(top.contains(words), "{words}:\n{top}");
+    }
+    // The one-liners say what a command does without the paper at hand.
+    let short = help(&["-h"]);
+    for (cmd, words) in [
+        ("simulate", "to try every command without a robot"),
+        ("eval", "how far its odometry ends from the ground truth (the mean end-pose error"),
+        ("train", "so that its odometry follows the ground truth; writes the fitted model"),
+        ("config", "each with where it came from"),
+        ("completions", "shell completion script"),
+        ("man", "manual page"),
+    ] {
+        let line = short.lines().find(|l| l.trim_start().starts_with(&format!("{cmd} "))).unwrap();
+        assert!(line.contains(words), "{cmd}: {line}");
+    }
+    let train = help(&["train", "--help"]);
+    assert!(train.contains("Training recipe: search method, objective and limits"), "{train}");
+    assert!(train.contains("the same seed gives the same model, whatever --threads"), "{train}");
 }
 
 #[test]

@@ -174,14 +174,8 @@ fn csv_wheel_columns_follow_the_robots_joints() {
     );
 }
 
-const DIFF: &str = r#"kind = "diff"
-[diff]
-wheel_separation_m = 0.287
-left_joint = "wheel_left_joint"
-right_joint = "wheel_right_joint"
-left_radius_m = 0.033
-right_radius_m = 0.033
-"#;
+/// A differential drive (r 33 mm, axle 0.287 m), one file for robot.rs and robot_types.rs.
+const DIFF: &str = include_str!("data/diff_robot.toml");
 
 #[test]
 fn priors_bound_the_parametric_search_and_are_reported() {

@@ -238,14 +238,8 @@ fn mecanum_workbench() {
     plan_and_report(d, 4);
 }
 
-const DIFF: &str = r#"kind = "diff"
-[diff]
-wheel_separation_m = 0.287
-left_joint = "wheel_left_joint"
-right_joint = "wheel_right_joint"
-left_radius_m = 0.033
-right_radius_m = 0.033
-"#;
+/// A differential drive (r 33 mm, axle 0.287 m), one file for robot.rs and robot_types.rs.
+const DIFF: &str = include_str!("data/diff_robot.toml");
 
 #[test]
 fn diff_workbench() {

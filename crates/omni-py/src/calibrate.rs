@@ -4,12 +4,14 @@
 use crate::effect::{EffectErrors, effect_from};
 use crate::errors::{PyResultExt, value_error};
 use crate::model::PyModel;
-use crate::robot::model_or_design;
+use crate::robot::{model_or_design, model_spec, robot_arg};
 use crate::run::runs_from;
 use numpy::PyArray2;
+use omni_cli::cmd::train::{FitArgs, apply_fit_args, prior_half_widths};
 use omni_ga::calibrate::{Calibration, Plan, Preset, calibrate};
 use omni_ga::observe::{Control, Iteration, Observer};
 use omni_kin::choice::UnknownChoice;
+use omni_kin::{FittedModel, KinematicsKind};
 use pyo3::exceptions::{PyKeyboardInterrupt, PyUserWarning};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -111,6 +113,11 @@ impl Observer for PyObserver<'_> {
 }
 
 /// The outcome of ``train``: the fitted model, its costs, and how the search went.
+///
+/// >>> runs = omnical.simulate(runs_per_command=1, duration_s=1.0)
+/// >>> fit = omnical.train("ik", runs, robot="apr02", seed=0)
+/// >>> fit.costs["improvement_pct"] > 50, fit.history[0]["optimizer"], fit.model.kinematics
+/// (True, 'ga', 'ik')
 #[pyclass(frozen, name = "Calibration", module = "omnical._omnical")]
 pub struct PyCalibration {
     model: Py<PyModel>,
@@ -277,41 +284,77 @@ pub fn _calibration_from_state(state: &Bound<'_, PyDict>) -> PyResult<PyCalibrat
     })
 }
 
-/// Fit a model to training runs.
+/// Fit a model to training runs, as ``omnical train RUNS`` (the options carry its flags' names).
 ///
-/// The start is ``model``, else the design model of ``robot`` (a ``robot.toml`` path or ``"apr02"``, the
-/// paper's robot), else the design of the data's robot (a Dataset's ``design``), plus ``effects``
-/// (catalogue ids or Python effects). With none of them (runs from ``simulate`` or ``Run(...)``, data
-/// without a robot description) it raises ``ValueError`` saying how to describe the robot: there is no
-/// default robot. ``preset="default"`` (path cost, short GA + Levenberg–Marquardt) or
-/// ``"paper"`` (the paper's Eq. 6 GA). ``progress(dict)`` is called after each iteration; returning False
-/// stops. Ctrl-C stops the GA and returns the best so far (``interrupted`` is True). The GIL is released
-/// while the search runs.
+/// ``model``: what to start from. A kinematics, as the CLI's ``--model``: ``"ik"`` (the 3 x W matrix),
+/// ``"geometry"``, ``"diff"`` or ``"mecanum"``, at the design of ``robot`` (a ``robot.toml`` path or
+/// ``"apr02"``, the paper's robot), else of the data's robot (a Dataset's); these parametric fits use the
+/// robot description's ``[priors]`` to bound the search, as the CLI does. ``"design"``: the data's (or
+/// ``robot``'s) design model as ``evaluate`` uses it. Or a start model, as the CLI's ``--start``: an
+/// :class:`omnical.Model` or a model file path. Without a known design it raises ``ValueError`` saying how
+/// to describe the robot: there is no default robot. ``effects``: catalogue ids or Python effects to add.
 ///
-/// >>> fit = omnical.train(omnical.load("runs/"), robot="robot.toml", seed=0)  # doctest: +SKIP
-/// >>> fit.model.save("fit.toml")  # wheel names: the robot's joints  # doctest: +SKIP
+/// ``preset="default"`` (path cost, short GA + Levenberg–Marquardt) or ``"paper"`` (the paper's Eq. 6
+/// GA). ``objective`` (``"path"`` or ``"end_pose"``), ``unexcited`` (``"hold"`` or ``"move"``): default the
+/// preset's; ``every``, ``heading_weight`` [m/rad], ``max_std_error``, ``min_excitation``: as the CLI's
+/// flags. ``progress(dict)`` is called after each iteration; returning False stops. Ctrl-C stops the GA and
+/// returns the best so far (``interrupted`` is True). The GIL is released while the search runs.
+///
+/// >>> runs = omnical.simulate(runs_per_command=1, duration_s=1.0)  # on the paper's Eq. 9 robot
+/// >>> fit = omnical.train("ik", runs, robot="apr02", seed=0)
+/// >>> fit.objective, fit.cost_fitted < fit.cost_start
+/// ('path', True)
+/// >>> fit.matrix.shape
+/// (3, 3)
 #[pyfunction]
-#[pyo3(signature = (runs, *, model = None, robot = None, effects = Vec::new(), preset = "default", seed = 0, progress = None))]
+#[pyo3(signature = (model, runs, *, robot = None, effects = Vec::new(), preset = "default", seed = 0, objective = None, every = 1, heading_weight = 1.0, unexcited = None, max_std_error = 0.05, min_excitation = 0.01, progress = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn train(
     py: Python<'_>,
+    model: &Bound<'_, PyAny>,
     runs: &Bound<'_, PyAny>,
-    model: Option<&Bound<'_, PyAny>>,
     robot: Option<std::path::PathBuf>,
     effects: Vec<Bound<'_, PyAny>>,
     preset: &str,
     seed: u64,
+    objective: Option<&str>,
+    every: usize,
+    heading_weight: f64,
+    unexcited: Option<&str>,
+    max_std_error: f64,
+    min_excitation: f64,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<PyCalibration> {
+    crate::robot::check_order(model, runs, "omnical.train")?;
     let preset: Preset = preset.parse().map_err(|e: UnknownChoice| value_error(format!("preset {e}")))?;
+    let fit = FitArgs {
+        // The CLI's spelling (`end-pose`) and the id Calibration.objective gives (`end_pose`).
+        objective: objective
+            .map(|o| o.replace('-', "_").parse())
+            .transpose()
+            .map_err(|e: UnknownChoice| value_error(format!("objective {e}")))?,
+        every,
+        heading_weight,
+        unexcited: unexcited
+            .map(str::parse)
+            .transpose()
+            .map_err(|e: UnknownChoice| value_error(format!("unexcited {e}")))?,
+        max_std_error,
+        min_excitation,
+    };
+    let mut origin = crate::run::origin_of(runs);
     let (runs, design) = runs_from(runs, "runs")?;
-    let (mut start, mut adapters) = model_or_design(model, robot.as_ref(), design, "omnical.train")?;
+    let (mut start, mut adapters, from_design) = start_model(py, model, robot.as_ref(), design, &mut origin)?;
     for e in &effects {
         let (kind, adapter) = effect_from(e, start.model.n_wheels())?;
         start = start.with_effect(kind);
         adapters.extend(adapter);
     }
     let plan = Plan::preset(preset, start.model.n_params()).seed(seed);
+    let mut plan = apply_fit_args(plan, &fit).map_err(|e| value_error(flag_names(&format!("omnical.train: {e}"))))?;
+    if from_design {
+        plan.half_widths = prior_half_widths(&start, &origin).into_iter().collect();
+    }
     let errors = crate::effect::EffectErrors::new(adapters.iter().cloned());
     let mut observer = PyObserver {
         progress,
@@ -354,4 +397,42 @@ pub fn train(
         identifiability: serde_json::to_string(&c.identifiability).map_err(|e| value_error(e.to_string()))?,
         steps: observer.history,
     })
+}
+
+/// The CLI's message with Python's spelling of its flags (`--every` → `every=`).
+fn flag_names(message: &str) -> String {
+    let mut out = message.to_string();
+    for flag in ["every", "heading-weight", "max-std-error", "min-excitation"] {
+        out = out.replace(&format!("--{flag}"), &format!("{}=", flag.replace('-', "_")));
+    }
+    out
+}
+
+/// The start of `train` and whether it is a robot's design (then its `[priors]` bound the search, as
+/// the CLI's when no `--start` is given): a kinematics id at the design of `robot`, else of the data's
+/// robot (`origin`, which `robot` replaces); `"design"` as in `evaluate`; else a start model.
+fn start_model(
+    py: Python<'_>,
+    model: &Bound<'_, PyAny>,
+    robot: Option<&std::path::PathBuf>,
+    declared: Option<FittedModel>,
+    origin: &mut omni_cli::dataset::Dataset,
+) -> PyResult<(FittedModel, Vec<std::sync::Arc<crate::effect::PyEffect>>, bool)> {
+    if let Some(r) = robot_arg(robot)? {
+        origin.robot_file = Some(r);
+    }
+    let kind = model.extract::<String>().ok().and_then(|s| s.parse::<KinematicsKind>().ok());
+    if let Some(kind) = kind {
+        let m = omni_cli::design::model_of(kind, origin).map_err(|e| value_error(format!("robot: {e:#}")))?;
+        return match m {
+            Some(m) => Ok((FittedModel::nominal(m), Vec::new(), true)),
+            None => Err(crate::robot::no_design("omnical.train")),
+        };
+    }
+    if model.extract::<String>().is_ok_and(|s| s == "design") {
+        let (m, a) = model_or_design(None, robot, declared, "omnical.train")?;
+        return Ok((m, a, true));
+    }
+    let (m, a, _) = model_spec(py, model, robot, declared, "omnical.train")?;
+    Ok((m, a, false))
 }

@@ -3,7 +3,8 @@
 
 use crate::effect::{EffectErrors, effect_from};
 use crate::errors::PyResultExt;
-use crate::model::{PyModel, model_arg};
+use crate::model::PyModel;
+use crate::robot::{check_order, model_spec};
 use crate::run::runs_from;
 use omni_cli::design::design_for;
 use omni_ga::diagnose::{Candidate, Costs, DiagnoseOptions, Diagnosis, ParamValue, diagnose as rs_diagnose};
@@ -48,7 +49,13 @@ fn candidate_dict<'py>(py: Python<'py>, c: &Candidate) -> PyResult<Bound<'py, Py
     Ok(d)
 }
 
-/// The outcome of ``diagnose``.
+/// The outcome of ``diagnose``: the verdict, the ranking of candidate effects, the error ladder.
+///
+/// >>> truth = omnical.Model.paper().with_effect("time_offset", tau_s=0.06)
+/// >>> runs = omnical.simulate(truth, runs_per_command=1, duration_s=2.0)
+/// >>> d = omnical.diagnose("paper", runs, candidates=["time_offset"])
+/// >>> d.verdict, d.ranking[0]["effect"], d.to_dict()["verdict"]
+/// ('time_offset', 'time_offset', 'time_offset')
 #[pyclass(frozen, name = "Diagnosis", module = "omnical._omnical")]
 pub struct PyDiagnosis {
     inner: Diagnosis,
@@ -154,28 +161,38 @@ impl PyDiagnosis {
     }
 }
 
-/// Diagnose a model on training runs: compare with the design, locate the error, refit each candidate
-/// effect and rank them by the fall of the held-out path cost.
+/// Diagnose a model on training runs, as ``omnical diagnose --model MODEL RUNS``: compare with the design,
+/// locate the error, refit each candidate effect and rank them by the fall of the held-out path cost.
 ///
-/// ``validation``: held-out runs (default: 2-fold cross-validation over repetitions). ``candidates``:
-/// catalogue ids and/or Python effects (default: the whole catalogue). ``auto``: add effects one at a time
-/// while the held-out cost falls (the error ladder). The GIL is released.
+/// ``model``: as in :func:`evaluate` (a Model, ``"design"``, ``"paper"`` or a model file path).
+/// ``validate``: held-out runs (``--validate``; default: 2-fold cross-validation over repetitions).
+/// ``candidates``: catalogue ids and/or Python effects (default: the whole catalogue). ``auto``: add effects
+/// one at a time while the held-out cost falls (the error ladder). The GIL is released.
+///
+/// >>> truth = omnical.Model.paper().with_effect("time_offset", tau_s=0.06)
+/// >>> runs = omnical.simulate(truth, runs_per_command=1, duration_s=2.0)
+/// >>> held_out = omnical.simulate(truth, runs_per_command=1, duration_s=2.0, seed=8, prefix="validation/")
+/// >>> d = omnical.diagnose("paper", runs, validate=held_out, candidates=["time_offset", "sensor_offset"])
+/// >>> d.verdict, round(d.ranking[0]["params"][0]["value"], 2)
+/// ('time_offset', 0.06)
 #[pyfunction]
-#[pyo3(signature = (model, runs, *, validation = None, candidates = None, auto = false, min_gain = 0.05, every = 1))]
+#[pyo3(signature = (model, runs, *, validate = None, candidates = None, auto = false, min_gain = 0.05, every = 1, robot = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn diagnose(
     py: Python<'_>,
     model: &Bound<'_, PyAny>,
     runs: &Bound<'_, PyAny>,
-    validation: Option<&Bound<'_, PyAny>>,
+    validate: Option<&Bound<'_, PyAny>>,
     candidates: Option<Vec<Bound<'_, PyAny>>>,
     auto: bool,
     min_gain: f64,
     every: usize,
+    robot: Option<std::path::PathBuf>,
 ) -> PyResult<PyDiagnosis> {
-    let (train, _) = runs_from(runs, "runs")?;
-    let validation = validation.map(|v| runs_from(v, "validation")).transpose()?.map(|(r, _)| r);
-    let (fm, mut adapters) = model_arg(model)?;
+    check_order(model, runs, "omnical.diagnose")?;
+    let (train, declared) = runs_from(runs, "runs")?;
+    let validation = validate.map(|v| runs_from(v, "validate")).transpose()?.map(|(r, _)| r);
+    let (fm, mut adapters, _) = model_spec(py, model, robot.as_ref(), declared, "omnical.diagnose")?;
     let mut opts = DiagnoseOptions { auto, min_gain, every, ..DiagnoseOptions::default() };
     if let Some(cands) = candidates {
         opts.candidates.clear();

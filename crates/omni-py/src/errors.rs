@@ -18,15 +18,48 @@ use omni_kin::KinError;
 use pyo3::exceptions::{PyException, PyFileNotFoundError, PyOSError, PyValueError};
 use pyo3::{PyErr, create_exception};
 
-create_exception!(omnical, OmnicalError, PyException, "Base class of omnical's own exceptions.");
+create_exception!(
+    omnical,
+    OmnicalError,
+    PyException,
+    "Base class of omnical's own exceptions.\n\n>>> issubclass(omnical.DatasetError, omnical.OmnicalError)\nTrue"
+);
 create_exception!(
     omnical,
     DatasetError,
     OmnicalError,
-    "A data file could not be read as runs (the message names the file, place and field)."
+    "A data file could not be read as runs (the message names the file, place and field).\n\n\
+     >>> import tempfile, pathlib\n\
+     >>> bad = pathlib.Path(tempfile.mkdtemp()) / \"run.csv\"\n\
+     >>> _ = bad.write_text(\"t_s,wheel_a\\n0.0,nan\\n\")\n\
+     >>> try:\n\
+     ...     omnical.load(bad)\n\
+     ... except omnical.DatasetError as e:\n\
+     ...     print(\"DatasetError:\", \"run.csv\" in str(e))\n\
+     DatasetError: True"
 );
-create_exception!(omnical, ModelFileError, OmnicalError, "A model file is not valid TOML or not a valid model.");
-create_exception!(omnical, CalibrationError, OmnicalError, "An optimizer refused its inputs or settings.");
+create_exception!(
+    omnical,
+    ModelFileError,
+    OmnicalError,
+    "A model file is not valid TOML or not a valid model.\n\n\
+     >>> import tempfile, pathlib\n\
+     >>> bad = pathlib.Path(tempfile.mkdtemp()) / \"model.toml\"\n\
+     >>> _ = bad.write_text(\"kinematics = 3\\n\")\n\
+     >>> try:\n\
+     ...     omnical.load_model(bad)\n\
+     ... except omnical.ModelFileError as e:\n\
+     ...     print(\"ModelFileError:\", \"model.toml\" in str(e))\n\
+     ModelFileError: True"
+);
+create_exception!(
+    omnical,
+    CalibrationError,
+    OmnicalError,
+    "An optimizer refused its inputs or settings.\n\n\
+     >>> issubclass(omnical.CalibrationError, omnical.OmnicalError)\n\
+     True"
+);
 
 /// Conversion of a Rust error into the matching Python exception.
 pub trait ToPyErr {

@@ -2,7 +2,7 @@
 
 use crate::arrays::{to_matrix, to_vector};
 use crate::errors::PyResultExt;
-use crate::robot::model_or_design;
+use crate::robot::{check_order, model_spec};
 use crate::run::{PyRun, runs_from};
 use numpy::{PyArray1, PyArray2};
 use omni_kin::PoseError;
@@ -14,6 +14,11 @@ use rayon::prelude::*;
 use std::path::PathBuf;
 
 /// One run's residuals at every ground-truth pose after the first.
+///
+/// >>> runs = omnical.simulate(runs_per_command=1, duration_s=1.0)
+/// >>> r = omnical.evaluate("paper", runs).runs[0]
+/// >>> r.name, r.error.shape == (len(r.t_s), 3), r.end_error.shape
+/// ('train/00-r0', True, (3,))
 #[pyclass(frozen, name = "RunResiduals", module = "omnical._omnical")]
 pub struct PyRunResiduals {
     /// Run name.
@@ -61,6 +66,11 @@ impl PyRunResiduals {
 }
 
 /// Costs of a model on runs, and each run's residuals.
+///
+/// >>> runs = omnical.simulate(runs_per_command=1, duration_s=1.0)
+/// >>> ev = omnical.evaluate("paper", runs)  # the true robot: what remains is measurement noise
+/// >>> ev.end_errors.shape, ev.names[0], ev.path_cost < 0.01
+/// ((36, 3), 'train/00-r0', True)
 #[pyclass(frozen, name = "Evaluation", module = "omnical._omnical")]
 pub struct PyEvaluation {
     /// The paper's Eq. 6: mean end-pose error (m and rad mixed).
@@ -98,22 +108,28 @@ impl PyEvaluation {
     }
 }
 
-/// Evaluate a model on runs: the Eq. 6 cost, the path cost, and per-run residuals as arrays. ``model``
-/// defaults to the design model of ``robot`` (a ``robot.toml`` path or ``"apr02"``), else of the data's
-/// robot (a Dataset's ``design``); with none of them it raises ``ValueError`` saying how to describe the
-/// robot. The GIL is released.
+/// Evaluate a model on runs, as ``omnical eval --model MODEL RUNS``: the Eq. 6 cost, the path cost, and
+/// per-run residuals as arrays.
 ///
-/// >>> omnical.evaluate(runs, robot="apr02").path_cost  # the paper's design on these runs  # doctest: +SKIP
+/// ``model``: an :class:`omnical.Model`, ``"design"`` (the design model of ``robot``, a ``robot.toml`` path
+/// or ``"apr02"``, else of the data's robot: a Dataset's ``design``; with none of them ``ValueError`` says
+/// how to describe the robot), ``"paper"`` (Eq. 9) or a model file path. The GIL is released.
+///
+/// >>> runs = omnical.simulate(runs_per_command=1, duration_s=1.0)
+/// >>> ev = omnical.evaluate("design", runs, robot="apr02")  # the design (Eq. 7) on the true Eq. 9 robot
+/// >>> round(ev.path_cost, 3), len(ev.runs), ev.runs[0].error.shape[1]
+/// (0.016, 36, 3)
 #[pyfunction]
-#[pyo3(signature = (runs, model = None, *, robot = None))]
+#[pyo3(signature = (model, runs, *, robot = None))]
 pub fn evaluate(
     py: Python<'_>,
+    model: &Bound<'_, PyAny>,
     runs: &Bound<'_, PyAny>,
-    model: Option<&Bound<'_, PyAny>>,
     robot: Option<PathBuf>,
 ) -> PyResult<PyEvaluation> {
+    check_order(model, runs, "omnical.evaluate")?;
     let (runs, design) = runs_from(runs, "runs")?;
-    let (fm, adapters) = model_or_design(model, robot.as_ref(), design, "omnical.evaluate")?;
+    let (fm, adapters, _) = model_spec(py, model, robot.as_ref(), design, "omnical.evaluate")?;
     let errors = crate::effect::EffectErrors::new(adapters);
     let out = py.detach(|| -> Result<_, omni_kin::KinError> {
         let evaluator = Evaluator::for_report(&fm.model, &runs, CostKind::PATH.selection())?;
@@ -138,19 +154,30 @@ pub fn evaluate(
     Ok(PyEvaluation { cost: c, path_cost: path, runs })
 }
 
-/// Integrate one run's wheel speeds through a model (or the design model of ``robot``, a ``robot.toml``
-/// path or ``"apr02"``; one of them is needed), from its first ground-truth pose. Returns (N, 4): t_s [s],
+/// Integrate one run's wheel speeds through a model, from its first ground-truth pose. ``model`` as in
+/// :func:`evaluate` (``"design"`` needs ``robot``: a single run names no robot). Returns (N, 4): t_s [s],
 /// x_m [m], y_m [m], theta_rad [rad] of the measured point at the sample times.
+///
+/// >>> run = omnical.simulate(runs_per_command=1, duration_s=1.0)[0]
+/// >>> path = omnical.integrate("paper", run)
+/// >>> path.shape[1], bool(np.isfinite(path).all())
+/// (4, True)
 #[pyfunction]
-#[pyo3(signature = (run, model = None, *, robot = None))]
+#[pyo3(signature = (model, run, *, robot = None))]
 pub fn integrate<'py>(
     py: Python<'py>,
-    run: &Bound<'py, PyRun>,
-    model: Option<&Bound<'py, PyAny>>,
+    model: &Bound<'py, PyAny>,
+    run: &Bound<'py, PyAny>,
     robot: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let run = run.get().inner.clone();
-    let (fm, adapters) = model_or_design(model, robot.as_ref(), None, "omnical.integrate")?;
+    check_order(model, run, "omnical.integrate")?;
+    let run = run
+        .cast::<PyRun>()
+        .map_err(|_| pyo3::exceptions::PyTypeError::new_err("omnical.integrate: run must be an omnical.Run"))?
+        .get()
+        .inner
+        .clone();
+    let (fm, adapters, _) = model_spec(py, model, robot.as_ref(), None, "omnical.integrate")?;
     let errors = crate::effect::EffectErrors::new(adapters);
     let traj = py.detach(|| -> Result<_, omni_kin::KinError> {
         cost::check_runs(&fm.model, std::slice::from_ref(&run))?;

@@ -3,12 +3,20 @@
 //! CLI's `explore --json`.
 
 use crate::errors::PyResultExt;
-use crate::model::{PyModel, model_arg};
+use crate::model::PyModel;
+use crate::robot::{check_order, model_spec};
 use crate::run::runs_from;
 use omni_ga::explore::{Exploration, ExploreOptions, explore as rs_explore};
 use pyo3::prelude::*;
 
-/// The outcome of ``explore``.
+/// The outcome of ``explore``: each family of features fitted on the training runs, judged on held-out ones.
+///
+/// >>> truth = omnical.Model.paper().with_effect("learned:world", drift_x=0.004)
+/// >>> runs = omnical.simulate(truth, runs_per_command=1, duration_s=2.0)
+/// >>> held_out = omnical.simulate(truth, runs_per_command=1, duration_s=2.0, seed=8, prefix="validation/")
+/// >>> e = omnical.explore("paper", runs, validate=held_out)
+/// >>> e.families[0]["family"], e.model.effects
+/// ('world', ['learned:world'])
 #[pyclass(frozen, name = "Exploration", module = "omnical._omnical")]
 pub struct PyExploration {
     inner: Exploration,
@@ -60,21 +68,31 @@ impl PyExploration {
     }
 }
 
-/// Explore which family of features explains what ``model`` leaves on ``runs``, judged on ``validation``
-/// (held-out runs, required). ``min_gain``: the smallest held-out gain that passes (it must also exceed two
-/// standard errors). The GIL is released.
+/// Explore which family of features explains what ``model`` leaves on ``runs``, judged on the held-out
+/// runs ``validate`` (required), as ``omnical explore --model MODEL RUNS --validate V``. ``model``: as in
+/// :func:`evaluate`. ``min_gain``: the smallest held-out gain that passes (it must also exceed two standard
+/// errors). The GIL is released.
+///
+/// >>> truth = omnical.Model.paper().with_effect("learned:world", drift_x=0.004)
+/// >>> runs = omnical.simulate(truth, runs_per_command=1, duration_s=2.0)
+/// >>> held_out = omnical.simulate(truth, runs_per_command=1, duration_s=2.0, seed=8, prefix="validation/")
+/// >>> e = omnical.explore("paper", runs, validate=held_out)
+/// >>> e.best
+/// 'world'
 #[pyfunction]
-#[pyo3(signature = (model, runs, validation, *, min_gain = 0.05))]
+#[pyo3(signature = (model, runs, *, validate, min_gain = 0.05, robot = None))]
 pub fn explore(
     py: Python<'_>,
     model: &Bound<'_, PyAny>,
     runs: &Bound<'_, PyAny>,
-    validation: &Bound<'_, PyAny>,
+    validate: &Bound<'_, PyAny>,
     min_gain: f64,
+    robot: Option<std::path::PathBuf>,
 ) -> PyResult<PyExploration> {
-    let (train, _) = runs_from(runs, "runs")?;
-    let (held_out, _) = runs_from(validation, "validation")?;
-    let (fm, _) = model_arg(model)?;
+    check_order(model, runs, "omnical.explore")?;
+    let (train, declared) = runs_from(runs, "runs")?;
+    let (held_out, _) = runs_from(validate, "validate")?;
+    let (fm, _, _) = model_spec(py, model, robot.as_ref(), declared, "omnical.explore")?;
     let opts = ExploreOptions { min_gain, ..ExploreOptions::default() };
     let e = py.detach(|| rs_explore(&fm, &train, &held_out, &opts)).py()?;
     let json = omni_cli::cmd::explore::to_json(&e).to_string();

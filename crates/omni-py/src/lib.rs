@@ -19,6 +19,7 @@ mod effect;
 mod errors;
 mod evaluate;
 mod explore;
+mod export;
 mod model;
 mod pickle;
 mod report;
@@ -41,6 +42,8 @@ mod _omnical {
     use crate::evaluate::{PyEvaluation, PyRunResiduals, evaluate, integrate};
     #[pymodule_export]
     use crate::explore::{PyExploration, explore};
+    #[pymodule_export]
+    use crate::export::export;
     #[pymodule_export]
     use crate::model::{_model_from_toml, PyModel, effect_catalogue, load_model};
     #[pymodule_export]

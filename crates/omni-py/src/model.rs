@@ -17,6 +17,10 @@ use std::sync::Arc;
 /// A model with parameter values: base kinematics (``"ik"``: the 3 × W IK matrix; ``"geometry"``:
 /// per-wheel radius, distance and angle) plus effects. Immutable: ``with_effect`` and ``with_params``
 /// return new models.
+///
+/// >>> m = omnical.Model.paper().with_effect("time_offset", tau_s=0.06)  # Eq. 9 and a 60 ms clock lag
+/// >>> m.kinematics, m.effects, m.get("time_offset.tau_s"), m.matrix.shape
+/// ('ik', ['time_offset'], 0.06, (3, 3))
 #[pyclass(frozen, name = "Model", module = "omnical._omnical")]
 pub struct PyModel {
     pub inner: FittedModel,
@@ -229,6 +233,12 @@ impl PyModel {
 
 /// Read a model file (TOML). ``effects``: Python effect objects the file names by id (files store only
 /// ids and parameter values of effects).
+///
+/// >>> import tempfile, pathlib
+/// >>> path = pathlib.Path(tempfile.mkdtemp()) / "model.toml"
+/// >>> omnical.Model.paper().with_effect("time_offset", tau_s=0.06).save(path)
+/// >>> omnical.load_model(path).params["time_offset.tau_s"]
+/// 0.06
 #[pyfunction]
 #[pyo3(signature = (path, *, effects = Vec::new()))]
 pub fn load_model(py: Python<'_>, path: PathBuf, effects: Vec<Bound<'_, PyAny>>) -> PyResult<PyModel> {
@@ -294,6 +304,10 @@ fn model_from_text(text: &str, name: &str, effects: &[Bound<'_, PyAny>]) -> PyRe
 }
 
 /// The built-in effect catalogue: one dict per effect (id, stage, physics, params).
+///
+/// >>> first = omnical.effect_catalogue()[0]
+/// >>> sorted(first) == ["id", "params", "physics", "stage"], first["id"] in omnical.CATALOGUE
+/// (True, True)
 #[pyfunction]
 #[pyo3(signature = (*, n_wheels = 3))]
 pub fn effect_catalogue(py: Python<'_>, n_wheels: usize) -> PyResult<Vec<Bound<'_, PyDict>>> {

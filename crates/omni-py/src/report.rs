@@ -1,8 +1,8 @@
 //! `report`: the HTML report of a model on runs, as `omnical report` writes it.
 
 use crate::effect::EffectErrors;
-use crate::errors::{OmnicalError, PyResultExt};
-use crate::model::model_arg;
+use crate::errors::{OmnicalError, PyResultExt, value_error};
+use crate::robot::{check_order, model_spec};
 use crate::run::runs_from;
 use omni_cli::design::design_for;
 use omni_cli::report::{self as rs_report, ReportInput};
@@ -11,26 +11,38 @@ use pyo3::exceptions::{PyFileNotFoundError, PyOSError};
 use pyo3::prelude::*;
 use std::path::PathBuf;
 
-/// Write the HTML report of ``model`` on ``runs`` to ``out`` (one self-contained file, inline SVG figures);
-/// with ``png_dir`` also each figure as PNG. ``validation``: held-out runs the figures use (default: the
-/// training runs). ``diagnose``: run the diagnosis (with ``auto``) and show its ranking and error ladder.
+/// Write the HTML report of ``model`` on ``runs`` to ``out`` (one self-contained file, inline SVG figures),
+/// as ``omnical report --model MODEL RUNS --out OUT``; with ``png`` (a folder) also each figure as PNG.
+/// ``model``: as in :func:`evaluate`. ``validate``: held-out runs the figures use (default: the training
+/// runs). ``diagnose``: run the diagnosis (with ``auto``) and show its ranking and error ladder (the CLI's
+/// ``--no-diagnose`` is ``diagnose=False``). ``explore``: add the explorer's section (needs ``validate``).
 /// Returns the ids of the figures written. The GIL is released.
+///
+/// >>> import tempfile, pathlib
+/// >>> runs = omnical.simulate(runs_per_command=1, duration_s=1.0)
+/// >>> out = pathlib.Path(tempfile.mkdtemp()) / "report.html"
+/// >>> figures = omnical.report("paper", runs, out=out, diagnose=False)
+/// >>> "ladder" in figures, out.read_text().startswith("<!DOCTYPE html>")
+/// (True, True)
 #[pyfunction]
-#[pyo3(signature = (model, runs, *, out, validation = None, png_dir = None, diagnose = true, title = None))]
+#[pyo3(signature = (model, runs, *, out, validate = None, png = None, diagnose = true, explore = false, title = None, robot = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn report(
     py: Python<'_>,
     model: &Bound<'_, PyAny>,
     runs: &Bound<'_, PyAny>,
     out: PathBuf,
-    validation: Option<&Bound<'_, PyAny>>,
-    png_dir: Option<PathBuf>,
+    validate: Option<&Bound<'_, PyAny>>,
+    png: Option<PathBuf>,
     diagnose: bool,
+    explore: bool,
     title: Option<String>,
+    robot: Option<PathBuf>,
 ) -> PyResult<Vec<String>> {
-    let (train, _) = runs_from(runs, "runs")?;
-    let held_out = validation.map(|v| runs_from(v, "validation")).transpose()?.map(|(r, _)| r).unwrap_or_default();
-    let (fm, adapters) = model_arg(model)?;
+    check_order(model, runs, "omnical.report")?;
+    let (train, declared) = runs_from(runs, "runs")?;
+    let held_out = validate.map(|v| runs_from(v, "validate")).transpose()?.map(|(r, _)| r).unwrap_or_default();
+    let (fm, adapters, label) = model_spec(py, model, robot.as_ref(), declared, "omnical.report")?;
     let errors = EffectErrors::new(adapters.iter().cloned());
     let design = design_for(&fm);
     let d = if diagnose {
@@ -41,15 +53,31 @@ pub fn report(
     } else {
         None
     };
+    let extra = if explore {
+        if held_out.is_empty() {
+            return Err(value_error(
+                "omnical.report: explore=True judges each family on held-out runs; give them with validate=",
+            ));
+        }
+        let opts = omni_ga::explore::ExploreOptions::default();
+        let e = py.detach(|| omni_ga::explore::explore(&fm, &train, &held_out, &opts));
+        rs_report::explore::section(&errors.check(e)?.py()?)
+    } else {
+        String::new()
+    };
     let input = ReportInput {
-        title: title.unwrap_or_else(|| "omnical report".to_string()),
+        // The CLI's title names the --model value; a Model object has none.
+        title: title.unwrap_or_else(|| match model.is_instance_of::<crate::model::PyModel>() {
+            true => "omnical report".to_string(),
+            false => format!("omnical report: {label}"),
+        }),
         models: rs_report::models_for(&design, &fm, d.as_ref()),
         train: &train,
         held_out: &held_out,
         diagnosis: d.as_ref(),
         sources: Vec::new(),
     };
-    let written = py.detach(|| rs_report::write(&input, &out, png_dir.as_deref()));
+    let written = py.detach(|| rs_report::write_with(&input, &out, png.as_deref(), &extra));
     match written {
         Ok(w) => Ok(w.figures),
         Err(e) => {

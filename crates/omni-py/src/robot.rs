@@ -65,3 +65,66 @@ pub fn model_or_design(
     }
     data.map(|d| (d, Vec::new())).ok_or_else(|| no_design(what))
 }
+
+/// A model argument spelt as the command line's `--model`: an `omnical.Model`, `"design"` (the design
+/// model of `robot=`, else of the data's robot), `"paper"` (the paper's Eq. 9) or the path of a model file
+/// (`train --out`). Returns the model, its Python effects and how outputs name it (the spelling, as the
+/// CLI's `--model` value; `"the model"` for a Model object).
+pub fn model_spec(
+    py: Python<'_>,
+    model: &Bound<'_, PyAny>,
+    robot: Option<&PathBuf>,
+    data: Option<FittedModel>,
+    what: &str,
+) -> PyResult<(FittedModel, Vec<Arc<PyEffect>>, String)> {
+    if model.is_instance_of::<crate::model::PyModel>() {
+        let (m, adapters) = model_or_design(Some(model), robot, data, what)?;
+        return Ok((m, adapters, "the model".to_string()));
+    }
+    let Ok(spec) = model.extract::<PathBuf>() else {
+        return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+            "{what}: model must be an omnical.Model, \"design\", \"paper\" or a model file path, got {}",
+            model.get_type().name().map(|n| n.to_string()).unwrap_or_default()
+        )));
+    };
+    let label = spec.to_string_lossy().into_owned();
+    match label.as_str() {
+        "design" => Ok((model_or_design(None, robot, data, what)?.0, Vec::new(), label)),
+        "paper" => Ok((omni_cli::design::paper_calibrated(), Vec::new(), label)),
+        _ => {
+            if let Some(r) = robot {
+                return Err(value_error(format!(
+                    "{what}: robot={:?} names a design, and the model file {label:?} is its own model: give \
+                     model=\"design\" with robot=, or the model file alone",
+                    r.to_string_lossy()
+                )));
+            }
+            let m = crate::model::load_model(py, spec, Vec::new())?;
+            Ok((m.inner.clone(), m.py_effects.clone(), label))
+        }
+    }
+}
+
+/// Whether `o` holds runs (a Dataset, a Run, or a list/tuple whose first item is a Run).
+fn looks_like_runs(o: &Bound<'_, PyAny>) -> bool {
+    use crate::run::{PyDataset, PyRun};
+    if o.is_instance_of::<PyDataset>() || o.is_instance_of::<PyRun>() {
+        return true;
+    }
+    let first = o.cast::<pyo3::types::PyList>().ok().and_then(|l| l.get_item(0).ok());
+    let first = first.or_else(|| o.cast::<pyo3::types::PyTuple>().ok().and_then(|t| t.get_item(0).ok()));
+    first.is_some_and(|f| f.is_instance_of::<PyRun>())
+}
+
+/// The argument order every call shares (`model, runs`, as the CLI's `--model M RUNS`): runs given first
+/// (the old `evaluate(runs, model)` order) is a `TypeError` showing the right spelling.
+pub fn check_order(model: &Bound<'_, PyAny>, runs: &Bound<'_, PyAny>, what: &str) -> PyResult<()> {
+    if looks_like_runs(model) && !looks_like_runs(runs) {
+        return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+            "{what}(model, runs, ...): the model comes first, then the runs (as in omnical.train, evaluate, \
+             diagnose, report and explore, and the CLI's --model M RUNS): e.g. {what}(\"design\", runs, \
+             robot=\"apr02\") or {what}(fit.model, runs)"
+        )));
+    }
+    Ok(())
+}

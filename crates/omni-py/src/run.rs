@@ -20,6 +20,14 @@ use std::path::PathBuf;
 /// Build one from arrays with ``Run(t_s, wheel_rad_s, truth, name=...)``; it is validated on
 /// construction (``ValueError`` for NaN, stamps that do not increase, wheel data that does not cover the
 /// ground truth, bad shapes). Immutable.
+///
+/// >>> import numpy as np
+/// >>> t = np.arange(0.0, 1.0, 0.01)
+/// >>> wheels = np.full((t.size, 3), 2.0)  # every wheel at 2 rad/s: APR-02 turns on the spot
+/// >>> truth = np.array([[0.0, 0.0, 0.0, 0.0], [0.5, 0.0, 0.0, 0.43], [0.99, 0.0, 0.0, 0.85]])
+/// >>> run = omnical.Run(t, wheels, truth, name="spin")
+/// >>> run.name, run.n_samples, run.n_wheels, run.truth.shape
+/// ('spin', 100, 3, (3, 4))
 #[pyclass(frozen, name = "Run", module = "omnical._omnical")]
 #[derive(Clone)]
 pub struct PyRun {
@@ -138,6 +146,14 @@ impl PyRun {
 ///
 /// Behaves as a sequence of :class:`Run` (``len``, indexing, iteration) and is accepted wherever runs
 /// are.
+///
+/// >>> import tempfile
+/// >>> out = tempfile.mkdtemp()  # `omnical simulate` writes train/ and validation/ with a robot.toml
+/// >>> omnical._omnical.cli_main(["omnical", "simulate", "--out", out, "--runs-per-command", "1", "--duration", "1"])
+/// 0
+/// >>> ds = omnical.load(out + "/train")
+/// >>> len(ds), ds[0].n_wheels, ds.robot.endswith("(found beside the data)"), ds.design.kinematics
+/// (36, 3, True, 'ik')
 #[pyclass(frozen, name = "Dataset", module = "omnical._omnical")]
 pub struct PyDataset {
     pub runs: Vec<Run>,
@@ -145,6 +161,9 @@ pub struct PyDataset {
     skipped: Vec<(String, String)>,
     pub design: Option<FittedModel>,
     robot: Option<String>,
+    /// Where the design came from (the robot description and the geometry the data declares), for the
+    /// kinematics and `[priors]` of `train`; not pickled.
+    pub origin: omni_cli::dataset::Dataset,
 }
 
 #[pymethods]
@@ -153,6 +172,14 @@ impl PyDataset {
     #[getter]
     fn runs(&self) -> Vec<PyRun> {
         self.runs.iter().map(|r| PyRun { inner: r.clone() }).collect()
+    }
+    /// The clock offset each ground-truth file (``gt=``) was read with, one dict per recording: recording,
+    /// file, offset_s [s] (wheel time = ground-truth time + offset_s), std_error_s [s] (None when forced by
+    /// ``gt_time_offset``), estimated, r_squared. Empty without ``gt=`` (and after unpickling).
+    #[getter]
+    fn ground_truth_clocks<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let list: Vec<serde_json::Value> = self.origin.ground_truth_clocks.iter().map(|c| c.to_json()).collect();
+        py.import("json")?.call_method1("loads", (serde_json::Value::Array(list).to_string(),))
     }
     /// Things to know about the data (e.g. "velocity empty: differentiated position", "robot: data/robot.toml
     /// (found beside the data)").
@@ -236,7 +263,7 @@ pub fn _dataset_from_state(
             toml::from_str(design).map_err(|e| value_error(format!("pickled dataset: design model: {e}")))?;
         Some(file.to_fitted().map_err(|e| value_error(format!("pickled dataset: design model: {e}")))?)
     };
-    Ok(PyDataset { runs, notes, skipped, design, robot })
+    Ok(PyDataset { runs, notes, skipped, design, robot, origin: Default::default() })
 }
 
 /// Load runs from files and folders: omnical CSV (``.csv``), ROS 2 bags (``.mcap``, rosbag2 folders),
@@ -247,10 +274,22 @@ pub fn _dataset_from_state(
 /// working directory, as the CLI's ``--robot``. Its joint names, topics, frames and ground-truth file fill
 /// what the other options leave open, and its design becomes ``Dataset.design``.
 ///
-/// >>> ds = omnical.load("runs/", robot="robot.toml")  # doctest: +SKIP
-/// >>> ds.design.design_matrix  # doctest: +SKIP
+/// ``gt``: the ground truth from a separate file instead of a topic, a TUM (``t x y z qx qy qz qw``) or CSV
+/// file for one recording or a folder of files named after the recordings (``--gt``); ``gt_time_offset``
+/// forces its clock offset [s] (wheel time = ground-truth time + offset; default: estimated from the data,
+/// see ``Dataset.ground_truth_clocks``), ``gt_columns`` / ``gt_units`` name its CSV columns and units
+/// (``{"t": "stamp_ns", "x": "pos_x_mm"}``, ``{"time": "ns", "length": "mm", "angle": "deg"}``).
+/// ``recorded_odometry``: keep the runs' recorded odometry (for ``export``'s MCAP bags).
+///
+/// >>> import tempfile
+/// >>> out = tempfile.mkdtemp()
+/// >>> omnical._omnical.cli_main(["omnical", "simulate", "--out", out, "--runs-per-command", "1", "--duration", "1"])
+/// 0
+/// >>> ds = omnical.load(out + "/train")  # MCAP bags and the robot.toml beside them
+/// >>> len(ds), ds[0].name, ds.design.n_wheels
+/// (36, '00-r0', 3)
 #[pyfunction]
-#[pyo3(signature = (*paths, robot = None, joints = None, joints_topic = None, gt_topic = None, gt_parent_frame = None, gt_child_frame = None, split_s = None, skip_invalid = false, ticks_per_rev = None))]
+#[pyo3(signature = (*paths, robot = None, joints = None, joints_topic = None, gt_topic = None, gt_parent_frame = None, gt_child_frame = None, gt = None, gt_time_offset = None, gt_columns = None, gt_units = None, split_s = None, skip_invalid = false, ticks_per_rev = None, max_file_mb = 1024, recorded_odometry = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn load(
     py: Python<'_>,
@@ -261,9 +300,15 @@ pub fn load(
     gt_topic: Option<String>,
     gt_parent_frame: Option<String>,
     gt_child_frame: Option<String>,
+    gt: Option<PathBuf>,
+    gt_time_offset: Option<f64>,
+    gt_columns: Option<std::collections::BTreeMap<String, String>>,
+    gt_units: Option<std::collections::BTreeMap<String, String>>,
     split_s: Option<f64>,
     skip_invalid: bool,
     ticks_per_rev: Option<f64>,
+    max_file_mb: u64,
+    recorded_odometry: bool,
 ) -> PyResult<PyDataset> {
     if paths.is_empty() {
         return Err(value_error("load() needs at least one path"));
@@ -275,27 +320,43 @@ pub fn load(
         gt_topic,
         gt_parent_frame,
         gt_child_frame,
+        gt,
+        gt_time_offset,
+        gt_columns: key_values(gt_columns),
+        gt_units: key_values(gt_units),
         split: split_s,
         skip_invalid,
         ticks_per_rev,
-        ..DataArgs::default()
+        max_file_mb,
     };
     // The CLI's lookup: robot=, else a robot.toml beside the data or in the working directory.
     let robot = robot_file::resolve(data.robot.robot.as_deref(), &paths).map_err(robot_error)?;
-    let ds = py.detach(|| cmd::load_for_robot(&paths, &data, false, robot)).map_err(load_error)?;
+    let ds = py.detach(|| cmd::load_for_robot(&paths, &data, recorded_odometry, robot)).map_err(load_error)?;
     let design = omni_cli::design::declared(&ds).map_err(|e| value_error(format!("{e:#}")))?;
     let source = ds.robot_file.as_ref().map(|f| f.source.clone());
     let mut notes = ds.notes;
     if let Some(s @ robot_file::Source::Discovered(_)) = &source {
         notes.insert(0, format!("robot: {s}"));
     }
+    let origin = omni_cli::dataset::Dataset {
+        robot: ds.robot,
+        robot_file: ds.robot_file,
+        ground_truth_clocks: ds.ground_truth_clocks,
+        ..Default::default()
+    };
     Ok(PyDataset {
         runs: ds.runs,
         notes,
         skipped: ds.skipped.into_iter().map(|s| (s.source, s.reason)).collect(),
         design,
         robot: source.map(|s| s.to_string()),
+        origin,
     })
+}
+
+/// A dict of CSV columns or units as the CLI's `KEY=VALUE` list.
+fn key_values(map: Option<std::collections::BTreeMap<String, String>>) -> Vec<String> {
+    map.unwrap_or_default().into_iter().map(|(k, v)| format!("{k}={v}")).collect()
 }
 
 /// An error of the CLI's loading as the Python exception of its cause (`DatasetError`, `FileNotFoundError`,
@@ -336,4 +397,20 @@ pub fn runs_from(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(Vec<Run>, Opti
         }
     }
     Ok((runs, None))
+}
+
+/// Where the design of runs given as a `Dataset` came from (its robot description and declared geometry,
+/// no runs); an empty one for other runs.
+pub fn origin_of(obj: &Bound<'_, PyAny>) -> omni_cli::dataset::Dataset {
+    match obj.cast::<PyDataset>() {
+        Ok(ds) => {
+            let o = &ds.get().origin;
+            omni_cli::dataset::Dataset {
+                robot: o.robot.clone(),
+                robot_file: o.robot_file.clone(),
+                ..Default::default()
+            }
+        }
+        Err(_) => Default::default(),
+    }
 }

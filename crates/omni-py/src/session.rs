@@ -16,6 +16,14 @@ use serde_json::json;
 /// latest wheel stamps of the runs [s]), ``runs``, ``notes``, ``skipped`` ([source, reason]) and
 /// ``warnings``. Bad arguments raise ``ValueError``; a failed load or fit raises ``OmnicalError`` with the
 /// command's message. The GIL is released while it runs.
+///
+/// >>> import tempfile
+/// >>> out = tempfile.mkdtemp()
+/// >>> omnical._omnical.cli_main(["omnical", "simulate", "--out", out, "--runs-per-command", "1", "--duration", "1"])
+/// 0
+/// >>> t = omnical._omnical.train_files([out + "/train", "--seed", "0", "--out", out + "/fit.toml"])
+/// >>> t["runs"], t["summary"]["objective"], omnical.load_model(out + "/fit.toml").kinematics
+/// (36, 'path', 'ik')
 #[pyfunction]
 pub fn train_files<'py>(py: Python<'py>, args: Vec<String>) -> PyResult<Bound<'py, PyAny>> {
     let argv = ["omnical".to_string(), "train".to_string()].into_iter().chain(args);
@@ -31,6 +39,15 @@ pub fn train_files<'py>(py: Python<'py>, args: Vec<String>) -> PyResult<Bound<'p
 /// Diagnoses as ``omnical diagnose ARGS...`` would (``args`` without the program and subcommand names, e.g.
 /// ``["--model", "model.toml", "rec/"]``) and returns what ``--json`` prints (``verdict``, ``verdict_text``,
 /// ``ranking``, ``ladder``, ...). Errors as :func:`train_files`. The GIL is released while it runs.
+///
+/// >>> import tempfile
+/// >>> out = tempfile.mkdtemp()
+/// >>> args = ["--effect", "time_offset=0.06", "--runs-per-command", "1", "--duration", "2"]
+/// >>> omnical._omnical.cli_main(["omnical", "simulate", "--out", out, *args])
+/// 0
+/// >>> d = omnical._omnical.diagnose_files(["--model", "paper", out + "/train", "--candidates", "time_offset"])
+/// >>> d["verdict"]
+/// 'time_offset'
 #[pyfunction]
 pub fn diagnose_files<'py>(py: Python<'py>, args: Vec<String>) -> PyResult<Bound<'py, PyAny>> {
     let argv = ["omnical".to_string(), "diagnose".to_string()].into_iter().chain(args);

@@ -10,7 +10,9 @@ use omni_kin::{IkMatrix, KinematicsKind};
 use pyo3::prelude::*;
 use std::path::PathBuf;
 
-/// Simulate the benchmark (its commands × ``runs_per_command``) on the true robot ``truth``.
+/// Simulate the benchmark (its commands × ``runs_per_command``) on the true robot ``truth``: the runs
+/// ``omnical simulate`` writes into its ``train/`` folder (the same defaults: 5 runs per command of 10 s,
+/// seed 7, names ``train/NN-rK``; its ``validation/`` folder is ``seed=8, prefix="validation/"``).
 ///
 /// ``robot``: the simulated base, a ``robot.toml`` path or ``"apr02"`` (as ``omnical simulate --robot``;
 /// default ``"apr02"``, the paper's robot): its design turns the commands into wheel targets, and the
@@ -20,9 +22,13 @@ use std::path::PathBuf;
 /// wheel count. Returns the runs, named ``{prefix}{command:02}-r{repetition}``. Deterministic for a
 /// ``seed``; the GIL is released.
 ///
-/// >>> runs = omnical.simulate(robot="diff.toml", seed=1)  # doctest: +SKIP
+/// >>> runs = omnical.simulate(runs_per_command=1, duration_s=1.0)  # 36 flower commands, 1 s each
+/// >>> len(runs), runs[0].name, runs[0].n_wheels
+/// (36, 'train/00-r0', 3)
 #[pyfunction]
-#[pyo3(signature = (truth = None, *, robot = None, runs_per_command = 1, duration_s = 4.0, seed = 0, noise_free = false, prefix = "run/", sample_drop_probability = 0.0, sample_jitter_s = 0.0))]
+// The defaults are `omnical simulate`'s (SimConfig::default(), omni_cli::cmd::simulate::DEFAULT_SEED),
+// spelt out so that help() shows them; tests/test_mirror.py compares them with the CLI's --help.
+#[pyo3(signature = (truth = None, *, robot = None, runs_per_command = 5, duration_s = 10.0, seed = 7, noise_free = false, prefix = "train/", sample_drop_probability = 0.0, sample_jitter_s = 0.0))]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate(
     py: Python<'_>,

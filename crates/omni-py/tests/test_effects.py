@@ -46,19 +46,19 @@ def test_wheel_effect_is_simulated_and_recovered() -> None:
     assert truth.effects == ["brake_drag"] and truth.get("brake_drag.d_rad_s") == 0.3
     runs = omnical.simulate(truth, runs_per_command=1, duration_s=2.0, seed=1)
     assert drag.calls >= 36
-    fit = omnical.train(runs, model=omnical.Model.paper(), effects=[drag], seed=0)
+    fit = omnical.train(omnical.Model.paper(), runs, effects=[drag], seed=0)
     assert abs(fit.params["brake_drag.d_rad_s"] - 0.3) < 0.05
 
 
 def test_clock_effect_matches_the_builtin(runs: list[omnical.Run]) -> None:
     py = omnical.Model.paper().with_effect(Lag(), tau_s=0.06)
     rs = omnical.Model.paper().with_effect("time_offset", tau_s=0.06)
-    assert omnical.evaluate(runs, py).cost == pytest.approx(omnical.evaluate(runs, rs).cost, rel=1e-12)
+    assert omnical.evaluate(py, runs).cost == pytest.approx(omnical.evaluate(rs, runs).cost, rel=1e-12)
 
 
 def test_diagnose_ranks_a_python_effect(runs: list[omnical.Run], validation: list[omnical.Run]) -> None:
-    fit = omnical.train(runs, robot="apr02", seed=0)
-    d = omnical.diagnose(fit.model, runs, validation=validation, candidates=[Lag(), "sensor_offset"])
+    fit = omnical.train("design", runs, robot="apr02", seed=0)
+    d = omnical.diagnose(fit.model, runs, validate=validation, candidates=[Lag(), "sensor_offset"])
     assert d.verdict == "py_lag"
     assert d.ranking[0]["physics"] == "A clock lag, in Python."
     assert abs(d.ranking[0]["params"][0]["value"] - 0.06) < 0.01
@@ -93,11 +93,11 @@ class WrongShape(Raises):
 
 def test_exceptions_in_effects_surface(runs: list[omnical.Run]) -> None:
     with pytest.raises(ZeroDivisionError, match="bad physics"):
-        omnical.train(runs, robot="apr02", effects=[Raises()])
+        omnical.train("design", runs, robot="apr02", effects=[Raises()])
     with pytest.raises(ZeroDivisionError, match="bad physics"):
-        omnical.evaluate(runs, omnical.Model.design().with_effect(Raises()))
+        omnical.evaluate(omnical.Model.design().with_effect(Raises()), runs)
     with pytest.raises(ValueError, match=r"effect wrong_shape: wheel_rates must return shape \(\d+, 3\), got \(\d+, 2\)"):
-        omnical.simulate(omnical.Model.paper().with_effect(WrongShape()), duration_s=1.0)
+        omnical.simulate(omnical.Model.paper().with_effect(WrongShape()), runs_per_command=1, duration_s=1.0)
 
 
 def test_bad_effect_definitions() -> None:
@@ -125,7 +125,7 @@ def test_world_drift_from_python() -> None:
     truth = omnical.Model.paper().with_effect("world_drift", drift_x_m_s=0.0039, drift_y_m_s=-0.0021)
     runs = omnical.simulate(truth, runs_per_command=1, duration_s=2.5, seed=31)
     validation = omnical.simulate(truth, runs_per_command=1, duration_s=2.5, seed=32, prefix="validation/")
-    d = omnical.diagnose(omnical.Model.paper(), runs, validation=validation, candidates=["world_drift", "time_offset"])
+    d = omnical.diagnose(omnical.Model.paper(), runs, validate=validation, candidates=["world_drift", "time_offset"])
     assert d.verdict == "world_drift", d.verdict_text
     dx, dy = d.ranking[0]["params"]
     assert dx["name"] == "drift_x_m_s" and dx["unit"] == "m/s" and abs(dx["value"] - 0.0039) < 3e-4

@@ -8,9 +8,9 @@ import omnical
 
 def test_explore_finds_a_world_drift_and_the_learned_effect_trains() -> None:
     truth = omnical.Model.design().with_effect("learned:world", drift_x=0.0039, drift_y=-0.0021)
-    train = omnical.simulate(truth, duration_s=4.0, seed=11)
-    held_out = omnical.simulate(truth, duration_s=4.0, seed=12, prefix="validation/")
-    e = omnical.explore(omnical.Model.design(), train, held_out)
+    train = omnical.simulate(truth, runs_per_command=1, duration_s=4.0, seed=11)
+    held_out = omnical.simulate(truth, runs_per_command=1, duration_s=4.0, seed=12, prefix="validation/")
+    e = omnical.explore(omnical.Model.design(), train, validate=held_out)
     assert e.best == "world", e.conclusion
     assert e.unexplained is False
     world = e.families[0]
@@ -20,6 +20,6 @@ def test_explore_finds_a_world_drift_and_the_learned_effect_trains() -> None:
     assert abs(terms["drift_y"]["value"] + 0.0021) < 4e-4
     assert e.to_dict()["schema_version"] == 1
     assert e.model is not None and "learned:world.drift_x" in e.model.param_names
-    fit = omnical.train(train, robot="apr02", effects=["learned:world"], seed=0)
-    true_cost = omnical.evaluate(held_out, truth).path_cost
-    assert omnical.evaluate(held_out, fit.model).path_cost <= 1.1 * true_cost
+    fit = omnical.train("design", train, robot="apr02", effects=["learned:world"], seed=0)
+    true_cost = omnical.evaluate(truth, held_out).path_cost
+    assert omnical.evaluate(fit.model, held_out).path_cost <= 1.1 * true_cost

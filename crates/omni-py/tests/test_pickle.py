@@ -48,7 +48,7 @@ def test_run_round_trip_is_exact(runs: list[omnical.Run]) -> None:
                     np.array([[0.0, 0, 0, 0], [0.02, 1e-3, -2e-3, 0.1]]), name="from arrays")
     b = round_trip(a)
     assert_same_run(a, b)
-    assert omnical.evaluate(b, omnical.Model.paper()).cost == omnical.evaluate(a, omnical.Model.paper()).cost
+    assert omnical.evaluate(omnical.Model.paper(), b).cost == omnical.evaluate(omnical.Model.paper(), a).cost
 
 
 def test_corrupt_run_bytes_are_refused() -> None:
@@ -73,11 +73,11 @@ def test_model_with_a_python_effect_round_trips(runs: list[omnical.Run]) -> None
     m = omnical.Model.paper().with_effect(Slip(), k=0.0125)
     back = round_trip(m)
     assert back.effects == ["slip_py"] and back.get("slip_py.k") == 0.0125  # type: ignore[attr-defined]
-    assert omnical.evaluate(runs[:4], back).cost == omnical.evaluate(runs[:4], m).cost  # type: ignore[arg-type]
+    assert omnical.evaluate(back, runs[:4]).cost == omnical.evaluate(m, runs[:4]).cost  # type: ignore[arg-type]
 
 
 def test_calibration_round_trip_is_exact(runs: list[omnical.Run]) -> None:
-    c = omnical.train(runs, robot="apr02", seed=3)
+    c = omnical.train("design", runs, robot="apr02", seed=3)
     back = round_trip(c)
     assert isinstance(back, omnical.Calibration)
     assert back.matrix.tobytes() == c.matrix.tobytes()

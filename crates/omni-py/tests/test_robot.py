@@ -44,16 +44,16 @@ def omni_design(angles_deg: list[float], distance_m: float, radius_m: float) -> 
 
 def test_a_call_without_a_design_says_how_to_give_one(runs: list[omnical.Run]) -> None:
     with pytest.raises(ValueError) as e:
-        omnical.train(runs)
+        omnical.train("design", runs)
     assert str(e.value) == no_design("omnical.train")
     with pytest.raises(ValueError) as e:
-        omnical.evaluate(runs)
+        omnical.evaluate("design", runs)
     assert str(e.value) == no_design("omnical.evaluate")
     with pytest.raises(ValueError) as e:
-        omnical.integrate(runs[0])
+        omnical.integrate("design", runs[0])
     assert str(e.value) == no_design("omnical.integrate")
     with pytest.raises(ValueError, match="give model= or robot=, not both"):
-        omnical.evaluate(runs, omnical.Model.paper(), robot="apr02")
+        omnical.evaluate(omnical.Model.paper(), runs, robot="apr02")
 
 
 def test_data_without_a_robot_has_no_design(
@@ -67,13 +67,13 @@ def test_data_without_a_robot_has_no_design(
     ds = omnical.load(data)
     assert ds.design is None and ds.robot is None
     with pytest.raises(ValueError) as e:
-        omnical.evaluate(ds)
+        omnical.evaluate("design", ds)
     assert str(e.value) == no_design("omnical.evaluate")
     apr02 = omnical.load(data, robot="apr02")
     assert apr02.robot == "apr02 (built in: the paper's APR-02)"
     assert apr02.design is not None
     np.testing.assert_array_equal(apr02.design.matrix, omnical.Model.design().matrix)
-    assert omnical.evaluate(apr02).cost == omnical.evaluate(ds, robot="apr02").cost
+    assert omnical.evaluate("design", apr02).cost == omnical.evaluate("design", ds, robot="apr02").cost
 
 
 def test_a_robot_toml_beside_the_data_is_picked_up(sim_dir: Path) -> None:
@@ -105,9 +105,9 @@ def test_omni4_from_the_docs_gives_its_design_matrix(tmp_path: Path) -> None:
     m.save(back)
     assert omnical.load_model(back).wheel_names == joints
     # Simulated on its own design, the design explains the runs to the simulator's noise.
-    runs = omnical.simulate(robot=path, duration_s=1.0, seed=2)
+    runs = omnical.simulate(robot=path, runs_per_command=1, duration_s=1.0, seed=2)
     assert len(runs) == 36 and runs[0].n_wheels == 4
-    assert omnical.evaluate(runs, robot=path).path_cost < 0.01
+    assert omnical.evaluate("design", runs, robot=path).path_cost < 0.01
 
 
 def test_diff_from_the_docs_gives_its_design_matrix_and_fits_its_radii(tmp_path: Path) -> None:
@@ -120,14 +120,14 @@ def test_diff_from_the_docs_gives_its_design_matrix_and_fits_its_radii(tmp_path:
     assert diff.params == {"r_right": r, "r_left": r, "b": s}
     # A left wheel 3 % larger than designed: simulated (no sideways runs on a diff base) and recovered.
     truth = diff.with_params({"r_left": 1.03 * r})
-    runs = omnical.simulate(truth, robot=path, duration_s=2.0, seed=4)
+    runs = omnical.simulate(truth, robot=path, runs_per_command=1, duration_s=2.0, seed=4)
     commands = [run.command for run in runs if run.command is not None]
     assert len(commands) == len(runs) == 12 and all(abs(np.sin(alpha)) < 1e-12 for _, alpha, _ in commands)
-    fit = omnical.train(runs, model=diff, seed=0)
+    fit = omnical.train(diff, runs, seed=0)
     assert fit.params["r_left"] == pytest.approx(1.03 * r, rel=2e-3)
     assert fit.params["r_right"] == pytest.approx(r, rel=2e-3)
     # The ik fit around the robot's design keeps the vy row at zero (a motion the base cannot make).
-    ik = omnical.train(runs, robot=path, seed=0)
+    ik = omnical.train("design", runs, robot=path, seed=0)
     assert set(ik.params) == {"m11", "m12", "m31", "m32"}
     np.testing.assert_array_equal(ik.matrix[1], [0.0, 0.0])
 
@@ -141,7 +141,7 @@ def test_a_bad_robot_file_names_the_file_line_and_field(tmp_path: Path, runs: li
         omnical.Model.design(bad)
     assert str(e.value) == f"{bad}: line {line}: diff.left_radius_m: -0.033 must be > 0"
     with pytest.raises(ValueError, match=re.escape(f"{bad}: line {line}: diff.left_radius_m")):
-        omnical.train(runs, robot=bad)
+        omnical.train("design", runs, robot=bad)
     with pytest.raises(FileNotFoundError, match=re.escape(str(tmp_path / "none.toml"))):
         omnical.load(tmp_path, robot=tmp_path / "none.toml")
     with pytest.raises(ValueError, match="truth has 3 wheels and robot .* has 2"):

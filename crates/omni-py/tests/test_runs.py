@@ -93,7 +93,7 @@ def test_load_optiodom_declares_its_geometry(optiodom: Path) -> None:
     ds = omnical.load(optiodom)
     assert len(ds) > 0
     assert ds.design.kinematics == "geometry"
-    assert omnical.evaluate(ds).cost > 0
+    assert omnical.evaluate("design", ds).cost > 0
 
 
 def test_missing_file_is_file_not_found(tmp_path: Path) -> None:

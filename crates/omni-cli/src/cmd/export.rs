@@ -129,15 +129,7 @@ fn write_mcaps(
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let mut files = Vec::with_capacity(ds.runs.len());
     for run in &ds.runs {
-        let opts = WriteOptions {
-            wheel_joints: wheel_joints(&a.data, ds),
-            design_odometry: (!run.recorded_odometry().is_empty()).then(|| run.recorded_odometry().to_vec()),
-            calibrated_odometry: Some(odometry_poses(model, run)?),
-            ..WriteOptions::default()
-        };
-        let path = dir.join(format!("{}.mcap", tum::file_stem(run.name())));
-        write_run(&path, run, &opts)?;
-        files.push(path);
+        files.push(write_mcap(dir, run, model, &wheel_joints(&a.data, ds))?);
     }
     Ok(files)
 }
@@ -190,8 +182,25 @@ fn joint_names(model: &FittedModel, joints: &[String]) -> Vec<String> {
     }
 }
 
-/// Writes the run's three TUM files (ground truth, design, `model`) into `dir`; returns their paths.
-fn write_tum(
+/// Writes one run's MCAP bag `DIR/<run>.mcap` (`--mcap`): its wheel data (joints `wheel_joints`), ground
+/// truth, recorded odometry if any, and `model`'s odometry on /omnical/odometry; a run whose clock starts
+/// before 0 s (a simulated one) is put at the simulator's epoch. Returns the path.
+pub fn write_mcap(dir: &Path, run: &Run, model: &FittedModel, wheel_joints: &[String]) -> anyhow::Result<PathBuf> {
+    let opts = WriteOptions {
+        wheel_joints: wheel_joints.to_vec(),
+        design_odometry: (!run.recorded_odometry().is_empty()).then(|| run.recorded_odometry().to_vec()),
+        calibrated_odometry: Some(odometry_poses(model, run)?),
+        // Simulated clocks start before 0 s (as `simulate` does): put them at its epoch.
+        origin_s: if run.wheel_t_s().first().is_some_and(|&t| t < 0.0) { super::simulate::SIM_EPOCH_S } else { 0 },
+    };
+    let path = dir.join(format!("{}.mcap", tum::file_stem(run.name())));
+    write_run(&path, run, &opts)?;
+    Ok(path)
+}
+
+/// Writes one run's TUM files (`--tum`): `DIR/<run>.gt.tum`, `.design.tum` and `.calibrated.tum`, the
+/// latter two the odometry of `design` and of `model` (named `spec` in the header). Returns the paths.
+pub fn write_tum(
     dir: &Path,
     run: &Run,
     design: &FittedModel,

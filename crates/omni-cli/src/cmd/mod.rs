@@ -1,5 +1,6 @@
 //! Subcommand implementations: load, call the library, format.
 
+pub mod config;
 pub mod demo;
 pub mod diagnose;
 pub mod eval;
@@ -9,6 +10,7 @@ pub mod held_out;
 pub mod init;
 pub mod plan;
 pub mod report;
+pub mod shell;
 pub mod sim_spec;
 pub mod simulate;
 pub mod train;
@@ -39,9 +41,10 @@ pub fn python_only(what: &str) -> anyhow::Error {
 /// with the command's name as `command`. Raised when a field changes meaning or is removed.
 pub const JSON_SCHEMA_VERSION: u32 = 1;
 
-/// Commands that produce no results of their own, so take no `--json`: `fleet` (the Python wheel's).
+/// Commands that produce no results of their own, so take no `--json`: `fleet` (the Python wheel's),
+/// `completions` and `man` (their output is a script and a man page).
 /// Every other subcommand flattens [`OutputArgs`]; tests/json.rs checks both lists against the parser.
-pub const WITHOUT_RESULTS: &[&str] = &["fleet"];
+pub const WITHOUT_RESULTS: &[&str] = &["fleet", "completions", "man"];
 
 /// The output options of every command that produces results (one definition, flattened into each).
 #[derive(Debug, Default, Clone, Copy, clap::Args)]

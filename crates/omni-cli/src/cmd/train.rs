@@ -27,10 +27,11 @@ pub struct Args {
     /// Start from this model file instead of the design.
     #[arg(long)]
     pub start: Option<PathBuf>,
-    /// Recipe.
+    /// Training recipe: search method, objective and limits.
     #[arg(long, value_parser = choice::<Preset>(), default_value_t = Preset::default())]
     pub preset: Preset,
-    /// GA seed.
+    /// Seed of the genetic algorithm's random search: the same seed gives the same model, whatever
+    /// --threads.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Add an effect to fit (an effect id). Repeatable.
@@ -200,17 +201,8 @@ impl PriorUse {
 /// says the priors are not used then.
 fn robot_priors(start: &FittedModel, ds: &crate::dataset::Dataset) -> Vec<PriorUse> {
     let Some(Design::File(f)) = robot_file::design(ds) else { return Vec::new() };
-    let Some(priors) = &f.description.priors else { return Vec::new() };
-    let specs = start.model.params();
-    let found: Vec<PriorUse> = specs[..start.model.n_base()]
-        .iter()
-        .zip(&start.params)
-        .filter_map(|(s, v)| {
-            let std = priors.std_of(&s.name)?;
-            Some(PriorUse { name: s.name.clone(), unit: s.unit.clone(), design: *v, std })
-        })
-        .collect();
-    if found.is_empty() {
+    let found = priors_of(start, ds);
+    if found.is_empty() && f.description.priors.is_some() {
         // A warning, not a note (shown with -q too): a setting of the user's file goes unused.
         tracing::warn!(
             "the [priors] of {} bound the parametric models' search (--model geometry, diff or mecanum); \
@@ -220,6 +212,28 @@ fn robot_priors(start: &FittedModel, ds: &crate::dataset::Dataset) -> Vec<PriorU
         );
     }
     found
+}
+
+/// The priors of [`robot_priors`], without its note.
+fn priors_of(start: &FittedModel, ds: &crate::dataset::Dataset) -> Vec<PriorUse> {
+    let Some(Design::File(f)) = robot_file::design(ds) else { return Vec::new() };
+    let Some(priors) = &f.description.priors else { return Vec::new() };
+    let specs = start.model.params();
+    specs[..start.model.n_base()]
+        .iter()
+        .zip(&start.params)
+        .filter_map(|(s, v)| {
+            let std = priors.std_of(&s.name)?;
+            Some(PriorUse { name: s.name.clone(), unit: s.unit.clone(), design: *v, std })
+        })
+        .collect()
+}
+
+/// The GA half-widths (parameter units) that the `[priors]` of `ds`'s robot description set on `start`'s
+/// base parameters, as `omnical train` uses them (`Plan::half_widths`; `PRIOR_BOX_SIGMAS` σ each). The
+/// Python binding's `train`.
+pub fn prior_half_widths(start: &FittedModel, ds: &crate::dataset::Dataset) -> Vec<(String, f64)> {
+    priors_of(start, ds).iter().map(|p| (p.name.clone(), PRIOR_BOX_SIGMAS * p.std)).collect()
 }
 
 /// The design model with its columns named: the robot description's joints (already), else `--joints`

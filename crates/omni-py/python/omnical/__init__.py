@@ -4,15 +4,19 @@ and find out which physical effect the model still misses.
 The same steps as the ``omnical`` command, on numpy arrays::
 
     import omnical
-    runs = omnical.simulate(omnical.Model.paper().with_effect("time_offset", tau_s=0.06), seed=7)
-    fit = omnical.train(runs, robot="apr02", seed=0)  # fit the 3 x W IK matrix around APR-02's design
+    runs = omnical.simulate(omnical.Model.paper().with_effect("time_offset", tau_s=0.06))  # as `omnical simulate`
+    fit = omnical.train("ik", runs, robot="apr02", seed=0)  # fit the 3 x W IK matrix around APR-02's design
     print(fit.matrix, fit.costs)
     d = omnical.diagnose(fit.model, runs)         # which effect is missing?
     print(d.verdict, d.ranking[0])
 
+Every call takes the model first, then the runs, then keyword-only options named after the CLI's flags
+(``validate=``, ``robot=``, ...); the model as the CLI's ``--model``: a :class:`Model`, ``"design"``,
+``"paper"`` or a model file path.
+
 Real data: ``omnical.load("bags/", robot="robot.toml")`` (a robot.toml beside the data is picked up
-without it, as by the CLI); ``train``, ``evaluate`` and ``integrate`` start from the design of the data's
-robot, or of ``robot=``, and raise ``ValueError`` saying how to describe the robot when none is known.
+without it, as by the CLI); ``"design"`` is the design of ``robot=``, else of the data's robot, and raises
+``ValueError`` saying how to describe the robot when none is known.
 
 Units are SI (m, s, rad, rad/s). Long calls release the GIL; Ctrl-C stops ``train`` and keeps the best
 fit so far. Errors: ``ValueError`` for bad input (shapes, NaN, unknown names), ``FileNotFoundError`` /
@@ -48,6 +52,7 @@ from ._omnical import (
     effect_catalogue,
     evaluate,
     explore,
+    export,
     integrate,
     load,
     load_model,
@@ -77,6 +82,7 @@ __all__ = [
     "effect_catalogue",
     "evaluate",
     "explore",
+    "export",
     "integrate",
     "load",
     "load_model",
@@ -87,7 +93,12 @@ __all__ = [
 
 
 class Param(NamedTuple):
-    """One parameter of a user effect."""
+    """One parameter of a user effect.
+
+    >>> p = omnical.Param("k", "1", null=0.0, lower=-0.5, upper=0.5)
+    >>> p.name, p.upper - p.lower
+    ('k', 1.0)
+    """
 
     name: str
     """Name, unique within the effect, e.g. ``"k"``; the model calls it ``"<effect id>.<name>"``."""
@@ -118,6 +129,17 @@ class Effect:
     At the ``null`` parameter values the effect must change nothing. The hooks run on omnical's worker
     threads and take the GIL, so Python effects serialise the otherwise parallel cost. An exception
     raised by a hook stops the call and is re-raised by it.
+
+    >>> class Slip(omnical.Effect):
+    ...     'Every wheel delivers a fraction s less than it turns.'
+    ...     id = "slip"
+    ...     params = [omnical.Param("s", "1", 0.0, -0.2, 0.2)]
+    ...     def wheel_rates(self, p, t_s, dt_s, wheel_rad_s):
+    ...         return wheel_rad_s * (1.0 - p[0])
+    >>> truth = omnical.Model.paper().with_effect(Slip(), s=0.05)
+    >>> runs = omnical.simulate(truth, runs_per_command=1, duration_s=1.0)
+    >>> omnical.evaluate(truth, runs).path_cost < omnical.evaluate("paper", runs).path_cost
+    True
     """
 
     id: str = "python_effect"

@@ -15,6 +15,9 @@ _F64 = npt.NDArray[np.float64]
 _Path = Union[str, PathLike[str]]
 _Runs = Union["Dataset", "Run", Iterable["Run"]]
 _EffectArg = Any  # a catalogue id (str) or a Python effect object (see omnical.Effect)
+# A model as the CLI's --model: a Model, "design", "paper" or a model file path (train: also "ik",
+# "geometry", "diff", "mecanum").
+_ModelArg = Union["Model", str, PathLike[str]]
 
 __all__ = [
     "CATALOGUE",
@@ -37,6 +40,7 @@ __all__ = [
     "effect_catalogue",
     "evaluate",
     "explore",
+    "export",
     "integrate",
     "load",
     "load_model",
@@ -118,6 +122,10 @@ class Dataset:
     def robot(self) -> Optional[str]:
         """The robot description the runs were read with (``"PATH (found beside the data)"``, a path, or
         ``"apr02 (built in: the paper's APR-02)"``), or None."""
+    @property
+    def ground_truth_clocks(self) -> list[dict[str, Any]]:
+        """The clock offset of each ``gt=`` file: recording, file, offset_s [s], std_error_s [s], estimated,
+        r_squared."""
     def __len__(self) -> int: ...
     def __getitem__(self, key: int, /) -> Run: ...
 
@@ -308,14 +316,21 @@ class Exploration:
     def model(self) -> Optional[Model]: ...
     def to_dict(self) -> dict[str, Any]: ...
 
-def explore(model: Model, runs: _Runs, validation: _Runs, *, min_gain: float = 0.05) -> Exploration:
+def explore(
+    model: _ModelArg, runs: _Runs, *, validate: _Runs, min_gain: float = 0.05, robot: Optional[_Path] = None
+) -> Exploration:
     """Which family of physical features explains the error ``model`` leaves on ``runs``, judged on the
-    held-out ``validation`` runs::
+    held-out ``validate`` runs."""
 
-        e = omnical.explore(fit.model, train_runs, held_out_runs)
-        print(e.best, e.families[0]["terms"], e.conclusion)
-        fit2 = omnical.train(train_runs, effects=[f"learned:{e.best}"])  # add it, watch the error fall
-    """
+def export(
+    model: _ModelArg,
+    runs: _Runs,
+    *,
+    tum: Optional[_Path] = None,
+    mcap: Optional[_Path] = None,
+    robot: Optional[_Path] = None,
+) -> list[str]:
+    """TUM files and/or MCAP bags of ``model``'s odometry on ``runs`` (``omnical export``); the paths written."""
 
 def load(
     *paths: _Path,
@@ -325,9 +340,15 @@ def load(
     gt_topic: Optional[str] = None,
     gt_parent_frame: Optional[str] = None,
     gt_child_frame: Optional[str] = None,
+    gt: Optional[_Path] = None,
+    gt_time_offset: Optional[float] = None,
+    gt_columns: Optional[dict[str, str]] = None,
+    gt_units: Optional[dict[str, str]] = None,
     split_s: Optional[float] = None,
     skip_invalid: bool = False,
     ticks_per_rev: Optional[float] = None,
+    max_file_mb: int = 1024,
+    recorded_odometry: bool = False,
 ) -> Dataset:
     """Load runs from .csv, .mcap, folders of them or OptiOdom set folders. ``robot``: a robot.toml or
     ``"apr02"`` (default: a robot.toml beside the data or in the working directory, as the CLI)."""
@@ -340,11 +361,11 @@ def simulate(
     truth: Optional[Model] = None,
     *,
     robot: Optional[_Path] = None,
-    runs_per_command: int = 1,
-    duration_s: float = 4.0,
-    seed: int = 0,
+    runs_per_command: int = 5,
+    duration_s: float = 10.0,
+    seed: int = 7,
     noise_free: bool = False,
-    prefix: str = "run/",
+    prefix: str = "train/",
     sample_drop_probability: float = 0.0,
     sample_jitter_s: float = 0.0,
 ) -> list[Run]:
@@ -352,44 +373,53 @@ def simulate(
     robot ``truth`` (default: Eq. 9 on APR-02, else the robot's design)."""
 
 def train(
+    model: _ModelArg,
     runs: _Runs,
     *,
-    model: Optional[Model] = None,
     robot: Optional[_Path] = None,
     effects: Sequence[_EffectArg] = ...,
     preset: str = "default",
     seed: int = 0,
+    objective: Optional[str] = None,
+    every: int = 1,
+    heading_weight: float = 1.0,
+    unexcited: Optional[str] = None,
+    max_std_error: float = 0.05,
+    min_excitation: float = 0.01,
     progress: Optional[Callable[[dict[str, Any]], Optional[bool]]] = None,
 ) -> Calibration:
-    """Fit a model to training runs, starting from ``model``, else ``robot``'s design, else the data's
-    (``ValueError`` when none is known); Ctrl-C keeps the best so far."""
+    """Fit a model to training runs from ``model`` (a kinematics at the design, ``"design"``, or a start
+    model); Ctrl-C keeps the best so far."""
 
-def evaluate(runs: _Runs, model: Optional[Model] = None, *, robot: Optional[_Path] = None) -> Evaluation:
-    """Costs of ``model`` (else ``robot``'s design, else the data's; ``ValueError`` when none is known)."""
-def integrate(run: Run, model: Optional[Model] = None, *, robot: Optional[_Path] = None) -> _F64:
-    """(N, 4) t_s [s], x_m [m], y_m [m], theta_rad [rad] through ``model`` or ``robot``'s design."""
+def evaluate(model: _ModelArg, runs: _Runs, *, robot: Optional[_Path] = None) -> Evaluation:
+    """Costs of ``model`` (a Model, ``"design"``, ``"paper"`` or a model file) on ``runs``."""
+def integrate(model: _ModelArg, run: Run, *, robot: Optional[_Path] = None) -> _F64:
+    """(N, 4) t_s [s], x_m [m], y_m [m], theta_rad [rad] through ``model``."""
 
 def diagnose(
-    model: Model,
+    model: _ModelArg,
     runs: _Runs,
     *,
-    validation: Optional[_Runs] = None,
+    validate: Optional[_Runs] = None,
     candidates: Optional[Sequence[_EffectArg]] = None,
     auto: bool = False,
     min_gain: float = 0.05,
     every: int = 1,
+    robot: Optional[_Path] = None,
 ) -> Diagnosis: ...
 def report(
-    model: Model,
+    model: _ModelArg,
     runs: _Runs,
     *,
-    out: Union[str, PathLike[str]],
-    validation: Optional[_Runs] = None,
-    png_dir: Optional[Union[str, PathLike[str]]] = None,
+    out: _Path,
+    validate: Optional[_Runs] = None,
+    png: Optional[_Path] = None,
     diagnose: bool = True,
+    explore: bool = False,
     title: Optional[str] = None,
+    robot: Optional[_Path] = None,
 ) -> list[str]:
-    """Write the HTML report (inline SVG figures) of ``model`` on ``runs`` to ``out``; with ``png_dir``
+    """Write the HTML report (inline SVG figures) of ``model`` on ``runs`` to ``out``; with ``png``
     also each figure as PNG. Returns the figure ids (``ladder``, ``overlay-worst``, ...)."""
 def cli_main(argv: list[str]) -> int:
     """Run the omnical command line; returns the exit status. ``train`` installs a process-wide Ctrl-C

@@ -64,7 +64,11 @@ _TASK_KEYS = ("robot", "session", "path")
 
 @dataclass
 class Session:
-    """One robot-session: its recordings' folder and the robot description used for it."""
+    """One robot-session: its recordings' folder and the robot description used for it.
+
+    >>> Session("r00", "s00", "fleet/r00/s00", "fleet/robot.toml").session
+    's00'
+    """
 
     robot: str
     session: str
@@ -74,7 +78,13 @@ class Session:
 
 @dataclass
 class FleetResult:
-    """What :func:`calibrate_fleet` produced."""
+    """What :func:`calibrate_fleet` produced.
+
+    >>> rows = [{"robot": "r00", "session": "s00", "status": "ok"}, {"robot": "r01", "session": "s00", "status": "error"}]
+    >>> result = FleetResult(rows, Path("fleet-out"), [], {"flagged": ["r00"]})
+    >>> result.flagged, [r["robot"] for r in result.errors]
+    (['r00'], ['r01'])
+    """
 
     rows: list[dict[str, Any]]
     """One per robot-session, ordered by robot, then session start time (then name)."""
@@ -108,6 +118,13 @@ def find_sessions(fleet_dir: PathLike) -> list[Session]:
 
     Raises ``FileNotFoundError`` when ``fleet_dir`` is not a folder and ``ValueError`` when it holds no
     session folder.
+
+    >>> import tempfile
+    >>> fleet = Path(tempfile.mkdtemp())
+    >>> for d in ("r00/s00", "r00/s01", "r01/s00"):
+    ...     (fleet / d).mkdir(parents=True)
+    >>> [(s.robot, s.session, s.robot_toml) for s in find_sessions(fleet)]
+    [('r00', 's00', None), ('r00', 's01', None), ('r01', 's00', None)]
     """
     root = Path(fleet_dir)
     if not root.is_dir():
@@ -132,7 +149,13 @@ def find_sessions(fleet_dir: PathLike) -> list[Session]:
 
 def train_args(session: Session, model_path: str, *, preset: str, seed: int, model: str, extra: Sequence[str]) -> list[str]:
     """The arguments of ``omnical train`` that a task runs for ``session`` (also the command to reproduce
-    it: ``omnical train ARGS...``)."""
+    it: ``omnical train ARGS...``).
+
+    >>> train_args(Session("r00", "s00", "fleet/r00/s00", None), "out/model.toml", preset="default", seed=0,
+    ...            model="ik", extra=["--effect", "time_offset"])  # doctest: +NORMALIZE_WHITESPACE
+    ['fleet/r00/s00', '--preset', 'default', '--seed', '0', '--model', 'ik', '--effect', 'time_offset',
+     '--out', 'out/model.toml']
+    """
     args = [session.path, "--preset", preset, "--seed", str(seed), "--model", model]
     if session.robot_toml:
         args += ["--robot", session.robot_toml]
@@ -142,7 +165,17 @@ def train_args(session: Session, model_path: str, *, preset: str, seed: int, mod
 def calibrate_session(task: dict[str, Any]) -> dict[str, Any]:
     """One robot-session on a worker: train (writing the model file atomically) and, when ``task["diagnose"]``
     is true, diagnose (``"only"``: diagnose the model file a first task wrote). Never raises for bad data:
-    the row's ``status`` is ``"error"`` and ``error`` holds the message. ``seconds``: the task's wall time."""
+    the row's ``status`` is ``"error"`` and ``error`` holds the message. ``seconds``: the task's wall time.
+
+    >>> import tempfile
+    >>> fleet, out = Path(tempfile.mkdtemp()), tempfile.mkdtemp()
+    >>> _ = simulate_fleet(fleet, n_robots=1, n_sessions=1, n_wearing=0, n_lagging=0, duration_s=1.0)
+    >>> task = {**vars(find_sessions(fleet)[0]), "out": out, "preset": "default", "seed": 0, "model": "ik",
+    ...         "extra": []}
+    >>> row = calibrate_session(task)
+    >>> row["status"], row["runs"], row["cost_fitted"] < row["cost_design"]
+    ('ok', 36, True)
+    """
     t0 = time.perf_counter()
     session = Session(**{k: task[k] for k in (*_TASK_KEYS, "robot_toml")})
     row: dict[str, Any] = {"robot": session.robot, "session": session.session, "status": "ok", "error": ""}
@@ -171,7 +204,16 @@ def calibrate_session(task: dict[str, Any]) -> dict[str, Any]:
 
 def diagnose_session(session: Session, model_path: str) -> dict[str, Any]:
     """``omnical diagnose --model MODEL SESSION`` as row fields: verdict (an effect id or empty), its
-    text, and the named effect's fitted parameters with standard errors."""
+    text, and the named effect's fitted parameters with standard errors.
+
+    >>> import tempfile
+    >>> fleet = Path(tempfile.mkdtemp())
+    >>> _ = simulate_fleet(fleet, n_robots=2, n_sessions=1, n_wearing=0, n_lagging=1, lag_per_session_s=0.06,
+    ...                    duration_s=1.0)
+    >>> row = diagnose_session(find_sessions(fleet)[0], "design")  # r00: the design but for its radii
+    >>> row["diagnosed"], sorted(row)[:3]
+    (True, ['diagnosed', 'verdict', 'verdict_text'])
+    """
     args = ["--model", model_path, session.path]
     if session.robot_toml:
         args += ["--robot", session.robot_toml]
@@ -276,6 +318,13 @@ def calibrate_fleet(
     :data:`DIAGNOSE_COST_RATIO` times the fleet's median, or a robust outlier), ``"none"`` none.
     ``progress``: a progress bar on stderr (default: when stderr is a terminal). ``on_row(row)`` is called
     as each session finishes. Ctrl-C writes the rows that finished, then raises ``KeyboardInterrupt``.
+
+    Starting a Dask cluster takes seconds, so this example is not run by the doctests (tests/test_fleet.py
+    runs it on a simulated fleet):
+
+    >>> result = calibrate_fleet("fleet/", "fleet-out/", n_workers=2, seed=0)  # doctest: +SKIP
+    >>> result.rows[0]["cost_fitted"], result.flagged  # doctest: +SKIP
+    (0.0123, ['r01', 'r02'])
     """
     if diagnose not in ("all", "auto", "none"):
         raise ValueError(f"diagnose must be 'all', 'auto' or 'none', got {diagnose!r}")
@@ -465,7 +514,13 @@ class _Progress:
 def order_sessions(rows: Iterable[dict[str, Any]]) -> list[dict[str, Any]]:
     """Rows by robot, then by the session's start time (its recordings' earliest wheel stamp), then by
     session name (sessions whose recordings all start at 0 s, as simulated CSV runs do, keep name order);
-    sets ``session_index`` (0, 1, ... per robot)."""
+    sets ``session_index`` (0, 1, ... per robot).
+
+    >>> rows = order_sessions([{"robot": "r00", "session": "b", "start_s": 5.0},
+    ...                        {"robot": "r00", "session": "a", "start_s": 9.0}])
+    >>> [(r["session"], r["session_index"]) for r in rows]
+    [('b', 0), ('a', 1)]
+    """
     rows = list(rows)
 
     def key(r: dict[str, Any]) -> tuple[Any, ...]:
@@ -492,7 +547,11 @@ def _median(values: Sequence[float]) -> float:
 def robust_z(values: Sequence[float], floor: float = 0.0) -> list[float]:
     """Robust z-scores 0.6745 (x - median) / MAD (Iglewicz and Hoaglin); ``floor`` bounds the MAD from
     below (e.g. by the values' typical standard error, so that a fleet of near-identical robots does not
-    turn noise into outliers). All zeros when the MAD and the floor are 0."""
+    turn noise into outliers). All zeros when the MAD and the floor are 0.
+
+    >>> [round(z, 2) for z in robust_z([1.0, 1.1, 0.9, 1.0, 3.0])]
+    [0.0, 0.67, -0.67, 0.0, 13.49]
+    """
     med = _median(values)
     mad = max(_median([abs(x - med) for x in values]), floor)
     if mad == 0:
@@ -503,7 +562,12 @@ def robust_z(values: Sequence[float], floor: float = 0.0) -> list[float]:
 def trend(x: Sequence[float], y: Sequence[float], se: Sequence[Optional[float]]) -> Optional[dict[str, float]]:
     """Straight-line fit of ``y`` over ``x`` (weighted by 1/se² when every se is known): slope, its
     standard error (the larger of the one from the stated errors and the one from the scatter when there
-    are more than 2 points), intercept. None for fewer than 2 points or one x."""
+    are more than 2 points), intercept. None for fewer than 2 points or one x.
+
+    >>> t = trend([0, 1, 2], [1.0, 0.9, 0.8], [0.01, 0.01, 0.01])
+    >>> round(t["slope"], 3), round(t["intercept"], 3)
+    (-0.1, 1.0)
+    """
     n = len(x)
     if n < 2 or len(set(x)) < 2:
         return None
@@ -543,6 +607,11 @@ def analyse(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
       ``flagged`` trends are |slope| > :data:`TREND_T` standard errors and of a size that matters;
     - ``effects``: per robot, the sessions whose diagnosis names an effect;
     - ``flagged``: robots with any of the above, and ``reasons`` per robot in words.
+
+    >>> rows = [{"robot": f"r{i}", "session": "s00", "status": "ok", "radius_a_pct": x, "radius_a_pct_se": 0.05}
+    ...         for i, x in enumerate([0.1, -0.1, 0.0, 0.2, 4.0])]
+    >>> analyse(order_sessions(rows))["flagged"]
+    ['r4']
     """
     ok = [r for r in rows if r.get("status") == "ok"]
     quantities = _quantities(ok)
@@ -659,7 +728,14 @@ def _atomic_write(path: Path, write: Callable[[Any], None], mode: str = "w") -> 
 
 def write_table(rows: Sequence[dict[str, Any]], out: PathLike) -> list[Path]:
     """``OUT/fleet.csv`` (one row per robot-session, empty cells for missing values), and
-    ``OUT/fleet.parquet`` when pyarrow is importable. Returns the files written."""
+    ``OUT/fleet.parquet`` when pyarrow is importable. Returns the files written.
+
+    >>> import tempfile
+    >>> out = Path(tempfile.mkdtemp())
+    >>> _ = write_table([{"robot": "r00", "session": "s00", "cost_fitted": 0.01}], out)
+    >>> (out / "fleet.csv").read_text().splitlines()[1]
+    'r00,s00,0.01'
+    """
     out = Path(out)
     cols = _columns(rows)
 
@@ -683,7 +759,13 @@ def write_table(rows: Sequence[dict[str, Any]], out: PathLike) -> list[Path]:
 
 
 def write_fleet_view(rows: Sequence[dict[str, Any]], analysis: dict[str, Any], out: PathLike, *, interrupted: bool = False) -> list[Path]:
-    """The table (:func:`write_table`) and ``OUT/fleet.html``. Returns the files written."""
+    """The table (:func:`write_table`) and ``OUT/fleet.html``. Returns the files written.
+
+    >>> import tempfile
+    >>> rows = [{"robot": "r00", "session": "s00", "status": "ok", "cost_fitted": 0.01}]
+    >>> [p.name for p in write_fleet_view(rows, analyse(rows), tempfile.mkdtemp())][-1]
+    'fleet.html'
+    """
     from . import _fleet_html
 
     out = Path(out)
@@ -726,6 +808,12 @@ def simulate_fleet(
     first ``n_wearing`` robots after ``r00`` lose ``wear_per_session`` of wheel b's radius per session,
     the next ``n_lagging`` have a wheel-clock lag growing by ``lag_per_session_s`` per session (0 in the
     first). ``truth["degrading"]`` names them.
+
+    >>> import tempfile
+    >>> out = Path(tempfile.mkdtemp())
+    >>> truth = simulate_fleet(out, n_robots=3, n_sessions=1, duration_s=0.5)
+    >>> truth["degrading"]["r02"], len(list((out / "r00" / "s00").glob("*.csv")))
+    (['clock lag +30 ms per session (time_offset)'], 36)
     """
     import json
     import random
@@ -810,7 +898,11 @@ A robot.toml per robot folder or one in FLEET_DIR describes the robots. Argument
 
 def main(argv: Sequence[str]) -> int:
     """``omnical fleet ...`` (``argv`` after the subcommand); returns the exit status (0, 2 on bad
-    input, 130 after Ctrl-C)."""
+    input, 130 after Ctrl-C).
+
+    >>> main(["no-such-fleet/", "--out", "fleet-out/"])  # prints "error: fleet folder ... does not exist"
+    2
+    """
     import argparse
 
     p = argparse.ArgumentParser(prog="omnical fleet", usage=USAGE.split("\n\n")[0][len("usage: ") :], description=USAGE.split("\n\n")[1])

@@ -1,0 +1,152 @@
+//! Project defaults (`omnical.toml`, `--config FILE`) and `omnical config` through the real binary
+//! (issue 19): where each value came from, a flag over the file, the file's values reaching `train`, and
+//! bad keys and values refused with the file, line and key (exit 2).
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn omnical(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir).output().expect("run omnical")
+}
+
+fn ok(args: &[&str], dir: &Path) -> String {
+    let out = omnical(args, dir);
+    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// The error line of a command that must fail with exit status 2.
+fn refused(args: &[&str], dir: &Path) -> String {
+    let out = omnical(args, dir);
+    assert_eq!(out.status.code(), Some(2), "{args:?}");
+    String::from_utf8(out.stderr).unwrap().trim_end().to_string()
+}
+
+/// `omnical config`'s rows as (key, value, source), split at runs of two or more spaces.
+fn rows(text: &str) -> Vec<(String, String, String)> {
+    text.lines()
+        .skip(1)
+        .take_while(|l| !l.is_empty())
+        .map(|l| {
+            let cells: Vec<&str> = l.split("  ").map(str::trim).filter(|c| !c.is_empty()).collect();
+            assert_eq!(cells.len(), 3, "{l}");
+            (cells[0].to_string(), cells[1].to_string(), cells[2].to_string())
+        })
+        .collect()
+}
+
+fn row<'a>(rows: &'a [(String, String, String)], key: &str) -> (&'a str, &'a str) {
+    let r = rows.iter().find(|r| r.0 == key).unwrap_or_else(|| panic!("no {key} in {rows:?}"));
+    (r.1.as_str(), r.2.as_str())
+}
+
+fn simulate(dir: &Path) {
+    ok(&["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "2", "--seed", "4", "-q"], dir);
+}
+
+const PROJECT: &str = "# omnical.toml\nseed = 5\njoints_topic = \"/wheels\"\nthreads = 1\n\n[simulate]\nseed = 11\n";
+
+#[test]
+fn config_shows_where_each_value_came_from() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    simulate(d);
+    // Without a project file: the robot.toml beside the data, with its lines, and defaults.
+    let text = ok(&["config", "sim/train"], d);
+    let r = rows(&text);
+    assert_eq!(row(&r, "robot"), ("sim/train/robot.toml", "found beside the data or in the working directory"));
+    assert_eq!(row(&r, "joints"), ("wheel_a, wheel_b, wheel_c", "sim/train/robot.toml:6"));
+    assert_eq!(row(&r, "joints_topic"), ("the only JointState topic", "default"));
+    assert_eq!(row(&r, "seed"), ("0 (train), 7 (simulate)", "default"));
+    assert_eq!(row(&r, "preset"), ("default", "default"));
+    assert!(text.contains("\nno project file (omnical.toml in the working directory or --config FILE)"), "{text}");
+    // With omnical.toml: its values with their lines; a flag wins over the file.
+    std::fs::write(d.join("omnical.toml"), PROJECT).unwrap();
+    let r = rows(&ok(&["config", "sim/train", "--joints", "x,y,z"], d));
+    assert_eq!(row(&r, "seed"), ("5", "omnical.toml:2"));
+    assert_eq!(row(&r, "joints_topic"), ("/wheels", "omnical.toml:3"));
+    assert_eq!(row(&r, "threads"), ("1", "omnical.toml:4"));
+    assert_eq!(row(&r, "simulate.seed"), ("11", "omnical.toml:7"));
+    assert_eq!(row(&r, "joints"), ("x, y, z", "command line"));
+    let r = rows(&ok(&["config", "sim/train", "--seed", "8", "--joints-topic", "/js"], d));
+    assert_eq!(row(&r, "seed"), ("8", "command line"));
+    assert_eq!(row(&r, "joints_topic"), ("/js", "command line"));
+    // A robot.toml's topics, with the line.
+    let robot = std::fs::read_to_string(d.join("sim/train/robot.toml")).unwrap();
+    std::fs::write(d.join("robot.toml"), format!("{robot}\n[topics]\nground_truth = \"/mocap\"\n")).unwrap();
+    let line = robot.lines().count() + 3;
+    let r = rows(&ok(&["config", "--robot", "robot.toml"], d));
+    assert_eq!(row(&r, "gt_topic"), ("/mocap", format!("robot.toml:{line}").as_str()));
+    assert_eq!(row(&r, "robot"), ("robot.toml", "command line"));
+    // The same rows as JSON.
+    let v: serde_json::Value = serde_json::from_str(&ok(&["config", "--robot", "robot.toml", "--json"], d)).unwrap();
+    assert_eq!((v["command"].as_str(), v["schema_version"].as_u64()), (Some("config"), Some(1)));
+    assert_eq!(v["project_file"], "omnical.toml");
+    let gt = v["settings"].as_array().unwrap().iter().find(|s| s["key"] == "gt_topic").unwrap();
+    assert_eq!(
+        (gt["value"].as_str(), gt["source"].as_str()),
+        (Some("/mocap"), Some(format!("robot.toml:{line}").as_str()))
+    );
+}
+
+#[test]
+fn the_project_file_sets_defaults_and_flags_win() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    simulate(d);
+    let seed_of = |args: &[&str]| -> u64 {
+        let base = ["train", "sim/train", "--json", "-q", "--preset", "paper"];
+        let v: serde_json::Value = serde_json::from_str(&ok(&[&base[..], args].concat(), d)).unwrap();
+        v["seed"].as_u64().unwrap()
+    };
+    assert_eq!(seed_of(&[]), 0);
+    std::fs::write(d.join("omnical.toml"), "seed = 5\n").unwrap();
+    assert_eq!(seed_of(&[]), 5);
+    assert_eq!(seed_of(&["--seed", "6"]), 6);
+    // A command's own table wins over the top level, for that command only.
+    std::fs::write(d.join("omnical.toml"), "seed = 5\n[train]\nseed = 9\n").unwrap();
+    assert_eq!(seed_of(&[]), 9);
+    // --config FILE elsewhere, its robot path relative to it.
+    std::fs::remove_file(d.join("omnical.toml")).unwrap();
+    std::fs::create_dir(d.join("proj")).unwrap();
+    std::fs::copy(d.join("sim/train/robot.toml"), d.join("proj/r.toml")).unwrap();
+    std::fs::write(d.join("proj/p.toml"), "seed = 3\nrobot = \"r.toml\"\n").unwrap();
+    assert_eq!(seed_of(&["--config", "proj/p.toml"]), 3);
+    let r = rows(&ok(&["config", "--config", "proj/p.toml"], d));
+    assert_eq!(row(&r, "robot"), ("proj/r.toml", "proj/p.toml:2"));
+    assert_eq!(row(&r, "joints"), ("wheel_a, wheel_b, wheel_c", "proj/r.toml:6"));
+}
+
+#[test]
+fn bad_project_files_name_the_file_line_and_key() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let cases = [
+        (
+            "seed = 5\nsed = 3\n",
+            "error: omnical.toml: line 2: sed: unknown key; known keys: threads, robot, joints, joints_topic, \
+             gt_topic, gt_parent_frame, gt_child_frame, gt, gt_time_offset, split, skip_invalid, ticks_per_rev, \
+             max_file_mb, preset, seed, objective, every, heading_weight, unexcited",
+        ),
+        (
+            "preset = \"fast\"\n",
+            "error: omnical.toml: line 1: preset: invalid value 'fast' for '--preset <PRESET>' [possible values: \
+             paper, default]",
+        ),
+        ("# x\n\n[eval]\nseed = 3\n", "error: omnical.toml: line 4: eval.seed: `omnical eval` has no --seed"),
+        ("seed = [1]\n", "error: omnical.toml: line 1: seed: expected a string, number or boolean, found array"),
+        ("seed = \n", "error: omnical.toml: not TOML: string values must be quoted, expected literal string"),
+    ];
+    for (text, want) in cases {
+        std::fs::write(d.join("omnical.toml"), text).unwrap();
+        for args in [&["config"][..], &["eval", "--model", "design", "x"]] {
+            let got = refused(args, d);
+            assert_eq!(got.lines().next().unwrap(), want, "{text:?} {args:?}");
+        }
+    }
+    // Help and version do not read the file.
+    assert!(omnical(&["--help"], d).status.success());
+    let missing = refused(&["--config", "nope.toml", "eval", "x"], d);
+    assert!(missing.starts_with("error: nope.toml: No such file"), "{missing}");
+}

@@ -1,0 +1,87 @@
+//! `export`: trajectories for other tools, as `omnical export` writes them (its own functions): TUM files
+//! for evo, MCAP bags with the model's odometry on /omnical/odometry for Foxglove.
+
+use crate::errors::{OmnicalError, value_error};
+use crate::robot::{check_order, model_spec};
+use crate::run::{origin_of, runs_from};
+use omni_cli::cmd::export::{write_mcap, write_tum};
+use omni_cli::design::design_for;
+use pyo3::exceptions::{PyFileNotFoundError, PyOSError};
+use pyo3::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// Write trajectories of ``model`` on ``runs`` for other tools, as ``omnical export --model MODEL RUNS``.
+///
+/// ``tum``: a folder for ``<run>.gt.tum`` (ground truth), ``<run>.design.tum`` and ``<run>.calibrated.tum``
+/// (the odometry of the design and of ``model``: every wheel-sample step plus the ground-truth stamps),
+/// byte for byte the CLI's files for the same model spelling and runs (``evo_ape tum A.gt.tum
+/// A.calibrated.tum``). ``mcap``: a folder for one ROS 2 bag per run, the run's topics plus ``model``'s
+/// odometry on ``/omnical/odometry`` (and the recorded odometry of runs loaded with
+/// ``recorded_odometry=True``). ``model``: as in :func:`evaluate`. Returns the paths written. The GIL is
+/// released.
+///
+/// >>> import tempfile
+/// >>> runs = omnical.simulate(runs_per_command=1, duration_s=1.0)[:2]
+/// >>> files = omnical.export("paper", runs, tum=tempfile.mkdtemp(), mcap=tempfile.mkdtemp())
+/// >>> [f.rsplit("/", 1)[1] for f in files]  # doctest: +NORMALIZE_WHITESPACE
+/// ['train_00-r0.gt.tum', 'train_00-r0.design.tum', 'train_00-r0.calibrated.tum', 'train_01-r0.gt.tum',
+///  'train_01-r0.design.tum', 'train_01-r0.calibrated.tum', 'train_00-r0.mcap', 'train_01-r0.mcap']
+#[pyfunction]
+#[pyo3(signature = (model, runs, *, tum = None, mcap = None, robot = None))]
+pub fn export(
+    py: Python<'_>,
+    model: &Bound<'_, PyAny>,
+    runs: &Bound<'_, PyAny>,
+    tum: Option<PathBuf>,
+    mcap: Option<PathBuf>,
+    robot: Option<PathBuf>,
+) -> PyResult<Vec<String>> {
+    check_order(model, runs, "omnical.export")?;
+    if tum.is_none() && mcap.is_none() {
+        return Err(value_error("omnical.export: nothing to export: give tum=DIR and/or mcap=DIR"));
+    }
+    let origin = origin_of(runs);
+    let (runs, declared) = runs_from(runs, "runs")?;
+    let (fm, adapters, spec) = model_spec(py, model, robot.as_ref(), declared, "omnical.export")?;
+    let errors = crate::effect::EffectErrors::new(adapters);
+    let design = design_for(&fm);
+    // The joints the CLI names the wheels by: the data's robot description's, else the model's columns.
+    let joints = match origin.robot_file {
+        Some(_) => omni_cli::cmd::wheel_joints(&omni_cli::cmd::DataArgs::default(), &origin),
+        None => fm.model.kinematics.wheel_names(),
+    };
+    let written = py.detach(|| -> anyhow::Result<Vec<PathBuf>> {
+        let mut written = Vec::new();
+        if let Some(dir) = &tum {
+            create_dir(dir)?;
+            for run in &runs {
+                written.extend(write_tum(dir, run, &design, &fm, &spec)?);
+            }
+        }
+        if let Some(dir) = &mcap {
+            create_dir(dir)?;
+            for run in &runs {
+                written.push(write_mcap(dir, run, &fm, &joints)?);
+            }
+        }
+        Ok(written)
+    });
+    let written = errors.check(written)?.map_err(export_error)?;
+    Ok(written.iter().map(|p| p.display().to_string()).collect())
+}
+
+fn create_dir(dir: &Path) -> anyhow::Result<()> {
+    use anyhow::Context;
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))
+}
+
+/// An export failure as the Python exception of its cause (`FileNotFoundError`, `OSError`, else
+/// `OmnicalError`), with the CLI's message.
+fn export_error(e: anyhow::Error) -> PyErr {
+    let message = format!("{e:#}");
+    match e.chain().find_map(|c| c.downcast_ref::<std::io::Error>()) {
+        Some(io) if io.kind() == std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
+        Some(_) => PyOSError::new_err(message),
+        None => OmnicalError::new_err(message),
+    }
+}
