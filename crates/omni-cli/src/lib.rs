@@ -19,3 +19,4 @@ pub mod project_file;
 pub mod report;
 pub mod robot_config;
 pub mod robot_file;
+pub mod units;

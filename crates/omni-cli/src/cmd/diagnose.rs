@@ -3,6 +3,7 @@
 use super::{DataArgs, OutputArgs, load_with_held_out, resolve_model};
 use crate::cli::effect_help;
 use crate::design::design_for;
+use crate::units::{std_error_text, value_text};
 use crate::{atomic, model_file};
 use anyhow::Context;
 use omni_ga::diagnose::{DiagnoseOptions, Diagnosis, diagnose};
@@ -149,8 +150,11 @@ pub fn print_diagnosis(d: &Diagnosis) {
     }
     if let Some(nf) = &d.noise_floor {
         println!(
-            "   noise floor: {:.4} m position, {:.4} rad heading at standstill → path RMS ≈ {:.4} m ({} poses)",
-            nf.position_m, nf.heading_rad, nf.path_rms, nf.samples
+            "   noise floor: {:.4} m position, {} heading at standstill → path RMS ≈ {:.4} m ({} poses)",
+            nf.position_m,
+            value_text(nf.heading_rad, "rad").trim_start(),
+            nf.path_rms,
+            nf.samples
         );
     }
     if let Some(id) = &d.identifiability {
@@ -170,14 +174,14 @@ pub fn print_diagnosis(d: &Diagnosis) {
     println!("   {:<20} {:>9} {:>11} {:>9}  parameters", "effect", "gain %", "1st-order %", "separable");
     for c in &d.ranking {
         let params: Vec<String> = if c.absorbed {
-            c.implied.iter().map(|p| format!("{}={:.4} {}", p.name, p.value, p.unit)).collect()
+            c.implied.iter().map(|p| format!("{}={}", p.name, param_text(p.value, None, &p.unit))).collect()
         } else {
             c.params
                 .iter()
                 .map(|p| match p.std_error {
-                    Some(se) => format!("{}={:.4}±{:.4} {}", p.name, p.value, se, p.unit),
+                    Some(se) => format!("{}={}", p.name, param_text(p.value, Some(se), &p.unit)),
                     // Part of a direction the runs do not constrain (see the identifiability analysis).
-                    None => format!("{}={:.4} {} (undetermined)", p.name, p.value, p.unit),
+                    None => format!("{}={} (undetermined)", p.name, param_text(p.value, None, &p.unit)),
                 })
                 .collect()
         };
@@ -220,4 +224,29 @@ pub fn print_diagnosis(d: &Diagnosis) {
         }
     }
     println!("verdict: {}", d.verdict_text);
+}
+
+/// A ranking parameter's value (and standard error) in its unit: an angle (unit `rad`) as `omnical train`
+/// prints it, in degrees with radians in parentheses (`2.0053° (0.034999 rad) ±1.15e-2° (2.00e-4 rad)`);
+/// anything else as `0.0602±0.0004 s`.
+fn param_text(value: f64, std_error: Option<f64>, unit: &str) -> String {
+    match (unit, std_error) {
+        ("rad", Some(se)) => format!("{} {}", value_text(value, unit).trim_start(), std_error_text(se, unit)),
+        ("rad", None) => value_text(value, unit).trim_start().to_string(),
+        (_, Some(se)) => format!("{value:.4}±{se:.4} {unit}"),
+        (_, None) => format!("{value:.4} {unit}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::param_text;
+
+    #[test]
+    fn ranking_angles_print_in_degrees_with_radians() {
+        assert_eq!(param_text(0.034999, Some(2.0e-4), "rad"), "2.0053° (0.034999 rad) ±1.15e-2° (2.00e-4 rad)");
+        assert_eq!(param_text(-0.001, None, "rad"), "-0.0573° (-0.001000 rad)");
+        assert_eq!(param_text(0.0602, Some(0.0004), "s"), "0.0602±0.0004 s");
+        assert_eq!(param_text(0.0123, None, "m"), "0.0123 m");
+    }
 }

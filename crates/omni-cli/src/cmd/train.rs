@@ -4,6 +4,7 @@ use super::{DataArgs, OutputArgs, load_runs};
 use crate::cli::{choice, effect_help};
 use crate::dataset::Dataset;
 use crate::robot_file::{self, Design};
+use crate::units::{std_error_text, value_text};
 use crate::{atomic, design, interrupt, model_file, progress};
 use anyhow::Context;
 use omni_ga::calibrate::{Calibration, Plan, Preset, Unexcited, calibrate};
@@ -401,25 +402,6 @@ pub fn print_summary(c: &Calibration, preset: &str, runs: usize) {
         println!("note: the polish left the GA box (the box was too small) for: {}", c.outside_box.join(", "));
     }
     print_identifiability(c);
-}
-
-/// A fitted value in its unit, right-aligned: an angle (unit `rad`) in degrees with radians in parentheses
-/// (`    -30.0123° (-0.523813 rad)`), anything else as `{value:>14.6} {unit}`.
-pub fn value_text(value: f64, unit: &str) -> String {
-    if unit == "rad" {
-        format!("{:>13.4}° ({value:.6} rad)", value.to_degrees())
-    } else {
-        format!("{value:>14.6} {unit}")
-    }
-}
-
-/// A standard error in its unit: an angle (unit `rad`) in degrees with radians in parentheses.
-fn std_error_text(std_error: f64, unit: &str) -> String {
-    if unit == "rad" {
-        format!("±{:.2e}° ({std_error:.2e} rad)", std_error.to_degrees())
-    } else {
-        format!("±{std_error:.2e} {unit}")
-    }
 }
 
 /// Standard errors, condition number, and a warning per unconstrained direction.
