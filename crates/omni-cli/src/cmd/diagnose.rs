@@ -150,9 +150,10 @@ pub fn print_diagnosis(d: &Diagnosis) {
     }
     if let Some(nf) = &d.noise_floor {
         println!(
-            "   noise floor: {:.4} m position, {} heading at standstill → path RMS ≈ {:.4} m ({} poses)",
+            "   noise floor: {:.4} m position, {} heading {} → path RMS ≈ {:.4} m ({} poses)",
             nf.position_m,
             value_text(nf.heading_rad, "rad").trim_start(),
+            text::noise_source(nf.source),
             nf.path_rms,
             nf.samples
         );

@@ -157,8 +157,12 @@ fn findings(h: &mut String, d: &Diagnosis) {
     if let Some(nf) = &d.noise_floor {
         let _ = writeln!(
             h,
-            "<li>Noise floor at standstill: {:.4} m position, {:.4} rad heading → path RMS ≈ {:.4} m ({} poses).</li>",
-            nf.position_m, nf.heading_rad, nf.path_rms, nf.samples
+            "<li>Noise floor {}: {:.4} m position, {:.4} rad heading → path RMS ≈ {:.4} m ({} poses).</li>",
+            omni_ga::science::text::noise_source(nf.source),
+            nf.position_m,
+            nf.heading_rad,
+            nf.path_rms,
+            nf.samples
         );
     }
     h.push_str("</ul>\n");

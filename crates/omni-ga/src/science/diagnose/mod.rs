@@ -33,6 +33,7 @@
 mod compare;
 mod evidence;
 mod findings;
+mod kinds;
 mod noise;
 mod search;
 mod unexplained;
@@ -41,6 +42,7 @@ pub use compare::{Turn, costs_of};
 pub(crate) use evidence::unbounded;
 pub use evidence::{differentiable_start, refit};
 pub use findings::{Conclusion, Finding, Remaining, Verdict};
+pub use kinds::{GroupBasis, MotionKind, Shape};
 pub use noise::{ExcitationGap, GapKind, WheelGap, noise_floor, wheel_excitation, wheel_excitation_gap};
 pub use unexplained::{DecidedBy, UnexplainedEvidence};
 
@@ -121,11 +123,15 @@ pub struct RunReport {
     pub design_end_error: f64,
 }
 
-/// Errors of a group of runs sharing a command direction and turn sign.
+/// Errors of a group of runs sharing a command direction and turn sign, or (runs without a command) the
+/// same kind of path ([`MotionKind`]).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct GroupReport {
-    /// `α=30° ω>0` style label.
+    /// `α=30° ω>0` style label, or the kind of path (`arcs, net turn left, ~0.20 m/s, ~4.00 m`).
     pub group: String,
+    /// Whether the runs repeat one command or only share a kind of path.
+    #[serde(default)]
+    pub basis: GroupBasis,
     /// Runs in it.
     pub runs: usize,
     /// Mean end-pose error vector (dx m, dy m, dθ rad) in the world frame.
@@ -232,8 +238,23 @@ pub struct NoiseFloor {
     pub heading_rad: f64,
     /// Path RMS expected from this noise alone (start and current pose noise). m.
     pub path_rms: f64,
-    /// Stationary poses used.
+    /// Poses used (at rest; or third differences, for the jitter estimate).
     pub samples: usize,
+    /// Where the estimate comes from.
+    #[serde(default)]
+    pub source: NoiseSource,
+}
+
+/// Where a noise floor comes from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NoiseSource {
+    /// The scatter of the ground truth while the robot stands still (rests at the runs' ends).
+    #[default]
+    Standstill,
+    /// The runs never stand still: the ground truth's sample-to-sample jitter while moving (third
+    /// differences).
+    Jitter,
 }
 
 /// The whole diagnosis.
@@ -358,6 +379,30 @@ fn recommend(
     Ok(((!failed).then(|| winner.effect.clone()), kind_check))
 }
 
+/// Whether something physical is still missing once `model` is used: the one decision of diagnose,
+/// explore and the report ([`unexplained`](crate::science::diagnose::DecidedBy)), from `model`'s groups and
+/// error growth on the training runs `train`, its remaining held-out path RMS `held_out_m` (m) and the
+/// noise floor ([`noise_of`]).
+pub fn remains(
+    model: &FittedModel,
+    train: &[Run],
+    held: &[Run],
+    held_out_m: f64,
+    every: usize,
+) -> Result<(bool, UnexplainedEvidence, Option<NoiseFloor>), Error> {
+    let cmp = compare(model, model, train, every.max(1))?;
+    let noise = noise_of(train, held);
+    let (missing, evidence) =
+        unexplained::decide(&cmp.groups, &cmp.growth, repeatability_floor(&cmp.groups), held_out_m, noise.as_ref());
+    Ok((missing, evidence, noise))
+}
+
+/// The measurement noise floor of the training runs, or of the held-out runs when the training runs
+/// show none.
+pub fn noise_of(train: &[Run], held: &[Run]) -> Option<NoiseFloor> {
+    noise_floor(train).or_else(|| noise_floor(held))
+}
+
 /// Diagnose `model` on `train`, holding out `validation` (or cross-validating over repetitions).
 pub fn diagnose(
     model: &FittedModel,
@@ -375,7 +420,7 @@ pub fn diagnose(
     let costs = costs_of(model, &fit_runs, &held_runs, every)?;
     let design_costs = costs_of(design, &fit_runs, &held_runs, every)?;
     let cmp = compare(model, design, train, every)?;
-    let noise = noise_floor(train);
+    let noise = noise_of(train, &held_runs);
     // Each candidate's evidence, ranked; with `auto`, the error ladder.
     let bench = Bench { design, fit_runs: &fit_runs, held_runs: &held_runs, every, noise: noise.as_ref() };
     let climb = search::climb(&bench, model, &costs, &design_costs, opts)?;
@@ -385,7 +430,14 @@ pub fn diagnose(
         .ok()
         .map(|p| p.identifiability(&model.params, &IdentifyOptions::default()));
     let repeat_floor = repeatability_floor(&cmp.groups);
-    let facts = findings(&cmp.runs, &cmp.groups, &cmp.growth, &climb.ranking, identifiability.as_ref(), repeat_floor);
+    let mut facts =
+        findings(&cmp.runs, &cmp.groups, &cmp.growth, &climb.ranking, identifiability.as_ref(), repeat_floor);
+    if protocol != HeldOut::TrainingRuns {
+        let (worse, runs) = compare::worse_than_design(model, design, &held_runs, every)?;
+        if worse > 0 {
+            facts.insert(facts.len().min(1), Finding::WorseThanDesign { worse, runs });
+        }
+    }
     // The repeat structure with the accepted effects: the verdict's (refitted), or those `auto` added.
     let accepted = match (&verdict, climb.ranking.first(), opts.auto) {
         (Some(_), Some(Candidate { fitted: Some(f), .. }), false) => Some(f),
