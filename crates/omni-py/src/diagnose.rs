@@ -74,14 +74,17 @@ impl PyDiagnosis {
     fn verdict_text(&self) -> String {
         self.inner.verdict_text.clone()
     }
-    /// A systematic error remains that no accepted effect removes (decided by the share of command groups
-    /// biased beyond their repeat scatter, or without repeats by the noise-floor ratio).
+    /// Something physical is still missing that no accepted effect removes: the held-out error is 10× the
+    /// noise floor or more, or groups of runs (repeats of a command, or runs of one kind of path) are biased
+    /// beyond their scatter, or without such groups it is above 3× the noise floor. The same decision as
+    /// ``Exploration.unexplained``.
     #[getter]
     fn unexplained(&self) -> bool {
         self.inner.unexplained
     }
-    /// The figures behind ``unexplained``: decided_by (``repeats``, ``noise_floor_ratio`` or ``undecided``),
-    /// groups_biased, groups_total, share_biased, chance_probability, repeatability_floor,
+    /// The figures behind ``unexplained``: decided_by (``far_above_noise``, ``repeats``,
+    /// ``noise_floor_ratio`` or ``undecided``), groups_biased, groups_total, groups_basis (``command`` or
+    /// ``motion``), share_biased, chance_probability, repeatability_floor,
     /// remaining_held_out_m [m], noise_floor_m [m], ratio, growth, early_m [m], late_m [m] (None where
     /// not measured).
     #[getter]

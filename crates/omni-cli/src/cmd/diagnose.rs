@@ -50,9 +50,10 @@ pub struct Args {
 /// Runs `omnical diagnose`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
     let (d, loaded) = diagnose_loaded(a)?;
-    // The explorer stage of `--auto`: only when the catalogue leaves a systematic error unexplained, on the
-    // same training and held-out runs, starting from the model the ladder ended with.
-    let exploration = match (&loaded.validate, a.auto && d.unexplained) {
+    // The explorer stage of `--auto`: whenever the catalogue leaves the held-out error above the noise floor
+    // (or something missing), on the same training and held-out runs, from the model the ladder ended with.
+    let explore_stage = a.auto && d.error_remains();
+    let exploration = match (&loaded.validate, explore_stage) {
         (Some(v), true) => {
             let from = d.final_model.as_ref().unwrap_or(&loaded.model);
             Some(explore(from, &loaded.train, v, &ExploreOptions::default())?)
@@ -69,7 +70,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         super::print_json("diagnose", doc)?;
     } else {
         print_diagnosis(&d);
-        if a.auto && d.unexplained {
+        if explore_stage {
             print_explore_stage(exploration.as_ref());
         }
     }

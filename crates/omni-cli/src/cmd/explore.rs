@@ -94,6 +94,7 @@ pub fn to_json(e: &Exploration) -> Value {
         "schema_version": SCHEMA_VERSION,
         "families": e.families.iter().map(family_json).collect::<Vec<_>>(),
         "unexplained": e.unexplained,
+        "unexplained_evidence": e.evidence,
         "best": e.best().map(|f| f.family.id()),
         "baseline_held_out_cost_m": e.baseline_held_out_cost,
         "noise_floor_path_rms_m": e.noise_floor_path_rms,

@@ -220,6 +220,80 @@ mod tests {
         assert_eq!(binomial_tail(5, 0, 0.05), 1.0);
     }
 
+    /// `n` groups of 5 runs, the first `biased` of them biased, and a noise floor of 2 mm path RMS.
+    fn groups(n: usize, biased: usize, basis: GroupBasis) -> Vec<GroupReport> {
+        (0..n)
+            .map(|i| GroupReport {
+                group: format!("g{i}"),
+                basis,
+                runs: 5,
+                mean_end_error: [0.0; 3],
+                bias: 0.0,
+                scatter: 0.01,
+                p_value: Some(if i < biased { 0.001 } else { 0.5 }),
+                systematic: i < biased,
+            })
+            .collect()
+    }
+
+    fn floor() -> NoiseFloor {
+        NoiseFloor { position_m: 0.0, heading_rad: 0.0, path_rms: 0.002, samples: 100, source: Default::default() }
+    }
+
+    fn growth() -> Growth {
+        Growth { fraction: vec![0.5], position_m: vec![0.01], heading_rad: vec![0.0] }
+    }
+
+    #[test]
+    fn far_above_the_noise_floor_something_is_missing_whatever_the_groups_say() {
+        // Real runs without command ids: one group of one kind, unbiased, 18x the floor (omni3's case, where
+        // the repeat test once said "no systematic error remains").
+        let (missing, ev) = decide(&groups(1, 0, GroupBasis::Motion), &growth(), None, 0.036, Some(&floor()));
+        assert!(missing);
+        assert_eq!(ev.decided_by, DecidedBy::FarAboveNoise);
+        assert_eq!((ev.groups_total, ev.groups_biased, ev.groups_basis), (1, 0, GroupBasis::Motion));
+        assert!((ev.ratio.unwrap() - 18.0).abs() < 1e-12);
+        // 36 command groups, none biased, but 10x the floor: still missing.
+        let (missing, ev) = decide(&groups(36, 0, GroupBasis::Command), &growth(), None, 0.020, Some(&floor()));
+        assert!(missing);
+        assert_eq!(ev.decided_by, DecidedBy::FarAboveNoise);
+    }
+
+    #[test]
+    fn a_single_group_never_decides_the_noise_floor_does() {
+        // One group, biased or not: P(X >= 1 | 1, 5 %) = 5 % is never beyond chance at 1 %.
+        for biased in [0, 1] {
+            let g = groups(1, biased, GroupBasis::Motion);
+            let (missing, ev) = decide(&g, &growth(), None, 0.010, Some(&floor()));
+            assert!(missing, "5x the floor");
+            assert_eq!(ev.decided_by, DecidedBy::NoiseFloorRatio);
+            let (missing, ev) = decide(&g, &growth(), None, 0.004, Some(&floor()));
+            assert!(!missing, "2x the floor");
+            assert_eq!(ev.decided_by, DecidedBy::NoiseFloorRatio);
+        }
+        // Without a noise floor nothing decides.
+        let (missing, ev) = decide(&groups(1, 1, GroupBasis::Motion), &growth(), None, 0.010, None);
+        assert!(!missing);
+        assert_eq!(ev.decided_by, DecidedBy::Undecided);
+    }
+
+    #[test]
+    fn below_ten_noise_floors_the_groups_decide_when_they_can() {
+        // Clean simulated data: 3 of 36 command groups biased (as many by chance with probability 0.27),
+        // 1.1x the floor.
+        let (missing, ev) = decide(&groups(36, 3, GroupBasis::Command), &growth(), None, 0.0022, Some(&floor()));
+        assert!(!missing);
+        assert_eq!(ev.decided_by, DecidedBy::Repeats);
+        assert!((ev.chance_probability.unwrap() - binomial_tail(36, 3, 0.05)).abs() < 1e-15);
+        // Two groups of one kind, both biased (probability 0.0025 by chance), 5x the floor: missing.
+        let (missing, ev) = decide(&groups(2, 2, GroupBasis::Motion), &growth(), None, 0.010, Some(&floor()));
+        assert!(missing);
+        assert_eq!((ev.decided_by, ev.groups_basis), (DecidedBy::Repeats, GroupBasis::Motion));
+        // 9 of 36 biased at 5x: missing; 1 of 36 at 5x: the groups say no bias beyond chance.
+        assert!(decide(&groups(36, 9, GroupBasis::Command), &growth(), None, 0.010, Some(&floor())).0);
+        assert!(!decide(&groups(36, 1, GroupBasis::Command), &growth(), None, 0.010, Some(&floor())).0);
+    }
+
     #[test]
     fn a_group_is_biased_when_its_mean_is_far_beyond_its_standard_error() {
         // Mean 3 mm, scatter 1 mm over 5 repeats: t = 6.7 (4 dof), p = 0.0026 per component, 0.0077 corrected.
