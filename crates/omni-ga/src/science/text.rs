@@ -7,8 +7,8 @@
 //! beside them in the results so that JSON, the CLI and Python show the same text.
 
 use crate::science::diagnose::{
-    Conclusion, DecidedBy, ExcitationGap, Finding, GapKind, GroupBasis, HeldOut, NoiseSource, RungKind, Turn, UnexplainedEvidence,
-    Verdict,
+    Conclusion, DecidedBy, ExcitationGap, Finding, GapKind, GroupBasis, HeldOut, NoiseSource, RungKind, Turn,
+    UnexplainedEvidence, Verdict,
 };
 use crate::science::identify::{Advice, MotionParts, PatternPresence, WeakDirection, WheelEvidence};
 
@@ -196,7 +196,11 @@ fn unexplained(v: &Verdict) -> String {
             )
         }
         (DecidedBy::Repeats, true) => {
-            format!("something physical is still missing, decided by the {}: {}; {floor}{growth}", groups_short(e.groups_basis), repeats(e))
+            format!(
+                "something physical is still missing, decided by the {}: {}; {floor}{growth}",
+                groups_short(e.groups_basis),
+                repeats(e)
+            )
         }
         (DecidedBy::Repeats, false) => format!(
             "no systematic error remains, decided by the {}: {}{}; {floor}",
@@ -506,7 +510,9 @@ pub fn explore_conclusion(e: &Exploration) -> String {
     match e.best() {
         Some(f) => {
             let rest = if e.unexplained {
-                format!("; with it the held-out path error ({remaining:.4} m) is still {floor}: something physical is still missing")
+                format!(
+                    "; with it the held-out path error ({remaining:.4} m) is still {floor}: something physical is still missing"
+                )
             } else {
                 String::new()
             };

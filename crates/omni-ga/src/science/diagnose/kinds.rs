@@ -177,9 +177,8 @@ mod tests {
     fn circles_squares_lines_and_figure_eights_are_told_apart() {
         // A circle of radius 0.5 m at 0.2 m/s, turning left: arcs, ~0.2 m/s, one lap ≈ 3.1 m.
         let w = 0.4;
-        let circle = run_along(2.0 * std::f64::consts::PI / w, |t| {
-            (0.5 * (w * t).sin(), 0.5 - 0.5 * (w * t).cos(), w * t)
-        });
+        let circle =
+            run_along(2.0 * std::f64::consts::PI / w, |t| (0.5 * (w * t).sin(), 0.5 - 0.5 * (w * t).cos(), w * t));
         let k = MotionKind::of(&circle).expect("moves");
         assert_eq!((k.shape, k.turn, k.speed_band, k.length_band), (Shape::Arc, Turn::Left, 1, 2));
         assert!(k.groups());
