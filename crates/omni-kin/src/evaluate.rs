@@ -15,10 +15,10 @@
 
 use crate::cost::{CostKind, check_runs, mean_end_pose_error};
 use crate::error::KinError;
-use crate::fast::{MAX_WHEELS, PreparedRuns};
+use crate::fast::{MAX_WHEELS, PreparedRuns, general};
 use crate::model::{Model, Resolved, StepMode};
 use crate::odometry::{self, Selection};
-use crate::plan::StepPlan;
+use crate::plan::{StepPlan, wheel_speeds};
 use crate::pose::PoseError;
 use crate::run::Run;
 use nalgebra::DMatrix;
@@ -188,7 +188,14 @@ impl<'a> Evaluator<'a> {
 
     /// Errors at the selected poses and at each run's end.
     pub fn errors(&self, res: &Resolved<'_>) -> RunErrors {
-        self.fast_errors(res).unwrap_or_else(|| walk_errors(res, self.runs, self.selection))
+        self.fast_errors(res).unwrap_or_else(|| self.unprepared_errors(res, self.selection))
+    }
+
+    /// Errors at the poses of `selection` without the prepared runs: the general fast walk on
+    /// [`Route::Fast`] (where its step angles stay small), else the literal walk.
+    fn unprepared_errors(&self, res: &Resolved<'_>, selection: Selection) -> RunErrors {
+        let general = (self.route == Route::Fast).then(|| general_errors(res, self.runs, selection)).flatten();
+        general.unwrap_or_else(|| walk_errors(res, self.runs, selection))
     }
 
     fn fast_errors(&self, res: &Resolved<'_>) -> Option<RunErrors> {
@@ -212,7 +219,7 @@ impl<'a> Evaluator<'a> {
         if let Some(e) = self.prepared.as_ref().and_then(|p| p.end_pose_errors(res, self.runs)) {
             return e;
         }
-        walk_errors(res, self.runs, Selection::End).ends
+        self.unprepared_errors(res, Selection::End).ends
     }
 
     /// The cost `kind` of `res`: the Eq. 6 cost from any selection; a path cost from this selection when it
@@ -234,7 +241,7 @@ impl<'a> Evaluator<'a> {
         if kind.selection() == self.selection {
             self.errors(res)
         } else {
-            walk_errors(res, self.runs, kind.selection())
+            self.unprepared_errors(res, kind.selection())
         }
     }
 
@@ -268,6 +275,33 @@ impl<'a> Evaluator<'a> {
     pub fn route(&self) -> Route {
         self.route
     }
+}
+
+/// Errors of the general fast walk ([`crate::fast::general`]) at the poses of `selection` (one run per
+/// task, in parallel); `None` when a step angle of some run leaves the polynomials' range.
+pub(crate) fn general_errors(res: &Resolved<'_>, runs: &[Run], selection: Selection) -> Option<RunErrors> {
+    let per: Vec<Option<(Vec<PoseError>, PoseError)>> = runs
+        .par_iter()
+        .map(|r| {
+            let idx = match selection {
+                Selection::End => Vec::new(),
+                Selection::Path(_) => selection.indices(r.truth().len()),
+            };
+            let plan = StepPlan::new(r, res.clock_lag_s, &idx);
+            general::run_errors(res, r, &plan, &wheel_speeds(res, r))
+        })
+        .collect();
+    let mut out = RunErrors { errors: Vec::new(), offsets: vec![0], ends: Vec::with_capacity(runs.len()) };
+    for e in per {
+        let (at, end) = e?;
+        match selection {
+            Selection::End => out.errors.push(end),
+            Selection::Path(_) => out.errors.extend(at),
+        }
+        out.ends.push(end);
+        out.offsets.push(out.errors.len());
+    }
+    Some(out)
 }
 
 /// Errors of the literal walk at the poses of `selection` (one walk per run, in parallel).

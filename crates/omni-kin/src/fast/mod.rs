@@ -22,6 +22,7 @@
 //! Results are deterministic: groups are evaluated in parallel and collected in run order, so they do not
 //! depend on the thread count. With FMA the last bits differ from a CPU without it.
 
+pub(crate) mod general;
 mod jacobian;
 mod kernel;
 mod lanes;
