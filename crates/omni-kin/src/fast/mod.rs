@@ -22,6 +22,7 @@
 //! Results are deterministic: groups are evaluated in parallel and collected in run order, so they do not
 //! depend on the thread count. With FMA the last bits differ from a CPU without it.
 
+mod features;
 pub(crate) mod general;
 mod jacobian;
 mod kernel;
@@ -33,10 +34,13 @@ use crate::odometry::Selection;
 use crate::plan::wheel_speeds;
 use crate::pose::PoseError;
 use crate::run::Run;
+use features::{WheelFeatures, affine_wheel_effect};
 use nalgebra::DMatrix;
 use prepare::{Group, Increments, max_per_wheel};
 use rayon::prelude::*;
+use std::borrow::Cow;
 use std::cell::RefCell;
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// Runs per lane group.
 pub const LANES: usize = 4;
@@ -114,7 +118,45 @@ pub struct PreparedRuns {
     n_wheels: usize,
     fixed_dt_s: Option<f64>,
     selection: Selection,
+    /// Keep the increments (else each walk redoes them).
+    keep: bool,
+    /// The groups without clock lag.
     groups: Vec<Group>,
+    /// The groups of the last few other clock lags.
+    lagged: LagCache,
+    /// The parts of the models' affine wheel-stage effect, taken at the first evaluation with one.
+    features: OnceLock<Option<Arc<WheelFeatures>>>,
+}
+
+/// Lagged group sets kept at once: a fit evaluates one lag several times (residuals, Jacobian rows) and its
+/// finite differences two more.
+const LAGS_KEPT: usize = 4;
+
+/// The groups prepared for the last [`LAGS_KEPT`] clock lags other than 0, newest last, by the lag's bits.
+/// Each set is a pure function of the runs and the lag, so the cache never changes a result.
+#[derive(Debug, Default)]
+struct LagCache(Mutex<Vec<(u64, Arc<Vec<Group>>)>>);
+
+impl Clone for LagCache {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
+}
+
+/// The groups an evaluation walks: the prepared ones, or a set prepared for its clock lag.
+enum Groups<'a> {
+    Unlagged(&'a [Group]),
+    Lagged(Arc<Vec<Group>>),
+}
+
+impl std::ops::Deref for Groups<'_> {
+    type Target = [Group];
+    fn deref(&self) -> &[Group] {
+        match self {
+            Groups::Unlagged(g) => g,
+            Groups::Lagged(g) => g,
+        }
+    }
 }
 
 impl PreparedRuns {
@@ -136,10 +178,33 @@ impl PreparedRuns {
         let n_wheels = runs.first().map_or(0, Run::n_wheels);
         let bytes = runs.iter().map(|r| std::mem::size_of_val(r.wheel_rad_s())).sum::<usize>();
         let keep = bytes <= max_bytes;
-        let groups = (runs.par_chunks(LANES).enumerate())
-            .map(|(gi, chunk)| Group::new(gi * LANES, chunk, fixed_dt_s, selection, keep))
-            .collect();
-        Self { n_runs: runs.len(), n_wheels, fixed_dt_s, selection, groups }
+        let groups = make_groups(runs, fixed_dt_s, selection, 0.0, keep);
+        let (lagged, features) = (LagCache::default(), OnceLock::new());
+        Self { n_runs: runs.len(), n_wheels, fixed_dt_s, selection, keep, groups, lagged, features }
+    }
+
+    /// The groups for a clock lag of `lag_s` (prepared now, or kept from an earlier evaluation); `None` when
+    /// `runs` are not the prepared runs.
+    fn groups_for(&self, lag_s: f64, runs: &[Run]) -> Option<Groups<'_>> {
+        if runs.len() != self.n_runs {
+            return None;
+        }
+        if lag_s == 0.0 {
+            return Some(Groups::Unlagged(&self.groups));
+        }
+        let key = lag_s.to_bits();
+        let kept = |cache: &Vec<(u64, Arc<Vec<Group>>)>| cache.iter().find(|(k, _)| *k == key).map(|(_, g)| g.clone());
+        if let Some(g) = self.lagged.0.lock().ok().and_then(|c| kept(&c)) {
+            return Some(Groups::Lagged(g));
+        }
+        let groups = Arc::new(make_groups(runs, self.fixed_dt_s, self.selection, lag_s, self.keep));
+        if let Ok(mut cache) = self.lagged.0.lock() {
+            if cache.len() == LAGS_KEPT {
+                cache.remove(0);
+            }
+            cache.push((key, groups.clone()));
+        }
+        Some(Groups::Lagged(groups))
     }
 
     /// Number of runs.
@@ -157,12 +222,12 @@ impl PreparedRuns {
         self.groups.iter().all(|g| g.kept().is_some())
     }
 
-    /// True when `res` can use these prepared runs (same fixed step, no clock lag, no twist-stage effects,
-    /// no measured stamps, 1 to [`MAX_WHEELS`] wheels). Wheel-stage effects are applied to the runs'
-    /// wheel speeds before the increments are redone, on each evaluation.
+    /// True when `res` can use these prepared runs (same fixed step, no twist-stage effects, no measured
+    /// stamps, 1 to [`MAX_WHEELS`] wheels). Wheel-stage effects are applied to the runs' wheel speeds
+    /// before the increments are redone, on each evaluation; a clock lag takes groups prepared for it.
     pub fn supports(&self, res: &Resolved<'_>) -> bool {
         !res.stamps
-            && res.clock_lag_s == 0.0
+            && res.clock_lag_s.is_finite()
             && res.twist_effects.is_empty()
             && res.fixed_dt_s == self.fixed_dt_s
             && res.ik.n_wheels() == self.n_wheels
@@ -172,7 +237,11 @@ impl PreparedRuns {
     /// Errors at the selected ground-truth poses and at each run's end, in run order. `None` when `res`
     /// needs the literal walk (or `runs` are not the prepared runs).
     pub fn errors(&self, res: &Resolved<'_>, runs: &[Run]) -> Option<FastErrors> {
-        let per_group: Vec<Option<(Vec<PoseError>, [PoseError; LANES])>> = (self.groups.par_iter())
+        if !self.supports(res) {
+            return None;
+        }
+        let groups = self.groups_for(res.clock_lag_s, runs)?;
+        let per_group: Vec<Option<(Vec<PoseError>, [PoseError; LANES])>> = (groups.par_iter())
             .map(|g| {
                 let mut at = vec![PoseError::default(); g.queries.len()];
                 let ends = self.walk_group(g, res, runs, &mut |slot, e| at[slot] = e)?;
@@ -180,7 +249,7 @@ impl PreparedRuns {
             })
             .collect();
         let mut out = FastErrors { at_queries: Vec::new(), ends: Vec::with_capacity(self.n_runs) };
-        for (g, r) in self.groups.iter().zip(per_group) {
+        for (g, r) in groups.iter().zip(per_group) {
             let (at, ends) = r?;
             out.at_queries.extend(at);
             out.ends.extend_from_slice(&ends[..g.lanes]);
@@ -191,10 +260,14 @@ impl PreparedRuns {
     /// The end-pose error of every run (the Eq. 6 terms), in run order (any selection). `None` when `res`
     /// needs the literal walk.
     pub fn end_pose_errors(&self, res: &Resolved<'_>, runs: &[Run]) -> Option<Vec<PoseError>> {
+        if !self.supports(res) {
+            return None;
+        }
+        let groups = self.groups_for(res.clock_lag_s, runs)?;
         let per_group: Vec<Option<[PoseError; LANES]>> =
-            self.groups.par_iter().map(|g| self.walk_group(g, res, runs, &mut |_, _| {})).collect();
+            groups.par_iter().map(|g| self.walk_group(g, res, runs, &mut |_, _| {})).collect();
         let mut out = Vec::with_capacity(self.n_runs);
-        for (g, ends) in self.groups.iter().zip(per_group) {
+        for (g, ends) in groups.iter().zip(per_group) {
             out.extend_from_slice(&ends?[..g.lanes]);
         }
         Some(out)
@@ -214,11 +287,12 @@ impl PreparedRuns {
     ) -> Option<()> {
         let m = res.ik.entries();
         let ok = self.supports(res) && res.wheel_effects.is_empty() && runs.len() == self.n_runs;
-        if !ok || !self.groups.iter().all(|g| in_range(m, g.u_max())) {
+        let groups = if ok { self.groups_for(res.clock_lag_s, runs)? } else { return None };
+        if !groups.iter().all(|g| in_range(m, g.u_max())) {
             return None;
         }
         let (arc, sensor, n) = (res.scheme == Scheme::ExactArc, res.sensor_from_body, self.n_wheels);
-        for batch in self.groups.chunks(BLOCK_RUNS / LANES) {
+        for batch in groups.chunks(BLOCK_RUNS / LANES) {
             let rows: Option<Vec<Vec<jacobian::LaneRows>>> = (batch.par_iter())
                 .map(|g| {
                     self.with_increments(g, res, runs, |inc| {
@@ -256,6 +330,27 @@ impl PreparedRuns {
         })?
     }
 
+    /// The wheel speeds of group `g`'s runs (`chunk`) rewritten by `res`'s wheel-stage effects: from the
+    /// parts of an affine one ([`WheelFeatures`], taken once), else by the effects themselves.
+    fn rewritten_speeds<'r>(
+        &self,
+        g: &Group,
+        chunk: &'r [Run],
+        res: &Resolved<'_>,
+        runs: &[Run],
+    ) -> Vec<Cow<'r, [f64]>> {
+        let parts = affine_wheel_effect(res).and_then(|e| {
+            let f = self.features.get_or_init(|| Some(Arc::new(WheelFeatures::new(e, runs, self.fixed_dt_s))));
+            f.as_ref().and_then(|f| f.params(res).map(|p| (f, p)))
+        });
+        match parts {
+            Some((f, p)) => {
+                chunk.iter().enumerate().map(|(lane, r)| Cow::Owned(f.speeds(g.first_run + lane, r, p))).collect()
+            }
+            None => chunk.iter().map(|r| wheel_speeds(res, r)).collect(),
+        }
+    }
+
     /// Calls `f` with the increments of group `g` for `res`: the kept ones, ones redone from the runs'
     /// wheel speeds into this thread's buffer, or ones redone from speeds rewritten by `res`'s wheel-stage
     /// effects. `None` when a step angle may exceed [`MAX_STEP_ANGLE_RAD`] or `runs` are not the
@@ -269,8 +364,7 @@ impl PreparedRuns {
     ) -> Option<R> {
         let m = res.ik.entries();
         let chunk = g.runs(runs)?;
-        let rewritten: Option<Vec<_>> =
-            (!res.wheel_effects.is_empty()).then(|| chunk.iter().map(|r| wheel_speeds(res, r)).collect());
+        let rewritten = (!res.wheel_effects.is_empty()).then(|| self.rewritten_speeds(g, chunk, res, runs));
         if rewritten.is_none() && !in_range(m, g.u_max()) {
             return None;
         }
@@ -297,6 +391,13 @@ impl PreparedRuns {
             out
         })
     }
+}
+
+/// The lane groups of `runs` (see [`PreparedRuns::with_increment_budget`]) for a wheel-clock lag of `lag_s`.
+fn make_groups(runs: &[Run], fixed_dt_s: Option<f64>, selection: Selection, lag_s: f64, keep: bool) -> Vec<Group> {
+    (runs.par_chunks(LANES).enumerate())
+        .map(|(gi, chunk)| Group::new(gi * LANES, chunk, fixed_dt_s, selection, lag_s, keep))
+        .collect()
 }
 
 /// True when no step angle can exceed [`MAX_STEP_ANGLE_RAD`]: `Σ_j |m3j| max|u_j|` bounds it.

@@ -1,4 +1,4 @@
-//! Preparation: each run's [`StepPlan`] (no clock lag), four runs interleaved to a lane group (struct of
+//! Preparation: each run's [`StepPlan`] (for one clock lag), four runs interleaved to a lane group (struct of
 //! arrays), and the wheel-angle increments `u = f h w` of their steps — kept, redone from the runs' wheel
 //! columns, or redone from wheel speeds rewritten by wheel-stage effects, always by [`Group::fill`].
 
@@ -60,8 +60,16 @@ pub(super) struct Increments<'g> {
 
 impl Group {
     /// Group of `chunk` (at most [`LANES`] runs, the first being run `first_run`) with fixed steps of
-    /// `fixed_dt_s` (`None`: each run's median interval); keeps the increments when `keep`.
-    pub fn new(first_run: usize, chunk: &[Run], fixed_dt_s: Option<f64>, selection: Selection, keep: bool) -> Self {
+    /// `fixed_dt_s` (`None`: each run's median interval) and a wheel-clock lag of `lag_s`; keeps the
+    /// increments when `keep`.
+    pub fn new(
+        first_run: usize,
+        chunk: &[Run],
+        fixed_dt_s: Option<f64>,
+        selection: Selection,
+        lag_s: f64,
+        keep: bool,
+    ) -> Self {
         let n_wheels = chunk.first().map_or(0, Run::n_wheels);
         let plans: Vec<StepPlan> = chunk
             .iter()
@@ -70,7 +78,7 @@ impl Group {
                     Selection::End => Vec::new(),
                     Selection::Path(_) => selection.indices(r.truth().len()),
                 };
-                StepPlan::new(r, 0.0, &idx)
+                StepPlan::new(r, lag_s, &idx)
             })
             .collect();
         let (mut start, mut end, mut h) = ([Pose2::IDENTITY; LANES], [Pose2::IDENTITY; LANES], [0.0; LANES]);

@@ -140,6 +140,7 @@ fn agrees_with_wheel_stage_effects() {
         ("accel_slip", vec![0.05, 0.02, -0.03]),
         ("backlash", vec![0.02, 0.01, 0.03]),
         ("wheel_eccentricity", vec![0.02, -0.01, 0.01, 0.015, 0.0, -0.02]),
+        ("learned:wheel", (0..27).map(|i| 0.002 * ((i * 7 % 11) as f64 - 5.0)).collect()),
     ] {
         let model = Model::ik(IkMatrix::paper_design()).with_effect(EffectKind::from_id(id, 3).unwrap());
         let mut p = model.nominal();
@@ -159,7 +160,9 @@ fn declines_what_it_cannot_do() {
     let mut p = lagged.nominal();
     assert!(prepared.errors(&lagged.resolve(&p).unwrap(), &runs).is_some(), "no lag at τ = 0");
     p[9] = 0.01;
-    assert!(prepared.errors(&lagged.resolve(&p).unwrap(), &runs).is_none());
+    assert!(prepared.errors(&lagged.resolve(&p).unwrap(), &runs).is_some(), "a lag takes groups of its own");
+    p[9] = f64::INFINITY;
+    assert!(lagged.resolve(&p).is_err(), "a lag that is not finite is refused before");
     let twist = Model::ik(IkMatrix::paper_design()).with_effect(EffectKind::from_id("rotation_slip", 3).unwrap());
     assert!(prepared.errors(&twist.resolve(&twist.nominal()).unwrap(), &runs).is_none());
     let paper_step = Model::ik(IkMatrix::paper_design()).with_integration(Integration::PAPER);
@@ -465,4 +468,105 @@ fn general_walk_declines_large_step_angles() {
     let via = Evaluator::new(&model, &runs, Selection::Path(1)).unwrap().errors(&res);
     let walk = Evaluator::with_route(&model, &runs, Selection::Path(1), Route::Walk).unwrap().errors(&res);
     assert_eq!(via, walk);
+}
+
+/// A clock lag (either way, several in turn so that the lag cache fills and turns over): the lane kernel
+/// agrees with the literal walk within 1e-9 m, with the sensor offset and a wheel-stage effect too.
+#[test]
+fn kernel_serves_a_clock_lag_as_the_walk_does() {
+    let runs: Vec<Run> = paper_size().into_iter().step_by(20).collect();
+    for integration in [Integration::PAPER, Integration::DEFAULT] {
+        let model = Model::ik(IkMatrix::paper_design())
+            .with_integration(integration)
+            .with_effect(EffectKind::from_id("time_offset", 3).unwrap())
+            .with_effect(EffectKind::from_id("sensor_offset", 3).unwrap())
+            .with_effect(EffectKind::from_id("wheel_asymmetry", 3).unwrap());
+        for selection in [Selection::End, Selection::Path(1), Selection::Path(5)] {
+            let ev = Evaluator::new(&model, &runs, selection).unwrap();
+            for (round, lag) in [0.041, -0.023, 0.0105, 0.3, -0.11, 0.041, 0.0].into_iter().enumerate() {
+                let mut p = IkMatrix::paper_calibrated().entries().to_vec();
+                p.extend([lag, 0.02, -0.01]);
+                p.extend(if round % 2 == 0 { [0.0; 3] } else { [0.03, -0.02, 0.01] });
+                let res = model.resolve(&p).unwrap();
+                assert!(ev.is_fast(&res));
+                let (gap, count) = max_gap(&model, &p, &runs, selection);
+                assert!(gap < 1e-9, "{integration:?} {selection:?} lag {lag}: gap {gap:e} m");
+                assert!(count >= runs.len());
+                // The same evaluator, its lag cache warm or turned over: the same bits as a fresh one.
+                let fresh = Evaluator::new(&model, &runs, selection).unwrap();
+                assert_eq!(ev.errors(&res), fresh.errors(&res), "lag {lag}");
+            }
+        }
+    }
+}
+
+/// With a clock lag the IK Jacobian is still the kernel's forward-mode one (the lag's own column is the
+/// caller's finite difference): it matches central differences.
+#[test]
+fn ik_jacobian_with_a_clock_lag_matches_central_differences() {
+    let runs: Vec<Run> = paper_size().into_iter().step_by(15).collect();
+    for kind in [CostKind::EndPose, CostKind::PATH] {
+        let model = Model::ik(IkMatrix::paper_design()).with_effect(EffectKind::from_id("time_offset", 3).unwrap());
+        let ev = Evaluator::for_cost(&model, &runs, kind).unwrap();
+        let mut x = IkMatrix::paper_calibrated().entries().to_vec();
+        x.push(0.037);
+        let res = model.resolve(&x).unwrap();
+        let (r, j) = stacked(&ev, &res, kind);
+        let fast = ev.residual_vector(&res, kind);
+        assert!(r.iter().zip(&fast).all(|(a, b)| (a - b).abs() < 1e-12), "residuals differ");
+        for c in 0..9 {
+            let h = 1e-6 * x[c].abs().max(0.05);
+            let (mut xp, mut xm) = (x.clone(), x.clone());
+            xp[c] += h;
+            xm[c] -= h;
+            let rp = ev.residual_vector(&model.resolve(&xp).unwrap(), kind);
+            let rm = ev.residual_vector(&model.resolve(&xm).unwrap(), kind);
+            let col_max = (0..r.len()).map(|i| j[(i, c)].abs()).fold(0.0f64, f64::max);
+            assert!(col_max > 1e-3, "column {c} is flat");
+            for i in 0..r.len() {
+                let fd = (rp[i] - rm[i]) / (2.0 * h);
+                assert!((fd - j[(i, c)]).abs() < 1e-6 * col_max, "{kind:?} column {c} row {i}: {fd} vs {}", j[(i, c)]);
+            }
+        }
+    }
+}
+
+/// The law the fast path relies on for every effect that claims it (`wheel_rates_affine`): the rewritten
+/// speeds are the measured ones plus each parameter's part, `w + Σ_i p_i (wheel_rates(e_i) − w)`, to
+/// rounding; and backlash (a play operator) does not claim it.
+#[test]
+fn affine_wheel_effects_are_affine() {
+    use crate::effect::{Effect, WheelContext};
+    let run = &jittered_runs(1)[0];
+    let (s, h) = crate::plan::sample_times(run, 0.0, None, false);
+    let ctx = WheelContext { n_wheels: 3, t_s: &s, dt_s: &h, start_angle_rad: &[0.3, -1.0, 2.0] };
+    let w = run.wheel_rad_s();
+    let mut claimed = Vec::new();
+    for id in crate::effect::CATALOGUE.iter().copied().chain(["learned:wheel"]) {
+        let e = EffectKind::from_id(id, 3).unwrap();
+        if !e.wheel_rates_affine() {
+            continue;
+        }
+        claimed.push(id);
+        let n = e.params().len();
+        let p: Vec<f64> = (0..n).map(|i| 0.01 * (1.0 + i as f64) * if i % 2 == 0 { 1.0 } else { -1.0 }).collect();
+        let mut whole = w.to_vec();
+        e.wheel_rates(&p, &ctx, &mut whole);
+        let mut sum = w.to_vec();
+        for i in 0..n {
+            let mut unit = vec![0.0; n];
+            unit[i] = 1.0;
+            let mut part = w.to_vec();
+            e.wheel_rates(&unit, &ctx, &mut part);
+            for k in 0..w.len() {
+                sum[k] += p[i] * (part[k] - w[k]);
+            }
+        }
+        let scale = w.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let gap = whole.iter().zip(&sum).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(gap < 1e-12 * scale, "{id}: gap {gap:e} rad/s");
+        assert!(whole.iter().zip(w).any(|(a, b)| (a - b).abs() > 1e-6 * scale), "{id} changes nothing here");
+    }
+    let expected = ["wheel_asymmetry", "speed_scale", "accel_slip", "wheel_eccentricity", "learned:wheel"];
+    assert_eq!(claimed, expected);
 }
