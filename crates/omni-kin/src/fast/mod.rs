@@ -277,8 +277,8 @@ impl PreparedRuns {
     /// IK matrix entries (3 rows per pose: dx, dy, dθ; columns in row-major order `m11 … m3N`), unscaled,
     /// by forward-mode differentiation of the step recurrence; the sensor pose is held fixed. Only
     /// [`BLOCK_RUNS`] runs' rows are held at a time; the runs of a batch are differentiated in parallel
-    /// and visited sequentially. `None` (before any visit) when `res` needs the literal walk or has
-    /// wheel-stage effects.
+    /// and visited sequentially; with wheel-stage effects, along the rewritten speeds (the effects do not
+    /// depend on the IK matrix). `None` (before any visit) when `res` needs the literal walk.
     pub fn ik_jacobian_rows(
         &self,
         res: &Resolved<'_>,
@@ -286,9 +286,18 @@ impl PreparedRuns {
         visit: &mut dyn FnMut(JacobianRows<'_>),
     ) -> Option<()> {
         let m = res.ik.entries();
-        let ok = self.supports(res) && res.wheel_effects.is_empty() && runs.len() == self.n_runs;
+        let ok = self.supports(res) && runs.len() == self.n_runs;
         let groups = if ok { self.groups_for(res.clock_lag_s, runs)? } else { return None };
-        if !groups.iter().all(|g| in_range(m, g.u_max())) {
+        // Every step angle in range before the first visit: on the runs' own speeds by their bound; on
+        // rewritten ones by rewriting them (each batch checks its own before visiting, so only needed
+        // when there are several).
+        let in_range = if res.wheel_effects.is_empty() {
+            groups.iter().all(|g| in_range(m, g.u_max()))
+        } else {
+            groups.len() <= BLOCK_RUNS / LANES
+                || groups.par_iter().all(|g| self.with_increments(g, res, runs, |_| ()).is_some())
+        };
+        if !in_range {
             return None;
         }
         let (arc, sensor, n) = (res.scheme == Scheme::ExactArc, res.sensor_from_body, self.n_wheels);

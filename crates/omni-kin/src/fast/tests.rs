@@ -570,3 +570,41 @@ fn affine_wheel_effects_are_affine() {
     let expected = ["wheel_asymmetry", "speed_scale", "accel_slip", "wheel_eccentricity", "learned:wheel"];
     assert_eq!(claimed, expected);
 }
+
+/// With wheel-stage effects (an affine one from its parts, and two effects rewritten on each evaluation)
+/// the IK Jacobian is the kernel's forward-mode one along the rewritten speeds: it matches central
+/// differences.
+#[test]
+fn ik_jacobian_with_wheel_stage_effects_matches_central_differences() {
+    let runs: Vec<Run> = paper_size().into_iter().step_by(15).collect();
+    let cases: [(&[&str], Vec<f64>); 2] = [
+        (&["wheel_eccentricity"], vec![0.02, -0.01, 0.01, 0.015, 0.0, -0.02]),
+        (&["backlash", "wheel_asymmetry"], vec![0.02, 0.01, 0.03, 0.05, -0.03, 0.02]),
+    ];
+    for (ids, values) in cases {
+        let mut model = Model::ik(IkMatrix::paper_design());
+        for id in ids {
+            model = model.with_effect(EffectKind::from_id(id, 3).unwrap());
+        }
+        let ev = Evaluator::for_cost(&model, &runs, CostKind::PATH).unwrap();
+        let mut x = IkMatrix::paper_calibrated().entries().to_vec();
+        x.extend(&values);
+        let (r, j) = stacked(&ev, &model.resolve(&x).unwrap(), CostKind::PATH);
+        let fast = ev.residual_vector(&model.resolve(&x).unwrap(), CostKind::PATH);
+        assert!(r.iter().zip(&fast).all(|(a, b)| (a - b).abs() < 1e-12), "{ids:?}: residuals differ");
+        for c in 0..9 {
+            let h = 1e-6 * x[c].abs().max(0.05);
+            let (mut xp, mut xm) = (x.clone(), x.clone());
+            xp[c] += h;
+            xm[c] -= h;
+            let rp = ev.residual_vector(&model.resolve(&xp).unwrap(), CostKind::PATH);
+            let rm = ev.residual_vector(&model.resolve(&xm).unwrap(), CostKind::PATH);
+            let col_max = (0..r.len()).map(|i| j[(i, c)].abs()).fold(0.0f64, f64::max);
+            assert!(col_max > 1e-3, "column {c} is flat");
+            for i in 0..r.len() {
+                let fd = (rp[i] - rm[i]) / (2.0 * h);
+                assert!((fd - j[(i, c)]).abs() < 1e-6 * col_max, "{ids:?} column {c} row {i}: {fd} vs {}", j[(i, c)]);
+            }
+        }
+    }
+}
