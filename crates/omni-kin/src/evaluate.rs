@@ -15,7 +15,8 @@
 
 use crate::cost::{CostKind, check_runs, mean_end_pose_error};
 use crate::error::KinError;
-use crate::fast::{MAX_WHEELS, PreparedRuns, general};
+use crate::fast::forward::{self, ForwardModel};
+use crate::fast::{BLOCK_RUNS, MAX_WHEELS, PreparedRuns, general};
 use crate::model::{Model, Resolved, StepMode};
 use crate::odometry::{self, Selection};
 use crate::plan::{StepPlan, wheel_speeds};
@@ -23,6 +24,7 @@ use crate::pose::PoseError;
 use crate::run::Run;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
+use std::borrow::Cow;
 
 /// Which odometry an [`Evaluator`] may take.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -125,6 +127,21 @@ pub struct IkBlock<'a> {
     pub residuals: &'a [f64],
     /// Their Jacobian with respect to the IK matrix entries (columns in row-major order `m11 … m3N`).
     pub jacobian: &'a DMatrix<f64>,
+}
+
+/// One run's part of the least-squares system by the forward-mode walk, as
+/// [`Evaluator::forward_jacobian_blocks`] visits it.
+#[derive(Clone, Copy, Debug)]
+pub struct ModelBlock<'a> {
+    /// Index of the run.
+    pub run: usize,
+    /// The run's residuals: its rows of [`Evaluator::residual_vector`].
+    pub residuals: &'a [f64],
+    /// Their Jacobian: with respect to the IK entries (the first `3 N` columns, row-major `m11 … m3N`),
+    /// then to the model's parameters `covered`.
+    pub jacobian: &'a DMatrix<f64>,
+    /// Indices (in the model's parameter vector) of the effect parameters after the IK entries.
+    pub covered: &'a [usize],
 }
 
 /// Evaluates models of one structure on a set of runs at one selection of ground-truth poses.
@@ -268,6 +285,60 @@ impl<'a> Evaluator<'a> {
             }
             visit(IkBlock { run, residuals: &r, jacobian: &jacobian });
         })
+    }
+
+    /// Visits, in run order, each run's residuals (its rows of [`Self::residual_vector`]) and their
+    /// Jacobian with respect to the IK entries and to the effect parameters the forward-mode walk carries
+    /// ([`crate::fast::forward`]: twist- and measurement-stage effects, the one affine wheel-stage
+    /// effect), for `model` at `params`; the other parameters are the caller's to difference. Only a few
+    /// hundred runs' rows are held at a time. `None` (before any visit) on [`Route::Walk`], when `kind` is
+    /// not this evaluator's selection or a step angle leaves the polynomials' range.
+    pub fn forward_jacobian_blocks(
+        &self,
+        model: &Model,
+        params: &[f64],
+        kind: CostKind,
+        visit: &mut dyn FnMut(ModelBlock<'_>),
+    ) -> Option<()> {
+        if self.route != Route::Fast || kind.selection() != self.selection {
+            return None;
+        }
+        let res = model.resolve(params).ok()?;
+        let parts = self.prepared.as_ref().and_then(|p| p.wheel_features(&res, self.runs));
+        let fm = ForwardModel::new(model, parts);
+        // Several batches: make sure every step angle is in range before the first visit.
+        if self.runs.len() > BLOCK_RUNS && general_errors(&res, self.runs, self.selection).is_none() {
+            return None;
+        }
+        let (w, n_runs) = (kind.heading_weight(), self.runs.len());
+        let end_only = self.selection == Selection::End;
+        let indexed: Vec<(usize, &Run)> = self.runs.iter().enumerate().collect();
+        let mut r = Vec::new();
+        for batch in indexed.chunks(BLOCK_RUNS) {
+            let rows: Option<Vec<forward::RunRows>> = (batch.par_iter())
+                .map(|&(index, run)| {
+                    let idx = if end_only { Vec::new() } else { self.selection.indices(run.truth().len()) };
+                    let plan = StepPlan::new(run, res.clock_lag_s, &idx);
+                    let wheels = match parts.and_then(|f| f.params(&res)) {
+                        Some(p) => Cow::Owned(parts?.speeds(index, run, p)),
+                        None => wheel_speeds(&res, run),
+                    };
+                    let input =
+                        forward::RunInput { res: &res, params, run, index, plan: &plan, wheels: &wheels, end_only };
+                    forward::run_rows(&fm, &input)
+                })
+                .collect();
+            for (&(run, _), mut rows) in batch.iter().zip(rows?) {
+                let k = residual_weights(n_runs, rows.errors.len(), w);
+                r.clear();
+                r.extend(rows.errors.iter().flat_map(|e| [e.dx_m * k[0], e.dy_m * k[1], e.dtheta_rad * k[2]]));
+                for (i, mut row) in rows.jacobian.row_iter_mut().enumerate() {
+                    row *= k[i % 3];
+                }
+                visit(ModelBlock { run, residuals: &r, jacobian: &rows.jacobian, covered: &fm.covered });
+            }
+        }
+        Some(())
     }
 
     /// The route this evaluator may take.

@@ -24,7 +24,7 @@ struct Part {
 
 /// The parts of one affine wheel-stage effect on every run.
 #[derive(Debug)]
-pub(super) struct WheelFeatures {
+pub(crate) struct WheelFeatures {
     /// The effect's id and parameter count (what the parts belong to).
     id: String,
     n_params: usize,
@@ -73,6 +73,11 @@ impl WheelFeatures {
             }
             _ => None,
         }
+    }
+
+    /// Run `i`'s parts: (parameter, wheel, change per unit at every sample).
+    pub fn run_parts(&self, i: usize) -> impl Iterator<Item = (usize, usize, &[f64])> {
+        self.runs[i].iter().map(|p| (p.param, p.wheel, p.column.as_slice()))
     }
 
     /// Run `i`'s (`run`'s) wheel speeds rewritten with parameters `p`.

@@ -23,6 +23,7 @@
 //! depend on the thread count. With FMA the last bits differ from a CPU without it.
 
 mod features;
+pub(crate) mod forward;
 pub(crate) mod general;
 mod jacobian;
 mod kernel;
@@ -339,6 +340,14 @@ impl PreparedRuns {
         })?
     }
 
+    /// The parts of `res`'s affine wheel-stage effect (taken at the first call), when it has one and they
+    /// serve it.
+    pub(crate) fn wheel_features(&self, res: &Resolved<'_>, runs: &[Run]) -> Option<&WheelFeatures> {
+        let e = affine_wheel_effect(res)?;
+        let f = self.features.get_or_init(|| Some(Arc::new(WheelFeatures::new(e, runs, self.fixed_dt_s))));
+        f.as_deref().filter(|f| f.params(res).is_some())
+    }
+
     /// The wheel speeds of group `g`'s runs (`chunk`) rewritten by `res`'s wheel-stage effects: from the
     /// parts of an affine one ([`WheelFeatures`], taken once), else by the effects themselves.
     fn rewritten_speeds<'r>(
@@ -348,11 +357,7 @@ impl PreparedRuns {
         res: &Resolved<'_>,
         runs: &[Run],
     ) -> Vec<Cow<'r, [f64]>> {
-        let parts = affine_wheel_effect(res).and_then(|e| {
-            let f = self.features.get_or_init(|| Some(Arc::new(WheelFeatures::new(e, runs, self.fixed_dt_s))));
-            f.as_ref().and_then(|f| f.params(res).map(|p| (f, p)))
-        });
-        match parts {
+        match self.wheel_features(res, runs).and_then(|f| f.params(res).map(|p| (f, p))) {
             Some((f, p)) => {
                 chunk.iter().enumerate().map(|(lane, r)| Cow::Owned(f.speeds(g.first_run + lane, r, p))).collect()
             }

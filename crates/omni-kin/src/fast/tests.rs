@@ -608,3 +608,63 @@ fn ik_jacobian_with_wheel_stage_effects_matches_central_differences() {
         }
     }
 }
+
+/// The forward-mode walk's Jacobian (IK entries and the effect parameters it carries) against central
+/// differences of the evaluator's residuals, for twist-stage effects alone and mixed with a sensor offset,
+/// an affine wheel-stage effect, measured stamps and a clock lag (whose column is left to the caller).
+#[test]
+fn forward_jacobian_matches_central_differences() {
+    use crate::evaluate::ModelBlock;
+    let runs = jittered_runs(5);
+    let cases: Vec<(Vec<&str>, Vec<f64>, usize)> = vec![
+        (vec!["rotation_slip"], vec![0.12], 1),
+        (vec!["world_drift"], vec![0.004, -0.003], 2),
+        (vec!["learned:body"], vec![0.05, 0.02, 0.1, -0.05, 0.03, 0.02, -0.01, 0.015, 0.01], 9),
+        (vec!["learned:world"], vec![0.003, -0.002, 0.01, -0.02], 4),
+        (vec!["learned:time"], vec![0.001, -0.0005, 0.002, 0.003], 4),
+        (vec!["sensor_offset_yaw", "rotation_slip"], vec![0.03, -0.02, 0.05, 0.1], 4),
+        (vec!["wheel_eccentricity", "world_drift"], vec![0.02, -0.01, 0.01, 0.015, 0.0, -0.02, 0.004, 0.002], 8),
+        (vec!["sample_timing", "learned:ground_truth", "rotation_slip"], vec![0.02, 0.01, -0.03, 0.08], 4),
+        (vec!["time_offset", "rotation_slip"], vec![0.03, 0.1], 1),
+    ];
+    for (ids, values, carried) in cases {
+        for kind in [CostKind::EndPose, CostKind::PATH, CostKind::Path { every: 4, heading_weight_m_per_rad: 0.5 }] {
+            let mut model = Model::ik(IkMatrix::paper_design());
+            for id in &ids {
+                model = model.with_effect(EffectKind::from_id(id, 3).unwrap());
+            }
+            let mut x = IkMatrix::paper_calibrated().entries().to_vec();
+            x.extend(&values);
+            let ev = Evaluator::for_cost(&model, &runs, kind).unwrap();
+            let mut rows: Vec<(Vec<f64>, DMatrix<f64>, Vec<usize>)> = Vec::new();
+            ev.forward_jacobian_blocks(&model, &x, kind, &mut |b: ModelBlock<'_>| {
+                rows.push((b.residuals.to_vec(), b.jacobian.clone(), b.covered.to_vec()))
+            })
+            .unwrap();
+            assert_eq!(rows.len(), runs.len());
+            let covered = rows[0].2.clone();
+            assert_eq!(covered.len(), carried, "{ids:?}");
+            let r: Vec<f64> = rows.iter().flat_map(|b| b.0.clone()).collect();
+            let fast = ev.residual_vector(&model.resolve(&x).unwrap(), kind);
+            assert!(r.iter().zip(&fast).all(|(a, b)| (a - b).abs() < 1e-12), "{ids:?} {kind:?}: residuals differ");
+            let columns: Vec<usize> = (0..9).chain(covered.iter().copied()).collect();
+            for (c, &g) in columns.iter().enumerate() {
+                let h = 1e-6 * x[g].abs().max(if g < 9 { 0.05 } else { 1e-2 });
+                let (mut xp, mut xm) = (x.clone(), x.clone());
+                xp[g] += h;
+                xm[g] -= h;
+                let rp = ev.residual_vector(&model.resolve(&xp).unwrap(), kind);
+                let rm = ev.residual_vector(&model.resolve(&xm).unwrap(), kind);
+                let col: Vec<f64> =
+                    rows.iter().flat_map(|b| b.1.column(c).iter().copied().collect::<Vec<_>>()).collect();
+                let col_max = col.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                assert!(col_max > 1e-6, "{ids:?} column {g} is flat");
+                for i in 0..r.len() {
+                    let fd = (rp[i] - rm[i]) / (2.0 * h);
+                    let gap = (fd - col[i]).abs() / col_max;
+                    assert!(gap < 1e-6, "{ids:?} {kind:?} column {g} row {i}: {fd} vs {} ({gap:e})", col[i]);
+                }
+            }
+        }
+    }
+}
