@@ -37,7 +37,7 @@ use crate::pose::PoseError;
 use crate::run::Run;
 use features::{WheelFeatures, affine_wheel_effect};
 use nalgebra::DMatrix;
-use prepare::{Group, Increments, max_per_wheel};
+use prepare::{Group, GroupPart, Increments, max_per_wheel};
 use rayon::prelude::*;
 use std::borrow::Cow;
 use std::cell::RefCell;
@@ -378,6 +378,17 @@ impl PreparedRuns {
     ) -> Option<R> {
         let m = res.ik.entries();
         let chunk = g.runs(runs)?;
+        if let Some(features) = self.wheel_features(res, runs) {
+            let p = features.params(res)?;
+            if let Some(inc) = g.kept() {
+                return with_parts(&inc, g.parts(features), p, (m, g.u_max()), f);
+            }
+            // Not kept: the same increments and parts, redone (the same bits).
+            let wheels: Vec<&[f64]> = chunk.iter().map(Run::wheel_rad_s).collect();
+            let mut u = Vec::new();
+            g.fill_steps(&wheels, &mut u);
+            return with_parts(&g.redone(&u), &g.make_parts(features), p, (m, g.u_max()), f);
+        }
         let rewritten = (!res.wheel_effects.is_empty()).then(|| self.rewritten_speeds(g, chunk, res, runs));
         if rewritten.is_none() && !in_range(m, g.u_max()) {
             return None;
@@ -405,6 +416,46 @@ impl PreparedRuns {
             out
         })
     }
+}
+
+/// Calls `f` with the kept increments `inc` plus the parts of an affine wheel-stage effect at parameters
+/// `p` (its speeds' change as increments, [`prepare::GroupPart`]), in this thread's buffer; `None` when a
+/// step angle of IK matrix `m` may exceed [`MAX_STEP_ANGLE_RAD`] (`u_max`: the unchanged increments'
+/// bound, widened by the parts').
+fn with_parts<R>(
+    inc: &Increments<'_>,
+    parts: &[GroupPart],
+    p: &[f64],
+    (m, u_max): (&[f64], &[f64]),
+    f: impl FnOnce(&Increments<'_>) -> R,
+) -> Option<R> {
+    let n = u_max.len();
+    SCRATCH.with(|cell| {
+        let mut u = cell.take();
+        u.clear();
+        u.extend_from_slice(inc.u);
+        let mut query_u = inc.query_u.to_vec();
+        let mut bound = u_max.to_vec();
+        for part in parts {
+            let v = p[part.param];
+            if v == 0.0 {
+                continue;
+            }
+            for (t, du) in u.iter_mut().skip(part.wheel).step_by(n).zip(&part.u) {
+                for l in 0..LANES {
+                    t[l] += v * du[l];
+                }
+            }
+            for (t, dq) in query_u.iter_mut().skip(part.wheel).step_by(n).zip(&part.query_u) {
+                *t += v * dq;
+            }
+            bound[part.wheel] += v.abs() * part.u_max;
+        }
+        let ok = in_range(m, &bound) || in_range(m, &max_per_wheel(&u, n));
+        let out = ok.then(|| f(&Increments { u: &u, query_u: &query_u }));
+        cell.replace(u);
+        out
+    })
 }
 
 /// The lane groups of `runs` (see [`PreparedRuns::with_increment_budget`]) for a wheel-clock lag of `lag_s`.
