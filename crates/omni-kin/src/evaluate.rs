@@ -4,11 +4,13 @@
 //! ([`RunErrors`] holds the aggregation). Training, evaluation, diagnosis, reports, the planner and the
 //! Python binding all go through it.
 //!
-//! The runs are prepared once for the fast path when the model integrates fixed steps of 1 to
-//! [`crate::fast::MAX_WHEELS`] wheels; each evaluation then takes the fast path when it serves the
-//! resolved parameters (no clock lag, no twist-stage effects, small step angles) and the literal walk
-//! otherwise. The two agree within 1e-9 m but not to the last bit; [`Route::Walk`] asks for the walk's
-//! numbers always.
+//! The runs are prepared once for the lane kernel when the model integrates fixed steps of 1 to
+//! [`crate::fast::MAX_WHEELS`] wheels; each evaluation then takes the kernel when it serves the resolved
+//! parameters (no twist-stage effects, no measured stamps, small step angles), else the general fast walk
+//! (any model, small step angles), else the literal walk. They agree within 1e-9 m but not to the last
+//! bit; [`Route::Walk`] asks for the walk's numbers always. Jacobians: the kernel's forward-mode one with
+//! respect to the IK matrix, else the general walk's, which also carries the parameters of twist- and
+//! measurement-stage effects and of an affine wheel-stage effect.
 //!
 //! Runs are evaluated in parallel (rayon) and summed sequentially in run order, so results are
 //! bit-identical whatever the thread count.

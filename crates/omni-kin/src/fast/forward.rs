@@ -122,7 +122,7 @@ struct StepTwist {
 /// [`MAX_STEP_ANGLE_RAD`].
 fn advance(arc: bool, st: LaneState, t: &Tangent, tw: &StepTwist, h: f64, out: &mut Tangent) -> Option<LaneState> {
     let (dx, dy, a) = (h * tw.v.vx_m_s, h * tw.v.vy_m_s, h * tw.v.omega_rad_s);
-    if !(a.abs() <= MAX_STEP_ANGLE_RAD) {
+    if a.is_nan() || a.abs() > MAX_STEP_ANGLE_RAD {
         return None;
     }
     let (sinc, cosc) = if arc { arc_factors(a) } else { (1.0, 0.0) };
@@ -185,8 +185,7 @@ fn error_rows(st: LaneState, t: &Tangent, sensor: Pose2, ds: &[Pose2], truth: &P
     out.errors.push(measured_error(st, sensor, truth));
     let (c, s) = (st.c, st.s);
     let (kx, ky) = (-s * sensor.x_m - c * sensor.y_m, c * sensor.x_m - s * sensor.y_m);
-    for d in 0..t.x.len() {
-        let q = ds[d];
+    for (d, q) in ds.iter().enumerate() {
         out.jacobian[(row, d)] = t.x[d] + kx * t.th[d] + c * q.x_m - s * q.y_m;
         out.jacobian[(row + 1, d)] = t.y[d] + ky * t.th[d] + s * q.x_m + c * q.y_m;
         out.jacobian[(row + 2, d)] = t.th[d] + q.theta_rad;
@@ -216,8 +215,8 @@ impl TwistSlopes<'_> {
         let raw = self.res.ik.twist(w);
         // dv (before the hooks): the IK entries and the wheel parts.
         out.dvx.iter_mut().chain(out.dvy.iter_mut()).chain(out.dw.iter_mut()).for_each(|v| *v = 0.0);
-        for j in 0..n {
-            (out.dvx[j], out.dvy[n + j], out.dw[2 * n + j]) = (w[j], w[j], w[j]);
+        for (j, &wj) in w.iter().enumerate().take(n) {
+            (out.dvx[j], out.dvy[n + j], out.dw[2 * n + j]) = (wj, wj, wj);
         }
         for &(col, wheel, value) in parts {
             out.dvx[col] += m[wheel] * value;

@@ -19,7 +19,7 @@ use crate::run::Run;
 #[inline(always)]
 fn advance(arc: bool, st: LaneState, v: &Twist2, h: f64) -> Option<LaneState> {
     let a = h * v.omega_rad_s;
-    if !(a.abs() <= MAX_STEP_ANGLE_RAD) {
+    if a.is_nan() || a.abs() > MAX_STEP_ANGLE_RAD {
         return None;
     }
     let (dx, dy) = (h * v.vx_m_s, h * v.vy_m_s);

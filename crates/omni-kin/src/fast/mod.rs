@@ -1,26 +1,34 @@
-//! Fast fixed-step odometry over prepared runs: the same steps as [`crate::odometry`] (both read the
-//! runs' [`crate::plan::StepPlan`]s; the numbers agree within rounding, checked to 1e-9 m against the
-//! literal walk in tests) at close to the arithmetic limit. [`crate::evaluate::Evaluator`] chooses it
-//! whenever it serves a model and aggregates its errors; nothing else calls it.
+//! Fast odometry: the same steps as [`crate::odometry`] (every route reads the runs'
+//! [`crate::plan::StepPlan`]s; the numbers agree within rounding, checked to 1e-9 m against the literal walk
+//! in tests), with no `sin_cos` per step. [`crate::evaluate::Evaluator`] chooses a route whenever one serves
+//! a model and aggregates the errors; nothing else calls these modules.
 //!
 //! - `prepare.rs`: what depends only on the data, done once in [`PreparedRuns::new`]: each step's fraction
 //!   is folded into its wheel-angle increment `u_k = f_k h w_k` (rad), so with the IK matrix `M` a step's
 //!   body displacement is `M u_k` — 3 × N multiply-adds — for both Eq. 1 (Euler) and exact arcs. The
 //!   increments are kept up to [`KEPT_INCREMENTS_MAX_BYTES`] (8 B per wheel and sample); for larger
 //!   datasets each walk redoes a lane group's increments from the runs' own wheel columns (the same
-//!   products, so the same numbers). Runs are interleaved four to a lane group (struct of arrays).
+//!   products, so the same numbers). Runs are interleaved four to a lane group (struct of arrays). A clock
+//!   lag takes lane groups prepared for it (the last [`LAGS_KEPT`] lags are kept).
+//! - `features.rs`: the parts of an affine wheel-stage effect (each parameter's change of the speeds),
+//!   taken once; an evaluation adds them to the increments instead of running the effect.
 //! - `lanes.rs`: the four lanes' arithmetic, AVX2 + FMA on x86-64 CPUs that have them (checked at run time
 //!   through `pulp`, no `-C target-cpu` needed), plain arrays otherwise.
 //! - `kernel.rs`: the step loop; the heading's cosine and sine advance by polynomial rotations.
-//! - `jacobian.rs`: the forward-mode Jacobian with respect to the IK matrix, for the LM polish.
+//! - `jacobian.rs`: the forward-mode Jacobian of the kernel with respect to the IK matrix.
+//! - `general.rs`: the general fast walk, one run at a time (scalar), for what the lanes do not serve:
+//!   twist-stage effects (through their own hooks) and measured stamps; the kernel's polynomial steps.
+//! - `forward.rs`: the forward-mode Jacobian along the general walk, with respect to the IK matrix and the
+//!   parameters of twist- and measurement-stage effects and of the affine wheel-stage effect.
 //!
-//! Scope. Fixed steps with no clock lag, no twist-stage effects and no measured stamps, 1 to
-//! [`MAX_WHEELS`] wheels; a sensor offset (measurement stage) and wheel-stage effects (the increments are
-//! redone from the rewritten wheel speeds on each evaluation) are allowed. Anything else — or a step angle
-//! above [`MAX_STEP_ANGLE_RAD`] — returns `None` and the evaluator takes the literal walk.
+//! Scope of the lane kernel: fixed steps with no twist-stage effects and no measured stamps, 1 to
+//! [`MAX_WHEELS`] wheels; any clock lag, measurement-stage effects and wheel-stage effects (affine ones
+//! from their parts, others by rewriting the speeds on each evaluation). The general walk serves any model.
+//! Either returns `None` for a step angle above [`MAX_STEP_ANGLE_RAD`], and the evaluator takes the literal
+//! walk.
 //!
-//! Results are deterministic: groups are evaluated in parallel and collected in run order, so they do not
-//! depend on the thread count. With FMA the last bits differ from a CPU without it.
+//! Results are deterministic: groups and runs are evaluated in parallel and collected in run order, so they
+//! do not depend on the thread count. With FMA the last bits differ from a CPU without it.
 
 mod features;
 pub(crate) mod forward;

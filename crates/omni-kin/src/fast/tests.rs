@@ -395,7 +395,7 @@ fn general_gap(model: &Model, params: &[f64], runs: &[Run], selection: Selection
         gap = gap.max((a.dx_m - b.dx_m).abs()).max((a.dy_m - b.dy_m).abs()).max((a.dtheta_rad - b.dtheta_rad).abs());
     };
     let (via_evaluator, ends) = (fast.errors(&res), fast.end_pose_errors(&res));
-    for i in 0..runs.len() {
+    for (i, end) in ends.iter().enumerate() {
         assert_eq!(general.run(i).len(), walk.run(i).len());
         for ((a, b), c) in general.run(i).iter().zip(walk.run(i)).zip(via_evaluator.run(i)) {
             at(a, b);
@@ -403,7 +403,7 @@ fn general_gap(model: &Model, params: &[f64], runs: &[Run], selection: Selection
             count += 1;
         }
         at(&general.ends()[i], &walk.ends()[i]);
-        at(&ends[i], &walk.ends()[i]);
+        at(end, &walk.ends()[i]);
     }
     (gap, count)
 }
