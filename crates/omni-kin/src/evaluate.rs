@@ -291,7 +291,7 @@ impl<'a> Evaluator<'a> {
 
     /// Visits, in run order, each run's residuals (its rows of [`Self::residual_vector`]) and their
     /// Jacobian with respect to the IK entries and to the effect parameters the forward-mode walk carries
-    /// ([`crate::fast::forward`]: twist- and measurement-stage effects, the one affine wheel-stage
+    /// (twist- and measurement-stage effects, the one affine wheel-stage
     /// effect), for `model` at `params`; the other parameters are the caller's to difference. Only a few
     /// hundred runs' rows are held at a time. `None` (before any visit) on [`Route::Walk`], when `kind` is
     /// not this evaluator's selection or a step angle leaves the polynomials' range.

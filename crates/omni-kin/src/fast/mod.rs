@@ -9,7 +9,7 @@
 //!   increments are kept up to [`KEPT_INCREMENTS_MAX_BYTES`] (8 B per wheel and sample); for larger
 //!   datasets each walk redoes a lane group's increments from the runs' own wheel columns (the same
 //!   products, so the same numbers). Runs are interleaved four to a lane group (struct of arrays). A clock
-//!   lag takes lane groups prepared for it (the last [`LAGS_KEPT`] lags are kept).
+//!   lag takes lane groups prepared for it (the last 4 lags are kept).
 //! - `features.rs`: the parts of an affine wheel-stage effect (each parameter's change of the speeds),
 //!   taken once; an evaluation adds them to the increments instead of running the effect.
 //! - `lanes.rs`: the four lanes' arithmetic, AVX2 + FMA on x86-64 CPUs that have them (checked at run time
