@@ -37,6 +37,7 @@ mod jacobian;
 mod kernel;
 mod lanes;
 mod prepare;
+mod twist;
 
 use crate::model::{Resolved, Scheme};
 use crate::odometry::Selection;
@@ -237,7 +238,7 @@ impl PreparedRuns {
     pub fn supports(&self, res: &Resolved<'_>) -> bool {
         !res.stamps
             && res.clock_lag_s.is_finite()
-            && res.twist_effects.is_empty()
+            && (res.twist_effects.is_empty() || twist::lane_twists(res).is_some())
             && res.fixed_dt_s == self.fixed_dt_s
             && res.ik.n_wheels() == self.n_wheels
             && (1..=MAX_WHEELS).contains(&self.n_wheels)
@@ -295,7 +296,7 @@ impl PreparedRuns {
         visit: &mut dyn FnMut(JacobianRows<'_>),
     ) -> Option<()> {
         let m = res.ik.entries();
-        let ok = self.supports(res) && runs.len() == self.n_runs;
+        let ok = self.supports(res) && res.twist_effects.is_empty() && runs.len() == self.n_runs;
         let groups = if ok { self.groups_for(res.clock_lag_s, runs)? } else { return None };
         // Every step angle in range before the first visit: on the runs' own speeds by their bound; on
         // rewritten ones by rewriting them (each batch checks its own before visiting, so only needed
@@ -343,9 +344,16 @@ impl PreparedRuns {
             return None;
         }
         let (m, arc, sensor) = (res.ik.entries(), res.scheme == Scheme::ExactArc, res.sensor_from_body);
+        if res.twist_effects.is_empty() {
+            return self.with_increments(g, res, runs, |inc| {
+                by_wheels!(self.n_wheels, arc, kernel::walk(g, inc, m, sensor, on_query))
+            })?;
+        }
+        let twists = twist::lane_twists(res)?;
+        let times = g.times(g.runs(runs)?);
         self.with_increments(g, res, runs, |inc| {
-            by_wheels!(self.n_wheels, arc, kernel::walk(g, inc, m, sensor, on_query))
-        })?
+            by_wheels!(self.n_wheels, arc, twist::walk(g, inc, times, (m, sensor), &twists, on_query))
+        })??
     }
 
     /// The parts of `res`'s affine wheel-stage effect (taken at the first call), when it has one and they

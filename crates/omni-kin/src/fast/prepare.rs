@@ -3,6 +3,7 @@
 //! columns, or redone from wheel speeds rewritten by wheel-stage effects, always by [`Group::fill`].
 
 use super::features::WheelFeatures;
+use super::twist::StepTimes;
 use super::{LANES, Lanes};
 use crate::odometry::Selection;
 use crate::plan::StepPlan;
@@ -21,6 +22,13 @@ pub(super) struct Query {
     pub truth: Pose2,
     /// Index of the query in its lane's plan.
     source: usize,
+}
+
+impl Query {
+    /// Index of the query in its lane's plan.
+    pub fn source(&self) -> usize {
+        self.source
+    }
 }
 
 /// Four runs interleaved.
@@ -52,6 +60,8 @@ pub(super) struct Group {
     query_u: Vec<f64>,
     /// The parts of the evaluator's affine wheel-stage effect as increments (taken at first use).
     parts: OnceLock<Vec<GroupPart>>,
+    /// Step lengths and times for twist-stage effects (taken at first use).
+    times: OnceLock<StepTimes>,
 }
 
 /// One part of an affine wheel-stage effect ([`WheelFeatures`]) as increments of a group: `f h Δw` of
@@ -128,6 +138,7 @@ impl Group {
             queries,
             query_u: Vec::new(),
             parts: OnceLock::new(),
+            times: OnceLock::new(),
         };
         let wheels: Vec<&[f64]> = chunk.iter().map(Run::wheel_rad_s).collect();
         let mut u = Vec::new();
@@ -138,6 +149,22 @@ impl Group {
             g.u = u;
         }
         g
+    }
+
+    /// Each real lane's plan.
+    pub fn plans(&self) -> &[StepPlan] {
+        &self.plans
+    }
+
+    /// Step length of each lane. s.
+    pub fn h(&self) -> &Lanes {
+        &self.h
+    }
+
+    /// The step times twist-stage effects read ([`StepTimes`]) of this group, whose runs are `chunk`,
+    /// taken at the first call.
+    pub fn times(&self, chunk: &[Run]) -> &StepTimes {
+        self.times.get_or_init(|| StepTimes::new(self, chunk))
     }
 
     /// The kept increments; `None` when they were not kept.
