@@ -653,12 +653,23 @@ fn forward_jacobian_matches_central_differences() {
         (vec!["wheel_eccentricity", "world_drift"], vec![0.02, -0.01, 0.01, 0.015, 0.0, -0.02, 0.004, 0.002], 8),
         (vec!["sample_timing", "learned:ground_truth", "rotation_slip"], vec![0.02, 0.01, -0.03, 0.08], 4),
         (vec!["time_offset", "rotation_slip"], vec![0.03, 0.1], 1),
+        (
+            vec!["rotation_slip", "learned:world", "learned:body"],
+            [vec![-0.7, 0.003, -0.002, 0.01, -0.02], vec![0.01; 9]].concat(),
+            14,
+        ),
+        // A user's twist-stage effect: its hook's slopes by differences.
+        (vec!["spin", "world_drift"], vec![0.02, 0.004, 0.002], 3),
     ];
     for (ids, values, carried) in cases {
         for kind in [CostKind::EndPose, CostKind::PATH, CostKind::Path { every: 4, heading_weight_m_per_rad: 0.5 }] {
             let mut model = Model::ik(IkMatrix::paper_design());
             for id in &ids {
-                model = model.with_effect(EffectKind::from_id(id, 3).unwrap());
+                let e = match *id {
+                    "spin" => EffectKind::Custom(std::sync::Arc::new(Spin)),
+                    id => EffectKind::from_id(id, 3).unwrap(),
+                };
+                model = model.with_effect(e);
             }
             let mut x = IkMatrix::paper_calibrated().entries().to_vec();
             x.extend(&values);

@@ -13,7 +13,7 @@ use super::lanes::{LaneOps, Portable};
 use super::prepare::{Group, Increments};
 use super::{Lanes, MAX_STEP_ANGLE_RAD};
 use crate::effect::learned::{Family, Learned};
-use crate::effect::{EffectKind, MOVING_OMEGA_RAD_S, MOVING_SPEED_M_S};
+use crate::effect::{EffectKind, MOVING_OMEGA_RAD_S, MOVING_SPEED_M_S, longer_than};
 use crate::model::Resolved;
 use crate::plan::interval;
 use crate::pose::{Pose2, PoseError};
@@ -49,15 +49,10 @@ pub(super) fn lane_twists(res: &Resolved<'_>) -> Option<Vec<LaneTwist>> {
 /// The body twist of each lane: `(vx, vy, ω)`. m/s, rad/s.
 type LaneTwistState = [Lanes; 3];
 
-/// [`crate::effect::moving`] of lane `l` (the squared speed against the squared threshold, `hypot` itself
-/// where they are within rounding of each other).
+/// [`crate::effect::moving`] of lane `l`.
 #[inline(always)]
 fn moving(v: &LaneTwistState, l: usize) -> bool {
-    let (vx, vy, w) = (v[0][l], v[1][l], v[2][l]);
-    let q = vx * vx + vy * vy;
-    let t2 = MOVING_SPEED_M_S * MOVING_SPEED_M_S;
-    let fast = if (q - t2).abs() > 1e-9 * t2 { q > t2 } else { vx.hypot(vy) > MOVING_SPEED_M_S };
-    fast || w.abs() > MOVING_OMEGA_RAD_S
+    v[2][l].abs() > MOVING_OMEGA_RAD_S || longer_than(v[0][l], v[1][l], MOVING_SPEED_M_S)
 }
 
 impl LaneTwist {
@@ -172,7 +167,13 @@ impl StepTimes {
 
 /// The twist each lane holds over step `k`, from its displacement `d` (`M u`).
 #[inline(always)]
-fn twist_of_step(d: &LaneTwistState, times: &StepTimes, k: usize, twists: &[LaneTwist], st: (&Lanes, &Lanes)) -> LaneTwistState {
+fn twist_of_step(
+    d: &LaneTwistState,
+    times: &StepTimes,
+    k: usize,
+    twists: &[LaneTwist],
+    st: (&Lanes, &Lanes),
+) -> LaneTwistState {
     let h = &times.step_s[k];
     let mut v: LaneTwistState = [[0.0; LANES]; 3];
     for l in 0..LANES {
@@ -245,4 +246,119 @@ pub(super) fn walk<const N: usize, const ARC: bool>(
         on_query(q.slot, measured_error(lanes[q.lane], sensor, &q.truth));
     }
     Some(std::array::from_fn(|l| measured_error(lanes[l], sensor, &g.end[l])))
+}
+
+/// One twist-stage effect at one step with its derivatives: the twist it gives, and its derivatives with
+/// respect to the incoming twist (`jv[out][in]`, components vx, vy, ω), to the heading, and to its own
+/// parameters (the first `n_params` of `jp`). Exact but at `moving`'s threshold and at rest, where the
+/// hooks are not differentiable (there: the slopes of the side the step is on).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Slopes {
+    pub v: [f64; 3],
+    pub jv: [[f64; 3]; 3],
+    pub jth: [f64; 3],
+    pub jp: [[f64; 3]; 9],
+    pub n_params: usize,
+}
+
+impl LaneTwist {
+    /// Number of parameters.
+    pub fn n_params(&self) -> usize {
+        match self {
+            LaneTwist::RotationSlip(_) => 1,
+            LaneTwist::WorldDrift(_) => 2,
+            LaneTwist::Body(_) => 9,
+            LaneTwist::World(_) | LaneTwist::Time(_) => 4,
+        }
+    }
+
+    /// The effect on twist `v` at heading cosine and sine `(c, s)` and time `t` since the start, with its
+    /// derivatives ([`Slopes`]); the same formulas as [`Self::apply`].
+    pub fn slopes(&self, v: [f64; 3], (c, s): (f64, f64), t: f64) -> Slopes {
+        let id = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let mut out = Slopes { v, jv: id, jth: [0.0; 3], jp: [[0.0; 3]; 9], n_params: self.n_params() };
+        let [vx, vy, w] = v;
+        let moves = || crate::effect::moving(&crate::pose::Twist2 { vx_m_s: vx, vy_m_s: vy, omega_rad_s: w });
+        match *self {
+            LaneTwist::RotationSlip(k) => {
+                let (sn, cs) = if k != 0.0 { turn(k * w) } else { (0.0, 1.0) };
+                let (rx, ry) = (-sn * vx - cs * vy, cs * vx - sn * vy);
+                out.v = [cs * vx - sn * vy, sn * vx + cs * vy, w];
+                out.jv = [[cs, -sn, k * rx], [sn, cs, k * ry], [0.0, 0.0, 1.0]];
+                out.jp[0] = [w * rx, w * ry, 0.0];
+            }
+            LaneTwist::WorldDrift(p) => {
+                if moves() {
+                    out.v = [vx + c * p[0] + s * p[1], vy - s * p[0] + c * p[1], w];
+                    out.jth = [-s * p[0] + c * p[1], -c * p[0] - s * p[1], 0.0];
+                    out.jp[0] = [c, -s, 0.0];
+                    out.jp[1] = [s, c, 0.0];
+                }
+            }
+            LaneTwist::Body(p) => body_slopes(&p, &mut out),
+            LaneTwist::World(p) => {
+                if moves() {
+                    out.v = [vx + c * p[0] + s * p[1], vy - s * p[0] + c * p[1], w + p[2] * c + p[3] * s];
+                    out.jth = [-s * p[0] + c * p[1], -c * p[0] - s * p[1], -p[2] * s + p[3] * c];
+                    out.jp[..4].copy_from_slice(&[[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, c], [0.0, 0.0, s]]);
+                }
+            }
+            LaneTwist::Time(p) => {
+                if moves() {
+                    let (dx, dy) = (p[0] * t, p[1] * t);
+                    let g = 1.0 + p[3] * t;
+                    out.v = [vx + p[3] * t * vx + c * dx + s * dy, vy + p[3] * t * vy - s * dx + c * dy, w + p[2] * t];
+                    out.jv = [[g, 0.0, 0.0], [0.0, g, 0.0], [0.0, 0.0, 1.0]];
+                    out.jth = [-s * dx + c * dy, -c * dx - s * dy, 0.0];
+                    let jp = [[c * t, -s * t, 0.0], [s * t, c * t, 0.0], [0.0, 0.0, t], [t * vx, t * vy, 0.0]];
+                    out.jp[..4].copy_from_slice(&jp);
+                }
+            }
+        }
+        out
+    }
+}
+
+/// [`LaneTwist::slopes`] of the `body` family (`learned::body`).
+fn body_slopes(p: &[f64; 9], out: &mut Slopes) {
+    let [vx, vy, w] = out.v;
+    let s = (vx * vx + vy * vy).sqrt();
+    let (ca, sa) = if s > 0.0 { (vx / s, vy / s) } else { (0.0, 0.0) };
+    let (c2, s2) = (ca * ca - sa * sa, 2.0 * ca * sa);
+    let scale = p[2] * s + p[3] * w.abs() + p[5] * ca + p[6] * sa + p[7] * c2 + p[8] * s2;
+    let sw = if w > 0.0 {
+        1.0
+    } else if w < 0.0 {
+        -1.0
+    } else {
+        0.0
+    };
+    // Slopes of s, ca, sa in (vx, vy) (none at rest).
+    let inv = if s > 0.0 { 1.0 / s } else { 0.0 };
+    let ds = [ca, sa];
+    let dca = [sa * sa * inv, -ca * sa * inv];
+    let dsa = [-ca * sa * inv, ca * ca * inv];
+    let dscale: [f64; 2] = std::array::from_fn(|i| {
+        let dc2 = 2.0 * ca * dca[i] - 2.0 * sa * dsa[i];
+        let ds2 = 2.0 * (dca[i] * sa + ca * dsa[i]);
+        p[2] * ds[i] + p[5] * dca[i] + p[6] * dsa[i] + p[7] * dc2 + p[8] * ds2
+    });
+    let dscale_w = p[3] * sw;
+    out.v = [vx + scale * vx - p[4] * w * vy, vy + scale * vy + p[4] * w * vx, w + p[0] * s + p[1] * w.abs()];
+    out.jv = [
+        [1.0 + scale + vx * dscale[0], vx * dscale[1] - p[4] * w, vx * dscale_w - p[4] * vy],
+        [vy * dscale[0] + p[4] * w, 1.0 + scale + vy * dscale[1], vy * dscale_w + p[4] * vx],
+        [p[0] * ds[0], p[0] * ds[1], 1.0 + p[1] * sw],
+    ];
+    out.jp = [
+        [0.0, 0.0, s],
+        [0.0, 0.0, w.abs()],
+        [vx * s, vy * s, 0.0],
+        [vx * w.abs(), vy * w.abs(), 0.0],
+        [-w * vy, w * vx, 0.0],
+        [vx * ca, vy * ca, 0.0],
+        [vx * sa, vy * sa, 0.0],
+        [vx * c2, vy * c2, 0.0],
+        [vx * s2, vy * s2, 0.0],
+    ];
 }
