@@ -255,8 +255,12 @@ fn wheel_rates(p: &[f64], ctx: &WheelContext<'_>, w: &mut [f64]) {
             };
             let mut harmonics = 0.0;
             for m in 1..=3 {
-                let (sn, cs) = (m as f64 * mid).sin_cos();
-                harmonics += term(1 + 2 * m, i) * cs + term(2 + 2 * m, i) * sn;
+                let (a, b) = (term(1 + 2 * m, i), term(2 + 2 * m, i));
+                // A harmonic without terms adds nothing (skipping its sine and cosine changes no bit).
+                if a != 0.0 || b != 0.0 {
+                    let (sn, cs) = (m as f64 * mid).sin_cos();
+                    harmonics += a * cs + b * sn;
+                }
             }
             w[s * n + i] = v + term(0, i) * v * v.abs() + term(1, i) * v.abs() + term(2, i) * accel + harmonics * v;
             phi += v * h;

@@ -46,7 +46,7 @@ use crate::pose::PoseError;
 use crate::run::Run;
 use features::{WheelFeatures, affine_wheel_effect};
 use nalgebra::DMatrix;
-use prepare::{Group, GroupPart, Increments, max_per_wheel};
+use prepare::{Group, GroupParts, Increments, max_per_wheel};
 use rayon::prelude::*;
 use std::borrow::Cow;
 use std::cell::RefCell;
@@ -435,37 +435,42 @@ impl PreparedRuns {
 }
 
 /// Calls `f` with the kept increments `inc` plus the parts of an affine wheel-stage effect at parameters
-/// `p` (its speeds' change as increments, [`prepare::GroupPart`]), in this thread's buffer; `None` when a
-/// step angle of IK matrix `m` may exceed [`MAX_STEP_ANGLE_RAD`] (`u_max`: the unchanged increments'
-/// bound, widened by the parts').
+/// `p` (its speeds' change as increments, [`GroupParts`]), in this thread's buffer; `None` when a step angle
+/// of IK matrix `m` may exceed [`MAX_STEP_ANGLE_RAD`] (`u_max`: the unchanged increments' bound, widened by
+/// the parts').
 fn with_parts<R>(
     inc: &Increments<'_>,
-    parts: &[GroupPart],
+    parts: &GroupParts,
     p: &[f64],
     (m, u_max): (&[f64], &[f64]),
     f: impl FnOnce(&Increments<'_>) -> R,
 ) -> Option<R> {
-    let n = u_max.len();
+    let (n, np) = (u_max.len(), parts.keys.len());
+    // The parts with a parameter not zero: (index, wheel, value).
+    let active: Vec<(usize, usize, f64)> = (parts.keys.iter().enumerate())
+        .map(|(i, &(param, wheel))| (i, wheel, p[param]))
+        .filter(|a| a.2 != 0.0)
+        .collect();
+    let mut bound = u_max.to_vec();
+    for &(i, wheel, v) in &active {
+        bound[wheel] += v.abs() * parts.u_max[i];
+    }
     SCRATCH.with(|cell| {
         let mut u = cell.take();
         u.clear();
         u.extend_from_slice(inc.u);
-        let mut query_u = inc.query_u.to_vec();
-        let mut bound = u_max.to_vec();
-        for part in parts {
-            let v = p[part.param];
-            if v == 0.0 {
-                continue;
-            }
-            for (t, du) in u.iter_mut().skip(part.wheel).step_by(n).zip(&part.u) {
+        for (step, row) in u.chunks_exact_mut(n.max(1)).zip(parts.u.chunks_exact(np.max(1))) {
+            for &(i, wheel, v) in &active {
                 for l in 0..LANES {
-                    t[l] += v * du[l];
+                    step[wheel][l] += v * row[i][l];
                 }
             }
-            for (t, dq) in query_u.iter_mut().skip(part.wheel).step_by(n).zip(&part.query_u) {
-                *t += v * dq;
+        }
+        let mut query_u = inc.query_u.to_vec();
+        for (q, row) in query_u.chunks_exact_mut(n.max(1)).zip(parts.query_u.chunks_exact(np.max(1))) {
+            for &(i, wheel, v) in &active {
+                q[wheel] += v * row[i];
             }
-            bound[part.wheel] += v.abs() * part.u_max;
         }
         let ok = in_range(m, &bound) || in_range(m, &max_per_wheel(&u, n));
         let out = ok.then(|| f(&Increments { u: &u, query_u: &query_u }));
