@@ -72,6 +72,8 @@ type Lanes = [f64; LANES];
 thread_local! {
     /// Each thread's buffer for increments redone on a walk (datasets beyond [`KEPT_INCREMENTS_MAX_BYTES`]).
     static SCRATCH: RefCell<Vec<Lanes>> = const { RefCell::new(Vec::new()) };
+    /// Each thread's buffer for the queries' increments with an affine effect's parts.
+    static QUERY_SCRATCH: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
 }
 
 /// Calls `$f::<N, ARC>($args)` for the wheel count `$n` (1 to [`MAX_WHEELS`]) and scheme flag `$arc`:
@@ -110,15 +112,18 @@ pub struct FastErrors {
 }
 
 /// One run's errors at its selected poses and their unscaled IK Jacobian, as
-/// [`PreparedRuns::ik_jacobian_rows`] visits them.
-#[derive(Clone, Copy, Debug)]
+/// [`PreparedRuns::ik_jacobian_rows`] visits them (the Jacobian is the visitor's to scale in place).
+#[derive(Debug)]
 pub struct JacobianRows<'a> {
     /// Index of the run.
     pub run: usize,
     /// Errors at the selected poses (for [`Selection::End`], the end pose).
     pub errors: &'a [PoseError],
-    /// `3 × errors.len()` rows (dx, dy, dθ of each pose) by the IK entries `m11 … m3N`.
-    pub jacobian: &'a DMatrix<f64>,
+    /// `3 × errors.len()` rows (dx, dy, dθ of each pose) by the IK entries `m11 … m3N`, then the
+    /// parameters of the affine wheel-stage effect (`wheel_columns` of them, in the effect's order).
+    pub jacobian: &'a mut DMatrix<f64>,
+    /// Columns after the IK entries: the affine wheel-stage effect's parameters (0 without one).
+    pub wheel_columns: usize,
 }
 
 /// Runs prepared for fast repeated evaluation at one step rule and one selection of ground-truth poses.
@@ -311,21 +316,26 @@ impl PreparedRuns {
             return None;
         }
         let (arc, sensor, n) = (res.scheme == Scheme::ExactArc, res.sensor_from_body, self.n_wheels);
+        // An affine wheel-stage effect's parameters are differentiated along with the IK entries.
+        let features = self.wheel_features(res, runs);
+        let wheel_columns = features.map_or(0, |f| f.n_params());
         for batch in groups.chunks(BLOCK_RUNS / LANES) {
             let rows: Option<Vec<Vec<jacobian::LaneRows>>> = (batch.par_iter())
                 .map(|g| {
+                    let parts = features.map(|f| (g.parts(f), f.n_params()));
                     self.with_increments(g, res, runs, |inc| {
                         (0..g.lanes)
                             .map(|lane| {
-                                by_wheels!(n, arc, jacobian::lane_rows(g, inc, lane, m, sensor, self.selection))
+                                by_wheels!(n, arc, jacobian::lane_rows(g, inc, lane, m, sensor, self.selection, parts))
                             })
                             .collect::<Option<Vec<_>>>()
                     })?
                 })
                 .collect();
-            for (g, lanes) in batch.iter().zip(rows?) {
-                for (lane, r) in lanes.iter().enumerate() {
-                    visit(JacobianRows { run: g.first_run + lane, errors: &r.errors, jacobian: &r.jacobian });
+            for (g, mut lanes) in batch.iter().zip(rows?) {
+                for (lane, r) in lanes.iter_mut().enumerate() {
+                    let (errors, jacobian) = (&r.errors, &mut r.jacobian);
+                    visit(JacobianRows { run: g.first_run + lane, errors, jacobian, wheel_columns });
                 }
             }
         }
@@ -466,7 +476,9 @@ fn with_parts<R>(
                 }
             }
         }
-        let mut query_u = inc.query_u.to_vec();
+        let mut query_u = QUERY_SCRATCH.with(|q| q.take());
+        query_u.clear();
+        query_u.extend_from_slice(inc.query_u);
         for (q, row) in query_u.chunks_exact_mut(n.max(1)).zip(parts.query_u.chunks_exact(np.max(1))) {
             for &(i, wheel, v) in &active {
                 q[wheel] += v * row[i];
@@ -475,6 +487,7 @@ fn with_parts<R>(
         let ok = in_range(m, &bound) || in_range(m, &max_per_wheel(&u, n));
         let out = ok.then(|| f(&Increments { u: &u, query_u: &query_u }));
         cell.replace(u);
+        QUERY_SCRATCH.with(|q| q.replace(query_u));
         out
     })
 }

@@ -619,7 +619,10 @@ fn ik_jacobian_with_wheel_stage_effects_matches_central_differences() {
         let (r, j) = stacked(&ev, &model.resolve(&x).unwrap(), CostKind::PATH);
         let fast = ev.residual_vector(&model.resolve(&x).unwrap(), CostKind::PATH);
         assert!(r.iter().zip(&fast).all(|(a, b)| (a - b).abs() < 1e-12), "{ids:?}: residuals differ");
-        for c in 0..9 {
+        // The affine effect's parameters are columns too (its parts); two wheel-stage effects: none.
+        let carried = if ids.len() == 1 { values.len() } else { 0 };
+        assert_eq!(j.ncols(), 9 + carried, "{ids:?}");
+        for c in 0..9 + carried {
             let h = 1e-6 * x[c].abs().max(0.05);
             let (mut xp, mut xm) = (x.clone(), x.clone());
             xp[c] += h;
