@@ -6,7 +6,8 @@
 //!
 //! The runs are prepared once for the lane kernel when the model integrates fixed steps of 1 to
 //! [`crate::fast::MAX_WHEELS`] wheels; each evaluation then takes the kernel when it serves the resolved
-//! parameters (no twist-stage effects, no measured stamps, small step angles), else the general fast walk
+//! parameters (built-in twist-stage effects only, no measured stamps, small step angles), else the general
+//! fast walk
 //! (any model, small step angles), else the literal walk. They agree within 1e-9 m but not to the last
 //! bit; [`Route::Walk`] asks for the walk's numbers always. Jacobians: the kernel's forward-mode one with
 //! respect to the IK matrix, else the general walk's, which also carries the parameters of twist- and

@@ -15,15 +15,18 @@
 //! - `lanes.rs`: the four lanes' arithmetic, AVX2 + FMA on x86-64 CPUs that have them (checked at run time
 //!   through `pulp`, no `-C target-cpu` needed), plain arrays otherwise.
 //! - `kernel.rs`: the step loop; the heading's cosine and sine advance by polynomial rotations.
-//! - `jacobian.rs`: the forward-mode Jacobian of the kernel with respect to the IK matrix.
-//! - `general.rs`: the general fast walk, one run at a time (scalar), for what the lanes do not serve:
-//!   twist-stage effects (through their own hooks) and measured stamps; the kernel's polynomial steps.
+//! - `twist.rs`: the built-in twist-stage effects per lane (the hooks' formulas), a step loop with them,
+//!   and their exact slopes.
+//! - `jacobian.rs`: the forward-mode Jacobian of the kernel with respect to the IK matrix and the
+//!   parameters of an affine wheel-stage effect.
+//! - `general.rs`: the general fast walk, one run at a time (scalar), for what the lanes do not serve: a
+//!   user's twist-stage effects (through their own hooks) and measured stamps; the kernel's polynomial steps.
 //! - `forward.rs`: the forward-mode Jacobian along the general walk, with respect to the IK matrix and the
 //!   parameters of twist- and measurement-stage effects and of the affine wheel-stage effect.
 //!
-//! Scope of the lane kernel: fixed steps with no twist-stage effects and no measured stamps, 1 to
-//! [`MAX_WHEELS`] wheels; any clock lag, measurement-stage effects and wheel-stage effects (affine ones
-//! from their parts, others by rewriting the speeds on each evaluation). The general walk serves any model.
+//! Scope of the lane kernel: fixed steps with no measured stamps, 1 to [`MAX_WHEELS`] wheels; any clock
+//! lag, measurement-stage effects, wheel-stage effects (affine ones from their parts, others by rewriting the
+//! speeds on each evaluation) and the built-in twist-stage effects. The general walk serves any model.
 //! Either returns `None` for a step angle above [`MAX_STEP_ANGLE_RAD`], and the evaluator takes the literal
 //! walk.
 //!

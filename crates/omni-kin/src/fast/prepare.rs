@@ -64,6 +64,9 @@ pub(super) struct Group {
     times: OnceLock<StepTimes>,
 }
 
+/// One part's increments before interleaving: (parameter, wheel), steps, queries, largest |increment|.
+type PartColumn = ((usize, usize), Vec<Lanes>, Vec<f64>, f64);
+
 /// The parts of an affine wheel-stage effect ([`WheelFeatures`]) as increments of a group: `f h Δw` of
 /// every step and query for one unit of a parameter, on one wheel; interleaved by step (one pass reads
 /// them all).
@@ -238,7 +241,7 @@ impl Group {
 
     /// The parts of `features` as increments of this group (see [`Self::parts`]).
     pub fn make_parts(&self, features: &WheelFeatures) -> GroupParts {
-        let columns: Vec<((usize, usize), Vec<Lanes>, Vec<f64>, f64)> = {
+        let columns: Vec<PartColumn> = {
             let lanes: Vec<Vec<(usize, usize, &[f64])>> =
                 (0..self.lanes).map(|l| features.run_parts(self.first_run + l).collect()).collect();
             let mut keys: Vec<(usize, usize)> = lanes.iter().flatten().map(|&(p, w, _)| (p, w)).collect();

@@ -62,10 +62,10 @@ impl LaneTwist {
     fn apply(&self, v: &mut LaneTwistState, c: &Lanes, s: &Lanes, t: &Lanes) {
         match *self {
             LaneTwist::RotationSlip(k) if k != 0.0 => {
-                for l in 0..LANES {
-                    let (vx, vy) = (v[0][l], v[1][l]);
-                    let (sn, cs) = turn(k * v[2][l]);
-                    (v[0][l], v[1][l]) = (cs * vx - sn * vy, sn * vx + cs * vy);
+                let [vx, vy, w] = v;
+                for ((x, y), w) in vx.iter_mut().zip(vy.iter_mut()).zip(w.iter()) {
+                    let (sn, cs) = turn(k * w);
+                    (*x, *y) = (cs * *x - sn * *y, sn * *x + cs * *y);
                 }
             }
             LaneTwist::WorldDrift(p) if p != [0.0; 2] => {
