@@ -37,7 +37,7 @@ mod noise;
 mod search;
 mod unexplained;
 
-pub use compare::{Turn, costs_of};
+pub use compare::{Turn, costs_of, costs_of_each};
 pub(crate) use evidence::unbounded;
 pub use evidence::{differentiable_start, refit};
 pub use findings::{Conclusion, Finding, Remaining, Verdict};
@@ -51,7 +51,7 @@ use compare::compare;
 use evidence::{Bench, candidate_effect};
 use findings::{Judgement, findings};
 use noise::repeatability_floor;
-use omni_kin::{EffectKind, FittedModel, Run};
+use omni_kin::{EffectKind, FittedModel, Run, RunModels};
 use search::{confident, kind_out, passes};
 use serde::{Deserialize, Serialize};
 
@@ -359,9 +359,14 @@ fn recommend(
 }
 
 /// Diagnose `model` on `train`, holding out `validation` (or cross-validating over repetitions).
+///
+/// `design`: the design each run is compared with — one model (a `&FittedModel`) or a model per run
+/// ([`RunModels`], when a robot's sets declare different designs; it must know every training and
+/// validation run). Its design costs are the run-weighted means of the runs' own; the implied effect values
+/// are taken against its first model.
 pub fn diagnose(
     model: &FittedModel,
-    design: &FittedModel,
+    design: impl Into<RunModels>,
     train: &[Run],
     validation: Option<&[Run]>,
     opts: &DiagnoseOptions,
@@ -369,14 +374,16 @@ pub fn diagnose(
     if train.is_empty() {
         return Err(Error::NoRuns);
     }
+    let designs: RunModels = design.into();
     let every = opts.every.max(1);
     let (fit_runs, held_runs, protocol) = held_out_sets(train, validation);
     // Compare the model and the design with the data.
     let costs = costs_of(model, &fit_runs, &held_runs, every)?;
-    let design_costs = costs_of(design, &fit_runs, &held_runs, every)?;
-    let cmp = compare(model, design, train, every)?;
+    let design_costs = costs_of_each(&designs, &fit_runs, &held_runs, every)?;
+    let cmp = compare(model, &designs, train, every)?;
     let noise = noise_floor(train);
     // Each candidate's evidence, ranked; with `auto`, the error ladder.
+    let design = designs.first();
     let bench = Bench { design, fit_runs: &fit_runs, held_runs: &held_runs, every, noise: noise.as_ref() };
     let climb = search::climb(&bench, model, &costs, &design_costs, opts)?;
     let (verdict, kind_check) = recommend(model, &climb.ranking, train, every, opts)?;
@@ -392,7 +399,7 @@ pub fn diagnose(
         (_, _, true) if climb.ladder.len() > 2 => Some(&climb.top),
         _ => None,
     };
-    let after = accepted.map(|f| compare(f, design, train, every)).transpose()?;
+    let after = accepted.map(|f| compare(f, &designs, train, every)).transpose()?;
     let (groups_after, growth_after) = after.as_ref().map_or((&cmp.groups, &cmp.growth), |c| (&c.groups, &c.growth));
     let conclusion = Judgement {
         ranking: &climb.ranking,
