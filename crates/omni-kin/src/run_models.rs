@@ -7,6 +7,7 @@
 //! Plain data: the caller (omni-cli's design layer) decides which run gets which model; runs are matched by
 //! name, so any subset of the runs (a cross-validation fold, the held-out runs) finds its models.
 
+use crate::cost::CostKind;
 use crate::error::KinError;
 use crate::evaluate::{Evaluator, RunErrors};
 use crate::model::FittedModel;
@@ -106,6 +107,16 @@ impl RunModels {
         Self { models: self.models.iter().map(f).collect(), of_run: self.of_run.clone() }
     }
 
+    /// The cost `kind` over `runs`, each under its own model ([`crate::cost::cost`] for one model): Eq. 6 the
+    /// mean of the runs' end-pose errors, a path cost the root of the mean of their path MSEs.
+    pub fn cost(&self, runs: &[Run], kind: CostKind) -> Result<f64, KinError> {
+        let errors = self.errors(runs, kind.selection())?;
+        Ok(match kind {
+            CostKind::EndPose => errors.end_pose_cost(),
+            CostKind::Path { heading_weight_m_per_rad: w, .. } => errors.path_cost(w),
+        })
+    }
+
     /// Errors of every run under its own model at the poses of `selection`, in run order, through
     /// [`Evaluator::for_report`] (one evaluator per model, over that model's runs).
     pub fn errors(&self, runs: &[Run], selection: Selection) -> Result<RunErrors, KinError> {
@@ -130,7 +141,6 @@ impl RunModels {
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
-    use crate::cost::CostKind;
     use crate::ik::IkMatrix;
     use crate::model::Model;
     use crate::simulate::{SimConfig, flower_commands, simulate};

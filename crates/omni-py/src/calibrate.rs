@@ -2,12 +2,12 @@
 //! Ctrl-C that stops the GA and keeps the best so far.
 
 use crate::effect::{EffectErrors, effect_from};
-use crate::errors::{PyResultExt, value_error};
+use crate::errors::{CalibrationError, PyResultExt, value_error};
 use crate::model::PyModel;
 use crate::robot::{model_or_design, model_spec, robot_arg};
 use crate::run::runs_from;
 use numpy::PyArray2;
-use omni_cli::cmd::train::{FitArgs, apply_fit_args, prior_half_widths};
+use omni_cli::cmd::train::{FitArgs, apply_fit_args, check_fit, check_step, prior_half_widths};
 use omni_ga::calibrate::{Calibration, Plan, Preset, calibrate};
 use omni_ga::observe::{Control, Iteration, Observer};
 use omni_kin::choice::UnknownChoice;
@@ -300,6 +300,11 @@ pub fn _calibration_from_state(state: &Bound<'_, PyDict>) -> PyResult<PyCalibrat
 /// flags. ``progress(dict)`` is called after each iteration; returning False stops. Ctrl-C stops the GA and
 /// returns the best so far (``interrupted`` is True). The GIL is released while the search runs.
 ///
+/// Refused with ``omnical.CalibrationError`` as the CLI refuses: a preset whose fixed step misses the runs'
+/// sampling (the paper's 10 ms on 40 ms data; before fitting), and a fit worse than its start on its own
+/// training runs (both objectives in the message). ``force=True`` fits and returns it anyway, with a
+/// ``UserWarning``.
+///
 /// >>> runs = omnical.simulate(runs_per_command=1, duration_s=1.0)  # on the paper's Eq. 9 robot
 /// >>> fit = omnical.train("ik", runs, robot="apr02", seed=0)
 /// >>> fit.objective, fit.cost_fitted < fit.cost_start
@@ -307,7 +312,7 @@ pub fn _calibration_from_state(state: &Bound<'_, PyDict>) -> PyResult<PyCalibrat
 /// >>> fit.matrix.shape
 /// (3, 3)
 #[pyfunction]
-#[pyo3(signature = (model, runs, *, robot = None, effects = Vec::new(), preset = "default", seed = 0, objective = None, every = 1, heading_weight = 1.0, unexcited = None, max_std_error = 0.05, min_excitation = 0.01, progress = None))]
+#[pyo3(signature = (model, runs, *, robot = None, effects = Vec::new(), preset = "default", seed = 0, objective = None, every = 1, heading_weight = 1.0, unexcited = None, max_std_error = 0.05, min_excitation = 0.01, progress = None, force = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn train(
     py: Python<'_>,
@@ -324,6 +329,7 @@ pub fn train(
     max_std_error: f64,
     min_excitation: f64,
     progress: Option<Py<PyAny>>,
+    force: bool,
 ) -> PyResult<PyCalibration> {
     crate::robot::check_order(model, runs, "omnical.train")?;
     let preset: Preset = preset.parse().map_err(|e: UnknownChoice| value_error(format!("preset {e}")))?;
@@ -355,6 +361,10 @@ pub fn train(
     if from_design {
         plan.half_widths = prior_half_widths(&start, &origin).into_iter().collect();
     }
+    // The CLI's refusals (`omnical train` without --force): the preset's fixed step against the runs.
+    if let Some(w) = check_step(&plan, &runs, force).map_err(refused)? {
+        warn(py, &w)?;
+    }
     let errors = crate::effect::EffectErrors::new(adapters.iter().cloned());
     let mut observer = PyObserver {
         progress,
@@ -369,6 +379,10 @@ pub fn train(
         return Err(e);
     }
     let c = errors.check(result)?.py()?;
+    // A fit worse than its start on its own training runs is refused (force=True keeps it, with a warning).
+    if let Some(w) = check_fit(&c, &plan, &runs, force).map_err(refused)? {
+        warn(py, &w)?;
+    }
     if observer.interrupted {
         PyErr::warn(
             py,
@@ -399,9 +413,21 @@ pub fn train(
     })
 }
 
+/// A refusal of the CLI's `train` as `omnical.CalibrationError`, in Python's spelling.
+fn refused(e: anyhow::Error) -> PyErr {
+    CalibrationError::new_err(flag_names(&format!("omnical.train: {e:#}")))
+}
+
+/// A `UserWarning` in Python's spelling.
+fn warn(py: Python<'_>, message: &str) -> PyResult<()> {
+    let text = std::ffi::CString::new(flag_names(&format!("omnical.train: {message}")))
+        .map_err(|e| value_error(e.to_string()))?;
+    PyErr::warn(py, &py.get_type::<PyUserWarning>(), &text, 1)
+}
+
 /// The CLI's message with Python's spelling of its flags (`--every` → `every=`).
 fn flag_names(message: &str) -> String {
-    let mut out = message.to_string();
+    let mut out = message.replace("--preset default", "preset=\"default\"").replace("--force", "force=True");
     for flag in ["every", "heading-weight", "max-std-error", "min-excitation"] {
         out = out.replace(&format!("--{flag}"), &format!("{}=", flag.replace('-', "_")));
     }

@@ -125,12 +125,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
 }
 
 /// One MCAP bag per run in `dir` (created), with the calibrated odometry; returns the paths.
-fn write_mcaps(
-    dir: &Path,
-    a: &Args,
-    ds: &crate::dataset::Dataset,
-    models: &RunModels,
-) -> anyhow::Result<Vec<PathBuf>> {
+fn write_mcaps(dir: &Path, a: &Args, ds: &crate::dataset::Dataset, models: &RunModels) -> anyhow::Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let mut files = Vec::with_capacity(ds.runs.len());
     for run in &ds.runs {

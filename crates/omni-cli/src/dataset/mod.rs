@@ -72,8 +72,7 @@ impl std::fmt::Display for RobotKind {
 impl RobotKind {
     /// Whether `other` is of another kind: another wheel count, or another declared type.
     fn differs(&self, other: &RobotKind) -> bool {
-        self.n_wheels != other.n_wheels
-            || matches!((&self.declared, &other.declared), (Some(a), Some(b)) if a != b)
+        self.n_wheels != other.n_wheels || matches!((&self.declared, &other.declared), (Some(a), Some(b)) if a != b)
     }
 }
 

@@ -16,7 +16,6 @@ pub mod tum;
 
 use omni_ga::diagnose::{Costs, Diagnosis};
 use omni_kin::cost::CostKind;
-use omni_kin::evaluate::Evaluator;
 use omni_kin::odometry::{self, Selection};
 use omni_kin::{FittedModel, KinError, Pose2, Run, RunModels};
 use serde::Serialize;
@@ -157,7 +156,8 @@ impl Report {
         let mut models = Vec::with_capacity(input.models.len());
         let mut fig_errors = Vec::with_capacity(input.models.len());
         for m in &input.models {
-            let (train, held_out) = (m.model.errors(input.train, path.selection())?, m.model.errors(fig_runs, path.selection())?);
+            let (train, held_out) =
+                (m.model.errors(input.train, path.selection())?, m.model.errors(fig_runs, path.selection())?);
             let w = path.heading_weight();
             let costs = Costs {
                 train_path: train.path_cost(w),
@@ -332,11 +332,7 @@ pub fn write_with(
 
 /// The models a report shows for a fitted model and its diagnosis: the design (one, or each run's own),
 /// the model itself, and the model with the effects the diagnosis added (when it added any).
-pub fn models_for(
-    design: impl Into<RunModels>,
-    fitted: &FittedModel,
-    diagnosis: Option<&Diagnosis>,
-) -> Vec<Labelled> {
+pub fn models_for(design: impl Into<RunModels>, fitted: &FittedModel, diagnosis: Option<&Diagnosis>) -> Vec<Labelled> {
     let base = format!("fitted {}", fitted.model.kinematics.noun());
     let with_effects = |m: &FittedModel, base: &str| {
         let ids: Vec<&str> = m.model.effects.iter().map(omni_kin::effect::Effect::id).collect();

@@ -6,8 +6,8 @@ use crate::fit::stage::Stage;
 use crate::optimizer::ga::{GaConfig, StallRule};
 use crate::optimizer::lm::LmConfig;
 use crate::science::identify::IdentifyOptions;
-use omni_kin::{Integration, Run, StepMode};
 use omni_kin::cost::CostKind;
+use omni_kin::{Integration, Run, StepMode};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -139,7 +139,8 @@ impl Plan {
         let mut dts: Vec<f64> = runs.iter().map(Run::median_dt_s).collect();
         dts.sort_by(f64::total_cmp);
         let median_interval_s = *dts.get(dts.len() / 2)?;
-        ((median_interval_s / step_s - 1.0).abs() > STEP_TOLERANCE).then_some(StepMismatch { step_s, median_interval_s })
+        ((median_interval_s / step_s - 1.0).abs() > STEP_TOLERANCE)
+            .then_some(StepMismatch { step_s, median_interval_s })
     }
 }
 
