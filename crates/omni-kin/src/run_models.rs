@@ -47,7 +47,7 @@ impl From<&RunModels> for RunModels {
 impl RunModels {
     /// Models by run: `groups` pairs each model with the names of its runs. The first group's model stands
     /// for them all ([`Self::first`]). One group is one model for every run, whatever its names. A run
-    /// named in two groups, or no group, is an error.
+    /// named in two groups is an error (twice in one group is the same run).
     pub fn new(mut groups: Vec<(FittedModel, Vec<String>)>) -> Result<Self, KinError> {
         if groups.is_empty() {
             return Err(KinError::Invalid { what: "models by run".into(), why: "no model given".into() });
@@ -60,7 +60,7 @@ impl RunModels {
         let mut models = Vec::with_capacity(groups.len());
         for (i, (model, names)) in groups.into_iter().enumerate() {
             for name in names {
-                if of_run.insert(name.clone(), i).is_some() {
+                if of_run.insert(name.clone(), i).is_some_and(|j| j != i) {
                     return Err(KinError::Invalid {
                         what: format!("run {name}"),
                         why: "two inputs hold a run of this name and declare different designs; rename one".into(),

@@ -231,9 +231,10 @@ fn designs_note(ds: &Dataset) -> Option<String> {
         .iter()
         .map(|g| format!("{} ({} run{})", names(g), g.n_runs(), if g.n_runs() == 1 { "" } else { "s" }))
         .collect();
+    let why = if groups[1].n_runs() == groups[0].n_runs() { "the most runs, the first given" } else { "the most runs" };
     Some(format!(
         "the inputs declare {} different designs: {}; each run is evaluated with its own input's design, and \
-         where one design is needed (training's start, --model design) it is {}'s (the most runs)",
+         where one design is needed (training's start, --model design) it is that of {} ({why})",
         groups.len(),
         list.join(", "),
         names(&groups[0])
