@@ -41,4 +41,4 @@ pub use odometry::{Selection, Trajectory};
 pub use pose::{Pose2, PoseError, StampedPose, Twist2};
 pub use robot::{BaseKind, RobotDescription};
 pub use run::{Command, Run, RunData};
-pub use run_models::RunModels;
+pub use run_models::{RunModels, ToRunModels};

@@ -38,9 +38,22 @@ impl From<&FittedModel> for RunModels {
     }
 }
 
-impl From<&RunModels> for RunModels {
-    fn from(models: &RunModels) -> Self {
-        models.clone()
+/// Where runs are compared with their designs, either one model for every run (a [`FittedModel`]) or a
+/// model per run (a [`RunModels`]): `diagnose(&model, &design, …)` takes both.
+pub trait ToRunModels {
+    /// The models by run.
+    fn to_run_models(&self) -> RunModels;
+}
+
+impl ToRunModels for FittedModel {
+    fn to_run_models(&self) -> RunModels {
+        RunModels::from(self)
+    }
+}
+
+impl ToRunModels for RunModels {
+    fn to_run_models(&self) -> RunModels {
+        self.clone()
     }
 }
 

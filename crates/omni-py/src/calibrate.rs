@@ -333,21 +333,7 @@ pub fn train(
 ) -> PyResult<PyCalibration> {
     crate::robot::check_order(model, runs, "omnical.train")?;
     let preset: Preset = preset.parse().map_err(|e: UnknownChoice| value_error(format!("preset {e}")))?;
-    let fit = FitArgs {
-        // The CLI's spelling (`end-pose`) and the id Calibration.objective gives (`end_pose`).
-        objective: objective
-            .map(|o| o.replace('-', "_").parse())
-            .transpose()
-            .map_err(|e: UnknownChoice| value_error(format!("objective {e}")))?,
-        every,
-        heading_weight,
-        unexcited: unexcited
-            .map(str::parse)
-            .transpose()
-            .map_err(|e: UnknownChoice| value_error(format!("unexcited {e}")))?,
-        max_std_error,
-        min_excitation,
-    };
+    let fit = fit_args(objective, every, heading_weight, unexcited, max_std_error, min_excitation)?;
     let mut origin = crate::run::origin_of(runs);
     let (runs, design) = runs_from(runs, "runs")?;
     let (mut start, mut adapters, from_design) = start_model(py, model, robot.as_ref(), design, &mut origin)?;
@@ -391,6 +377,44 @@ pub fn train(
             1,
         )?;
     }
+    let stopped = (observer.interrupted, observer.stopped_by_callback);
+    calibration_of(py, c, adapters, stopped, observer.history)
+}
+
+/// `train`'s objective and identifiability keywords as the CLI's [`FitArgs`].
+fn fit_args(
+    objective: Option<&str>,
+    every: usize,
+    heading_weight: f64,
+    unexcited: Option<&str>,
+    max_std_error: f64,
+    min_excitation: f64,
+) -> PyResult<FitArgs> {
+    Ok(FitArgs {
+        // The CLI's spelling (`end-pose`) and the id Calibration.objective gives (`end_pose`).
+        objective: objective
+            .map(|o| o.replace('-', "_").parse())
+            .transpose()
+            .map_err(|e: UnknownChoice| value_error(format!("objective {e}")))?,
+        every,
+        heading_weight,
+        unexcited: unexcited
+            .map(str::parse)
+            .transpose()
+            .map_err(|e: UnknownChoice| value_error(format!("unexcited {e}")))?,
+        max_std_error,
+        min_excitation,
+    })
+}
+
+/// The Python object of a calibration; `stopped`: (interrupted by Ctrl-C, stopped by the callback).
+fn calibration_of(
+    py: Python<'_>,
+    c: Calibration,
+    adapters: Vec<std::sync::Arc<crate::effect::PyEffect>>,
+    stopped: (bool, bool),
+    steps: Vec<Step>,
+) -> PyResult<PyCalibration> {
     Ok(PyCalibration {
         model: Py::new(py, PyModel::from_fitted(c.fitted.clone(), adapters.clone()))?,
         start: Py::new(py, PyModel::from_fitted(c.start.clone(), adapters))?,
@@ -404,12 +428,12 @@ pub fn train(
         seconds: c.seconds,
         at_bound: c.at_bound,
         outside_box: c.outside_box,
-        interrupted: observer.interrupted,
-        stopped: observer.stopped_by_callback,
+        interrupted: stopped.0,
+        stopped: stopped.1,
         warnings: c.identifiability.warnings(),
         held: c.held.iter().map(|w| w.text.clone()).collect(),
         identifiability: serde_json::to_string(&c.identifiability).map_err(|e| value_error(e.to_string()))?,
-        steps: observer.history,
+        steps,
     })
 }
 

@@ -17,7 +17,7 @@ pub mod tum;
 use omni_ga::diagnose::{Costs, Diagnosis};
 use omni_kin::cost::CostKind;
 use omni_kin::odometry::{self, Selection};
-use omni_kin::{FittedModel, KinError, Pose2, Run, RunModels};
+use omni_kin::{FittedModel, KinError, Pose2, Run, RunModels, ToRunModels};
 use serde::Serialize;
 
 /// Heading weight of the path cost. m/rad.
@@ -332,14 +332,14 @@ pub fn write_with(
 
 /// The models a report shows for a fitted model and its diagnosis: the design (one, or each run's own),
 /// the model itself, and the model with the effects the diagnosis added (when it added any).
-pub fn models_for(design: impl Into<RunModels>, fitted: &FittedModel, diagnosis: Option<&Diagnosis>) -> Vec<Labelled> {
+pub fn models_for(design: &impl ToRunModels, fitted: &FittedModel, diagnosis: Option<&Diagnosis>) -> Vec<Labelled> {
     let base = format!("fitted {}", fitted.model.kinematics.noun());
     let with_effects = |m: &FittedModel, base: &str| {
         let ids: Vec<&str> = m.model.effects.iter().map(omni_kin::effect::Effect::id).collect();
         if ids.is_empty() { base.to_string() } else { format!("{base} + {}", ids.join(" + ")) }
     };
     let mut v = vec![
-        Labelled { label: "design".into(), model: design.into() },
+        Labelled { label: "design".into(), model: design.to_run_models() },
         Labelled { label: with_effects(fitted, &base), model: fitted.into() },
     ];
     if let Some(f) = diagnosis.and_then(|d| d.final_model.as_ref())

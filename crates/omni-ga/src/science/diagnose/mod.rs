@@ -51,7 +51,7 @@ use compare::compare;
 use evidence::{Bench, candidate_effect};
 use findings::{Judgement, findings};
 use noise::repeatability_floor;
-use omni_kin::{EffectKind, FittedModel, Run, RunModels};
+use omni_kin::{EffectKind, FittedModel, Run, ToRunModels};
 use search::{confident, kind_out, passes};
 use serde::{Deserialize, Serialize};
 
@@ -361,12 +361,12 @@ fn recommend(
 /// Diagnose `model` on `train`, holding out `validation` (or cross-validating over repetitions).
 ///
 /// `design`: the design each run is compared with — one model (a `&FittedModel`) or a model per run
-/// ([`RunModels`], when a robot's sets declare different designs; it must know every training and
+/// (a `&RunModels`, when a robot's sets declare different designs; it must know every training and
 /// validation run). Its design costs are the run-weighted means of the runs' own; the implied effect values
 /// are taken against its first model.
 pub fn diagnose(
     model: &FittedModel,
-    design: impl Into<RunModels>,
+    design: &impl ToRunModels,
     train: &[Run],
     validation: Option<&[Run]>,
     opts: &DiagnoseOptions,
@@ -374,7 +374,7 @@ pub fn diagnose(
     if train.is_empty() {
         return Err(Error::NoRuns);
     }
-    let designs: RunModels = design.into();
+    let designs = design.to_run_models();
     let every = opts.every.max(1);
     let (fit_runs, held_runs, protocol) = held_out_sets(train, validation);
     // Compare the model and the design with the data.
