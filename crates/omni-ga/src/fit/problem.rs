@@ -8,6 +8,7 @@ use crate::optimizer::problem::{
 use crate::science::identify::{self, Identifiability, IdentifyOptions};
 use nalgebra::DMatrix;
 use omni_kin::cost::CostKind;
+use omni_kin::effect::{Effect, Stage};
 use omni_kin::evaluate::Evaluator;
 use omni_kin::{Model, Run};
 
@@ -94,42 +95,81 @@ impl<'a> CalibrationProblem<'a> {
         k.twist_from_wheels_jacobian(&x[..self.model.n_base()]).ok().map(Some)
     }
 
-    /// The effect parameters' Jacobian columns over all residuals (finite differences; see
+    /// The Jacobian columns `cols` (effect parameters) over all residuals, by finite differences (see
     /// [`LeastSquares::jacobian`]).
-    fn effect_columns(&self, x: &[f64]) -> Vec<Vec<f64>> {
-        let (nb, n) = (self.model.n_base(), x.len());
-        if n <= nb {
-            return Vec::new();
-        }
+    fn effect_columns(&self, x: &[f64], cols: &[usize]) -> Vec<Vec<f64>> {
         let specs = self.model.params();
         let at_range_end = |i: usize| specs.get(i).is_some_and(|s| s.lower == x[i] && s.upper > s.lower);
-        finite_difference_columns(x, nb..n, |y| self.residuals(y), at_range_end)
+        let y0: Vec<f64> = cols.iter().map(|&c| x[c]).collect();
+        finite_difference_columns(
+            &y0,
+            0..cols.len(),
+            |y| self.residuals(&spread(x, cols, y)),
+            |k| at_range_end(cols[k]),
+        )
     }
 
-    /// [`Self::for_each_run_block`] through the fast kernel; `None` (before any visit) when it cannot
-    /// serve `x`.
+    /// [`Self::for_each_run_block`] through the fast paths: the kernel's IK Jacobian, else the forward-mode
+    /// walk (which also carries some effect parameters); the other effect columns by finite differences.
+    /// `None` (before any visit) when neither serves `x`.
     fn analytic_blocks(&self, x: &[f64], visit: &mut dyn FnMut(RunBlock<'_>)) -> Option<()> {
         let res = self.model.resolve(x).ok()?;
         let dm = self.ik_from_base(x)?;
         let (nb, n) = (self.model.n_base(), x.len());
-        let mut effects: Option<Vec<Vec<f64>>> = None;
-        self.evaluator.ik_jacobian_blocks(&res, self.objective, &mut |b| {
-            let row_offset = self.row_offsets[b.run];
-            let rows = b.residuals.len();
-            let mut j = DMatrix::zeros(rows, n);
+        let mut effects: Option<(Vec<usize>, Vec<Vec<f64>>)> = None;
+        // Every column of a block is written below: one buffer serves every run.
+        let mut j = DMatrix::zeros(0, n);
+        // One run's block: the IK columns (chained to the base parameters), the carried effect columns
+        // (`covered`, after the IK entries in `jac`) and the rest by differences, computed once.
+        let mut block = |run: usize, residuals: &[f64], jac: &DMatrix<f64>, covered: &[usize]| {
+            let row_offset = self.row_offsets[run];
+            let rows = residuals.len();
+            let nik = jac.ncols() - covered.len();
+            j.resize_mut(rows, n, 0.0);
             match &dm {
-                None => j.columns_mut(0, nb).copy_from(b.jacobian),
-                Some(dm) => j.columns_mut(0, nb).copy_from(&(b.jacobian * dm)),
+                None => j.columns_mut(0, nb).copy_from(&jac.columns(0, nik)),
+                Some(dm) => j.columns_mut(0, nb).copy_from(&(jac.columns(0, nik) * dm)),
             }
-            // The effect columns come from whole residual vectors: computed once, at the first block.
-            let cols = effects.get_or_insert_with(|| self.effect_columns(x));
-            for (c, col) in (nb..n).zip(cols.iter()) {
+            for (k, &g) in covered.iter().enumerate() {
+                j.column_mut(g).copy_from(&jac.column(nik + k));
+            }
+            let (rest, cols) = effects.get_or_insert_with(|| {
+                let rest: Vec<usize> = (nb..n).filter(|g| !covered.contains(g)).collect();
+                let cols = self.effect_columns(x, &rest);
+                (rest, cols)
+            });
+            for (&c, col) in rest.iter().zip(cols.iter()) {
                 for (i, v) in col.iter().skip(row_offset).take(rows).enumerate() {
                     j[(i, c)] = *v;
                 }
             }
-            visit(RunBlock { run: b.run, residuals: b.residuals, row_offset, jacobian: &j });
+            visit(RunBlock { run, residuals, row_offset, jacobian: &j });
+        };
+        // The kernel also carries the parameters of a model's one (affine) wheel-stage effect.
+        let wheel = self.wheel_parameters();
+        let kernel = self.evaluator.ik_jacobian_blocks(&res, self.objective, &mut |b| {
+            debug_assert!(b.wheel_columns == 0 || b.wheel_columns == wheel.len());
+            let covered = if b.wheel_columns == wheel.len() { wheel.as_slice() } else { &[] };
+            block(b.run, b.residuals, b.jacobian, covered)
+        });
+        kernel.or_else(|| {
+            self.evaluator.forward_jacobian_blocks(self.model, x, self.objective, &mut |b| {
+                block(b.run, b.residuals, b.jacobian, b.covered)
+            })
         })
+    }
+
+    /// Indices of the parameters of the model's wheel-stage effect, when it has exactly one.
+    fn wheel_parameters(&self) -> Vec<usize> {
+        let model = self.model;
+        let wheel: Vec<_> = (model.effects.iter().zip(model.effect_ranges()))
+            .filter(|(e, _)| e.stage() == Stage::Wheel)
+            .map(|(_, r)| r)
+            .collect();
+        match &wheel[..] {
+            [r] => r.clone().collect(),
+            _ => Vec::new(),
+        }
     }
 
     /// Residual rows of each run, in run order (3 per selected ground-truth pose).
@@ -178,6 +218,15 @@ impl<'a> CalibrationProblem<'a> {
         })?;
         Some((r, j))
     }
+}
+
+/// `x` with the entries `cols` replaced by `y` (one value per entry).
+fn spread(x: &[f64], cols: &[usize], y: &[f64]) -> Vec<f64> {
+    let mut out = x.to_vec();
+    for (&c, &v) in cols.iter().zip(y) {
+        out[c] = v;
+    }
+    out
 }
 
 impl Problem for CalibrationProblem<'_> {

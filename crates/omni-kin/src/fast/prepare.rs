@@ -1,12 +1,15 @@
-//! Preparation: each run's [`StepPlan`] (no clock lag), four runs interleaved to a lane group (struct of
+//! Preparation: each run's [`StepPlan`] (for one clock lag), four runs interleaved to a lane group (struct of
 //! arrays), and the wheel-angle increments `u = f h w` of their steps — kept, redone from the runs' wheel
 //! columns, or redone from wheel speeds rewritten by wheel-stage effects, always by [`Group::fill`].
 
+use super::features::WheelFeatures;
+use super::twist::StepTimes;
 use super::{LANES, Lanes};
 use crate::odometry::Selection;
 use crate::plan::StepPlan;
 use crate::pose::Pose2;
 use crate::run::Run;
+use std::sync::OnceLock;
 
 /// One ground-truth pose to predict: after `step` steps of `lane`, a partial step (its increments in
 /// [`Increments::query_u`]).
@@ -19,6 +22,13 @@ pub(super) struct Query {
     pub truth: Pose2,
     /// Index of the query in its lane's plan.
     source: usize,
+}
+
+impl Query {
+    /// Index of the query in its lane's plan.
+    pub fn source(&self) -> usize {
+        self.source
+    }
 }
 
 /// Four runs interleaved.
@@ -48,6 +58,28 @@ pub(super) struct Group {
     pub queries: Vec<Query>,
     /// Partial-step increments of the queries, `n_wheels` each. rad.
     query_u: Vec<f64>,
+    /// The parts of the evaluator's affine wheel-stage effect as increments (taken at first use).
+    parts: OnceLock<GroupParts>,
+    /// Step lengths and times for twist-stage effects (taken at first use).
+    times: OnceLock<StepTimes>,
+}
+
+/// One part's increments before interleaving: (parameter, wheel), steps, queries, largest |increment|.
+type PartColumn = ((usize, usize), Vec<Lanes>, Vec<f64>, f64);
+
+/// The parts of an affine wheel-stage effect ([`WheelFeatures`]) as increments of a group: `f h Δw` of
+/// every step and query for one unit of a parameter, on one wheel; interleaved by step (one pass reads
+/// them all).
+#[derive(Clone, Debug, Default)]
+pub(super) struct GroupParts {
+    /// (parameter index in the effect's, wheel) of each part.
+    pub keys: Vec<(usize, usize)>,
+    /// Increments of the steps: `steps × keys.len()` lane vectors, step-major. rad.
+    pub u: Vec<Lanes>,
+    /// Increments of the queries: `queries × keys.len()`, query-major. rad.
+    pub query_u: Vec<f64>,
+    /// Largest |increment| of each part. rad.
+    pub u_max: Vec<f64>,
 }
 
 /// The increments a walk of a group reads.
@@ -60,8 +92,16 @@ pub(super) struct Increments<'g> {
 
 impl Group {
     /// Group of `chunk` (at most [`LANES`] runs, the first being run `first_run`) with fixed steps of
-    /// `fixed_dt_s` (`None`: each run's median interval); keeps the increments when `keep`.
-    pub fn new(first_run: usize, chunk: &[Run], fixed_dt_s: Option<f64>, selection: Selection, keep: bool) -> Self {
+    /// `fixed_dt_s` (`None`: each run's median interval) and a wheel-clock lag of `lag_s`; keeps the
+    /// increments when `keep`.
+    pub fn new(
+        first_run: usize,
+        chunk: &[Run],
+        fixed_dt_s: Option<f64>,
+        selection: Selection,
+        lag_s: f64,
+        keep: bool,
+    ) -> Self {
         let n_wheels = chunk.first().map_or(0, Run::n_wheels);
         let plans: Vec<StepPlan> = chunk
             .iter()
@@ -70,7 +110,7 @@ impl Group {
                     Selection::End => Vec::new(),
                     Selection::Path(_) => selection.indices(r.truth().len()),
                 };
-                StepPlan::new(r, 0.0, &idx)
+                StepPlan::new(r, lag_s, &idx)
             })
             .collect();
         let (mut start, mut end, mut h) = ([Pose2::IDENTITY; LANES], [Pose2::IDENTITY; LANES], [0.0; LANES]);
@@ -99,6 +139,8 @@ impl Group {
             end,
             queries,
             query_u: Vec::new(),
+            parts: OnceLock::new(),
+            times: OnceLock::new(),
         };
         let wheels: Vec<&[f64]> = chunk.iter().map(Run::wheel_rad_s).collect();
         let mut u = Vec::new();
@@ -109,6 +151,22 @@ impl Group {
             g.u = u;
         }
         g
+    }
+
+    /// Each real lane's plan.
+    pub fn plans(&self) -> &[StepPlan] {
+        &self.plans
+    }
+
+    /// Step length of each lane. s.
+    pub fn h(&self) -> &Lanes {
+        &self.h
+    }
+
+    /// The step times twist-stage effects read ([`StepTimes`]) of this group, whose runs are `chunk`,
+    /// taken at the first call.
+    pub fn times(&self, chunk: &[Run]) -> &StepTimes {
+        self.times.get_or_init(|| StepTimes::new(self, chunk))
     }
 
     /// The kept increments; `None` when they were not kept.
@@ -137,7 +195,11 @@ impl Group {
     /// wheel speeds `wheels[lane]` and its plan's fractions, zero past a lane's last step). With
     /// [`Self::fill_queries`], the one place increments are taken.
     pub fn fill_steps(&self, wheels: &[&[f64]], u: &mut Vec<Lanes>) {
-        let n = self.n_wheels;
+        self.fill_steps_of(wheels, self.n_wheels, u);
+    }
+
+    /// [`Self::fill_steps`] of `n` columns per sample.
+    fn fill_steps_of(&self, wheels: &[&[f64]], n: usize, u: &mut Vec<Lanes>) {
         // Each lane's wheel speeds over its steps (none for padding lanes).
         let mut w: [&[f64]; LANES] = [&[]; LANES];
         for (lane, (plan, speeds)) in self.plans.iter().zip(wheels).enumerate() {
@@ -168,7 +230,53 @@ impl Group {
     /// The queries' partial-step increments `f h w` from each lane's wheel speeds `wheels[lane]` (zero
     /// where the robot is at rest), `n_wheels` per query. rad.
     pub fn fill_queries(&self, wheels: &[&[f64]]) -> Vec<f64> {
-        let n = self.n_wheels;
+        self.fill_queries_of(wheels, self.n_wheels)
+    }
+
+    /// The parts of `features` (the affine wheel-stage effect of every evaluation of these runs) as
+    /// increments of this group, taken at the first call.
+    pub fn parts(&self, features: &WheelFeatures) -> &GroupParts {
+        self.parts.get_or_init(|| self.make_parts(features))
+    }
+
+    /// The parts of `features` as increments of this group (see [`Self::parts`]).
+    pub fn make_parts(&self, features: &WheelFeatures) -> GroupParts {
+        let columns: Vec<PartColumn> = {
+            let lanes: Vec<Vec<(usize, usize, &[f64])>> =
+                (0..self.lanes).map(|l| features.run_parts(self.first_run + l).collect()).collect();
+            let mut keys: Vec<(usize, usize)> = lanes.iter().flatten().map(|&(p, w, _)| (p, w)).collect();
+            keys.sort_unstable();
+            keys.dedup();
+            let zeros: Vec<Vec<f64>> = self.plans.iter().map(|p| vec![0.0; p.first_sample + p.steps + 1]).collect();
+            keys.into_iter()
+                .map(|(param, wheel)| {
+                    let cols: Vec<&[f64]> = (0..self.lanes)
+                        .map(|l| {
+                            let own = lanes[l].iter().find(|&&(p, w, _)| (p, w) == (param, wheel));
+                            own.map_or(zeros[l].as_slice(), |&(_, _, c)| c)
+                        })
+                        .collect();
+                    let mut u = Vec::new();
+                    self.fill_steps_of(&cols, 1, &mut u);
+                    let u_max = max_per_wheel(&u, 1)[0];
+                    ((param, wheel), u, self.fill_queries_of(&cols, 1), u_max)
+                })
+                .collect()
+        };
+        let mut parts = GroupParts::default();
+        for k in 0..self.steps {
+            parts.u.extend(columns.iter().map(|c| c.1[k]));
+        }
+        for q in 0..self.queries.len() {
+            parts.query_u.extend(columns.iter().map(|c| c.2[q]));
+        }
+        parts.keys = columns.iter().map(|c| c.0).collect();
+        parts.u_max = columns.iter().map(|c| c.3).collect();
+        parts
+    }
+
+    /// [`Self::fill_queries`] of `n` columns per sample.
+    fn fill_queries_of(&self, wheels: &[&[f64]], n: usize) -> Vec<f64> {
         let mut query_u = Vec::with_capacity(self.queries.len() * n);
         for q in &self.queries {
             let (plan, h) = (&self.plans[q.lane], self.h[q.lane]);
