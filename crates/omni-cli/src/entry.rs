@@ -8,7 +8,8 @@ use std::ffi::OsString;
 
 /// Parses `args` (the program name first, as `std::env::args_os`) and runs the command. Returns the exit
 /// status: 0 on success and for `--help`/`--version` and a closed pipe, 2 on errors (printed on stderr as
-/// `error: {e:#}`), 130 after Ctrl-C stopped a training, clap's own status for usage errors.
+/// `error: {e:#}`), 1 for a refused fit (`train`: its step, or a fit worse than its start; `--force`), 130
+/// after Ctrl-C stopped a training, clap's own status for usage errors.
 pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
     let args: Vec<OsString> = args.into_iter().collect();
     let cli = match Cli::try_parse_from(&args) {
@@ -34,6 +35,10 @@ pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
                 c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
             }) {
                 return 0;
+            }
+            if e.downcast_ref::<crate::cmd::train::Refused>().is_some() {
+                eprintln!("error: {e:#}");
+                return crate::cmd::train::EXIT_REFUSED;
             }
             if e.downcast_ref::<crate::interrupt::Interrupted>().is_some() {
                 eprintln!("omnical: {e:#}");

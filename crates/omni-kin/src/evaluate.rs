@@ -121,6 +121,28 @@ impl RunErrors {
     }
 }
 
+impl RunErrors {
+    /// The errors of `n_runs` runs evaluated in groups (each group under a model of its own), put back in
+    /// run order: `parts` pairs each group's run indices with its errors (in that order). Every index in
+    /// `0..n_runs` appears once.
+    pub fn interleave(n_runs: usize, parts: &[(Vec<usize>, RunErrors)]) -> RunErrors {
+        let mut at: Vec<(usize, usize)> = vec![(0, 0); n_runs];
+        for (g, (idx, _)) in parts.iter().enumerate() {
+            for (k, &i) in idx.iter().enumerate() {
+                at[i] = (g, k);
+            }
+        }
+        let mut out = RunErrors { errors: Vec::new(), offsets: vec![0], ends: Vec::with_capacity(n_runs) };
+        for (g, k) in at {
+            let part = &parts[g].1;
+            out.errors.extend_from_slice(part.run(k));
+            out.ends.push(part.ends[k]);
+            out.offsets.push(out.errors.len());
+        }
+        out
+    }
+}
+
 /// One run's part of the least-squares system, as [`Evaluator::ik_jacobian_blocks`] visits it.
 #[derive(Clone, Copy, Debug)]
 pub struct IkBlock<'a> {

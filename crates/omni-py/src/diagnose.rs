@@ -4,9 +4,8 @@
 use crate::effect::{EffectErrors, effect_from};
 use crate::errors::PyResultExt;
 use crate::model::PyModel;
-use crate::robot::{check_order, model_spec};
-use crate::run::runs_from;
-use omni_cli::design::design_for;
+use crate::robot::{check_order, designs_for, model_spec};
+use crate::run::{origin_of, runs_from};
 use omni_ga::diagnose::{Candidate, Costs, DiagnoseOptions, Diagnosis, ParamValue, diagnose as rs_diagnose};
 use omni_kin::effect::Effect;
 use pyo3::prelude::*;
@@ -193,6 +192,8 @@ pub fn diagnose(
     robot: Option<std::path::PathBuf>,
 ) -> PyResult<PyDiagnosis> {
     check_order(model, runs, "omnical.diagnose")?;
+    let mut origins = vec![origin_of(runs)];
+    origins.extend(validate.map(origin_of));
     let (train, declared) = runs_from(runs, "runs")?;
     let validation = validate.map(|v| runs_from(v, "validate")).transpose()?.map(|(r, _)| r);
     let (fm, mut adapters, _) = model_spec(py, model, robot.as_ref(), declared, "omnical.diagnose")?;
@@ -210,7 +211,8 @@ pub fn diagnose(
         }
     }
     let errors = EffectErrors::new(adapters.iter().cloned());
-    let design = design_for(&fm);
+    // Each run is compared with its own input's design.
+    let design = designs_for(&fm, robot.as_ref(), &origins);
     let d = py.detach(|| rs_diagnose(&fm, &design, &train, validation.as_deref(), &opts));
     let d = errors.check(d)?.py()?;
     let final_model = match &d.final_model {

@@ -2,10 +2,9 @@
 //! for evo, MCAP bags with the model's odometry on /omnical/odometry for Foxglove.
 
 use crate::errors::{OmnicalError, value_error};
-use crate::robot::{check_order, model_spec};
+use crate::robot::{check_order, designs_for, model_spec, per_run};
 use crate::run::{origin_of, runs_from};
 use omni_cli::cmd::export::{write_mcap, write_tum};
-use omni_cli::design::design_for;
 use pyo3::exceptions::{PyFileNotFoundError, PyOSError};
 use pyo3::prelude::*;
 use std::path::{Path, PathBuf};
@@ -44,7 +43,9 @@ pub fn export(
     let (runs, declared) = runs_from(runs, "runs")?;
     let (fm, adapters, spec) = model_spec(py, model, robot.as_ref(), declared, "omnical.export")?;
     let errors = crate::effect::EffectErrors::new(adapters);
-    let design = design_for(&fm);
+    // Each run's own input's design; `"design"` is each run's own in the model's trajectories too.
+    let designs = designs_for(&fm, robot.as_ref(), std::slice::from_ref(&origin));
+    let models = per_run(fm.clone(), &spec, robot.as_ref(), &origin)?;
     // The joints the CLI names the wheels by: the data's robot description's, else the model's columns.
     let joints = match origin.robot_file {
         Some(_) => omni_cli::cmd::wheel_joints(&omni_cli::cmd::DataArgs::default(), &origin),
@@ -55,13 +56,13 @@ pub fn export(
         if let Some(dir) = &tum {
             create_dir(dir)?;
             for run in &runs {
-                written.extend(write_tum(dir, run, &design, &fm, &spec)?);
+                written.extend(write_tum(dir, run, designs.for_run(run)?, models.for_run(run)?, &spec)?);
             }
         }
         if let Some(dir) = &mcap {
             create_dir(dir)?;
             for run in &runs {
-                written.push(write_mcap(dir, run, &fm, &joints)?);
+                written.push(write_mcap(dir, run, models.for_run(run)?, &joints)?);
             }
         }
         Ok(written)

@@ -2,7 +2,7 @@
 
 use super::{DataArgs, OutputArgs, load_with_held_out, resolve_model};
 use crate::cli::effect_help;
-use crate::design::design_for;
+use crate::design::designs_for;
 use crate::units::{std_error_text, value_text};
 use crate::{atomic, model_file};
 use anyhow::Context;
@@ -92,15 +92,16 @@ struct Loaded {
 
 /// Loads, diagnoses and writes `--out`; returns the diagnosis and what it was computed on.
 fn diagnose_loaded(a: &Args) -> anyhow::Result<(Diagnosis, Loaded)> {
-    let (ds, val) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
+    let (ds, val_ds) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
-    let val = val.map(|v| v.runs);
+    // Each run is compared with its own input's design.
+    let design = designs_for(&model, &[Some(&ds), val_ds.as_ref()].into_iter().flatten().collect::<Vec<_>>());
+    let val = val_ds.map(|v| v.runs);
     super::held_out::check("diagnose", &a.runs, &ds.runs, val.as_deref().unwrap_or_default())?;
     let mut opts = DiagnoseOptions { auto: a.auto, min_gain: a.min_gain, ..DiagnoseOptions::default() };
     if !a.candidates.is_empty() {
         opts.candidates = a.candidates.clone();
     }
-    let design = design_for(&model);
     let d = diagnose(&model, &design, &ds.runs, val.as_deref(), &opts)?;
     if let (Some(out), Some(fm)) = (&a.out, &d.final_model) {
         let text = model_file::to_toml(fm, None).map_err(anyhow::Error::msg)?;

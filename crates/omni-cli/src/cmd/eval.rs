@@ -1,17 +1,17 @@
 //! `omnical eval`: the cost of a model on runs — the summary first (Eq. 6, path RMS, statistics of the
 //! end-position and end-heading errors, as evo_ape prints them), each run's row with `--per-run`.
 
-use super::{DataArgs, OutputArgs, load_runs, resolve_model};
+use super::{DataArgs, OutputArgs, load_runs};
 use omni_kin::PoseError;
 use omni_kin::cost::CostKind;
-use omni_kin::evaluate::Evaluator;
 use serde_json::json;
 use std::path::PathBuf;
 
 /// Arguments of `omnical eval`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// `design` (the data's design model, or the paper's Eq. 7) or a model file.
+    /// `design` (the data's design model, each run its own input's when the inputs declare different
+    /// designs), `paper` (the paper's Eq. 9) or a model file.
     #[arg(long, default_value = "design")]
     pub model: String,
     /// Run files or folders.
@@ -84,9 +84,9 @@ fn heading_stats(errors: &[PoseError]) -> Stats {
 pub fn run(a: &Args) -> anyhow::Result<()> {
     let model = a.model.as_str();
     let ds = load_runs(&a.runs, &a.data)?;
-    let fm = resolve_model(model, &ds)?;
-    let evaluator = Evaluator::for_report(&fm.model, &ds.runs, CostKind::PATH.selection())?;
-    let all = evaluator.errors(&fm.model.resolve(&fm.params)?);
+    // `design`: each run its own input's design (the pooled figures are the run-weighted means).
+    let models = crate::design::resolve_each(model, &[&ds])?;
+    let all = models.errors(&ds.runs, CostKind::PATH.selection())?;
     let errors = all.ends();
     let c = all.end_pose_cost();
     let path = all.path_cost(CostKind::PATH.heading_weight());

@@ -3,12 +3,12 @@
 
 use super::{DataArgs, OutputArgs, load_runs_with_odometry, resolve_model, wheel_joints};
 use crate::dataset::mcap::{WriteOptions, write_run};
-use crate::design::design_for;
+use crate::design::{design_for, designs_for};
 use crate::report::tum;
 use crate::{atomic, robot_config};
 use anyhow::Context;
 use omni_kin::odometry::{self, Selection};
-use omni_kin::{FittedModel, Run, StampedPose};
+use omni_kin::{FittedModel, Run, RunModels, StampedPose};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `omnical export`.
@@ -64,13 +64,17 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     }
     let ds = load_runs_with_odometry(&a.runs, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
+    // Each run's own input's design (for the design's odometry and accuracy); `--model design` is each
+    // run's own in the trajectories too.
+    let designs = designs_for(&model, &[&ds]);
     let design = design_for(&model);
+    let models = crate::design::resolve_each(&a.model, &[&ds])?;
     let mut doc = serde_json::json!({ "model": a.model, "runs": ds.runs.len() });
     if let Some(dir) = &a.tum {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         let mut files = Vec::new();
         for run in &ds.runs {
-            files.extend(write_tum(dir, run, &design, &model, &a.model)?);
+            files.extend(write_tum(dir, run, designs.for_run(run)?, models.for_run(run)?, &a.model)?);
         }
         doc["tum"] = serde_json::json!({ "dir": dir, "files": files });
         if !a.output.json {
@@ -86,7 +90,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         }
     }
     if let Some(dir) = &a.mcap {
-        let files = write_mcaps(dir, a, &ds, &model)?;
+        let files = write_mcaps(dir, a, &ds, &models)?;
         doc["mcap"] = serde_json::json!({ "dir": dir, "files": files });
         if !a.output.json {
             println!(
@@ -100,6 +104,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         let request = robot_config::Request {
             model: &model,
             design: &design,
+            designs: &designs,
             spec: &a.model,
             runs: &ds.runs,
             wheel_names: joint_names(&model, &wheel_joints(&a.data, &ds)),
@@ -120,16 +125,11 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
 }
 
 /// One MCAP bag per run in `dir` (created), with the calibrated odometry; returns the paths.
-fn write_mcaps(
-    dir: &Path,
-    a: &Args,
-    ds: &crate::dataset::Dataset,
-    model: &FittedModel,
-) -> anyhow::Result<Vec<PathBuf>> {
+fn write_mcaps(dir: &Path, a: &Args, ds: &crate::dataset::Dataset, models: &RunModels) -> anyhow::Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let mut files = Vec::with_capacity(ds.runs.len());
     for run in &ds.runs {
-        files.push(write_mcap(dir, run, model, &wheel_joints(&a.data, ds))?);
+        files.push(write_mcap(dir, run, models.for_run(run)?, &wheel_joints(&a.data, ds))?);
     }
     Ok(files)
 }

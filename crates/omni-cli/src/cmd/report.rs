@@ -1,7 +1,7 @@
 //! `omnical report`: the HTML report of a model on runs (diagnosis included unless `--no-diagnose`).
 
 use super::{DataArgs, OutputArgs, load_with_held_out, resolve_model};
-use crate::design::design_for;
+use crate::design::designs_for;
 use crate::progress;
 use crate::report::{self, ReportInput};
 use omni_ga::diagnose::{DiagnoseOptions, diagnose};
@@ -43,11 +43,12 @@ pub struct Args {
 
 /// Runs `omnical report`; `quiet` hides the progress display.
 pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
-    let (ds, val) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
+    let (ds, val_ds) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
-    let val = val.map(|v| v.runs).unwrap_or_default();
+    // Each run is compared with its own input's design.
+    let design = designs_for(&model, &[Some(&ds), val_ds.as_ref()].into_iter().flatten().collect::<Vec<_>>());
+    let val = val_ds.map(|v| v.runs).unwrap_or_default();
     super::held_out::check("report", &a.runs, &ds.runs, &val)?;
-    let design = design_for(&model);
     let diagnosis = if a.no_diagnose {
         None
     } else {

@@ -27,9 +27,9 @@ mod search_box;
 mod stage;
 
 pub use crate::error::Error as CalibrateError;
-pub use calibration::{Calibration, calibrate};
+pub use calibration::{Calibration, WorseThanStart, calibrate};
 pub use pipeline::StageOutcome;
-pub use plan::{Plan, Preset, Unexcited};
+pub use plan::{Plan, Preset, STEP_TOLERANCE, StepMismatch, Unexcited};
 pub use problem::{CalibrationProblem, RunBlock};
 pub use search_box::{BoxRule, search_box, search_box_with};
 pub use stage::Stage;

@@ -9,7 +9,7 @@ use crate::science::text;
 use omni_kin::cost::{self, CostKind};
 use omni_kin::evaluate::Evaluator;
 use omni_kin::odometry::Selection;
-use omni_kin::{FittedModel, PoseError, Run};
+use omni_kin::{FittedModel, PoseError, Run, RunModels};
 use std::collections::BTreeMap;
 
 /// Bins of the error-growth profile.
@@ -56,13 +56,14 @@ pub(super) fn path_kind(every: usize) -> CostKind {
 
 /// Costs of a fitted model on train and held-out runs.
 pub fn costs_of(f: &FittedModel, train: &[Run], held_out: &[Run], every: usize) -> Result<Costs, Error> {
+    costs_of_each(&RunModels::from(f), train, held_out, every)
+}
+
+/// [`costs_of`] with each run under its own model (a robot's sets that declare different designs): the
+/// pooled figures are the run-weighted means of the runs' own (Eq. 6; the path cost from the mean MSE).
+pub fn costs_of_each(models: &RunModels, train: &[Run], held_out: &[Run], every: usize) -> Result<Costs, Error> {
     let kind = path_kind(every);
-    let (train, held_out) = (
-        Evaluator::for_report(&f.model, train, kind.selection())?,
-        Evaluator::for_report(&f.model, held_out, kind.selection())?,
-    );
-    let res = f.model.resolve(&f.params)?;
-    let (train, held_out) = (train.errors(&res), held_out.errors(&res));
+    let (train, held_out) = (models.errors(train, kind.selection())?, models.errors(held_out, kind.selection())?);
     Ok(Costs {
         train_path: train.path_cost(kind.heading_weight()),
         held_out_path: held_out.path_cost(kind.heading_weight()),
@@ -78,12 +79,12 @@ pub(super) struct Comparison {
     pub growth: Growth,
 }
 
-/// Per-run errors of `f` and `design` on `runs`, grouped by command, and the error growth along the runs.
-pub(super) fn compare(f: &FittedModel, design: &FittedModel, runs: &[Run], every: usize) -> Result<Comparison, Error> {
+/// Per-run errors of `f` and of each run's design on `runs`, grouped by command, and the error growth along
+/// the runs.
+pub(super) fn compare(f: &FittedModel, design: &RunModels, runs: &[Run], every: usize) -> Result<Comparison, Error> {
     let selection = Selection::Path(every);
     let fitted = Evaluator::for_report(&f.model, runs, selection)?.errors(&f.model.resolve(&f.params)?);
-    let designed =
-        Evaluator::for_report(&design.model, runs, selection)?.errors(&design.model.resolve(&design.params)?);
+    let designed = design.errors(runs, selection)?;
     let mut reports = Vec::new();
     let mut groups: BTreeMap<(GroupBasis, String), Vec<[f64; 3]>> = BTreeMap::new();
     let mut bins = GrowthBins::default();

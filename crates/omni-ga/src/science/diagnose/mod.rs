@@ -38,7 +38,7 @@ mod noise;
 mod search;
 mod unexplained;
 
-pub use compare::{Turn, costs_of};
+pub use compare::{Turn, costs_of, costs_of_each};
 pub(crate) use evidence::unbounded;
 pub use evidence::{differentiable_start, refit};
 pub use findings::{Conclusion, Finding, Remaining, Verdict};
@@ -53,7 +53,7 @@ use compare::compare;
 use evidence::{Bench, candidate_effect};
 use findings::{Judgement, findings};
 use noise::repeatability_floor;
-use omni_kin::{EffectKind, FittedModel, Run};
+use omni_kin::{EffectKind, FittedModel, Run, RunModels, ToRunModels};
 use search::{confident, kind_out, passes};
 use serde::{Deserialize, Serialize};
 
@@ -399,7 +399,7 @@ pub fn remains(
     held_out_m: f64,
     every: usize,
 ) -> Result<(bool, UnexplainedEvidence, Option<NoiseFloor>), Error> {
-    let cmp = compare(model, model, train, every.max(1))?;
+    let cmp = compare(model, &RunModels::from(model), train, every.max(1))?;
     let noise = noise_of(train, held);
     let (missing, evidence) =
         unexplained::decide(&cmp.groups, &cmp.growth, repeatability_floor(&cmp.groups), held_out_m, noise.as_ref());
@@ -413,9 +413,14 @@ pub fn noise_of(train: &[Run], held: &[Run]) -> Option<NoiseFloor> {
 }
 
 /// Diagnose `model` on `train`, holding out `validation` (or cross-validating over repetitions).
+///
+/// `design`: the design each run is compared with — one model (a `&FittedModel`) or a model per run
+/// (a `&RunModels`, when a robot's sets declare different designs; it must know every training and
+/// validation run). Its design costs are the run-weighted means of the runs' own; the implied effect values
+/// are taken against its first model.
 pub fn diagnose(
     model: &FittedModel,
-    design: &FittedModel,
+    design: &impl ToRunModels,
     train: &[Run],
     validation: Option<&[Run]>,
     opts: &DiagnoseOptions,
@@ -423,14 +428,16 @@ pub fn diagnose(
     if train.is_empty() {
         return Err(Error::NoRuns);
     }
+    let designs = design.to_run_models();
     let every = opts.every.max(1);
     let (fit_runs, held_runs, protocol) = held_out_sets(train, validation);
     // Compare the model and the design with the data.
     let costs = costs_of(model, &fit_runs, &held_runs, every)?;
-    let design_costs = costs_of(design, &fit_runs, &held_runs, every)?;
-    let cmp = compare(model, design, train, every)?;
+    let design_costs = costs_of_each(&designs, &fit_runs, &held_runs, every)?;
+    let cmp = compare(model, &designs, train, every)?;
     let noise = noise_of(train, &held_runs);
     // Each candidate's evidence, ranked; with `auto`, the error ladder.
+    let design = designs.first();
     let bench = Bench { design, fit_runs: &fit_runs, held_runs: &held_runs, every, noise: noise.as_ref() };
     let climb = search::climb(&bench, model, &costs, &design_costs, opts)?;
     let (verdict, kind_check) = recommend(model, &climb.ranking, train, every, opts)?;
@@ -453,7 +460,7 @@ pub fn diagnose(
         (_, _, true) if climb.ladder.len() > 2 => Some(&climb.top),
         _ => None,
     };
-    let after = accepted.map(|f| compare(f, design, train, every)).transpose()?;
+    let after = accepted.map(|f| compare(f, &designs, train, every)).transpose()?;
     let (groups_after, growth_after) = after.as_ref().map_or((&cmp.groups, &cmp.growth), |c| (&c.groups, &c.growth));
     let conclusion = Judgement {
         ranking: &climb.ranking,
