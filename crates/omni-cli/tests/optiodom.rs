@@ -375,15 +375,11 @@ fn omni4_mecanum_model_finds_radii_and_lx_plus_ly() {
     assert!(text.starts_with("lx and ly trade off") || text.starts_with("ly and lx trade off"), "{text}");
 }
 
-/// The shared OptiOdom folder of a robot type, if this machine has it (CI does not).
-fn shared(kind: &str) -> Option<std::path::PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../../../shared/data/optiodom-{kind}-square"));
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("SKIPPED: ../shared/data/optiodom-{kind}-square not found");
-        None
-    }
+/// The real OptiOdom logs of a robot type, found by build.rs (the tests that use them are ignored when they
+/// are not here).
+fn shared(kind: &str) -> std::path::PathBuf {
+    let data = option_env!("OMNICAL_SHARED_DATA").expect("built with cfg(shared_data)");
+    Path::new(data).join(format!("optiodom-{kind}-square"))
 }
 
 fn eval_cost(dir: &Path, model: &str, sets: &[&Path]) -> (f64, f64) {
@@ -399,8 +395,9 @@ fn eval_cost(dir: &Path, model: &str, sets: &[&Path]) -> (f64, f64) {
 /// matrix on it and on the other set, and identifiability's finding: the runs hardly contain the wheels
 /// fighting each other, so the three matrix directions along that pattern are held at the design.
 #[test]
+#[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn real_omni4_runs_hold_the_fighting_pattern() {
-    let Some(data) = shared("omni4") else { return };
+    let data = shared("omni4");
     let dir = tempfile::tempdir().unwrap();
     let (train_set, other) = (data.join("080920201715"), data.join("231220200521"));
     let s = train(dir.path(), &[train_set.to_str().unwrap(), "--model", "ik", "--out", "ik.toml"]);
@@ -424,8 +421,9 @@ fn real_omni4_runs_hold_the_fighting_pattern() {
 /// The real differential drive: `--model diff` on one set finds a separation near 0.2007 m and radii
 /// near 41.9 mm, and beats the design on the three other sets.
 #[test]
+#[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn real_diff_runs_fit_the_axle() {
-    let Some(data) = shared("diff") else { return };
+    let data = shared("diff");
     let dir = tempfile::tempdir().unwrap();
     let sets: Vec<std::path::PathBuf> =
         ["230620202042", "230620202144", "231220200029", "231220200040"].iter().map(|s| data.join(s)).collect();

@@ -111,11 +111,9 @@ fn diagnose_ranking_shows_numbers_or_a_reason_never_nan() {
 }
 
 #[test]
+#[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn report_without_diagnosis_or_commands_leaves_those_figures_out_and_says_so() {
-    let Some(data) = shared_data() else {
-        eprintln!("SKIPPED: ../shared/data/optiodom-omni3-square not found");
-        return;
-    };
+    let data = shared_data();
     let dir = tempfile::tempdir().unwrap();
     let set = data.join("221220201934");
     let out = omnical(
@@ -133,9 +131,10 @@ fn report_without_diagnosis_or_commands_leaves_those_figures_out_and_says_so() {
     assert!(stdout.lines().any(|l| l.starts_with("design") && l.trim_end().ends_with("0.18560")), "{stdout}");
 }
 
-fn shared_data() -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/optiodom-omni3-square");
-    p.exists().then_some(p)
+/// The real omni3 logs, found by build.rs (the tests that use them are ignored when they are not here).
+fn shared_data() -> PathBuf {
+    let data = option_env!("OMNICAL_SHARED_DATA").expect("built with cfg(shared_data)");
+    Path::new(data).join("optiodom-omni3-square")
 }
 
 /// The TUM files of the run `03-r0` and our own position RMS of the calibrated odometry against its ground

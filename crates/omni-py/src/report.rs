@@ -40,6 +40,10 @@ pub fn report(
     robot: Option<PathBuf>,
 ) -> PyResult<Vec<String>> {
     check_order(model, runs, "omnical.report")?;
+    // Where the results go is checked before the diagnosis, as `omnical report` does.
+    let outputs = omni_cli::out_path::check_file(&out, "out=")
+        .and_then(|()| png.as_deref().map_or(Ok(()), |d| omni_cli::out_path::prepare_dir(d, "png=")));
+    outputs.map_err(|e| PyFileNotFoundError::new_err(format!("omnical.report: {e:#}")))?;
     let (train, declared) = runs_from(runs, "runs")?;
     let held_out = validate.map(|v| runs_from(v, "validate")).transpose()?.map(|(r, _)| r).unwrap_or_default();
     let (fm, adapters, label) = model_spec(py, model, robot.as_ref(), declared, "omnical.report")?;
