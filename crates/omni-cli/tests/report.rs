@@ -44,6 +44,8 @@ fn held_out_path(stdout: &str, label: &str) -> f64 {
 #[test]
 fn report_shows_every_figure_and_the_error_falling_with_the_hidden_effect() {
     let (_keep, root) = fitted();
+    // The page's folder must exist (checked before the work); the PNG folder is made.
+    std::fs::create_dir_all(root.join("out")).unwrap();
     let out = omnical(
         &[
             "report",
@@ -137,13 +139,13 @@ fn shared_data() -> PathBuf {
     Path::new(data).join("optiodom-omni3-square")
 }
 
-/// The TUM files of the run `03-r0` and our own position RMS of the calibrated odometry against its ground
-/// truth, from the library.
-fn tum_export_and_our_rms(root: &Path) -> f64 {
-    let out = omnical(&["export", "--model", "fit.toml", "sim/validation/03-r0.mcap", "--tum", "tum"], root);
+/// The TUM files of the run `03-r0` in the folder `tum` (one per test: the tests share the fitted model),
+/// and our own position RMS of the calibrated odometry against its ground truth, from the library.
+fn tum_export_and_our_rms(root: &Path, tum: &str) -> f64 {
+    let out = omnical(&["export", "--model", "fit.toml", "sim/validation/03-r0.mcap", "--tum", tum], root);
     ok(&out);
     for kind in ["gt", "design", "calibrated"] {
-        let text = std::fs::read_to_string(root.join(format!("tum/03-r0.{kind}.tum"))).unwrap();
+        let text = std::fs::read_to_string(root.join(format!("{tum}/03-r0.{kind}.tum"))).unwrap();
         let rows: Vec<&str> = text.lines().filter(|l| !l.starts_with('#')).collect();
         assert!(rows.len() > 10, "{kind}: {} poses", rows.len());
         assert!(rows.iter().all(|r| r.split(' ').count() == 8), "{kind}: not 8 columns");
@@ -161,7 +163,7 @@ fn tum_export_and_our_rms(root: &Path) -> f64 {
 #[test]
 fn tum_export_writes_the_three_trajectories() {
     let (_keep, root) = fitted();
-    let ours = tum_export_and_our_rms(root);
+    let ours = tum_export_and_our_rms(root, "tum");
     assert!(ours > 1e-4, "position RMS {ours}");
 }
 
@@ -169,12 +171,12 @@ fn tum_export_writes_the_three_trajectories() {
 #[cfg_attr(not(python_evo), ignore = "needs evo_ape beside $OMNICAL_PYTHON: bash scripts/test.sh installs evo")]
 fn tum_export_agrees_with_evo_ape() {
     let (_keep, root) = fitted();
-    let ours = tum_export_and_our_rms(root);
+    let ours = tum_export_and_our_rms(root, "tum-evo");
     let python = PathBuf::from(std::env::var_os("OMNICAL_PYTHON").unwrap());
     let ape = python.parent().unwrap().join("evo_ape");
     let out = Command::new(&ape)
         .args(["tum", "03-r0.gt.tum", "03-r0.calibrated.tum", "--no_warnings"])
-        .current_dir(root.join("tum"))
+        .current_dir(root.join("tum-evo"))
         .env("MPLBACKEND", "Agg")
         .output()
         .unwrap();
