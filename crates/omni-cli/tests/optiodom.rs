@@ -378,7 +378,8 @@ fn omni4_mecanum_model_finds_radii_and_lx_plus_ly() {
 /// The real OptiOdom logs of a robot type, found by build.rs (the tests that use them are ignored when they
 /// are not here).
 fn shared(kind: &str) -> std::path::PathBuf {
-    let data = option_env!("OMNICAL_SHARED_DATA").expect("built with cfg(shared_data)");
+    // Set with cfg(shared_data), which every caller needs (the tests are ignored without it).
+    let data = option_env!("OMNICAL_SHARED_DATA").unwrap_or("");
     Path::new(data).join(format!("optiodom-{kind}-square"))
 }
 
