@@ -5,4 +5,5 @@ mod common;
 mod determinism;
 mod hidden_effect;
 mod identifiability;
+mod readme;
 mod recover;

@@ -633,7 +633,7 @@ pub fn controller_yaml(c: &RobotConfig) -> String {
     s
 }
 
-/// What `omnical export` prints about the robot configuration.
+/// What `omnical export` prints about the robot configuration (on stdout; [`warning_lines`] go to stderr).
 pub fn summary(c: &RobotConfig, dir: &Path) -> String {
     let t = c.fit.twist_rms;
     let mut s = format!(
@@ -648,9 +648,6 @@ pub fn summary(c: &RobotConfig, dir: &Path) -> String {
     );
     for l in accuracy_lines(c) {
         let _ = writeln!(s, "{l}");
-    }
-    for w in warning_lines(c) {
-        let _ = writeln!(s, "warning: {w}");
     }
     s
 }

@@ -377,20 +377,12 @@ fn omni4_mecanum_model_finds_radii_and_lx_plus_ly() {
     assert!(text.starts_with("lx and ly trade off") || text.starts_with("ly and lx trade off"), "{text}");
 }
 
-/// The shared OptiOdom folder of a robot type, if this machine has it (CI does not): beside the repository,
-/// or in /work/shared (a git worktree sits one level deeper; as the Python tests' conftest looks).
-fn shared(kind: &str) -> Option<std::path::PathBuf> {
-    let beside = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared");
-    let found = [beside.as_path(), Path::new("/work/shared")]
-        .iter()
-        .map(|base| base.join(format!("data/optiodom-{kind}-square")))
-        .find(|p| p.exists());
-    if let Some(p) = found {
-        Some(p)
-    } else {
-        eprintln!("SKIPPED: ../shared/data/optiodom-{kind}-square not found");
-        None
-    }
+/// The real OptiOdom logs of a robot type, found by build.rs (the tests that use them are ignored when they
+/// are not here).
+fn shared(kind: &str) -> std::path::PathBuf {
+    // Set with cfg(shared_data), which every caller needs (the tests are ignored without it).
+    let data = option_env!("OMNICAL_SHARED_DATA").unwrap_or("");
+    Path::new(data).join(format!("optiodom-{kind}-square"))
 }
 
 fn eval_cost(dir: &Path, model: &str, sets: &[&Path]) -> (f64, f64) {
@@ -406,8 +398,9 @@ fn eval_cost(dir: &Path, model: &str, sets: &[&Path]) -> (f64, f64) {
 /// matrix on it and on the other set, and identifiability's finding: the runs hardly contain the wheels
 /// fighting each other, so the three matrix directions along that pattern are held at the design.
 #[test]
+#[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn real_omni4_runs_hold_the_fighting_pattern() {
-    let Some(data) = shared("omni4") else { return };
+    let data = shared("omni4");
     let dir = tempfile::tempdir().unwrap();
     let (train_set, other) = (data.join("080920201715"), data.join("231220200521"));
     let s = train(dir.path(), &[train_set.to_str().unwrap(), "--model", "ik", "--out", "ik.toml"]);
@@ -431,8 +424,9 @@ fn real_omni4_runs_hold_the_fighting_pattern() {
 /// The real differential drive: `--model diff` on one set finds a separation near 0.2007 m and radii
 /// near 41.9 mm, and beats the design on the three other sets.
 #[test]
+#[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn real_diff_runs_fit_the_axle() {
-    let Some(data) = shared("diff") else { return };
+    let data = shared("diff");
     let dir = tempfile::tempdir().unwrap();
     let sets: Vec<std::path::PathBuf> =
         ["230620202042", "230620202144", "231220200029", "231220200040"].iter().map(|s| data.join(s)).collect();
@@ -587,9 +581,10 @@ fn paper_preset_on_other_sampling_is_refused_unless_forced() {
 /// folder order), and diagnose's design costs are eval's figures on its training and held-out runs (its
 /// held-out design on 231220200521 was 080920201715's, 0.5638).
 #[test]
+#[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn real_sets_are_each_evaluated_with_their_own_design() {
-    let Some(omni4) = shared("omni4") else { return };
-    let Some(diff) = shared("diff") else { return };
+    let omni4 = shared("omni4");
+    let diff = shared("diff");
     let dir = tempfile::tempdir().unwrap();
     let (a, b) = (omni4.join("080920201715"), omni4.join("231220200521"));
     let (ca, pa) = eval_cost(dir.path(), "design", &[&a]);
@@ -680,9 +675,10 @@ fn real_sets_are_each_evaluated_with_their_own_design() {
 /// own training runs (measured Eq. 6: omni3 221220201934 2.17061 against 0.18560, 11.7×; diff
 /// 230620202042 1.26201 against 0.04623, 27.3×), which the warning says.
 #[test]
+#[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn real_paper_preset_is_refused_on_40_and_50_ms_runs() {
-    let Some(omni3) = shared("omni3") else { return };
-    let Some(diff) = shared("diff") else { return };
+    let omni3 = shared("omni3");
+    let diff = shared("diff");
     let dir = tempfile::tempdir().unwrap();
     for (set, ms, fitted, design) in
         [(omni3.join("221220201934"), 40, 2.17061, 0.18560), (diff.join("230620202042"), 50, 1.26201, 0.04623)]

@@ -39,6 +39,10 @@ pub fn report(
     robot: Option<PathBuf>,
 ) -> PyResult<Vec<String>> {
     check_order(model, runs, "omnical.report")?;
+    // Where the results go is checked before the diagnosis, as `omnical report` does.
+    let outputs = omni_cli::out_path::check_file(&out, "out=")
+        .and_then(|()| png.as_deref().map_or(Ok(()), |d| omni_cli::out_path::prepare_dir(d, "png=")));
+    outputs.map_err(|e| PyFileNotFoundError::new_err(format!("omnical.report: {e:#}")))?;
     let mut origins = vec![origin_of(runs)];
     origins.extend(validate.map(origin_of));
     let (train, declared) = runs_from(runs, "runs")?;

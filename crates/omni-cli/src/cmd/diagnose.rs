@@ -92,6 +92,9 @@ struct Loaded {
 
 /// Loads, diagnoses and writes `--out`; returns the diagnosis and what it was computed on.
 fn diagnose_loaded(a: &Args) -> anyhow::Result<(Diagnosis, Loaded)> {
+    if let Some(out) = &a.out {
+        crate::out_path::check_file(out, "--out")?;
+    }
     let (ds, val_ds) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
     // Each run is compared with its own input's design.

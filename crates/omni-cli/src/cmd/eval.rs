@@ -124,7 +124,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
 
 /// The summary: the costs, then the statistics of the end-position (m) and end-heading (deg) errors.
 fn print_summary(model: &str, runs: usize, cost: f64, path: f64, position_m: Stats, heading_deg: Stats) {
-    println!("model {model}: {runs} runs");
+    println!("model {model}: {}", crate::units::count(runs, "run"));
     println!("cost (Eq. 6) {cost:.5} (mean of sqrt(dx² + dy² + dθ²), m and rad with weight 1); path RMS {path:.5} m");
     println!("{:<22} {:>9} {:>9} {:>9} {:>9}", "end-pose error", "mean", "median", "rmse", "max");
     for (name, s) in [("position m", position_m), ("heading deg (|dθ|)", heading_deg)] {

@@ -42,6 +42,9 @@ pub struct Args {
 
 /// Runs `omnical explore`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
+    if let Some(out) = &a.out {
+        crate::out_path::check_file(out, "--out")?;
+    }
     let (ds, val) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
     let val = val.map(|v| v.runs).unwrap_or_default();

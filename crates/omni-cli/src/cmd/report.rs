@@ -23,7 +23,8 @@ pub struct Args {
     /// The HTML file to write.
     #[arg(long, default_value = "report.html")]
     pub out: PathBuf,
-    /// Also write each figure as PNG into this folder.
+    /// Also write each figure as PNG into this folder (`<figure>.png`; other files in it stay, figures an
+    /// earlier report wrote that this one does not draw are removed).
     #[arg(long, value_name = "DIR")]
     pub png: Option<PathBuf>,
     /// Skip the diagnosis (faster; no ranking, ladder of the given model only).
@@ -43,6 +44,10 @@ pub struct Args {
 
 /// Runs `omnical report`; `quiet` hides the progress display.
 pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
+    crate::out_path::check_file(&a.out, "--out")?;
+    if let Some(dir) = &a.png {
+        crate::out_path::prepare_dir(dir, "--png")?;
+    }
     let (ds, val_ds) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
     // Each run is compared with its own input's design.

@@ -4,8 +4,8 @@ use super::{DataArgs, OutputArgs, load_runs};
 use crate::cli::{choice, effect_help};
 use crate::dataset::Dataset;
 use crate::robot_file::{self, Design};
-use crate::units::{std_error_text, value_text};
-use crate::{atomic, design, interrupt, model_file, progress};
+use crate::units::{count, std_error_text, value_text};
+use crate::{atomic, design, interrupt, model_file, out_path, progress};
 use anyhow::Context;
 use omni_ga::calibrate::{Calibration, Plan, Preset, Unexcited, calibrate};
 use omni_ga::identify::IdentifyOptions;
@@ -37,7 +37,8 @@ pub struct Args {
     /// Add an effect to fit (an effect id). Repeatable.
     #[arg(long = "effect", value_name = "NAME", help = effect_help("Add an effect to fit. Repeatable."))]
     pub effects: Vec<String>,
-    /// Write the fitted model here (TOML; read back by `--model FILE`).
+    /// Write the fitted model here (TOML; read back by `--model FILE`). Without it the fit is printed and
+    /// nothing is written. Its folder must exist (checked before the fit).
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Fit and write even when the fit is refused: a preset whose fixed step misses the runs' sampling,
@@ -310,6 +311,9 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     // Ctrl-C while loading ends the command; during the fit it stops the GA at its next generation and the
     // best model so far is reported and written.
     interrupt::install();
+    if let Some(out) = &a.out {
+        out_path::check_file(out, "--out")?;
+    }
     let (ds, start, plan, priors) = prepare(a)?;
     let preset_name = a.preset.id();
     if let Some(w) = check_step(&plan, &ds.runs, a.force)? {
@@ -317,8 +321,8 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     }
     let mut bar = progress::ProgressObserver::new(plan.ga().map_or(0, |g| g.max_generations), quiet);
     crate::note!(
-        "training on {} runs: preset {preset_name}, seed {} (Ctrl-C stops early and keeps the best so far)",
-        ds.runs.len(),
+        "training on {}: preset {preset_name}, seed {} (Ctrl-C stops early and keeps the best so far)",
+        count(ds.runs.len(), "run"),
         a.seed
     );
     let c = calibrate(&start, &ds.runs, &plan, &mut interrupt::StopOnInterrupt(&mut bar))?;
@@ -362,6 +366,9 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
             let what = if interrupted { "best-so-far model" } else { "model" };
             println!("{what} written to {}", out.display());
         }
+    }
+    if a.out.is_none() {
+        crate::note!("note: the fitted model was not written (no --out FILE)");
     }
     if interrupted {
         return Err(interrupt::Interrupted.into());
@@ -416,6 +423,9 @@ pub struct Trained {
 /// written to `--out` (byte-identical: the same `write_model` either way), but nothing printed, no progress bar
 /// and no Ctrl-C handler installed.
 pub fn train_quietly(a: &Args) -> anyhow::Result<Trained> {
+    if let Some(out) = &a.out {
+        out_path::check_file(out, "--out")?;
+    }
     let (ds, start, plan, _priors) = prepare(a)?;
     let mut warnings: Vec<String> = check_step(&plan, &ds.runs, a.force)?.into_iter().collect();
     let c = calibrate(&start, &ds.runs, &plan, &mut omni_ga::observe::NoopObserver)?;
@@ -480,9 +490,9 @@ fn designs_figure(
     }))
 }
 
-/// Human-readable fit summary on stdout.
+/// Human-readable fit summary on stdout; its warnings and notes go to stderr.
 pub fn print_summary(c: &Calibration, preset: &str, runs: usize) {
-    println!("preset {preset}: {runs} training runs, objective {}", c.objective.name());
+    println!("preset {preset}: {}, objective {}", count(runs, "training run"), c.objective.name());
     println!(
         "cost (Eq. 6)  design {:.5}  fitted {:.5}  improvement {:.1} %",
         c.end_pose_start,
@@ -498,8 +508,9 @@ pub fn print_summary(c: &Calibration, preset: &str, runs: usize) {
     }
     let nb = c.fitted.model.n_base();
     let specs = c.fitted.model.params();
-    // The matrix above shows base parameters that are its entries; print the others.
-    let base_shown = c.fitted.model.kinematics.params_are_ik_entries();
+    // The matrix above shows base parameters that are its entries (all of an `ik` model's, also when some
+    // entries are structural zeros, as a diff base's vy row); print the others.
+    let base_shown = c.fitted.model.kinematics.kind() == KinematicsKind::Ik;
     if !base_shown || specs.len() > nb {
         for (i, s) in specs.iter().enumerate() {
             if i >= nb || !base_shown {
@@ -509,15 +520,15 @@ pub fn print_summary(c: &Calibration, preset: &str, runs: usize) {
     }
     println!("{} evaluations, {:.2} s", c.evaluations, c.seconds);
     if !c.at_bound.is_empty() {
-        println!("warning: ended on a bound of the GA box: {}", c.at_bound.join(", "));
+        tracing::warn!("ended on a bound of the GA box: {}", c.at_bound.join(", "));
     }
     if !c.outside_box.is_empty() {
-        println!("note: the polish left the GA box (the box was too small) for: {}", c.outside_box.join(", "));
+        crate::note!("note: the polish left the GA box (the box was too small) for: {}", c.outside_box.join(", "));
     }
     print_identifiability(c);
 }
 
-/// Standard errors, condition number, and a warning per unconstrained direction.
+/// Standard errors and condition number on stdout; a warning per unconstrained direction on stderr.
 pub fn print_identifiability(c: &Calibration) {
     let id = &c.identifiability;
     println!(
@@ -532,7 +543,7 @@ pub fn print_identifiability(c: &Calibration) {
     );
     // The IK matrix's ω row is in rad per wheel rad, a ratio and not an angle: it keeps its unit.
     let model = &c.fitted.model;
-    let ik_entries: Vec<String> = if model.kinematics.params_are_ik_entries() {
+    let ik_entries: Vec<String> = if model.kinematics.kind() == KinematicsKind::Ik {
         model.params().into_iter().take(model.n_base()).map(|s| s.name).collect()
     } else {
         Vec::new()
@@ -550,10 +561,10 @@ pub fn print_identifiability(c: &Calibration) {
         println!("  {}", chunk.join(" · "));
     }
     for w in id.warnings() {
-        println!("warning: {w}");
+        tracing::warn!("{w}");
     }
     if !c.held.is_empty() {
-        println!(
+        crate::note!(
             "note: {} direction(s) held at the start values (truncated update; `--unexcited move` lets them move)",
             c.held.len()
         );

@@ -42,11 +42,11 @@ pub fn render(r: &Report, figures: &[Figure], notes: &[String], diagnosis: Optio
     );
     let _ = writeln!(
         h,
-        "<p class=\"note\">omnical {} · {} training runs · figures on {} ({} runs)</p>",
+        "<p class=\"note\">omnical {} · {} · figures on {} ({})</p>",
         env!("CARGO_PKG_VERSION"),
-        r.train_runs,
+        crate::units::count(r.train_runs, "training run"),
         escape(&r.figure_runs),
-        r.runs.len()
+        crate::units::count(r.runs.len(), "run")
     );
     if let Some(d) = diagnosis {
         let _ = writeln!(h, "<p class=\"verdict\"><b>Verdict.</b> {}</p>", escape(&d.verdict_text));

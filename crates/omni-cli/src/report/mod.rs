@@ -169,8 +169,10 @@ impl Report {
             // Runs with designs of their own show no one matrix: the first stands for its parameters.
             let (first, one) = (m.model.first(), m.model.single().is_some());
             let specs = first.model.params();
-            // The matrix shows base parameters that are its entries; list the others.
-            let nb = if first.model.kinematics.params_are_ik_entries() { first.model.n_base() } else { 0 };
+            // The matrix shows base parameters that are its entries (all of an `ik` model's, structural zeros
+            // aside); list the others.
+            let is_matrix = first.model.kinematics.kind() == omni_kin::KinematicsKind::Ik;
+            let nb = if is_matrix { first.model.n_base() } else { 0 };
             let params =
                 specs.iter().zip(&first.params).skip(nb).map(|(s, v)| (s.name.clone(), *v, s.unit.to_string()));
             models.push(ModelSummary {
@@ -220,10 +222,11 @@ impl Report {
             heading_rad: growth_sum.iter().map(|g| g.iter().map(|c| mean(c.1, c.2)).collect()).collect(),
         };
 
-        // Worst and typical held-out runs of the fitted model (the second one; the design when alone).
+        // Worst and typical held-out runs of the fitted model (the second one; the design when alone), by
+        // path RMS: the measure by which the diagnosis names its worst (training) run.
         let judge = input.models.len().min(2) - 1;
         let mut order: Vec<usize> = (0..runs.len()).collect();
-        order.sort_by(|&a, &b| runs[a].end_position_m[judge].total_cmp(&runs[b].end_position_m[judge]));
+        order.sort_by(|&a, &b| runs[a].path_rms_m[judge].total_cmp(&runs[b].path_rms_m[judge]));
         let mut overlays = Vec::new();
         if let Some(&worst) = order.last() {
             overlays.push(overlay("worst", &fig_runs[worst], &input.models)?);
@@ -407,8 +410,8 @@ mod tests {
         .unwrap();
         assert_eq!(r.models[0].costs.held_out_end_pose, eq6);
         assert_eq!(r.ladder.len(), 2);
-        // The worst overlay is the run with the largest end error of the second model.
-        let worst = r.runs.iter().max_by(|a, b| a.end_position_m[1].total_cmp(&b.end_position_m[1])).unwrap();
+        // The worst overlay is the run with the largest path RMS of the second model.
+        let worst = r.runs.iter().max_by(|a, b| a.path_rms_m[1].total_cmp(&b.path_rms_m[1])).unwrap();
         assert_eq!(r.overlays[0].run, worst.name);
         assert_eq!(r.overlays[0].lines.len(), 3);
         // Design error grows along the runs; growth has one curve per model.

@@ -97,7 +97,7 @@ pub fn excitation_gap(gap: &ExcitationGap) -> String {
 pub fn finding(f: &Finding) -> String {
     match f {
         Finding::WorstRun { run, command, path_rms_m, design_path_rms_m } => format!(
-            "worst run {run} ({}): path RMS {path_rms_m:.4} m (design {design_path_rms_m:.4})",
+            "worst training run {run} ({}): path RMS {path_rms_m:.4} m (design {design_path_rms_m:.4})",
             command.as_deref().unwrap_or("-")
         ),
         Finding::SystematicGroups { systematic, groups, largest } => format!(

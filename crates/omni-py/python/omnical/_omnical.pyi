@@ -330,8 +330,10 @@ def export(
     tum: Optional[_Path] = None,
     mcap: Optional[_Path] = None,
     robot: Optional[_Path] = None,
+    force: bool = False,
 ) -> list[str]:
-    """TUM files and/or MCAP bags of ``model``'s odometry on ``runs`` (``omnical export``); the paths written."""
+    """TUM files and/or MCAP bags of ``model``'s odometry on ``runs`` (``omnical export``); the paths written.
+    A folder that already holds files raises ``FileExistsError`` unless ``force=True`` (replaced whole)."""
 
 def load(
     *paths: _Path,
