@@ -125,6 +125,8 @@ fn each_run(
         .collect();
     match (rest.first(), file) {
         (None, _) => {}
+        // No input declares a design and no robot description is found: the data names no robot.
+        (Some(_), None) if declared.is_empty() => return Ok(None),
         (Some(_), Some(f)) => models.push((FittedModel::nominal(from_file(f)?), rest)),
         (Some(run), None) => anyhow::bail!(
             "run {run} declares no design and no robot description is given, while other inputs declare theirs: \
@@ -137,7 +139,7 @@ fn each_run(
     Ok(Some(RunModels::new(models)?))
 }
 
-/// The design model of `kind` of each run of `sets` (see [`each_run`]), or `None` when the data names no
+/// The design model of `kind` of each run of `sets` (see `each_run`), or `None` when the data names no
 /// robot.
 pub fn designs(kind: KinematicsKind, sets: &[&Dataset]) -> anyhow::Result<Option<RunModels>> {
     each_run(sets, |g| Ok(Model::design(kind, Some(g))?), |f| robot_model(kind, f))

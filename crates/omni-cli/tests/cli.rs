@@ -171,9 +171,14 @@ fn square_runs_warn_under_the_end_pose_objective() {
     // The model file keeps the fit's identifiability (TOML has no null: undetermined errors are dropped).
     let toml = std::fs::read_to_string(dir.path().join("end.toml")).unwrap();
     assert!(toml.contains("condition_number"), "{toml}");
-    // The paper's fixed 10 ms step on 40 ms runs is flagged.
+    // The paper's fixed 10 ms step on 40 ms runs is refused (exit 1) before fitting, and says why;
+    // --force fits anyway and still says so.
     let out = omnical(&["train", train, "--preset", "paper", "--json"], dir.path());
-    assert!(out.status.success());
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("sampled every 40 ms") && err.contains("factor 0.25"), "{err}");
+    let out = omnical(&["train", train, "--preset", "paper", "--json", "--force"], dir.path());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("sampled every 40 ms") && err.contains("factor 0.25"), "{err}");
 }

@@ -59,7 +59,7 @@ impl Calibration {
     }
 
     /// The fit when it is worse than its start on its own training runs: its objective above the start's as
-    /// given ([`Self::objective_start_as_given`]) by more than [`WORSE_TOLERANCE`] (relative). The stages
+    /// given ([`Self::objective_start_as_given`]) by more than `WORSE_TOLERANCE` (1e-9) (relative). The stages
     /// keep the best point, so this happens when the plan's integration misrepresents the runs (a fixed
     /// step that is not their sampling interval): the fit is then worse than the model it started from.
     pub fn worse_than_start(&self) -> Option<WorseThanStart> {

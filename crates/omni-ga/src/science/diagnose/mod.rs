@@ -315,7 +315,7 @@ pub struct Diagnosis {
 
 impl Diagnosis {
     /// An error beyond the catalogue's reach remains: something is missing, or the remaining held-out error
-    /// is above [`unexplained::MISSING_RATIO`] (3×) the noise floor. `diagnose --auto` then runs the
+    /// is above `MISSING_RATIO` (3×) the noise floor. `diagnose --auto` then runs the
     /// explorer.
     pub fn error_remains(&self) -> bool {
         self.unexplained || self.conclusion.remaining.is_some_and(|r| r.missing)

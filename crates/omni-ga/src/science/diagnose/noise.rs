@@ -92,7 +92,7 @@ pub(super) fn repeatability_floor(groups: &[GroupReport]) -> Option<f64> {
 }
 
 /// Estimate the ground-truth noise from poses while every wheel is still; for runs that never stand still,
-/// from the ground truth's jitter while moving ([`jitter_floor`]).
+/// from the ground truth's jitter while moving (`jitter_floor`).
 pub fn noise_floor(runs: &[Run]) -> Option<NoiseFloor> {
     const STILL_RAD_S: f64 = 0.02;
     let (mut sp, mut sth, mut dof) = (0.0, 0.0, 0usize);

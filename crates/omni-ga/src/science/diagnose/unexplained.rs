@@ -46,7 +46,7 @@ pub enum DecidedBy {
     Repeats,
     /// The groups cannot decide (none, or one): the remaining held-out error against the noise floor.
     NoiseFloorRatio,
-    /// The remaining held-out error is at least [`FAR_RATIO`] times the noise floor.
+    /// The remaining held-out error is at least `FAR_RATIO` times the noise floor.
     FarAboveNoise,
     /// Neither repeats nor standstills: nothing to decide with (`unexplained` false).
     #[default]
