@@ -118,7 +118,7 @@ fn benches(c: &mut Criterion) {
                     black_box(LevenbergMarquardt::default().minimize(&problem, &ga.params, &mut NoopObserver).ok())
                 })
             });
-            // The same on the normal equations (the route of problems above 200,000 residuals).
+            // The same on the normal equations (the route of problems above 50,000 residuals).
             let normal = LmConfig { normal_equations_above: 0, ..LmConfig::default() };
             g.bench_function("LM polish from the GA result, normal equations", |b| {
                 b.iter(|| {

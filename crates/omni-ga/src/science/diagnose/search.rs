@@ -38,7 +38,9 @@ pub(super) fn rung(kind: RungKind, costs: &Costs) -> Rung {
 }
 
 /// Ranks the candidates for `model` (costs `costs`); with `opts.auto`, adds the best passing one and
-/// ranks again, up to `opts.max_added` effects.
+/// ranks again, up to `opts.max_added` effects. Forward selection: a later rung assesses only the
+/// candidates that passed ([`passes`]) at the rung before; one that did not help the simpler model is not
+/// refitted again (each rung's refits cost as much as the first ranking's).
 pub(super) fn climb(
     bench: &Bench<'_>,
     model: &FittedModel,
@@ -51,9 +53,11 @@ pub(super) fn climb(
     let mut current_costs = costs.clone();
     let mut first_ranking: Option<Vec<Candidate>> = None;
     let mut added = 0;
+    let mut eligible: Option<Vec<String>> = None;
     loop {
-        let ranking = rank(bench, &current, &current_costs, opts)?;
+        let ranking = rank(bench, &current, &current_costs, opts, eligible.as_deref())?;
         let best = ranking.first().filter(|c| passes(c, opts)).cloned();
+        eligible = Some(ranking.iter().filter(|c| passes(c, opts)).map(|c| c.effect.clone()).collect());
         if first_ranking.is_none() {
             first_ranking = Some(ranking);
         }
@@ -83,16 +87,21 @@ pub(super) fn climb(
     Ok(Climb { ranking: first_ranking.unwrap_or_default(), ladder, top: current })
 }
 
-/// Every candidate not yet in `current`, assessed, best held-out gain first.
+/// Every candidate not yet in `current` (and, given `eligible`, among those), assessed, best held-out gain
+/// first.
 fn rank(
     bench: &Bench<'_>,
     current: &FittedModel,
     current_costs: &Costs,
     opts: &DiagnoseOptions,
+    eligible: Option<&[String]>,
 ) -> Result<Vec<Candidate>, Error> {
     let present: Vec<String> = current.model.effects.iter().map(|e| e.id().replace("_yaw", "")).collect();
     let ids = opts.candidates.iter().cloned().chain(opts.custom.iter().map(|e| e.id().to_string()));
-    let ids: Vec<String> = ids.filter(|id| !present.iter().any(|p| p == id)).collect();
+    let ids: Vec<String> = ids
+        .filter(|id| !present.iter().any(|p| p == id))
+        .filter(|id| eligible.is_none_or(|e| e.contains(id)))
+        .collect();
     // The candidates are independent: assessed in parallel, collected in catalogue order (the first error
     // in that order is the one returned), so the ranking does not depend on the thread count.
     let assessed: Vec<Result<Candidate, Error>> = ids
@@ -121,17 +130,23 @@ pub(super) fn kind_out(
     if kinds.len() < 2 || runs.iter().any(|r| Turn::of_run(r).is_none()) {
         return Ok(None);
     }
-    let (mut before, mut after) = (0.0, 0.0);
-    let mut folds = Vec::new();
-    for kind in kinds {
-        let (test, fit): (Vec<Run>, Vec<Run>) = runs.iter().cloned().partition(|r| Turn::of_run(r) == Some(kind));
-        let base = refit(model, &fit, every)?;
-        let with = refit(&model.with_effect(effect.clone()), &fit, every)?;
-        let b = cost::cost(&base.model, &base.params, &test, path_kind(every))?;
-        let a = cost::cost(&with.model, &with.params, &test, path_kind(every))?;
-        before += b * b;
-        after += a * a;
-        folds.push((text::path_kind(kind).to_string(), b, a));
-    }
+    // The folds (and each fold's two refits) are independent: fitted in parallel, collected in kind order
+    // and summed in that order (the same bits whatever the thread count; the first error in that order).
+    let folds = kinds
+        .par_iter()
+        .map(|&kind| {
+            let (test, fit): (Vec<Run>, Vec<Run>) = runs.iter().cloned().partition(|r| Turn::of_run(r) == Some(kind));
+            let with_effect = model.with_effect(effect.clone());
+            let (base, with) = rayon::join(|| refit(model, &fit, every), || refit(&with_effect, &fit, every));
+            let (base, with) = (base?, with?);
+            let b = cost::cost(&base.model, &base.params, &test, path_kind(every))?;
+            let a = cost::cost(&with.model, &with.params, &test, path_kind(every))?;
+            Ok((text::path_kind(kind).to_string(), b, a))
+        })
+        .collect::<Vec<Result<_, Error>>>()
+        .into_iter()
+        .collect::<Result<Vec<_>, _>>()?;
+    let before: f64 = folds.iter().map(|f| f.1 * f.1).sum();
+    let after: f64 = folds.iter().map(|f| f.2 * f.2).sum();
     Ok(Some(KindOut { effect: effect.id().to_string(), folds, gain: 1.0 - (after / before.max(1e-300)).sqrt() }))
 }
