@@ -4,7 +4,7 @@
 use super::{DataArgs, OutputArgs, load_with_held_out, resolve_model};
 use crate::{atomic, model_file};
 use anyhow::Context;
-use omni_ga::explore::{Exploration, ExploreOptions, FamilyResult, explore};
+use omni_ga::explore::{Exploration, ExploreOptions, FamilyResult, FamilyStatus, explore};
 use omni_ga::science::text;
 use serde_json::{Value, json};
 use std::path::PathBuf;
@@ -68,11 +68,19 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// One family in JSON: `{family, held_out_gain, gain_std_error, passes, held_out_cost_m, terms, hint, curve}`.
+/// One family in JSON: `{family, effect, status, status_reason, status_text, held_out_gain, gain_std_error,
+/// passes, held_out_cost_m, terms, held, hint, curve}`.
 fn family_json(f: &FamilyResult) -> Value {
+    let reason = match f.status {
+        FamilyStatus::NotConverged { reason } => serde_json::to_value(reason).unwrap_or(Value::Null),
+        _ => Value::Null,
+    };
     json!({
         "family": f.family.id(),
         "effect": format!("learned:{}", f.family.id()),
+        "status": f.status.id(),
+        "status_reason": reason,
+        "status_text": text::family_status(f),
         "held_out_gain": f.held_out_gain,
         "gain_std_error": f.gain_std_error,
         "passes": f.passes,
@@ -82,7 +90,9 @@ fn family_json(f: &FamilyResult) -> Value {
             "value": t.value,
             "std_error": if t.std_error.is_finite() { json!(t.std_error) } else { Value::Null },
             "unit": t.unit,
+            "held": t.held,
         })).collect::<Vec<_>>(),
+        "held": f.held,
         "hint": text::explore_hint(f),
         "curve": f.curve,
     })
@@ -117,7 +127,8 @@ pub fn print_exploration(e: &Exploration, min_gain: f64) {
     if let Some(best) = e.best() {
         println!("  learned:{} terms (value ± standard error per run):", best.family.id());
         for t in &best.terms {
-            println!("    {:<16} {:+.6} ± {:.6} {}", t.name, t.value, t.std_error, t.unit);
+            let held = if t.held { "  (held: the runs do not constrain it)" } else { "" };
+            println!("    {:<16} {:+.6} ± {:.6} {}{held}", t.name, t.value, t.std_error, t.unit);
         }
     }
     if let Some(c) = conclusion {

@@ -7,9 +7,10 @@ use crate::robot_file::{self, Design};
 use crate::units::{std_error_text, value_text};
 use crate::{atomic, design, interrupt, model_file, progress};
 use anyhow::Context;
-use omni_ga::calibrate::{Calibration, Plan, Preset, Unexcited, calibrate};
+use omni_ga::calibrate::{Calibration, Plan, Preset, Unexcited, calibrate_with_effects};
 use omni_ga::identify::IdentifyOptions;
 use omni_kin::cost::{CostKind, CostName};
+use omni_kin::effect::Effect;
 use omni_kin::robot::PRIOR_BOX_SIGMAS;
 use omni_kin::{EffectKind, FittedModel, KinematicsKind, Model};
 use serde_json::json;
@@ -261,7 +262,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     // Ctrl-C while loading ends the command; during the fit it stops the GA at its next generation and the
     // best model so far is reported and written.
     interrupt::install();
-    let (ds, start, plan, priors) = prepare(a)?;
+    let Prepared { ds, start, effects, plan, priors } = prepare(a)?;
     let preset_name = a.preset.id();
     if let Some(w) = fixed_step_mismatch(&plan, &ds.runs) {
         tracing::warn!("{w}");
@@ -272,7 +273,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         ds.runs.len(),
         a.seed
     );
-    let c = calibrate(&start, &ds.runs, &plan, &mut interrupt::StopOnInterrupt(&mut bar))?;
+    let c = calibrate_with_effects(&start, &effects, &ds.runs, &plan, &mut interrupt::StopOnInterrupt(&mut bar))?;
     bar.finish();
     let interrupted = interrupt::requested();
     let mut s = summary(&c, preset_name, a.seed, ds.runs.len())?;
@@ -310,25 +311,38 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Loads the runs and builds the start model and the plan, as `omnical train` does. A Ctrl-C (when the
-/// handler is installed) during loading ends it with [`interrupt::Interrupted`].
-fn prepare(a: &Args) -> anyhow::Result<(Dataset, FittedModel, Plan, Vec<PriorUse>)> {
+/// What `omnical train` fits: the runs, the start model, the effects to add to it, the plan and the robot
+/// description's priors.
+struct Prepared {
+    ds: Dataset,
+    start: FittedModel,
+    effects: Vec<EffectKind>,
+    plan: Plan,
+    priors: Vec<PriorUse>,
+}
+
+/// Loads the runs and builds the start model, the effects and the plan, as `omnical train` does. A Ctrl-C
+/// (when the handler is installed) during loading ends it with [`interrupt::Interrupted`].
+fn prepare(a: &Args) -> anyhow::Result<Prepared> {
     let ds = load_runs(&a.runs, &a.data)?;
     if interrupt::requested() {
         return Err(interrupt::Interrupted.into());
     }
-    let mut start = match &a.start {
+    let start = match &a.start {
         Some(p) => model_file::read(p).context("reading --start")?,
         None => FittedModel::nominal(named_columns(design::model(a.model, &ds)?, a.data.joints.as_deref())?),
     };
-    for id in &a.effects {
-        start = start
-            .with_effect(EffectKind::from_id(id, start.model.n_wheels()).with_context(|| format!("--effect {id}"))?);
-    }
-    let mut plan = apply_fit_args(Plan::preset(a.preset, start.model.n_params()).seed(a.seed), &a.fit)?;
+    let effects = a
+        .effects
+        .iter()
+        .map(|id| EffectKind::from_id(id, start.model.n_wheels()).with_context(|| format!("--effect {id}")))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    // The parameter count with the effects: the paper preset's GA fits them all at once.
+    let n_params = start.model.n_params() + effects.iter().map(|e| e.params().len()).sum::<usize>();
+    let mut plan = apply_fit_args(Plan::preset(a.preset, n_params).seed(a.seed), &a.fit)?;
     let priors = if a.start.is_none() { robot_priors(&start, &ds) } else { Vec::new() };
     plan.half_widths = priors.iter().map(|p| (p.name.clone(), PRIOR_BOX_SIGMAS * p.std)).collect();
-    Ok((ds, start, plan, priors))
+    Ok(Prepared { ds, start, effects, plan, priors })
 }
 
 /// Writes the model file of a fit with its summary `s` as the `[fit]` table, atomically. Everything but the
@@ -357,9 +371,9 @@ pub struct Trained {
 /// written to `--out` (byte-identical: the same `write_model` either way), but nothing printed, no progress bar
 /// and no Ctrl-C handler installed.
 pub fn train_quietly(a: &Args) -> anyhow::Result<Trained> {
-    let (ds, start, plan, _priors) = prepare(a)?;
+    let Prepared { ds, start, effects, plan, .. } = prepare(a)?;
     let warnings = fixed_step_mismatch(&plan, &ds.runs).into_iter().collect();
-    let c = calibrate(&start, &ds.runs, &plan, &mut omni_ga::observe::NoopObserver)?;
+    let c = calibrate_with_effects(&start, &effects, &ds.runs, &plan, &mut omni_ga::observe::NoopObserver)?;
     let s = summary(&c, a.preset.id(), a.seed, ds.runs.len())?;
     if let Some(out) = &a.out {
         write_model(&c, &s, out)?;

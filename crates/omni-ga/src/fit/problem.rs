@@ -132,6 +132,21 @@ impl<'a> CalibrationProblem<'a> {
         })
     }
 
+    /// The model fitted.
+    pub fn model(&self) -> &'a Model {
+        self.model
+    }
+
+    /// The runs fitted on.
+    pub fn runs(&self) -> &'a [Run] {
+        self.runs
+    }
+
+    /// The objective.
+    pub fn objective(&self) -> CostKind {
+        self.objective
+    }
+
     /// Residual rows of each run, in run order (3 per selected ground-truth pose).
     pub fn run_rows(&self) -> Vec<usize> {
         self.row_offsets.windows(2).map(|w| w[1] - w[0]).collect()

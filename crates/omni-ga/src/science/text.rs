@@ -301,7 +301,7 @@ pub fn warning(w: &WeakDirection) -> String {
 
 // The explorer (issue 18): what a family's fitted terms mean, and the exploration in a few lines.
 
-use crate::science::explore::{Exploration, FamilyResult, Term};
+use crate::science::explore::{Exploration, FamilyResult, FamilyStatus, Term, Unconverged};
 use omni_kin::effect::Family;
 
 /// Terms that stand out: at least two standard errors from zero.
@@ -317,6 +317,9 @@ fn term<'a>(f: &'a FamilyResult, name: &str) -> Option<&'a Term> {
 /// (+3.9, −2.1) mm/s while moving, one drift shared by the runs: a tilted floor, or a ground-truth frame that
 /// moves".
 pub fn explore_hint(f: &FamilyResult) -> String {
+    if f.status != FamilyStatus::Fitted {
+        return family_status(f);
+    }
     let sig = significant(f);
     let Some(top) = sig.iter().max_by(|a, b| a.z().total_cmp(&b.z())) else {
         return "no term stands out from its standard error".into();
@@ -353,6 +356,49 @@ pub fn explore_hint(f: &FamilyResult) -> String {
             1e3 * value("lever_y_m"),
             value("yaw_rad").to_degrees()
         ),
+    }
+}
+
+/// Up to four names, then how many more.
+fn some_names(names: &[&str]) -> String {
+    match names.len() {
+        0..=4 => names.join(", "),
+        n => format!("{}, … ({} more)", names[..4].join(", "), n - 4),
+    }
+}
+
+/// Whether a family was fitted, and if not, why not, in words: "fitted", "fitted; 5 of 9 terms undetermined (…)",
+/// "not fitted: …", "not converged: …".
+pub fn family_status(f: &FamilyResult) -> String {
+    let n = f.terms.len();
+    match f.status {
+        FamilyStatus::Fitted => {
+            let held: Vec<&str> = f.terms.iter().filter(|t| t.held).map(|t| t.name.as_str()).collect();
+            if held.is_empty() {
+                "fitted".into()
+            } else {
+                format!(
+                    "fitted; {} of {n} terms undetermined ({}): part of directions the runs do not constrain, held at the start as train holds them",
+                    held.len(),
+                    some_names(&held)
+                )
+            }
+        }
+        FamilyStatus::NotExcited => {
+            format!("not fitted: the runs do not excite its {n} terms (no residual changes with them); all stay 0")
+        }
+        FamilyStatus::Singular => format!(
+            "not fitted: the runs cannot tell its {n} terms from the base kinematics or from each other, so all are held at 0, as train holds them"
+        ),
+        FamilyStatus::NotConverged { reason } => match reason {
+            Unconverged::Budget { evaluations } => format!(
+                "not converged: Levenberg–Marquardt spent its {evaluations} evaluations before the training cost settled (the terms as it left them)"
+            ),
+            Unconverged::NoStep => {
+                "not converged: no step lowered the training cost from the start; all terms stay 0".into()
+            }
+            Unconverged::AtZero => "not converged: the fit left every term at 0".into(),
+        },
     }
 }
 
@@ -419,14 +465,21 @@ fn body_hint(top: &Term) -> String {
     }
 }
 
-/// The exploration in lines: each family's held-out gain and judgement with its hint, then the conclusion.
+/// The exploration in lines: each family's held-out gain and judgement with its hint (or why it was not
+/// fitted, and which terms train holds), then the conclusion.
 pub fn exploration(e: &Exploration) -> Vec<String> {
     let mut lines: Vec<String> = e
         .families
         .iter()
         .map(|f| {
+            let held = f.terms.iter().any(|t| t.held);
+            let status = if f.status == FamilyStatus::Fitted && held {
+                format!(" ({})", family_status(f))
+            } else {
+                String::new()
+            };
             format!(
-                "{:<13} held-out gain {:+6.1} % ± {:4.1} %  {}  {}",
+                "{:<13} held-out gain {:+6.1} % ± {:4.1} %  {}  {}{status}",
                 f.family.id(),
                 100.0 * f.held_out_gain,
                 100.0 * f.gain_std_error,
@@ -447,13 +500,17 @@ pub fn explore_conclusion(e: &Exploration) -> String {
     };
     match e.best() {
         Some(f) => format!(
-            "{} explains {:.1} % of the held-out path error ({:.4} m → {:.4} m): {}; add it with --effect learned:{}",
+            "{} explains {:.1} % of the held-out path error ({:.4} m → {:.4} m): {}; add it with --effect learned:{} (train makes this very fit{})",
             f.family.id(),
             100.0 * f.held_out_gain,
             e.baseline_held_out_cost,
             f.held_out_cost,
             explore_hint(f),
-            f.family.id()
+            f.family.id(),
+            match f.terms.iter().filter(|t| t.held).count() {
+                0 => String::new(),
+                k => format!(", holding the same {k} terms"),
+            }
         ),
         None if e.unexplained => format!(
             "no family passes on held-out runs, and the held-out path error ({:.4} m) is {floor}: something physical is still missing that these features do not describe",

@@ -302,10 +302,14 @@ class Diagnosis:
 @final
 class Exploration:
     """The outcome of ``explore``: each family of features (wheel, body, world, time, ground_truth) fitted
-    on the training runs and judged by its held-out gain."""
+    on the training runs, as ``train(..., effects=["learned:<family>"])`` fits it, and judged by its
+    held-out gain."""
 
     @property
-    def families(self) -> list[dict[str, Any]]: ...
+    def families(self) -> list[dict[str, Any]]:
+        """Largest held-out gain first: family, effect, status (``fitted``, ``not_excited``, ``singular``,
+        ``not_converged``), status_reason, status_text, held_out_gain, gain_std_error, passes,
+        held_out_cost_m, terms (name, value, std_error, unit, held), held, hint, curve."""
     @property
     def unexplained(self) -> bool: ...
     @property

@@ -185,6 +185,10 @@ pub struct Candidate {
     /// Why the training runs cannot tell this effect, as facts.
     #[serde(skip)]
     pub excitation_gap: Option<ExcitationGap>,
+    /// The effect's parameters the refit held at their null values (truncated update: the runs do not
+    /// constrain them), as `train --effect` holds them; the held-out gain is with them held.
+    #[serde(default)]
+    pub held: Vec<String>,
     /// The refit model with the effect (None when absorbed, not excited or the refit failed).
     #[serde(skip)]
     pub fitted: Option<FittedModel>,

@@ -65,7 +65,7 @@ pub(super) fn climb(
                     (Some(fitted), Some(costs)) => (fitted, costs),
                     _ => {
                         let effect = candidate_effect(&b.effect, current.model.n_wheels(), opts)?;
-                        let next = refit(&current.with_effect(effect), bench.fit_runs, bench.every)?;
+                        let next = refit(&current, Some(&effect), bench.fit_runs, bench.every)?.fitted;
                         let costs = costs_of(&next, bench.fit_runs, bench.held_runs, bench.every)?;
                         (next, costs)
                     }
@@ -121,8 +121,8 @@ pub(super) fn kind_out(
     let mut folds = Vec::new();
     for kind in kinds {
         let (test, fit): (Vec<Run>, Vec<Run>) = runs.iter().cloned().partition(|r| Turn::of_run(r) == Some(kind));
-        let base = refit(model, &fit, every)?;
-        let with = refit(&model.with_effect(effect.clone()), &fit, every)?;
+        let base = refit(model, None, &fit, every)?.fitted;
+        let with = refit(model, Some(effect), &fit, every)?.fitted;
         let b = cost::cost(&base.model, &base.params, &test, path_kind(every))?;
         let a = cost::cost(&with.model, &with.params, &test, path_kind(every))?;
         before += b * b;

@@ -211,8 +211,9 @@ pub(super) fn analyse_core(
     let cov = to_params(dirs.chosen(noise.kind));
     let cov_iid = to_params(&dirs.iid);
     let weak_loading = |i: usize| weak_k.iter().map(|&(k, _)| sp.v[(i, k)].abs()).fold(0.0f64, f64::max);
-    let determined =
-        |i: usize| (weak_loading(i) < 0.1).then(|| (cov[(i, i)].max(0.0).sqrt(), cov_iid[(i, i)].max(0.0).sqrt()));
+    let determined = |i: usize| {
+        (weak_loading(i) < super::WEAK_LOADING).then(|| (cov[(i, i)].max(0.0).sqrt(), cov_iid[(i, i)].max(0.0).sqrt()))
+    };
     let weak = weak_k
         .iter()
         .map(|&(k, se)| {

@@ -33,6 +33,10 @@ use nalgebra::{DMatrix, DVector};
 use omni_kin::Model;
 use serde::{Deserialize, Serialize};
 
+/// Share of an unconstrained direction (unit vector in scaled space) from which a parameter counts as part
+/// of it: it then has no standard error, and the truncated update holds it.
+pub const WEAK_LOADING: f64 = 0.1;
+
 /// Settings of the analysis (scaled units: fractions of each parameter's scale).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct IdentifyOptions {
