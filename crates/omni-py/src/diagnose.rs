@@ -45,6 +45,7 @@ fn candidate_dict<'py>(py: Python<'py>, c: &Candidate) -> PyResult<Bound<'py, Py
     d.set_item("excess_closed", c.excess_closed)?;
     d.set_item("params", values(py, &c.params)?)?;
     d.set_item("implied", values(py, &c.implied)?)?;
+    d.set_item("held", &c.held)?;
     d.set_item("refit", c.refit.as_ref().map(|r| costs_dict(py, r)).transpose()?)?;
     Ok(d)
 }
@@ -106,7 +107,9 @@ impl PyDiagnosis {
         costs_dict(py, &self.inner.design_costs)
     }
     /// Candidates, best held-out gain first: one dict each (effect, physics, held_out_gain (fraction),
-    /// first_order_explained, separability, absorbed, excess_closed, params, implied, refit).
+    /// first_order_explained, separability, absorbed, excess_closed, params, implied, held (parameters held
+    /// at their null values, as ``train`` holds them), refit). The refit is the one ``train`` makes with
+    /// ``effects=[effect]`` after fitting the base.
     #[getter]
     fn ranking<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         self.inner.ranking.iter().map(|c| candidate_dict(py, c)).collect()

@@ -253,8 +253,13 @@ impl Bench<'_> {
         let n = fit.fitted.params.len();
         let r = fit.fitted.model.effect_ranges().last().cloned().unwrap_or(n..n);
         let held = fit.held_params();
-        cand.held =
-            r.clone().filter(|i| held.contains(i)).map(|i| fit.identifiability.params[i].name.clone()).collect();
+        cand.held = effect
+            .params()
+            .iter()
+            .zip(r.clone())
+            .filter(|(_, i)| held.contains(i))
+            .map(|(s, _)| s.name.clone())
+            .collect();
         cand.params = effect
             .params()
             .iter()
