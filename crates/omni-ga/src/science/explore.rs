@@ -21,6 +21,7 @@
 //! No I/O; the words are made in [`crate::science::text`].
 
 use crate::error::Error;
+use crate::science::coverage::{MotionCoverage, motion_coverage};
 use crate::science::diagnose::noise_floor;
 use crate::science::identify::{self, Moments};
 use nalgebra::{DMatrix, DVector};
@@ -140,6 +141,8 @@ pub struct Exploration {
     pub unexplained: bool,
     /// Training and held-out run counts.
     pub runs: (usize, usize),
+    /// The training runs' motions against the held-out runs': what the training runs lack.
+    pub coverage: MotionCoverage,
 }
 
 impl Exploration {
@@ -187,6 +190,7 @@ pub fn explore(
         noise_floor_path_rms: noise,
         unexplained,
         runs: (train.len(), validate.len()),
+        coverage: motion_coverage(model, train, validate)?,
     })
 }
 
