@@ -4,25 +4,29 @@
 //! ([`RunErrors`] holds the aggregation). Training, evaluation, diagnosis, reports, the planner and the
 //! Python binding all go through it.
 //!
-//! The runs are prepared once for the fast path when the model integrates fixed steps of 1 to
-//! [`crate::fast::MAX_WHEELS`] wheels; each evaluation then takes the fast path when it serves the
-//! resolved parameters (no clock lag, no twist-stage effects, small step angles) and the literal walk
-//! otherwise. The two agree within 1e-9 m but not to the last bit; [`Route::Walk`] asks for the walk's
-//! numbers always.
+//! The runs are prepared once for the lane kernel when the model integrates fixed steps of 1 to
+//! [`crate::fast::MAX_WHEELS`] wheels; each evaluation then takes the kernel when it serves the resolved
+//! parameters (no twist-stage effects, no measured stamps, small step angles), else the general fast walk
+//! (any model, small step angles), else the literal walk. They agree within 1e-9 m but not to the last
+//! bit; [`Route::Walk`] asks for the walk's numbers always. Jacobians: the kernel's forward-mode one with
+//! respect to the IK matrix, else the general walk's, which also carries the parameters of twist- and
+//! measurement-stage effects and of an affine wheel-stage effect.
 //!
 //! Runs are evaluated in parallel (rayon) and summed sequentially in run order, so results are
 //! bit-identical whatever the thread count.
 
 use crate::cost::{CostKind, check_runs, mean_end_pose_error};
 use crate::error::KinError;
-use crate::fast::{MAX_WHEELS, PreparedRuns};
+use crate::fast::forward::{self, ForwardModel};
+use crate::fast::{BLOCK_RUNS, MAX_WHEELS, PreparedRuns, general};
 use crate::model::{Model, Resolved, StepMode};
 use crate::odometry::{self, Selection};
-use crate::plan::StepPlan;
+use crate::plan::{StepPlan, wheel_speeds};
 use crate::pose::PoseError;
 use crate::run::Run;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
+use std::borrow::Cow;
 
 /// Which odometry an [`Evaluator`] may take.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -35,11 +39,10 @@ pub enum Route {
 }
 
 /// The route of the numbers a user reads: [`crate::cost::cost`], `eval`, `diagnose`, `report`, `simulate`'s
-/// summary, a calibration's Eq. 6 figures and Python's `evaluate` ([`Evaluator::for_report`]). The walk
-/// keeps them bit-identical to the golden outputs from before the evaluator; [`Route::Fast`] changes
-/// them by at most ~7e-15 (last bits only, no decision or printed table changes; measured in
-/// benches/README.md) and makes them faster. Flip it together with re-blessing the golden files.
-pub const REPORT_ROUTE: Route = Route::Walk;
+/// summary, a calibration's Eq. 6 figures and Python's `evaluate` ([`Evaluator::for_report`]). The fast
+/// route: its numbers differ from the literal walk's in the last bits only (≤ 1e-14 m, tested), and a
+/// diagnosis reads costs of dozens of refits. [`Route::Walk`] gives the walk's bits.
+pub const REPORT_ROUTE: Route = Route::Fast;
 
 /// The errors of every run at the selected ground-truth poses and at its end, in run order, and what is
 /// computed from them: the one place costs and residuals are aggregated.
@@ -128,6 +131,21 @@ pub struct IkBlock<'a> {
     pub jacobian: &'a DMatrix<f64>,
 }
 
+/// One run's part of the least-squares system by the forward-mode walk, as
+/// [`Evaluator::forward_jacobian_blocks`] visits it.
+#[derive(Clone, Copy, Debug)]
+pub struct ModelBlock<'a> {
+    /// Index of the run.
+    pub run: usize,
+    /// The run's residuals: its rows of [`Evaluator::residual_vector`].
+    pub residuals: &'a [f64],
+    /// Their Jacobian: with respect to the IK entries (the first `3 N` columns, row-major `m11 … m3N`),
+    /// then to the model's parameters `covered`.
+    pub jacobian: &'a DMatrix<f64>,
+    /// Indices (in the model's parameter vector) of the effect parameters after the IK entries.
+    pub covered: &'a [usize],
+}
+
 /// Evaluates models of one structure on a set of runs at one selection of ground-truth poses.
 #[derive(Clone, Debug)]
 pub struct Evaluator<'a> {
@@ -188,7 +206,14 @@ impl<'a> Evaluator<'a> {
 
     /// Errors at the selected poses and at each run's end.
     pub fn errors(&self, res: &Resolved<'_>) -> RunErrors {
-        self.fast_errors(res).unwrap_or_else(|| walk_errors(res, self.runs, self.selection))
+        self.fast_errors(res).unwrap_or_else(|| self.unprepared_errors(res, self.selection))
+    }
+
+    /// Errors at the poses of `selection` without the prepared runs: the general fast walk on
+    /// [`Route::Fast`] (where its step angles stay small), else the literal walk.
+    fn unprepared_errors(&self, res: &Resolved<'_>, selection: Selection) -> RunErrors {
+        let general = (self.route == Route::Fast).then(|| general_errors(res, self.runs, selection)).flatten();
+        general.unwrap_or_else(|| walk_errors(res, self.runs, selection))
     }
 
     fn fast_errors(&self, res: &Resolved<'_>) -> Option<RunErrors> {
@@ -212,7 +237,7 @@ impl<'a> Evaluator<'a> {
         if let Some(e) = self.prepared.as_ref().and_then(|p| p.end_pose_errors(res, self.runs)) {
             return e;
         }
-        walk_errors(res, self.runs, Selection::End).ends
+        self.unprepared_errors(res, Selection::End).ends
     }
 
     /// The cost `kind` of `res`: the Eq. 6 cost from any selection; a path cost from this selection when it
@@ -234,7 +259,7 @@ impl<'a> Evaluator<'a> {
         if kind.selection() == self.selection {
             self.errors(res)
         } else {
-            walk_errors(res, self.runs, kind.selection())
+            self.unprepared_errors(res, kind.selection())
         }
     }
 
@@ -264,10 +289,91 @@ impl<'a> Evaluator<'a> {
         })
     }
 
+    /// Visits, in run order, each run's residuals (its rows of [`Self::residual_vector`]) and their
+    /// Jacobian with respect to the IK entries and to the effect parameters the forward-mode walk carries
+    /// (twist- and measurement-stage effects, the one affine wheel-stage
+    /// effect), for `model` at `params`; the other parameters are the caller's to difference. Only a few
+    /// hundred runs' rows are held at a time. `None` (before any visit) on [`Route::Walk`], when `kind` is
+    /// not this evaluator's selection or a step angle leaves the polynomials' range.
+    pub fn forward_jacobian_blocks(
+        &self,
+        model: &Model,
+        params: &[f64],
+        kind: CostKind,
+        visit: &mut dyn FnMut(ModelBlock<'_>),
+    ) -> Option<()> {
+        if self.route != Route::Fast || kind.selection() != self.selection {
+            return None;
+        }
+        let res = model.resolve(params).ok()?;
+        let parts = self.prepared.as_ref().and_then(|p| p.wheel_features(&res, self.runs));
+        let fm = ForwardModel::new(model, parts);
+        // Several batches: make sure every step angle is in range before the first visit.
+        if self.runs.len() > BLOCK_RUNS && general_errors(&res, self.runs, self.selection).is_none() {
+            return None;
+        }
+        let (w, n_runs) = (kind.heading_weight(), self.runs.len());
+        let end_only = self.selection == Selection::End;
+        let indexed: Vec<(usize, &Run)> = self.runs.iter().enumerate().collect();
+        let mut r = Vec::new();
+        for batch in indexed.chunks(BLOCK_RUNS) {
+            let rows: Option<Vec<forward::RunRows>> = (batch.par_iter())
+                .map(|&(index, run)| {
+                    let idx = if end_only { Vec::new() } else { self.selection.indices(run.truth().len()) };
+                    let plan = StepPlan::new(run, res.clock_lag_s, &idx);
+                    let wheels = match parts.and_then(|f| f.params(&res)) {
+                        Some(p) => Cow::Owned(parts?.speeds(index, run, p)),
+                        None => wheel_speeds(&res, run),
+                    };
+                    let input =
+                        forward::RunInput { res: &res, params, run, index, plan: &plan, wheels: &wheels, end_only };
+                    forward::run_rows(&fm, &input)
+                })
+                .collect();
+            for (&(run, _), mut rows) in batch.iter().zip(rows?) {
+                let k = residual_weights(n_runs, rows.errors.len(), w);
+                r.clear();
+                r.extend(rows.errors.iter().flat_map(|e| [e.dx_m * k[0], e.dy_m * k[1], e.dtheta_rad * k[2]]));
+                for (i, mut row) in rows.jacobian.row_iter_mut().enumerate() {
+                    row *= k[i % 3];
+                }
+                visit(ModelBlock { run, residuals: &r, jacobian: &rows.jacobian, covered: &fm.covered });
+            }
+        }
+        Some(())
+    }
+
     /// The route this evaluator may take.
     pub fn route(&self) -> Route {
         self.route
     }
+}
+
+/// Errors of the general fast walk ([`crate::fast::general`]) at the poses of `selection` (one run per
+/// task, in parallel); `None` when a step angle of some run leaves the polynomials' range.
+pub(crate) fn general_errors(res: &Resolved<'_>, runs: &[Run], selection: Selection) -> Option<RunErrors> {
+    let per: Vec<Option<(Vec<PoseError>, PoseError)>> = runs
+        .par_iter()
+        .map(|r| {
+            let idx = match selection {
+                Selection::End => Vec::new(),
+                Selection::Path(_) => selection.indices(r.truth().len()),
+            };
+            let plan = StepPlan::new(r, res.clock_lag_s, &idx);
+            general::run_errors(res, r, &plan, &wheel_speeds(res, r))
+        })
+        .collect();
+    let mut out = RunErrors { errors: Vec::new(), offsets: vec![0], ends: Vec::with_capacity(runs.len()) };
+    for e in per {
+        let (at, end) = e?;
+        match selection {
+            Selection::End => out.errors.push(end),
+            Selection::Path(_) => out.errors.extend(at),
+        }
+        out.ends.push(end);
+        out.offsets.push(out.errors.len());
+    }
+    Some(out)
 }
 
 /// Errors of the literal walk at the poses of `selection` (one walk per run, in parallel).

@@ -98,7 +98,7 @@ pub fn step(scheme: Scheme, p: Pose2, v: Twist2, h: f64) -> Pose2 {
 /// The body twist of sample `w` through the IK matrix and twist-stage effects, for a step that starts
 /// at `at`.
 #[inline]
-fn twist_of(res: &Resolved<'_>, w: &[f64], at: &TwistAt) -> Twist2 {
+pub(crate) fn twist_of(res: &Resolved<'_>, w: &[f64], at: &TwistAt) -> Twist2 {
     let mut t = res.ik.twist(w);
     for (e, p) in &res.twist_effects {
         t = e.twist_at(p, t, w, at);

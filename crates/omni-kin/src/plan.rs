@@ -114,13 +114,25 @@ pub fn wheel_speeds<'r>(res: &Resolved<'_>, run: &'r Run) -> Cow<'r, [f64]> {
     if res.wheel_effects.is_empty() {
         return Cow::Borrowed(run.wheel_rad_s());
     }
-    let lag = res.clock_lag_s;
+    let (s, h) = sample_times(run, res.clock_lag_s, res.fixed_dt_s, res.stamps);
+    let mut w = run.wheel_rad_s().to_vec();
+    let ctx = WheelContext { n_wheels: run.n_wheels(), t_s: &s, dt_s: &h, start_angle_rad: run.wheel_start_rad() };
+    for (e, p) in &res.wheel_effects {
+        e.wheel_rates(p, &ctx, &mut w);
+    }
+    Cow::Owned(w)
+}
+
+/// What a wheel-stage effect sees of `run`'s timing for a clock lag of `lag_s`: each sample's instant on
+/// the ground-truth clock and the step it is integrated over (`fixed_dt_s`, else the run's median
+/// interval; with `stamps`, the measured interval). s.
+pub fn sample_times(run: &Run, lag_s: f64, fixed_dt_s: Option<f64>, stamps: bool) -> (Vec<f64>, Vec<f64>) {
     let median = run.median_dt_s();
-    let fixed = res.fixed_dt_s.unwrap_or(median);
-    let s: Vec<f64> = run.wheel_t_s().iter().map(|t| t - lag).collect();
+    let fixed = fixed_dt_s.unwrap_or(median);
+    let s: Vec<f64> = run.wheel_t_s().iter().map(|t| t - lag_s).collect();
     let h: Vec<f64> = (0..s.len())
         .map(|k| {
-            if !res.stamps {
+            if !stamps {
                 fixed
             } else if k == 0 {
                 median
@@ -129,10 +141,5 @@ pub fn wheel_speeds<'r>(res: &Resolved<'_>, run: &'r Run) -> Cow<'r, [f64]> {
             }
         })
         .collect();
-    let mut w = run.wheel_rad_s().to_vec();
-    let ctx = WheelContext { n_wheels: run.n_wheels(), t_s: &s, dt_s: &h, start_angle_rad: run.wheel_start_rad() };
-    for (e, p) in &res.wheel_effects {
-        e.wheel_rates(p, &ctx, &mut w);
-    }
-    Cow::Owned(w)
+    (s, h)
 }

@@ -94,41 +94,61 @@ impl<'a> CalibrationProblem<'a> {
         k.twist_from_wheels_jacobian(&x[..self.model.n_base()]).ok().map(Some)
     }
 
-    /// The effect parameters' Jacobian columns over all residuals (finite differences; see
+    /// The Jacobian columns `cols` (effect parameters) over all residuals, by finite differences (see
     /// [`LeastSquares::jacobian`]).
-    fn effect_columns(&self, x: &[f64]) -> Vec<Vec<f64>> {
-        let (nb, n) = (self.model.n_base(), x.len());
-        if n <= nb {
-            return Vec::new();
-        }
+    fn effect_columns(&self, x: &[f64], cols: &[usize]) -> Vec<Vec<f64>> {
         let specs = self.model.params();
         let at_range_end = |i: usize| specs.get(i).is_some_and(|s| s.lower == x[i] && s.upper > s.lower);
-        finite_difference_columns(x, nb..n, |y| self.residuals(y), at_range_end)
+        let y0: Vec<f64> = cols.iter().map(|&c| x[c]).collect();
+        finite_difference_columns(
+            &y0,
+            0..cols.len(),
+            |y| self.residuals(&spread(x, cols, y)),
+            |k| at_range_end(cols[k]),
+        )
     }
 
-    /// [`Self::for_each_run_block`] through the fast kernel; `None` (before any visit) when it cannot
-    /// serve `x`.
+    /// [`Self::for_each_run_block`] through the fast paths: the kernel's IK Jacobian, else the forward-mode
+    /// walk (which also carries some effect parameters); the other effect columns by finite differences.
+    /// `None` (before any visit) when neither serves `x`.
     fn analytic_blocks(&self, x: &[f64], visit: &mut dyn FnMut(RunBlock<'_>)) -> Option<()> {
         let res = self.model.resolve(x).ok()?;
         let dm = self.ik_from_base(x)?;
         let (nb, n) = (self.model.n_base(), x.len());
-        let mut effects: Option<Vec<Vec<f64>>> = None;
-        self.evaluator.ik_jacobian_blocks(&res, self.objective, &mut |b| {
-            let row_offset = self.row_offsets[b.run];
-            let rows = b.residuals.len();
+        let mut effects: Option<(Vec<usize>, Vec<Vec<f64>>)> = None;
+        // One run's block: the IK columns (chained to the base parameters), the carried effect columns
+        // (`covered`, after the IK entries in `jac`) and the rest by differences, computed once.
+        let mut block = |run: usize, residuals: &[f64], jac: &DMatrix<f64>, covered: &[usize]| {
+            let row_offset = self.row_offsets[run];
+            let rows = residuals.len();
+            let nik = jac.ncols() - covered.len();
             let mut j = DMatrix::zeros(rows, n);
             match &dm {
-                None => j.columns_mut(0, nb).copy_from(b.jacobian),
-                Some(dm) => j.columns_mut(0, nb).copy_from(&(b.jacobian * dm)),
+                None => j.columns_mut(0, nb).copy_from(&jac.columns(0, nik)),
+                Some(dm) => j.columns_mut(0, nb).copy_from(&(jac.columns(0, nik) * dm)),
             }
-            // The effect columns come from whole residual vectors: computed once, at the first block.
-            let cols = effects.get_or_insert_with(|| self.effect_columns(x));
-            for (c, col) in (nb..n).zip(cols.iter()) {
+            for (k, &g) in covered.iter().enumerate() {
+                j.column_mut(g).copy_from(&jac.column(nik + k));
+            }
+            let (rest, cols) = effects.get_or_insert_with(|| {
+                let rest: Vec<usize> = (nb..n).filter(|g| !covered.contains(g)).collect();
+                let cols = self.effect_columns(x, &rest);
+                (rest, cols)
+            });
+            for (&c, col) in rest.iter().zip(cols.iter()) {
                 for (i, v) in col.iter().skip(row_offset).take(rows).enumerate() {
                     j[(i, c)] = *v;
                 }
             }
-            visit(RunBlock { run: b.run, residuals: b.residuals, row_offset, jacobian: &j });
+            visit(RunBlock { run, residuals, row_offset, jacobian: &j });
+        };
+        let kernel = self
+            .evaluator
+            .ik_jacobian_blocks(&res, self.objective, &mut |b| block(b.run, b.residuals, b.jacobian, &[]));
+        kernel.or_else(|| {
+            self.evaluator.forward_jacobian_blocks(self.model, x, self.objective, &mut |b| {
+                block(b.run, b.residuals, b.jacobian, b.covered)
+            })
         })
     }
 
@@ -189,6 +209,15 @@ impl<'a> CalibrationProblem<'a> {
         })?;
         Some((r, j))
     }
+}
+
+/// `x` with the entries `cols` replaced by `y` (one value per entry).
+fn spread(x: &[f64], cols: &[usize], y: &[f64]) -> Vec<f64> {
+    let mut out = x.to_vec();
+    for (&c, &v) in cols.iter().zip(y) {
+        out[c] = v;
+    }
+    out
 }
 
 impl Problem for CalibrationProblem<'_> {

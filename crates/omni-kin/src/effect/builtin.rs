@@ -95,6 +95,9 @@ impl Effect for WheelAsymmetry {
     fn params(&self) -> Vec<ParamSpec> {
         per_wheel("a", "1", self.n_wheels, -0.3, 0.3)
     }
+    fn wheel_rates_affine(&self) -> bool {
+        true
+    }
     fn wheel_rates(&self, p: &[f64], ctx: &WheelContext<'_>, w: &mut [f64]) {
         for row in w.chunks_exact_mut(ctx.n_wheels) {
             for (v, a) in row.iter_mut().zip(p) {
@@ -128,6 +131,9 @@ impl Effect for SpeedScale {
     }
     fn params(&self) -> Vec<ParamSpec> {
         per_wheel("k", "s/rad", self.n_wheels, -0.2, 0.2)
+    }
+    fn wheel_rates_affine(&self) -> bool {
+        true
     }
     fn wheel_rates(&self, p: &[f64], ctx: &WheelContext<'_>, w: &mut [f64]) {
         for row in w.chunks_exact_mut(ctx.n_wheels) {
@@ -228,6 +234,9 @@ impl Effect for AccelSlip {
     fn params(&self) -> Vec<ParamSpec> {
         per_wheel("k", "s", self.n_wheels, -0.2, 0.2)
     }
+    fn wheel_rates_affine(&self) -> bool {
+        true
+    }
     fn wheel_rates(&self, p: &[f64], ctx: &WheelContext<'_>, w: &mut [f64]) {
         let n = ctx.n_wheels;
         let samples = ctx.t_s.len();
@@ -327,6 +336,9 @@ impl Effect for WheelEccentricity {
         let mut v = per_wheel("c", "1", self.n_wheels, -0.2, 0.2);
         v.extend(per_wheel("s", "1", self.n_wheels, -0.2, 0.2));
         v
+    }
+    fn wheel_rates_affine(&self) -> bool {
+        true
     }
     fn wheel_rates(&self, p: &[f64], ctx: &WheelContext<'_>, w: &mut [f64]) {
         let n = ctx.n_wheels;

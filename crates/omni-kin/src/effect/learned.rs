@@ -190,6 +190,9 @@ impl Effect for Learned {
             })
             .collect()
     }
+    fn wheel_rates_affine(&self) -> bool {
+        self.family == Family::Wheel
+    }
     fn wheel_rates(&self, p: &[f64], ctx: &WheelContext<'_>, w: &mut [f64]) {
         if self.family == Family::Wheel {
             wheel_rates(p, ctx, w);

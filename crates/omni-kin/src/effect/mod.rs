@@ -122,6 +122,14 @@ pub trait Effect: fmt::Debug + Send + Sync {
     fn params(&self) -> Vec<ParamSpec>;
     /// Wheel stage: rewrite a run's wheel speeds (row-major `n_samples × n_wheels`, rad/s) in place.
     fn wheel_rates(&self, _p: &[f64], _ctx: &WheelContext<'_>, _wheel_rad_s: &mut [f64]) {}
+    /// Wheel stage: whether [`Effect::wheel_rates`] is affine in the parameters, each parameter's part
+    /// taken from the measured speeds alone: `wheel_rates(p)` gives `w + Σ_i p_i (wheel_rates(e_i) − w)`
+    /// (to rounding; `e_i` the unit vector of parameter `i`). The fast path then computes each
+    /// parameter's part once per dataset instead of rewriting the speeds on every evaluation. Default
+    /// false.
+    fn wheel_rates_affine(&self) -> bool {
+        false
+    }
     /// Twist stage: change one sample's body twist (the wheel speeds it came from are given).
     fn twist(&self, _p: &[f64], twist: Twist2, _wheel_rad_s: &[f64]) -> Twist2 {
         twist
@@ -264,6 +272,9 @@ impl Effect for EffectKind {
     }
     fn wheel_rates(&self, p: &[f64], ctx: &WheelContext<'_>, w: &mut [f64]) {
         self.inner().wheel_rates(p, ctx, w)
+    }
+    fn wheel_rates_affine(&self) -> bool {
+        self.inner().wheel_rates_affine()
     }
     fn twist(&self, p: &[f64], twist: Twist2, w: &[f64]) -> Twist2 {
         match self {

@@ -32,7 +32,7 @@ struct Tangents<const N: usize> {
 
 /// Derivatives of `sin(a)/a` and `(1 − cos a)/a`.
 #[inline(always)]
-fn arc_factor_slopes(a: f64) -> (f64, f64) {
+pub(super) fn arc_factor_slopes(a: f64) -> (f64, f64) {
     let a2 = a * a;
     let ds = a * (2.0 * S1 + a2 * (4.0 * S2 + a2 * (6.0 * S3 + a2 * 8.0 * S4)));
     let dc = C0 + a2 * (3.0 * C1 + a2 * (5.0 * C2 + a2 * (7.0 * C3 + a2 * 9.0 * C4)));

@@ -1,27 +1,38 @@
-//! Fast fixed-step odometry over prepared runs: the same steps as [`crate::odometry`] (both read the
-//! runs' [`crate::plan::StepPlan`]s; the numbers agree within rounding, checked to 1e-9 m against the
-//! literal walk in tests) at close to the arithmetic limit. [`crate::evaluate::Evaluator`] chooses it
-//! whenever it serves a model and aggregates its errors; nothing else calls it.
+//! Fast odometry: the same steps as [`crate::odometry`] (every route reads the runs'
+//! [`crate::plan::StepPlan`]s; the numbers agree within rounding, checked to 1e-9 m against the literal walk
+//! in tests), with no `sin_cos` per step. [`crate::evaluate::Evaluator`] chooses a route whenever one serves
+//! a model and aggregates the errors; nothing else calls these modules.
 //!
 //! - `prepare.rs`: what depends only on the data, done once in [`PreparedRuns::new`]: each step's fraction
 //!   is folded into its wheel-angle increment `u_k = f_k h w_k` (rad), so with the IK matrix `M` a step's
 //!   body displacement is `M u_k` — 3 × N multiply-adds — for both Eq. 1 (Euler) and exact arcs. The
 //!   increments are kept up to [`KEPT_INCREMENTS_MAX_BYTES`] (8 B per wheel and sample); for larger
 //!   datasets each walk redoes a lane group's increments from the runs' own wheel columns (the same
-//!   products, so the same numbers). Runs are interleaved four to a lane group (struct of arrays).
+//!   products, so the same numbers). Runs are interleaved four to a lane group (struct of arrays). A clock
+//!   lag takes lane groups prepared for it (the last 4 lags are kept).
+//! - `features.rs`: the parts of an affine wheel-stage effect (each parameter's change of the speeds),
+//!   taken once; an evaluation adds them to the increments instead of running the effect.
 //! - `lanes.rs`: the four lanes' arithmetic, AVX2 + FMA on x86-64 CPUs that have them (checked at run time
 //!   through `pulp`, no `-C target-cpu` needed), plain arrays otherwise.
 //! - `kernel.rs`: the step loop; the heading's cosine and sine advance by polynomial rotations.
-//! - `jacobian.rs`: the forward-mode Jacobian with respect to the IK matrix, for the LM polish.
+//! - `jacobian.rs`: the forward-mode Jacobian of the kernel with respect to the IK matrix.
+//! - `general.rs`: the general fast walk, one run at a time (scalar), for what the lanes do not serve:
+//!   twist-stage effects (through their own hooks) and measured stamps; the kernel's polynomial steps.
+//! - `forward.rs`: the forward-mode Jacobian along the general walk, with respect to the IK matrix and the
+//!   parameters of twist- and measurement-stage effects and of the affine wheel-stage effect.
 //!
-//! Scope. Fixed steps with no clock lag, no twist-stage effects and no measured stamps, 1 to
-//! [`MAX_WHEELS`] wheels; a sensor offset (measurement stage) and wheel-stage effects (the increments are
-//! redone from the rewritten wheel speeds on each evaluation) are allowed. Anything else — or a step angle
-//! above [`MAX_STEP_ANGLE_RAD`] — returns `None` and the evaluator takes the literal walk.
+//! Scope of the lane kernel: fixed steps with no twist-stage effects and no measured stamps, 1 to
+//! [`MAX_WHEELS`] wheels; any clock lag, measurement-stage effects and wheel-stage effects (affine ones
+//! from their parts, others by rewriting the speeds on each evaluation). The general walk serves any model.
+//! Either returns `None` for a step angle above [`MAX_STEP_ANGLE_RAD`], and the evaluator takes the literal
+//! walk.
 //!
-//! Results are deterministic: groups are evaluated in parallel and collected in run order, so they do not
-//! depend on the thread count. With FMA the last bits differ from a CPU without it.
+//! Results are deterministic: groups and runs are evaluated in parallel and collected in run order, so they
+//! do not depend on the thread count. With FMA the last bits differ from a CPU without it.
 
+mod features;
+pub(crate) mod forward;
+pub(crate) mod general;
 mod jacobian;
 mod kernel;
 mod lanes;
@@ -32,10 +43,13 @@ use crate::odometry::Selection;
 use crate::plan::wheel_speeds;
 use crate::pose::PoseError;
 use crate::run::Run;
+use features::{WheelFeatures, affine_wheel_effect};
 use nalgebra::DMatrix;
-use prepare::{Group, Increments, max_per_wheel};
+use prepare::{Group, GroupPart, Increments, max_per_wheel};
 use rayon::prelude::*;
+use std::borrow::Cow;
 use std::cell::RefCell;
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// Runs per lane group.
 pub const LANES: usize = 4;
@@ -113,7 +127,45 @@ pub struct PreparedRuns {
     n_wheels: usize,
     fixed_dt_s: Option<f64>,
     selection: Selection,
+    /// Keep the increments (else each walk redoes them).
+    keep: bool,
+    /// The groups without clock lag.
     groups: Vec<Group>,
+    /// The groups of the last few other clock lags.
+    lagged: LagCache,
+    /// The parts of the models' affine wheel-stage effect, taken at the first evaluation with one.
+    features: OnceLock<Option<Arc<WheelFeatures>>>,
+}
+
+/// Lagged group sets kept at once: a fit evaluates one lag several times (residuals, Jacobian rows) and its
+/// finite differences two more.
+const LAGS_KEPT: usize = 4;
+
+/// The groups prepared for the last [`LAGS_KEPT`] clock lags other than 0, newest last, by the lag's bits.
+/// Each set is a pure function of the runs and the lag, so the cache never changes a result.
+#[derive(Debug, Default)]
+struct LagCache(Mutex<Vec<(u64, Arc<Vec<Group>>)>>);
+
+impl Clone for LagCache {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
+}
+
+/// The groups an evaluation walks: the prepared ones, or a set prepared for its clock lag.
+enum Groups<'a> {
+    Unlagged(&'a [Group]),
+    Lagged(Arc<Vec<Group>>),
+}
+
+impl std::ops::Deref for Groups<'_> {
+    type Target = [Group];
+    fn deref(&self) -> &[Group] {
+        match self {
+            Groups::Unlagged(g) => g,
+            Groups::Lagged(g) => g,
+        }
+    }
 }
 
 impl PreparedRuns {
@@ -135,10 +187,33 @@ impl PreparedRuns {
         let n_wheels = runs.first().map_or(0, Run::n_wheels);
         let bytes = runs.iter().map(|r| std::mem::size_of_val(r.wheel_rad_s())).sum::<usize>();
         let keep = bytes <= max_bytes;
-        let groups = (runs.par_chunks(LANES).enumerate())
-            .map(|(gi, chunk)| Group::new(gi * LANES, chunk, fixed_dt_s, selection, keep))
-            .collect();
-        Self { n_runs: runs.len(), n_wheels, fixed_dt_s, selection, groups }
+        let groups = make_groups(runs, fixed_dt_s, selection, 0.0, keep);
+        let (lagged, features) = (LagCache::default(), OnceLock::new());
+        Self { n_runs: runs.len(), n_wheels, fixed_dt_s, selection, keep, groups, lagged, features }
+    }
+
+    /// The groups for a clock lag of `lag_s` (prepared now, or kept from an earlier evaluation); `None` when
+    /// `runs` are not the prepared runs.
+    fn groups_for(&self, lag_s: f64, runs: &[Run]) -> Option<Groups<'_>> {
+        if runs.len() != self.n_runs {
+            return None;
+        }
+        if lag_s == 0.0 {
+            return Some(Groups::Unlagged(&self.groups));
+        }
+        let key = lag_s.to_bits();
+        let kept = |cache: &Vec<(u64, Arc<Vec<Group>>)>| cache.iter().find(|(k, _)| *k == key).map(|(_, g)| g.clone());
+        if let Some(g) = self.lagged.0.lock().ok().and_then(|c| kept(&c)) {
+            return Some(Groups::Lagged(g));
+        }
+        let groups = Arc::new(make_groups(runs, self.fixed_dt_s, self.selection, lag_s, self.keep));
+        if let Ok(mut cache) = self.lagged.0.lock() {
+            if cache.len() == LAGS_KEPT {
+                cache.remove(0);
+            }
+            cache.push((key, groups.clone()));
+        }
+        Some(Groups::Lagged(groups))
     }
 
     /// Number of runs.
@@ -156,12 +231,12 @@ impl PreparedRuns {
         self.groups.iter().all(|g| g.kept().is_some())
     }
 
-    /// True when `res` can use these prepared runs (same fixed step, no clock lag, no twist-stage effects,
-    /// no measured stamps, 1 to [`MAX_WHEELS`] wheels). Wheel-stage effects are applied to the runs'
-    /// wheel speeds before the increments are redone, on each evaluation.
+    /// True when `res` can use these prepared runs (same fixed step, no twist-stage effects, no measured
+    /// stamps, 1 to [`MAX_WHEELS`] wheels). Wheel-stage effects are applied to the runs' wheel speeds
+    /// before the increments are redone, on each evaluation; a clock lag takes groups prepared for it.
     pub fn supports(&self, res: &Resolved<'_>) -> bool {
         !res.stamps
-            && res.clock_lag_s == 0.0
+            && res.clock_lag_s.is_finite()
             && res.twist_effects.is_empty()
             && res.fixed_dt_s == self.fixed_dt_s
             && res.ik.n_wheels() == self.n_wheels
@@ -171,7 +246,11 @@ impl PreparedRuns {
     /// Errors at the selected ground-truth poses and at each run's end, in run order. `None` when `res`
     /// needs the literal walk (or `runs` are not the prepared runs).
     pub fn errors(&self, res: &Resolved<'_>, runs: &[Run]) -> Option<FastErrors> {
-        let per_group: Vec<Option<(Vec<PoseError>, [PoseError; LANES])>> = (self.groups.par_iter())
+        if !self.supports(res) {
+            return None;
+        }
+        let groups = self.groups_for(res.clock_lag_s, runs)?;
+        let per_group: Vec<Option<(Vec<PoseError>, [PoseError; LANES])>> = (groups.par_iter())
             .map(|g| {
                 let mut at = vec![PoseError::default(); g.queries.len()];
                 let ends = self.walk_group(g, res, runs, &mut |slot, e| at[slot] = e)?;
@@ -179,7 +258,7 @@ impl PreparedRuns {
             })
             .collect();
         let mut out = FastErrors { at_queries: Vec::new(), ends: Vec::with_capacity(self.n_runs) };
-        for (g, r) in self.groups.iter().zip(per_group) {
+        for (g, r) in groups.iter().zip(per_group) {
             let (at, ends) = r?;
             out.at_queries.extend(at);
             out.ends.extend_from_slice(&ends[..g.lanes]);
@@ -190,10 +269,14 @@ impl PreparedRuns {
     /// The end-pose error of every run (the Eq. 6 terms), in run order (any selection). `None` when `res`
     /// needs the literal walk.
     pub fn end_pose_errors(&self, res: &Resolved<'_>, runs: &[Run]) -> Option<Vec<PoseError>> {
+        if !self.supports(res) {
+            return None;
+        }
+        let groups = self.groups_for(res.clock_lag_s, runs)?;
         let per_group: Vec<Option<[PoseError; LANES]>> =
-            self.groups.par_iter().map(|g| self.walk_group(g, res, runs, &mut |_, _| {})).collect();
+            groups.par_iter().map(|g| self.walk_group(g, res, runs, &mut |_, _| {})).collect();
         let mut out = Vec::with_capacity(self.n_runs);
-        for (g, ends) in self.groups.iter().zip(per_group) {
+        for (g, ends) in groups.iter().zip(per_group) {
             out.extend_from_slice(&ends?[..g.lanes]);
         }
         Some(out)
@@ -203,8 +286,8 @@ impl PreparedRuns {
     /// IK matrix entries (3 rows per pose: dx, dy, dθ; columns in row-major order `m11 … m3N`), unscaled,
     /// by forward-mode differentiation of the step recurrence; the sensor pose is held fixed. Only
     /// [`BLOCK_RUNS`] runs' rows are held at a time; the runs of a batch are differentiated in parallel
-    /// and visited sequentially. `None` (before any visit) when `res` needs the literal walk or has
-    /// wheel-stage effects.
+    /// and visited sequentially; with wheel-stage effects, along the rewritten speeds (the effects do not
+    /// depend on the IK matrix). `None` (before any visit) when `res` needs the literal walk.
     pub fn ik_jacobian_rows(
         &self,
         res: &Resolved<'_>,
@@ -212,12 +295,22 @@ impl PreparedRuns {
         visit: &mut dyn FnMut(JacobianRows<'_>),
     ) -> Option<()> {
         let m = res.ik.entries();
-        let ok = self.supports(res) && res.wheel_effects.is_empty() && runs.len() == self.n_runs;
-        if !ok || !self.groups.iter().all(|g| in_range(m, g.u_max())) {
+        let ok = self.supports(res) && runs.len() == self.n_runs;
+        let groups = if ok { self.groups_for(res.clock_lag_s, runs)? } else { return None };
+        // Every step angle in range before the first visit: on the runs' own speeds by their bound; on
+        // rewritten ones by rewriting them (each batch checks its own before visiting, so only needed
+        // when there are several).
+        let in_range = if res.wheel_effects.is_empty() {
+            groups.iter().all(|g| in_range(m, g.u_max()))
+        } else {
+            groups.len() <= BLOCK_RUNS / LANES
+                || groups.par_iter().all(|g| self.with_increments(g, res, runs, |_| ()).is_some())
+        };
+        if !in_range {
             return None;
         }
         let (arc, sensor, n) = (res.scheme == Scheme::ExactArc, res.sensor_from_body, self.n_wheels);
-        for batch in self.groups.chunks(BLOCK_RUNS / LANES) {
+        for batch in groups.chunks(BLOCK_RUNS / LANES) {
             let rows: Option<Vec<Vec<jacobian::LaneRows>>> = (batch.par_iter())
                 .map(|g| {
                     self.with_increments(g, res, runs, |inc| {
@@ -255,6 +348,31 @@ impl PreparedRuns {
         })?
     }
 
+    /// The parts of `res`'s affine wheel-stage effect (taken at the first call), when it has one and they
+    /// serve it.
+    pub(crate) fn wheel_features(&self, res: &Resolved<'_>, runs: &[Run]) -> Option<&WheelFeatures> {
+        let e = affine_wheel_effect(res)?;
+        let f = self.features.get_or_init(|| Some(Arc::new(WheelFeatures::new(e, runs, self.fixed_dt_s))));
+        f.as_deref().filter(|f| f.params(res).is_some())
+    }
+
+    /// The wheel speeds of group `g`'s runs (`chunk`) rewritten by `res`'s wheel-stage effects: from the
+    /// parts of an affine one ([`WheelFeatures`], taken once), else by the effects themselves.
+    fn rewritten_speeds<'r>(
+        &self,
+        g: &Group,
+        chunk: &'r [Run],
+        res: &Resolved<'_>,
+        runs: &[Run],
+    ) -> Vec<Cow<'r, [f64]>> {
+        match self.wheel_features(res, runs).and_then(|f| f.params(res).map(|p| (f, p))) {
+            Some((f, p)) => {
+                chunk.iter().enumerate().map(|(lane, r)| Cow::Owned(f.speeds(g.first_run + lane, r, p))).collect()
+            }
+            None => chunk.iter().map(|r| wheel_speeds(res, r)).collect(),
+        }
+    }
+
     /// Calls `f` with the increments of group `g` for `res`: the kept ones, ones redone from the runs'
     /// wheel speeds into this thread's buffer, or ones redone from speeds rewritten by `res`'s wheel-stage
     /// effects. `None` when a step angle may exceed [`MAX_STEP_ANGLE_RAD`] or `runs` are not the
@@ -268,8 +386,18 @@ impl PreparedRuns {
     ) -> Option<R> {
         let m = res.ik.entries();
         let chunk = g.runs(runs)?;
-        let rewritten: Option<Vec<_>> =
-            (!res.wheel_effects.is_empty()).then(|| chunk.iter().map(|r| wheel_speeds(res, r)).collect());
+        if let Some(features) = self.wheel_features(res, runs) {
+            let p = features.params(res)?;
+            if let Some(inc) = g.kept() {
+                return with_parts(&inc, g.parts(features), p, (m, g.u_max()), f);
+            }
+            // Not kept: the same increments and parts, redone (the same bits).
+            let wheels: Vec<&[f64]> = chunk.iter().map(Run::wheel_rad_s).collect();
+            let mut u = Vec::new();
+            g.fill_steps(&wheels, &mut u);
+            return with_parts(&g.redone(&u), &g.make_parts(features), p, (m, g.u_max()), f);
+        }
+        let rewritten = (!res.wheel_effects.is_empty()).then(|| self.rewritten_speeds(g, chunk, res, runs));
         if rewritten.is_none() && !in_range(m, g.u_max()) {
             return None;
         }
@@ -296,6 +424,53 @@ impl PreparedRuns {
             out
         })
     }
+}
+
+/// Calls `f` with the kept increments `inc` plus the parts of an affine wheel-stage effect at parameters
+/// `p` (its speeds' change as increments, [`prepare::GroupPart`]), in this thread's buffer; `None` when a
+/// step angle of IK matrix `m` may exceed [`MAX_STEP_ANGLE_RAD`] (`u_max`: the unchanged increments'
+/// bound, widened by the parts').
+fn with_parts<R>(
+    inc: &Increments<'_>,
+    parts: &[GroupPart],
+    p: &[f64],
+    (m, u_max): (&[f64], &[f64]),
+    f: impl FnOnce(&Increments<'_>) -> R,
+) -> Option<R> {
+    let n = u_max.len();
+    SCRATCH.with(|cell| {
+        let mut u = cell.take();
+        u.clear();
+        u.extend_from_slice(inc.u);
+        let mut query_u = inc.query_u.to_vec();
+        let mut bound = u_max.to_vec();
+        for part in parts {
+            let v = p[part.param];
+            if v == 0.0 {
+                continue;
+            }
+            for (t, du) in u.iter_mut().skip(part.wheel).step_by(n).zip(&part.u) {
+                for l in 0..LANES {
+                    t[l] += v * du[l];
+                }
+            }
+            for (t, dq) in query_u.iter_mut().skip(part.wheel).step_by(n).zip(&part.query_u) {
+                *t += v * dq;
+            }
+            bound[part.wheel] += v.abs() * part.u_max;
+        }
+        let ok = in_range(m, &bound) || in_range(m, &max_per_wheel(&u, n));
+        let out = ok.then(|| f(&Increments { u: &u, query_u: &query_u }));
+        cell.replace(u);
+        out
+    })
+}
+
+/// The lane groups of `runs` (see [`PreparedRuns::with_increment_budget`]) for a wheel-clock lag of `lag_s`.
+fn make_groups(runs: &[Run], fixed_dt_s: Option<f64>, selection: Selection, lag_s: f64, keep: bool) -> Vec<Group> {
+    (runs.par_chunks(LANES).enumerate())
+        .map(|(gi, chunk)| Group::new(gi * LANES, chunk, fixed_dt_s, selection, lag_s, keep))
+        .collect()
 }
 
 /// True when no step angle can exceed [`MAX_STEP_ANGLE_RAD`]: `Σ_j |m3j| max|u_j|` bounds it.

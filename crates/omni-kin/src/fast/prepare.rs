@@ -1,12 +1,14 @@
-//! Preparation: each run's [`StepPlan`] (no clock lag), four runs interleaved to a lane group (struct of
+//! Preparation: each run's [`StepPlan`] (for one clock lag), four runs interleaved to a lane group (struct of
 //! arrays), and the wheel-angle increments `u = f h w` of their steps — kept, redone from the runs' wheel
 //! columns, or redone from wheel speeds rewritten by wheel-stage effects, always by [`Group::fill`].
 
+use super::features::WheelFeatures;
 use super::{LANES, Lanes};
 use crate::odometry::Selection;
 use crate::plan::StepPlan;
 use crate::pose::Pose2;
 use crate::run::Run;
+use std::sync::OnceLock;
 
 /// One ground-truth pose to predict: after `step` steps of `lane`, a partial step (its increments in
 /// [`Increments::query_u`]).
@@ -48,6 +50,24 @@ pub(super) struct Group {
     pub queries: Vec<Query>,
     /// Partial-step increments of the queries, `n_wheels` each. rad.
     query_u: Vec<f64>,
+    /// The parts of the evaluator's affine wheel-stage effect as increments (taken at first use).
+    parts: OnceLock<Vec<GroupPart>>,
+}
+
+/// One part of an affine wheel-stage effect ([`WheelFeatures`]) as increments of a group: `f h Δw` of
+/// every step and query for one unit of the parameter, on one wheel.
+#[derive(Clone, Debug)]
+pub(super) struct GroupPart {
+    /// Index of the parameter in the effect's.
+    pub param: usize,
+    /// The wheel.
+    pub wheel: usize,
+    /// Increments of the steps (lanes). rad.
+    pub u: Vec<Lanes>,
+    /// Increments of the queries, one each. rad.
+    pub query_u: Vec<f64>,
+    /// Largest |increment|. rad.
+    pub u_max: f64,
 }
 
 /// The increments a walk of a group reads.
@@ -60,8 +80,16 @@ pub(super) struct Increments<'g> {
 
 impl Group {
     /// Group of `chunk` (at most [`LANES`] runs, the first being run `first_run`) with fixed steps of
-    /// `fixed_dt_s` (`None`: each run's median interval); keeps the increments when `keep`.
-    pub fn new(first_run: usize, chunk: &[Run], fixed_dt_s: Option<f64>, selection: Selection, keep: bool) -> Self {
+    /// `fixed_dt_s` (`None`: each run's median interval) and a wheel-clock lag of `lag_s`; keeps the
+    /// increments when `keep`.
+    pub fn new(
+        first_run: usize,
+        chunk: &[Run],
+        fixed_dt_s: Option<f64>,
+        selection: Selection,
+        lag_s: f64,
+        keep: bool,
+    ) -> Self {
         let n_wheels = chunk.first().map_or(0, Run::n_wheels);
         let plans: Vec<StepPlan> = chunk
             .iter()
@@ -70,7 +98,7 @@ impl Group {
                     Selection::End => Vec::new(),
                     Selection::Path(_) => selection.indices(r.truth().len()),
                 };
-                StepPlan::new(r, 0.0, &idx)
+                StepPlan::new(r, lag_s, &idx)
             })
             .collect();
         let (mut start, mut end, mut h) = ([Pose2::IDENTITY; LANES], [Pose2::IDENTITY; LANES], [0.0; LANES]);
@@ -99,6 +127,7 @@ impl Group {
             end,
             queries,
             query_u: Vec::new(),
+            parts: OnceLock::new(),
         };
         let wheels: Vec<&[f64]> = chunk.iter().map(Run::wheel_rad_s).collect();
         let mut u = Vec::new();
@@ -137,7 +166,11 @@ impl Group {
     /// wheel speeds `wheels[lane]` and its plan's fractions, zero past a lane's last step). With
     /// [`Self::fill_queries`], the one place increments are taken.
     pub fn fill_steps(&self, wheels: &[&[f64]], u: &mut Vec<Lanes>) {
-        let n = self.n_wheels;
+        self.fill_steps_of(wheels, self.n_wheels, u);
+    }
+
+    /// [`Self::fill_steps`] of `n` columns per sample.
+    fn fill_steps_of(&self, wheels: &[&[f64]], n: usize, u: &mut Vec<Lanes>) {
         // Each lane's wheel speeds over its steps (none for padding lanes).
         let mut w: [&[f64]; LANES] = [&[]; LANES];
         for (lane, (plan, speeds)) in self.plans.iter().zip(wheels).enumerate() {
@@ -168,7 +201,43 @@ impl Group {
     /// The queries' partial-step increments `f h w` from each lane's wheel speeds `wheels[lane]` (zero
     /// where the robot is at rest), `n_wheels` per query. rad.
     pub fn fill_queries(&self, wheels: &[&[f64]]) -> Vec<f64> {
-        let n = self.n_wheels;
+        self.fill_queries_of(wheels, self.n_wheels)
+    }
+
+    /// The parts of `features` (the affine wheel-stage effect of every evaluation of these runs) as
+    /// increments of this group, taken at the first call.
+    pub fn parts(&self, features: &WheelFeatures) -> &[GroupPart] {
+        self.parts.get_or_init(|| self.make_parts(features))
+    }
+
+    /// The parts of `features` as increments of this group (see [`Self::parts`]).
+    pub fn make_parts(&self, features: &WheelFeatures) -> Vec<GroupPart> {
+        {
+            let lanes: Vec<Vec<(usize, usize, &[f64])>> =
+                (0..self.lanes).map(|l| features.run_parts(self.first_run + l).collect()).collect();
+            let mut keys: Vec<(usize, usize)> = lanes.iter().flatten().map(|&(p, w, _)| (p, w)).collect();
+            keys.sort_unstable();
+            keys.dedup();
+            let zeros: Vec<Vec<f64>> = self.plans.iter().map(|p| vec![0.0; p.first_sample + p.steps + 1]).collect();
+            keys.into_iter()
+                .map(|(param, wheel)| {
+                    let cols: Vec<&[f64]> = (0..self.lanes)
+                        .map(|l| {
+                            let own = lanes[l].iter().find(|&&(p, w, _)| (p, w) == (param, wheel));
+                            own.map_or(zeros[l].as_slice(), |&(_, _, c)| c)
+                        })
+                        .collect();
+                    let mut u = Vec::new();
+                    self.fill_steps_of(&cols, 1, &mut u);
+                    let u_max = max_per_wheel(&u, 1)[0];
+                    GroupPart { param, wheel, u, query_u: self.fill_queries_of(&cols, 1), u_max }
+                })
+                .collect()
+        }
+    }
+
+    /// [`Self::fill_queries`] of `n` columns per sample.
+    fn fill_queries_of(&self, wheels: &[&[f64]], n: usize) -> Vec<f64> {
         let mut query_u = Vec::with_capacity(self.queries.len() * n);
         for q in &self.queries {
             let (plan, h) = (&self.plans[q.lane], self.h[q.lane]);

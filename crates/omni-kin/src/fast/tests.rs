@@ -140,6 +140,7 @@ fn agrees_with_wheel_stage_effects() {
         ("accel_slip", vec![0.05, 0.02, -0.03]),
         ("backlash", vec![0.02, 0.01, 0.03]),
         ("wheel_eccentricity", vec![0.02, -0.01, 0.01, 0.015, 0.0, -0.02]),
+        ("learned:wheel", (0..27).map(|i| 0.002 * ((i * 7 % 11) as f64 - 5.0)).collect()),
     ] {
         let model = Model::ik(IkMatrix::paper_design()).with_effect(EffectKind::from_id(id, 3).unwrap());
         let mut p = model.nominal();
@@ -159,7 +160,9 @@ fn declines_what_it_cannot_do() {
     let mut p = lagged.nominal();
     assert!(prepared.errors(&lagged.resolve(&p).unwrap(), &runs).is_some(), "no lag at τ = 0");
     p[9] = 0.01;
-    assert!(prepared.errors(&lagged.resolve(&p).unwrap(), &runs).is_none());
+    assert!(prepared.errors(&lagged.resolve(&p).unwrap(), &runs).is_some(), "a lag takes groups of its own");
+    p[9] = f64::INFINITY;
+    assert!(lagged.resolve(&p).is_err(), "a lag that is not finite is refused before");
     let twist = Model::ik(IkMatrix::paper_design()).with_effect(EffectKind::from_id("rotation_slip", 3).unwrap());
     assert!(prepared.errors(&twist.resolve(&twist.nominal()).unwrap(), &runs).is_none());
     let paper_step = Model::ik(IkMatrix::paper_design()).with_integration(Integration::PAPER);
@@ -375,6 +378,292 @@ fn chained_jacobian_of_diff_and_mecanum_models_matches_central_differences() {
                 let fd = (rp[i] - rm[i]) / (2.0 * h);
                 let gap = (fd - j[(i, c)]).abs() / col_max;
                 assert!(gap < 1e-6, "{} column {c} row {i}: {fd} vs {}", model.kinematics.id(), j[(i, c)]);
+            }
+        }
+    }
+}
+
+/// Largest difference between the general fast walk and the literal walk (every selected pose and end
+/// pose), and the number of poses compared; panics when the general walk declines.
+fn general_gap(model: &Model, params: &[f64], runs: &[Run], selection: Selection) -> (f64, usize) {
+    let res = model.resolve(params).unwrap();
+    let general = crate::evaluate::general_errors(&res, runs, selection).expect("the general walk serves");
+    let walk = Evaluator::with_route(model, runs, selection, Route::Walk).unwrap().errors(&res);
+    let fast = Evaluator::new(model, runs, selection).unwrap();
+    let (mut gap, mut count) = (0.0f64, 0);
+    let mut at = |a: &PoseError, b: &PoseError| {
+        gap = gap.max((a.dx_m - b.dx_m).abs()).max((a.dy_m - b.dy_m).abs()).max((a.dtheta_rad - b.dtheta_rad).abs());
+    };
+    let (via_evaluator, ends) = (fast.errors(&res), fast.end_pose_errors(&res));
+    for (i, end) in ends.iter().enumerate() {
+        assert_eq!(general.run(i).len(), walk.run(i).len());
+        for ((a, b), c) in general.run(i).iter().zip(walk.run(i)).zip(via_evaluator.run(i)) {
+            at(a, b);
+            at(c, b);
+            count += 1;
+        }
+        at(&general.ends()[i], &walk.ends()[i]);
+        at(end, &walk.ends()[i]);
+    }
+    (gap, count)
+}
+
+/// Runs with late samples (jittered stamps), so that measured stamps differ from the fixed step.
+fn jittered_runs(n: usize) -> Vec<Run> {
+    let truth = FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated()));
+    let cfg = SimConfig { seed: 5, sample_jitter_s: 0.003, duration_s: 4.0, ..SimConfig::default() };
+    simulate(&cfg, &truth, "j/").unwrap().into_iter().step_by(5).take(n).collect()
+}
+
+/// Every effect the lane kernel does not serve (a clock lag either way, each twist-stage effect, measured
+/// stamps), alone and mixed with wheel- and measurement-stage effects: the general fast walk agrees with
+/// the literal walk within 1e-9 m, Euler and exact arcs, end and path selections.
+#[test]
+fn general_walk_agrees_with_the_literal_walk_for_every_effect() {
+    let runs = jittered_runs(7);
+    let cases: Vec<(Vec<&str>, Vec<f64>)> = vec![
+        (vec!["time_offset"], vec![0.037]),
+        (vec!["time_offset"], vec![-0.052]),
+        (vec!["rotation_slip"], vec![0.12]),
+        (vec!["world_drift"], vec![0.004, -0.003]),
+        (vec!["sample_timing"], vec![]),
+        (vec!["learned:body"], vec![0.05, 0.02, 0.1, -0.05, 0.03, 0.02, -0.01, 0.015, 0.01]),
+        (vec!["learned:world"], vec![0.003, -0.002, 0.01, -0.02]),
+        (vec!["learned:time"], vec![0.001, -0.0005, 0.002, 0.003]),
+        (
+            vec!["time_offset", "rotation_slip", "wheel_eccentricity", "sensor_offset_yaw", "world_drift"],
+            vec![0.02, -0.1, 0.02, -0.01, 0.01, 0.015, 0.0, -0.02, 0.03, -0.02, 0.05, 0.002, 0.001],
+        ),
+        (vec!["sample_timing", "time_offset", "learned:time"], vec![-0.01, 0.001, 0.0, -0.002, 0.001]),
+    ];
+    for (ids, values) in cases {
+        for integration in [Integration::PAPER, Integration::DEFAULT] {
+            let mut model = Model::ik(IkMatrix::paper_design()).with_integration(integration);
+            for id in &ids {
+                model = model.with_effect(EffectKind::from_id(id, 3).unwrap());
+            }
+            let mut p = IkMatrix::paper_calibrated().entries().to_vec();
+            p.extend(&values);
+            assert_eq!(p.len(), model.n_params(), "{ids:?}");
+            for selection in [Selection::End, Selection::Path(1), Selection::Path(7)] {
+                let (gap, count) = general_gap(&model, &p, &runs, selection);
+                eprintln!("{ids:?} {:?} {selection:?}: largest gap {gap:.1e} m", integration.scheme);
+                assert!(gap < 1e-9, "{ids:?} {integration:?} {selection:?}: gap {gap:e} m");
+                assert!(count >= runs.len(), "{count} poses");
+            }
+        }
+    }
+}
+
+/// A step angle beyond the polynomials' range: the general walk declines, and the evaluator's numbers
+/// are the literal walk's.
+#[test]
+fn general_walk_declines_large_step_angles() {
+    let runs = jittered_runs(3);
+    let model = Model::ik(IkMatrix::new(3, vec![0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 50.0, 50.0, 50.0]).unwrap())
+        .with_effect(EffectKind::from_id("rotation_slip", 3).unwrap());
+    let p = model.nominal();
+    let res = model.resolve(&p).unwrap();
+    assert!(crate::evaluate::general_errors(&res, &runs, Selection::Path(1)).is_none());
+    let via = Evaluator::new(&model, &runs, Selection::Path(1)).unwrap().errors(&res);
+    let walk = Evaluator::with_route(&model, &runs, Selection::Path(1), Route::Walk).unwrap().errors(&res);
+    assert_eq!(via, walk);
+}
+
+/// A clock lag (either way, several in turn so that the lag cache fills and turns over): the lane kernel
+/// agrees with the literal walk within 1e-9 m, with the sensor offset and a wheel-stage effect too.
+#[test]
+fn kernel_serves_a_clock_lag_as_the_walk_does() {
+    let runs: Vec<Run> = paper_size().into_iter().step_by(20).collect();
+    for integration in [Integration::PAPER, Integration::DEFAULT] {
+        let model = Model::ik(IkMatrix::paper_design())
+            .with_integration(integration)
+            .with_effect(EffectKind::from_id("time_offset", 3).unwrap())
+            .with_effect(EffectKind::from_id("sensor_offset", 3).unwrap())
+            .with_effect(EffectKind::from_id("wheel_asymmetry", 3).unwrap());
+        for selection in [Selection::End, Selection::Path(1), Selection::Path(5)] {
+            let ev = Evaluator::new(&model, &runs, selection).unwrap();
+            for (round, lag) in [0.041, -0.023, 0.0105, 0.3, -0.11, 0.041, 0.0].into_iter().enumerate() {
+                let mut p = IkMatrix::paper_calibrated().entries().to_vec();
+                p.extend([lag, 0.02, -0.01]);
+                p.extend(if round % 2 == 0 { [0.0; 3] } else { [0.03, -0.02, 0.01] });
+                let res = model.resolve(&p).unwrap();
+                assert!(ev.is_fast(&res));
+                let (gap, count) = max_gap(&model, &p, &runs, selection);
+                assert!(gap < 1e-9, "{integration:?} {selection:?} lag {lag}: gap {gap:e} m");
+                assert!(count >= runs.len());
+                // The same evaluator, its lag cache warm or turned over: the same bits as a fresh one.
+                let fresh = Evaluator::new(&model, &runs, selection).unwrap();
+                assert_eq!(ev.errors(&res), fresh.errors(&res), "lag {lag}");
+            }
+        }
+    }
+}
+
+/// With a clock lag the IK Jacobian is still the kernel's forward-mode one (the lag's own column is the
+/// caller's finite difference): it matches central differences.
+#[test]
+fn ik_jacobian_with_a_clock_lag_matches_central_differences() {
+    let runs: Vec<Run> = paper_size().into_iter().step_by(15).collect();
+    for kind in [CostKind::EndPose, CostKind::PATH] {
+        let model = Model::ik(IkMatrix::paper_design()).with_effect(EffectKind::from_id("time_offset", 3).unwrap());
+        let ev = Evaluator::for_cost(&model, &runs, kind).unwrap();
+        let mut x = IkMatrix::paper_calibrated().entries().to_vec();
+        x.push(0.037);
+        let res = model.resolve(&x).unwrap();
+        let (r, j) = stacked(&ev, &res, kind);
+        let fast = ev.residual_vector(&res, kind);
+        assert!(r.iter().zip(&fast).all(|(a, b)| (a - b).abs() < 1e-12), "residuals differ");
+        for c in 0..9 {
+            let h = 1e-6 * x[c].abs().max(0.05);
+            let (mut xp, mut xm) = (x.clone(), x.clone());
+            xp[c] += h;
+            xm[c] -= h;
+            let rp = ev.residual_vector(&model.resolve(&xp).unwrap(), kind);
+            let rm = ev.residual_vector(&model.resolve(&xm).unwrap(), kind);
+            let col_max = (0..r.len()).map(|i| j[(i, c)].abs()).fold(0.0f64, f64::max);
+            assert!(col_max > 1e-3, "column {c} is flat");
+            for i in 0..r.len() {
+                let fd = (rp[i] - rm[i]) / (2.0 * h);
+                assert!((fd - j[(i, c)]).abs() < 1e-6 * col_max, "{kind:?} column {c} row {i}: {fd} vs {}", j[(i, c)]);
+            }
+        }
+    }
+}
+
+/// The law the fast path relies on for every effect that claims it (`wheel_rates_affine`): the rewritten
+/// speeds are the measured ones plus each parameter's part, `w + Σ_i p_i (wheel_rates(e_i) − w)`, to
+/// rounding; and backlash (a play operator) does not claim it.
+#[test]
+fn affine_wheel_effects_are_affine() {
+    use crate::effect::{Effect, WheelContext};
+    let run = &jittered_runs(1)[0];
+    let (s, h) = crate::plan::sample_times(run, 0.0, None, false);
+    let ctx = WheelContext { n_wheels: 3, t_s: &s, dt_s: &h, start_angle_rad: &[0.3, -1.0, 2.0] };
+    let w = run.wheel_rad_s();
+    let mut claimed = Vec::new();
+    for id in crate::effect::CATALOGUE.iter().copied().chain(["learned:wheel"]) {
+        let e = EffectKind::from_id(id, 3).unwrap();
+        if !e.wheel_rates_affine() {
+            continue;
+        }
+        claimed.push(id);
+        let n = e.params().len();
+        let p: Vec<f64> = (0..n).map(|i| 0.01 * (1.0 + i as f64) * if i % 2 == 0 { 1.0 } else { -1.0 }).collect();
+        let mut whole = w.to_vec();
+        e.wheel_rates(&p, &ctx, &mut whole);
+        let mut sum = w.to_vec();
+        for i in 0..n {
+            let mut unit = vec![0.0; n];
+            unit[i] = 1.0;
+            let mut part = w.to_vec();
+            e.wheel_rates(&unit, &ctx, &mut part);
+            for k in 0..w.len() {
+                sum[k] += p[i] * (part[k] - w[k]);
+            }
+        }
+        let scale = w.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let gap = whole.iter().zip(&sum).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(gap < 1e-12 * scale, "{id}: gap {gap:e} rad/s");
+        assert!(whole.iter().zip(w).any(|(a, b)| (a - b).abs() > 1e-6 * scale), "{id} changes nothing here");
+    }
+    let expected = ["wheel_asymmetry", "speed_scale", "accel_slip", "wheel_eccentricity", "learned:wheel"];
+    assert_eq!(claimed, expected);
+}
+
+/// With wheel-stage effects (an affine one from its parts, and two effects rewritten on each evaluation)
+/// the IK Jacobian is the kernel's forward-mode one along the rewritten speeds: it matches central
+/// differences.
+#[test]
+fn ik_jacobian_with_wheel_stage_effects_matches_central_differences() {
+    let runs: Vec<Run> = paper_size().into_iter().step_by(15).collect();
+    let cases: [(&[&str], Vec<f64>); 2] = [
+        (&["wheel_eccentricity"], vec![0.02, -0.01, 0.01, 0.015, 0.0, -0.02]),
+        (&["backlash", "wheel_asymmetry"], vec![0.02, 0.01, 0.03, 0.05, -0.03, 0.02]),
+    ];
+    for (ids, values) in cases {
+        let mut model = Model::ik(IkMatrix::paper_design());
+        for id in ids {
+            model = model.with_effect(EffectKind::from_id(id, 3).unwrap());
+        }
+        let ev = Evaluator::for_cost(&model, &runs, CostKind::PATH).unwrap();
+        let mut x = IkMatrix::paper_calibrated().entries().to_vec();
+        x.extend(&values);
+        let (r, j) = stacked(&ev, &model.resolve(&x).unwrap(), CostKind::PATH);
+        let fast = ev.residual_vector(&model.resolve(&x).unwrap(), CostKind::PATH);
+        assert!(r.iter().zip(&fast).all(|(a, b)| (a - b).abs() < 1e-12), "{ids:?}: residuals differ");
+        for c in 0..9 {
+            let h = 1e-6 * x[c].abs().max(0.05);
+            let (mut xp, mut xm) = (x.clone(), x.clone());
+            xp[c] += h;
+            xm[c] -= h;
+            let rp = ev.residual_vector(&model.resolve(&xp).unwrap(), CostKind::PATH);
+            let rm = ev.residual_vector(&model.resolve(&xm).unwrap(), CostKind::PATH);
+            let col_max = (0..r.len()).map(|i| j[(i, c)].abs()).fold(0.0f64, f64::max);
+            assert!(col_max > 1e-3, "column {c} is flat");
+            for i in 0..r.len() {
+                let fd = (rp[i] - rm[i]) / (2.0 * h);
+                assert!((fd - j[(i, c)]).abs() < 1e-6 * col_max, "{ids:?} column {c} row {i}: {fd} vs {}", j[(i, c)]);
+            }
+        }
+    }
+}
+
+/// The forward-mode walk's Jacobian (IK entries and the effect parameters it carries) against central
+/// differences of the evaluator's residuals, for twist-stage effects alone and mixed with a sensor offset,
+/// an affine wheel-stage effect, measured stamps and a clock lag (whose column is left to the caller).
+#[test]
+fn forward_jacobian_matches_central_differences() {
+    use crate::evaluate::ModelBlock;
+    let runs = jittered_runs(5);
+    let cases: Vec<(Vec<&str>, Vec<f64>, usize)> = vec![
+        (vec!["rotation_slip"], vec![0.12], 1),
+        (vec!["world_drift"], vec![0.004, -0.003], 2),
+        (vec!["learned:body"], vec![0.05, 0.02, 0.1, -0.05, 0.03, 0.02, -0.01, 0.015, 0.01], 9),
+        (vec!["learned:world"], vec![0.003, -0.002, 0.01, -0.02], 4),
+        (vec!["learned:time"], vec![0.001, -0.0005, 0.002, 0.003], 4),
+        (vec!["sensor_offset_yaw", "rotation_slip"], vec![0.03, -0.02, 0.05, 0.1], 4),
+        (vec!["wheel_eccentricity", "world_drift"], vec![0.02, -0.01, 0.01, 0.015, 0.0, -0.02, 0.004, 0.002], 8),
+        (vec!["sample_timing", "learned:ground_truth", "rotation_slip"], vec![0.02, 0.01, -0.03, 0.08], 4),
+        (vec!["time_offset", "rotation_slip"], vec![0.03, 0.1], 1),
+    ];
+    for (ids, values, carried) in cases {
+        for kind in [CostKind::EndPose, CostKind::PATH, CostKind::Path { every: 4, heading_weight_m_per_rad: 0.5 }] {
+            let mut model = Model::ik(IkMatrix::paper_design());
+            for id in &ids {
+                model = model.with_effect(EffectKind::from_id(id, 3).unwrap());
+            }
+            let mut x = IkMatrix::paper_calibrated().entries().to_vec();
+            x.extend(&values);
+            let ev = Evaluator::for_cost(&model, &runs, kind).unwrap();
+            let mut rows: Vec<(Vec<f64>, DMatrix<f64>, Vec<usize>)> = Vec::new();
+            ev.forward_jacobian_blocks(&model, &x, kind, &mut |b: ModelBlock<'_>| {
+                rows.push((b.residuals.to_vec(), b.jacobian.clone(), b.covered.to_vec()))
+            })
+            .unwrap();
+            assert_eq!(rows.len(), runs.len());
+            let covered = rows[0].2.clone();
+            assert_eq!(covered.len(), carried, "{ids:?}");
+            let r: Vec<f64> = rows.iter().flat_map(|b| b.0.clone()).collect();
+            let fast = ev.residual_vector(&model.resolve(&x).unwrap(), kind);
+            assert!(r.iter().zip(&fast).all(|(a, b)| (a - b).abs() < 1e-12), "{ids:?} {kind:?}: residuals differ");
+            let columns: Vec<usize> = (0..9).chain(covered.iter().copied()).collect();
+            for (c, &g) in columns.iter().enumerate() {
+                let h = 1e-6 * x[g].abs().max(if g < 9 { 0.05 } else { 1e-2 });
+                let (mut xp, mut xm) = (x.clone(), x.clone());
+                xp[g] += h;
+                xm[g] -= h;
+                let rp = ev.residual_vector(&model.resolve(&xp).unwrap(), kind);
+                let rm = ev.residual_vector(&model.resolve(&xm).unwrap(), kind);
+                let col: Vec<f64> =
+                    rows.iter().flat_map(|b| b.1.column(c).iter().copied().collect::<Vec<_>>()).collect();
+                let col_max = col.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                assert!(col_max > 1e-6, "{ids:?} column {g} is flat");
+                for i in 0..r.len() {
+                    let fd = (rp[i] - rm[i]) / (2.0 * h);
+                    let gap = (fd - col[i]).abs() / col_max;
+                    assert!(gap < 1e-6, "{ids:?} {kind:?} column {g} row {i}: {fd} vs {} ({gap:e})", col[i]);
+                }
             }
         }
     }

@@ -9,6 +9,7 @@ use crate::science::text;
 use omni_kin::cost;
 use omni_kin::effect::Effect;
 use omni_kin::{EffectKind, FittedModel, Run};
+use rayon::prelude::*;
 
 /// An effect helps enough to be added: separable and the held-out path cost falls by `min_gain`.
 pub(super) fn passes(c: &Candidate, opts: &DiagnoseOptions) -> bool {
@@ -91,14 +92,17 @@ fn rank(
 ) -> Result<Vec<Candidate>, Error> {
     let present: Vec<String> = current.model.effects.iter().map(|e| e.id().replace("_yaw", "")).collect();
     let ids = opts.candidates.iter().cloned().chain(opts.custom.iter().map(|e| e.id().to_string()));
-    let mut ranking = Vec::new();
-    for id in &ids.collect::<Vec<_>>() {
-        if present.iter().any(|p| p == id) {
-            continue;
-        }
-        let effect = candidate_effect(id, current.model.n_wheels(), opts)?;
-        ranking.push(bench.assess(id, &effect, current, current_costs)?);
-    }
+    let ids: Vec<String> = ids.filter(|id| !present.iter().any(|p| p == id)).collect();
+    // The candidates are independent: assessed in parallel, collected in catalogue order (the first error
+    // in that order is the one returned), so the ranking does not depend on the thread count.
+    let assessed: Vec<Result<Candidate, Error>> = ids
+        .par_iter()
+        .map(|id| {
+            let effect = candidate_effect(id, current.model.n_wheels(), opts)?;
+            bench.assess(id, &effect, current, current_costs)
+        })
+        .collect();
+    let mut ranking = assessed.into_iter().collect::<Result<Vec<_>, _>>()?;
     ranking.sort_by(|a, b| b.held_out_gain.total_cmp(&a.held_out_gain));
     Ok(ranking)
 }
