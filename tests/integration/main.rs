@@ -3,6 +3,8 @@
 mod choices;
 mod common;
 mod determinism;
+mod few_runs;
 mod hidden_effect;
 mod identifiability;
+mod motion_coverage;
 mod recover;

@@ -153,6 +153,15 @@ impl PyDiagnosis {
     fn final_model(&self, py: Python<'_>) -> Option<Py<PyModel>> {
         self.final_model.as_ref().map(|m| m.clone_ref(py))
     }
+    /// The training runs' motions against the held-out runs' (with ``validate``; else None): shares of
+    /// translating, rotating and translating while rotating per set, ``gaps`` (what the training runs lack,
+    /// with commands to ``record``) and ``unseen_effects``.
+    #[getter]
+    fn coverage<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let Some(c) = &self.inner.coverage else { return Ok(None) };
+        let text = serde_json::to_string(c).map_err(|e| crate::errors::value_error(e.to_string()))?;
+        py.import("json")?.call_method1("loads", (text,)).map(Some)
+    }
     /// Everything as plain data (the CLI's ``--json``; NaN becomes None there).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let text = serde_json::to_string(&self.inner).map_err(|e| crate::errors::value_error(e.to_string()))?;

@@ -50,6 +50,13 @@ impl PyExploration {
     fn best(&self) -> Option<String> {
         self.inner.best().map(|f| f.family.id().to_string())
     }
+    /// The training runs' motions against the held-out runs' (the CLI's ``coverage``): shares of
+    /// translating, rotating and translating while rotating per set, ``gaps`` (what the training runs lack,
+    /// with commands to ``record``) and ``unseen_effects``.
+    #[getter]
+    fn coverage<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.record(py)?.get_item("coverage")
+    }
     /// The conclusion in words (as the CLI prints it).
     #[getter]
     fn conclusion(&self) -> String {

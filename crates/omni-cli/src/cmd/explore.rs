@@ -108,6 +108,8 @@ pub fn to_json(e: &Exploration) -> Value {
         "baseline_held_out_cost_m": e.baseline_held_out_cost,
         "noise_floor_path_rms_m": e.noise_floor_path_rms,
         "runs": { "train": e.runs.0, "held_out": e.runs.1 },
+        "coverage": e.coverage,
+        "coverage_text": text::motion_coverage(&e.coverage),
         "conclusion": text::explore_conclusion(e),
     })
 }
@@ -131,6 +133,7 @@ pub fn print_exploration(e: &Exploration, min_gain: f64) {
             println!("    {:<16} {:+.6} ± {:.6} {}{held}", t.name, t.value, t.std_error, t.unit);
         }
     }
+    println!("motions: {}", text::motion_coverage(&e.coverage));
     if let Some(c) = conclusion {
         println!("{c}");
     }

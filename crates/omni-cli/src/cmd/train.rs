@@ -9,6 +9,7 @@ use crate::{atomic, design, interrupt, model_file, progress};
 use anyhow::Context;
 use omni_ga::calibrate::{Calibration, Plan, Preset, Unexcited, calibrate_with_effects};
 use omni_ga::identify::IdentifyOptions;
+use omni_ga::science::text;
 use omni_kin::cost::{CostKind, CostName};
 use omni_kin::effect::Effect;
 use omni_kin::robot::PRIOR_BOX_SIGMAS;
@@ -425,11 +426,7 @@ pub fn print_identifiability(c: &Calibration) {
         "identifiability: condition number {:.3e} (scaled), residual RMS {:.4} m, standard errors {}",
         id.condition_number,
         id.residual_rms,
-        match id.covariance_kind {
-            omni_ga::identify::CovarianceKind::PerRun => "per run (robust to correlated errors along a path)",
-            omni_ga::identify::CovarianceKind::Iid => "iid (too few runs for the per-run estimate)",
-            omni_ga::identify::CovarianceKind::Stated => "from the stated noise",
-        }
+        text::covariance(id)
     );
     // The IK matrix's ω row is in rad per wheel rad, a ratio and not an angle: it keeps its unit.
     let model = &c.fitted.model;

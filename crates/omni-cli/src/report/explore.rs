@@ -31,6 +31,9 @@ pub fn section(e: &Exploration) -> String {
         ));
     }
     h.push_str("</table>\n");
+    if e.coverage.lacking() {
+        h.push_str(&format!("<p>{}</p>\n", esc(&text::motion_coverage(&e.coverage))));
+    }
     h.push_str(&format!("<p>{}</p>\n", esc(&text::explore_conclusion(e))));
     if let Some(c) = e.best().and_then(|f| f.curve.as_ref()) {
         h.push_str(&curve_svg(c));

@@ -34,6 +34,7 @@ use crate::fit::{Calibration, CalibrationProblem, Plan, Stage, refine};
 use crate::optimizer::observe::NoopObserver;
 use crate::optimizer::problem::{Bounds, LeastSquares};
 use crate::optimizer::{LmConfig, Termination};
+use crate::science::coverage::{MotionCoverage, motion_coverage};
 use crate::science::diagnose::noise_floor;
 use crate::science::identify::WEAK_LOADING;
 use omni_kin::effect::{Effect, EffectKind, Family, Learned};
@@ -204,6 +205,8 @@ pub struct Exploration {
     pub unexplained: bool,
     /// Training and held-out run counts.
     pub runs: (usize, usize),
+    /// The training runs' motions against the held-out runs': what the training runs lack.
+    pub coverage: MotionCoverage,
 }
 
 impl Exploration {
@@ -240,6 +243,7 @@ pub fn explore(
         noise_floor_path_rms: noise,
         unexplained,
         runs: (train.len(), validate.len()),
+        coverage: motion_coverage(model, train, validate)?,
     })
 }
 

@@ -6,10 +6,13 @@
 //! are made last, from the structured findings ([`Finding`], [`Verdict`], [`WeakDirection`], …), and stored
 //! beside them in the results so that JSON, the CLI and Python show the same text.
 
+use crate::science::coverage::{MotionCoverage, MotionGap, MotionKind};
 use crate::science::diagnose::{
     Conclusion, DecidedBy, ExcitationGap, Finding, GapKind, HeldOut, RungKind, Turn, UnexplainedEvidence, Verdict,
 };
-use crate::science::identify::{Advice, MotionParts, PatternPresence, WeakDirection, WheelEvidence};
+use crate::science::identify::{
+    Advice, CovarianceKind, Identifiability, MIN_SEGMENT_S, MotionParts, PatternPresence, WeakDirection, WheelEvidence,
+};
 
 /// How the held-out costs were obtained.
 pub fn held_out(protocol: HeldOut) -> &'static str {
@@ -117,10 +120,88 @@ pub fn finding(f: &Finding) -> String {
             format!("{effect}: not tested, the training runs do not excite it ({})", excitation_gap(gap))
         }
         Finding::Unconstrained(w) => format!("the model itself: {}", warning(w)),
+        Finding::MissingMotions(c) => motion_coverage(c),
         Finding::RepeatabilityFloor { scatter } => format!(
             "repeatability floor: end-pose errors scatter by {scatter:.4} between repeats of the same command (no deterministic effect removes that part)"
         ),
     }
+}
+
+/// Which standard errors an identifiability analysis gives: `per run (robust to correlated errors along a
+/// path)`, with the segments when the runs were cut.
+pub fn covariance(id: &Identifiability) -> String {
+    match id.covariance_kind {
+        CovarianceKind::PerRun if id.clusters > id.runs => format!(
+            "per run (robust to correlated errors along a path; {} runs cut into {} segments of ≥ {MIN_SEGMENT_S:.0} s)",
+            id.runs, id.clusters
+        ),
+        CovarianceKind::PerRun => "per run (robust to correlated errors along a path)".into(),
+        CovarianceKind::Iid => "iid (too few runs for the per-run estimate)".into(),
+        CovarianceKind::Stated => "from the stated noise".into(),
+    }
+}
+
+/// A kind of motion: `translating while rotating (arcs)`.
+pub fn motion_kind(kind: MotionKind) -> &'static str {
+    match kind {
+        MotionKind::Translating => "translating without rotating (straight lines)",
+        MotionKind::Rotating => "rotating on the spot",
+        MotionKind::TranslatingWhileRotating => "translating while rotating (arcs)",
+    }
+}
+
+/// A command to record: `v 0.20 m/s α 0° ω +0.35 rad/s`.
+fn command(c: &omni_kin::Command) -> String {
+    format!("v {:.2} m/s α {:.0}° ω {:+.2} rad/s", c.v_m_s, c.alpha_rad.to_degrees(), c.omega_rad_s)
+}
+
+/// One gap: `translating while rotating (arcs): 93 % of the held-out motion (|v| ≈ 0.20 m/s with
+/// |ω| ≈ 0.35 rad/s), 2 % of the training motion`.
+fn motion_gap(g: &MotionGap) -> String {
+    let magnitudes = match g.kind {
+        MotionKind::Translating => format!("|v| ≈ {:.2} m/s", g.speed_m_s),
+        MotionKind::Rotating => format!("|ω| ≈ {:.2} rad/s", g.turn_rate_rad_s),
+        MotionKind::TranslatingWhileRotating => {
+            format!("|v| ≈ {:.2} m/s with |ω| ≈ {:.2} rad/s", g.speed_m_s, g.turn_rate_rad_s)
+        }
+    };
+    format!(
+        "{}: {} % of the held-out motion ({magnitudes}) where the training runs never go; {} % of the training \
+         motion is of this kind",
+        motion_kind(g.kind),
+        percent_0(g.held_out_share),
+        percent_0(g.train_share)
+    )
+}
+
+/// A share (0…1) as a whole percentage, `<1` for a small non-zero share.
+fn percent_0(share: f64) -> String {
+    let p = 100.0 * share;
+    if p > 0.0 && p < 0.5 { "<1".into() } else { format!("{p:.0}") }
+}
+
+/// What the training runs lack against the held-out runs, and what to record.
+pub fn motion_coverage(c: &MotionCoverage) -> String {
+    if !c.lacking() {
+        return format!(
+            "the training runs cover the held-out motions ({} % of the held-out motion falls where they go)",
+            percent_0(c.covered)
+        );
+    }
+    let gaps: Vec<String> = c.gaps.iter().map(motion_gap).collect();
+    let mut text = format!("the training runs lack motions the held-out runs contain: {}", gaps.join("; "));
+    if !c.unseen_effects.is_empty() {
+        text.push_str(&format!("; no fit on these runs can see {}", c.unseen_effects.join(", ")));
+    }
+    let record: Vec<String> = c.gaps.iter().flat_map(|g| g.record.iter().map(command)).collect();
+    if !record.is_empty() {
+        text.push_str(&format!("; record {}", record.join(", ")));
+    }
+    if !c.unseen_effects.is_empty() {
+        let flags: Vec<String> = c.unseen_effects.iter().map(|e| format!("--effect {e}")).collect();
+        text.push_str(&format!(" (`omnical plan {}` proposes runs that excite them)", flags.join(" ")));
+    }
+    text
 }
 
 /// The verdict of a diagnosis, with the remaining error against the noise floor.

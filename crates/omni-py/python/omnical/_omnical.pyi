@@ -296,6 +296,9 @@ class Diagnosis:
     @property
     def noise_floor(self) -> Optional[dict[str, Any]]: ...
     @property
+    def coverage(self) -> Optional[dict[str, Any]]:
+        """The training runs' motions against the held-out runs' (with ``validate``): what they lack."""
+    @property
     def final_model(self) -> Optional[Model]: ...
     def to_dict(self) -> dict[str, Any]: ...
 
@@ -314,6 +317,9 @@ class Exploration:
     def unexplained(self) -> bool: ...
     @property
     def best(self) -> Optional[str]: ...
+    @property
+    def coverage(self) -> dict[str, Any]:
+        """The training runs' motions against the held-out runs': what they lack."""
     @property
     def conclusion(self) -> str: ...
     @property

@@ -45,6 +45,7 @@ pub use noise::{ExcitationGap, GapKind, WheelGap, noise_floor, wheel_excitation,
 pub use unexplained::{DecidedBy, UnexplainedEvidence};
 
 use crate::error::Error;
+use crate::science::coverage::{MotionCoverage, motion_coverage};
 use crate::science::identify::{Identifiability, IdentifyOptions};
 use crate::science::text;
 use compare::compare;
@@ -282,6 +283,9 @@ pub struct Diagnosis {
     /// The verdict's effect validated on kinds of path left out of its fit (straight, turning left,
     /// turning right), when the runs have several kinds.
     pub kind_out: Option<KindOut>,
+    /// The training runs' motions against the held-out runs' (with a validation set): what the training
+    /// runs lack.
+    pub coverage: Option<MotionCoverage>,
     /// The final model (the input, plus effects added by `auto`).
     #[serde(skip)]
     pub final_model: Option<FittedModel>,
@@ -389,7 +393,16 @@ pub fn diagnose(
         .ok()
         .map(|p| p.identifiability(&model.params, &IdentifyOptions::default()));
     let repeat_floor = repeatability_floor(&cmp.groups);
-    let facts = findings(&cmp.runs, &cmp.groups, &cmp.growth, &climb.ranking, identifiability.as_ref(), repeat_floor);
+    let mut facts =
+        findings(&cmp.runs, &cmp.groups, &cmp.growth, &climb.ranking, identifiability.as_ref(), repeat_floor);
+    // What the training runs lack, first: it bounds what any fit on them can learn.
+    let coverage = match protocol {
+        HeldOut::ValidationSet => Some(motion_coverage(model, &fit_runs, &held_runs)?),
+        _ => None,
+    };
+    if let Some(c) = coverage.as_ref().filter(|c| c.lacking()) {
+        facts.insert(0, Finding::MissingMotions(c.clone()));
+    }
     // The repeat structure with the accepted effects: the verdict's (refitted), or those `auto` added.
     let accepted = match (&verdict, climb.ranking.first(), opts.auto) {
         (Some(_), Some(Candidate { fitted: Some(f), .. }), false) => Some(f),
@@ -428,6 +441,7 @@ pub fn diagnose(
         identifiability,
         repeatability_floor: repeat_floor,
         kind_out: kind_check,
+        coverage,
         final_model: Some(climb.top),
         protocol,
         facts,
