@@ -11,9 +11,11 @@
 # libFuzzer adds goes to fuzz/corpus/<target>/ (not committed). A crash lands in fuzz/artifacts/<target>/:
 # reproduce it with `cargo fuzz run -s none <target> <file>`, fix the reader, and add the file to
 # tests/data/bad/ (with its expected message) so `cargo test` replays it from then on.
-# Costs (2 shared cores): installing cargo-fuzz ~1 min, building the targets cold ~7 min.
+# Costs (2 shared cores): installing cargo-fuzz ~1 min, building the targets cold ~7 min. cargo-fuzz is
+# installed into the repository's .tools/ (git-ignored), not the home folder, when no `cargo fuzz` is found.
 set -euo pipefail
 cd "$(dirname "$0")/../fuzz"
+export PATH="$PWD/../.tools/bin:$PATH"
 SECONDS_PER_TARGET="${1:-600}"
 shift || true
 TARGETS=("$@")
@@ -21,7 +23,7 @@ if [ ${#TARGETS[@]} -eq 0 ]; then
   TARGETS=($(cd fuzz_targets && ls *.rs | sed 's/\.rs$//'))
 fi
 if ! cargo fuzz --version >/dev/null 2>&1; then
-  cargo install cargo-fuzz --locked
+  cargo install cargo-fuzz --locked --root ../.tools
 fi
 cargo fuzz build -s none
 for t in "${TARGETS[@]}"; do

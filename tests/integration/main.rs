@@ -7,4 +7,5 @@ mod few_runs;
 mod hidden_effect;
 mod identifiability;
 mod motion_coverage;
+mod readme;
 mod recover;

@@ -4,11 +4,18 @@
 //! A dataset's robot is, in this order: `--robot` (a robot.toml or `apr02`), the data's own geometry
 //! (OptiOdom metadata), a robot.toml found beside the data or in the working directory
 //! ([`robot_file::design`]).
+//!
+//! Each run carries its own design: when a robot's inputs declare different geometries (OptiOdom sets whose
+//! metadata give other wheel distances), every run is integrated with its own input's design wherever "the
+//! design" is evaluated ([`designs`], [`declared_each`], [`designs_for`]: plain data, a [`RunModels`], for
+//! the core), and pooled figures are the run-weighted means of the runs' own. Where one design is needed
+//! (training's start, the model `--model design` stands for in diagnose and explore) it is the one the most
+//! runs declare ([`crate::dataset::Dataset::declared_start`]).
 
-use crate::dataset::Dataset;
-use crate::robot_file::{self, Design, RobotFile};
+use crate::dataset::{Dataset, Declared, group_designs};
+use crate::robot_file::{self, Design, RobotFile, Source};
 use anyhow::Context;
-use omni_kin::{FittedModel, IkMatrix, KinematicsKind, Model, RobotGeometry};
+use omni_kin::{FittedModel, IkMatrix, KinematicsKind, Model, RobotGeometry, RunModels};
 use std::path::Path;
 
 /// The design model of `kind` for a dataset's robot, or `None` when the dataset names no robot. A robot
@@ -81,5 +88,96 @@ pub fn resolve(spec: &str, ds: &Dataset) -> anyhow::Result<FittedModel> {
         "design" => declared(ds)?.ok_or_else(|| robot_file::no_design("--model design")),
         "paper" => Ok(paper_calibrated()),
         path => crate::model_file::read(Path::new(path)).context("reading the model"),
+    }
+}
+
+/// The design model of each run of `sets` (datasets read with the same data options: training and
+/// held-out runs), from `from_geometry` for the geometry its input declares and `from_file` for a robot
+/// description: `--robot`'s for every run; else each input's declared geometry for its runs (a robot.toml
+/// found beside the data for runs of inputs that declare none); else the found robot.toml's. The design of
+/// the most runs comes first. `None` when the data names no robot.
+fn each_run(
+    sets: &[&Dataset],
+    from_geometry: impl Fn(&RobotGeometry) -> anyhow::Result<Model>,
+    from_file: impl Fn(&RobotFile) -> anyhow::Result<Model>,
+) -> anyhow::Result<Option<RunModels>> {
+    let file = sets.iter().find_map(|ds| ds.robot_file.as_ref());
+    let named = file.filter(|f| !matches!(f.source, Source::Discovered(_)));
+    let declared: Vec<&Declared> = sets.iter().flat_map(|ds| &ds.declared).collect();
+    if let Some(f) = named.or(file.filter(|_| declared.is_empty())) {
+        return Ok(Some(RunModels::from(FittedModel::nominal(from_file(f)?))));
+    }
+    let groups = group_designs(declared.iter().copied());
+    let mut models = Vec::with_capacity(groups.len() + 1);
+    for g in &groups {
+        let names: Vec<String> = g.inputs.iter().flat_map(|d| d.runs.iter().cloned()).collect();
+        let source = g.inputs.first().map_or_else(String::new, |d| d.source.display().to_string());
+        let model = from_geometry(g.geometry).with_context(|| format!("the design {source} declares"))?;
+        models.push((FittedModel::nominal(model), names));
+    }
+    let covered: std::collections::BTreeSet<&str> =
+        declared.iter().flat_map(|d| d.runs.iter().map(String::as_str)).collect();
+    let rest: Vec<String> = sets
+        .iter()
+        .flat_map(|ds| &ds.runs)
+        .map(|r| r.name().to_string())
+        .filter(|n| !covered.contains(n.as_str()))
+        .collect();
+    match (rest.first(), file) {
+        (None, _) => {}
+        // No input declares a design and no robot description is found: the data names no robot.
+        (Some(_), None) if declared.is_empty() => return Ok(None),
+        (Some(_), Some(f)) => models.push((FittedModel::nominal(from_file(f)?), rest)),
+        (Some(run), None) => anyhow::bail!(
+            "run {run} declares no design and no robot description is given, while other inputs declare theirs: \
+             give --robot FILE, or read these runs in a command of their own"
+        ),
+    }
+    if models.is_empty() {
+        return Ok(None);
+    }
+    Ok(Some(RunModels::new(models)?))
+}
+
+/// The design model of `kind` of each run of `sets` (see `each_run`), or `None` when the data names no
+/// robot.
+pub fn designs(kind: KinematicsKind, sets: &[&Dataset]) -> anyhow::Result<Option<RunModels>> {
+    each_run(sets, |g| Ok(Model::design(kind, Some(g))?), |f| robot_model(kind, f))
+}
+
+/// The design model each run's robot declares, as [`declared`] builds it (`--model design`, run by run), or
+/// `None` when the data names no robot.
+pub fn declared_each(sets: &[&Dataset]) -> anyhow::Result<Option<RunModels>> {
+    each_run(sets, declared_model, |f| robot_model(KinematicsKind::Ik, f))
+}
+
+/// The design model a declared geometry stands for: a geometry model (a two-wheel base, OptiOdom's diff,
+/// as a diff model: it has no omnidirectional geometry model).
+fn declared_model(g: &RobotGeometry) -> anyhow::Result<Model> {
+    Ok(if g.n_wheels() == 2 { Model::design(KinematicsKind::Diff, Some(g))? } else { Model::geometry(g.clone()) })
+}
+
+/// The designs to compare `model` with on the runs of `sets`: each run's own design in `model`'s kinematics
+/// and integration (no effects), from the data's robot ([`designs`]); where the data names none, or its
+/// design cannot take `model`'s kinematics, the design `model` was fitted around ([`design_for`]).
+pub fn designs_for(model: &FittedModel, sets: &[&Dataset]) -> RunModels {
+    let kind = model.model.kinematics.kind();
+    let integration = model.model.integration;
+    match designs(kind, sets) {
+        Ok(Some(d)) if d.models().iter().all(|m| m.model.n_wheels() == model.model.n_wheels()) => d.map(|m| {
+            let base = Model { kinematics: m.model.kinematics.clone(), effects: Vec::new(), integration };
+            FittedModel::nominal(base)
+        }),
+        _ => RunModels::from(design_for(model)),
+    }
+}
+
+/// A model spec for every run of `sets`: `design` each run's own ([`declared_each`]; none is an error),
+/// else [`resolve`]'s one model for all.
+pub fn resolve_each(spec: &str, sets: &[&Dataset]) -> anyhow::Result<RunModels> {
+    match (spec, sets.first()) {
+        ("design", _) => declared_each(sets)?.ok_or_else(|| robot_file::no_design("--model design")),
+        (_, Some(ds)) => Ok(RunModels::from(resolve(spec, ds)?)),
+        (_, None) => anyhow::bail!("no runs to resolve {spec} for (a bug)"),
     }
 }

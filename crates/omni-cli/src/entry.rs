@@ -8,13 +8,15 @@ use std::ffi::OsString;
 
 /// Parses `args` (the program name first, as `std::env::args_os`) and runs the command. Returns the exit
 /// status: 0 on success and for `--help`/`--version` and a closed pipe, 2 on errors (printed on stderr as
-/// `error: {e:#}`), 130 after Ctrl-C stopped a training, clap's own status for usage errors.
+/// `error: {e:#}`), 1 for a refused fit (`train`: its step, or a fit worse than its start; `--force`), 130
+/// after Ctrl-C stopped a training, clap's own status for usage errors.
 pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
     let args: Vec<OsString> = args.into_iter().collect();
     let cli = match Cli::try_parse_from(&args) {
         Ok(cli) => cli,
-        Err(mut e) => {
+        Err(e) => {
             // `--help` and `--version` arrive here too; clap prints them on stdout and exits 0.
+            let mut e = nearest_flag_error(e, &args);
             if let Some(tip) = validate_tip(&e, &args).or_else(|| robot_from_tip(&e, &args)) {
                 e.insert(ContextKind::Suggested, ContextValue::StyledStrs(vec![tip.into()]));
             }
@@ -34,6 +36,10 @@ pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
                 c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
             }) {
                 return 0;
+            }
+            if e.downcast_ref::<crate::cmd::train::Refused>().is_some() {
+                eprintln!("error: {e:#}");
+                return crate::cmd::train::EXIT_REFUSED;
             }
             if e.downcast_ref::<crate::interrupt::Interrupted>().is_some() {
                 eprintln!("omnical: {e:#}");
@@ -87,6 +93,62 @@ fn validate_tip(e: &Error, args: &[OsString]) -> Option<String> {
     ))
 }
 
+/// An unknown `--flag` with the suggestion (and usage line) of [`nearest_flag`] instead of clap's, whose
+/// similarity measure takes `--ot` for `--joints-topic` rather than `--out`; other errors unchanged.
+fn nearest_flag_error(e: Error, args: &[OsString]) -> Error {
+    let Some(ContextValue::String(invalid)) = e.get(ContextKind::InvalidArg) else { return e };
+    let Some(typed) = invalid.strip_prefix("--") else { return e };
+    if e.kind() != ErrorKind::UnknownArgument {
+        return e;
+    }
+    let mut cli = Cli::command();
+    cli.build();
+    let Some(sub) = args.iter().skip(1).find_map(|a| cli.find_subcommand(a)) else { return e };
+    let longs: Vec<&str> = sub.get_arguments().chain(cli.get_arguments()).filter_map(|a| a.get_long()).collect();
+    let mut fixed = Error::new(ErrorKind::UnknownArgument).with_cmd(sub);
+    for (kind, value) in e.context().filter(|(k, _)| !matches!(k, ContextKind::SuggestedArg | ContextKind::Usage)) {
+        fixed.insert(kind, value.clone());
+    }
+    if let Some(flag) = nearest_flag(typed.split('=').next().unwrap_or(typed), &longs) {
+        fixed.insert(ContextKind::SuggestedArg, ContextValue::String(format!("--{flag}")));
+    }
+    fixed.insert(ContextKind::Usage, ContextValue::StyledStr(sub.clone().render_usage()));
+    fixed
+}
+
+/// The long flag a mistyped `typed` (without `--`) most likely meant: the only one it begins, else the
+/// nearest by edit distance (at most 1 for up to four letters, 2 beyond; ties go to the one with the same
+/// first letter, then to the first declared).
+pub fn nearest_flag<'a>(typed: &str, longs: &[&'a str]) -> Option<&'a str> {
+    let prefixed: Vec<&str> = longs.iter().copied().filter(|l| l.starts_with(typed)).collect();
+    if let [only] = prefixed[..] {
+        return Some(only);
+    }
+    let limit = if typed.chars().count() <= 4 { 1 } else { 2 };
+    longs
+        .iter()
+        .map(|l| (edit_distance(typed, l), !l.starts_with(typed.get(..1).unwrap_or("")), *l))
+        .filter(|(d, _, _)| *d <= limit)
+        .min_by_key(|(d, other_initial, _)| (*d, *other_initial))
+        .map(|(_, _, l)| l)
+}
+
+/// Levenshtein distance (insertions, deletions, substitutions) between two strings, by characters.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let substitute = diagonal + usize::from(ca != cb);
+            diagonal = row[j + 1];
+            row[j + 1] = substitute.min(row[j] + 1).min(row[j + 1] + 1);
+        }
+    }
+    row[b.len()]
+}
+
 /// When `plan` got paths it takes none of (an older spelling gave `--robot-from` several), the spelling that
 /// works.
 fn robot_from_tip(e: &Error, args: &[OsString]) -> Option<String> {
@@ -133,4 +195,22 @@ fn install_closed_pipe_hook() {
             }
         }));
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_mistyped_flag_gets_the_nearest_one() {
+        let train = ["model", "start", "preset", "seed", "effect", "out", "json", "joints", "joints-topic", "gt"];
+        assert_eq!(nearest_flag("ot", &train), Some("out"));
+        assert_eq!(nearest_flag("oot", &train), Some("out"));
+        assert_eq!(nearest_flag("pres", &train), Some("preset"));
+        assert_eq!(nearest_flag("joints-topc", &train), Some("joints-topic"));
+        assert_eq!(nearest_flag("gt-topic", &["gt", "gt-topic"]), Some("gt-topic"));
+        assert_eq!(nearest_flag("xyz", &train), None);
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+        assert_eq!(edit_distance("", "abc"), 3);
+    }
 }

@@ -14,6 +14,7 @@ pub mod init;
 pub mod interrupt;
 pub mod logging;
 pub mod model_file;
+pub mod out_path;
 pub mod progress;
 pub mod project_file;
 pub mod report;

@@ -17,8 +17,7 @@ use anyhow::Context;
 use omni_kin::controller::{self, ControllerFit, ControllerKind, ControllerParams, FitOptions};
 use omni_kin::cost::{self, CostKind};
 use omni_kin::effect::Effect;
-use omni_kin::evaluate::Evaluator;
-use omni_kin::{FittedModel, IkMatrix, Integration, Model, Run, Scheme, StepMode};
+use omni_kin::{FittedModel, IkMatrix, Integration, Model, Run, RunModels, Scheme, StepMode};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -54,6 +53,8 @@ pub struct Request<'a> {
     pub model: &'a FittedModel,
     /// Its design (the same structure at its design values): the controller's nominal parameters.
     pub design: &'a FittedModel,
+    /// Each run's design (its own input's, `crate::design::designs_for`), for the design's accuracy.
+    pub designs: &'a RunModels,
     /// How the model was named on the command line (file path or `design`).
     pub spec: &'a str,
     /// Runs to weight the controller fit with and to measure accuracy on (preferably held out).
@@ -123,8 +124,12 @@ fn roller_angles(design: &FittedModel) -> Option<Vec<f64>> {
 }
 
 fn accuracy(fm: &FittedModel, runs: &[Run]) -> anyhow::Result<Accuracy> {
-    let evaluator = Evaluator::for_report(&fm.model, runs, CostKind::PATH.selection())?;
-    let errors = evaluator.errors(&fm.model.resolve(&fm.params)?);
+    accuracy_each(&RunModels::from(fm), runs)
+}
+
+/// [`accuracy`] with each run under its own model.
+fn accuracy_each(models: &RunModels, runs: &[Run]) -> anyhow::Result<Accuracy> {
+    let errors = models.errors(runs, CostKind::PATH.selection())?;
     Ok(Accuracy { end_pose: errors.end_pose_cost(), path_rms: errors.path_cost(CostKind::PATH.heading_weight()) })
 }
 
@@ -165,7 +170,7 @@ pub fn build(req: &Request<'_>) -> anyhow::Result<RobotConfig> {
         wheel_names: req.wheel_names.clone(),
         matrix: matrix.clone(),
         integration,
-        design_accuracy: accuracy(req.design, req.runs)?,
+        design_accuracy: accuracy_each(req.designs, req.runs)?,
         model_accuracy: accuracy(model, req.runs)?,
         matrix_accuracy: if effects.is_empty() { None } else { Some(accuracy(&plain(&matrix), req.runs)?) },
         controller_accuracy: accuracy(&plain(&fit.twist_from_wheels), req.runs)?,
@@ -628,7 +633,7 @@ pub fn controller_yaml(c: &RobotConfig) -> String {
     s
 }
 
-/// What `omnical export` prints about the robot configuration.
+/// What `omnical export` prints about the robot configuration (on stdout; [`warning_lines`] go to stderr).
 pub fn summary(c: &RobotConfig, dir: &Path) -> String {
     let t = c.fit.twist_rms;
     let mut s = format!(
@@ -643,9 +648,6 @@ pub fn summary(c: &RobotConfig, dir: &Path) -> String {
     );
     for l in accuracy_lines(c) {
         let _ = writeln!(s, "{l}");
-    }
-    for w in warning_lines(c) {
-        let _ = writeln!(s, "warning: {w}");
     }
     s
 }

@@ -211,10 +211,11 @@ pub enum Design<'a> {
     Data(&'a RobotGeometry),
 }
 
-/// The design of a dataset's robot, in this order: `--robot`, the geometry the data declares, a
-/// `robot.toml` found beside the data. `None` when there is none of them.
+/// The design of a dataset's robot, in this order: `--robot`, the geometry the data declares (when its
+/// inputs declare several, the one the most runs declare: [`Dataset::declared_start`]; each run's own is
+/// `crate::design::designs`), a `robot.toml` found beside the data. `None` when there is none of them.
 pub fn design(ds: &Dataset) -> Option<Design<'_>> {
-    match (&ds.robot_file, &ds.robot) {
+    match (&ds.robot_file, ds.declared_start().map(|d| &d.geometry)) {
         (Some(f), _) if !matches!(f.source, Source::Discovered(_)) => Some(Design::File(f)),
         (_, Some(g)) => Some(Design::Data(g)),
         (Some(f), None) => Some(Design::File(f)),

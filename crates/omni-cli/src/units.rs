@@ -22,9 +22,21 @@ pub fn std_error_text(std_error: f64, unit: &str) -> String {
     }
 }
 
+/// A count with its noun, singular for one: `count(1, "run")` is `1 run`, `count(3, "run")` `3 runs`.
+pub fn count(n: usize, noun: &str) -> String {
+    if n == 1 { format!("1 {noun}") } else { format!("{n} {noun}s") }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn counts_are_singular_for_one() {
+        assert_eq!(count(1, "training run"), "1 training run");
+        assert_eq!(count(0, "run"), "0 runs");
+        assert_eq!(count(72, "run"), "72 runs");
+    }
 
     #[test]
     fn angles_print_in_degrees_with_radians() {

@@ -104,27 +104,25 @@ fn squares_against_arcs_name_the_missing_motions_everywhere() {
     assert!(arcs >= 2, "{:#}", plan["plan"]["runs"]);
 }
 
-/// The shared OptiOdom folder of a robot type, if this machine has it (CI does not).
-fn shared(kind: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../../../shared/data/optiodom-{kind}-square"));
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("SKIPPED: ../shared/data/optiodom-{kind}-square not found");
-        None
-    }
+/// The real OptiOdom logs of a robot type, found by build.rs (the tests that use them are ignored when they
+/// are not here).
+fn shared(kind: &str) -> PathBuf {
+    // Set with cfg(shared_data), which every caller needs.
+    let data = option_env!("OMNICAL_SHARED_DATA").unwrap_or("");
+    Path::new(data).join(format!("optiodom-{kind}-square"))
 }
 
 /// Real squares against real squares: covered (no false alarm). Measured: the omni4 squares translate while
 /// rotating in 0.1 % of their moving samples (set 080920201715: 69 % translating, 30 % rotating).
 #[test]
+#[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn real_squares_cover_real_squares_and_omni4_never_turns_while_driving() {
     for (kind, a, b) in [
         ("omni4", "080920201715", "231220200521"),
         ("omni3", "221220201934", "221220201953"),
         ("diff", "230620202042", "230620202144"),
     ] {
-        let Some(data) = shared(kind) else { return };
+        let data = shared(kind);
         let load = |set: &str| dataset::load(&[data.join(set)], &LoadOptions::default()).unwrap();
         let (train, held) = (load(a), load(b));
         let design = omni_cli::design::geometry(&train).unwrap();

@@ -216,7 +216,7 @@ fn demo_out_keeps_the_runs_and_its_commands_repeat_each_step() {
     let (_, repeat) = t.split_once("== repeat each step by hand on these files:\n").unwrap_or_else(|| panic!("{t}"));
     let commands: Vec<&str> = repeat.lines().map(str::trim).collect();
     assert_eq!(commands.len(), 5, "{repeat}");
-    assert_eq!(commands[0], "omnical simulate --out demo --runs-per-command 1 --effect time_offset=0.06");
+    assert_eq!(commands[0], "omnical simulate --out demo --force --runs-per-command 1 --effect time_offset=0.06");
     assert_eq!(commands[1], "omnical train demo/train --out demo/fitted_matrix.toml");
 
     let cost_line = |text: &str| text.lines().find(|l| l.starts_with("cost (Eq. 6)  design")).unwrap().to_string();
@@ -225,8 +225,14 @@ fn demo_out_keeps_the_runs_and_its_commands_repeat_each_step() {
     let eval = commands.iter().find(|c| c.starts_with("omnical eval ")).unwrap();
     let held_out = numbers_on(&t, "fitted matrix + time_offset");
     assert_eq!(number_after(&text(&args_of(eval), d), "cost (Eq. 6) "), held_out[1]);
+    // The printed simulate replaces the demo's folder with the same runs (its --force: the folder is not
+    // empty; without it the command would be refused).
+    let run_00 = std::fs::read(d.join("demo/train/00-r0.mcap")).unwrap();
+    text(&args_of(commands[0]), d);
+    assert_eq!(std::fs::read(d.join("demo/train/00-r0.mcap")).unwrap(), run_00);
+    assert!(!d.join("demo/report.html").exists(), "replaced whole");
 
-    let j = json(&[&demo[..], &["--out", "demo"]].concat(), d);
+    let j = json(&[&demo[..], &["--out", "demo", "--force"]].concat(), d);
     let listed: Vec<&str> = j["commands"].as_array().unwrap().iter().map(|c| c["command"].as_str().unwrap()).collect();
     assert_eq!(listed, commands);
     assert_eq!(j["diagnosis"]["verdict"], "time_offset");

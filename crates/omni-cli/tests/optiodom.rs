@@ -178,7 +178,9 @@ fn design_of_every_type_reproduces_optiodom_nominal_model() {
         assert_eq!(ds.runs.len(), 3, "{}", set.kind);
         assert_eq!(ds.runs[0].name(), format!("{}0001/run-01", set.kind));
         assert!(ds.runs.iter().all(|r| r.n_wheels() == wheels.len() && r.truth().len() == r.n_samples()));
-        let robot = ds.robot.expect("the metadata declares the robot");
+        assert_eq!(ds.declared.len(), 1, "the metadata declares the robot");
+        assert_eq!((ds.declared[0].kind.as_str(), ds.declared[0].runs.len()), (set.kind, 3));
+        let robot = ds.declared[0].geometry.clone();
         assert_eq!(robot.wheel_names, wheels);
         let design = FittedModel::nominal(Model::ik(robot.twist_from_wheels().unwrap()));
         let end = cost::cost(&design.model, &design.params, &ds.runs, CostKind::EndPose).unwrap();
@@ -375,15 +377,12 @@ fn omni4_mecanum_model_finds_radii_and_lx_plus_ly() {
     assert!(text.starts_with("lx and ly trade off") || text.starts_with("ly and lx trade off"), "{text}");
 }
 
-/// The shared OptiOdom folder of a robot type, if this machine has it (CI does not).
-fn shared(kind: &str) -> Option<std::path::PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../../../shared/data/optiodom-{kind}-square"));
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("SKIPPED: ../shared/data/optiodom-{kind}-square not found");
-        None
-    }
+/// The real OptiOdom logs of a robot type, found by build.rs (the tests that use them are ignored when they
+/// are not here).
+fn shared(kind: &str) -> std::path::PathBuf {
+    // Set with cfg(shared_data), which every caller needs (the tests are ignored without it).
+    let data = option_env!("OMNICAL_SHARED_DATA").unwrap_or("");
+    Path::new(data).join(format!("optiodom-{kind}-square"))
 }
 
 fn eval_cost(dir: &Path, model: &str, sets: &[&Path]) -> (f64, f64) {
@@ -402,8 +401,9 @@ fn eval_cost(dir: &Path, model: &str, sets: &[&Path]) -> (f64, f64) {
 /// two more directions, how the translation answers turning on the spot, are poorly constrained (±5.8 %,
 /// ±6.6 % of scale) and held.
 #[test]
+#[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn real_omni4_runs_hold_the_fighting_pattern() {
-    let Some(data) = shared("omni4") else { return };
+    let data = shared("omni4");
     let dir = tempfile::tempdir().unwrap();
     let (train_set, other) = (data.join("080920201715"), data.join("231220200521"));
     let s = train(dir.path(), &[train_set.to_str().unwrap(), "--model", "ik", "--out", "ik.toml"]);
@@ -433,8 +433,9 @@ fn real_omni4_runs_hold_the_fighting_pattern() {
 /// The real differential drive: `--model diff` on one set finds a separation near 0.2007 m and radii
 /// near 41.9 mm, and beats the design on the three other sets.
 #[test]
+#[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn real_diff_runs_fit_the_axle() {
-    let Some(data) = shared("diff") else { return };
+    let data = shared("diff");
     let dir = tempfile::tempdir().unwrap();
     let sets: Vec<std::path::PathBuf> =
         ["230620202042", "230620202144", "231220200029", "231220200040"].iter().map(|s| data.join(s)).collect();
@@ -449,5 +450,267 @@ fn real_diff_runs_fit_the_axle() {
         let (fitted, _) = eval_cost(dir.path(), "diff.toml", &[other]);
         let (design, _) = eval_cost(dir.path(), "design", &[other]);
         assert!(fitted < 0.7 * design, "{}: fitted {fitted} vs design {design}", other.display());
+    }
+}
+
+/// `omnical ARGS --json` in `dir`: the document (exit 0 required).
+fn json_of(dir: &Path, args: &[&str]) -> serde_json::Value {
+    let out = omnical(args, dir);
+    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+/// Two omni4 sets of one robot that declare different geometries (Li 0.2, 0.2 and 0.205, 0.215, as the
+/// shared sets do): each run is integrated with its own set's design, so the pooled Eq. 6 is the
+/// run-weighted mean of the sets' own costs and the path RMS the root of the run-weighted mean MSE, in
+/// either order; the last set's design on every run (what one design for all gave) differs. Diagnose's
+/// design costs are the same numbers, and training starts from the design of the most runs.
+#[test]
+fn each_set_is_evaluated_with_its_own_design() {
+    let dir = tempfile::tempdir().unwrap();
+    let robot =
+        |li: &[f64]| Set::new("omni4", 1.0, 1.0, li, &[0.06; 4], 0.01).real(&[1.01, 0.99, 1.0, 1.02], &[0.208, 0.208]);
+    robot(&[0.2, 0.2]).write(dir.path(), "a", 2);
+    robot(&[0.205, 0.215]).write(dir.path(), "b", 3);
+    Set { seed_offset: 7, ..robot(&[0.2, 0.2]) }.write(dir.path(), "c", 2);
+    let (ca, pa) = eval_cost(dir.path(), "design", &[Path::new("a")]);
+    let (cb, pb) = eval_cost(dir.path(), "design", &[Path::new("b")]);
+    let (c, p) = eval_cost(dir.path(), "design", &[Path::new("a"), Path::new("b")]);
+    let (eq6, path) = ((2.0 * ca + 3.0 * cb) / 5.0, ((2.0 * pa * pa + 3.0 * pb * pb) / 5.0).sqrt());
+    assert!((c - eq6).abs() < 1e-12 && (p - path).abs() < 1e-12, "pooled {c} / {p} vs {eq6} / {path}");
+    let (c2, p2) = eval_cost(dir.path(), "design", &[Path::new("b"), Path::new("a")]);
+    assert!((c2 - c).abs() < 1e-12 && (p2 - p).abs() < 1e-12, "{c2} / {p2} in the other order");
+    // One design for all (b's, the last folder's) on a's runs is another number.
+    let a = dataset::load(&[dir.path().join("a")], &LoadOptions::default()).unwrap();
+    let b = dataset::load(&[dir.path().join("b")], &LoadOptions::default()).unwrap();
+    let b_design = Model::geometry(b.declared[0].geometry.clone());
+    let a_with_b = cost::cost(&b_design, &b_design.nominal(), &a.runs, CostKind::EndPose).unwrap();
+    assert!((a_with_b - ca).abs() > 0.05 * ca, "a's runs: own design {ca}, b's {a_with_b}");
+    // Diagnose: the design costs on the training runs are eval's pooled figures, held out c's own.
+    let d = json_of(
+        dir.path(),
+        &["diagnose", "--model", "design", "a", "b", "--validate", "c", "--candidates", "time_offset", "--json"],
+    );
+    let (cc, pc) = eval_cost(dir.path(), "design", &[Path::new("c")]);
+    let costs = &d["design_costs"];
+    let got =
+        ["train_end_pose", "train_path", "held_out_end_pose", "held_out_path"].map(|k| costs[k].as_f64().unwrap());
+    for (g, want) in got.iter().zip([c, p, cc, pc]) {
+        assert!((g - want).abs() < 1e-12, "diagnose design costs {costs} vs {want}");
+    }
+    assert_eq!(d["ladder"][0]["costs"], d["design_costs"], "the ladder's first rung is the design");
+    // Training starts from b's design (3 of 5 runs), and says so; its design figure is each run's own.
+    let out = omnical(&["train", "--json", "a", "b"], dir.path());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains(
+            "note: the inputs declare 2 different designs: b (3 runs), a (2 runs); each run is evaluated with its \
+             own input's design, and where one design is needed (training's start, --model design) it is that of \
+             b (the most runs)"
+        ),
+        "{stderr}"
+    );
+    let s: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let mut all = a.runs.clone();
+    all.extend(b.runs.clone());
+    let start = cost::cost(&b_design, &b_design.nominal(), &all, CostKind::EndPose).unwrap();
+    assert!((s["cost_design"].as_f64().unwrap() - start).abs() < 1e-9, "{} vs {start}", s["cost_design"]);
+    assert_eq!(s["designs"]["designs"], 2);
+    assert_eq!(s["designs"]["start"], "b");
+    assert!((s["designs"]["cost"].as_f64().unwrap() - c).abs() < 1e-9, "{} vs {c}", s["designs"]);
+}
+
+/// Robots of different kinds in one command are refused (exit 2), naming both inputs and their kinds:
+/// among the training runs, and between the training and the held-out runs.
+#[test]
+fn robots_of_different_kinds_are_refused_naming_both() {
+    let dir = tempfile::tempdir().unwrap();
+    Set::omni3().write(dir.path(), "o3", 1);
+    Set::diff().write(dir.path(), "df", 1);
+    Set::omni4().write(dir.path(), "o4", 1);
+    for (args, want) in [
+        (
+            vec!["eval", "o3", "df"],
+            "error: df: runs of robots of different kinds in one command: o3 is an OptiOdom omni3 set (3 wheels), \
+             and df is an OptiOdom diff set (2 wheels); give one robot's runs (train and validate one robot at a \
+             time)",
+        ),
+        (
+            vec!["diagnose", "--model", "design", "o4", "--validate", "o3"],
+            "error: o3: runs of robots of different kinds in one command: o4 is an OptiOdom omni4 set (4 wheels), \
+             and o3 is an OptiOdom omni3 set (3 wheels); give one robot's runs (train and validate one robot at a \
+             time)",
+        ),
+    ] {
+        let out = omnical(&args, dir.path());
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", String::from_utf8_lossy(&out.stdout));
+        assert_eq!(String::from_utf8_lossy(&out.stderr).trim(), want);
+    }
+}
+
+/// The paper preset's fixed 10 ms step on 40 ms (omni3) and 50 ms (diff) sets: refused before fitting
+/// (exit 1, the fix in the message, nothing written); with --force fitted and written, with a warning for
+/// the step and one for a fit worse than the design it started from (both objectives).
+#[test]
+fn paper_preset_on_other_sampling_is_refused_unless_forced() {
+    let dir = tempfile::tempdir().unwrap();
+    Set { wheel_gain: vec![1.01, 0.99, 1.0], ..Set::omni3() }.write(dir.path(), "o3", 2);
+    Set::diff().real(&[1.01, 0.99], &[0.205]).write(dir.path(), "df", 2);
+    for (set, ms, factor) in [("o3", 40, "0.25"), ("df", 50, "0.20")] {
+        let out = omnical(&["train", set, "--preset", "paper", "--out", "m.toml"], dir.path());
+        assert_eq!(out.status.code(), Some(1), "{set}: {}", String::from_utf8_lossy(&out.stderr));
+        assert_eq!(
+            String::from_utf8_lossy(&out.stderr).trim(),
+            format!(
+                "error: the paper preset integrates fixed 10 ms steps (Eq. 1), but these runs are sampled every {ms} \
+                 ms (median wheel-sample interval): odometry would be off by a factor {factor} and the fit worse \
+                 than the design; use --preset default (each run's own step); --force fits with the fixed step \
+                 anyway"
+            )
+        );
+        assert!(!dir.path().join("m.toml").exists(), "{set}: nothing written");
+        let out = omnical(&["train", set, "--preset", "paper", "--out", "m.toml", "--force", "--json"], dir.path());
+        assert!(out.status.success(), "{set}: {}", String::from_utf8_lossy(&out.stderr));
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains(&format!("warning: the paper preset integrates fixed 10 ms steps (Eq. 1), but these runs are sampled every {ms} ms")), "{stderr}");
+        assert!(
+            stderr.contains("warning: the fitted model is worse than its start on its own training runs: end_pose "),
+            "{stderr}"
+        );
+        assert!(stderr.contains("; kept because of --force"), "{stderr}");
+        assert!(dir.path().join("m.toml").exists(), "{set}: written with --force");
+        std::fs::remove_file(dir.path().join("m.toml")).unwrap();
+    }
+}
+
+/// The shared sets that declare different designs (omni4: Li 0.2, 0.2 on 8 runs and 0.205, 0.215 on 12;
+/// diff: b = 0.205 on 230620202144, 0.2 on the three others; docs/real-robots.md): `eval --model design`
+/// pools the sets' own costs run-weighted, in either order (one design for all gave 0.87913 or 0.49577 by
+/// folder order), and diagnose's design costs are eval's figures on its training and held-out runs (its
+/// held-out design on 231220200521 was 080920201715's, 0.5638).
+#[test]
+#[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
+fn real_sets_are_each_evaluated_with_their_own_design() {
+    let omni4 = shared("omni4");
+    let diff = shared("diff");
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (omni4.join("080920201715"), omni4.join("231220200521"));
+    let (ca, pa) = eval_cost(dir.path(), "design", &[&a]);
+    let (cb, pb) = eval_cost(dir.path(), "design", &[&b]);
+    for order in [[a.as_path(), b.as_path()], [b.as_path(), a.as_path()]] {
+        let (c, p) = eval_cost(dir.path(), "design", &order);
+        assert!((c - (8.0 * ca + 12.0 * cb) / 20.0).abs() < 1e-12, "{c} vs {ca}, {cb}");
+        assert!((p - ((8.0 * pa * pa + 12.0 * pb * pb) / 20.0).sqrt()).abs() < 1e-12, "{p} vs {pa}, {pb}");
+        // Measured: 0.39375 and 0.98397 → 0.74788; path 0.19433 and 0.46753 → 0.38244.
+        let rounded = [ca, cb, c, pa, pb, p].map(|x| (x * 1e5).round() / 1e5);
+        assert_eq!(rounded, [0.39375, 0.98397, 0.74788, 0.19433, 0.46753, 0.38244]);
+    }
+    // One design for all, the last folder's (what eval gave before): 0.87913 / 0.42578 in this order,
+    // 0.49577 / 0.24558 in the other; a's design on b's runs 0.5638.
+    let one_for_all = |sets: &[&Path], last: &Path| -> [f64; 2] {
+        let paths: Vec<std::path::PathBuf> = sets.iter().map(|p| p.to_path_buf()).collect();
+        let runs = dataset::load(&paths, &LoadOptions::default()).unwrap().runs;
+        let own = dataset::load(&[last.to_path_buf()], &LoadOptions::default()).unwrap();
+        let m = Model::geometry(own.declared[0].geometry.clone());
+        [CostKind::EndPose, CostKind::PATH]
+            .map(|k| (cost::cost(&m, &m.nominal(), &runs, k).unwrap() * 1e5).round() / 1e5)
+    };
+    assert_eq!(one_for_all(&[&a, &b], &b), [0.87913, 0.42578]);
+    assert_eq!(one_for_all(&[&b, &a], &a), [0.49577, 0.24558]);
+    assert_eq!(one_for_all(&[&b], &a)[0], 0.56378);
+    let d = json_of(
+        dir.path(),
+        &[
+            "diagnose",
+            "--model",
+            "design",
+            a.to_str().unwrap(),
+            "--validate",
+            b.to_str().unwrap(),
+            "--candidates",
+            "time_offset",
+            "--json",
+        ],
+    );
+    let got = ["train_end_pose", "train_path", "held_out_end_pose", "held_out_path"]
+        .map(|k| d["design_costs"][k].as_f64().unwrap());
+    for (g, want) in got.iter().zip([ca, pa, cb, pb]) {
+        assert!((g - want).abs() < 1e-12, "omni4 diagnose design costs {} vs {want}", d["design_costs"]);
+    }
+    let sets = ["230620202042", "230620202144", "231220200029", "231220200040"].map(|s| diff.join(s));
+    let own: Vec<(f64, f64)> = sets.iter().map(|s| eval_cost(dir.path(), "design", &[s])).collect();
+    let (c, p) = eval_cost(dir.path(), "design", &sets.iter().map(|s| s.as_path()).collect::<Vec<_>>());
+    let mean = own.iter().map(|o| o.0).sum::<f64>() / 4.0;
+    let rms = (own.iter().map(|o| o.1 * o.1).sum::<f64>() / 4.0).sqrt();
+    assert!((c - mean).abs() < 1e-12 && (p - rms).abs() < 1e-12, "diff pooled {c} / {p} vs {mean} / {rms}");
+    assert_eq!([c, p].map(|x| (x * 1e5).round() / 1e5), [0.09558, 0.06663]);
+    let last = dataset::load(&[sets[3].clone()], &LoadOptions::default()).unwrap();
+    let m = Model::design(omni_kin::KinematicsKind::Diff, Some(&last.declared[0].geometry)).unwrap();
+    let runs = dataset::load(&sets, &LoadOptions::default()).unwrap().runs;
+    let before = [CostKind::EndPose, CostKind::PATH]
+        .map(|k| (cost::cost(&m, &m.nominal(), &runs, k).unwrap() * 1e5).round() / 1e5);
+    assert_eq!(before, [0.07874, 0.0608], "one design for all, the last folder's");
+    let d = json_of(
+        dir.path(),
+        &[
+            "diagnose",
+            "--model",
+            "design",
+            sets[0].to_str().unwrap(),
+            sets[1].to_str().unwrap(),
+            "--validate",
+            sets[2].to_str().unwrap(),
+            "--validate",
+            sets[3].to_str().unwrap(),
+            "--candidates",
+            "time_offset",
+            "--json",
+        ],
+    );
+    let (train, held) = (
+        eval_cost(dir.path(), "design", &[&sets[0], &sets[1]]),
+        eval_cost(dir.path(), "design", &[&sets[2], &sets[3]]),
+    );
+    let got = ["train_end_pose", "train_path", "held_out_end_pose", "held_out_path"]
+        .map(|k| d["design_costs"][k].as_f64().unwrap());
+    for (g, want) in got.iter().zip([train.0, train.1, held.0, held.1]) {
+        assert!((g - want).abs() < 1e-12, "diff diagnose design costs {} vs {want}", d["design_costs"]);
+    }
+}
+
+/// The paper preset on the shared omni3 (40 ms) and diff (50 ms) sets (docs/presets.md): refused before
+/// fitting (exit 1, nothing written); with --force the written model is far worse than the design on its
+/// own training runs (measured Eq. 6: omni3 221220201934 2.17061 against 0.18560, 11.7×; diff
+/// 230620202042 1.26201 against 0.04623, 27.3×), which the warning says.
+#[test]
+#[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
+fn real_paper_preset_is_refused_on_40_and_50_ms_runs() {
+    let omni3 = shared("omni3");
+    let diff = shared("diff");
+    let dir = tempfile::tempdir().unwrap();
+    for (set, ms, fitted, design) in
+        [(omni3.join("221220201934"), 40, 2.17061, 0.18560), (diff.join("230620202042"), 50, 1.26201, 0.04623)]
+    {
+        let set = set.to_str().unwrap();
+        let out = omnical(&["train", set, "--preset", "paper", "--out", "m.toml"], dir.path());
+        assert_eq!(out.status.code(), Some(1), "{set}: {}", String::from_utf8_lossy(&out.stderr));
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            stderr.starts_with(&format!(
+                "error: the paper preset integrates fixed 10 ms steps (Eq. 1), but these runs are sampled every {ms} ms"
+            )),
+            "{stderr}"
+        );
+        assert!(stderr.contains("use --preset default (each run's own step); --force fits"), "{stderr}");
+        assert!(!dir.path().join("m.toml").exists(), "{set}: nothing written");
+        let out = omnical(&["train", set, "--preset", "paper", "--out", "m.toml", "--force"], dir.path());
+        assert!(out.status.success(), "{set}: {}", String::from_utf8_lossy(&out.stderr));
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains(&format!("warning: the fitted model is worse than its start on its own training runs: end_pose {fitted:.5} fitted against {design:.5} for the start as given")), "{stderr}");
+        let (c, _) = eval_cost(dir.path(), "m.toml", &[Path::new(set)]);
+        let (d, _) = eval_cost(dir.path(), "design", &[Path::new(set)]);
+        assert!((c - fitted).abs() < 1e-5 && (d - design).abs() < 1e-5, "{set}: {c} vs {d}");
+        std::fs::remove_file(dir.path().join("m.toml")).unwrap();
     }
 }

@@ -11,6 +11,11 @@ use std::process::Command;
 use yaml_rust2::{Yaml, YamlLoader};
 
 fn omnical(args: &[&str], dir: &Path) -> String {
+    omnical_with_stderr(args, dir).0
+}
+
+/// Stdout (the results) and stderr (warnings: `-q` keeps them).
+fn omnical_with_stderr(args: &[&str], dir: &Path) -> (String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_omnical"))
         .args(["--threads", "2", "-q"])
         .args(args)
@@ -18,7 +23,7 @@ fn omnical(args: &[&str], dir: &Path) -> String {
         .output()
         .expect("run omnical");
     assert!(out.status.success(), "omnical {args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout).unwrap()
+    (String::from_utf8(out.stdout).unwrap(), String::from_utf8(out.stderr).unwrap())
 }
 
 fn yaml(path: &Path) -> Yaml {
@@ -101,7 +106,8 @@ fn apr02_design_is_exactly_an_omni_wheel_drive_controller() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
     simulate_apr02(dir);
-    let out = omnical(&["export", "--model", "design", "--robot-config", "rc", "sim/validation"], dir);
+    let (out, err) =
+        omnical_with_stderr(&["export", "--model", "design", "--robot-config", "rc", "sim/validation"], dir);
     let rc = dir.join("rc");
     // The written matrix is Eq. 7 bit for bit.
     assert_eq!(written_matrix(&rc), IkMatrix::paper_design());
@@ -116,9 +122,11 @@ fn apr02_design_is_exactly_an_omni_wheel_drive_controller() {
     assert!((real(&p["wheel_radius"]) - 0.148).abs() < 1e-12, "{out}");
     assert!((real(&p["robot_radius"]) - 0.195).abs() < 1e-12, "{out}");
     assert!((real(&p["wheel_offset"]) - std::f64::consts::FRAC_PI_3).abs() < 1e-12, "{out}");
-    // Nothing is given up, and the sign convention is reported (APR-02 counts anticlockwise).
+    // Nothing is given up, and the sign convention is warned about on stderr (APR-02 counts anticlockwise).
     assert!(loss_pct(&out).iter().all(|p| p.abs() < 0.05), "{out}");
-    assert!(out.contains("these joints count the other way: wheel_a, wheel_b, wheel_c"), "{out}");
+    assert!(err.starts_with("warning: omni_wheel_drive_controller counts a wheel speed positive when it"), "{err}");
+    assert!(err.contains("these joints count the other way: wheel_a, wheel_b, wheel_c"), "{err}");
+    assert!(!out.contains("warning"), "warnings go to stderr, results to stdout: {out}");
 }
 
 #[test]
@@ -281,7 +289,7 @@ fn diff_drive_multipliers_reproduce_a_differential_drive_exactly() {
     let names = vec!["right_wheel_joint".to_string(), "left_wheel_joint".to_string()];
     write_runs(&dir.join("runs"), &fitted, &names);
     write_model(&dir.join("diff.toml"), &fitted);
-    let out = omnical(
+    let (out, err) = omnical_with_stderr(
         &[
             "export",
             "--model",
@@ -312,7 +320,7 @@ fn diff_drive_multipliers_reproduce_a_differential_drive_exactly() {
     let (s, rl, rr) = (got[0] * got[2], got[1] * got[3], got[1] * got[4]);
     assert_close(diff_matrix(s, rl, rr).entries(), truth.entries(), 1e-12, "controller odometry");
     assert!(loss_pct(&out).iter().all(|p| p.abs() < 0.05), "{out}");
-    assert!(!out.contains("warning"), "{out}");
+    assert!(!err.contains("warning"), "{err}");
 }
 
 #[test]
@@ -366,7 +374,8 @@ fn effects_a_matrix_cannot_carry_are_listed_as_warnings() {
         .with_effect(omni_kin::EffectKind::from_id("time_offset", 3).unwrap());
     fitted.set("time_offset.tau_s", 0.04).unwrap();
     write_model(&dir.join("lag.toml"), &fitted);
-    let out = omnical(&["export", "--model", "lag.toml", "--robot-config", "rc", "sim/validation"], dir);
+    let (out, err) =
+        omnical_with_stderr(&["export", "--model", "lag.toml", "--robot-config", "rc", "sim/validation"], dir);
     let rc = dir.join("rc");
     assert_eq!(written_matrix(&rc), IkMatrix::paper_calibrated());
     let header = std::fs::read_to_string(rc.join("omnical_odometry.h")).unwrap();
@@ -377,5 +386,5 @@ fn effects_a_matrix_cannot_carry_are_listed_as_warnings() {
     // The matrix alone is measured too (the simulated robot has no clock lag, so the lag costs accuracy).
     let alone = out.lines().find(|l| l.contains("its matrix alone")).unwrap_or_else(|| panic!("{out}"));
     assert_eq!(alone.split_whitespace().filter_map(|t| t.parse::<f64>().ok()).count(), 2, "{alone}");
-    assert!(out.contains("warning: the controller cannot carry the model's effects (time_offset)."), "{out}");
+    assert!(err.contains("warning: the controller cannot carry the model's effects (time_offset)."), "{err}");
 }

@@ -115,7 +115,7 @@ fn without_repeats_the_noise_floor_ratio_decides_and_says_so() {
     assert!(e.ratio.unwrap() < 3.0, "{e:?}");
     assert!(
         d.verdict_text.contains(
-            "no command was repeated, so the repeat test could not be made; decided by the noise floor alone"
+            "no command was repeated and no two runs are of one kind, so the group test could not be made; decided by the noise floor alone"
         ),
         "{}",
         d.verdict_text

@@ -6,7 +6,8 @@
 //!
 //! The runs are prepared once for the lane kernel when the model integrates fixed steps of 1 to
 //! [`crate::fast::MAX_WHEELS`] wheels; each evaluation then takes the kernel when it serves the resolved
-//! parameters (no twist-stage effects, no measured stamps, small step angles), else the general fast walk
+//! parameters (built-in twist-stage effects only, no measured stamps, small step angles), else the general
+//! fast walk
 //! (any model, small step angles), else the literal walk. They agree within 1e-9 m but not to the last
 //! bit; [`Route::Walk`] asks for the walk's numbers always. Jacobians: the kernel's forward-mode one with
 //! respect to the IK matrix, else the general walk's, which also carries the parameters of twist- and
@@ -120,6 +121,28 @@ impl RunErrors {
     }
 }
 
+impl RunErrors {
+    /// The errors of `n_runs` runs evaluated in groups (each group under a model of its own), put back in
+    /// run order: `parts` pairs each group's run indices with its errors (in that order). Every index in
+    /// `0..n_runs` appears once.
+    pub fn interleave(n_runs: usize, parts: &[(Vec<usize>, RunErrors)]) -> RunErrors {
+        let mut at: Vec<(usize, usize)> = vec![(0, 0); n_runs];
+        for (g, (idx, _)) in parts.iter().enumerate() {
+            for (k, &i) in idx.iter().enumerate() {
+                at[i] = (g, k);
+            }
+        }
+        let mut out = RunErrors { errors: Vec::new(), offsets: vec![0], ends: Vec::with_capacity(n_runs) };
+        for (g, k) in at {
+            let part = &parts[g].1;
+            out.errors.extend_from_slice(part.run(k));
+            out.ends.push(part.ends[k]);
+            out.offsets.push(out.errors.len());
+        }
+        out
+    }
+}
+
 /// One run's part of the least-squares system, as [`Evaluator::ik_jacobian_blocks`] visits it.
 #[derive(Clone, Copy, Debug)]
 pub struct IkBlock<'a> {
@@ -127,8 +150,12 @@ pub struct IkBlock<'a> {
     pub run: usize,
     /// The run's residuals: its rows of [`RunErrors::residual_vector`].
     pub residuals: &'a [f64],
-    /// Their Jacobian with respect to the IK matrix entries (columns in row-major order `m11 … m3N`).
+    /// Their Jacobian with respect to the IK matrix entries (columns in row-major order `m11 … m3N`), then
+    /// to the parameters of the model's affine wheel-stage effect (`wheel_columns` of them).
     pub jacobian: &'a DMatrix<f64>,
+    /// Columns after the IK entries: the affine wheel-stage effect's parameters, in the effect's order (0
+    /// without one).
+    pub wheel_columns: usize,
 }
 
 /// One run's part of the least-squares system by the forward-mode walk, as
@@ -281,11 +308,11 @@ impl<'a> Evaluator<'a> {
             let k = residual_weights(n_runs, rows.errors.len(), w);
             r.clear();
             r.extend(rows.errors.iter().flat_map(|e| [e.dx_m * k[0], e.dy_m * k[1], e.dtheta_rad * k[2]]));
-            let (run, mut jacobian) = (rows.run, rows.jacobian.clone());
+            let (run, jacobian) = (rows.run, rows.jacobian);
             for (i, mut row) in jacobian.row_iter_mut().enumerate() {
                 row *= k[i % 3];
             }
-            visit(IkBlock { run, residuals: &r, jacobian: &jacobian });
+            visit(IkBlock { run, residuals: &r, jacobian, wheel_columns: rows.wheel_columns });
         })
     }
 

@@ -26,6 +26,7 @@ pub mod plan;
 pub mod pose;
 pub mod robot;
 pub mod run;
+pub mod run_models;
 pub mod simulate;
 
 pub use choice::Choice;
@@ -40,3 +41,4 @@ pub use odometry::{Selection, Trajectory};
 pub use pose::{Pose2, PoseError, StampedPose, Twist2};
 pub use robot::{BaseKind, RobotDescription};
 pub use run::{Command, Run, RunData};
+pub use run_models::{RunModels, ToRunModels};

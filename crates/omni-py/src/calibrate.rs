@@ -2,12 +2,12 @@
 //! Ctrl-C that stops the GA and keeps the best so far.
 
 use crate::effect::{EffectErrors, effect_from};
-use crate::errors::{PyResultExt, value_error};
+use crate::errors::{CalibrationError, PyResultExt, value_error};
 use crate::model::PyModel;
 use crate::robot::{model_or_design, model_spec, robot_arg};
 use crate::run::runs_from;
 use numpy::PyArray2;
-use omni_cli::cmd::train::{FitArgs, apply_fit_args, prior_half_widths};
+use omni_cli::cmd::train::{FitArgs, apply_fit_args, check_fit, check_step, prior_half_widths};
 use omni_ga::calibrate::{Calibration, Plan, Preset, calibrate_with_effects};
 use omni_ga::observe::{Control, Iteration, Observer};
 use omni_kin::choice::UnknownChoice;
@@ -301,6 +301,11 @@ pub fn _calibration_from_state(state: &Bound<'_, PyDict>) -> PyResult<PyCalibrat
 /// flags. ``progress(dict)`` is called after each iteration; returning False stops. Ctrl-C stops the GA and
 /// returns the best so far (``interrupted`` is True). The GIL is released while the search runs.
 ///
+/// Refused with ``omnical.CalibrationError`` as the CLI refuses: a preset whose fixed step misses the runs'
+/// sampling (the paper's 10 ms on 40 ms data; before fitting), and a fit worse than its start on its own
+/// training runs (both objectives in the message). ``force=True`` fits and returns it anyway, with a
+/// ``UserWarning``.
+///
 /// >>> runs = omnical.simulate(runs_per_command=1, duration_s=1.0)  # on the paper's Eq. 9 robot
 /// >>> fit = omnical.train("ik", runs, robot="apr02", seed=0)
 /// >>> fit.objective, fit.cost_fitted < fit.cost_start
@@ -308,7 +313,7 @@ pub fn _calibration_from_state(state: &Bound<'_, PyDict>) -> PyResult<PyCalibrat
 /// >>> fit.matrix.shape
 /// (3, 3)
 #[pyfunction]
-#[pyo3(signature = (model, runs, *, robot = None, effects = Vec::new(), preset = "default", seed = 0, objective = None, every = 1, heading_weight = 1.0, unexcited = None, max_std_error = 0.05, min_excitation = 0.01, progress = None))]
+#[pyo3(signature = (model, runs, *, robot = None, effects = Vec::new(), preset = "default", seed = 0, objective = None, every = 1, heading_weight = 1.0, unexcited = None, max_std_error = 0.05, min_excitation = 0.01, progress = None, force = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn train(
     py: Python<'_>,
@@ -325,24 +330,11 @@ pub fn train(
     max_std_error: f64,
     min_excitation: f64,
     progress: Option<Py<PyAny>>,
+    force: bool,
 ) -> PyResult<PyCalibration> {
     crate::robot::check_order(model, runs, "omnical.train")?;
     let preset: Preset = preset.parse().map_err(|e: UnknownChoice| value_error(format!("preset {e}")))?;
-    let fit = FitArgs {
-        // The CLI's spelling (`end-pose`) and the id Calibration.objective gives (`end_pose`).
-        objective: objective
-            .map(|o| o.replace('-', "_").parse())
-            .transpose()
-            .map_err(|e: UnknownChoice| value_error(format!("objective {e}")))?,
-        every,
-        heading_weight,
-        unexcited: unexcited
-            .map(str::parse)
-            .transpose()
-            .map_err(|e: UnknownChoice| value_error(format!("unexcited {e}")))?,
-        max_std_error,
-        min_excitation,
-    };
+    let fit = fit_args(objective, every, heading_weight, unexcited, max_std_error, min_excitation)?;
     let mut origin = crate::run::origin_of(runs);
     let (runs, design) = runs_from(runs, "runs")?;
     let (start, mut adapters, from_design) = start_model(py, model, robot.as_ref(), design, &mut origin)?;
@@ -355,6 +347,10 @@ pub fn train(
     let mut plan = apply_fit_args(plan, &fit).map_err(|e| value_error(flag_names(&format!("omnical.train: {e}"))))?;
     if from_design {
         plan.half_widths = prior_half_widths(&start, &origin).into_iter().collect();
+    }
+    // The CLI's refusals (`omnical train` without --force): the preset's fixed step against the runs.
+    if let Some(w) = check_step(&plan, &runs, force).map_err(refused)? {
+        warn(py, &w)?;
     }
     let errors = crate::effect::EffectErrors::new(adapters.iter().cloned());
     let mut observer = PyObserver {
@@ -371,6 +367,10 @@ pub fn train(
         return Err(e);
     }
     let c = errors.check(result)?.py()?;
+    // A fit worse than its start on its own training runs is refused (force=True keeps it, with a warning).
+    if let Some(w) = check_fit(&c, &plan, &runs, force).map_err(refused)? {
+        warn(py, &w)?;
+    }
     if observer.interrupted {
         PyErr::warn(
             py,
@@ -379,6 +379,44 @@ pub fn train(
             1,
         )?;
     }
+    let stopped = (observer.interrupted, observer.stopped_by_callback);
+    calibration_of(py, c, adapters, stopped, observer.history)
+}
+
+/// `train`'s objective and identifiability keywords as the CLI's [`FitArgs`].
+fn fit_args(
+    objective: Option<&str>,
+    every: usize,
+    heading_weight: f64,
+    unexcited: Option<&str>,
+    max_std_error: f64,
+    min_excitation: f64,
+) -> PyResult<FitArgs> {
+    Ok(FitArgs {
+        // The CLI's spelling (`end-pose`) and the id Calibration.objective gives (`end_pose`).
+        objective: objective
+            .map(|o| o.replace('-', "_").parse())
+            .transpose()
+            .map_err(|e: UnknownChoice| value_error(format!("objective {e}")))?,
+        every,
+        heading_weight,
+        unexcited: unexcited
+            .map(str::parse)
+            .transpose()
+            .map_err(|e: UnknownChoice| value_error(format!("unexcited {e}")))?,
+        max_std_error,
+        min_excitation,
+    })
+}
+
+/// The Python object of a calibration; `stopped`: (interrupted by Ctrl-C, stopped by the callback).
+fn calibration_of(
+    py: Python<'_>,
+    c: Calibration,
+    adapters: Vec<std::sync::Arc<crate::effect::PyEffect>>,
+    stopped: (bool, bool),
+    steps: Vec<Step>,
+) -> PyResult<PyCalibration> {
     Ok(PyCalibration {
         model: Py::new(py, PyModel::from_fitted(c.fitted.clone(), adapters.clone()))?,
         start: Py::new(py, PyModel::from_fitted(c.start.clone(), adapters))?,
@@ -392,18 +430,30 @@ pub fn train(
         seconds: c.seconds,
         at_bound: c.at_bound,
         outside_box: c.outside_box,
-        interrupted: observer.interrupted,
-        stopped: observer.stopped_by_callback,
+        interrupted: stopped.0,
+        stopped: stopped.1,
         warnings: c.identifiability.warnings(),
         held: c.held.iter().map(|w| w.text.clone()).collect(),
         identifiability: serde_json::to_string(&c.identifiability).map_err(|e| value_error(e.to_string()))?,
-        steps: observer.history,
+        steps,
     })
+}
+
+/// A refusal of the CLI's `train` as `omnical.CalibrationError`, in Python's spelling.
+fn refused(e: anyhow::Error) -> PyErr {
+    CalibrationError::new_err(flag_names(&format!("omnical.train: {e:#}")))
+}
+
+/// A `UserWarning` in Python's spelling.
+fn warn(py: Python<'_>, message: &str) -> PyResult<()> {
+    let text = std::ffi::CString::new(flag_names(&format!("omnical.train: {message}")))
+        .map_err(|e| value_error(e.to_string()))?;
+    PyErr::warn(py, &py.get_type::<PyUserWarning>(), &text, 1)
 }
 
 /// The CLI's message with Python's spelling of its flags (`--every` → `every=`).
 fn flag_names(message: &str) -> String {
-    let mut out = message.to_string();
+    let mut out = message.replace("--preset default", "preset=\"default\"").replace("--force", "force=True");
     for flag in ["every", "heading-weight", "max-std-error", "min-excitation"] {
         out = out.replace(&format!("--{flag}"), &format!("{}=", flag.replace('-', "_")));
     }

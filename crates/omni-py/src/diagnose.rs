@@ -4,9 +4,8 @@
 use crate::effect::{EffectErrors, effect_from};
 use crate::errors::PyResultExt;
 use crate::model::PyModel;
-use crate::robot::{check_order, model_spec};
-use crate::run::runs_from;
-use omni_cli::design::design_for;
+use crate::robot::{check_order, designs_for, model_spec};
+use crate::run::{origin_of, runs_from};
 use omni_ga::diagnose::{Candidate, Costs, DiagnoseOptions, Diagnosis, ParamValue, diagnose as rs_diagnose};
 use omni_kin::effect::Effect;
 use pyo3::prelude::*;
@@ -75,14 +74,17 @@ impl PyDiagnosis {
     fn verdict_text(&self) -> String {
         self.inner.verdict_text.clone()
     }
-    /// A systematic error remains that no accepted effect removes (decided by the share of command groups
-    /// biased beyond their repeat scatter, or without repeats by the noise-floor ratio).
+    /// Something physical is still missing that no accepted effect removes: the held-out error is 10× the
+    /// noise floor or more, or groups of runs (repeats of a command, or runs of one kind of path) are biased
+    /// beyond their scatter, or without such groups it is above 3× the noise floor. The same decision as
+    /// ``Exploration.unexplained``.
     #[getter]
     fn unexplained(&self) -> bool {
         self.inner.unexplained
     }
-    /// The figures behind ``unexplained``: decided_by (``repeats``, ``noise_floor_ratio`` or ``undecided``),
-    /// groups_biased, groups_total, share_biased, chance_probability, repeatability_floor,
+    /// The figures behind ``unexplained``: decided_by (``far_above_noise``, ``repeats``,
+    /// ``noise_floor_ratio`` or ``undecided``), groups_biased, groups_total, groups_basis (``command`` or
+    /// ``motion``), share_biased, chance_probability, repeatability_floor,
     /// remaining_held_out_m [m], noise_floor_m [m], ratio, growth, early_m [m], late_m [m] (None where
     /// not measured).
     #[getter]
@@ -202,6 +204,8 @@ pub fn diagnose(
     robot: Option<std::path::PathBuf>,
 ) -> PyResult<PyDiagnosis> {
     check_order(model, runs, "omnical.diagnose")?;
+    let mut origins = vec![origin_of(runs)];
+    origins.extend(validate.map(origin_of));
     let (train, declared) = runs_from(runs, "runs")?;
     let validation = validate.map(|v| runs_from(v, "validate")).transpose()?.map(|(r, _)| r);
     let (fm, mut adapters, _) = model_spec(py, model, robot.as_ref(), declared, "omnical.diagnose")?;
@@ -219,7 +223,8 @@ pub fn diagnose(
         }
     }
     let errors = EffectErrors::new(adapters.iter().cloned());
-    let design = design_for(&fm);
+    // Each run is compared with its own input's design.
+    let design = designs_for(&fm, robot.as_ref(), &origins);
     let d = py.detach(|| rs_diagnose(&fm, &design, &train, validation.as_deref(), &opts));
     let d = errors.check(d)?.py()?;
     let final_model = match &d.final_model {

@@ -7,7 +7,7 @@
 //! | other I/O | `OSError` |
 //! | `DatasetError` (a file that does not parse or does not make runs) | `omnical.DatasetError` |
 //! | `ModelFileError` (parse / invalid contents) | `omnical.ModelFileError` |
-//! | `OptimizeError` (an optimizer refused its inputs) | `omnical.CalibrationError` |
+//! | `OptimizeError` (an optimizer refused its inputs); a refused fit (`train`: a fixed step that misses the runs' sampling, a fit worse than its start) | `omnical.CalibrationError` |
 //!
 //! All omnical-specific exceptions derive from `omnical.OmnicalError`.
 
@@ -56,7 +56,9 @@ create_exception!(
     omnical,
     CalibrationError,
     OmnicalError,
-    "An optimizer refused its inputs or settings.\n\n\
+    "An optimizer refused its inputs or settings, or train refused a fit: a preset whose fixed step misses \
+     the runs' sampling, or a fitted model worse than its start on its own training runs (force=True keeps \
+     it).\n\n\
      >>> issubclass(omnical.CalibrationError, omnical.OmnicalError)\n\
      True"
 );

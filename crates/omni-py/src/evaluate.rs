@@ -2,12 +2,11 @@
 
 use crate::arrays::{to_matrix, to_vector};
 use crate::errors::PyResultExt;
-use crate::robot::{check_order, model_spec};
-use crate::run::{PyRun, runs_from};
+use crate::robot::{check_order, model_spec, per_run};
+use crate::run::{PyRun, origin_of, runs_from};
 use numpy::{PyArray1, PyArray2};
 use omni_kin::PoseError;
 use omni_kin::cost::{self, CostKind};
-use omni_kin::evaluate::Evaluator;
 use omni_kin::odometry::{self, Residual};
 use pyo3::prelude::*;
 use rayon::prelude::*;
@@ -112,8 +111,10 @@ impl PyEvaluation {
 /// per-run residuals as arrays.
 ///
 /// ``model``: an :class:`omnical.Model`, ``"design"`` (the design model of ``robot``, a ``robot.toml`` path
-/// or ``"apr02"``, else of the data's robot: a Dataset's ``design``; with none of them ``ValueError`` says
-/// how to describe the robot), ``"paper"`` (Eq. 9) or a model file path. The GIL is released.
+/// or ``"apr02"``, else of the data's robot: a Dataset's ``design``, each run its own input's when the
+/// inputs declare different designs, the pooled costs then the run-weighted means of the runs' own; with
+/// none of them ``ValueError`` says how to describe the robot), ``"paper"`` (Eq. 9) or a model file path.
+/// The GIL is released.
 ///
 /// >>> runs = omnical.simulate(runs_per_command=1, duration_s=1.0)
 /// >>> ev = omnical.evaluate("design", runs, robot="apr02")  # the design (Eq. 7) on the true Eq. 9 robot
@@ -128,15 +129,22 @@ pub fn evaluate(
     robot: Option<PathBuf>,
 ) -> PyResult<PyEvaluation> {
     check_order(model, runs, "omnical.evaluate")?;
+    let origin = origin_of(runs);
     let (runs, design) = runs_from(runs, "runs")?;
-    let (fm, adapters, _) = model_spec(py, model, robot.as_ref(), design, "omnical.evaluate")?;
+    let (fm, adapters, spelled) = model_spec(py, model, robot.as_ref(), design, "omnical.evaluate")?;
+    // `"design"`: each run its own input's design, as the CLI's `eval --model design`.
+    let models = per_run(fm, &spelled, robot.as_ref(), &origin)?;
     let errors = crate::effect::EffectErrors::new(adapters);
     let out = py.detach(|| -> Result<_, omni_kin::KinError> {
-        let evaluator = Evaluator::for_report(&fm.model, &runs, CostKind::PATH.selection())?;
-        let res = fm.model.resolve(&fm.params)?;
-        let errors = evaluator.errors(&res);
-        let residuals: Vec<Vec<Residual>> =
-            runs.par_iter().map(|r| odometry::residuals(&res, r, CostKind::PATH.selection())).collect();
+        let selection = CostKind::PATH.selection();
+        let errors = models.errors(&runs, selection)?;
+        let residuals = runs
+            .par_iter()
+            .map(|r| {
+                let fm = models.for_run(r)?;
+                Ok(odometry::residuals(&fm.model.resolve(&fm.params)?, r, selection))
+            })
+            .collect::<Result<Vec<Vec<Residual>>, omni_kin::KinError>>()?;
         Ok((errors, residuals))
     });
     let (errors, residuals) = errors.check(out)?.py()?;

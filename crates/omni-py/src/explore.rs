@@ -40,7 +40,8 @@ impl PyExploration {
     fn families<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         self.record(py)?.get_item("families")
     }
-    /// True when no family passes and the held-out error is well above the measurement noise floor.
+    /// Something physical is still missing with the best passing family (or none): the same decision as
+    /// ``Diagnosis.unexplained``.
     #[getter]
     fn unexplained(&self) -> bool {
         self.inner.unexplained

@@ -2,13 +2,13 @@
 //! for evo, MCAP bags with the model's odometry on /omnical/odometry for Foxglove.
 
 use crate::errors::{OmnicalError, value_error};
-use crate::robot::{check_order, model_spec};
+use crate::robot::{check_order, designs_for, model_spec, per_run};
 use crate::run::{origin_of, runs_from};
 use omni_cli::cmd::export::{write_mcap, write_tum};
-use omni_cli::design::design_for;
-use pyo3::exceptions::{PyFileNotFoundError, PyOSError};
+use omni_cli::out_path::OutDir;
+use pyo3::exceptions::{PyFileExistsError, PyFileNotFoundError, PyOSError};
 use pyo3::prelude::*;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Write trajectories of ``model`` on ``runs`` for other tools, as ``omnical export --model MODEL RUNS``.
 ///
@@ -17,7 +17,9 @@ use std::path::{Path, PathBuf};
 /// byte for byte the CLI's files for the same model spelling and runs (``evo_ape tum A.gt.tum
 /// A.calibrated.tum``). ``mcap``: a folder for one ROS 2 bag per run, the run's topics plus ``model``'s
 /// odometry on ``/omnical/odometry`` (and the recorded odometry of runs loaded with
-/// ``recorded_odometry=True``). ``model``: as in :func:`evaluate`. Returns the paths written. The GIL is
+/// ``recorded_odometry=True``). Each folder must be new or empty (files of other runs left in it would be
+/// taken for this export's) unless ``force=True``, which replaces it whole, as ``--force``; nothing is
+/// written when the export fails. ``model``: as in :func:`evaluate`. Returns the paths written. The GIL is
 /// released.
 ///
 /// >>> import tempfile
@@ -27,7 +29,7 @@ use std::path::{Path, PathBuf};
 /// ['train_00-r0.gt.tum', 'train_00-r0.design.tum', 'train_00-r0.calibrated.tum', 'train_01-r0.gt.tum',
 ///  'train_01-r0.design.tum', 'train_01-r0.calibrated.tum', 'train_00-r0.mcap', 'train_01-r0.mcap']
 #[pyfunction]
-#[pyo3(signature = (model, runs, *, tum = None, mcap = None, robot = None))]
+#[pyo3(signature = (model, runs, *, tum = None, mcap = None, robot = None, force = false))]
 pub fn export(
     py: Python<'_>,
     model: &Bound<'_, PyAny>,
@@ -35,34 +37,46 @@ pub fn export(
     tum: Option<PathBuf>,
     mcap: Option<PathBuf>,
     robot: Option<PathBuf>,
+    force: bool,
 ) -> PyResult<Vec<String>> {
     check_order(model, runs, "omnical.export")?;
     if tum.is_none() && mcap.is_none() {
         return Err(value_error("omnical.export: nothing to export: give tum=DIR and/or mcap=DIR"));
     }
+    if tum.is_some() && tum == mcap {
+        return Err(value_error("omnical.export: tum= and mcap= name the same folder: give each its own"));
+    }
     let origin = origin_of(runs);
     let (runs, declared) = runs_from(runs, "runs")?;
     let (fm, adapters, spec) = model_spec(py, model, robot.as_ref(), declared, "omnical.export")?;
     let errors = crate::effect::EffectErrors::new(adapters);
-    let design = design_for(&fm);
+    // Each run's own input's design; `"design"` is each run's own in the model's trajectories too.
+    let designs = designs_for(&fm, robot.as_ref(), std::slice::from_ref(&origin));
+    let models = per_run(fm.clone(), &spec, robot.as_ref(), &origin)?;
     // The joints the CLI names the wheels by: the data's robot description's, else the model's columns.
     let joints = match origin.robot_file {
         Some(_) => omni_cli::cmd::wheel_joints(&omni_cli::cmd::DataArgs::default(), &origin),
         None => fm.model.kinematics.wheel_names(),
     };
     let written = py.detach(|| -> anyhow::Result<Vec<PathBuf>> {
+        let claim = |dir: &Option<PathBuf>, flag| dir.as_deref().map(|d| OutDir::claim(d, flag, force)).transpose();
+        let (tum, mcap) = (claim(&tum, "tum=")?, claim(&mcap, "mcap=")?);
         let mut written = Vec::new();
-        if let Some(dir) = &tum {
-            create_dir(dir)?;
+        if let Some(out) = tum {
             for run in &runs {
-                written.extend(write_tum(dir, run, &design, &fm, &spec)?);
+                written.extend(
+                    write_tum(out.path(), run, designs.for_run(run)?, models.for_run(run)?, &spec)?
+                        .iter()
+                        .map(|f| out.shown(f)),
+                );
             }
+            out.commit()?;
         }
-        if let Some(dir) = &mcap {
-            create_dir(dir)?;
+        if let Some(out) = mcap {
             for run in &runs {
-                written.push(write_mcap(dir, run, &fm, &joints)?);
+                written.push(out.shown(&write_mcap(out.path(), run, models.for_run(run)?, &joints)?));
             }
+            out.commit()?;
         }
         Ok(written)
     });
@@ -70,15 +84,13 @@ pub fn export(
     Ok(written.iter().map(|p| p.display().to_string()).collect())
 }
 
-fn create_dir(dir: &Path) -> anyhow::Result<()> {
-    use anyhow::Context;
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))
-}
-
 /// An export failure as the Python exception of its cause (`FileNotFoundError`, `OSError`, else
 /// `OmnicalError`), with the CLI's message.
 fn export_error(e: anyhow::Error) -> PyErr {
     let message = format!("{e:#}");
+    if e.downcast_ref::<omni_cli::out_path::NotEmpty>().is_some() {
+        return PyFileExistsError::new_err(message);
+    }
     match e.chain().find_map(|c| c.downcast_ref::<std::io::Error>()) {
         Some(io) if io.kind() == std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
         Some(_) => PyOSError::new_err(message),

@@ -2,9 +2,8 @@
 
 use crate::effect::EffectErrors;
 use crate::errors::{OmnicalError, PyResultExt, value_error};
-use crate::robot::{check_order, model_spec};
-use crate::run::runs_from;
-use omni_cli::design::design_for;
+use crate::robot::{check_order, designs_for, model_spec};
+use crate::run::{origin_of, runs_from};
 use omni_cli::report::{self as rs_report, ReportInput};
 use omni_ga::diagnose::DiagnoseOptions;
 use pyo3::exceptions::{PyFileNotFoundError, PyOSError};
@@ -40,11 +39,18 @@ pub fn report(
     robot: Option<PathBuf>,
 ) -> PyResult<Vec<String>> {
     check_order(model, runs, "omnical.report")?;
+    // Where the results go is checked before the diagnosis, as `omnical report` does.
+    let outputs = omni_cli::out_path::check_file(&out, "out=")
+        .and_then(|()| png.as_deref().map_or(Ok(()), |d| omni_cli::out_path::prepare_dir(d, "png=")));
+    outputs.map_err(|e| PyFileNotFoundError::new_err(format!("omnical.report: {e:#}")))?;
+    let mut origins = vec![origin_of(runs)];
+    origins.extend(validate.map(origin_of));
     let (train, declared) = runs_from(runs, "runs")?;
     let held_out = validate.map(|v| runs_from(v, "validate")).transpose()?.map(|(r, _)| r).unwrap_or_default();
     let (fm, adapters, label) = model_spec(py, model, robot.as_ref(), declared, "omnical.report")?;
     let errors = EffectErrors::new(adapters.iter().cloned());
-    let design = design_for(&fm);
+    // Each run is compared with its own input's design.
+    let design = designs_for(&fm, robot.as_ref(), &origins);
     let d = if diagnose {
         let opts = DiagnoseOptions { auto: true, ..DiagnoseOptions::default() };
         let held = (!held_out.is_empty()).then_some(held_out.as_slice());

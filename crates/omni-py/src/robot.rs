@@ -7,7 +7,7 @@ use crate::effect::PyEffect;
 use crate::errors::{io_error, value_error};
 use crate::model::model_arg;
 use omni_cli::robot_file::{self, RobotFile, RobotFileError, Spelling};
-use omni_kin::{FittedModel, KinematicsKind};
+use omni_kin::{FittedModel, KinematicsKind, RunModels};
 use pyo3::prelude::*;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -127,4 +127,33 @@ pub fn check_order(model: &Bound<'_, PyAny>, runs: &Bound<'_, PyAny>, what: &str
         )));
     }
     Ok(())
+}
+
+/// The designs `model` is compared with (diagnose, report, export), as the CLI's
+/// `omni_cli::design::designs_for`: with `robot=` its design for every run; else each run's own input's
+/// design for runs given as Datasets (`origins`: [`crate::run::origin_of`]), else the design `model` was
+/// fitted around.
+pub fn designs_for(model: &FittedModel, robot: Option<&PathBuf>, origins: &[omni_cli::dataset::Dataset]) -> RunModels {
+    match robot {
+        Some(_) => RunModels::from(omni_cli::design::design_for(model)),
+        None => omni_cli::design::designs_for(model, &origins.iter().collect::<Vec<_>>()),
+    }
+}
+
+/// `model` for each run, as the CLI's `--model` in `eval` and `export`: `"design"` without `robot=` is each
+/// run's own input's design (runs given as a Dataset whose inputs declare different designs), anything
+/// else `model` for every run.
+pub fn per_run(
+    model: FittedModel,
+    spelled: &str,
+    robot: Option<&PathBuf>,
+    origin: &omni_cli::dataset::Dataset,
+) -> PyResult<RunModels> {
+    if spelled != "design" || robot.is_some() {
+        return Ok(RunModels::from(model));
+    }
+    match omni_cli::design::declared_each(&[origin]).map_err(|e| value_error(format!("{e:#}")))? {
+        Some(each) if each.single().is_none() => Ok(each),
+        _ => Ok(RunModels::from(model)),
+    }
 }

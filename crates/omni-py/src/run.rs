@@ -161,8 +161,9 @@ pub struct PyDataset {
     skipped: Vec<(String, String)>,
     pub design: Option<FittedModel>,
     robot: Option<String>,
-    /// Where the design came from (the robot description and the geometry the data declares), for the
-    /// kinematics and `[priors]` of `train`; not pickled.
+    /// Where the design came from (the robot description and the geometry each input declares, with its
+    /// runs: each run's own design), for the kinematics and `[priors]` of `train` and the designs runs
+    /// are compared with; the declared geometries are pickled, the robot description is not.
     pub origin: omni_cli::dataset::Dataset,
 }
 
@@ -228,7 +229,9 @@ impl PyDataset {
             Some(d) => omni_cli::model_file::to_toml(d, None).map_err(value_error)?,
             None => String::new(),
         };
-        Ok((rebuild, (runs, self.notes.clone(), self.skipped.clone(), design, self.robot.clone())))
+        let declared =
+            serde_json::to_string(&declared_state(&self.origin.declared)).map_err(|e| value_error(e.to_string()))?;
+        Ok((rebuild, (runs, self.notes.clone(), self.skipped.clone(), design, self.robot.clone(), declared)))
     }
     fn __repr__(&self) -> String {
         format!("Dataset({} runs, {} skipped)", self.runs.len(), self.skipped.len())
@@ -236,8 +239,18 @@ impl PyDataset {
 }
 
 /// A pickled `Dataset`: its runs' bytes, notes, skipped inputs, design model file text ("" when none),
-/// robot description.
-type DatasetState<'py> = (Vec<Bound<'py, PyBytes>>, Vec<String>, Vec<(String, String)>, String, Option<String>);
+/// robot description, the geometry each input declares (JSON: [`DeclaredState`] items).
+type DatasetState<'py> = (Vec<Bound<'py, PyBytes>>, Vec<String>, Vec<(String, String)>, String, Option<String>, String);
+
+/// One input's declared design, pickled: source, robot type, geometry, run names.
+type DeclaredState = (String, String, omni_kin::RobotGeometry, Vec<String>);
+
+fn declared_state(declared: &[omni_cli::dataset::Declared]) -> Vec<DeclaredState> {
+    declared
+        .iter()
+        .map(|d| (d.source.display().to_string(), d.kind.clone(), d.geometry.clone(), d.runs.clone()))
+        .collect()
+}
 
 /// Unpickling a `Run`.
 #[pyfunction]
@@ -247,13 +260,14 @@ pub fn _run_from_bytes(data: &[u8]) -> PyResult<PyRun> {
 
 /// Unpickling a `Dataset`.
 #[pyfunction]
-#[pyo3(signature = (runs, notes, skipped, design, robot = None))]
+#[pyo3(signature = (runs, notes, skipped, design, robot = None, declared = ""))]
 pub fn _dataset_from_state(
     runs: Vec<Vec<u8>>,
     notes: Vec<String>,
     skipped: Vec<(String, String)>,
     design: &str,
     robot: Option<String>,
+    declared: &str,
 ) -> PyResult<PyDataset> {
     let runs = runs.iter().map(|b| crate::pickle::run_from_bytes(b)).collect::<PyResult<Vec<Run>>>()?;
     let design = if design.is_empty() {
@@ -263,7 +277,22 @@ pub fn _dataset_from_state(
             toml::from_str(design).map_err(|e| value_error(format!("pickled dataset: design model: {e}")))?;
         Some(file.to_fitted().map_err(|e| value_error(format!("pickled dataset: design model: {e}")))?)
     };
-    Ok(PyDataset { runs, notes, skipped, design, robot, origin: Default::default() })
+    let declared: Vec<DeclaredState> = if declared.is_empty() {
+        Vec::new()
+    } else {
+        serde_json::from_str(declared).map_err(|e| value_error(format!("pickled dataset: declared designs: {e}")))?
+    };
+    let declared = declared
+        .into_iter()
+        .map(|(source, kind, geometry, runs)| omni_cli::dataset::Declared {
+            source: source.into(),
+            kind,
+            geometry,
+            runs,
+        })
+        .collect();
+    let origin = omni_cli::dataset::Dataset { declared, ..Default::default() };
+    Ok(PyDataset { runs, notes, skipped, design, robot, origin })
 }
 
 /// Load runs from files and folders: omnical CSV (``.csv``), ROS 2 bags (``.mcap``, rosbag2 folders),
@@ -339,7 +368,8 @@ pub fn load(
         notes.insert(0, format!("robot: {s}"));
     }
     let origin = omni_cli::dataset::Dataset {
-        robot: ds.robot,
+        declared: ds.declared,
+        robot_kind: ds.robot_kind,
         robot_file: ds.robot_file,
         ground_truth_clocks: ds.ground_truth_clocks,
         ..Default::default()
@@ -406,7 +436,8 @@ pub fn origin_of(obj: &Bound<'_, PyAny>) -> omni_cli::dataset::Dataset {
         Ok(ds) => {
             let o = &ds.get().origin;
             omni_cli::dataset::Dataset {
-                robot: o.robot.clone(),
+                declared: o.declared.clone(),
+                robot_kind: o.robot_kind.clone(),
                 robot_file: o.robot_file.clone(),
                 ..Default::default()
             }

@@ -162,7 +162,7 @@ def test_diagnose_ranks_the_hidden_effect(runs: list[omnical.Run], validation: l
     assert d.unexplained is False and d.to_dict()["unexplained"] is False
     assert ev["decided_by"] == "noise_floor_ratio" and ev["groups_total"] == 0 and ev["share_biased"] is None
     assert 0.0 < ev["ratio"] < 3.0 and ev["remaining_held_out_m"] > 0.0
-    assert "the repeat test could not be made" in d.verdict_text
+    assert "the group test could not be made" in d.verdict_text
     auto = omnical.diagnose(fit.model, runs, validate=validation, candidates=["time_offset"], auto=True)
     assert auto.final_model.effects == ["time_offset"] and auto.ladder[-1]["label"] == "+ time_offset"
     with pytest.raises(ValueError, match='unknown effect "nope"'):

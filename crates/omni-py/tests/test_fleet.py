@@ -119,7 +119,8 @@ def test_model_files_are_byte_identical_to_omnical_train(fleet_run: fleet.FleetR
         assert (fleet_run.out / robot / session / "model.toml").read_bytes() == out.read_bytes()
 
 
-def test_a_bad_session_gets_its_error_and_the_others_finish(sim_fleet: tuple[Path, dict[str, Any]], client: Any, tmp_path: Path) -> None:
+def test_a_bad_session_gets_its_error_and_the_others_finish(sim_fleet: tuple[Path, dict[str, Any]], client: Any, tmp_path: Path,
+                                                            capsys: pytest.CaptureFixture[str]) -> None:
     root, _ = sim_fleet
     small = tmp_path / "fleet"
     shutil.copytree(root / "r00", small / "r00")
@@ -127,12 +128,16 @@ def test_a_bad_session_gets_its_error_and_the_others_finish(sim_fleet: tuple[Pat
     bad = small / "r09" / "s00"
     shutil.copytree(root / "r03" / "s00", bad)
     (bad / "00-r0.csv").write_text("t_s,wheel_a_rad_s\n0.0,nan\n")
+    # A robot folder whose recordings lie in it directly, with no session folder: said, and given a row.
+    shutil.copytree(root / "r04" / "s00", small / "r10")
     r = fleet.calibrate_fleet(small, tmp_path / "out", client=client, diagnose="none")
-    assert len(r.rows) == 4 and [e["robot"] for e in r.errors] == ["r09"]
+    assert len(r.rows) == 5 and [e["robot"] for e in r.errors] == ["r09", "r10"]
     assert "00-r0.csv" in r.errors[0]["error"]
+    assert r.errors[1]["error"] == f"{small / 'r10'} holds no session folder: its recordings go in FLEET_DIR/r10/<session>/"
+    assert f"omnical fleet: warning: robot r10 skipped: {r.errors[1]['error']}" in capsys.readouterr().err
     assert r.analysis["errors"][0]["session"] == "s00"
     table = csv_rows(tmp_path / "out" / "fleet.csv")
-    assert [t["status"] for t in table] == ["ok", "ok", "ok", "error"]
+    assert [(t["robot"], t["status"]) for t in table] == [("r00", "ok")] * 3 + [("r09", "error"), ("r10", "error")]
     assert not (tmp_path / "out" / "r09" / "s00" / "model.toml").exists()
 
 
@@ -211,3 +216,13 @@ def test_simulate_fleet_command(tmp_path: Path) -> None:
     assert r.returncode == 0, r.stderr
     truth = json.loads((tmp_path / "f" / "truth.json").read_text())
     assert sorted(truth["degrading"]) == ["r01", "r02"] and len(fleet.find_sessions(tmp_path / "f")) == 8
+    # A folder that holds a fleet already is refused (its sessions would mix with the new ones) unless
+    # --force, which replaces it whole.
+    smaller = [*omnical_command(), "simulate", "--fleet", "3", "--sessions", "1", "--out", str(tmp_path / "f")]
+    again = subprocess.run(smaller, capture_output=True, text=True)
+    assert again.returncode == 2 and again.stderr == (
+        f"error: {tmp_path / 'f'}: the folder already holds files (r00, r01, r02, …); give --force (force=True) to "
+        "replace it whole, or another folder\n"), again.stderr
+    forced = subprocess.run([*smaller, "--force"], capture_output=True, text=True)
+    assert forced.returncode == 0, forced.stderr
+    assert len(fleet.find_sessions(tmp_path / "f")) == 3 and sorted(p.name for p in tmp_path.iterdir()) == ["f"]

@@ -229,13 +229,19 @@ def test_export_writes_the_cli_files(csv_runs: Path, tmp_path: Path) -> None:
     assert _read(tmp_path / "py_mcap") == _read(tmp_path / "cli_mcap")
     first = sorted(py_tum)[0]
     assert py_tum[first].startswith(b"# run ")
+    # A folder that holds files already (another export's runs) is refused unless force=True, as --force.
+    with pytest.raises(FileExistsError, match=r"tum= .*py_tum: the folder already holds files \(.*\); give --force"):
+        omnical.export(str(fit), [ds[0]], tum=tmp_path / "py_tum")
+    assert _read(tmp_path / "py_tum") == cli_tum
+    one = omnical.export(str(fit), [ds[0]], tum=tmp_path / "py_tum", force=True)
+    assert sorted(_read(tmp_path / "py_tum")) == sorted(Path(f).name for f in one) and len(one) == 3
     with pytest.raises(ValueError, match="nothing to export: give tum=DIR and/or mcap=DIR"):
         omnical.export(str(fit), ds)
 
 
 def test_export_mcap_has_the_model_odometry(runs: list[omnical.Run], tmp_path: Path) -> None:
     mcap_reader = pytest.importorskip("mcap.reader")
-    tum, bag = (Path(p) for p in omnical.export("paper", runs[:1], tum=tmp_path, mcap=tmp_path)[2:])
+    tum, bag = (Path(p) for p in omnical.export("paper", runs[:1], tum=tmp_path / "tum", mcap=tmp_path / "bags")[2:])
     with bag.open("rb") as f:
         counts: dict[str, int] = {}
         for _schema, channel, _message in mcap_reader.make_reader(f).iter_messages():

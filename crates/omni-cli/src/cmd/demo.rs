@@ -7,6 +7,7 @@ use super::simulate::{self as simulate_cmd, DEFAULT_SEED, Format};
 use super::train::print_summary;
 use super::{DataArgs, OutputArgs};
 use crate::design::{design_for, paper_calibrated};
+use crate::out_path::OutDir;
 use crate::report::{self, ReportInput};
 use crate::robot_file::RobotFile;
 use crate::{atomic, model_file, progress, robot_file};
@@ -23,9 +24,13 @@ use std::path::{Path, PathBuf};
 pub struct Args {
     /// Write everything here: the simulated runs (train/ and validation/, each with its robot.toml), the
     /// true model, the fitted models, diagnosis.json and report.html. The `omnical` commands that repeat
-    /// each step on these files are printed at the end.
+    /// each step on these files are printed at the end. A folder that already holds files is refused
+    /// unless --force.
     #[arg(long, default_value = "omnical-demo")]
     pub out: PathBuf,
+    /// Replace an --out folder that already holds files (an earlier demo's, say), whole.
+    #[arg(long)]
+    pub force: bool,
     /// Repetitions of each command.
     #[arg(long, default_value_t = 2)]
     pub runs_per_command: usize,
@@ -159,7 +164,8 @@ fn shell_word(s: &str) -> String {
 fn repeat_commands(a: &Args, setup: &Setup, dir: &Path, with_effects: bool) -> Vec<(&'static str, String)> {
     let p = |name: &str| shell_word(&dir.join(name).display().to_string());
     let out = shell_word(&dir.display().to_string());
-    let mut simulate = format!("omnical simulate --out {out} --runs-per-command {}", a.runs_per_command);
+    // --force: the folder holds this demo's files, which the repeated steps write again.
+    let mut simulate = format!("omnical simulate --out {out} --force --runs-per-command {}", a.runs_per_command);
     for w in &setup.simulate_args {
         simulate.push(' ');
         simulate.push_str(&shell_word(w));
@@ -215,22 +221,28 @@ fn write_models(dir: &Path, truth: &FittedModel, fitted: &FittedModel, d: &Diagn
 ///
 /// long: the story's steps in order (simulate, train, diagnose, report, the commands), each printing.
 pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
-    let (dir, runs_per_command, hidden, robot) =
-        (a.out.as_path(), a.runs_per_command, a.hidden.as_str(), a.robot.as_deref());
+    let (runs_per_command, hidden, robot) = (a.runs_per_command, a.hidden.as_str(), a.robot.as_deref());
     let text = !a.output.json;
     let mut setup = match robot {
         None | Some(robot_file::BUILTIN_APR02) => paper_setup(runs_per_command),
         Some(arg) => robot_setup(arg, runs_per_command)?,
     };
     apply_effect_spec(hidden, &mut setup.truth, &mut setup.config, &setup.wheels)?;
+    // Everything is written into a staging folder that becomes --out at the end.
+    let out = OutDir::claim(&a.out, "--out", a.force)?;
+    let dir = out.path();
     if text {
         println!("== simulate: true robot = {} + a hidden effect ({hidden})", setup.true_robot);
     }
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let (train, val) = simulate_and_keep(&setup, dir, quiet)?;
     let n_base = setup.start.model.n_base();
     if text {
-        println!("   {} training and {} validation runs in {}", train.len(), val.len(), dir.display());
+        println!(
+            "   {} and {} in {}",
+            crate::units::count(train.len(), "training run"),
+            crate::units::count(val.len(), "validation run"),
+            a.out.display()
+        );
         println!("== train: fit the {n_base}-entry IK matrix (preset default)");
     }
     let preset = Preset::Default;
@@ -267,9 +279,10 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
             DEFAULT_SEED + 1
         )],
     };
-    let html = dir.join(REPORT);
-    let w = report::write(&input, &html, None)?;
+    let w = report::write(&input, &dir.join(REPORT), None)?;
     spinner.finish_and_clear();
+    out.commit()?;
+    let (dir, html) = (a.out.as_path(), a.out.join(REPORT));
     let commands = repeat_commands(a, &setup, dir, d.final_model.is_some());
     if !text {
         let doc = demo_json(a, &setup, (&train, &val), &fit, &d, &w, &commands)?;

@@ -2,7 +2,7 @@
 
 use super::{DataArgs, OutputArgs, load_with_held_out, resolve_model};
 use crate::cli::effect_help;
-use crate::design::design_for;
+use crate::design::designs_for;
 use crate::units::{std_error_text, value_text};
 use crate::{atomic, model_file};
 use anyhow::Context;
@@ -50,9 +50,10 @@ pub struct Args {
 /// Runs `omnical diagnose`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
     let (d, loaded) = diagnose_loaded(a)?;
-    // The explorer stage of `--auto`: only when the catalogue leaves a systematic error unexplained, on the
-    // same training and held-out runs, starting from the model the ladder ended with.
-    let exploration = match (&loaded.validate, a.auto && d.unexplained) {
+    // The explorer stage of `--auto`: whenever the catalogue leaves the held-out error above the noise floor
+    // (or something missing), on the same training and held-out runs, from the model the ladder ended with.
+    let explore_stage = a.auto && d.error_remains();
+    let exploration = match (&loaded.validate, explore_stage) {
         (Some(v), true) => {
             let from = d.final_model.as_ref().unwrap_or(&loaded.model);
             Some(explore(from, &loaded.train, v, &ExploreOptions::default())?)
@@ -69,7 +70,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         super::print_json("diagnose", doc)?;
     } else {
         print_diagnosis(&d);
-        if a.auto && d.unexplained {
+        if explore_stage {
             print_explore_stage(exploration.as_ref());
         }
     }
@@ -91,15 +92,19 @@ struct Loaded {
 
 /// Loads, diagnoses and writes `--out`; returns the diagnosis and what it was computed on.
 fn diagnose_loaded(a: &Args) -> anyhow::Result<(Diagnosis, Loaded)> {
-    let (ds, val) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
+    if let Some(out) = &a.out {
+        crate::out_path::check_file(out, "--out")?;
+    }
+    let (ds, val_ds) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
-    let val = val.map(|v| v.runs);
+    // Each run is compared with its own input's design.
+    let design = designs_for(&model, &[Some(&ds), val_ds.as_ref()].into_iter().flatten().collect::<Vec<_>>());
+    let val = val_ds.map(|v| v.runs);
     super::held_out::check("diagnose", &a.runs, &ds.runs, val.as_deref().unwrap_or_default())?;
     let mut opts = DiagnoseOptions { auto: a.auto, min_gain: a.min_gain, ..DiagnoseOptions::default() };
     if !a.candidates.is_empty() {
         opts.candidates = a.candidates.clone();
     }
-    let design = design_for(&model);
     let d = diagnose(&model, &design, &ds.runs, val.as_deref(), &opts)?;
     if let (Some(out), Some(fm)) = (&a.out, &d.final_model) {
         let text = model_file::to_toml(fm, None).map_err(anyhow::Error::msg)?;
@@ -150,9 +155,10 @@ pub fn print_diagnosis(d: &Diagnosis) {
     }
     if let Some(nf) = &d.noise_floor {
         println!(
-            "   noise floor: {:.4} m position, {} heading at standstill → path RMS ≈ {:.4} m ({} poses)",
+            "   noise floor: {:.4} m position, {} heading {} → path RMS ≈ {:.4} m ({} poses)",
             nf.position_m,
             value_text(nf.heading_rad, "rad").trim_start(),
+            text::noise_source(nf.source),
             nf.path_rms,
             nf.samples
         );

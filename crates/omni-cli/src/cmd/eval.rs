@@ -1,17 +1,17 @@
 //! `omnical eval`: the cost of a model on runs — the summary first (Eq. 6, path RMS, statistics of the
 //! end-position and end-heading errors, as evo_ape prints them), each run's row with `--per-run`.
 
-use super::{DataArgs, OutputArgs, load_runs, resolve_model};
+use super::{DataArgs, OutputArgs, load_runs};
 use omni_kin::PoseError;
 use omni_kin::cost::CostKind;
-use omni_kin::evaluate::Evaluator;
 use serde_json::json;
 use std::path::PathBuf;
 
 /// Arguments of `omnical eval`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// `design` (the data's design model, or the paper's Eq. 7) or a model file.
+    /// `design` (the data's design model, each run its own input's when the inputs declare different
+    /// designs), `paper` (the paper's Eq. 9) or a model file.
     #[arg(long, default_value = "design")]
     pub model: String,
     /// Run files or folders.
@@ -84,9 +84,9 @@ fn heading_stats(errors: &[PoseError]) -> Stats {
 pub fn run(a: &Args) -> anyhow::Result<()> {
     let model = a.model.as_str();
     let ds = load_runs(&a.runs, &a.data)?;
-    let fm = resolve_model(model, &ds)?;
-    let evaluator = Evaluator::for_report(&fm.model, &ds.runs, CostKind::PATH.selection())?;
-    let all = evaluator.errors(&fm.model.resolve(&fm.params)?);
+    // `design`: each run its own input's design (the pooled figures are the run-weighted means).
+    let models = crate::design::resolve_each(model, &[&ds])?;
+    let all = models.errors(&ds.runs, CostKind::PATH.selection())?;
     let errors = all.ends();
     let c = all.end_pose_cost();
     let path = all.path_cost(CostKind::PATH.heading_weight());
@@ -124,7 +124,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
 
 /// The summary: the costs, then the statistics of the end-position (m) and end-heading (deg) errors.
 fn print_summary(model: &str, runs: usize, cost: f64, path: f64, position_m: Stats, heading_deg: Stats) {
-    println!("model {model}: {runs} runs");
+    println!("model {model}: {}", crate::units::count(runs, "run"));
     println!("cost (Eq. 6) {cost:.5} (mean of sqrt(dx² + dy² + dθ²), m and rad with weight 1); path RMS {path:.5} m");
     println!("{:<22} {:>9} {:>9} {:>9} {:>9}", "end-pose error", "mean", "median", "rmse", "max");
     for (name, s) in [("position m", position_m), ("heading deg (|dθ|)", heading_deg)] {

@@ -42,6 +42,9 @@ pub struct Args {
 
 /// Runs `omnical explore`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
+    if let Some(out) = &a.out {
+        crate::out_path::check_file(out, "--out")?;
+    }
     let (ds, val) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
     let val = val.map(|v| v.runs).unwrap_or_default();
@@ -104,6 +107,7 @@ pub fn to_json(e: &Exploration) -> Value {
         "schema_version": SCHEMA_VERSION,
         "families": e.families.iter().map(family_json).collect::<Vec<_>>(),
         "unexplained": e.unexplained,
+        "unexplained_evidence": e.evidence,
         "best": e.best().map(|f| f.family.id()),
         "baseline_held_out_cost_m": e.baseline_held_out_cost,
         "noise_floor_path_rms_m": e.noise_floor_path_rms,

@@ -3,12 +3,13 @@
 
 use super::{DataArgs, OutputArgs, load_runs_with_odometry, resolve_model, wheel_joints};
 use crate::dataset::mcap::{WriteOptions, write_run};
-use crate::design::design_for;
+use crate::design::{design_for, designs_for};
+use crate::out_path::{self, OutDir};
 use crate::report::tum;
 use crate::{atomic, robot_config};
 use anyhow::Context;
 use omni_kin::odometry::{self, Selection};
-use omni_kin::{FittedModel, Run, StampedPose};
+use omni_kin::{FittedModel, Run, RunModels, StampedPose};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `omnical export`.
@@ -20,16 +21,22 @@ pub struct Args {
     /// Run files or folders.
     #[arg(required = true)]
     pub runs: Vec<PathBuf>,
-    /// Write `<run>.gt.tum`, `<run>.design.tum` and `<run>.calibrated.tum` into this folder.
+    /// Write `<run>.gt.tum`, `<run>.design.tum` and `<run>.calibrated.tum` into this folder (new or empty,
+    /// unless --force).
     #[arg(long, value_name = "DIR")]
     pub tum: Option<PathBuf>,
-    /// Write one MCAP bag per run into this folder, with the calibrated odometry added.
+    /// Write one MCAP bag per run into this folder, with the calibrated odometry added (new or empty,
+    /// unless --force).
     #[arg(long, value_name = "DIR")]
     pub mcap: Option<PathBuf>,
+    /// Replace a --tum or --mcap folder that already holds files, whole (files of other runs left in it
+    /// would be taken for this export's).
+    #[arg(long)]
+    pub force: bool,
     /// Write the calibration for the robot into this folder: the matrix as ROS 2 parameters
     /// (omnical_odometry.yaml) and as a C header (omnical_odometry.h), and the parameters of the
     /// matching ros2_controllers drive controller (ros2_controllers.yaml) from the nearest parametric fit,
-    /// with the accuracy it gives up on the runs (docs/applying.md).
+    /// with the accuracy it gives up on the runs (docs/applying.md). Other files in the folder stay.
     #[arg(long, value_name = "DIR")]
     pub robot_config: Option<PathBuf>,
     /// Drive controller for --robot-config (default: the one that matches the base).
@@ -57,26 +64,57 @@ pub fn odometry_poses(model: &FittedModel, run: &Run) -> anyhow::Result<Vec<Stam
     Ok(poses)
 }
 
+/// The output folders of `export`, claimed before the work: `--tum` and `--mcap` are new or emptied
+/// ([`OutDir`]), `--robot-config` is created if missing. Refuses one folder named twice.
+fn claim_folders(a: &Args) -> anyhow::Result<(Option<OutDir>, Option<OutDir>)> {
+    let named = [("--tum", &a.tum), ("--mcap", &a.mcap), ("--robot-config", &a.robot_config)];
+    for (i, (flag, dir)) in named.iter().enumerate() {
+        for (other, same) in &named[i + 1..] {
+            if let (Some(d), Some(s)) = (dir, same)
+                && d.components().eq(s.components())
+            {
+                anyhow::bail!("{flag} and {other} name the same folder {}: give each its own", d.display());
+            }
+        }
+    }
+    if let Some(dir) = &a.robot_config {
+        out_path::prepare_dir(dir, "--robot-config")?;
+    }
+    let tum = a.tum.as_deref().map(|d| OutDir::claim(d, "--tum", a.force)).transpose()?;
+    let mcap = a.mcap.as_deref().map(|d| OutDir::claim(d, "--mcap", a.force)).transpose()?;
+    Ok((tum, mcap))
+}
+
 /// Runs `omnical export`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
     if a.tum.is_none() && a.mcap.is_none() && a.robot_config.is_none() {
         anyhow::bail!("nothing to export: give --tum DIR and/or --mcap DIR (or --robot-config DIR)");
     }
+    let (tum_dir, mcap_dir) = claim_folders(a)?;
     let ds = load_runs_with_odometry(&a.runs, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
+    // Each run's own input's design (for the design's odometry and accuracy); `--model design` is each
+    // run's own in the trajectories too.
+    let designs = designs_for(&model, &[&ds]);
     let design = design_for(&model);
+    let models = crate::design::resolve_each(&a.model, &[&ds])?;
     let mut doc = serde_json::json!({ "model": a.model, "runs": ds.runs.len() });
-    if let Some(dir) = &a.tum {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    if let Some(out) = tum_dir {
+        let dir = out.target().to_path_buf();
         let mut files = Vec::new();
         for run in &ds.runs {
-            files.extend(write_tum(dir, run, &design, &model, &a.model)?);
+            files.extend(
+                write_tum(out.path(), run, designs.for_run(run)?, models.for_run(run)?, &a.model)?
+                    .iter()
+                    .map(|f| out.shown(f)),
+            );
         }
+        out.commit()?;
         doc["tum"] = serde_json::json!({ "dir": dir, "files": files });
         if !a.output.json {
             println!(
-                "wrote {} runs × 3 TUM files (ground truth, design, calibrated) to {}; e.g. evo_ape tum {}",
-                ds.runs.len(),
+                "wrote {} × 3 TUM files (ground truth, design, calibrated) to {}; e.g. evo_ape tum {}",
+                crate::units::count(ds.runs.len(), "run"),
                 dir.display(),
                 ds.runs.first().map_or_else(String::new, |r| {
                     let s = tum::file_stem(r.name());
@@ -85,13 +123,15 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             );
         }
     }
-    if let Some(dir) = &a.mcap {
-        let files = write_mcaps(dir, a, &ds, &model)?;
+    if let Some(out) = mcap_dir {
+        let files: Vec<PathBuf> = write_mcaps(out.path(), a, &ds, &models)?.iter().map(|f| out.shown(f)).collect();
+        let dir = out.target().to_path_buf();
+        out.commit()?;
         doc["mcap"] = serde_json::json!({ "dir": dir, "files": files });
         if !a.output.json {
             println!(
-                "wrote {} MCAP files to {} (topics /joint_states, /ground_truth/pose, /omnical/odometry, …)",
-                ds.runs.len(),
+                "wrote {} to {} (topics /joint_states, /ground_truth/pose, /omnical/odometry, …)",
+                crate::units::count(ds.runs.len(), "MCAP file"),
                 dir.display()
             );
         }
@@ -100,6 +140,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         let request = robot_config::Request {
             model: &model,
             design: &design,
+            designs: &designs,
             spec: &a.model,
             runs: &ds.runs,
             wheel_names: joint_names(&model, &wheel_joints(&a.data, &ds)),
@@ -107,6 +148,9 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         };
         let config = robot_config::build(&request)?;
         robot_config::write(dir, &config)?;
+        for w in robot_config::warning_lines(&config) {
+            tracing::warn!("{w}");
+        }
         if a.output.json {
             doc["robot_config"] = robot_config_json(&config, dir);
         } else {
@@ -119,17 +163,11 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// One MCAP bag per run in `dir` (created), with the calibrated odometry; returns the paths.
-fn write_mcaps(
-    dir: &Path,
-    a: &Args,
-    ds: &crate::dataset::Dataset,
-    model: &FittedModel,
-) -> anyhow::Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+/// One MCAP bag per run in `dir`, with the calibrated odometry; returns the paths.
+fn write_mcaps(dir: &Path, a: &Args, ds: &crate::dataset::Dataset, models: &RunModels) -> anyhow::Result<Vec<PathBuf>> {
     let mut files = Vec::with_capacity(ds.runs.len());
     for run in &ds.runs {
-        files.push(write_mcap(dir, run, model, &wheel_joints(&a.data, ds))?);
+        files.push(write_mcap(dir, run, models.for_run(run)?, &wheel_joints(&a.data, ds))?);
     }
     Ok(files)
 }

@@ -63,6 +63,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     if a.out.exists() && !a.force {
         bail!("{} exists; pass --force to replace it, or --out another file", a.out.display());
     }
+    crate::out_path::check_file(&a.out, "--out")?;
     let found = dataset::inspect(&a.recording, a.max_file_mb.saturating_mul(1 << 20))?;
     if found.recordings > 1 && !a.output.json {
         println!(

@@ -183,6 +183,9 @@ pub fn load_with_held_out(
 ) -> anyhow::Result<(Dataset, Option<Dataset>)> {
     let train = load(runs, data, false)?;
     let held = if held_out.is_empty() { None } else { Some(load(held_out, data, false)?) };
+    if let Some(h) = &held {
+        dataset::check_same_robot(train.robot_kind.as_ref(), h.robot_kind.as_ref())?;
+    }
     say_load_notes(&[Some(&train), held.as_ref()].into_iter().flatten().collect::<Vec<_>>());
     Ok((train, held))
 }

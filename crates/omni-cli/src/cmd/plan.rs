@@ -81,6 +81,9 @@ impl Args {
 
 /// Runs `omnical plan`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
+    if let Some(out) = &a.out {
+        crate::out_path::check_file(out, "--out")?;
+    }
     let robot = plan_robot(a)?;
     let mut model = FittedModel::nominal(Model::design(a.model, Some(&robot))?);
     for id in &a.effects {
@@ -188,7 +191,7 @@ fn print_plan(plan: &RunPlan, flower: Option<&RunPlan>, req: &PlanRequest, bench
     }
     println!("condition number {:.3e} (scaled)", id.condition_number);
     for w in id.warnings() {
-        println!("warning: {w}");
+        tracing::warn!("{w}");
     }
     if let Some(f) = flower {
         match (worst_relative_se(plan), worst_relative_se(f)) {

@@ -1,7 +1,7 @@
 //! `omnical report`: the HTML report of a model on runs (diagnosis included unless `--no-diagnose`).
 
 use super::{DataArgs, OutputArgs, load_with_held_out, resolve_model};
-use crate::design::design_for;
+use crate::design::designs_for;
 use crate::progress;
 use crate::report::{self, ReportInput};
 use omni_ga::diagnose::{DiagnoseOptions, diagnose};
@@ -23,7 +23,8 @@ pub struct Args {
     /// The HTML file to write.
     #[arg(long, default_value = "report.html")]
     pub out: PathBuf,
-    /// Also write each figure as PNG into this folder.
+    /// Also write each figure as PNG into this folder (`<figure>.png`; other files in it stay, figures an
+    /// earlier report wrote that this one does not draw are removed).
     #[arg(long, value_name = "DIR")]
     pub png: Option<PathBuf>,
     /// Skip the diagnosis (faster; no ranking, ladder of the given model only).
@@ -43,11 +44,16 @@ pub struct Args {
 
 /// Runs `omnical report`; `quiet` hides the progress display.
 pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
-    let (ds, val) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
+    crate::out_path::check_file(&a.out, "--out")?;
+    if let Some(dir) = &a.png {
+        crate::out_path::prepare_dir(dir, "--png")?;
+    }
+    let (ds, val_ds) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
     let model = resolve_model(&a.model, &ds)?;
-    let val = val.map(|v| v.runs).unwrap_or_default();
+    // Each run is compared with its own input's design.
+    let design = designs_for(&model, &[Some(&ds), val_ds.as_ref()].into_iter().flatten().collect::<Vec<_>>());
+    let val = val_ds.map(|v| v.runs).unwrap_or_default();
     super::held_out::check("report", &a.runs, &ds.runs, &val)?;
-    let design = design_for(&model);
     let diagnosis = if a.no_diagnose {
         None
     } else {

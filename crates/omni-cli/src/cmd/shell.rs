@@ -12,9 +12,11 @@ use std::path::PathBuf;
 /// Arguments of `omnical completions`.
 #[derive(Debug, clap::Args)]
 #[command(after_help = "Install, e.g.:\n  \
-    bash: omnical completions bash > ~/.local/share/bash-completion/completions/omnical\n  \
-    zsh:  omnical completions zsh > ~/.zfunc/_omnical   (with fpath+=~/.zfunc before compinit in ~/.zshrc)\n  \
-    fish: omnical completions fish > ~/.config/fish/completions/omnical.fish")]
+    bash: mkdir -p ~/.local/share/bash-completion/completions && \
+    omnical completions bash > ~/.local/share/bash-completion/completions/omnical\n  \
+    zsh:  mkdir -p ~/.zfunc && omnical completions zsh > ~/.zfunc/_omnical   \
+    (with fpath+=~/.zfunc before compinit in ~/.zshrc)\n  \
+    fish: mkdir -p ~/.config/fish/completions && omnical completions fish > ~/.config/fish/completions/omnical.fish")]
 pub struct CompletionsArgs {
     /// The shell to complete for.
     #[arg(value_enum)]
@@ -25,7 +27,7 @@ pub struct CompletionsArgs {
 #[derive(Debug, clap::Args)]
 pub struct ManArgs {
     /// Write one page per command into this folder (`omnical.1`, `omnical-train.1`, …) instead of the
-    /// top page to stdout. Read one with `man -l DIR/omnical-train.1`.
+    /// top page to stdout. Read one with `man -l DIR/omnical-train.1`. Other files in the folder stay.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
 }
@@ -67,7 +69,7 @@ pub fn man(a: &ManArgs) -> anyhow::Result<()> {
         std::io::stdout().lock().write_all(top)?;
         return Ok(());
     };
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    crate::out_path::prepare_dir(dir, "--out")?;
     for (name, roff) in &pages {
         let path = dir.join(name);
         atomic::write_atomic(&path, roff).with_context(|| format!("writing {}", path.display()))?;

@@ -2,6 +2,7 @@
 
 use super::{OutputArgs, sim_spec};
 use crate::cli::effect_help;
+use crate::out_path::OutDir;
 use crate::robot_file::{self, RobotFile};
 use crate::{atomic, dataset, design, model_file};
 use anyhow::{Context, bail};
@@ -30,9 +31,14 @@ pub enum Format {
 /// Arguments of `omnical simulate`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Output folder: writes train/, validation/, truth.json and truth_model.toml.
+    /// Output folder: writes train/, validation/, truth.json and truth_model.toml. A folder that already
+    /// holds files is refused (runs left from before would mix with the new ones) unless --force.
     #[arg(long)]
     pub out: PathBuf,
+    /// Replace an --out folder that already holds files, whole (the new folder is written beside it and
+    /// renamed into place at the end).
+    #[arg(long)]
+    pub force: bool,
     /// Seed (training uses it, validation seed + 1).
     #[arg(long, default_value_t = DEFAULT_SEED)]
     pub seed: u64,
@@ -224,13 +230,14 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     for spec in &a.effects {
         sim_spec::apply_effect_spec(spec, &mut truth, &mut config, &wheel_names)?;
     }
+    let out = OutDir::claim(&a.out, "--out", a.force)?;
     let (mut summary, mut written) = (serde_json::Map::new(), serde_json::Map::new());
     for (split, seed) in [("train", a.seed), ("validation", a.seed.wrapping_add(1))] {
         let cfg = SimConfig { seed, ..config.clone() };
         let spinner = crate::progress::spinner(format!("simulating and writing {split} runs"), quiet);
         let runs = simulate(&cfg, &truth, &format!("{split}/"))?;
-        let files = write_split(&a.out.join(split), &runs, a.format, &wheel_names)?;
-        write_robot(&a.out.join(split), &robot, a.format)?;
+        let files = write_split(&out.path().join(split), &runs, a.format, &wheel_names)?;
+        write_robot(&out.path().join(split), &robot, a.format)?;
         spinner.finish_and_clear();
         let costs = split_costs(&design, &truth, &runs)?;
         let entry: serde_json::Map<String, serde_json::Value> = costs
@@ -241,8 +248,8 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         // The summary prints whatever --quiet says (it only hides progress).
         if !a.output.json {
             println!(
-                "{split}: {} runs, design cost {:.4}, oracle cost {:.4} (Eq. 6; path: {:.4} vs {:.4})",
-                runs.len(),
+                "{split}: {}, design cost {:.4}, oracle cost {:.4} (Eq. 6; path: {:.4} vs {:.4})",
+                crate::units::count(runs.len(), "run"),
                 costs[0].1,
                 costs[1].1,
                 costs[2].1,
@@ -251,12 +258,13 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         }
         let mut listed = entry.clone();
         listed.insert("dir".into(), json!(a.out.join(split)));
-        listed.insert("files".into(), json!(files));
+        listed.insert("files".into(), json!(files.iter().map(|f| out.shown(f)).collect::<Vec<_>>()));
         listed.insert("robot".into(), json!(a.out.join(split).join(robot_file::FILE_NAME)));
         written.insert(split.into(), listed.into());
         summary.insert(split.into(), serde_json::Value::Object(entry));
     }
-    write_truth(a, &truth, summary, &config)?;
+    write_truth(a, out.path(), &truth, summary, &config)?;
+    out.commit()?;
     if a.output.json {
         let format = match a.format {
             Format::Csv => "csv",
@@ -271,15 +279,16 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
 }
 
 /// Writes `truth_model.toml` and `truth.json` (the costs of each split in `summary`, the true model, the
-/// simulator's settings) into `--out`.
+/// simulator's settings) into `dir` (the `--out` folder being written).
 fn write_truth(
     a: &Args,
+    dir: &Path,
     truth: &FittedModel,
     summary: serde_json::Map<String, serde_json::Value>,
     config: &SimConfig,
 ) -> anyhow::Result<()> {
     let truth_toml = model_file::to_toml(truth, None).map_err(anyhow::Error::msg)?;
-    atomic::write_atomic(&a.out.join("truth_model.toml"), truth_toml.as_bytes())
+    atomic::write_atomic(&dir.join("truth_model.toml"), truth_toml.as_bytes())
         .with_context(|| format!("writing {}", a.out.join("truth_model.toml").display()))?;
     let doc = json!({
         "design_cost": { "train": summary["train"]["design_end_pose"], "validation": summary["validation"]["design_end_pose"] },
@@ -292,6 +301,6 @@ fn write_truth(
         "cost": "design_cost and oracle_cost are the paper's Eq. 6 with exact-arc odometry; path costs are RMS over every ground-truth pose",
     });
     let text = serde_json::to_string_pretty(&doc)?;
-    atomic::write_atomic(&a.out.join("truth.json"), text.as_bytes())
+    atomic::write_atomic(&dir.join("truth.json"), text.as_bytes())
         .with_context(|| format!("writing {}", a.out.join("truth.json").display()))
 }

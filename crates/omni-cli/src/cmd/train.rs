@@ -4,8 +4,8 @@ use super::{DataArgs, OutputArgs, load_runs};
 use crate::cli::{choice, effect_help};
 use crate::dataset::Dataset;
 use crate::robot_file::{self, Design};
-use crate::units::{std_error_text, value_text};
-use crate::{atomic, design, interrupt, model_file, progress};
+use crate::units::{count, std_error_text, value_text};
+use crate::{atomic, design, interrupt, model_file, out_path, progress};
 use anyhow::Context;
 use omni_ga::calibrate::{Calibration, Plan, Preset, Unexcited, calibrate_with_effects};
 use omni_ga::identify::IdentifyOptions;
@@ -39,9 +39,14 @@ pub struct Args {
     /// Add an effect to fit (an effect id). Repeatable.
     #[arg(long = "effect", value_name = "NAME", help = effect_help("Add an effect to fit. Repeatable."))]
     pub effects: Vec<String>,
-    /// Write the fitted model here (TOML; read back by `--model FILE`).
+    /// Write the fitted model here (TOML; read back by `--model FILE`). Without it the fit is printed and
+    /// nothing is written. Its folder must exist (checked before the fit).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Fit and write even when the fit is refused: a preset whose fixed step misses the runs' sampling,
+    /// or a fitted model worse than its start on its own training runs (each then a warning).
+    #[arg(long)]
+    pub force: bool,
     /// Output options.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -118,24 +123,69 @@ fn toml_safe(v: serde_json::Value) -> serde_json::Value {
     }
 }
 
+/// Exit status of a refused fit ([`Refused`]): 1 (an error in the input is 2).
+pub const EXIT_REFUSED: i32 = 1;
+
+/// A fit refused (exit status [`EXIT_REFUSED`], nothing written) unless `--force`: a preset whose fixed step
+/// misses the runs' sampling (before fitting), or a fit worse than its start on its own training runs.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct Refused(pub String);
+
 /// The paper's Eq. 1 integrates fixed 10 ms steps, one per wheel sample: on runs sampled at another rate
-/// every displacement is scaled by the ratio. Says so when the runs' median interval is more than 10 %
-/// away from the plan's step.
+/// every displacement is scaled by the ratio ([`Plan::step_mismatch`]). Says so, and what to use instead.
 pub fn fixed_step_mismatch(plan: &Plan, runs: &[omni_kin::Run]) -> Option<String> {
-    let omni_kin::StepMode::Fixed { dt_s: Some(step) } = plan.integration.step else { return None };
-    let mut dts: Vec<f64> = runs.iter().map(|r| r.median_dt_s()).collect();
-    dts.sort_by(f64::total_cmp);
-    let median = *dts.get(dts.len() / 2)?;
-    ((median / step - 1.0).abs() > 0.1).then(|| {
+    let m = plan.step_mismatch(runs)?;
+    Some(format!(
+        "the {} preset integrates fixed {:.0} ms steps (Eq. 1), but these runs are sampled every {:.0} ms (median \
+         wheel-sample interval): odometry would be off by a factor {:.2} and the fit worse than the design; use \
+         --preset default (each run's own step)",
+        plan.preset,
+        1e3 * m.step_s,
+        1e3 * m.median_interval_s,
+        m.factor()
+    ))
+}
+
+/// A fit worse than its start on its training runs, in words: both objectives and, when the plan's fixed
+/// step misses the runs' sampling, why.
+pub fn worse_than_start_text(c: &Calibration, plan: &Plan, runs: &[omni_kin::Run]) -> Option<String> {
+    let w = c.worse_than_start()?;
+    let why = plan.step_mismatch(runs).map_or(String::new(), |m| {
         format!(
-            "the {} preset integrates fixed {:.0} ms steps (Eq. 1), but these runs are sampled every {:.0} ms: \
-             odometry is off by a factor {:.2}; use --preset default (each run's own step)",
+            " (the {} preset's fixed {:.0} ms step misses these runs' {:.0} ms sampling)",
             plan.preset,
-            1e3 * step,
-            1e3 * median,
-            step / median
+            1e3 * m.step_s,
+            1e3 * m.median_interval_s
         )
-    })
+    });
+    Some(format!(
+        "the fitted model is worse than its start on its own training runs: {} {:.5} fitted against {:.5} for the \
+         start as given ({:.1} times){why}",
+        w.objective.name(),
+        w.fitted,
+        w.start,
+        w.ratio()
+    ))
+}
+
+/// Before fitting: a preset whose fixed step misses the runs' sampling is refused, or with `force` a
+/// warning (returned, for the caller to say).
+pub fn check_step(plan: &Plan, runs: &[omni_kin::Run], force: bool) -> anyhow::Result<Option<String>> {
+    match fixed_step_mismatch(plan, runs) {
+        Some(m) if !force => Err(Refused(format!("{m}; --force fits with the fixed step anyway")).into()),
+        other => Ok(other),
+    }
+}
+
+/// After fitting: a fit worse than its start is refused (nothing written), or with `force` a warning
+/// (returned).
+pub fn check_fit(c: &Calibration, plan: &Plan, runs: &[omni_kin::Run], force: bool) -> anyhow::Result<Option<String>> {
+    match worse_than_start_text(c, plan, runs) {
+        Some(w) if !force => Err(Refused(format!("{w}; nothing written (--force writes it anyway)")).into()),
+        Some(w) => Ok(Some(format!("{w}; kept because of --force"))),
+        None => Ok(None),
+    }
 }
 
 /// A preset's plan with the command line's overrides.
@@ -263,21 +313,31 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     // Ctrl-C while loading ends the command; during the fit it stops the GA at its next generation and the
     // best model so far is reported and written.
     interrupt::install();
+    if let Some(out) = &a.out {
+        out_path::check_file(out, "--out")?;
+    }
     let Prepared { ds, start, effects, plan, priors } = prepare(a)?;
     let preset_name = a.preset.id();
-    if let Some(w) = fixed_step_mismatch(&plan, &ds.runs) {
+    if let Some(w) = check_step(&plan, &ds.runs, a.force)? {
         tracing::warn!("{w}");
     }
     let mut bar = progress::ProgressObserver::new(plan.ga().map_or(0, |g| g.max_generations), quiet);
     crate::note!(
-        "training on {} runs: preset {preset_name}, seed {} (Ctrl-C stops early and keeps the best so far)",
-        ds.runs.len(),
+        "training on {}: preset {preset_name}, seed {} (Ctrl-C stops early and keeps the best so far)",
+        count(ds.runs.len(), "run"),
         a.seed
     );
     let c = calibrate_with_effects(&start, &effects, &ds.runs, &plan, &mut interrupt::StopOnInterrupt(&mut bar))?;
     bar.finish();
+    if let Some(w) = check_fit(&c, &plan, &ds.runs, a.force)? {
+        tracing::warn!("{w}");
+    }
     let interrupted = interrupt::requested();
     let mut s = summary(&c, preset_name, a.seed, ds.runs.len())?;
+    let designs = designs_figure(&c, &ds, &plan, a.start.is_none())?;
+    if let Some(d) = &designs {
+        s["designs"] = d.to_json();
+    }
     if !priors.is_empty() {
         s["priors"] = priors.iter().map(|p| p.to_json(&c.fitted)).collect();
     }
@@ -298,6 +358,9 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
             println!("interrupted (Ctrl-C): the best model found so far (the GA stopped early; no polish)");
         }
         print_summary(&c, preset_name, ds.runs.len());
+        if let Some(d) = &designs {
+            println!("{}", d.describe());
+        }
         for p in &priors {
             println!("{}", p.describe(&c.fitted));
         }
@@ -305,6 +368,9 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
             let what = if interrupted { "best-so-far model" } else { "model" };
             println!("{what} written to {}", out.display());
         }
+    }
+    if a.out.is_none() {
+        crate::note!("note: the fitted model was not written (no --out FILE)");
     }
     if interrupted {
         return Err(interrupt::Interrupted.into());
@@ -372,19 +438,76 @@ pub struct Trained {
 /// written to `--out` (byte-identical: the same `write_model` either way), but nothing printed, no progress bar
 /// and no Ctrl-C handler installed.
 pub fn train_quietly(a: &Args) -> anyhow::Result<Trained> {
+    if let Some(out) = &a.out {
+        out_path::check_file(out, "--out")?;
+    }
     let Prepared { ds, start, effects, plan, .. } = prepare(a)?;
-    let warnings = fixed_step_mismatch(&plan, &ds.runs).into_iter().collect();
+    let mut warnings: Vec<String> = check_step(&plan, &ds.runs, a.force)?.into_iter().collect();
     let c = calibrate_with_effects(&start, &effects, &ds.runs, &plan, &mut omni_ga::observe::NoopObserver)?;
-    let s = summary(&c, a.preset.id(), a.seed, ds.runs.len())?;
+    warnings.extend(check_fit(&c, &plan, &ds.runs, a.force)?);
+    let mut s = summary(&c, a.preset.id(), a.seed, ds.runs.len())?;
+    if let Some(d) = designs_figure(&c, &ds, &plan, a.start.is_none())? {
+        s["designs"] = d.to_json();
+    }
     if let Some(out) = &a.out {
         write_model(&c, &s, out)?;
     }
     Ok(Trained { calibration: c, summary: s, dataset: ds, warnings })
 }
 
-/// Human-readable fit summary on stdout.
+/// The design figure when the training runs' inputs declare different designs: each run under its own
+/// input's design (in the fit's kinematics and integration), against the one design the fit started from.
+pub struct DesignsFigure {
+    /// Distinct designs.
+    pub designs: usize,
+    /// Eq. 6 on the training runs, each under its own design.
+    pub end_pose: f64,
+    /// The objective on the training runs, each under its own design.
+    pub objective: f64,
+    /// The input whose design the fit started from (`None`: a `--start` model).
+    pub start: Option<String>,
+}
+
+impl DesignsFigure {
+    fn to_json(&self) -> serde_json::Value {
+        json!({ "designs": self.designs, "cost": self.end_pose, "objective": self.objective, "start": self.start })
+    }
+
+    fn describe(&self) -> String {
+        let start = self.start.as_ref().map_or("the --start model".to_string(), |s| format!("{s}'s design"));
+        format!(
+            "design, each run its own input's ({} designs): Eq. 6 {:.5}, objective {:.5}; the fit started from {start} \
+             (the \"design\" above)",
+            self.designs, self.end_pose, self.objective
+        )
+    }
+}
+
+/// [`DesignsFigure`] for a fit on `ds`'s runs, `None` when its inputs declare one design (or none).
+fn designs_figure(
+    c: &Calibration,
+    ds: &Dataset,
+    plan: &Plan,
+    from_design: bool,
+) -> anyhow::Result<Option<DesignsFigure>> {
+    let designs = design::designs_for(&c.start, &[ds]);
+    if designs.single().is_some() {
+        return Ok(None);
+    }
+    let start = ds.declared_start().filter(|_| from_design).map(|d| {
+        d.source.file_name().map_or_else(|| d.source.display().to_string(), |n| n.to_string_lossy().into_owned())
+    });
+    Ok(Some(DesignsFigure {
+        designs: designs.models().len(),
+        end_pose: designs.cost(&ds.runs, CostKind::EndPose)?,
+        objective: designs.cost(&ds.runs, plan.objective)?,
+        start,
+    }))
+}
+
+/// Human-readable fit summary on stdout; its warnings and notes go to stderr.
 pub fn print_summary(c: &Calibration, preset: &str, runs: usize) {
-    println!("preset {preset}: {runs} training runs, objective {}", c.objective.name());
+    println!("preset {preset}: {}, objective {}", count(runs, "training run"), c.objective.name());
     println!(
         "cost (Eq. 6)  design {:.5}  fitted {:.5}  improvement {:.1} %",
         c.end_pose_start,
@@ -400,8 +523,9 @@ pub fn print_summary(c: &Calibration, preset: &str, runs: usize) {
     }
     let nb = c.fitted.model.n_base();
     let specs = c.fitted.model.params();
-    // The matrix above shows base parameters that are its entries; print the others.
-    let base_shown = c.fitted.model.kinematics.params_are_ik_entries();
+    // The matrix above shows base parameters that are its entries (all of an `ik` model's, also when some
+    // entries are structural zeros, as a diff base's vy row); print the others.
+    let base_shown = c.fitted.model.kinematics.kind() == KinematicsKind::Ik;
     if !base_shown || specs.len() > nb {
         for (i, s) in specs.iter().enumerate() {
             if i >= nb || !base_shown {
@@ -411,15 +535,15 @@ pub fn print_summary(c: &Calibration, preset: &str, runs: usize) {
     }
     println!("{} evaluations, {:.2} s", c.evaluations, c.seconds);
     if !c.at_bound.is_empty() {
-        println!("warning: ended on a bound of the GA box: {}", c.at_bound.join(", "));
+        tracing::warn!("ended on a bound of the GA box: {}", c.at_bound.join(", "));
     }
     if !c.outside_box.is_empty() {
-        println!("note: the polish left the GA box (the box was too small) for: {}", c.outside_box.join(", "));
+        crate::note!("note: the polish left the GA box (the box was too small) for: {}", c.outside_box.join(", "));
     }
     print_identifiability(c);
 }
 
-/// Standard errors, condition number, and a warning per unconstrained direction.
+/// Standard errors and condition number on stdout; a warning per unconstrained direction on stderr.
 pub fn print_identifiability(c: &Calibration) {
     let id = &c.identifiability;
     println!(
@@ -430,7 +554,7 @@ pub fn print_identifiability(c: &Calibration) {
     );
     // The IK matrix's ω row is in rad per wheel rad, a ratio and not an angle: it keeps its unit.
     let model = &c.fitted.model;
-    let ik_entries: Vec<String> = if model.kinematics.params_are_ik_entries() {
+    let ik_entries: Vec<String> = if model.kinematics.kind() == KinematicsKind::Ik {
         model.params().into_iter().take(model.n_base()).map(|s| s.name).collect()
     } else {
         Vec::new()
@@ -448,10 +572,10 @@ pub fn print_identifiability(c: &Calibration) {
         println!("  {}", chunk.join(" · "));
     }
     for w in id.warnings() {
-        println!("warning: {w}");
+        tracing::warn!("{w}");
     }
     if !c.held.is_empty() {
-        println!(
+        crate::note!(
             "note: {} direction(s) held at the start values (truncated update; `--unexcited move` lets them move)",
             c.held.len()
         );

@@ -94,6 +94,24 @@ pub fn parse_run(path: &Path, bytes: &[u8], ticks_per_rev: Option<f64>) -> Resul
     parse_run_for(path, bytes, ticks_per_rev, &[])
 }
 
+/// What to say when a CSV file's first line holds numbers rather than column names: an OptiOdom run file
+/// (`<set>_run-NN.csv`, no header) is read with its set's `<set>_metadata.csv`; any other needs a header.
+fn headerless_hint(path: &Path, headers: &[String]) -> String {
+    if !headers.iter().all(|h| h.parse::<f64>().is_ok()) {
+        return String::new();
+    }
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    match name.split_once("_run-") {
+        Some((set, _)) => format!(
+            "; the first line holds numbers: this looks like an OptiOdom run file, which is read from its set's \
+             folder with the set's metadata file ({set}_metadata.csv) beside it (docs/formats.md)"
+        ),
+        None => {
+            "; the first line holds numbers: an omnical CSV file starts with a header line (docs/formats.md)".into()
+        }
+    }
+}
+
 /// [`parse_run`] with the wheel columns in the order of `joints` ([`read_run_for`]).
 ///
 /// long: one pass over header and rows, each check with its own message naming file, line and column;
@@ -153,7 +171,7 @@ pub fn parse_run_for(
         DatasetError::at(
             path,
             format!("line {header_line}"),
-            format!("missing column t_s (columns: {})", headers.join(",")),
+            format!("missing column t_s (columns: {}){}", headers.join(","), headerless_hint(path, &headers)),
         )
     })?;
     let rad_cols: Vec<usize> = (0..headers.len()).filter(|&i| headers[i].ends_with("_rad_s")).collect();

@@ -23,13 +23,119 @@ pub struct Dataset {
     pub skipped: Vec<Skipped>,
     /// Things the user should know (e.g. "velocity empty: differentiated position").
     pub notes: Vec<String>,
-    /// The design geometry the data declares (OptiOdom metadata), if any.
-    pub robot: Option<RobotGeometry>,
+    /// The design geometry each input declares (OptiOdom metadata), in input order, with its runs: each run
+    /// is evaluated with its own input's design (`crate::design`).
+    pub declared: Vec<Declared>,
+    /// The robot the runs are of, from the first input that gave runs: every other input must be of the
+    /// same kind ([`check_same_robot`]).
+    pub robot_kind: Option<RobotKind>,
     /// The robot description the data was read with (`--robot`, or a `robot.toml` found beside it), if any.
     /// Set by the command line, not by [`load`].
     pub robot_file: Option<crate::robot_file::RobotFile>,
     /// The clock offsets of ground truths read from separate files (`--gt`), one per recording.
     pub ground_truth_clocks: Vec<ground_truth::GtClock>,
+}
+
+/// The design one input declares (an OptiOdom set's metadata), with the runs read from it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Declared {
+    /// The input (a set folder).
+    pub source: PathBuf,
+    /// The robot type it names (OptiOdom's `type`: `omni3`, `omni4`, `diff`).
+    pub kind: String,
+    /// The design geometry.
+    pub geometry: RobotGeometry,
+    /// The names of its runs.
+    pub runs: Vec<String>,
+}
+
+/// What kind of robot an input's runs are of: what one command's inputs must share.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RobotKind {
+    /// The input.
+    pub source: PathBuf,
+    /// The robot type the input declares (OptiOdom's `type`), if it declares one.
+    pub declared: Option<String>,
+    /// Wheels of its runs.
+    pub n_wheels: usize,
+}
+
+impl std::fmt::Display for RobotKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.declared {
+            Some(k) => write!(f, "{} is an OptiOdom {k} set ({} wheels)", self.source.display(), self.n_wheels),
+            None => write!(f, "{} holds runs of a {}-wheel robot", self.source.display(), self.n_wheels),
+        }
+    }
+}
+
+impl RobotKind {
+    /// Whether `other` is of another kind: another wheel count, or another declared type.
+    fn differs(&self, other: &RobotKind) -> bool {
+        self.n_wheels != other.n_wheels || matches!((&self.declared, &other.declared), (Some(a), Some(b)) if a != b)
+    }
+}
+
+/// Refuses robots of different kinds in one command (OptiOdom omni3 with diff, 3 wheels with 4), naming both
+/// inputs and their kinds: `first` is the kind seen first, `next` the one that differs.
+pub fn check_same_robot(first: Option<&RobotKind>, next: Option<&RobotKind>) -> Result<(), DatasetError> {
+    match (first, next) {
+        (Some(a), Some(b)) if a.differs(b) => Err(DatasetError::file(
+            &b.source,
+            format!(
+                "runs of robots of different kinds in one command: {a}, and {b}; give one robot's runs (train and \
+                 validate one robot at a time)"
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
+impl Dataset {
+    /// The declared design that stands for all where one design is needed (training's start): the one the
+    /// most runs declare (inputs with equal geometry counted together), the first given on a tie.
+    pub fn declared_start(&self) -> Option<&Declared> {
+        group_designs(&self.declared).into_iter().next().and_then(|g| g.inputs.first().copied())
+    }
+}
+
+/// Inputs that declare one design geometry.
+#[derive(Clone, Debug)]
+pub struct DesignGroup<'a> {
+    /// The geometry.
+    pub geometry: &'a RobotGeometry,
+    /// The inputs that declare it, in the order given.
+    pub inputs: Vec<&'a Declared>,
+}
+
+impl DesignGroup<'_> {
+    /// Runs of its inputs.
+    pub fn n_runs(&self) -> usize {
+        self.inputs.iter().map(|d| d.runs.len()).sum()
+    }
+}
+
+/// The distinct designs `declared` holds, the one of the most runs first (the first given on a tie), the
+/// others in the order given.
+pub fn group_designs<'a>(declared: impl IntoIterator<Item = &'a Declared>) -> Vec<DesignGroup<'a>> {
+    let mut out: Vec<DesignGroup<'a>> = Vec::new();
+    for d in declared {
+        match out.iter_mut().find(|g| *g.geometry == d.geometry) {
+            Some(g) => g.inputs.push(d),
+            None => out.push(DesignGroup { geometry: &d.geometry, inputs: vec![d] }),
+        }
+    }
+    let mut start = 0;
+    for (i, g) in out.iter().enumerate() {
+        if g.n_runs() > out[start].n_runs() {
+            start = i;
+        }
+    }
+    if start > 0 {
+        let first = out.remove(start);
+        out.insert(0, first);
+    }
+    out
 }
 
 /// The default cap on one input file's size (`--max-file-mb`). Bytes: 1 GiB.
@@ -96,6 +202,7 @@ pub fn load(paths: &[PathBuf], opts: &LoadOptions) -> Result<Dataset, DatasetErr
             merge(&mut ds, opts, input.path(), read?)?;
         }
     }
+    ds.notes.extend(designs_note(&ds));
     if ds.runs.is_empty() {
         let what = paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ");
         return Err(match ds.skipped.first() {
@@ -107,6 +214,31 @@ pub fn load(paths: &[PathBuf], opts: &LoadOptions) -> Result<Dataset, DatasetErr
         });
     }
     Ok(ds)
+}
+
+/// When the inputs declare different designs, the note that says so: each run is evaluated with its own
+/// input's design, and which one stands for all where one is needed.
+fn designs_note(ds: &Dataset) -> Option<String> {
+    let groups = group_designs(&ds.declared);
+    if groups.len() < 2 {
+        return None;
+    }
+    let name = |d: &Declared| {
+        d.source.file_name().map_or_else(|| d.source.display().to_string(), |n| n.to_string_lossy().into_owned())
+    };
+    let names = |g: &DesignGroup<'_>| g.inputs.iter().map(|d| name(d)).collect::<Vec<_>>().join(" + ");
+    let list: Vec<String> = groups
+        .iter()
+        .map(|g| format!("{} ({} run{})", names(g), g.n_runs(), if g.n_runs() == 1 { "" } else { "s" }))
+        .collect();
+    let why = if groups[1].n_runs() == groups[0].n_runs() { "the most runs, the first given" } else { "the most runs" };
+    Some(format!(
+        "the inputs declare {} different designs: {}; each run is evaluated with its own input's design, and \
+         where one design is needed (training's start, --model design) it is that of {} ({why})",
+        groups.len(),
+        list.join(", "),
+        names(&groups[0])
+    ))
 }
 
 /// What `omnical init` inspected: one ROS recording and what it holds.
@@ -177,7 +309,8 @@ struct Loaded {
     runs: Vec<Run>,
     skipped: Vec<Skipped>,
     notes: Vec<String>,
-    robot: Option<RobotGeometry>,
+    /// The robot type and design geometry the input declares (an OptiOdom set).
+    declared: Option<(&'static str, RobotGeometry)>,
     clock: Option<ground_truth::GtClock>,
 }
 
@@ -252,7 +385,7 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
         runs: r.runs,
         skipped: r.skipped.into_iter().map(|(source, reason)| Skipped { source, reason }).collect(),
         notes: r.notes,
-        robot: None,
+        declared: None,
         clock: r.ground_truth_clock,
     };
     // The ground-truth file of a ROS recording, when --gt is given.
@@ -287,7 +420,7 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
             // The set's runs are checked one by one (skipped under skip_invalid); a failure of the set
             // itself stops the load.
             let mut skipped = Vec::new();
-            let (runs, robot) = optiodom::read_set(p, |e| {
+            let set = optiodom::read_set(p, |e| {
                 if opts.skip_invalid {
                     skipped.push(Skipped { source: p.display().to_string(), reason: e.to_string() });
                     Ok(())
@@ -295,7 +428,8 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
                     Err(e)
                 }
             })?;
-            Ok(Ok(Loaded { runs, skipped, notes: Vec::new(), robot: Some(robot), clock: None }))
+            let declared = Some((set.kind, set.robot));
+            Ok(Ok(Loaded { runs: set.runs, skipped, notes: Vec::new(), declared, clock: None }))
         }
     }
 }
@@ -325,12 +459,22 @@ fn merge(
                     r.truth().len()
                 );
             }
+            if let Some(first) = l.runs.first() {
+                let kind = RobotKind {
+                    source: source.to_path_buf(),
+                    declared: l.declared.as_ref().map(|(k, _)| k.to_string()),
+                    n_wheels: first.n_wheels(),
+                };
+                check_same_robot(ds.robot_kind.as_ref(), Some(&kind))?;
+                ds.robot_kind.get_or_insert(kind);
+            }
+            if let Some((kind, geometry)) = l.declared {
+                let runs = l.runs.iter().map(|r| r.name().to_string()).collect();
+                ds.declared.push(Declared { source: source.to_path_buf(), kind: kind.into(), geometry, runs });
+            }
             ds.runs.extend(l.runs);
             ds.skipped.extend(l.skipped);
             ds.notes.extend(l.notes);
-            if l.robot.is_some() {
-                ds.robot = l.robot;
-            }
             ds.ground_truth_clocks.extend(l.clock);
             Ok(())
         }

@@ -149,13 +149,14 @@ impl Meta<'_> {
     }
 }
 
-/// The design geometry a set's metadata declares, and the wheel angle of one tick (rad).
-fn design_from_metadata(meta: &Meta<'_>) -> Result<(RobotGeometry, f64), DatasetError> {
+/// The robot type a set's metadata names (one of [`SUPPORTED_TYPES`]), its design geometry, and the wheel
+/// angle of one tick (rad).
+fn design_from_metadata(meta: &Meta<'_>) -> Result<(&'static str, RobotGeometry, f64), DatasetError> {
     let (line, kind) = meta.values("type")?;
-    let kind = kind.first().map_or("", String::as_str);
-    if !SUPPORTED_TYPES.contains(&kind) {
-        return Err(unsupported_type(meta, line, kind));
-    }
+    let named = kind.first().map_or("", String::as_str);
+    let Some(kind) = SUPPORTED_TYPES.iter().copied().find(|t| *t == named) else {
+        return Err(unsupported_type(meta, line, named));
+    };
     let ngear = meta.positive("ngear", 1, "gear ratio")?[0];
     let enc = meta.positive("encRes", 1, "encoder counts per motor revolution")?[0];
     let robot = match kind {
@@ -176,7 +177,7 @@ fn design_from_metadata(meta: &Meta<'_>) -> Result<(RobotGeometry, f64), Dataset
         }
         _ => return Err(unsupported_type(meta, line, kind)),
     };
-    Ok((robot, 2.0 * PI / (ngear * enc)))
+    Ok((kind, robot, 2.0 * PI / (ngear * enc)))
 }
 
 /// The refusal of a robot type outside [`SUPPORTED_TYPES`] (OptiOdom's tricycle, a typo).
@@ -188,15 +189,26 @@ fn unsupported_type(meta: &Meta<'_>, line: usize, kind: &str) -> DatasetError {
     )
 }
 
+/// What a set folder holds: its runs and the robot its metadata declares.
+#[derive(Clone, Debug)]
+pub struct Set {
+    /// The runs, in file-name order.
+    pub runs: Vec<Run>,
+    /// The robot type the metadata names (`omni3`, `omni4`, `diff`).
+    pub kind: &'static str,
+    /// The design geometry it declares.
+    pub robot: RobotGeometry,
+}
+
 /// Read every run of an OptiOdom set folder, with the geometry its metadata declares. Per-run errors go to
 /// `on_error` (return `Err` to stop).
 pub fn read_set(
     dir: &Path,
     mut on_error: impl FnMut(DatasetError) -> Result<(), DatasetError>,
-) -> Result<(Vec<Run>, RobotGeometry), DatasetError> {
+) -> Result<Set, DatasetError> {
     let meta_path = metadata_file(dir).ok_or_else(|| DatasetError::file(dir, "no *_metadata.csv in this folder"))?;
     let meta = Meta { path: &meta_path, rows: read_metadata(&meta_path)? };
-    let (robot, rad_per_tick) = design_from_metadata(&meta)?;
+    let (kind, robot, rad_per_tick) = design_from_metadata(&meta)?;
     let set = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
         .map_err(|e| DatasetError::io(dir, e))?
@@ -215,7 +227,7 @@ pub fn read_set(
             Err(e) => on_error(e)?,
         }
     }
-    Ok((runs, robot))
+    Ok(Set { runs, kind, robot })
 }
 
 /// Column names for errors: `time, x_gt, y_gt, theta_gt` and `ticks_<wheel>` per wheel.

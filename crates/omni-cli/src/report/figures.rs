@@ -182,24 +182,30 @@ pub fn overlay(r: &Report, which: usize) -> anyhow::Result<Figure> {
         path_panel(&right, "end point (zoom)", o, (cx - half, cx + half), (cy - half, cy + half), false)?;
         Ok(())
     })?;
-    let ends: Vec<String> = r
+    let ends: (String, String) = r
         .runs
         .iter()
         .find(|x| x.name == o.run)
         .map(|x| {
-            r.models.iter().zip(&x.end_position_m).map(|(m, e)| format!("{} {:.1} mm", m.label, e * 1000.0)).collect()
+            let per_model = |v: &[f64]| -> Vec<String> {
+                r.models.iter().zip(v).map(|(m, e)| format!("{} {:.1} mm", m.label, e * 1000.0)).collect()
+            };
+            (per_model(&x.path_rms_m).join(", "), per_model(&x.end_position_m).join(", "))
         })
         .unwrap_or_default();
+    let set = if r.held_out_runs > 0 { "held-out" } else { "training" };
+    let judged = &r.models[r.models.len().min(2) - 1].label;
     Ok(Figure {
         id: format!("overlay-{}", o.role),
         title: format!("Trajectory overlay: {} run", o.role),
         caption: format!(
-            "Run {} — the {} held-out run for the fitted matrix (end position error: {}). Left: the whole path \
-             (black: motion-capture ground truth); right: a zoom on where each model ends, as in the paper's \
-             Figs. 6–7.",
+            "Run {} — the {} {set} run by the path RMS of the {judged} (path RMS: {}; end position error: {}). \
+             Left: the whole path (black: motion-capture ground truth); right: a zoom on where each model ends, \
+             as in the paper's Figs. 6–7.",
             o.run,
             if o.role == "worst" { "worst" } else { "median" },
-            ends.join(", ")
+            ends.0,
+            ends.1
         ),
         svg,
     })

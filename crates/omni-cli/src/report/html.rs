@@ -42,11 +42,11 @@ pub fn render(r: &Report, figures: &[Figure], notes: &[String], diagnosis: Optio
     );
     let _ = writeln!(
         h,
-        "<p class=\"note\">omnical {} · {} training runs · figures on {} ({} runs)</p>",
+        "<p class=\"note\">omnical {} · {} · figures on {} ({})</p>",
         env!("CARGO_PKG_VERSION"),
-        r.train_runs,
+        crate::units::count(r.train_runs, "training run"),
         escape(&r.figure_runs),
-        r.runs.len()
+        crate::units::count(r.runs.len(), "run")
     );
     if let Some(d) = diagnosis {
         let _ = writeln!(h, "<p class=\"verdict\"><b>Verdict.</b> {}</p>", escape(&d.verdict_text));
@@ -157,8 +157,12 @@ fn findings(h: &mut String, d: &Diagnosis) {
     if let Some(nf) = &d.noise_floor {
         let _ = writeln!(
             h,
-            "<li>Noise floor at standstill: {:.4} m position, {:.4} rad heading → path RMS ≈ {:.4} m ({} poses).</li>",
-            nf.position_m, nf.heading_rad, nf.path_rms, nf.samples
+            "<li>Noise floor {}: {:.4} m position, {:.4} rad heading → path RMS ≈ {:.4} m ({} poses).</li>",
+            omni_ga::science::text::noise_source(nf.source),
+            nf.position_m,
+            nf.heading_rad,
+            nf.path_rms,
+            nf.samples
         );
     }
     h.push_str("</ul>\n");

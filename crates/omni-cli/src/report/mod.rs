@@ -16,9 +16,8 @@ pub mod tum;
 
 use omni_ga::diagnose::{Costs, Diagnosis};
 use omni_kin::cost::CostKind;
-use omni_kin::evaluate::Evaluator;
 use omni_kin::odometry::{self, Selection};
-use omni_kin::{FittedModel, KinError, Pose2, Run};
+use omni_kin::{FittedModel, KinError, Pose2, Run, RunModels, ToRunModels};
 use serde::Serialize;
 
 /// Heading weight of the path cost. m/rad.
@@ -31,8 +30,9 @@ const GROWTH_BINS: usize = 20;
 pub struct Labelled {
     /// `design`, `fitted matrix`, `+ time_offset`, …
     pub label: String,
-    /// The model and its parameters.
-    pub model: FittedModel,
+    /// The model and its parameters: one for every run, or each run's own (the design, when the robot's
+    /// inputs declare different designs; it must know every training and held-out run).
+    pub model: RunModels,
 }
 
 /// Everything the report is made from.
@@ -156,10 +156,8 @@ impl Report {
         let mut models = Vec::with_capacity(input.models.len());
         let mut fig_errors = Vec::with_capacity(input.models.len());
         for m in &input.models {
-            let train = Evaluator::for_report(&m.model.model, input.train, path.selection())?;
-            let held_out = Evaluator::for_report(&m.model.model, fig_runs, path.selection())?;
-            let res = m.model.model.resolve(&m.model.params)?;
-            let (train, held_out) = (train.errors(&res), held_out.errors(&res));
+            let (train, held_out) =
+                (m.model.errors(input.train, path.selection())?, m.model.errors(fig_runs, path.selection())?);
             let w = path.heading_weight();
             let costs = Costs {
                 train_path: train.path_cost(w),
@@ -168,15 +166,19 @@ impl Report {
                 held_out_end_pose: held_out.end_pose_cost(),
             };
             fig_errors.push(held_out);
-            let specs = m.model.model.params();
-            // The matrix shows base parameters that are its entries; list the others.
-            let nb = if m.model.model.kinematics.params_are_ik_entries() { m.model.model.n_base() } else { 0 };
+            // Runs with designs of their own show no one matrix: the first stands for its parameters.
+            let (first, one) = (m.model.first(), m.model.single().is_some());
+            let specs = first.model.params();
+            // The matrix shows base parameters that are its entries (all of an `ik` model's, structural zeros
+            // aside); list the others.
+            let is_matrix = first.model.kinematics.kind() == omni_kin::KinematicsKind::Ik;
+            let nb = if is_matrix { first.model.n_base() } else { 0 };
             let params =
-                specs.iter().zip(&m.model.params).skip(nb).map(|(s, v)| (s.name.clone(), *v, s.unit.to_string()));
+                specs.iter().zip(&first.params).skip(nb).map(|(s, v)| (s.name.clone(), *v, s.unit.to_string()));
             models.push(ModelSummary {
                 label: m.label.clone(),
                 costs,
-                matrix: m.model.ik().ok().map(|k| k.rows()),
+                matrix: first.ik().ok().filter(|_| one).map(|k| k.rows()),
                 params: params.collect(),
             });
         }
@@ -220,10 +222,11 @@ impl Report {
             heading_rad: growth_sum.iter().map(|g| g.iter().map(|c| mean(c.1, c.2)).collect()).collect(),
         };
 
-        // Worst and typical held-out runs of the fitted model (the second one; the design when alone).
+        // Worst and typical held-out runs of the fitted model (the second one; the design when alone), by
+        // path RMS: the measure by which the diagnosis names its worst (training) run.
         let judge = input.models.len().min(2) - 1;
         let mut order: Vec<usize> = (0..runs.len()).collect();
-        order.sort_by(|&a, &b| runs[a].end_position_m[judge].total_cmp(&runs[b].end_position_m[judge]));
+        order.sort_by(|&a, &b| runs[a].path_rms_m[judge].total_cmp(&runs[b].path_rms_m[judge]));
         let mut overlays = Vec::new();
         if let Some(&worst) = order.last() {
             overlays.push(overlay("worst", &fig_runs[worst], &input.models)?);
@@ -261,7 +264,8 @@ fn overlay(role: &str, run: &Run, models: &[Labelled]) -> Result<Overlay, KinErr
         xy_m: run.truth().iter().map(|p| (p.pose.x_m, p.pose.y_m)).collect(),
     }];
     for m in models {
-        let res = m.model.model.resolve(&m.model.params)?;
+        let fm = m.model.for_run(run)?;
+        let res = fm.model.resolve(&fm.params)?;
         let tr = odometry::integrate(&res, run);
         lines.push(PathLine { label: m.label.clone(), xy_m: thin(&tr.poses) });
     }
@@ -329,22 +333,22 @@ pub fn write_with(
     Ok(Written { report, figures: figs.into_iter().map(|f| f.id).collect(), png })
 }
 
-/// The models a report shows for a fitted model and its diagnosis: the design, the model itself, and the
-/// model with the effects the diagnosis added (when it added any).
-pub fn models_for(design: &FittedModel, fitted: &FittedModel, diagnosis: Option<&Diagnosis>) -> Vec<Labelled> {
+/// The models a report shows for a fitted model and its diagnosis: the design (one, or each run's own),
+/// the model itself, and the model with the effects the diagnosis added (when it added any).
+pub fn models_for(design: &impl ToRunModels, fitted: &FittedModel, diagnosis: Option<&Diagnosis>) -> Vec<Labelled> {
     let base = format!("fitted {}", fitted.model.kinematics.noun());
     let with_effects = |m: &FittedModel, base: &str| {
         let ids: Vec<&str> = m.model.effects.iter().map(omni_kin::effect::Effect::id).collect();
         if ids.is_empty() { base.to_string() } else { format!("{base} + {}", ids.join(" + ")) }
     };
     let mut v = vec![
-        Labelled { label: "design".into(), model: design.clone() },
-        Labelled { label: with_effects(fitted, &base), model: fitted.clone() },
+        Labelled { label: "design".into(), model: design.to_run_models() },
+        Labelled { label: with_effects(fitted, &base), model: fitted.into() },
     ];
     if let Some(f) = diagnosis.and_then(|d| d.final_model.as_ref())
         && f.model.effects.len() > fitted.model.effects.len()
     {
-        v.push(Labelled { label: with_effects(f, &base), model: f.clone() });
+        v.push(Labelled { label: with_effects(f, &base), model: f.into() });
     }
     v
 }
@@ -371,10 +375,10 @@ mod tests {
         ReportInput {
             title: "t <&>".into(),
             models: vec![
-                Labelled { label: "design".into(), model: FittedModel::paper_design() },
+                Labelled { label: "design".into(), model: FittedModel::paper_design().into() },
                 Labelled {
                     label: "truth".into(),
-                    model: FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated())),
+                    model: FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated())).into(),
                 },
             ],
             train: runs,
@@ -406,8 +410,8 @@ mod tests {
         .unwrap();
         assert_eq!(r.models[0].costs.held_out_end_pose, eq6);
         assert_eq!(r.ladder.len(), 2);
-        // The worst overlay is the run with the largest end error of the second model.
-        let worst = r.runs.iter().max_by(|a, b| a.end_position_m[1].total_cmp(&b.end_position_m[1])).unwrap();
+        // The worst overlay is the run with the largest path RMS of the second model.
+        let worst = r.runs.iter().max_by(|a, b| a.path_rms_m[1].total_cmp(&b.path_rms_m[1])).unwrap();
         assert_eq!(r.overlays[0].run, worst.name);
         assert_eq!(r.overlays[0].lines.len(), 3);
         // Design error grows along the runs; growth has one curve per model.

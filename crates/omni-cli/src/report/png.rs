@@ -39,16 +39,32 @@ pub fn options() -> usvg::Options<'static> {
     options
 }
 
-/// Writes `DIR/<figure id>.png` for every figure (atomically); returns the paths.
+/// Every figure a report can draw (`figures::all`), by id: the PNG files a report owns in its folder.
+pub const FIGURE_IDS: &[&str] =
+    &["ladder", "overlay-worst", "overlay-typical", "flower", "heat-map", "growth", "ranking"];
+
+/// Writes `DIR/<figure id>.png` for every figure (atomically) and removes the figures of [`FIGURE_IDS`]
+/// that this report does not draw (an earlier report's, which would pass for this one's); other files in
+/// `DIR` stay. Returns the paths written.
 pub fn write_all(figures: &[Figure], dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let options = options();
     let mut written = Vec::with_capacity(figures.len());
     for f in figures {
+        anyhow::ensure!(FIGURE_IDS.contains(&f.id.as_str()), "figure {} is missing from png::FIGURE_IDS (a bug)", f.id);
         let path = dir.join(format!("{}.png", f.id));
         let bytes = render(&f.svg, &options).with_context(|| format!("figure {}", f.id))?;
         atomic::write_atomic(&path, &bytes).with_context(|| format!("writing {}", path.display()))?;
         written.push(path);
+    }
+    for id in FIGURE_IDS.iter().filter(|id| !figures.iter().any(|f| f.id == **id)) {
+        let stale = dir.join(format!("{id}.png"));
+        match std::fs::remove_file(&stale) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(e).with_context(|| format!("removing {} (an earlier report's figure)", stale.display()));
+            }
+            _ => {}
+        }
     }
     Ok(written)
 }

@@ -26,6 +26,9 @@ pub struct Calibration {
     pub objective_start: f64,
     /// Objective at the fit.
     pub objective_fitted: f64,
+    /// Objective of the start as given (its own integration, which the plan's may replace) on the training
+    /// runs: what the fit must not be worse than ([`Calibration::worse_than_start`]).
+    pub objective_start_as_given: f64,
     /// Eq. 6 end-pose cost on the training runs at the start.
     pub end_pose_start: f64,
     /// Eq. 6 end-pose cost on the training runs at the fit.
@@ -64,9 +67,43 @@ impl Calibration {
             .collect()
     }
 
+    /// The fit when it is worse than its start on its own training runs: its objective above the start's as
+    /// given ([`Self::objective_start_as_given`]) by more than `WORSE_TOLERANCE` (1e-9) (relative). The stages
+    /// keep the best point, so this happens when the plan's integration misrepresents the runs (a fixed
+    /// step that is not their sampling interval): the fit is then worse than the model it started from.
+    pub fn worse_than_start(&self) -> Option<WorseThanStart> {
+        (self.objective_fitted > self.objective_start_as_given * (1.0 + WORSE_TOLERANCE)).then_some(WorseThanStart {
+            objective: self.objective,
+            start: self.objective_start_as_given,
+            fitted: self.objective_fitted,
+        })
+    }
+
     /// The result of the last stage run with optimizer `name` (`ga`, `lm`), if it ran.
     pub fn solution(&self, name: &str) -> Option<&Solution> {
         self.stages.iter().rev().find(|s| s.name == name).map(|s| &s.solution)
+    }
+}
+
+/// Relative margin above the start's objective within which a fit counts as no worse (the fast route and
+/// the walk differ in the last bits).
+pub const WORSE_TOLERANCE: f64 = 1e-9;
+
+/// A fit worse than its start on its own training runs ([`Calibration::worse_than_start`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WorseThanStart {
+    /// The objective compared.
+    pub objective: CostKind,
+    /// The start's, as given (its own integration).
+    pub start: f64,
+    /// The fit's.
+    pub fitted: f64,
+}
+
+impl WorseThanStart {
+    /// How many times the start's objective the fit's is.
+    pub fn ratio(&self) -> f64 {
+        self.fitted / self.start
     }
 }
 
@@ -85,7 +122,24 @@ pub fn calibrate(
     let names: Vec<String> = model.params().into_iter().map(|p| p.name).collect();
     let from = Start { x: &start.params, objective: objective_start, hold_at: &start.params };
     let fit = pipeline::run(&problem, plan, from, &names, observer)?;
-    Outcome { fit, identifiability: None }.report(&problem, &plan.identify, &start.params, objective_start, t0)
+    let start_as_given = objective_as_given(start, train, plan, objective_start)?;
+    Outcome { fit, identifiability: None, start_as_given }.report(
+        &problem,
+        &plan.identify,
+        &start.params,
+        objective_start,
+        t0,
+    )
+}
+
+/// The objective of `start` as given (its own integration, which the plan's may replace) on `train`:
+/// `objective_start` (the plan's integration) when the two integrations are the same.
+fn objective_as_given(start: &FittedModel, train: &[Run], plan: &Plan, objective_start: f64) -> Result<f64, Error> {
+    if start.model.integration == plan.integration {
+        Ok(objective_start)
+    } else {
+        Ok(cost::cost(&start.model, &start.params, train, plan.objective)?)
+    }
 }
 
 /// Adds `effects`, at their null values, to the fitted model `base` and refits every parameter: the plan's
@@ -114,7 +168,9 @@ pub fn refine(
     let from = Start { x: &nudged, objective, hold_at: &start.params };
     let fit = pipeline::run(&problem, &refining, from, &names, observer)?;
     let objective_start = problem.cost(&start.params);
-    Outcome { fit, identifiability: None }.report(&problem, &plan.identify, &start.params, objective_start, t0)
+    // The model keeps its own integration: the start as given is the start fitted from.
+    let outcome = Outcome { fit, identifiability: None, start_as_given: objective_start };
+    outcome.report(&problem, &plan.identify, &start.params, objective_start, t0)
 }
 
 /// `start`'s parameters, with those from `first` on whose value is the lower end of their range (backlash
@@ -175,7 +231,8 @@ pub fn calibrate_with_effects(
     let bounds = search_box_with(&model, &full.params, plan.box_rule, &plan.half_widths)?;
     let problem = CalibrationProblem::new(&model, train, plan.objective, bounds)?;
     let objective_start = problem.cost(&full.params);
-    Outcome { fit, identifiability }.report(&problem, &plan.identify, &full.params, objective_start, t0)
+    let start_as_given = objective_as_given(&full, train, plan, objective_start)?;
+    Outcome { fit, identifiability, start_as_given }.report(&problem, &plan.identify, &full.params, objective_start, t0)
 }
 
 /// What a fit ended with, before its report: the pipeline's result and, when already computed at its point,
@@ -183,6 +240,8 @@ pub fn calibrate_with_effects(
 struct Outcome {
     fit: Fitted,
     identifiability: Option<Identifiability>,
+    /// The start's objective as given ([`Calibration::objective_start_as_given`]).
+    start_as_given: f64,
 }
 
 impl Outcome {
@@ -216,6 +275,7 @@ impl Outcome {
             objective: problem.objective(),
             objective_start,
             objective_fitted,
+            objective_start_as_given: self.start_as_given,
             end_pose_start,
             end_pose_fitted,
             evaluations: 1 + fit.evaluations,
@@ -227,5 +287,65 @@ impl Outcome {
             identifiability,
             held: fit.held,
         })
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use crate::fit::plan::Preset;
+    use crate::optimizer::observe::NoopObserver;
+    use omni_kin::simulate::{SimConfig, flower_commands, simulate};
+    use omni_kin::{IkMatrix, Model};
+
+    /// Runs of the paper's robot (Eq. 9) sampled every 40 ms, as OptiOdom's omni3 data is.
+    fn runs_at_40_ms() -> Vec<Run> {
+        let config = SimConfig {
+            commands: flower_commands().into_iter().step_by(3).collect(),
+            runs_per_command: 1,
+            duration_s: 4.0,
+            wheel_rate_hz: 25.0,
+            ..SimConfig::default()
+        };
+        simulate(&config, &FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated())), "r/").unwrap()
+    }
+
+    /// The paper's fixed 10 ms step on 40 ms data: the step check says so up front (factor 0.25), and the
+    /// fit (which cannot scale the matrix 4× within its box) ends worse than the design it started from,
+    /// which the calibration reports with both objectives.
+    #[test]
+    fn a_fit_worse_than_its_start_is_reported() {
+        let runs = runs_at_40_ms();
+        let design = FittedModel::paper_design();
+        let mut plan = Plan::preset(Preset::Paper, design.model.n_params());
+        plan.ga_mut().unwrap().max_generations = 5;
+        let m = plan.step_mismatch(&runs).unwrap();
+        assert_eq!(m.step_s, 0.010);
+        assert!((m.median_interval_s - 0.040).abs() < 1e-9, "{m:?}");
+        assert!((m.factor() - 0.25).abs() < 1e-9);
+        let c = calibrate(&design, &runs, &plan, &mut NoopObserver).unwrap();
+        let w = c.worse_than_start().expect("the fit is worse than the design on its own training runs");
+        assert_eq!(w.objective, CostKind::EndPose);
+        let own = cost::cost(&design.model, &design.params, &runs, CostKind::EndPose).unwrap();
+        assert_eq!(w.start, own, "the start is compared as given: each run's own steps");
+        assert_eq!(w.fitted, c.objective_fitted);
+        assert!(w.ratio() > 2.0, "fitted {} vs start {}", w.fitted, w.start);
+        // Within the plan's own integration the stages still kept their best point.
+        assert!(c.objective_fitted <= c.objective_start);
+    }
+
+    /// Each run's own step (the default preset): no mismatch, and the fit beats its start.
+    #[test]
+    fn a_fit_on_the_runs_own_steps_is_not_worse() {
+        let runs = runs_at_40_ms();
+        let design = FittedModel::paper_design();
+        let mut plan = Plan::preset(Preset::Default, design.model.n_params());
+        plan.ga_mut().unwrap().max_generations = 5;
+        assert_eq!(plan.step_mismatch(&runs), None);
+        let c = calibrate(&design, &runs, &plan, &mut NoopObserver).unwrap();
+        assert_eq!(c.objective_start_as_given, c.objective_start);
+        assert_eq!(c.worse_than_start(), None, "fitted {} vs start {}", c.objective_fitted, c.objective_start);
+        assert!(c.objective_fitted < 0.5 * c.objective_start);
     }
 }

@@ -31,9 +31,9 @@ mod stage;
 
 pub use crate::error::Error as CalibrateError;
 pub(crate) use calibration::differentiable_start;
-pub use calibration::{Calibration, calibrate, calibrate_with_effects, refine};
+pub use calibration::{Calibration, WorseThanStart, calibrate, calibrate_with_effects, refine};
 pub use pipeline::StageOutcome;
-pub use plan::{Plan, Preset, Unexcited};
+pub use plan::{Plan, Preset, STEP_TOLERANCE, StepMismatch, Unexcited};
 pub use problem::{CalibrationProblem, RunBlock};
 pub use search_box::{BoxRule, search_box, search_box_with};
 pub use stage::Stage;

@@ -6,8 +6,8 @@ use crate::fit::stage::Stage;
 use crate::optimizer::ga::{GaConfig, StallRule};
 use crate::optimizer::lm::LmConfig;
 use crate::science::identify::IdentifyOptions;
-use omni_kin::Integration;
 use omni_kin::cost::CostKind;
+use omni_kin::{Integration, Run, StepMode};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -137,5 +137,39 @@ impl Plan {
             Stage::Ga(c) => Some(c),
             _ => None,
         })
+    }
+
+    /// Whether the plan's fixed integration step (the paper's Eq. 1: one fixed step per wheel sample)
+    /// misses the runs' sampling: the median over runs of each run's median wheel-sample interval more
+    /// than [`STEP_TOLERANCE`] away from the step. On such runs every displacement is scaled by step /
+    /// interval, and a fit compensates in its parameters. `None` for a plan that takes each run's own
+    /// steps, or without runs.
+    pub fn step_mismatch(&self, runs: &[Run]) -> Option<StepMismatch> {
+        let StepMode::Fixed { dt_s: Some(step_s) } = self.integration.step else { return None };
+        let mut dts: Vec<f64> = runs.iter().map(Run::median_dt_s).collect();
+        dts.sort_by(f64::total_cmp);
+        let median_interval_s = *dts.get(dts.len() / 2)?;
+        ((median_interval_s / step_s - 1.0).abs() > STEP_TOLERANCE)
+            .then_some(StepMismatch { step_s, median_interval_s })
+    }
+}
+
+/// Relative difference between a plan's fixed step and the runs' sampling interval beyond which they
+/// do not match ([`Plan::step_mismatch`]): 10 %.
+pub const STEP_TOLERANCE: f64 = 0.1;
+
+/// A plan's fixed step against the runs' sampling ([`Plan::step_mismatch`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepMismatch {
+    /// The plan's fixed step. s.
+    pub step_s: f64,
+    /// The median over runs of each run's median wheel-sample interval. s.
+    pub median_interval_s: f64,
+}
+
+impl StepMismatch {
+    /// The factor every integrated displacement is off by: step / interval.
+    pub fn factor(&self) -> f64 {
+        self.step_s / self.median_interval_s
     }
 }

@@ -8,6 +8,7 @@ use crate::optimizer::problem::{
 use crate::science::identify::{self, Identifiability, IdentifyOptions};
 use nalgebra::DMatrix;
 use omni_kin::cost::CostKind;
+use omni_kin::effect::{Effect, Stage};
 use omni_kin::evaluate::Evaluator;
 use omni_kin::{Model, Run};
 
@@ -116,13 +117,15 @@ impl<'a> CalibrationProblem<'a> {
         let dm = self.ik_from_base(x)?;
         let (nb, n) = (self.model.n_base(), x.len());
         let mut effects: Option<(Vec<usize>, Vec<Vec<f64>>)> = None;
+        // Every column of a block is written below: one buffer serves every run.
+        let mut j = DMatrix::zeros(0, n);
         // One run's block: the IK columns (chained to the base parameters), the carried effect columns
         // (`covered`, after the IK entries in `jac`) and the rest by differences, computed once.
         let mut block = |run: usize, residuals: &[f64], jac: &DMatrix<f64>, covered: &[usize]| {
             let row_offset = self.row_offsets[run];
             let rows = residuals.len();
             let nik = jac.ncols() - covered.len();
-            let mut j = DMatrix::zeros(rows, n);
+            j.resize_mut(rows, n, 0.0);
             match &dm {
                 None => j.columns_mut(0, nb).copy_from(&jac.columns(0, nik)),
                 Some(dm) => j.columns_mut(0, nb).copy_from(&(jac.columns(0, nik) * dm)),
@@ -142,9 +145,13 @@ impl<'a> CalibrationProblem<'a> {
             }
             visit(RunBlock { run, residuals, row_offset, jacobian: &j });
         };
-        let kernel = self
-            .evaluator
-            .ik_jacobian_blocks(&res, self.objective, &mut |b| block(b.run, b.residuals, b.jacobian, &[]));
+        // The kernel also carries the parameters of a model's one (affine) wheel-stage effect.
+        let wheel = self.wheel_parameters();
+        let kernel = self.evaluator.ik_jacobian_blocks(&res, self.objective, &mut |b| {
+            debug_assert!(b.wheel_columns == 0 || b.wheel_columns == wheel.len());
+            let covered = if b.wheel_columns == wheel.len() { wheel.as_slice() } else { &[] };
+            block(b.run, b.residuals, b.jacobian, covered)
+        });
         kernel.or_else(|| {
             self.evaluator.forward_jacobian_blocks(self.model, x, self.objective, &mut |b| {
                 block(b.run, b.residuals, b.jacobian, b.covered)
@@ -165,6 +172,19 @@ impl<'a> CalibrationProblem<'a> {
     /// The objective.
     pub fn objective(&self) -> CostKind {
         self.objective
+    }
+
+    /// Indices of the parameters of the model's wheel-stage effect, when it has exactly one.
+    fn wheel_parameters(&self) -> Vec<usize> {
+        let model = self.model;
+        let wheel: Vec<_> = (model.effects.iter().zip(model.effect_ranges()))
+            .filter(|(e, _)| e.stage() == Stage::Wheel)
+            .map(|(_, r)| r)
+            .collect();
+        match &wheel[..] {
+            [r] => r.clone().collect(),
+            _ => Vec::new(),
+        }
     }
 
     /// Residual rows of each run, in run order (3 per selected ground-truth pose).

@@ -23,9 +23,10 @@
 //! [`ExploreOptions::min_gain`] (5 %) and larger than [`ExploreOptions::min_gain_std_errors`] (2) standard
 //! errors.
 //!
-//! `unexplained`: no family passes, and the baseline's held-out path RMS is more than
-//! [`ExploreOptions::noise_ratio`] (3) times the held-out runs' measurement noise floor (or the noise floor
-//! is unknown): an error remains that no family's features explain.
+//! `unexplained`: the one decision of diagnose ([`crate::science::diagnose::remains`]) on the error that
+//! remains with the best passing family (or the baseline, when none passes): far above the noise floor, or
+//! biased beyond the scatter of repeated runs (or runs of one kind of path), or above 3× the noise floor
+//! when the runs have no groups to test.
 //!
 //! No I/O; the words are made in [`crate::science::text`].
 
@@ -35,7 +36,7 @@ use crate::optimizer::observe::NoopObserver;
 use crate::optimizer::problem::{Bounds, LeastSquares};
 use crate::optimizer::{LmConfig, Termination};
 use crate::science::coverage::{MotionCoverage, motion_coverage};
-use crate::science::diagnose::noise_floor;
+use crate::science::diagnose::{UnexplainedEvidence, remains};
 use crate::science::identify::WEAK_LOADING;
 use omni_kin::effect::{Effect, EffectKind, Family, Learned};
 use omni_kin::evaluate::Evaluator;
@@ -55,19 +56,11 @@ pub struct ExploreOptions {
     /// Training residuals at every k-th ground-truth pose: train's objective. Default 1
     /// ([`CostKind::PATH_EVERY`]).
     pub every: usize,
-    /// `unexplained` needs the held-out path RMS above this many noise floors. Default 3.
-    pub noise_ratio: f64,
 }
 
 impl Default for ExploreOptions {
     fn default() -> Self {
-        Self {
-            families: Family::ALL.to_vec(),
-            min_gain: 0.05,
-            min_gain_std_errors: 2.0,
-            every: CostKind::PATH_EVERY,
-            noise_ratio: 3.0,
-        }
+        Self { families: Family::ALL.to_vec(), min_gain: 0.05, min_gain_std_errors: 2.0, every: CostKind::PATH_EVERY }
     }
 }
 
@@ -201,8 +194,11 @@ pub struct Exploration {
     pub baseline_held_out_cost: f64,
     /// The held-out runs' measurement noise floor (path RMS from pose noise alone), when measurable. m.
     pub noise_floor_path_rms: Option<f64>,
-    /// No family passes and an error above the noise remains (module docs).
+    /// Something physical is still missing with the best passing family (or none): the one decision of
+    /// diagnose (module docs).
     pub unexplained: bool,
+    /// The figures behind `unexplained`.
+    pub evidence: UnexplainedEvidence,
     /// Training and held-out run counts.
     pub runs: (usize, usize),
     /// The training runs' motions against the held-out runs': what the training runs lack.
@@ -234,14 +230,17 @@ pub fn explore(
         families.push(fit_family(model, family, train, validate, &plan, (base_cost, &base_runs), opts)?);
     }
     families.sort_by(|a, b| b.held_out_gain.total_cmp(&a.held_out_gain));
-    let noise = noise_floor(validate).map(|n| n.path_rms);
-    let remains = noise.is_none_or(|n| base_cost > opts.noise_ratio * n);
-    let unexplained = !families.iter().any(|f| f.passes) && remains;
+    let (with, held_out_m) = match families.iter().find(|f| f.passes) {
+        Some(f) => (&f.fitted, f.held_out_cost),
+        None => (&baseline.fitted, base_cost),
+    };
+    let (unexplained, evidence, noise) = remains(with, train, validate, held_out_m, 1)?;
     Ok(Exploration {
         families,
         baseline_held_out_cost: base_cost,
-        noise_floor_path_rms: noise,
+        noise_floor_path_rms: noise.map(|n| n.path_rms),
         unexplained,
+        evidence,
         runs: (train.len(), validate.len()),
         coverage: motion_coverage(model, train, validate)?,
     })

@@ -8,7 +8,8 @@
 
 use crate::science::coverage::{MotionCoverage, MotionGap, MotionKind};
 use crate::science::diagnose::{
-    Conclusion, DecidedBy, ExcitationGap, Finding, GapKind, HeldOut, RungKind, Turn, UnexplainedEvidence, Verdict,
+    Conclusion, DecidedBy, ExcitationGap, Finding, GapKind, GroupBasis, HeldOut, NoiseSource, RungKind, Turn,
+    UnexplainedEvidence, Verdict,
 };
 use crate::science::identify::{
     Advice, CovarianceKind, Identifiability, MIN_SEGMENT_S, MotionParts, PatternPresence, WeakDirection, WheelEvidence,
@@ -99,12 +100,16 @@ pub fn excitation_gap(gap: &ExcitationGap) -> String {
 pub fn finding(f: &Finding) -> String {
     match f {
         Finding::WorstRun { run, command, path_rms_m, design_path_rms_m } => format!(
-            "worst run {run} ({}): path RMS {path_rms_m:.4} m (design {design_path_rms_m:.4})",
+            "worst training run {run} ({}): path RMS {path_rms_m:.4} m (design {design_path_rms_m:.4})",
             command.as_deref().unwrap_or("-")
         ),
         Finding::SystematicGroups { systematic, groups, largest } => format!(
-            "{systematic} of {groups} command groups end with a systematic error (bias beyond the repeat scatter); largest: {} bias {:.4}, scatter {:.4}",
-            largest.group, largest.bias, largest.scatter
+            "{systematic} of {groups} {} end with a systematic error (bias beyond the {}); largest: {} bias {:.4}, scatter {:.4}",
+            groups_noun(largest.basis),
+            scatter_noun(largest.basis),
+            largest.group,
+            largest.bias,
+            largest.scatter
         ),
         Finding::ErrorGrowth { early_m, late_m } => {
             format!("position error grows from {early_m:.4} m early to {late_m:.4} m late in the runs")
@@ -119,10 +124,16 @@ pub fn finding(f: &Finding) -> String {
         Finding::NotExcited { effect, gap } => {
             format!("{effect}: not tested, the training runs do not excite it ({})", excitation_gap(gap))
         }
+        Finding::WorseThanDesign { worse, runs } => format!(
+            "{worse} of {runs} held-out runs end with a larger path error than the design: the fit does not serve every motion (compare the training runs' motions with these)"
+        ),
         Finding::Unconstrained(w) => format!("the model itself: {}", warning(w)),
         Finding::MissingMotions(c) => motion_coverage(c),
-        Finding::RepeatabilityFloor { scatter } => format!(
+        Finding::RepeatabilityFloor { scatter, basis: GroupBasis::Command } => format!(
             "repeatability floor: end-pose errors scatter by {scatter:.4} between repeats of the same command (no deterministic effect removes that part)"
+        ),
+        Finding::RepeatabilityFloor { scatter, basis: GroupBasis::Motion } => format!(
+            "end-pose errors scatter by {scatter:.4} between runs of the same kind of path (not repeats of one command: part of it is the paths' own differences)"
         ),
     }
 }
@@ -249,29 +260,78 @@ fn unexplained(v: &Verdict) -> String {
     };
     let repeats = |e: &UnexplainedEvidence| {
         format!(
-            "{} of {} command groups end biased beyond their repeat scatter (t-test at 5 %: {:.1} expected by chance, as many with probability {})",
+            "{} of {} {} end biased beyond their {} (t-test at 5 %: {:.1} expected by chance, as many with probability {})",
             e.groups_biased,
             e.groups_total,
+            groups_noun(e.groups_basis),
+            scatter_noun(e.groups_basis),
             0.05 * e.groups_total as f64,
             probability(e.chance_probability.unwrap_or(1.0))
         )
     };
     match (e.decided_by, v.unexplained) {
+        (DecidedBy::FarAboveNoise, _) => {
+            let groups = if e.groups_total > 0 { format!(" ({})", repeats(e)) } else { String::new() };
+            format!(
+                "something physical is still missing: {floor}, far beyond what measurement noise explains{groups}{growth}"
+            )
+        }
         (DecidedBy::Repeats, true) => {
-            format!("something physical is still missing, decided by the repeats: {}; {floor}{growth}", repeats(e))
+            format!(
+                "something physical is still missing, decided by the {}: {}; {floor}{growth}",
+                groups_short(e.groups_basis),
+                repeats(e)
+            )
         }
         (DecidedBy::Repeats, false) => format!(
-            "no systematic error remains, decided by the repeats: {}{}; {floor}",
+            "no systematic error remains, decided by the {}: {}{}; {floor}",
+            groups_short(e.groups_basis),
             repeats(e),
             e.repeatability_floor.map_or(String::new(), |f| format!(", repeatability floor {f:.4}"))
         ),
         (DecidedBy::NoiseFloorRatio, missing) => format!(
-            "no command was repeated, so the repeat test could not be made; decided by the noise floor alone: {floor}{}",
+            "{}; decided by the noise floor alone: {floor}{}",
+            match e.groups_total {
+                0 => "no command was repeated and no two runs are of one kind, so the group test could not be made",
+                _ => "a single group of runs cannot show a bias beyond chance, so the group test could not decide",
+            },
             if missing { ": something physical is still missing" } else { ", close to it" }
         ),
         (DecidedBy::Undecided, _) => {
             format!("{floor}; without repeats or a noise floor, whether something is missing cannot be decided")
         }
+    }
+}
+
+/// Where a noise floor was seen, in words: `at standstill`, or from the jitter while moving.
+pub fn noise_source(source: NoiseSource) -> &'static str {
+    match source {
+        NoiseSource::Standstill => "at standstill",
+        NoiseSource::Jitter => "from the ground truth's jitter while moving (the runs never stand still)",
+    }
+}
+
+/// What the groups of a group test are, in words.
+fn groups_noun(basis: GroupBasis) -> &'static str {
+    match basis {
+        GroupBasis::Command => "command groups",
+        GroupBasis::Motion => "groups of runs of one kind of path (no command ids: grouped by their ground truth)",
+    }
+}
+
+/// The scatter a group's bias is judged against, in words.
+fn scatter_noun(basis: GroupBasis) -> &'static str {
+    match basis {
+        GroupBasis::Command => "repeat scatter",
+        GroupBasis::Motion => "scatter between the group's runs",
+    }
+}
+
+/// The group test's short name.
+fn groups_short(basis: GroupBasis) -> &'static str {
+    match basis {
+        GroupBasis::Command => "repeats",
+        GroupBasis::Motion => "runs of one kind",
     }
 }
 
@@ -573,33 +633,42 @@ pub fn exploration(e: &Exploration) -> Vec<String> {
     lines
 }
 
-/// The explorer's conclusion in one sentence.
+/// The explorer's conclusion in one sentence: the best family, and whether something is still missing (the
+/// one decision of diagnose, [`Exploration::evidence`]).
 pub fn explore_conclusion(e: &Exploration) -> String {
-    let floor = match e.noise_floor_path_rms {
-        Some(n) => format!("{:.1}× the measurement noise floor", e.baseline_held_out_cost / n),
-        None => "the noise floor is not measurable (no rest at the runs' ends)".into(),
+    let floor = match (e.noise_floor_path_rms, e.evidence.ratio) {
+        (Some(_), Some(r)) => format!("{r:.1}× the measurement noise floor"),
+        _ => "the noise floor is not measurable (no rest at the runs' ends, no fast ground truth)".into(),
     };
+    let remaining = e.evidence.remaining_held_out_m;
     match e.best() {
-        Some(f) => format!(
-            "{} explains {:.1} % of the held-out path error ({:.4} m → {:.4} m): {}; add it with --effect learned:{} (train makes this very fit{})",
-            f.family.id(),
-            100.0 * f.held_out_gain,
-            e.baseline_held_out_cost,
-            f.held_out_cost,
-            explore_hint(f),
-            f.family.id(),
-            match f.terms.iter().filter(|t| t.held).count() {
+        Some(f) => {
+            let rest = if e.unexplained {
+                format!(
+                    "; with it the held-out path error ({remaining:.4} m) is still {floor}: something physical is still missing"
+                )
+            } else {
+                String::new()
+            };
+            let holding = match f.terms.iter().filter(|t| t.held).count() {
                 0 => String::new(),
                 k => format!(", holding the same {k} terms"),
-            }
-        ),
+            };
+            format!(
+                "{} explains {:.1} % of the held-out path error ({:.4} m → {:.4} m): {}; add it with --effect learned:{} (train makes this very fit{holding}){rest}",
+                f.family.id(),
+                100.0 * f.held_out_gain,
+                e.baseline_held_out_cost,
+                f.held_out_cost,
+                explore_hint(f),
+                f.family.id()
+            )
+        }
         None if e.unexplained => format!(
-            "no family passes on held-out runs, and the held-out path error ({:.4} m) is {floor}: something physical is still missing that these features do not describe",
-            e.baseline_held_out_cost
+            "no family passes on held-out runs, and the held-out path error ({remaining:.4} m) is {floor}: something physical is still missing that these features do not describe"
         ),
         None => format!(
-            "no family passes on held-out runs; the held-out path error ({:.4} m) is {floor}: nothing systematic is left to explain",
-            e.baseline_held_out_cost
+            "no family passes on held-out runs; the held-out path error ({remaining:.4} m) is {floor}: nothing systematic is left to explain"
         ),
     }
 }

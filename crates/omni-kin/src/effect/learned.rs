@@ -150,7 +150,7 @@ fn add_world(t: &mut Twist2, d: [f64; 2], psi: f64) {
 /// The `body` family's correction of one twist.
 fn body(p: &[f64], t: Twist2) -> Twist2 {
     let (vx, vy, w) = (t.vx_m_s, t.vy_m_s, t.omega_rad_s);
-    let s = vx.hypot(vy);
+    let s = (vx * vx + vy * vy).sqrt();
     let (ca, sa) = if s > 0.0 { (vx / s, vy / s) } else { (0.0, 0.0) };
     let (c2, s2) = (ca * ca - sa * sa, 2.0 * ca * sa);
     let scale = p[2] * s + p[3] * w.abs() + p[5] * ca + p[6] * sa + p[7] * c2 + p[8] * s2;
@@ -255,8 +255,12 @@ fn wheel_rates(p: &[f64], ctx: &WheelContext<'_>, w: &mut [f64]) {
             };
             let mut harmonics = 0.0;
             for m in 1..=3 {
-                let (sn, cs) = (m as f64 * mid).sin_cos();
-                harmonics += term(1 + 2 * m, i) * cs + term(2 + 2 * m, i) * sn;
+                let (a, b) = (term(1 + 2 * m, i), term(2 + 2 * m, i));
+                // A harmonic without terms adds nothing (skipping its sine and cosine changes no bit).
+                if a != 0.0 || b != 0.0 {
+                    let (sn, cs) = (m as f64 * mid).sin_cos();
+                    harmonics += a * cs + b * sn;
+                }
             }
             w[s * n + i] = v + term(0, i) * v * v.abs() + term(1, i) * v.abs() + term(2, i) * accel + harmonics * v;
             phi += v * h;
@@ -296,6 +300,23 @@ mod tests {
         assert!((t.vx_m_s - 0.2).abs() < 1e-15 && (t.vy_m_s + 0.01).abs() < 1e-15, "{t:?}");
         let rest = e.twist_at(&p, Twist2::default(), &[], &at);
         assert_eq!(rest, Twist2::default());
+    }
+
+    /// The squared test `moving` uses decides as `hypot` does, on and around the threshold.
+    #[test]
+    fn longer_than_decides_as_hypot_does() {
+        let r = MOVING_SPEED_M_S;
+        let mut checked = 0;
+        for i in 0..2000 {
+            let angle = 0.0031 * i as f64;
+            for rel in [-1e-6, -1e-12, -1e-15, 0.0, 1e-16, 1e-15, 1e-12, 1e-6, 0.5, -0.5] {
+                let len = r * (1.0 + rel);
+                let (x, y) = (len * angle.cos(), len * angle.sin());
+                assert_eq!(super::super::longer_than(x, y, r), x.hypot(y) > r, "{x:e} {y:e}");
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 20_000);
     }
 
     /// `world_drift` and `learned:world` act on exactly the same steps: the body twist above 5 mm/s or

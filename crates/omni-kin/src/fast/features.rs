@@ -75,6 +75,11 @@ impl WheelFeatures {
         }
     }
 
+    /// Number of the effect's parameters.
+    pub fn n_params(&self) -> usize {
+        self.n_params
+    }
+
     /// Run `i`'s parts: (parameter, wheel, change per unit at every sample).
     pub fn run_parts(&self, i: usize) -> impl Iterator<Item = (usize, usize, &[f64])> {
         self.runs[i].iter().map(|p| (p.param, p.wheel, p.column.as_slice()))

@@ -16,6 +16,7 @@ use super::MAX_STEP_ANGLE_RAD;
 use super::features::WheelFeatures;
 use super::jacobian::arc_factor_slopes;
 use super::kernel::{LaneState, RESYNC_STEPS, arc_factors, measured_error, step_lane};
+use super::twist::{LaneTwist, lane_twists};
 use crate::effect::{Effect, EffectKind, Stage, TwistAt};
 use crate::model::{Model, Resolved, Scheme};
 use crate::plan::{StepPlan, interval};
@@ -39,6 +40,8 @@ pub(crate) struct ForwardModel<'m> {
     wheel: Option<(Range<usize>, &'m WheelFeatures)>,
     /// Indices (in the model's parameter vector) of the effect parameters carried, in column order.
     pub covered: Vec<usize>,
+    /// Each twist-stage effect's parameters: (index in the parameter vector, column).
+    twist_columns: Vec<Vec<(usize, usize)>>,
     n_wheels: usize,
 }
 
@@ -59,7 +62,10 @@ impl<'m> ForwardModel<'m> {
         let mut covered: Vec<usize> = twist.iter().chain(&measurement).flat_map(|(_, r)| r.clone()).collect();
         covered.extend(wheel.iter().flat_map(|(r, _)| r.clone()));
         covered.sort_unstable();
-        Self { twist, measurement, wheel, covered, n_wheels: model.n_wheels() }
+        let nik = 3 * model.n_wheels();
+        let column = |g: usize| nik + covered.iter().position(|&c| c == g).unwrap_or(0);
+        let twist_columns = twist.iter().map(|(_, r)| r.clone().map(|g| (g, column(g))).collect()).collect();
+        Self { twist, measurement, wheel, covered, twist_columns, n_wheels: model.n_wheels() }
     }
 
     /// Number of columns: IK entries, then the covered parameters.
@@ -196,29 +202,34 @@ fn error_rows(st: LaneState, t: &Tangent, sensor: Pose2, ds: &[Pose2], truth: &P
 struct TwistSlopes<'a> {
     fm: &'a ForwardModel<'a>,
     res: &'a Resolved<'a>,
+    /// The twist-stage effects' lane forms (all built-in: analytic slopes), else `None` (differences).
+    lanes: Option<Vec<LaneTwist>>,
+    /// The hooks' slopes in the covered parameters: (column, slope); a buffer.
+    jp: Vec<(usize, Twist2)>,
+}
+
+/// One step's inputs besides the parameters.
+struct StepInput<'a> {
+    w: &'a [f64],
+    /// (column, wheel, part) of the affine wheel-stage effect's parameters at this sample.
+    parts: &'a [(usize, usize, f64)],
+    at: &'a TwistAt,
+    /// Cosine and sine of the heading the state carries.
+    cs: (f64, f64),
 }
 
 impl TwistSlopes<'_> {
-    /// long: one step's chain rule through the hooks (their three kinds of inputs) kept together.
-    fn at(
-        &self,
-        x: &mut [f64],
-        w: &[f64],
-        parts: &[(usize, usize, f64)],
-        at: &TwistAt,
-        t: &Tangent,
-        out: &mut StepTwist,
-    ) {
+    /// The twist of a step and `dv'` of every column (`out`), from the tangent `t` at its start.
+    fn at(&mut self, x: &mut [f64], input: &StepInput<'_>, t: &Tangent, out: &mut StepTwist) {
         let (fm, m) = (self.fm, self.res.ik.entries());
         let n = fm.n_wheels;
-        let nik = 3 * n;
-        let raw = self.res.ik.twist(w);
+        let raw = self.res.ik.twist(input.w);
         // dv (before the hooks): the IK entries and the wheel parts.
         out.dvx.iter_mut().chain(out.dvy.iter_mut()).chain(out.dw.iter_mut()).for_each(|v| *v = 0.0);
-        for (j, &wj) in w.iter().enumerate().take(n) {
+        for (j, &wj) in input.w.iter().enumerate().take(n) {
             (out.dvx[j], out.dvy[n + j], out.dw[2 * n + j]) = (wj, wj, wj);
         }
-        for &(col, wheel, value) in parts {
+        for &(col, wheel, value) in input.parts {
             out.dvx[col] += m[wheel] * value;
             out.dvy[col] += m[n + wheel] * value;
             out.dw[col] += m[2 * n + wheel] * value;
@@ -227,39 +238,12 @@ impl TwistSlopes<'_> {
             out.v = raw;
             return;
         }
-        out.v = fm.twist(x, raw, w, at);
-        // The hooks' slopes: in the twist, in the pose, in their own parameters.
-        let hv = HOOK_STEP * raw.vx_m_s.abs().max(raw.vy_m_s.abs()).max(raw.omega_rad_s.abs()).max(1e-3);
-        let shifted = |i: usize, d: f64| {
-            let mut v = raw;
-            match i {
-                0 => v.vx_m_s += d,
-                1 => v.vy_m_s += d,
-                _ => v.omega_rad_s += d,
-            }
-            v
+        self.jp.clear();
+        let (v, jv, jx) = match &self.lanes {
+            Some(lanes) => lane_slopes(lanes, &fm.twist_columns, raw, input, &mut self.jp),
+            None => self.differences(x, raw, input),
         };
-        let jv: [Twist2; 3] = std::array::from_fn(|i| {
-            twist_diff(fm.twist(x, shifted(i, hv), w, at), fm.twist(x, shifted(i, -hv), w, at), 2.0 * hv)
-        });
-        let p = at.pose;
-        let hp = [
-            HOOK_STEP * p.x_m.abs().max(p.y_m.abs()).max(1.0),
-            HOOK_STEP * p.x_m.abs().max(p.y_m.abs()).max(1.0),
-            HOOK_STEP,
-        ];
-        let moved = |i: usize, d: f64| {
-            let mut a = *at;
-            match i {
-                0 => a.pose.x_m += d,
-                1 => a.pose.y_m += d,
-                _ => a.pose.theta_rad += d,
-            }
-            a
-        };
-        let jx: [Twist2; 3] = std::array::from_fn(|i| {
-            twist_diff(fm.twist(x, raw, w, &moved(i, hp[i])), fm.twist(x, raw, w, &moved(i, -hp[i])), 2.0 * hp[i])
-        });
+        out.v = v;
         let pose_free = jx.iter().all(|j| j.vx_m_s == 0.0 && j.vy_m_s == 0.0 && j.omega_rad_s == 0.0);
         for d in 0..out.dvx.len() {
             let (a, b, c) = (out.dvx[d], out.dvy[d], out.dw[d]);
@@ -276,15 +260,88 @@ impl TwistSlopes<'_> {
             }
             (out.dvx[d], out.dvy[d], out.dw[d]) = (g.vx_m_s, g.vy_m_s, g.omega_rad_s);
         }
-        for (k, &g) in fm.covered.iter().enumerate() {
-            if fm.twist.iter().any(|(_, r)| r.contains(&g)) {
-                let jp = param_slope(x, g, |x| fm.twist(x, raw, w, at), twist_diff);
-                out.dvx[nik + k] += jp.vx_m_s;
-                out.dvy[nik + k] += jp.vy_m_s;
-                out.dw[nik + k] += jp.omega_rad_s;
-            }
+        for &(col, jp) in &self.jp {
+            out.dvx[col] += jp.vx_m_s;
+            out.dvy[col] += jp.vy_m_s;
+            out.dw[col] += jp.omega_rad_s;
         }
     }
+
+    /// The twist after the hooks and their slopes by central differences (in the twist, in the pose
+    /// `x, y, θ`; the parameters' into `self.jp`).
+    fn differences(&mut self, x: &mut [f64], raw: Twist2, input: &StepInput<'_>) -> (Twist2, [Twist2; 3], [Twist2; 3]) {
+        let (fm, w, at) = (self.fm, input.w, input.at);
+        let v = fm.twist(x, raw, w, at);
+        let hv = HOOK_STEP * raw.vx_m_s.abs().max(raw.vy_m_s.abs()).max(raw.omega_rad_s.abs()).max(1e-3);
+        let shifted = |i: usize, d: f64| {
+            let mut v = raw;
+            match i {
+                0 => v.vx_m_s += d,
+                1 => v.vy_m_s += d,
+                _ => v.omega_rad_s += d,
+            }
+            v
+        };
+        let jv: [Twist2; 3] = std::array::from_fn(|i| {
+            twist_diff(fm.twist(x, shifted(i, hv), w, at), fm.twist(x, shifted(i, -hv), w, at), 2.0 * hv)
+        });
+        let p = at.pose;
+        let hxy = HOOK_STEP * p.x_m.abs().max(p.y_m.abs()).max(1.0);
+        let hp = [hxy, hxy, HOOK_STEP];
+        let moved = |i: usize, d: f64| {
+            let mut a = *at;
+            match i {
+                0 => a.pose.x_m += d,
+                1 => a.pose.y_m += d,
+                _ => a.pose.theta_rad += d,
+            }
+            a
+        };
+        let jx: [Twist2; 3] = std::array::from_fn(|i| {
+            twist_diff(fm.twist(x, raw, w, &moved(i, hp[i])), fm.twist(x, raw, w, &moved(i, -hp[i])), 2.0 * hp[i])
+        });
+        for cols in &fm.twist_columns {
+            for &(g, col) in cols {
+                self.jp.push((col, param_slope(x, g, |x| fm.twist(x, raw, w, at), twist_diff)));
+            }
+        }
+        (v, jv, jx)
+    }
+}
+
+/// The twist after the built-in hooks `lanes` (in order; `columns`: each one's (parameter, column)) and
+/// their exact slopes ([`LaneTwist::slopes`], chained): in the twist, in the pose (the heading only), and
+/// the parameters' (pushed to `jp`).
+fn lane_slopes(
+    lanes: &[LaneTwist],
+    columns: &[Vec<(usize, usize)>],
+    raw: Twist2,
+    input: &StepInput<'_>,
+    jp: &mut Vec<(usize, Twist2)>,
+) -> (Twist2, [Twist2; 3], [Twist2; 3]) {
+    let apply = |m: &[[f64; 3]; 3], v: [f64; 3]| -> [f64; 3] {
+        std::array::from_fn(|r| m[r][0] * v[0] + m[r][1] * v[1] + m[r][2] * v[2])
+    };
+    let mut v = [raw.vx_m_s, raw.vy_m_s, raw.omega_rad_s];
+    // d v / d raw (columns: the raw twist's components), d v / d θ.
+    let mut jv = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let mut jth = [0.0; 3];
+    let mut own: Vec<(usize, [f64; 3])> = Vec::new();
+    for (e, cols) in lanes.iter().zip(columns) {
+        let sl = e.slopes(v, input.cs, input.at.since_start_s);
+        jv = std::array::from_fn(|r| std::array::from_fn(|c| (0..3).map(|k| sl.jv[r][k] * jv[k][c]).sum()));
+        let moved = apply(&sl.jv, jth);
+        jth = std::array::from_fn(|r| moved[r] + sl.jth[r]);
+        for (_, j) in own.iter_mut() {
+            *j = apply(&sl.jv, *j);
+        }
+        own.extend(cols.iter().zip(&sl.jp[..sl.n_params]).map(|(&(_, col), j)| (col, *j)));
+        v = sl.v;
+    }
+    let t = |a: [f64; 3]| Twist2 { vx_m_s: a[0], vy_m_s: a[1], omega_rad_s: a[2] };
+    jp.extend(own.into_iter().map(|(col, j)| (col, t(j))));
+    let column = |c: usize| t([jv[0][c], jv[1][c], jv[2][c]]);
+    (t(v), [column(0), column(1), column(2)], [Twist2::default(), Twist2::default(), t(jth)])
 }
 
 /// The forward walk of one run (see the module docs); `None` when a step angle exceeds
@@ -308,7 +365,7 @@ pub(crate) fn run_rows(fm: &ForwardModel<'_>, input: &RunInput<'_>) -> Option<Ru
     let mut out = RunRows { errors: Vec::with_capacity(rows), jacobian: DMatrix::zeros(3 * rows, p) };
     let mut tw = StepTwist { v: Twist2::default(), dvx: vec![0.0; p], dvy: vec![0.0; p], dw: vec![0.0; p] };
     let (mut next_t, mut query_t) = (t.clone(), t.clone());
-    let slopes = TwistSlopes { fm, res };
+    let mut slopes = TwistSlopes { fm, res, lanes: lane_twists(res), jp: Vec::new() };
     // The wheel parameters' columns and their parts' runs.
     let wheel_parts: Vec<(usize, usize, &[f64])> = match &fm.wheel {
         Some((r, f)) => f
@@ -330,7 +387,8 @@ pub(crate) fn run_rows(fm: &ForwardModel<'_>, input: &RunInput<'_>) -> Option<Ru
             TwistAt { pose: Pose2::new(st.x, st.y, st.th), since_start_s: (0.5 * (a_k + s_k) - truth[0].t_s).max(0.0) };
         parts.clear();
         parts.extend(wheel_parts.iter().map(|&(col, wheel, column)| (col, wheel, column[k])));
-        slopes.at(&mut x, &wheels[k * n_w..(k + 1) * n_w], &parts, &at, &t, &mut tw);
+        let input = StepInput { w: &wheels[k * n_w..(k + 1) * n_w], parts: &parts, at: &at, cs: (st.c, st.s) };
+        slopes.at(&mut x, &input, &t, &mut tw);
         while let Some(q) = queries.next_if(|q| q.step == i) {
             if end_only {
                 continue;

@@ -15,15 +15,18 @@
 //! - `lanes.rs`: the four lanes' arithmetic, AVX2 + FMA on x86-64 CPUs that have them (checked at run time
 //!   through `pulp`, no `-C target-cpu` needed), plain arrays otherwise.
 //! - `kernel.rs`: the step loop; the heading's cosine and sine advance by polynomial rotations.
-//! - `jacobian.rs`: the forward-mode Jacobian of the kernel with respect to the IK matrix.
-//! - `general.rs`: the general fast walk, one run at a time (scalar), for what the lanes do not serve:
-//!   twist-stage effects (through their own hooks) and measured stamps; the kernel's polynomial steps.
+//! - `twist.rs`: the built-in twist-stage effects per lane (the hooks' formulas), a step loop with them,
+//!   and their exact slopes.
+//! - `jacobian.rs`: the forward-mode Jacobian of the kernel with respect to the IK matrix and the
+//!   parameters of an affine wheel-stage effect.
+//! - `general.rs`: the general fast walk, one run at a time (scalar), for what the lanes do not serve: a
+//!   user's twist-stage effects (through their own hooks) and measured stamps; the kernel's polynomial steps.
 //! - `forward.rs`: the forward-mode Jacobian along the general walk, with respect to the IK matrix and the
 //!   parameters of twist- and measurement-stage effects and of the affine wheel-stage effect.
 //!
-//! Scope of the lane kernel: fixed steps with no twist-stage effects and no measured stamps, 1 to
-//! [`MAX_WHEELS`] wheels; any clock lag, measurement-stage effects and wheel-stage effects (affine ones
-//! from their parts, others by rewriting the speeds on each evaluation). The general walk serves any model.
+//! Scope of the lane kernel: fixed steps with no measured stamps, 1 to [`MAX_WHEELS`] wheels; any clock
+//! lag, measurement-stage effects, wheel-stage effects (affine ones from their parts, others by rewriting the
+//! speeds on each evaluation) and the built-in twist-stage effects. The general walk serves any model.
 //! Either returns `None` for a step angle above [`MAX_STEP_ANGLE_RAD`], and the evaluator takes the literal
 //! walk.
 //!
@@ -37,6 +40,7 @@ mod jacobian;
 mod kernel;
 mod lanes;
 mod prepare;
+mod twist;
 
 use crate::model::{Resolved, Scheme};
 use crate::odometry::Selection;
@@ -45,7 +49,7 @@ use crate::pose::PoseError;
 use crate::run::Run;
 use features::{WheelFeatures, affine_wheel_effect};
 use nalgebra::DMatrix;
-use prepare::{Group, GroupPart, Increments, max_per_wheel};
+use prepare::{Group, GroupParts, Increments, max_per_wheel};
 use rayon::prelude::*;
 use std::borrow::Cow;
 use std::cell::RefCell;
@@ -71,6 +75,8 @@ type Lanes = [f64; LANES];
 thread_local! {
     /// Each thread's buffer for increments redone on a walk (datasets beyond [`KEPT_INCREMENTS_MAX_BYTES`]).
     static SCRATCH: RefCell<Vec<Lanes>> = const { RefCell::new(Vec::new()) };
+    /// Each thread's buffer for the queries' increments with an affine effect's parts.
+    static QUERY_SCRATCH: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
 }
 
 /// Calls `$f::<N, ARC>($args)` for the wheel count `$n` (1 to [`MAX_WHEELS`]) and scheme flag `$arc`:
@@ -109,15 +115,18 @@ pub struct FastErrors {
 }
 
 /// One run's errors at its selected poses and their unscaled IK Jacobian, as
-/// [`PreparedRuns::ik_jacobian_rows`] visits them.
-#[derive(Clone, Copy, Debug)]
+/// [`PreparedRuns::ik_jacobian_rows`] visits them (the Jacobian is the visitor's to scale in place).
+#[derive(Debug)]
 pub struct JacobianRows<'a> {
     /// Index of the run.
     pub run: usize,
     /// Errors at the selected poses (for [`Selection::End`], the end pose).
     pub errors: &'a [PoseError],
-    /// `3 × errors.len()` rows (dx, dy, dθ of each pose) by the IK entries `m11 … m3N`.
-    pub jacobian: &'a DMatrix<f64>,
+    /// `3 × errors.len()` rows (dx, dy, dθ of each pose) by the IK entries `m11 … m3N`, then the
+    /// parameters of the affine wheel-stage effect (`wheel_columns` of them, in the effect's order).
+    pub jacobian: &'a mut DMatrix<f64>,
+    /// Columns after the IK entries: the affine wheel-stage effect's parameters (0 without one).
+    pub wheel_columns: usize,
 }
 
 /// Runs prepared for fast repeated evaluation at one step rule and one selection of ground-truth poses.
@@ -237,7 +246,7 @@ impl PreparedRuns {
     pub fn supports(&self, res: &Resolved<'_>) -> bool {
         !res.stamps
             && res.clock_lag_s.is_finite()
-            && res.twist_effects.is_empty()
+            && (res.twist_effects.is_empty() || twist::lane_twists(res).is_some())
             && res.fixed_dt_s == self.fixed_dt_s
             && res.ik.n_wheels() == self.n_wheels
             && (1..=MAX_WHEELS).contains(&self.n_wheels)
@@ -295,7 +304,7 @@ impl PreparedRuns {
         visit: &mut dyn FnMut(JacobianRows<'_>),
     ) -> Option<()> {
         let m = res.ik.entries();
-        let ok = self.supports(res) && runs.len() == self.n_runs;
+        let ok = self.supports(res) && res.twist_effects.is_empty() && runs.len() == self.n_runs;
         let groups = if ok { self.groups_for(res.clock_lag_s, runs)? } else { return None };
         // Every step angle in range before the first visit: on the runs' own speeds by their bound; on
         // rewritten ones by rewriting them (each batch checks its own before visiting, so only needed
@@ -310,21 +319,26 @@ impl PreparedRuns {
             return None;
         }
         let (arc, sensor, n) = (res.scheme == Scheme::ExactArc, res.sensor_from_body, self.n_wheels);
+        // An affine wheel-stage effect's parameters are differentiated along with the IK entries.
+        let features = self.wheel_features(res, runs);
+        let wheel_columns = features.map_or(0, |f| f.n_params());
         for batch in groups.chunks(BLOCK_RUNS / LANES) {
             let rows: Option<Vec<Vec<jacobian::LaneRows>>> = (batch.par_iter())
                 .map(|g| {
+                    let parts = features.map(|f| (g.parts(f), f.n_params()));
                     self.with_increments(g, res, runs, |inc| {
                         (0..g.lanes)
                             .map(|lane| {
-                                by_wheels!(n, arc, jacobian::lane_rows(g, inc, lane, m, sensor, self.selection))
+                                by_wheels!(n, arc, jacobian::lane_rows(g, inc, lane, m, sensor, self.selection, parts))
                             })
                             .collect::<Option<Vec<_>>>()
                     })?
                 })
                 .collect();
-            for (g, lanes) in batch.iter().zip(rows?) {
-                for (lane, r) in lanes.iter().enumerate() {
-                    visit(JacobianRows { run: g.first_run + lane, errors: &r.errors, jacobian: &r.jacobian });
+            for (g, mut lanes) in batch.iter().zip(rows?) {
+                for (lane, r) in lanes.iter_mut().enumerate() {
+                    let (errors, jacobian) = (&r.errors, &mut r.jacobian);
+                    visit(JacobianRows { run: g.first_run + lane, errors, jacobian, wheel_columns });
                 }
             }
         }
@@ -343,9 +357,16 @@ impl PreparedRuns {
             return None;
         }
         let (m, arc, sensor) = (res.ik.entries(), res.scheme == Scheme::ExactArc, res.sensor_from_body);
+        if res.twist_effects.is_empty() {
+            return self.with_increments(g, res, runs, |inc| {
+                by_wheels!(self.n_wheels, arc, kernel::walk(g, inc, m, sensor, on_query))
+            })?;
+        }
+        let twists = twist::lane_twists(res)?;
+        let times = g.times(g.runs(runs)?);
         self.with_increments(g, res, runs, |inc| {
-            by_wheels!(self.n_wheels, arc, kernel::walk(g, inc, m, sensor, on_query))
-        })?
+            by_wheels!(self.n_wheels, arc, twist::walk(g, inc, times, (m, sensor), &twists, on_query))
+        })??
     }
 
     /// The parts of `res`'s affine wheel-stage effect (taken at the first call), when it has one and they
@@ -427,41 +448,49 @@ impl PreparedRuns {
 }
 
 /// Calls `f` with the kept increments `inc` plus the parts of an affine wheel-stage effect at parameters
-/// `p` (its speeds' change as increments, [`prepare::GroupPart`]), in this thread's buffer; `None` when a
-/// step angle of IK matrix `m` may exceed [`MAX_STEP_ANGLE_RAD`] (`u_max`: the unchanged increments'
-/// bound, widened by the parts').
+/// `p` (its speeds' change as increments, [`GroupParts`]), in this thread's buffer; `None` when a step angle
+/// of IK matrix `m` may exceed [`MAX_STEP_ANGLE_RAD`] (`u_max`: the unchanged increments' bound, widened by
+/// the parts').
 fn with_parts<R>(
     inc: &Increments<'_>,
-    parts: &[GroupPart],
+    parts: &GroupParts,
     p: &[f64],
     (m, u_max): (&[f64], &[f64]),
     f: impl FnOnce(&Increments<'_>) -> R,
 ) -> Option<R> {
-    let n = u_max.len();
+    let (n, np) = (u_max.len(), parts.keys.len());
+    // The parts with a parameter not zero: (index, wheel, value).
+    let active: Vec<(usize, usize, f64)> = (parts.keys.iter().enumerate())
+        .map(|(i, &(param, wheel))| (i, wheel, p[param]))
+        .filter(|a| a.2 != 0.0)
+        .collect();
+    let mut bound = u_max.to_vec();
+    for &(i, wheel, v) in &active {
+        bound[wheel] += v.abs() * parts.u_max[i];
+    }
     SCRATCH.with(|cell| {
         let mut u = cell.take();
         u.clear();
         u.extend_from_slice(inc.u);
-        let mut query_u = inc.query_u.to_vec();
-        let mut bound = u_max.to_vec();
-        for part in parts {
-            let v = p[part.param];
-            if v == 0.0 {
-                continue;
-            }
-            for (t, du) in u.iter_mut().skip(part.wheel).step_by(n).zip(&part.u) {
+        for (step, row) in u.chunks_exact_mut(n.max(1)).zip(parts.u.chunks_exact(np.max(1))) {
+            for &(i, wheel, v) in &active {
                 for l in 0..LANES {
-                    t[l] += v * du[l];
+                    step[wheel][l] += v * row[i][l];
                 }
             }
-            for (t, dq) in query_u.iter_mut().skip(part.wheel).step_by(n).zip(&part.query_u) {
-                *t += v * dq;
+        }
+        let mut query_u = QUERY_SCRATCH.with(|q| q.take());
+        query_u.clear();
+        query_u.extend_from_slice(inc.query_u);
+        for (q, row) in query_u.chunks_exact_mut(n.max(1)).zip(parts.query_u.chunks_exact(np.max(1))) {
+            for &(i, wheel, v) in &active {
+                q[wheel] += v * row[i];
             }
-            bound[part.wheel] += v.abs() * part.u_max;
         }
         let ok = in_range(m, &bound) || in_range(m, &max_per_wheel(&u, n));
         let out = ok.then(|| f(&Increments { u: &u, query_u: &query_u }));
         cell.replace(u);
+        QUERY_SCRATCH.with(|q| q.replace(query_u));
         out
     })
 }

@@ -3,6 +3,7 @@
 //! columns, or redone from wheel speeds rewritten by wheel-stage effects, always by [`Group::fill`].
 
 use super::features::WheelFeatures;
+use super::twist::StepTimes;
 use super::{LANES, Lanes};
 use crate::odometry::Selection;
 use crate::plan::StepPlan;
@@ -21,6 +22,13 @@ pub(super) struct Query {
     pub truth: Pose2,
     /// Index of the query in its lane's plan.
     source: usize,
+}
+
+impl Query {
+    /// Index of the query in its lane's plan.
+    pub fn source(&self) -> usize {
+        self.source
+    }
 }
 
 /// Four runs interleaved.
@@ -51,23 +59,27 @@ pub(super) struct Group {
     /// Partial-step increments of the queries, `n_wheels` each. rad.
     query_u: Vec<f64>,
     /// The parts of the evaluator's affine wheel-stage effect as increments (taken at first use).
-    parts: OnceLock<Vec<GroupPart>>,
+    parts: OnceLock<GroupParts>,
+    /// Step lengths and times for twist-stage effects (taken at first use).
+    times: OnceLock<StepTimes>,
 }
 
-/// One part of an affine wheel-stage effect ([`WheelFeatures`]) as increments of a group: `f h Δw` of
-/// every step and query for one unit of the parameter, on one wheel.
-#[derive(Clone, Debug)]
-pub(super) struct GroupPart {
-    /// Index of the parameter in the effect's.
-    pub param: usize,
-    /// The wheel.
-    pub wheel: usize,
-    /// Increments of the steps (lanes). rad.
+/// One part's increments before interleaving: (parameter, wheel), steps, queries, largest |increment|.
+type PartColumn = ((usize, usize), Vec<Lanes>, Vec<f64>, f64);
+
+/// The parts of an affine wheel-stage effect ([`WheelFeatures`]) as increments of a group: `f h Δw` of
+/// every step and query for one unit of a parameter, on one wheel; interleaved by step (one pass reads
+/// them all).
+#[derive(Clone, Debug, Default)]
+pub(super) struct GroupParts {
+    /// (parameter index in the effect's, wheel) of each part.
+    pub keys: Vec<(usize, usize)>,
+    /// Increments of the steps: `steps × keys.len()` lane vectors, step-major. rad.
     pub u: Vec<Lanes>,
-    /// Increments of the queries, one each. rad.
+    /// Increments of the queries: `queries × keys.len()`, query-major. rad.
     pub query_u: Vec<f64>,
-    /// Largest |increment|. rad.
-    pub u_max: f64,
+    /// Largest |increment| of each part. rad.
+    pub u_max: Vec<f64>,
 }
 
 /// The increments a walk of a group reads.
@@ -128,6 +140,7 @@ impl Group {
             queries,
             query_u: Vec::new(),
             parts: OnceLock::new(),
+            times: OnceLock::new(),
         };
         let wheels: Vec<&[f64]> = chunk.iter().map(Run::wheel_rad_s).collect();
         let mut u = Vec::new();
@@ -138,6 +151,22 @@ impl Group {
             g.u = u;
         }
         g
+    }
+
+    /// Each real lane's plan.
+    pub fn plans(&self) -> &[StepPlan] {
+        &self.plans
+    }
+
+    /// Step length of each lane. s.
+    pub fn h(&self) -> &Lanes {
+        &self.h
+    }
+
+    /// The step times twist-stage effects read ([`StepTimes`]) of this group, whose runs are `chunk`,
+    /// taken at the first call.
+    pub fn times(&self, chunk: &[Run]) -> &StepTimes {
+        self.times.get_or_init(|| StepTimes::new(self, chunk))
     }
 
     /// The kept increments; `None` when they were not kept.
@@ -206,13 +235,13 @@ impl Group {
 
     /// The parts of `features` (the affine wheel-stage effect of every evaluation of these runs) as
     /// increments of this group, taken at the first call.
-    pub fn parts(&self, features: &WheelFeatures) -> &[GroupPart] {
+    pub fn parts(&self, features: &WheelFeatures) -> &GroupParts {
         self.parts.get_or_init(|| self.make_parts(features))
     }
 
     /// The parts of `features` as increments of this group (see [`Self::parts`]).
-    pub fn make_parts(&self, features: &WheelFeatures) -> Vec<GroupPart> {
-        {
+    pub fn make_parts(&self, features: &WheelFeatures) -> GroupParts {
+        let columns: Vec<PartColumn> = {
             let lanes: Vec<Vec<(usize, usize, &[f64])>> =
                 (0..self.lanes).map(|l| features.run_parts(self.first_run + l).collect()).collect();
             let mut keys: Vec<(usize, usize)> = lanes.iter().flatten().map(|&(p, w, _)| (p, w)).collect();
@@ -230,10 +259,20 @@ impl Group {
                     let mut u = Vec::new();
                     self.fill_steps_of(&cols, 1, &mut u);
                     let u_max = max_per_wheel(&u, 1)[0];
-                    GroupPart { param, wheel, u, query_u: self.fill_queries_of(&cols, 1), u_max }
+                    ((param, wheel), u, self.fill_queries_of(&cols, 1), u_max)
                 })
                 .collect()
+        };
+        let mut parts = GroupParts::default();
+        for k in 0..self.steps {
+            parts.u.extend(columns.iter().map(|c| c.1[k]));
         }
+        for q in 0..self.queries.len() {
+            parts.query_u.extend(columns.iter().map(|c| c.2[q]));
+        }
+        parts.keys = columns.iter().map(|c| c.0).collect();
+        parts.u_max = columns.iter().map(|c| c.3).collect();
+        parts
     }
 
     /// [`Self::fill_queries`] of `n` columns per sample.

@@ -152,6 +152,29 @@ fn agrees_with_wheel_stage_effects() {
     }
 }
 
+/// A user's twist-stage effect: a yaw rate added while the robot moves (the lane kernel has no lane form
+/// of it; the general walk calls its hook).
+#[derive(Debug)]
+struct Spin;
+
+impl crate::effect::Effect for Spin {
+    fn id(&self) -> &str {
+        "spin"
+    }
+    fn describe(&self) -> String {
+        "a yaw rate".into()
+    }
+    fn stage(&self) -> crate::effect::Stage {
+        crate::effect::Stage::Twist
+    }
+    fn params(&self) -> Vec<crate::effect::ParamSpec> {
+        vec![crate::effect::ParamSpec::new("rate", "rad/s", 0.0, -0.1, 0.1)]
+    }
+    fn twist(&self, p: &[f64], t: crate::pose::Twist2, _w: &[f64]) -> crate::pose::Twist2 {
+        crate::pose::Twist2 { omega_rad_s: t.omega_rad_s + p[0], ..t }
+    }
+}
+
 #[test]
 fn declines_what_it_cannot_do() {
     let runs: Vec<Run> = paper_size().into_iter().take(5).collect();
@@ -164,7 +187,11 @@ fn declines_what_it_cannot_do() {
     p[9] = f64::INFINITY;
     assert!(lagged.resolve(&p).is_err(), "a lag that is not finite is refused before");
     let twist = Model::ik(IkMatrix::paper_design()).with_effect(EffectKind::from_id("rotation_slip", 3).unwrap());
-    assert!(prepared.errors(&twist.resolve(&twist.nominal()).unwrap(), &runs).is_none());
+    assert!(prepared.errors(&twist.resolve(&twist.nominal()).unwrap(), &runs).is_some(), "a built-in twist");
+    let user = Model::ik(IkMatrix::paper_design()).with_effect(EffectKind::Custom(std::sync::Arc::new(Spin)));
+    assert!(prepared.errors(&user.resolve(&user.nominal()).unwrap(), &runs).is_none(), "a user's twist");
+    let stamps = Model::ik(IkMatrix::paper_design()).with_effect(EffectKind::from_id("sample_timing", 3).unwrap());
+    assert!(prepared.errors(&stamps.resolve(&stamps.nominal()).unwrap(), &runs).is_none(), "measured stamps");
     let paper_step = Model::ik(IkMatrix::paper_design()).with_integration(Integration::PAPER);
     assert!(prepared.errors(&paper_step.resolve(&paper_step.nominal()).unwrap(), &runs).is_none(), "other step");
     // A step angle beyond the polynomials' range.
@@ -593,7 +620,10 @@ fn ik_jacobian_with_wheel_stage_effects_matches_central_differences() {
         let (r, j) = stacked(&ev, &model.resolve(&x).unwrap(), CostKind::PATH);
         let fast = ev.residual_vector(&model.resolve(&x).unwrap(), CostKind::PATH);
         assert!(r.iter().zip(&fast).all(|(a, b)| (a - b).abs() < 1e-12), "{ids:?}: residuals differ");
-        for c in 0..9 {
+        // The affine effect's parameters are columns too (its parts); two wheel-stage effects: none.
+        let carried = if ids.len() == 1 { values.len() } else { 0 };
+        assert_eq!(j.ncols(), 9 + carried, "{ids:?}");
+        for c in 0..9 + carried {
             let h = 1e-6 * x[c].abs().max(0.05);
             let (mut xp, mut xm) = (x.clone(), x.clone());
             xp[c] += h;
@@ -628,12 +658,23 @@ fn forward_jacobian_matches_central_differences() {
         (vec!["wheel_eccentricity", "world_drift"], vec![0.02, -0.01, 0.01, 0.015, 0.0, -0.02, 0.004, 0.002], 8),
         (vec!["sample_timing", "learned:ground_truth", "rotation_slip"], vec![0.02, 0.01, -0.03, 0.08], 4),
         (vec!["time_offset", "rotation_slip"], vec![0.03, 0.1], 1),
+        (
+            vec!["rotation_slip", "learned:world", "learned:body"],
+            [vec![-0.7, 0.003, -0.002, 0.01, -0.02], vec![0.01; 9]].concat(),
+            14,
+        ),
+        // A user's twist-stage effect: its hook's slopes by differences.
+        (vec!["spin", "world_drift"], vec![0.02, 0.004, 0.002], 3),
     ];
     for (ids, values, carried) in cases {
         for kind in [CostKind::EndPose, CostKind::PATH, CostKind::Path { every: 4, heading_weight_m_per_rad: 0.5 }] {
             let mut model = Model::ik(IkMatrix::paper_design());
             for id in &ids {
-                model = model.with_effect(EffectKind::from_id(id, 3).unwrap());
+                let e = match *id {
+                    "spin" => EffectKind::Custom(std::sync::Arc::new(Spin)),
+                    id => EffectKind::from_id(id, 3).unwrap(),
+                };
+                model = model.with_effect(e);
             }
             let mut x = IkMatrix::paper_calibrated().entries().to_vec();
             x.extend(&values);
@@ -666,6 +707,41 @@ fn forward_jacobian_matches_central_differences() {
                     let gap = (fd - col[i]).abs() / col_max;
                     assert!(gap < 1e-6, "{ids:?} {kind:?} column {g} row {i}: {fd} vs {} ({gap:e})", col[i]);
                 }
+            }
+        }
+    }
+}
+
+/// The built-in twist-stage effects in the lane kernel (a turn of `rotation_slip` beyond the polynomials'
+/// range included), alone and with a clock lag, a sensor offset and an affine wheel-stage effect: within
+/// 1e-9 m of the literal walk, Euler and exact arcs, end and path selections.
+#[test]
+fn kernel_serves_builtin_twist_effects_as_the_walk_does() {
+    let runs = jittered_runs(6);
+    let cases: Vec<(Vec<&str>, Vec<f64>)> = vec![
+        (vec!["rotation_slip"], vec![0.12]),
+        (vec!["rotation_slip"], vec![-2.5]),
+        (vec!["world_drift"], vec![0.004, -0.003]),
+        (vec!["learned:body"], vec![0.05, 0.02, 0.1, -0.05, 0.03, 0.02, -0.01, 0.015, 0.01]),
+        (vec!["learned:world"], vec![0.003, -0.002, 0.01, -0.02]),
+        (vec!["learned:time"], vec![0.001, -0.0005, 0.002, 0.003]),
+        (
+            vec!["time_offset", "rotation_slip", "wheel_eccentricity", "sensor_offset_yaw", "learned:time"],
+            vec![0.02, -0.1, 0.02, -0.01, 0.01, 0.015, 0.0, -0.02, 0.03, -0.02, 0.05, 0.001, -0.0005, 0.002, 0.003],
+        ),
+    ];
+    for (ids, values) in cases {
+        for integration in [Integration::PAPER, Integration::DEFAULT] {
+            let mut model = Model::ik(IkMatrix::paper_design()).with_integration(integration);
+            for id in &ids {
+                model = model.with_effect(EffectKind::from_id(id, 3).unwrap());
+            }
+            let mut p = IkMatrix::paper_calibrated().entries().to_vec();
+            p.extend(&values);
+            for selection in [Selection::End, Selection::Path(1), Selection::Path(7)] {
+                let (gap, count) = max_gap(&model, &p, &runs, selection);
+                assert!(gap < 1e-9, "{ids:?} {integration:?} {selection:?}: gap {gap:e} m");
+                assert!(count >= runs.len());
             }
         }
     }

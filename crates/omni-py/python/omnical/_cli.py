@@ -27,10 +27,11 @@ def _simulate_fleet(argv: Sequence[str]) -> int:
     p.add_argument("--sessions", type=int, default=3, metavar="S", help="sessions per robot (default 3)")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
+    p.add_argument("--force", action="store_true", help="replace an output folder that already holds files, whole")
     p.add_argument("--quiet", "-q", action="store_true")
     a = p.parse_args(list(argv))
     try:
-        truth = simulate_fleet(a.out, a.fleet, a.sessions, seed=a.seed)
+        truth = simulate_fleet(a.out, a.fleet, a.sessions, seed=a.seed, force=a.force)
     except (OSError, ValueError, RuntimeError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2

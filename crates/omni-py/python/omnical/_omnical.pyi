@@ -117,7 +117,8 @@ class Dataset:
     @property
     def design(self) -> Optional[Model]:
         """The design model of the data's robot (``robot=``, the data's geometry, or a ``robot.toml`` found
-        beside the data); None when the data names no robot."""
+        beside the data; when its inputs declare different designs, the one of the most runs, which
+        ``train`` starts from); None when the data names no robot."""
     @property
     def robot(self) -> Optional[str]:
         """The robot description the runs were read with (``"PATH (found beside the data)"``, a path, or
@@ -339,8 +340,10 @@ def export(
     tum: Optional[_Path] = None,
     mcap: Optional[_Path] = None,
     robot: Optional[_Path] = None,
+    force: bool = False,
 ) -> list[str]:
-    """TUM files and/or MCAP bags of ``model``'s odometry on ``runs`` (``omnical export``); the paths written."""
+    """TUM files and/or MCAP bags of ``model``'s odometry on ``runs`` (``omnical export``); the paths written.
+    A folder that already holds files raises ``FileExistsError`` unless ``force=True`` (replaced whole)."""
 
 def load(
     *paths: _Path,
@@ -397,12 +400,16 @@ def train(
     max_std_error: float = 0.05,
     min_excitation: float = 0.01,
     progress: Optional[Callable[[dict[str, Any]], Optional[bool]]] = None,
+    force: bool = False,
 ) -> Calibration:
     """Fit a model to training runs from ``model`` (a kinematics at the design, ``"design"``, or a start
-    model); Ctrl-C keeps the best so far."""
+    model); Ctrl-C keeps the best so far. ``CalibrationError`` for a preset whose fixed step misses the
+    runs' sampling and for a fit worse than its start on its own training runs; ``force=True`` returns it
+    with a ``UserWarning``."""
 
 def evaluate(model: _ModelArg, runs: _Runs, *, robot: Optional[_Path] = None) -> Evaluation:
-    """Costs of ``model`` (a Model, ``"design"``, ``"paper"`` or a model file) on ``runs``."""
+    """Costs of ``model`` (a Model, ``"design"``, ``"paper"`` or a model file) on ``runs``; ``"design"`` is
+    each run's own input's design when a Dataset's inputs declare different designs."""
 def integrate(model: _ModelArg, run: Run, *, robot: Optional[_Path] = None) -> _F64:
     """(N, 4) t_s [s], x_m [m], y_m [m], theta_rad [rad] through ``model``."""
 
@@ -449,7 +456,12 @@ def diagnose_files(args: list[str]) -> dict[str, Any]:
 # Unpickling (the targets of the classes' __reduce__).
 def _run_from_bytes(data: bytes) -> Run: ...
 def _dataset_from_state(
-    runs: list[bytes], notes: list[str], skipped: list[tuple[str, str]], design: str, robot: Optional[str] = None
+    runs: list[bytes],
+    notes: list[str],
+    skipped: list[tuple[str, str]],
+    design: str,
+    robot: Optional[str] = None,
+    declared: str = "",
 ) -> Dataset: ...
 def _model_from_toml(text: str, effects: list[Any] = ...) -> Model: ...
 def _calibration_from_state(state: dict[str, Any]) -> Calibration: ...

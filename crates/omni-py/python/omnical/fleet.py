@@ -144,6 +144,31 @@ def find_sessions(fleet_dir: PathLike) -> list[Session]:
     return sessions
 
 
+def robots_without_sessions(fleet_dir: PathLike) -> list[str]:
+    """The robot folders of a fleet folder that hold no session folder (recordings put straight into the
+    robot's folder, say), by name; :func:`calibrate_fleet` gives each a row with the reason.
+
+    >>> import tempfile
+    >>> fleet = Path(tempfile.mkdtemp())
+    >>> for d in ("r00/s00", "r01"):
+    ...     (fleet / d).mkdir(parents=True)
+    >>> robots_without_sessions(fleet)
+    ['r01']
+    """
+    root = Path(fleet_dir)
+    return [
+        p.name
+        for p in sorted(root.iterdir())
+        if p.is_dir() and not p.name.startswith(".") and not any(s.is_dir() and not s.name.startswith(".") for s in p.iterdir())
+    ]
+
+
+def _no_session_row(fleet_dir: PathLike, robot: str) -> dict[str, Any]:
+    """The fleet table's row of a robot folder without sessions: status ``error`` and why."""
+    error = f"{Path(fleet_dir) / robot} holds no session folder: its recordings go in FLEET_DIR/{robot}/<session>/"
+    return {"robot": robot, "session": "", "status": "error", "error": error}
+
+
 # ----------------------------------------------------------------------------------------- one task
 
 
@@ -330,12 +355,15 @@ def calibrate_fleet(
         raise ValueError(f"diagnose must be 'all', 'auto' or 'none', got {diagnose!r}")
     t0 = time.perf_counter()
     sessions = find_sessions(fleet_dir)
+    empty = [_no_session_row(fleet_dir, robot) for robot in robots_without_sessions(fleet_dir)]
+    for row in empty:
+        print(f"omnical fleet: warning: robot {row['robot']} skipped: {row['error']}", file=sys.stderr)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     base = {"out": str(out.resolve()), "preset": preset, "seed": int(seed), "model": model, "extra": list(extra_train_args)}
     tasks = [{**vars(s), **base, "diagnose": diagnose == "all"} for s in sessions]
     show = sys.stderr.isatty() if progress is None else progress
-    rows: list[dict[str, Any]] = []
+    rows: list[dict[str, Any]] = list(empty)
     interrupted = False
     with _DaskClient(scheduler, n_workers, client) as c:
         try:
@@ -799,6 +827,7 @@ def simulate_fleet(
     n_wearing: int = 1,
     n_lagging: int = 1,
     duration_s: float = 2.0,
+    force: bool = False,
 ) -> dict[str, Any]:
     """Write a simulated fleet ``OUT/<robot>/<session>/*.csv`` (the paper's APR-02 flower benchmark, one
     run of ``duration_s`` per command) with ``OUT/robot.toml`` and ``OUT/truth.json``, and return the truth.
@@ -807,7 +836,8 @@ def simulate_fleet(
     ``spread``, the same in every session); the
     first ``n_wearing`` robots after ``r00`` lose ``wear_per_session`` of wheel b's radius per session,
     the next ``n_lagging`` have a wheel-clock lag growing by ``lag_per_session_s`` per session (0 in the
-    first). ``truth["degrading"]`` names them.
+    first). ``truth["degrading"]`` names them. ``out`` must be new or empty (runs left in it would join the
+    fleet) unless ``force``, which replaces it whole; it is written beside and renamed into place at the end.
 
     >>> import tempfile
     >>> out = Path(tempfile.mkdtemp())
@@ -815,7 +845,6 @@ def simulate_fleet(
     >>> truth["degrading"]["r02"], len(list((out / "r00" / "s00").glob("*.csv")))
     (['clock lag +30 ms per session (time_offset)'], 36)
     """
-    import json
     import random
 
     if n_robots < 1 or n_sessions < 1:
@@ -823,8 +852,65 @@ def simulate_fleet(
     if 1 + n_wearing + n_lagging > n_robots and (n_wearing or n_lagging):
         raise ValueError(f"{n_robots} robots are too few for {n_wearing} wearing and {n_lagging} lagging ones after r00")
     rng = random.Random(seed)
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    final = Path(out)
+    _check_new_folder(final, force)
+    out = final.parent / f".{final.name}.omnical-tmp-{os.getpid()}"
+    shutil.rmtree(out, ignore_errors=True)
+    out.mkdir(parents=True)
+    try:
+        truth = _simulate_fleet_into(out, rng, n_robots, n_sessions, spread, wear_per_session, lag_per_session_s,
+                                     n_wearing, n_lagging, duration_s)
+        _swap_in(out, final)
+    finally:
+        shutil.rmtree(out, ignore_errors=True)
+    return truth
+
+
+def _check_new_folder(folder: Path, force: bool) -> None:
+    """Refuses an output folder that already holds files, unless ``force`` (as ``--force`` does)."""
+    if folder.exists() and not folder.is_dir():
+        raise FileExistsError(f"{folder}: this is a file, not a folder")
+    entries = sorted(p.name for p in folder.iterdir()) if folder.is_dir() else []
+    if entries and not force:
+        shown = ", ".join(entries[:3]) + (", …" if len(entries) > 3 else "")
+        raise FileExistsError(
+            f"{folder}: the folder already holds files ({shown}); give --force (force=True) to replace it whole, "
+            "or another folder"
+        )
+    if entries and Path.cwd().resolve().is_relative_to(folder.resolve()):
+        raise ValueError(f"{folder}: --force will not replace a folder that holds the working directory")
+
+
+def _swap_in(staging: Path, target: Path) -> None:
+    """Renames ``staging`` to ``target``, replacing an existing ``target`` folder whole."""
+    if not target.exists():
+        os.replace(staging, target)
+        return
+    old = target.parent / f".{target.name}.omnical-old-{os.getpid()}"
+    os.replace(target, old)
+    try:
+        os.replace(staging, target)
+    except BaseException:
+        os.replace(old, target)
+        raise
+    shutil.rmtree(old)
+
+
+def _simulate_fleet_into(
+    out: Path,
+    rng: Any,
+    n_robots: int,
+    n_sessions: int,
+    spread: float,
+    wear_per_session: float,
+    lag_per_session_s: float,
+    n_wearing: int,
+    n_lagging: int,
+    duration_s: float,
+) -> dict[str, Any]:
+    """:func:`simulate_fleet`'s work, into the folder ``out``."""
+    import json
+
     robots = []
     for i in range(n_robots):
         r = _SimRobot(f"r{i:02d}", {w: rng.gauss(0.0, spread) for w in "abc"})

@@ -1,6 +1,7 @@
 //! Step 1 of a diagnosis: compare the model with the design and the measurements — costs on training and
 //! held-out runs, per-run errors, per-command-group bias and scatter, and how the error grows along a run.
 
+use super::kinds::{GroupBasis, MotionKind};
 use super::unexplained::{GROUP_ALPHA, group_p_value};
 use super::{Costs, GroupReport, Growth, RunReport};
 use crate::error::Error;
@@ -8,7 +9,7 @@ use crate::science::text;
 use omni_kin::cost::{self, CostKind};
 use omni_kin::evaluate::Evaluator;
 use omni_kin::odometry::Selection;
-use omni_kin::{FittedModel, PoseError, Run};
+use omni_kin::{FittedModel, PoseError, Run, RunModels};
 use std::collections::BTreeMap;
 
 /// Bins of the error-growth profile.
@@ -38,9 +39,13 @@ impl Turn {
         }
     }
 
-    /// The kind of path a run follows, from its command (`None` without one).
+    /// The kind of path a run follows, from its command, or without one from the net turn its ground
+    /// truth shows (`None` for free driving, which turns both ways, and for a run that does not move).
     pub fn of_run(r: &Run) -> Option<Self> {
-        r.command().map(|c| Self::of(c.omega_rad_s))
+        match r.command() {
+            Some(c) => Some(Self::of(c.omega_rad_s)),
+            None => MotionKind::of(r).filter(MotionKind::groups).map(|k| k.turn),
+        }
     }
 }
 
@@ -51,13 +56,14 @@ pub(super) fn path_kind(every: usize) -> CostKind {
 
 /// Costs of a fitted model on train and held-out runs.
 pub fn costs_of(f: &FittedModel, train: &[Run], held_out: &[Run], every: usize) -> Result<Costs, Error> {
+    costs_of_each(&RunModels::from(f), train, held_out, every)
+}
+
+/// [`costs_of`] with each run under its own model (a robot's sets that declare different designs): the
+/// pooled figures are the run-weighted means of the runs' own (Eq. 6; the path cost from the mean MSE).
+pub fn costs_of_each(models: &RunModels, train: &[Run], held_out: &[Run], every: usize) -> Result<Costs, Error> {
     let kind = path_kind(every);
-    let (train, held_out) = (
-        Evaluator::for_report(&f.model, train, kind.selection())?,
-        Evaluator::for_report(&f.model, held_out, kind.selection())?,
-    );
-    let res = f.model.resolve(&f.params)?;
-    let (train, held_out) = (train.errors(&res), held_out.errors(&res));
+    let (train, held_out) = (models.errors(train, kind.selection())?, models.errors(held_out, kind.selection())?);
     Ok(Costs {
         train_path: train.path_cost(kind.heading_weight()),
         held_out_path: held_out.path_cost(kind.heading_weight()),
@@ -73,14 +79,14 @@ pub(super) struct Comparison {
     pub growth: Growth,
 }
 
-/// Per-run errors of `f` and `design` on `runs`, grouped by command, and the error growth along the runs.
-pub(super) fn compare(f: &FittedModel, design: &FittedModel, runs: &[Run], every: usize) -> Result<Comparison, Error> {
+/// Per-run errors of `f` and of each run's design on `runs`, grouped by command, and the error growth along
+/// the runs.
+pub(super) fn compare(f: &FittedModel, design: &RunModels, runs: &[Run], every: usize) -> Result<Comparison, Error> {
     let selection = Selection::Path(every);
     let fitted = Evaluator::for_report(&f.model, runs, selection)?.errors(&f.model.resolve(&f.params)?);
-    let designed =
-        Evaluator::for_report(&design.model, runs, selection)?.errors(&design.model.resolve(&design.params)?);
+    let designed = design.errors(runs, selection)?;
     let mut reports = Vec::new();
-    let mut groups: BTreeMap<String, Vec<[f64; 3]>> = BTreeMap::new();
+    let mut groups: BTreeMap<(GroupBasis, String), Vec<[f64; 3]>> = BTreeMap::new();
     let mut bins = GrowthBins::default();
     for (i, r) in runs.iter().enumerate() {
         let (path, dpath) = (fitted.run(i), designed.run(i));
@@ -93,17 +99,45 @@ pub(super) fn compare(f: &FittedModel, design: &FittedModel, runs: &[Run], every
             end_error: end.norm(),
             design_end_error: dend.norm(),
         });
-        let group = r.command().map(|c| (c.alpha_rad.to_degrees().rem_euclid(360.0), Turn::of(c.omega_rad_s)));
-        groups.entry(text::command_group(group)).or_default().push([end.dx_m, end.dy_m, end.dtheta_rad]);
+        if let Some(key) = group_key(r) {
+            groups.entry(key).or_default().push([end.dx_m, end.dy_m, end.dtheta_rad]);
+        }
         bins.add(r, path, &selection.indices(r.truth().len()));
     }
-    let groups = groups.into_iter().map(|(group, v)| group_report(group, &v)).collect();
+    let groups = groups.into_iter().map(|((basis, group), v)| group_report(basis, group, &v)).collect();
     Ok(Comparison { runs: reports, groups, growth: bins.growth() })
 }
 
-/// Bias and scatter of the end-pose errors `v` (dx m, dy m, dθ rad) of one command group, and whether the
-/// bias is beyond the repeat scatter ([`group_p_value`]).
-fn group_report(group: String, v: &[[f64; 3]]) -> GroupReport {
+/// How many of `runs` `f` follows worse than `design` (path RMS), of how many.
+pub(super) fn worse_than_design(
+    f: &FittedModel,
+    design: &FittedModel,
+    runs: &[Run],
+    every: usize,
+) -> Result<(usize, usize), Error> {
+    let selection = Selection::Path(every);
+    let fitted = Evaluator::for_report(&f.model, runs, selection)?.errors(&f.model.resolve(&f.params)?);
+    let designed =
+        Evaluator::for_report(&design.model, runs, selection)?.errors(&design.model.resolve(&design.params)?);
+    let worse = (0..runs.len()).filter(|&i| cost::path_rms(fitted.run(i)) > cost::path_rms(designed.run(i))).count();
+    Ok((worse, runs.len()))
+}
+
+/// The group of run `r`: its command, or without one the kind of path its ground truth shows (`None` for
+/// free driving and runs that do not move: no other run is like them).
+fn group_key(r: &Run) -> Option<(GroupBasis, String)> {
+    match r.command() {
+        Some(c) => {
+            let group = (c.alpha_rad.to_degrees().rem_euclid(360.0), Turn::of(c.omega_rad_s));
+            Some((GroupBasis::Command, text::command_group(Some(group))))
+        }
+        None => MotionKind::of(r).filter(MotionKind::groups).map(|k| (GroupBasis::Motion, k.label())),
+    }
+}
+
+/// Bias and scatter of the end-pose errors `v` (dx m, dy m, dθ rad) of one group, and whether the bias is
+/// beyond the scatter between its runs ([`group_p_value`]).
+fn group_report(basis: GroupBasis, group: String, v: &[[f64; 3]]) -> GroupReport {
     let n = v.len() as f64;
     let mean = [0, 1, 2].map(|i| v.iter().map(|e| e[i]).sum::<f64>() / n);
     let bias = mean.iter().map(|m| m * m).sum::<f64>().sqrt();
@@ -112,6 +146,7 @@ fn group_report(group: String, v: &[[f64; 3]]) -> GroupReport {
     let p_value = group_p_value(&mean, &sd, v.len());
     GroupReport {
         group,
+        basis,
         runs: v.len(),
         mean_end_error: mean,
         bias,

@@ -1,6 +1,7 @@
 //! Steps 4 and 5 of a diagnosis: where the model fails and what to do about it, as facts. Their words are
 //! made by [`crate::science::text`].
 
+use super::kinds::GroupBasis;
 use super::noise::ExcitationGap;
 use super::search::passes;
 use super::unexplained::{MISSING_RATIO, UnexplainedEvidence, decide};
@@ -52,14 +53,24 @@ pub enum Finding {
         /// Why.
         gap: ExcitationGap,
     },
+    /// Held-out runs the model follows worse than the design (path RMS).
+    WorseThanDesign {
+        /// Runs worse than the design.
+        worse: usize,
+        /// Held-out runs.
+        runs: usize,
+    },
     /// A direction of the model itself that the runs do not constrain.
     Unconstrained(WeakDirection),
     /// The held-out runs contain motions the training runs never do (e.g. arcs after squares).
     MissingMotions(MotionCoverage),
-    /// Scatter of the end-pose error between repeats of the same command (Eq. 6 units).
+    /// Scatter of the end-pose error between repeats of the same command, or runs of one kind (Eq. 6
+    /// units).
     RepeatabilityFloor {
         /// The scatter.
         scatter: f64,
+        /// What the groups are.
+        basis: GroupBasis,
     },
 }
 
@@ -167,7 +178,9 @@ pub(super) fn findings(
         out.push(Finding::Unconstrained(w.clone()));
     }
     if let Some(scatter) = repeatability_floor {
-        out.push(Finding::RepeatabilityFloor { scatter });
+        let motion = groups.iter().any(|g| g.runs >= 2 && g.basis == GroupBasis::Motion);
+        let basis = if motion { GroupBasis::Motion } else { GroupBasis::Command };
+        out.push(Finding::RepeatabilityFloor { scatter, basis });
     }
     out
 }

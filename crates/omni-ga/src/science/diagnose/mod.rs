@@ -33,14 +33,16 @@
 mod compare;
 mod evidence;
 mod findings;
+mod kinds;
 mod noise;
 mod search;
 mod unexplained;
 
-pub use compare::{Turn, costs_of};
+pub use compare::{Turn, costs_of, costs_of_each};
 pub(crate) use evidence::unbounded;
 pub use evidence::{differentiable_start, refit};
 pub use findings::{Conclusion, Finding, Remaining, Verdict};
+pub use kinds::{GroupBasis, MotionKind, Shape};
 pub use noise::{ExcitationGap, GapKind, WheelGap, noise_floor, wheel_excitation, wheel_excitation_gap};
 pub use unexplained::{DecidedBy, UnexplainedEvidence};
 
@@ -52,7 +54,7 @@ use compare::compare;
 use evidence::{Bench, candidate_effect};
 use findings::{Judgement, findings};
 use noise::repeatability_floor;
-use omni_kin::{EffectKind, FittedModel, Run};
+use omni_kin::{EffectKind, FittedModel, Run, RunModels, ToRunModels};
 use search::{confident, kind_out, passes};
 use serde::{Deserialize, Serialize};
 
@@ -122,11 +124,15 @@ pub struct RunReport {
     pub design_end_error: f64,
 }
 
-/// Errors of a group of runs sharing a command direction and turn sign.
+/// Errors of a group of runs sharing a command direction and turn sign, or (runs without a command) the
+/// same kind of path ([`MotionKind`]).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct GroupReport {
-    /// `α=30° ω>0` style label.
+    /// `α=30° ω>0` style label, or the kind of path (`arcs, net turn left, ~0.20 m/s, ~4.00 m`).
     pub group: String,
+    /// Whether the runs repeat one command or only share a kind of path.
+    #[serde(default)]
+    pub basis: GroupBasis,
     /// Runs in it.
     pub runs: usize,
     /// Mean end-pose error vector (dx m, dy m, dθ rad) in the world frame.
@@ -237,8 +243,23 @@ pub struct NoiseFloor {
     pub heading_rad: f64,
     /// Path RMS expected from this noise alone (start and current pose noise). m.
     pub path_rms: f64,
-    /// Stationary poses used.
+    /// Poses used (at rest; or third differences, for the jitter estimate).
     pub samples: usize,
+    /// Where the estimate comes from.
+    #[serde(default)]
+    pub source: NoiseSource,
+}
+
+/// Where a noise floor comes from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NoiseSource {
+    /// The scatter of the ground truth while the robot stands still (rests at the runs' ends).
+    #[default]
+    Standstill,
+    /// The runs never stand still: the ground truth's sample-to-sample jitter while moving (third
+    /// differences).
+    Jitter,
 }
 
 /// The whole diagnosis.
@@ -298,6 +319,15 @@ pub struct Diagnosis {
     /// The verdict, as facts.
     #[serde(skip)]
     pub conclusion: Verdict,
+}
+
+impl Diagnosis {
+    /// An error beyond the catalogue's reach remains: something is missing, or the remaining held-out error
+    /// is above `MISSING_RATIO` (3×) the noise floor. `diagnose --auto` then runs the
+    /// explorer.
+    pub fn error_remains(&self) -> bool {
+        self.unexplained || self.conclusion.remaining.is_some_and(|r| r.missing)
+    }
 }
 
 /// How the held-out costs were obtained.
@@ -366,10 +396,39 @@ fn recommend(
     Ok(((!failed).then(|| winner.effect.clone()), kind_check))
 }
 
+/// Whether something physical is still missing once `model` is used: the one decision of diagnose,
+/// explore and the report ([`unexplained`](crate::science::diagnose::DecidedBy)), from `model`'s groups and
+/// error growth on the training runs `train`, its remaining held-out path RMS `held_out_m` (m) and the
+/// noise floor ([`noise_of`]).
+pub fn remains(
+    model: &FittedModel,
+    train: &[Run],
+    held: &[Run],
+    held_out_m: f64,
+    every: usize,
+) -> Result<(bool, UnexplainedEvidence, Option<NoiseFloor>), Error> {
+    let cmp = compare(model, &RunModels::from(model), train, every.max(1))?;
+    let noise = noise_of(train, held);
+    let (missing, evidence) =
+        unexplained::decide(&cmp.groups, &cmp.growth, repeatability_floor(&cmp.groups), held_out_m, noise.as_ref());
+    Ok((missing, evidence, noise))
+}
+
+/// The measurement noise floor of the training runs, or of the held-out runs when the training runs
+/// show none.
+pub fn noise_of(train: &[Run], held: &[Run]) -> Option<NoiseFloor> {
+    noise_floor(train).or_else(|| noise_floor(held))
+}
+
 /// Diagnose `model` on `train`, holding out `validation` (or cross-validating over repetitions).
+///
+/// `design`: the design each run is compared with — one model (a `&FittedModel`) or a model per run
+/// (a `&RunModels`, when a robot's sets declare different designs; it must know every training and
+/// validation run). Its design costs are the run-weighted means of the runs' own; the implied effect values
+/// are taken against its first model.
 pub fn diagnose(
     model: &FittedModel,
-    design: &FittedModel,
+    design: &impl ToRunModels,
     train: &[Run],
     validation: Option<&[Run]>,
     opts: &DiagnoseOptions,
@@ -377,14 +436,16 @@ pub fn diagnose(
     if train.is_empty() {
         return Err(Error::NoRuns);
     }
+    let designs = design.to_run_models();
     let every = opts.every.max(1);
     let (fit_runs, held_runs, protocol) = held_out_sets(train, validation);
     // Compare the model and the design with the data.
     let costs = costs_of(model, &fit_runs, &held_runs, every)?;
-    let design_costs = costs_of(design, &fit_runs, &held_runs, every)?;
-    let cmp = compare(model, design, train, every)?;
-    let noise = noise_floor(train);
+    let design_costs = costs_of_each(&designs, &fit_runs, &held_runs, every)?;
+    let cmp = compare(model, &designs, train, every)?;
+    let noise = noise_of(train, &held_runs);
     // Each candidate's evidence, ranked; with `auto`, the error ladder.
+    let design = designs.first();
     let bench = Bench { design, fit_runs: &fit_runs, held_runs: &held_runs, every, noise: noise.as_ref() };
     let climb = search::climb(&bench, model, &costs, &design_costs, opts)?;
     let (verdict, kind_check) = recommend(model, &climb.ranking, train, every, opts)?;
@@ -395,6 +456,12 @@ pub fn diagnose(
     let repeat_floor = repeatability_floor(&cmp.groups);
     let mut facts =
         findings(&cmp.runs, &cmp.groups, &cmp.growth, &climb.ranking, identifiability.as_ref(), repeat_floor);
+    if protocol != HeldOut::TrainingRuns {
+        let (worse, runs) = compare::worse_than_design(model, design, &held_runs, every)?;
+        if worse > 0 {
+            facts.insert(facts.len().min(1), Finding::WorseThanDesign { worse, runs });
+        }
+    }
     // What the training runs lack, first: it bounds what any fit on them can learn.
     let coverage = match protocol {
         HeldOut::ValidationSet => Some(motion_coverage(model, &fit_runs, &held_runs)?),
@@ -409,7 +476,7 @@ pub fn diagnose(
         (_, _, true) if climb.ladder.len() > 2 => Some(&climb.top),
         _ => None,
     };
-    let after = accepted.map(|f| compare(f, design, train, every)).transpose()?;
+    let after = accepted.map(|f| compare(f, &designs, train, every)).transpose()?;
     let (groups_after, growth_after) = after.as_ref().map_or((&cmp.groups, &cmp.growth), |c| (&c.groups, &c.growth));
     let conclusion = Judgement {
         ranking: &climb.ranking,

@@ -1,7 +1,7 @@
 //! What the data itself allows: the measurement noise floor at standstill, the repeat scatter of the
 //! end-pose error, and whether the runs excite wheel-stage effects at all.
 
-use super::{GroupReport, NoiseFloor};
+use super::{GroupReport, NoiseFloor, NoiseSource};
 use crate::science::text;
 use omni_kin::Run;
 
@@ -91,7 +91,8 @@ pub(super) fn repeatability_floor(groups: &[GroupReport]) -> Option<f64> {
     (count > 0).then(|| (sum / count as f64).sqrt())
 }
 
-/// Estimate the ground-truth noise from poses while every wheel is still.
+/// Estimate the ground-truth noise from poses while every wheel is still; for runs that never stand still,
+/// from the ground truth's jitter while moving (`jitter_floor`).
 pub fn noise_floor(runs: &[Run]) -> Option<NoiseFloor> {
     const STILL_RAD_S: f64 = 0.02;
     let (mut sp, mut sth, mut dof) = (0.0, 0.0, 0usize);
@@ -122,10 +123,106 @@ pub fn noise_floor(runs: &[Run]) -> Option<NoiseFloor> {
         }
     }
     if dof == 0 {
-        return None;
+        return jitter_floor(runs);
     }
     let position_m = (sp / (2.0 * dof as f64)).sqrt();
     let heading_rad = (sth / dof as f64).sqrt();
+    Some(floor_of(position_m, heading_rad, used, NoiseSource::Standstill))
+}
+
+/// A noise floor from its per-axis position and heading noise: the path RMS the noise of the start pose
+/// and of each compared pose gives.
+fn floor_of(position_m: f64, heading_rad: f64, samples: usize, source: NoiseSource) -> NoiseFloor {
     let one = 2.0 * position_m * position_m + heading_rad * heading_rad;
-    Some(NoiseFloor { position_m, heading_rad, path_rms: (2.0 * one).sqrt(), samples: used })
+    NoiseFloor { position_m, heading_rad, path_rms: (2.0 * one).sqrt(), samples, source }
+}
+
+/// Longest median ground-truth interval for which the jitter estimate holds. s. Slower ground truth moves
+/// too far between poses for the motion to vanish from the third differences.
+const JITTER_MAX_DT_S: f64 = 0.05;
+
+/// The ground truth's noise from its jitter while moving, for runs that never stand still: third
+/// differences of the pose sequence, `x[k+2] − 3x[k+1] + 3x[k] − x[k−1]`, carry a smooth motion's jerk ×
+/// dt³ (negligible at ≥ 20 Hz) and 20 σ² of white noise; σ from their median absolute value (robust to the
+/// odd outlier, 1.4826 MAD). `None` with slower ground truth or fewer than 20 differences.
+fn jitter_floor(runs: &[Run]) -> Option<NoiseFloor> {
+    let (mut position, mut heading) = (Vec::new(), Vec::new());
+    for r in runs {
+        let p = r.truth();
+        let mut dts: Vec<f64> = p.windows(2).map(|w| w[1].t_s - w[0].t_s).collect();
+        if dts.is_empty() {
+            continue;
+        }
+        dts.sort_by(f64::total_cmp);
+        if dts[dts.len() / 2] > JITTER_MAX_DT_S {
+            continue;
+        }
+        let third = |f: &dyn Fn(usize) -> f64, k: usize| f(k + 3) - 3.0 * f(k + 2) + 3.0 * f(k + 1) - f(k);
+        for k in 0..p.len().saturating_sub(3) {
+            position.push(third(&|i| p[i].pose.x_m, k).abs());
+            position.push(third(&|i| p[i].pose.y_m, k).abs());
+            heading.push(third(&|i| p[i].pose.theta_rad, k).abs());
+        }
+    }
+    if heading.len() < 20 {
+        return None;
+    }
+    let sigma = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        1.4826 * v[v.len() / 2] / 20f64.sqrt()
+    };
+    let samples = heading.len();
+    Some(floor_of(sigma(&mut position), sigma(&mut heading), samples, NoiseSource::Jitter))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use omni_kin::pose::{Pose2, StampedPose};
+    use omni_kin::run::RunData;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+
+    /// A run that drives a circle for 20 s at 100 Hz, never standing still, its ground truth with white
+    /// noise of `sigma_m` per axis and `sigma_rad` in heading.
+    fn circling(sigma_m: f64, sigma_rad: f64, seed: u64) -> Run {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let (np, nh) = (Normal::new(0.0, sigma_m).unwrap(), Normal::new(0.0, sigma_rad).unwrap());
+        let n = 2001;
+        let t: Vec<f64> = (0..n).map(|k| k as f64 * 0.01).collect();
+        let truth = t
+            .iter()
+            .map(|&t_s| {
+                let a = 0.4 * t_s;
+                let pose = Pose2 {
+                    x_m: 0.5 * a.sin() + np.sample(&mut rng),
+                    y_m: 0.5 - 0.5 * a.cos() + np.sample(&mut rng),
+                    theta_rad: a + nh.sample(&mut rng),
+                };
+                StampedPose { t_s, pose }
+            })
+            .collect();
+        let data = RunData {
+            name: "circle".into(),
+            wheel_t_s: t,
+            wheel_rad_s: vec![3.0; 2 * n],
+            n_wheels: 2,
+            truth,
+            ..Default::default()
+        };
+        Run::new(data).unwrap()
+    }
+
+    #[test]
+    fn runs_that_never_stand_still_get_their_noise_floor_from_the_jitter() {
+        let runs: Vec<Run> = (0..3).map(|s| circling(1e-3, 2e-3, s)).collect();
+        let nf = noise_floor(&runs).unwrap();
+        assert_eq!(nf.source, NoiseSource::Jitter);
+        assert!((nf.position_m / 1e-3 - 1.0).abs() < 0.05, "{}", nf.position_m);
+        assert!((nf.heading_rad / 2e-3 - 1.0).abs() < 0.05, "{}", nf.heading_rad);
+        assert_eq!(nf.samples, 3 * (2001 - 3));
+        // Noise-free motion leaves (almost) nothing: the circle's jerk × dt³ is 6.4e-8 m.
+        let clean = noise_floor(&[circling(1e-12, 1e-12, 0)]).unwrap();
+        assert!(clean.position_m < 1e-7, "{}", clean.position_m);
+    }
 }

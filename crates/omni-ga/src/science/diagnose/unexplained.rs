@@ -1,22 +1,27 @@
 //! Step 6 of a diagnosis: does a systematic error remain that no accepted effect removes?
 //!
-//! The decision rests on the repeat structure of the training runs, with the model that includes the
+//! One decision, made here for diagnose, explore and the report alike, with the model that includes the
 //! accepted effect (the verdict's, or the ladder's top with `auto`):
-//! - **Repeat test** (per command group of ≥ 2 runs): each component of the mean end-pose error (dx, dy, dθ)
-//!   against its standard error from the repeats, `t = mean / (s / √n)` with `n − 1` degrees of freedom
-//!   (Student's t, two-sided); the group is *biased* when its smallest p-value, Bonferroni-corrected for the
-//!   three components, is below [`GROUP_ALPHA`] (5 %). On clean data about 5 % of the groups (or fewer) are
-//!   biased by chance.
+//! - **Far above the noise** (first): a remaining held-out path error of at least [`FAR_RATIO`] (10×) the
+//!   measurement noise floor means something physical is still missing, whatever the groups say: no
+//!   pattern of biases between runs outweighs an error that far beyond what the measurement explains.
+//! - **Group test** (per group of ≥ 2 runs: repeats of one command, or without command ids runs of the
+//!   same kind of path, [`super::MotionKind`]): each component of the mean end-pose error (dx, dy, dθ)
+//!   against its standard error from the group's scatter, `t = mean / (s / √n)` with `n − 1` degrees of
+//!   freedom (Student's t, two-sided); the group is *biased* when its smallest p-value, Bonferroni-corrected
+//!   for the three components, is below [`GROUP_ALPHA`] (5 %). On clean data about 5 % of the groups (or
+//!   fewer) are biased by chance.
 //! - **Share test**: a systematic error remains when the number of biased groups is beyond chance (binomial
 //!   tail `P(X ≥ k | G, 5 %)` below [`SHARE_ALPHA`], 1 %) *and* at least [`MIN_SHARE`] (25 %) of the groups
-//!   are biased.
-//! - Without repeats (no command group of ≥ 2 runs) the repeat test cannot be made; the decision falls back
-//!   to the remaining held-out path error against the measurement noise floor (above [`MISSING_RATIO`], 3×),
-//!   and says so.
+//!   are biased. It decides only when it can: with one group, even a biased one is as likely as 5 % by
+//!   chance, so a single group never decides.
+//! - Otherwise the decision falls back to the remaining held-out path error against the measurement noise
+//!   floor (above [`MISSING_RATIO`], 3×), and says so.
 //!
 //! The repeatability floor, the error growth along the path and the noise-floor ratio are reported beside
 //! the decision as evidence ([`UnexplainedEvidence`]).
 
+use super::kinds::GroupBasis;
 use super::{GroupReport, Growth, NoiseFloor};
 use serde::{Deserialize, Serialize};
 
@@ -27,17 +32,22 @@ pub const SHARE_ALPHA: f64 = 0.01;
 /// Smallest share of biased groups that counts as a systematic error.
 pub const MIN_SHARE: f64 = 0.25;
 /// Ratio of the remaining held-out error to the noise floor above which something physical is missing,
-/// when the runs have no repeats.
+/// when the groups cannot decide.
 pub const MISSING_RATIO: f64 = 3.0;
+/// Ratio of the remaining held-out error to the noise floor from which something physical is missing
+/// whatever the groups say.
+pub const FAR_RATIO: f64 = 10.0;
 
 /// Which evidence decided `unexplained`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum DecidedBy {
-    /// The share of command groups biased beyond their repeat scatter.
+    /// The share of groups (repeats of a command, or runs of one kind) biased beyond their scatter.
     Repeats,
-    /// No repeats: the remaining held-out error against the noise floor.
+    /// The groups cannot decide (none, or one): the remaining held-out error against the noise floor.
     NoiseFloorRatio,
+    /// The remaining held-out error is at least `FAR_RATIO` times the noise floor.
+    FarAboveNoise,
     /// Neither repeats nor standstills: nothing to decide with (`unexplained` false).
     #[default]
     Undecided,
@@ -48,10 +58,14 @@ pub enum DecidedBy {
 pub struct UnexplainedEvidence {
     /// Which evidence decided.
     pub decided_by: DecidedBy,
-    /// Command groups (of ≥ 2 runs) whose mean end-pose error is biased beyond their repeat scatter.
+    /// Groups (of ≥ 2 runs) whose mean end-pose error is biased beyond their scatter.
     pub groups_biased: usize,
-    /// Command groups of ≥ 2 runs (0: the repeat test could not be made).
+    /// Groups of ≥ 2 runs (0: the group test could not be made).
     pub groups_total: usize,
+    /// What the groups are: repeats of one command, or (runs without command ids) runs of the same kind
+    /// of path. `motion` when any tested group is not a command's.
+    #[serde(default)]
+    pub groups_basis: GroupBasis,
     /// `groups_biased / groups_total` (None without repeats).
     pub share_biased: Option<f64>,
     /// Probability of at least `groups_biased` biased groups by chance alone (binomial, 5 % each).
@@ -96,22 +110,38 @@ pub(super) fn decide(
         remaining_held_out_m,
         noise_floor_m: noise.map(|nf| nf.path_rms),
         ratio,
+        groups_basis: GroupBasis::Command,
         growth: early_m.zip(late_m).filter(|(e, _)| *e > 0.0).map(|(e, l)| l / e),
         early_m,
         late_m,
     };
-    let unexplained = if groups_total > 0 {
+    ev.groups_basis =
+        if tested.iter().all(|g| g.basis == GroupBasis::Command) { GroupBasis::Command } else { GroupBasis::Motion };
+    let share_decides = if groups_total > 0 {
         let share = groups_biased as f64 / groups_total as f64;
         let chance = binomial_tail(groups_total, groups_biased, GROUP_ALPHA);
         ev.share_biased = Some(share);
         ev.chance_probability = Some(chance);
-        ev.decided_by = DecidedBy::Repeats;
-        chance < SHARE_ALPHA && share >= MIN_SHARE
-    } else if let Some(r) = ratio {
-        ev.decided_by = DecidedBy::NoiseFloorRatio;
-        r > MISSING_RATIO
+        // The test can decide only when all groups biased would be beyond chance (two groups or more).
+        (binomial_tail(groups_total, groups_total, GROUP_ALPHA) < SHARE_ALPHA)
+            .then_some(chance < SHARE_ALPHA && share >= MIN_SHARE)
     } else {
-        false
+        None
+    };
+    let unexplained = match (ratio, share_decides) {
+        (Some(r), _) if r >= FAR_RATIO => {
+            ev.decided_by = DecidedBy::FarAboveNoise;
+            true
+        }
+        (_, Some(biased)) => {
+            ev.decided_by = DecidedBy::Repeats;
+            biased
+        }
+        (Some(r), None) => {
+            ev.decided_by = DecidedBy::NoiseFloorRatio;
+            r > MISSING_RATIO
+        }
+        (None, None) => false,
     };
     (unexplained, ev)
 }
@@ -188,6 +218,80 @@ mod tests {
             binomial_tail(36, 9, 0.05)
         );
         assert_eq!(binomial_tail(5, 0, 0.05), 1.0);
+    }
+
+    /// `n` groups of 5 runs, the first `biased` of them biased, and a noise floor of 2 mm path RMS.
+    fn groups(n: usize, biased: usize, basis: GroupBasis) -> Vec<GroupReport> {
+        (0..n)
+            .map(|i| GroupReport {
+                group: format!("g{i}"),
+                basis,
+                runs: 5,
+                mean_end_error: [0.0; 3],
+                bias: 0.0,
+                scatter: 0.01,
+                p_value: Some(if i < biased { 0.001 } else { 0.5 }),
+                systematic: i < biased,
+            })
+            .collect()
+    }
+
+    fn floor() -> NoiseFloor {
+        NoiseFloor { position_m: 0.0, heading_rad: 0.0, path_rms: 0.002, samples: 100, source: Default::default() }
+    }
+
+    fn growth() -> Growth {
+        Growth { fraction: vec![0.5], position_m: vec![0.01], heading_rad: vec![0.0] }
+    }
+
+    #[test]
+    fn far_above_the_noise_floor_something_is_missing_whatever_the_groups_say() {
+        // Real runs without command ids: one group of one kind, unbiased, 18x the floor (omni3's case, where
+        // the repeat test once said "no systematic error remains").
+        let (missing, ev) = decide(&groups(1, 0, GroupBasis::Motion), &growth(), None, 0.036, Some(&floor()));
+        assert!(missing);
+        assert_eq!(ev.decided_by, DecidedBy::FarAboveNoise);
+        assert_eq!((ev.groups_total, ev.groups_biased, ev.groups_basis), (1, 0, GroupBasis::Motion));
+        assert!((ev.ratio.unwrap() - 18.0).abs() < 1e-12);
+        // 36 command groups, none biased, but 10x the floor: still missing.
+        let (missing, ev) = decide(&groups(36, 0, GroupBasis::Command), &growth(), None, 0.020, Some(&floor()));
+        assert!(missing);
+        assert_eq!(ev.decided_by, DecidedBy::FarAboveNoise);
+    }
+
+    #[test]
+    fn a_single_group_never_decides_the_noise_floor_does() {
+        // One group, biased or not: P(X >= 1 | 1, 5 %) = 5 % is never beyond chance at 1 %.
+        for biased in [0, 1] {
+            let g = groups(1, biased, GroupBasis::Motion);
+            let (missing, ev) = decide(&g, &growth(), None, 0.010, Some(&floor()));
+            assert!(missing, "5x the floor");
+            assert_eq!(ev.decided_by, DecidedBy::NoiseFloorRatio);
+            let (missing, ev) = decide(&g, &growth(), None, 0.004, Some(&floor()));
+            assert!(!missing, "2x the floor");
+            assert_eq!(ev.decided_by, DecidedBy::NoiseFloorRatio);
+        }
+        // Without a noise floor nothing decides.
+        let (missing, ev) = decide(&groups(1, 1, GroupBasis::Motion), &growth(), None, 0.010, None);
+        assert!(!missing);
+        assert_eq!(ev.decided_by, DecidedBy::Undecided);
+    }
+
+    #[test]
+    fn below_ten_noise_floors_the_groups_decide_when_they_can() {
+        // Clean simulated data: 3 of 36 command groups biased (as many by chance with probability 0.27),
+        // 1.1x the floor.
+        let (missing, ev) = decide(&groups(36, 3, GroupBasis::Command), &growth(), None, 0.0022, Some(&floor()));
+        assert!(!missing);
+        assert_eq!(ev.decided_by, DecidedBy::Repeats);
+        assert!((ev.chance_probability.unwrap() - binomial_tail(36, 3, 0.05)).abs() < 1e-15);
+        // Two groups of one kind, both biased (probability 0.0025 by chance), 5x the floor: missing.
+        let (missing, ev) = decide(&groups(2, 2, GroupBasis::Motion), &growth(), None, 0.010, Some(&floor()));
+        assert!(missing);
+        assert_eq!((ev.decided_by, ev.groups_basis), (DecidedBy::Repeats, GroupBasis::Motion));
+        // 9 of 36 biased at 5x: missing; 1 of 36 at 5x: the groups say no bias beyond chance.
+        assert!(decide(&groups(36, 9, GroupBasis::Command), &growth(), None, 0.010, Some(&floor())).0);
+        assert!(!decide(&groups(36, 1, GroupBasis::Command), &growth(), None, 0.010, Some(&floor())).0);
     }
 
     #[test]

@@ -1,0 +1,305 @@
+//! Where results go, checked before any work starts: a result file's folder must exist and take files,
+//! and a result folder of per-run files (`simulate --out`, `demo --out`, `export --tum`, `export --mcap`)
+//! must be new or empty, unless `--force`, which replaces it whole.
+//!
+//! A result folder is filled in a staging folder beside it (`.NAME.omnical-tmp-PID`) and put in place by
+//! [`OutDir::commit`] with renames, so a command that fails leaves the old folder as it was and never a
+//! folder that mixes old runs with new ones. Folders of fixed file names that a user may share with other
+//! files (`report --png`, `export --robot-config`, `man --out`) are [`prepared`](prepare_dir) instead: the
+//! command writes its own file names and leaves the rest alone.
+
+use anyhow::{Context, bail};
+use std::path::{Path, PathBuf};
+
+/// The folder a path's file goes into (`.` for a bare file name).
+fn folder_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
+/// Checks that a file can be created in `folder` (a probe file, removed at once).
+fn check_writable(folder: &Path) -> std::io::Result<()> {
+    let probe = folder.join(format!(".omnical-write-check-{}", std::process::id()));
+    std::fs::OpenOptions::new().write(true).create_new(true).open(&probe)?;
+    std::fs::remove_file(&probe)
+}
+
+/// Checks, before the work, that the result file `path` (given with `flag`, e.g. `--out`) can be written:
+/// it is not a folder, its folder exists and takes files. The file itself is written later, atomically.
+pub fn check_file(path: &Path, flag: &str) -> anyhow::Result<()> {
+    if path.is_dir() {
+        bail!("{flag} {}: this is a folder; give a file name in it", path.display());
+    }
+    let folder = folder_of(path);
+    if !folder.is_dir() {
+        bail!(
+            "{flag} {}: the folder {} does not exist (create it first: mkdir -p {})",
+            path.display(),
+            folder.display(),
+            folder.display()
+        );
+    }
+    check_writable(folder).with_context(|| format!("{flag} {}: cannot write in {}", path.display(), folder.display()))
+}
+
+/// Makes the folder `dir` (given with `flag`) for results of fixed file names, and checks that it takes
+/// files, before the work: a missing folder is created (with its parents), files already in it stay.
+pub fn prepare_dir(dir: &Path, flag: &str) -> anyhow::Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        bail!("{flag} {}: this is a file, not a folder", dir.display());
+    }
+    std::fs::create_dir_all(dir).with_context(|| format!("{flag}: creating {}", dir.display()))?;
+    check_writable(dir).with_context(|| format!("{flag} {}: cannot write in it", dir.display()))
+}
+
+/// Up to three entries of a folder, for messages: `train, validation, truth.json, …`.
+fn some_entries(dir: &Path) -> std::io::Result<Option<String>> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)?
+        .map(|e| e.map(|e| e.file_name().to_string_lossy().into_owned()))
+        .collect::<Result<_, _>>()?;
+    if names.is_empty() {
+        return Ok(None);
+    }
+    names.sort();
+    let more = if names.len() > 3 { ", …" } else { "" };
+    Ok(Some(format!("{}{more}", names[..names.len().min(3)].join(", "))))
+}
+
+/// A result folder that already holds files, claimed without `--force`.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "{flag} {}: the folder already holds files ({entries}); give --force to replace it whole, or another {flag}",
+    dir.display()
+)]
+pub struct NotEmpty {
+    /// The option that named it (`--out`).
+    pub flag: String,
+    /// The folder.
+    pub dir: PathBuf,
+    /// Some of its entries, for the message.
+    pub entries: String,
+}
+
+/// Refuses to `--force` away a folder that holds the working directory or is the home folder.
+fn check_replaceable(dir: &Path, flag: &str) -> anyhow::Result<()> {
+    let canonical = dir.canonicalize().with_context(|| format!("{flag} {}", dir.display()))?;
+    let cwd = std::env::current_dir().and_then(|d| d.canonicalize()).unwrap_or_default();
+    if cwd.starts_with(&canonical) {
+        bail!("{flag} {}: --force will not replace a folder that holds the working directory", dir.display());
+    }
+    let home = std::env::var_os("HOME").map(PathBuf::from).and_then(|h| h.canonicalize().ok());
+    if home.is_some_and(|h| h == canonical) {
+        bail!("{flag} {}: --force will not replace the home folder", dir.display());
+    }
+    Ok(())
+}
+
+/// A result folder of per-run files, claimed before the work ([`OutDir::claim`]), filled at
+/// [`OutDir::path`] and put in place by [`OutDir::commit`]. Dropped without a commit, it removes what was
+/// written and leaves the target as it was.
+#[derive(Debug)]
+pub struct OutDir {
+    /// Where the folder ends up.
+    target: PathBuf,
+    /// Where it is filled: a sibling of `target`, or `None` to fill `target` itself (the working
+    /// directory, `.`, which cannot be renamed; it was checked empty).
+    staging: Option<PathBuf>,
+}
+
+impl OutDir {
+    /// Claims `target` (given with `flag`, e.g. `--out`): a folder that already holds files is refused
+    /// unless `force` (then it is replaced whole at the commit); missing parent folders are created; the
+    /// staging folder is made now, so a folder that takes no files fails before the work.
+    pub fn claim(target: &Path, flag: &str, force: bool) -> anyhow::Result<Self> {
+        if target.exists() && !target.is_dir() {
+            bail!("{flag} {}: this is a file, not a folder", target.display());
+        }
+        if target.is_dir() {
+            let held = some_entries(target).with_context(|| format!("{flag}: reading {}", target.display()))?;
+            match held {
+                Some(entries) if !force => {
+                    return Err(NotEmpty { flag: flag.into(), dir: target.to_path_buf(), entries }.into());
+                }
+                Some(_) => check_replaceable(target, flag)?,
+                None => {}
+            }
+        }
+        let name = target.file_name().filter(|_| !is_working_directory(target));
+        let Some(name) = name else {
+            std::fs::create_dir_all(target).with_context(|| format!("{flag}: creating {}", target.display()))?;
+            check_writable(target).with_context(|| format!("{flag} {}: cannot write in it", target.display()))?;
+            return Ok(Self { target: target.to_path_buf(), staging: None });
+        };
+        let parent = folder_of(target);
+        std::fs::create_dir_all(parent).with_context(|| format!("{flag}: creating {}", parent.display()))?;
+        let staging = parent.join(format!(".{}.omnical-tmp-{}", name.to_string_lossy(), std::process::id()));
+        if staging.exists() {
+            std::fs::remove_dir_all(&staging).with_context(|| format!("removing {}", staging.display()))?;
+        }
+        std::fs::create_dir(&staging)
+            .with_context(|| format!("{flag} {}: cannot write in {}", target.display(), parent.display()))?;
+        Ok(Self { target: target.to_path_buf(), staging: Some(staging) })
+    }
+
+    /// Where to write the folder's contents now.
+    pub fn path(&self) -> &Path {
+        self.staging.as_deref().unwrap_or(&self.target)
+    }
+
+    /// Where the folder ends up (for messages and JSON).
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// A path written under [`OutDir::path`], as it will be after the commit.
+    pub fn shown(&self, written: &Path) -> PathBuf {
+        match &self.staging {
+            Some(s) => written.strip_prefix(s).map_or_else(|_| written.to_path_buf(), |rel| self.target.join(rel)),
+            None => written.to_path_buf(),
+        }
+    }
+
+    /// Puts the folder in place: the old one (if any) is moved aside, the new one renamed to the target,
+    /// and the old one removed.
+    pub fn commit(mut self) -> anyhow::Result<()> {
+        let Some(staging) = self.staging.take() else { return Ok(()) };
+        let result = swap_in(&staging, &self.target);
+        if result.is_err() {
+            let _ = std::fs::remove_dir_all(&staging);
+        }
+        result
+    }
+}
+
+impl Drop for OutDir {
+    fn drop(&mut self) {
+        if let Some(s) = self.staging.take() {
+            let _ = std::fs::remove_dir_all(s);
+        }
+    }
+}
+
+/// True when `p` names the working directory (`.`, `./`, or its own path).
+fn is_working_directory(p: &Path) -> bool {
+    let cwd = std::env::current_dir().and_then(|d| d.canonicalize()).ok();
+    p.as_os_str().is_empty() || (p.canonicalize().ok().is_some() && p.canonicalize().ok() == cwd)
+}
+
+/// Renames `staging` to `target`, replacing an existing `target` folder (moved aside first, then removed;
+/// moved back if the rename fails).
+fn swap_in(staging: &Path, target: &Path) -> anyhow::Result<()> {
+    if !target.exists() {
+        return std::fs::rename(staging, target)
+            .with_context(|| format!("moving the results into {}", target.display()));
+    }
+    let name = target.file_name().map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+    let old = folder_of(target).join(format!(".{name}.omnical-old-{}", std::process::id()));
+    std::fs::rename(target, &old).with_context(|| format!("moving the old {} aside", target.display()))?;
+    if let Err(e) = std::fs::rename(staging, target) {
+        let _ = std::fs::rename(&old, target);
+        return Err(e).with_context(|| format!("moving the results into {}", target.display()));
+    }
+    std::fs::remove_dir_all(&old).with_context(|| format!("removing the old {} ({})", target.display(), old.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn files(dir: &Path) -> Vec<String> {
+        let mut v: Vec<String> =
+            std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn a_folder_with_files_is_refused_without_force_and_replaced_whole_with_it() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("sim");
+        std::fs::create_dir_all(out.join("train")).unwrap();
+        std::fs::write(out.join("train/old.csv"), "old").unwrap();
+        std::fs::write(out.join("truth.json"), "{}").unwrap();
+        let e = OutDir::claim(&out, "--out", false).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            format!(
+                "--out {}: the folder already holds files (train, truth.json); give --force to replace it whole, or \
+                 another --out",
+                out.display()
+            )
+        );
+        let d = OutDir::claim(&out, "--out", true).unwrap();
+        std::fs::create_dir(d.path().join("train")).unwrap();
+        std::fs::write(d.path().join("train/new.csv"), "new").unwrap();
+        assert_eq!(d.shown(&d.path().join("train/new.csv")), out.join("train/new.csv"));
+        // Before the commit the old folder is untouched.
+        assert_eq!(files(&out.join("train")), ["old.csv"]);
+        d.commit().unwrap();
+        assert_eq!(files(&out), ["train"]);
+        assert_eq!(files(&out.join("train")), ["new.csv"]);
+        // Nothing left beside it: no staging folder, no old copy.
+        assert_eq!(files(tmp.path()), ["sim"]);
+    }
+
+    #[test]
+    fn a_dropped_claim_leaves_the_old_folder_and_nothing_else() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("bags");
+        std::fs::create_dir(&out).unwrap();
+        std::fs::write(out.join("a.mcap"), "old").unwrap();
+        {
+            let d = OutDir::claim(&out, "--mcap", true).unwrap();
+            std::fs::write(d.path().join("b.mcap"), "half").unwrap();
+        }
+        assert_eq!(files(tmp.path()), ["bags"]);
+        assert_eq!(files(&out), ["a.mcap"]);
+    }
+
+    #[test]
+    fn new_and_empty_folders_need_no_force() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("deep/er/sim");
+        let d = OutDir::claim(&out, "--out", false).unwrap();
+        std::fs::write(d.path().join("x"), "x").unwrap();
+        d.commit().unwrap();
+        assert_eq!(files(&out), ["x"]);
+        let empty = tmp.path().join("empty");
+        std::fs::create_dir(&empty).unwrap();
+        let d = OutDir::claim(&empty, "--out", false).unwrap();
+        std::fs::write(d.path().join("y"), "y").unwrap();
+        d.commit().unwrap();
+        assert_eq!(files(&empty), ["y"]);
+    }
+
+    #[test]
+    fn force_never_replaces_a_folder_holding_the_working_directory() {
+        let here = std::env::current_dir().unwrap();
+        let parent = here.parent().unwrap();
+        let e = OutDir::claim(parent, "--out", true).unwrap_err().to_string();
+        assert!(e.ends_with("--force will not replace a folder that holds the working directory"), "{e}");
+    }
+
+    #[test]
+    fn a_result_file_needs_an_existing_folder() {
+        let tmp = tempfile::tempdir().unwrap();
+        let missing = tmp.path().join("fitted/model.toml");
+        assert_eq!(
+            check_file(&missing, "--out").unwrap_err().to_string(),
+            format!(
+                "--out {}: the folder {} does not exist (create it first: mkdir -p {})",
+                missing.display(),
+                tmp.path().join("fitted").display(),
+                tmp.path().join("fitted").display()
+            )
+        );
+        assert_eq!(
+            check_file(tmp.path(), "--out").unwrap_err().to_string(),
+            format!("--out {}: this is a folder; give a file name in it", tmp.path().display())
+        );
+        check_file(&tmp.path().join("model.toml"), "--out").unwrap();
+        assert!(files(tmp.path()).is_empty(), "the probe file is removed");
+    }
+}
