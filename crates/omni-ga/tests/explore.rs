@@ -166,7 +166,18 @@ fn an_oval_wheel_is_found_by_the_wheel_family() {
     assert!(s.abs() < 0.004, "sin2_b {s} ± {ss}");
     assert!(if ss.is_finite() { s.abs() < 3.0 * ss } else { held("sin2_b") }, "sin2_b {s} ± {ss}");
     let hint = omni_ga::science::text::explore_hint(e.best().unwrap());
-    assert!(hint.contains("wheel b") && hint.contains("an oval wheel"), "{hint}");
+    let terms: Vec<String> = e
+        .best()
+        .unwrap()
+        .terms
+        .iter()
+        .map(|t| format!("{} {:+.5} ± {:.5}{}", t.name, t.value, t.std_error, if t.held { " held" } else { "" }))
+        .collect();
+    assert!(
+        hint.contains("wheel b") && hint.contains("an oval wheel"),
+        "{hint}\n{terms:#?}\n{:#?}",
+        e.best().unwrap().held
+    );
 }
 
 #[test]

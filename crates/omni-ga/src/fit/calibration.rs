@@ -149,7 +149,7 @@ fn objective_as_given(start: &FittedModel, train: &[Run], plan: &Plan, objective
 /// [`calibrate_with_effects`]), diagnose's candidate refit and the explorer's family fit, so the three agree
 /// to the bit on the same runs (issue 25). With no effects, the base refitted alone. The model keeps its
 /// integration; the plan's objective is fitted. An effect parameter at the lower end of its range (backlash
-/// at 0, where the model uses `|b|`) starts 2 % inside it ([`differentiable_start`]); it is held back at
+/// at 0, where the model uses `|b|`) starts 2 % inside it (`differentiable_start`); it is held back at
 /// its null value.
 pub fn refine(
     base: &FittedModel,

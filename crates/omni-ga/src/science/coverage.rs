@@ -309,7 +309,7 @@ fn record(kind: MotionKind, samples: &[Sample], speed_m_s: f64, turn_rad_s: f64,
     }
     let mut common: Vec<((u8, i8), usize)> =
         counts.into_iter().filter(|&(_, c)| c as f64 >= RECORD_SHARE * samples.len() as f64).collect();
-    common.sort_by(|a, b| b.1.cmp(&a.1));
+    common.sort_by_key(|c| std::cmp::Reverse(c.1));
     common
         .into_iter()
         .take(MAX_RECORD)

@@ -447,7 +447,20 @@ use omni_kin::effect::Family;
 
 /// Terms that stand out: at least two standard errors from zero.
 fn significant(f: &FamilyResult) -> Vec<&Term> {
-    f.terms.iter().filter(|t| t.z() >= 2.0).collect()
+    f.terms.iter().filter(|t| strength(f, t) >= 2.0).collect()
+}
+
+/// How far a term stands out: `|value| / std_error` ([`Term::z`]). A held term (part of a direction the runs
+/// do not constrain, so without a standard error of its own) that still moved is judged against the largest
+/// standard error of the family's terms in its unit: an oval wheel's 3 % harmonic that carries a tenth of a
+/// weak direction is still the finding, not a 0.3 % term beside it.
+fn strength(f: &FamilyResult, t: &Term) -> f64 {
+    if !t.held || t.std_error.is_finite() {
+        return t.z();
+    }
+    let se =
+        f.terms.iter().filter(|u| u.unit == t.unit && u.std_error.is_finite()).map(|u| u.std_error).fold(0.0, f64::max);
+    if se > 0.0 { t.value.abs() / se } else { 0.0 }
 }
 
 fn term<'a>(f: &'a FamilyResult, name: &str) -> Option<&'a Term> {
@@ -462,7 +475,7 @@ pub fn explore_hint(f: &FamilyResult) -> String {
         return family_status(f);
     }
     let sig = significant(f);
-    let Some(top) = sig.iter().max_by(|a, b| a.z().total_cmp(&b.z())) else {
+    let Some(top) = sig.iter().max_by(|a, b| strength(f, a).total_cmp(&strength(f, b))) else {
         return "no term stands out from its standard error".into();
     };
     let value = |n: &str| term(f, n).map_or(0.0, |t| t.value);
