@@ -42,7 +42,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let config = SimConfig { runs_per_command: 1, duration_s: 6.0, ..SimConfig::default() };
     let runs = simulate(&config, &truth, "run/")?;
     let start = FittedModel::nominal(Model::ik(IkMatrix::paper_design())).with_effect(drag);
-    let fit = refit(&start, &runs, 1)?;
+    let fit = refit(&start, None, &runs, 1)?.fitted;
     println!("injected d = 0.05 rad/s, recovered d = {:.4} rad/s", fit.params[n - 1]);
     Ok(())
 }

@@ -50,7 +50,7 @@ fn check(id: &str, values: &[f64], tolerance: &[f64]) {
     let d = diagnose(&fitted, &design(), &train, Some(&val), &DiagnoseOptions::default()).expect("diagnose");
     let ranked: Vec<(&str, f64)> = d.ranking.iter().map(|c| (c.effect.as_str(), c.held_out_gain)).collect();
     assert_eq!(d.verdict.as_deref(), Some(id), "{id}: ranking {ranked:?}");
-    let with = refit(&fitted.with_effect(EffectKind::from_id(id, 3).expect("e")), &train, 1).expect("refit");
+    let with = refit(&fitted, Some(&EffectKind::from_id(id, 3).expect("e")), &train, 1).expect("refit").fitted;
     let path = CostKind::PATH;
     let oracle = cost(&truth.model, &truth.params, &val, path).expect("cost");
     let got = cost(&with.model, &with.params, &val, path).expect("cost");

@@ -3,7 +3,9 @@
 mod choices;
 mod common;
 mod determinism;
+mod few_runs;
 mod hidden_effect;
 mod identifiability;
+mod motion_coverage;
 mod readme;
 mod recover;

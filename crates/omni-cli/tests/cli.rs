@@ -159,7 +159,9 @@ fn square_runs_warn_under_the_end_pose_objective() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     // Warnings and notes are diagnostics: on stderr, the fit on stdout (issue 30).
     let (text, err) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
-    assert!(err.matches("warning: ").count() >= 3, "{err}");
+    // Two directions along the sideways wheel pattern (±59.8 %, ±66.3 % of scale), held.
+    assert_eq!(err.matches("warning: ").count(), 2, "{err}");
+    assert!(err.contains("note: 2 direction(s) held"), "{err}");
     assert!(err.contains("fit the path objective"), "{err}");
     assert!(err.contains("held at the start values"), "{err}");
     assert!(!text.contains("warning") && !text.contains("note:"), "{text}");

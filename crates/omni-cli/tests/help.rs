@@ -18,7 +18,7 @@ fn help(args: &[&str]) -> String {
 const SUBCOMMANDS: [&str; 9] = ["simulate", "eval", "train", "diagnose", "report", "export", "plan", "init", "demo"];
 /// The subcommands that read runs (and take the data options).
 const READING_RUNS: [&str; 6] = ["eval", "train", "diagnose", "report", "export", "plan"];
-const EFFECT_IDS: &str = "sensor_offset, sensor_offset_yaw, time_offset, wheel_asymmetry, speed_scale, rotation_slip, \
+const EFFECT_IDS: &str = "sensor_offset, sensor_offset_yaw, time_offset, wheel_asymmetry, speed_scale, rotation_slip, turn_scrub, \
                           accel_slip, backlash, wheel_eccentricity, sample_timing";
 
 #[test]

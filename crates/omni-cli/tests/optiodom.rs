@@ -396,7 +396,10 @@ fn eval_cost(dir: &Path, model: &str, sets: &[&Path]) -> (f64, f64) {
 
 /// The real four-wheel robot (docs/real-robots.md): the design's Eq. 6 on set 080920201715, the fitted
 /// matrix on it and on the other set, and identifiability's finding: the runs hardly contain the wheels
-/// fighting each other, so the three matrix directions along that pattern are held at the design.
+/// fighting each other, so the three matrix directions along that pattern are held at the design; with
+/// the per-run standard errors of the runs cut into segments (8 runs are fewer than 12 parameters + 2),
+/// two more directions, how the translation answers turning on the spot, are poorly constrained (±5.8 %,
+/// ±6.6 % of scale) and held.
 #[test]
 #[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn real_omni4_runs_hold_the_fighting_pattern() {
@@ -404,18 +407,24 @@ fn real_omni4_runs_hold_the_fighting_pattern() {
     let dir = tempfile::tempdir().unwrap();
     let (train_set, other) = (data.join("080920201715"), data.join("231220200521"));
     let s = train(dir.path(), &[train_set.to_str().unwrap(), "--model", "ik", "--out", "ik.toml"]);
-    // Measured: design 0.39375, fitted 0.04480 (Eq. 6), 3 directions held.
+    // Measured: design 0.39375, fitted 0.04518 (Eq. 6), 5 directions held, 88 segments of 8 runs.
     assert!((s["cost_design"].as_f64().unwrap() - 0.39375).abs() < 1e-4, "{}", s["cost_design"]);
     assert!(s["cost_fitted"].as_f64().unwrap() < 0.05, "{}", s["cost_fitted"]);
+    assert_eq!(s["identifiability"]["covariance_kind"], "per_run");
+    assert!(s["identifiability"]["clusters"].as_u64().unwrap() > 8 * 5, "{}", s["identifiability"]["clusters"]);
     let weak = s["identifiability"]["weak"].as_array().unwrap();
-    assert_eq!(s["held_at_start"].as_array().unwrap().len(), 3, "{}", s["warnings"]);
-    for w in weak {
-        let u: Vec<f64> = w["wheel_pattern"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
-        let want = [0.5, -0.5, -0.5, 0.5].map(|v| v * u[0].signum());
-        assert!(u.iter().zip(want).all(|(a, b)| (a - b).abs() < 0.05), "{u:?}");
-        assert!(w["text"].as_str().unwrap().contains("moves the robot nowhere"), "{}", w["text"]);
-    }
-    // Held out: the other set (another declared geometry, longer runs). Measured 0.1127 vs design 0.9840.
+    assert_eq!(s["held_at_start"].as_array().unwrap().len(), 5, "{}", s["warnings"]);
+    let fighting = weak
+        .iter()
+        .filter(|w| {
+            let u: Vec<f64> = w["wheel_pattern"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+            let want = [0.5, -0.5, -0.5, 0.5].map(|v| v * u[0].signum());
+            u.iter().zip(want).all(|(a, b)| (a - b).abs() < 0.05)
+        })
+        .inspect(|w| assert!(w["text"].as_str().unwrap().contains("moves the robot nowhere"), "{}", w["text"]))
+        .count();
+    assert_eq!(fighting, 3, "{}", s["warnings"]);
+    // Held out: the other set (another declared geometry, longer runs). Measured 0.1113 vs design 0.9840.
     let (held_out, _) = eval_cost(dir.path(), "ik.toml", &[&other]);
     let (design, _) = eval_cost(dir.path(), "design", &[&other]);
     assert!(held_out < 0.2 * design, "held-out {held_out} vs design {design}");

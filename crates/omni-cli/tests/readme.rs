@@ -243,7 +243,7 @@ fn your_robot_block_runs_on_recordings() {
 }
 
 /// `plan` → `simulate --commands` → `train --objective end-pose`: the planned runs constrain every
-/// direction (no warning); the OptiOdom square runs leave five unconstrained, which train warns about (on
+/// direction (no warning); the OptiOdom square runs leave two unconstrained, which train warns about (on
 /// stderr) and holds.
 #[test]
 #[cfg_attr(not(shared_data), ignore = "the block reads the real robot logs ../shared/data (crates/omni-cli/build.rs)")]
@@ -255,7 +255,7 @@ fn identifiability_block_runs_as_written() {
     let (planned, square) = err.split_once("+ omnical train ../../shared").unwrap();
     assert!(!planned.contains("warning") && !planned.contains("held at the start"), "{planned}");
     assert!(square.lines().any(|l| l.starts_with("warning: ") && l.contains("poorly constrained")), "{square}");
-    assert!(square.contains("note: 5 direction(s) held at the start values"), "{square}");
+    assert!(square.contains("note: 2 direction(s) held at the start values"), "{square}");
     assert!(!out.contains("warning"), "warnings go to stderr: {out}");
     assert_eq!(entries(&root), ["omnical-try"]);
 }

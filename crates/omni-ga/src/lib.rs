@@ -28,7 +28,7 @@ pub mod science;
 // `omni_ga::diagnose::diagnose`, `omni_ga::observe::Observer`, …
 pub use fit as calibrate;
 pub use optimizer::{ga, lm, observe, problem};
-pub use science::{diagnose, excitation, explore, identify};
+pub use science::{coverage, diagnose, excitation, explore, identify};
 
 pub use error::{Error, OptimizeError};
 pub use fit::{Calibration, Plan, Preset, calibrate};

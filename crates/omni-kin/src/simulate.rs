@@ -245,9 +245,8 @@ impl SimConfig {
     }
 }
 
-/// Simulate every command × repetition. Run `i` uses random stream `i` of `config.seed`. Run names are
-/// `{prefix}{command index:02}-r{repetition}` and carry their command and repetition.
-pub fn simulate(config: &SimConfig, truth: &FittedModel, prefix: &str) -> Result<Vec<Run>, KinError> {
+/// Checks the settings and that `truth` drives the configured robot (its wheel count, a valid model).
+fn check_truth(config: &SimConfig, truth: &FittedModel) -> Result<(), KinError> {
     config.validate()?;
     if truth.model.n_wheels() != config.design.n_wheels() {
         return Err(KinError::WheelCount {
@@ -257,6 +256,13 @@ pub fn simulate(config: &SimConfig, truth: &FittedModel, prefix: &str) -> Result
         });
     }
     truth.model.resolve(&truth.params)?;
+    Ok(())
+}
+
+/// Simulate every command × repetition. Run `i` uses random stream `i` of `config.seed`. Run names are
+/// `{prefix}{command index:02}-r{repetition}` and carry their command and repetition.
+pub fn simulate(config: &SimConfig, truth: &FittedModel, prefix: &str) -> Result<Vec<Run>, KinError> {
+    check_truth(config, truth)?;
     let jobs: Vec<(usize, Command, usize)> = config
         .commands
         .iter()
@@ -269,16 +275,65 @@ pub fn simulate(config: &SimConfig, truth: &FittedModel, prefix: &str) -> Result
         .collect()
 }
 
+/// One leg of a run with several motions: a command held for a while.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Leg {
+    /// The command.
+    pub command: Command,
+    /// How long it is held. s.
+    pub duration_s: f64,
+}
+
+/// A square of side `side_m` driven the way a differential drive (or UMBmark) drives it: forward along a
+/// side at `speed_m_s`, then a quarter turn on the spot at `omega_rad_s` (its sign: which way), four times.
+/// It never translates and rotates at once.
+pub fn square_legs(side_m: f64, speed_m_s: f64, omega_rad_s: f64) -> Vec<Leg> {
+    let side =
+        Leg { command: Command { v_m_s: speed_m_s, alpha_rad: 0.0, omega_rad_s: 0.0 }, duration_s: side_m / speed_m_s };
+    let turn =
+        Leg { command: Command { v_m_s: 0.0, alpha_rad: 0.0, omega_rad_s }, duration_s: 0.5 * PI / omega_rad_s.abs() };
+    [side, turn].repeat(4)
+}
+
+/// A figure-eight: a full circle to the left at `speed_m_s` and `omega_rad_s`, then one to the right.
+pub fn figure_eight_legs(speed_m_s: f64, omega_rad_s: f64) -> Vec<Leg> {
+    let circle = 2.0 * PI / omega_rad_s.abs();
+    let left = Command { v_m_s: speed_m_s, alpha_rad: 0.0, omega_rad_s: omega_rad_s.abs() };
+    let right = Command { omega_rad_s: -omega_rad_s.abs(), ..left };
+    vec![Leg { command: left, duration_s: circle }, Leg { command: right, duration_s: circle }]
+}
+
+/// Simulate one run whose motion is several legs in a row (a square: sides and turns on the spot; a
+/// figure-eight), between two rests, on random stream `stream` of `config.seed`; `config.commands`,
+/// `runs_per_command` and `duration_s` are not used. The run carries no command (like a recording).
+pub fn simulate_legs(
+    config: &SimConfig,
+    truth: &FittedModel,
+    legs: &[Leg],
+    stream: u64,
+    name: String,
+) -> Result<Run, KinError> {
+    let bad = |why: &str| KinError::Invalid { what: "simulator legs".into(), why: why.into() };
+    if legs.is_empty() {
+        return Err(bad("at least one leg is needed"));
+    }
+    if legs.iter().any(|l| !(l.duration_s > 0.0 && l.duration_s.is_finite())) {
+        return Err(bad("every leg's duration_s must be finite and > 0"));
+    }
+    let duration_s = legs.iter().map(|l| l.duration_s).sum();
+    let commands = legs.iter().map(|l| l.command).collect();
+    let config = SimConfig { commands, runs_per_command: 1, duration_s, ..config.clone() };
+    check_truth(&config, truth)?;
+    simulate_motion(&config, truth, legs, None, stream, name)
+}
+
 /// Zero-mean Gaussian noise of standard deviation `sigma` (one draw, always, so streams stay aligned).
 fn gauss(rng: &mut ChaCha8Rng, sigma: f64) -> f64 {
     let z: f64 = StandardNormal.sample(rng);
     sigma * z
 }
 
-/// Simulate one run on random stream `stream`.
-///
-/// long: one fine-step loop applying every effect stage in order (clock, wheel speeds, twist, integration,
-/// measurement) on shared per-step state; to split into stage helpers (issue 15 leftover).
+/// Simulate one run on random stream `stream`: `command` held for `config.duration_s`.
 pub fn simulate_run(
     config: &SimConfig,
     truth: &FittedModel,
@@ -287,17 +342,46 @@ pub fn simulate_run(
     stream: u64,
     name: String,
 ) -> Result<Run, KinError> {
+    let legs = [Leg { command, duration_s: config.duration_s }];
+    simulate_motion(config, truth, &legs, Some((command, repetition)), stream, name)
+}
+
+/// Simulate one run of `legs` in a row (their durations sum to `config.duration_s`) on random stream
+/// `stream`; the run carries `label` (its command and repetition) when there is one.
+///
+/// long: one fine-step loop applying every effect stage in order (clock, wheel speeds, twist, integration,
+/// measurement) on shared per-step state; to split into stage helpers (issue 15 leftover).
+fn simulate_motion(
+    config: &SimConfig,
+    truth: &FittedModel,
+    legs: &[Leg],
+    label: Option<(Command, usize)>,
+    stream: u64,
+    name: String,
+) -> Result<Run, KinError> {
     let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
     rng.set_stream(stream);
     let res = truth.model.resolve(&truth.params)?;
     let n_w = config.design.n_wheels();
     let fwd = config.design.wheels_from_twist();
-    let target: Vec<f64> = (0..n_w)
-        .map(|i| {
-            let (s, c) = command.alpha_rad.sin_cos();
-            fwd[(i, 0)] * command.v_m_s * c + fwd[(i, 1)] * command.v_m_s * s + fwd[(i, 2)] * command.omega_rad_s
+    // Each leg's wheel-speed targets and when it ends (since the motion started). s.
+    let mut leg_end_s = 0.0;
+    let targets: Vec<(f64, Vec<f64>)> = legs
+        .iter()
+        .map(|leg| {
+            let c = leg.command;
+            let (s, co) = c.alpha_rad.sin_cos();
+            leg_end_s += leg.duration_s;
+            let wheels = (0..n_w)
+                .map(|i| fwd[(i, 0)] * c.v_m_s * co + fwd[(i, 1)] * c.v_m_s * s + fwd[(i, 2)] * c.omega_rad_s)
+                .collect();
+            (leg_end_s, wheels)
         })
         .collect();
+    let target_at = |since_start_s: f64| -> &[f64] {
+        let i = targets.iter().position(|(end, _)| since_start_s < *end).unwrap_or(targets.len() - 1);
+        &targets[i].1
+    };
 
     // Time line (true clock): the robot moves in [rest, rest + duration]; we simulate a margin either side.
     let total = 2.0 * config.rest_s + config.duration_s;
@@ -313,6 +397,7 @@ pub fn simulate_run(
     let mut motor_rad_s = vec![0.0; n_fine * n_w];
     for (k, &t) in fine_t.iter().enumerate() {
         let on = t >= config.rest_s && t < config.rest_s + config.duration_s;
+        let target = target_at(t - config.rest_s);
         for i in 0..n_w {
             let goal = if on { target[i] } else { 0.0 };
             speed[i] += alpha * (goal - speed[i]);
@@ -457,8 +542,8 @@ pub fn simulate_run(
         wheel_rad_s,
         n_wheels: n_w,
         truth: truth_poses,
-        command: Some(command),
-        repetition: Some(repetition as u32),
+        command: label.map(|(c, _)| c),
+        repetition: label.map(|(_, r)| r as u32),
         recorded_odometry,
         wheel_start_rad,
     })
@@ -528,6 +613,34 @@ mod tests {
             assert_eq!(benchmark_commands(&design), flower_commands());
             assert!(unreachable_twists(&design, &flower_commands()).unwrap().iter().flatten().all(|m| m.abs() < 1e-12));
         }
+    }
+
+    #[test]
+    fn a_run_of_one_leg_is_the_command_held_and_a_square_closes() {
+        let truth = FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated()));
+        let cfg = small(5);
+        let command = cfg.commands[2];
+        let held = simulate_run(&cfg, &truth, command, 0, 3, "a".into()).unwrap();
+        let leg = [Leg { command, duration_s: cfg.duration_s }];
+        let one = simulate_legs(&cfg, &truth, &leg, 3, "a".into()).unwrap();
+        assert_eq!(held.wheel_rad_s(), one.wheel_rad_s());
+        assert_eq!(held.truth(), one.truth());
+        assert_eq!((held.command(), one.command()), (Some(command), None));
+        // A 1 m square (sides at 0.2 m/s, quarter turns at 0.5 rad/s) on the true robot, noise free: back at
+        // the start, one turn further on.
+        let quiet = SimConfig { design: RobotGeometry::apr02(), ..small(5).noise_free() };
+        let truth = FittedModel::nominal(Model::ik(quiet.design.twist_from_wheels().unwrap()));
+        let legs = square_legs(1.0, 0.2, 0.5);
+        assert_eq!(legs.len(), 8);
+        let run = simulate_legs(&quiet, &truth, &legs, 0, "square".into()).unwrap();
+        let end = run.end().pose;
+        // The controller's lag (50 ms) shortens each leg by a little: centimetres after four sides.
+        assert!(end.x_m.hypot(end.y_m) < 0.03, "{end:?}");
+        assert!((end.theta_rad - 2.0 * PI).abs() < 0.05, "{end:?}");
+        let eight = simulate_legs(&quiet, &truth, &figure_eight_legs(0.2, 0.4), 0, "eight".into()).unwrap();
+        assert!((eight.truth_duration_s() - (2.0 * 2.0 * PI / 0.4 + 2.0 * quiet.rest_s)).abs() < 1e-9);
+        let e = simulate_legs(&quiet, &truth, &[], 0, "none".into()).unwrap_err().to_string();
+        assert_eq!(e, "simulator legs: at least one leg is needed");
     }
 
     #[test]

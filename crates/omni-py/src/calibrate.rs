@@ -8,9 +8,10 @@ use crate::robot::{model_or_design, model_spec, robot_arg};
 use crate::run::runs_from;
 use numpy::PyArray2;
 use omni_cli::cmd::train::{FitArgs, apply_fit_args, check_fit, check_step, prior_half_widths};
-use omni_ga::calibrate::{Calibration, Plan, Preset, calibrate};
+use omni_ga::calibrate::{Calibration, Plan, Preset, calibrate_with_effects};
 use omni_ga::observe::{Control, Iteration, Observer};
 use omni_kin::choice::UnknownChoice;
+use omni_kin::effect::Effect;
 use omni_kin::{FittedModel, KinematicsKind};
 use pyo3::exceptions::{PyKeyboardInterrupt, PyUserWarning};
 use pyo3::prelude::*;
@@ -336,13 +337,13 @@ pub fn train(
     let fit = fit_args(objective, every, heading_weight, unexcited, max_std_error, min_excitation)?;
     let mut origin = crate::run::origin_of(runs);
     let (runs, design) = runs_from(runs, "runs")?;
-    let (mut start, mut adapters, from_design) = start_model(py, model, robot.as_ref(), design, &mut origin)?;
-    for e in &effects {
-        let (kind, adapter) = effect_from(e, start.model.n_wheels())?;
-        start = start.with_effect(kind);
-        adapters.extend(adapter);
-    }
-    let plan = Plan::preset(preset, start.model.n_params()).seed(seed);
+    let (start, mut adapters, from_design) = start_model(py, model, robot.as_ref(), design, &mut origin)?;
+    let made = effects.iter().map(|e| effect_from(e, start.model.n_wheels())).collect::<PyResult<Vec<_>>>()?;
+    let (kinds, added): (Vec<_>, Vec<_>) = made.into_iter().unzip();
+    adapters.extend(added.into_iter().flatten());
+    // As `omnical train`: the parameter count with the effects (the paper preset's GA fits them all at once).
+    let plan = Plan::preset(preset, start.model.n_params() + kinds.iter().map(|e| e.params().len()).sum::<usize>());
+    let plan = plan.seed(seed);
     let mut plan = apply_fit_args(plan, &fit).map_err(|e| value_error(flag_names(&format!("omnical.train: {e}"))))?;
     if from_design {
         plan.half_widths = prior_half_widths(&start, &origin).into_iter().collect();
@@ -360,7 +361,8 @@ pub fn train(
         stopped_by_callback: false,
         failure: None,
     };
-    let result: Result<Calibration, _> = py.detach(|| calibrate(&start, &runs, &plan, &mut observer));
+    let result: Result<Calibration, _> =
+        py.detach(|| calibrate_with_effects(&start, &kinds, &runs, &plan, &mut observer));
     if let Some(e) = observer.failure.take() {
         return Err(e);
     }

@@ -44,6 +44,7 @@ fn candidate_dict<'py>(py: Python<'py>, c: &Candidate) -> PyResult<Bound<'py, Py
     d.set_item("excess_closed", c.excess_closed)?;
     d.set_item("params", values(py, &c.params)?)?;
     d.set_item("implied", values(py, &c.implied)?)?;
+    d.set_item("held", &c.held)?;
     d.set_item("refit", c.refit.as_ref().map(|r| costs_dict(py, r)).transpose()?)?;
     Ok(d)
 }
@@ -108,7 +109,9 @@ impl PyDiagnosis {
         costs_dict(py, &self.inner.design_costs)
     }
     /// Candidates, best held-out gain first: one dict each (effect, physics, held_out_gain (fraction),
-    /// first_order_explained, separability, absorbed, excess_closed, params, implied, refit).
+    /// first_order_explained, separability, absorbed, excess_closed, params, implied, held (parameters held
+    /// at their null values, as ``train`` holds them), refit). The refit is the one ``train`` makes with
+    /// ``effects=[effect]`` after fitting the base.
     #[getter]
     fn ranking<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         self.inner.ranking.iter().map(|c| candidate_dict(py, c)).collect()
@@ -151,6 +154,15 @@ impl PyDiagnosis {
     #[getter]
     fn final_model(&self, py: Python<'_>) -> Option<Py<PyModel>> {
         self.final_model.as_ref().map(|m| m.clone_ref(py))
+    }
+    /// The training runs' motions against the held-out runs' (with ``validate``; else None): shares of
+    /// translating, rotating and translating while rotating per set, ``gaps`` (what the training runs lack,
+    /// with commands to ``record``) and ``unseen_effects``.
+    #[getter]
+    fn coverage<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let Some(c) = &self.inner.coverage else { return Ok(None) };
+        let text = serde_json::to_string(c).map_err(|e| crate::errors::value_error(e.to_string()))?;
+        py.import("json")?.call_method1("loads", (text,)).map(Some)
     }
     /// Everything as plain data (the CLI's ``--json``; NaN becomes None there).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {

@@ -31,9 +31,11 @@ impl PyExploration {
 
 #[pymethods]
 impl PyExploration {
-    /// Every family, largest held-out gain first: dicts with family, effect (``learned:<family>``),
+    /// Every family, largest held-out gain first: dicts with family, effect (``learned:<family>``), status
+    /// (``fitted``, ``not_excited``, ``singular``, ``not_converged``), status_reason, status_text,
     /// held_out_gain (fraction), gain_std_error, passes, held_out_cost_m, terms (name, value, std_error,
-    /// unit), hint, curve.
+    /// unit, held), held, hint, curve. Each family is fitted as ``train(..., effects=["learned:<family>"])``
+    /// fits it after the base, holding what train holds.
     #[getter]
     fn families<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         self.record(py)?.get_item("families")
@@ -48,6 +50,13 @@ impl PyExploration {
     #[getter]
     fn best(&self) -> Option<String> {
         self.inner.best().map(|f| f.family.id().to_string())
+    }
+    /// The training runs' motions against the held-out runs' (the CLI's ``coverage``): shares of
+    /// translating, rotating and translating while rotating per set, ``gaps`` (what the training runs lack,
+    /// with commands to ``record``) and ``unseen_effects``.
+    #[getter]
+    fn coverage<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.record(py)?.get_item("coverage")
     }
     /// The conclusion in words (as the CLI prints it).
     #[getter]

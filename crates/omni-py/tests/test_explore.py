@@ -15,6 +15,12 @@ def test_explore_finds_a_world_drift_and_the_learned_effect_trains() -> None:
     assert e.unexplained is False
     world = e.families[0]
     assert world["family"] == "world" and world["passes"] and world["held_out_gain"] > 0.3
+    assert world["status"] == "fitted" and world["status_reason"] is None
+    # Every family is fitted or says why not, never all terms at 0 as a silent "fitted".
+    for f in e.families:
+        assert f["status"] in ("fitted", "not_excited", "singular", "not_converged"), f
+        assert f["status"] != "fitted" or any(t["value"] != 0.0 for t in f["terms"]), f
+        assert f["status_text"], f
     terms = {t["name"]: t for t in world["terms"]}
     assert abs(terms["drift_x"]["value"] - 0.0039) < 4e-4 and terms["drift_x"]["unit"] == "m/s"
     assert abs(terms["drift_y"]["value"] + 0.0021) < 4e-4

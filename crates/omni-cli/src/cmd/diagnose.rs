@@ -176,7 +176,9 @@ pub fn print_diagnosis(d: &Diagnosis) {
             if id.weak.is_empty() { String::new() } else { format!(", {} unconstrained direction(s)", id.weak.len()) }
         );
     }
-    println!("3. which effect is missing (held-out gain of a refit; first-order share of the residual)");
+    println!(
+        "3. which effect is missing (held-out gain of the refit `train --effect` makes; first-order share of the residual)"
+    );
     println!("   {:<20} {:>9} {:>11} {:>9}  parameters", "effect", "gain %", "1st-order %", "separable");
     for c in &d.ranking {
         let params: Vec<String> = if c.absorbed {
@@ -186,6 +188,14 @@ pub fn print_diagnosis(d: &Diagnosis) {
                 .iter()
                 .map(|p| match p.std_error {
                     Some(se) => format!("{}={}", p.name, param_text(p.value, Some(se), &p.unit)),
+                    // Held at its null value by the truncated update, as `train --effect` holds it.
+                    None if c.held.contains(&p.name) => {
+                        format!(
+                            "{}={} (held: the runs do not constrain it; train holds it too)",
+                            p.name,
+                            param_text(p.value, None, &p.unit)
+                        )
+                    }
                     // Part of a direction the runs do not constrain (see the identifiability analysis).
                     None => format!("{}={} (undetermined)", p.name, param_text(p.value, None, &p.unit)),
                 })

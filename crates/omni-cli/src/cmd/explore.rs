@@ -4,7 +4,7 @@
 use super::{DataArgs, OutputArgs, load_with_held_out, resolve_model};
 use crate::{atomic, model_file};
 use anyhow::Context;
-use omni_ga::explore::{Exploration, ExploreOptions, FamilyResult, explore};
+use omni_ga::explore::{Exploration, ExploreOptions, FamilyResult, FamilyStatus, explore};
 use omni_ga::science::text;
 use serde_json::{Value, json};
 use std::path::PathBuf;
@@ -71,11 +71,19 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// One family in JSON: `{family, held_out_gain, gain_std_error, passes, held_out_cost_m, terms, hint, curve}`.
+/// One family in JSON: `{family, effect, status, status_reason, status_text, held_out_gain, gain_std_error,
+/// passes, held_out_cost_m, terms, held, hint, curve}`.
 fn family_json(f: &FamilyResult) -> Value {
+    let reason = match f.status {
+        FamilyStatus::NotConverged { reason } => serde_json::to_value(reason).unwrap_or(Value::Null),
+        _ => Value::Null,
+    };
     json!({
         "family": f.family.id(),
         "effect": format!("learned:{}", f.family.id()),
+        "status": f.status.id(),
+        "status_reason": reason,
+        "status_text": text::family_status(f),
         "held_out_gain": f.held_out_gain,
         "gain_std_error": f.gain_std_error,
         "passes": f.passes,
@@ -85,7 +93,9 @@ fn family_json(f: &FamilyResult) -> Value {
             "value": t.value,
             "std_error": if t.std_error.is_finite() { json!(t.std_error) } else { Value::Null },
             "unit": t.unit,
+            "held": t.held,
         })).collect::<Vec<_>>(),
+        "held": f.held,
         "hint": text::explore_hint(f),
         "curve": f.curve,
     })
@@ -102,6 +112,8 @@ pub fn to_json(e: &Exploration) -> Value {
         "baseline_held_out_cost_m": e.baseline_held_out_cost,
         "noise_floor_path_rms_m": e.noise_floor_path_rms,
         "runs": { "train": e.runs.0, "held_out": e.runs.1 },
+        "coverage": e.coverage,
+        "coverage_text": text::motion_coverage(&e.coverage),
         "conclusion": text::explore_conclusion(e),
     })
 }
@@ -121,9 +133,11 @@ pub fn print_exploration(e: &Exploration, min_gain: f64) {
     if let Some(best) = e.best() {
         println!("  learned:{} terms (value ± standard error per run):", best.family.id());
         for t in &best.terms {
-            println!("    {:<16} {:+.6} ± {:.6} {}", t.name, t.value, t.std_error, t.unit);
+            let held = if t.held { "  (held: the runs do not constrain it)" } else { "" };
+            println!("    {:<16} {:+.6} ± {:.6} {}{held}", t.name, t.value, t.std_error, t.unit);
         }
     }
+    println!("motions: {}", text::motion_coverage(&e.coverage));
     if let Some(c) = conclusion {
         println!("{c}");
     }

@@ -7,9 +7,11 @@ use crate::robot_file::{self, Design};
 use crate::units::{count, std_error_text, value_text};
 use crate::{atomic, design, interrupt, model_file, out_path, progress};
 use anyhow::Context;
-use omni_ga::calibrate::{Calibration, Plan, Preset, Unexcited, calibrate};
+use omni_ga::calibrate::{Calibration, Plan, Preset, Unexcited, calibrate_with_effects};
 use omni_ga::identify::IdentifyOptions;
+use omni_ga::science::text;
 use omni_kin::cost::{CostKind, CostName};
+use omni_kin::effect::Effect;
 use omni_kin::robot::PRIOR_BOX_SIGMAS;
 use omni_kin::{EffectKind, FittedModel, KinematicsKind, Model};
 use serde_json::json;
@@ -314,7 +316,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     if let Some(out) = &a.out {
         out_path::check_file(out, "--out")?;
     }
-    let (ds, start, plan, priors) = prepare(a)?;
+    let Prepared { ds, start, effects, plan, priors } = prepare(a)?;
     let preset_name = a.preset.id();
     if let Some(w) = check_step(&plan, &ds.runs, a.force)? {
         tracing::warn!("{w}");
@@ -325,7 +327,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         count(ds.runs.len(), "run"),
         a.seed
     );
-    let c = calibrate(&start, &ds.runs, &plan, &mut interrupt::StopOnInterrupt(&mut bar))?;
+    let c = calibrate_with_effects(&start, &effects, &ds.runs, &plan, &mut interrupt::StopOnInterrupt(&mut bar))?;
     bar.finish();
     if let Some(w) = check_fit(&c, &plan, &ds.runs, a.force)? {
         tracing::warn!("{w}");
@@ -376,25 +378,38 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Loads the runs and builds the start model and the plan, as `omnical train` does. A Ctrl-C (when the
-/// handler is installed) during loading ends it with [`interrupt::Interrupted`].
-fn prepare(a: &Args) -> anyhow::Result<(Dataset, FittedModel, Plan, Vec<PriorUse>)> {
+/// What `omnical train` fits: the runs, the start model, the effects to add to it, the plan and the robot
+/// description's priors.
+struct Prepared {
+    ds: Dataset,
+    start: FittedModel,
+    effects: Vec<EffectKind>,
+    plan: Plan,
+    priors: Vec<PriorUse>,
+}
+
+/// Loads the runs and builds the start model, the effects and the plan, as `omnical train` does. A Ctrl-C
+/// (when the handler is installed) during loading ends it with [`interrupt::Interrupted`].
+fn prepare(a: &Args) -> anyhow::Result<Prepared> {
     let ds = load_runs(&a.runs, &a.data)?;
     if interrupt::requested() {
         return Err(interrupt::Interrupted.into());
     }
-    let mut start = match &a.start {
+    let start = match &a.start {
         Some(p) => model_file::read(p).context("reading --start")?,
         None => FittedModel::nominal(named_columns(design::model(a.model, &ds)?, a.data.joints.as_deref())?),
     };
-    for id in &a.effects {
-        start = start
-            .with_effect(EffectKind::from_id(id, start.model.n_wheels()).with_context(|| format!("--effect {id}"))?);
-    }
-    let mut plan = apply_fit_args(Plan::preset(a.preset, start.model.n_params()).seed(a.seed), &a.fit)?;
+    let effects = a
+        .effects
+        .iter()
+        .map(|id| EffectKind::from_id(id, start.model.n_wheels()).with_context(|| format!("--effect {id}")))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    // The parameter count with the effects: the paper preset's GA fits them all at once.
+    let n_params = start.model.n_params() + effects.iter().map(|e| e.params().len()).sum::<usize>();
+    let mut plan = apply_fit_args(Plan::preset(a.preset, n_params).seed(a.seed), &a.fit)?;
     let priors = if a.start.is_none() { robot_priors(&start, &ds) } else { Vec::new() };
     plan.half_widths = priors.iter().map(|p| (p.name.clone(), PRIOR_BOX_SIGMAS * p.std)).collect();
-    Ok((ds, start, plan, priors))
+    Ok(Prepared { ds, start, effects, plan, priors })
 }
 
 /// Writes the model file of a fit with its summary `s` as the `[fit]` table, atomically. Everything but the
@@ -426,9 +441,9 @@ pub fn train_quietly(a: &Args) -> anyhow::Result<Trained> {
     if let Some(out) = &a.out {
         out_path::check_file(out, "--out")?;
     }
-    let (ds, start, plan, _priors) = prepare(a)?;
+    let Prepared { ds, start, effects, plan, .. } = prepare(a)?;
     let mut warnings: Vec<String> = check_step(&plan, &ds.runs, a.force)?.into_iter().collect();
-    let c = calibrate(&start, &ds.runs, &plan, &mut omni_ga::observe::NoopObserver)?;
+    let c = calibrate_with_effects(&start, &effects, &ds.runs, &plan, &mut omni_ga::observe::NoopObserver)?;
     warnings.extend(check_fit(&c, &plan, &ds.runs, a.force)?);
     let mut s = summary(&c, a.preset.id(), a.seed, ds.runs.len())?;
     if let Some(d) = designs_figure(&c, &ds, &plan, a.start.is_none())? {
@@ -535,11 +550,7 @@ pub fn print_identifiability(c: &Calibration) {
         "identifiability: condition number {:.3e} (scaled), residual RMS {:.4} m, standard errors {}",
         id.condition_number,
         id.residual_rms,
-        match id.covariance_kind {
-            omni_ga::identify::CovarianceKind::PerRun => "per run (robust to correlated errors along a path)",
-            omni_ga::identify::CovarianceKind::Iid => "iid (too few runs for the per-run estimate)",
-            omni_ga::identify::CovarianceKind::Stated => "from the stated noise",
-        }
+        text::covariance(id)
     );
     // The IK matrix's ω row is in rad per wheel rad, a ratio and not an angle: it keeps its unit.
     let model = &c.fitted.model;

@@ -13,14 +13,17 @@ fn esc(s: &str) -> String {
 pub fn section(e: &Exploration) -> String {
     let mut h = String::from(
         "<h2 id=\"explore\">Beyond the catalogue (explore)</h2>\n<p class=\"note\">Each family of features \
-         fitted with the base kinematics on the training runs; held-out gain = 1 − held-out path cost with it / \
+         refitted with everything else on the training runs, as <code>train --effect learned:&lt;family&gt;</code> fits it \
+         (terms the runs do not constrain held at 0, as train holds them); held-out gain = 1 − held-out path cost with it / \
          without it; passes at ≥ 5 % and > 2 standard errors.</p>\n<table><tr><th class=\"l\">family</th>\
-         <th>held-out gain %</th><th>± s.e. %</th><th>passes</th><th class=\"l\">what it says</th></tr>\n",
+         <th class=\"l\">status</th><th>held-out gain %</th><th>± s.e. %</th><th>passes</th>\
+         <th class=\"l\">what it says</th></tr>\n",
     );
     for f in &e.families {
         h.push_str(&format!(
-            "<tr><td class=\"l\">{}</td><td>{:+.1}</td><td>{:.1}</td><td>{}</td><td class=\"l\">{}</td></tr>\n",
+            "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{:+.1}</td><td>{:.1}</td><td>{}</td><td class=\"l\">{}</td></tr>\n",
             f.family.id(),
+            esc(&text::family_status(f)),
             100.0 * f.held_out_gain,
             100.0 * f.gain_std_error,
             if f.passes { "yes" } else { "no" },
@@ -28,6 +31,9 @@ pub fn section(e: &Exploration) -> String {
         ));
     }
     h.push_str("</table>\n");
+    if e.coverage.lacking() {
+        h.push_str(&format!("<p>{}</p>\n", esc(&text::motion_coverage(&e.coverage))));
+    }
     h.push_str(&format!("<p>{}</p>\n", esc(&text::explore_conclusion(e))));
     if let Some(c) = e.best().and_then(|f| f.curve.as_ref()) {
         h.push_str(&curve_svg(c));

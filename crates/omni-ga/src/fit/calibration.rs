@@ -1,16 +1,16 @@
 //! [`calibrate`]: fit a model's parameters to training runs by a [`Plan`], and report how it went.
 
 use crate::error::Error;
-use crate::fit::pipeline::{self, StageOutcome};
+use crate::fit::pipeline::{self, Fitted, StageOutcome, Start};
 use crate::fit::plan::Plan;
 use crate::fit::problem::CalibrationProblem;
 use crate::fit::search_box::search_box_with;
-use crate::optimizer::Solution;
 use crate::optimizer::observe::Observer;
 use crate::optimizer::problem::{Bounds, Problem};
-use crate::science::identify::{Identifiability, WeakDirection};
+use crate::optimizer::{Solution, Termination};
+use crate::science::identify::{Identifiability, IdentifyOptions, WEAK_LOADING, WeakDirection};
 use omni_kin::cost::{self, CostKind};
-use omni_kin::{FittedModel, Run};
+use omni_kin::{EffectKind, FittedModel, Run};
 use std::time::Instant;
 
 /// The outcome of a calibration.
@@ -58,6 +58,15 @@ impl Calibration {
         100.0 * (1.0 - self.end_pose_fitted / self.end_pose_start)
     }
 
+    /// Indices of the parameters the truncated update held at the start: those carrying at least
+    /// [`WEAK_LOADING`] of a held direction (the identifiability analysis's own rule for a parameter without
+    /// a standard error).
+    pub fn held_params(&self) -> Vec<usize> {
+        (0..self.fitted.params.len())
+            .filter(|&i| self.held.iter().any(|w| w.direction.get(i).is_some_and(|v| v.abs() >= WEAK_LOADING)))
+            .collect()
+    }
+
     /// The fit when it is worse than its start on its own training runs: its objective above the start's as
     /// given ([`Self::objective_start_as_given`]) by more than `WORSE_TOLERANCE` (1e-9) (relative). The stages
     /// keep the best point, so this happens when the plan's integration misrepresents the runs (a fixed
@@ -98,7 +107,7 @@ impl WorseThanStart {
     }
 }
 
-/// Fit `start`'s parameters to `train` following `plan`.
+/// Fit `start`'s parameters to `train` following `plan`: its stages, then its truncated update.
 pub fn calibrate(
     start: &FittedModel,
     train: &[Run],
@@ -107,46 +116,178 @@ pub fn calibrate(
 ) -> Result<Calibration, Error> {
     let t0 = Instant::now();
     let model = start.model.clone().with_integration(plan.integration);
-    let start_fm = FittedModel::new(model.clone(), start.params.clone())?;
     let bounds = search_box_with(&model, &start.params, plan.box_rule, &plan.half_widths)?;
     let problem = CalibrationProblem::new(&model, train, plan.objective, bounds.clone())?;
     let objective_start = problem.cost(&start.params);
     let names: Vec<String> = model.params().into_iter().map(|p| p.name).collect();
-    let fit = pipeline::run(&problem, plan, &start.params, objective_start, &names, observer)?;
-    let outside_box = names
-        .iter()
-        .enumerate()
-        .filter(|&(i, _)| fit.x[i] < bounds.lower[i] || fit.x[i] > bounds.upper[i])
-        .map(|(_, n)| n.clone())
-        .collect();
-    let fitted = FittedModel::new(model.clone(), fit.x)?;
-    let objective_fitted = problem.cost(&fitted.params);
-    let identifiability = problem.identifiability(&fitted.params, &plan.identify);
-    let end_pose_start = cost::cost(&model, &start.params, train, CostKind::EndPose)?;
-    let objective_start_as_given = if start.model.integration == plan.integration {
-        objective_start
-    } else {
-        cost::cost(&start.model, &start.params, train, plan.objective)?
-    };
-    let end_pose_fitted = cost::cost(&model, &fitted.params, train, CostKind::EndPose)?;
-    Ok(Calibration {
-        fitted,
-        start: start_fm,
-        objective: plan.objective,
+    let from = Start { x: &start.params, objective: objective_start, hold_at: &start.params };
+    let fit = pipeline::run(&problem, plan, from, &names, observer)?;
+    let start_as_given = objective_as_given(start, train, plan, objective_start)?;
+    Outcome { fit, identifiability: None, start_as_given }.report(
+        &problem,
+        &plan.identify,
+        &start.params,
         objective_start,
-        objective_fitted,
-        objective_start_as_given,
-        end_pose_start,
-        end_pose_fitted,
-        evaluations: 1 + fit.evaluations,
-        seconds: t0.elapsed().as_secs_f64(),
-        bounds,
-        at_bound: fit.at_bound,
-        outside_box,
-        stages: fit.stages,
-        identifiability,
-        held: fit.held,
-    })
+        t0,
+    )
+}
+
+/// The objective of `start` as given (its own integration, which the plan's may replace) on `train`:
+/// `objective_start` (the plan's integration) when the two integrations are the same.
+fn objective_as_given(start: &FittedModel, train: &[Run], plan: &Plan, objective_start: f64) -> Result<f64, Error> {
+    if start.model.integration == plan.integration {
+        Ok(objective_start)
+    } else {
+        Ok(cost::cost(&start.model, &start.params, train, plan.objective)?)
+    }
+}
+
+/// Adds `effects`, at their null values, to the fitted model `base` and refits every parameter: the plan's
+/// refining stages (Levenberg–Marquardt, unbounded) from there, then its truncated update, which puts back
+/// what the runs do not constrain to `base` and the effects' null values. No GA: the base is already fitted
+/// and the effects start at null. The one fit behind `train --effect E` (after the base's own calibration,
+/// [`calibrate_with_effects`]), diagnose's candidate refit and the explorer's family fit, so the three agree
+/// to the bit on the same runs (issue 25). With no effects, the base refitted alone. The model keeps its
+/// integration; the plan's objective is fitted. An effect parameter at the lower end of its range (backlash
+/// at 0, where the model uses `|b|`) starts 2 % inside it (`differentiable_start`); it is held back at
+/// its null value.
+pub fn refine(
+    base: &FittedModel,
+    effects: &[EffectKind],
+    train: &[Run],
+    plan: &Plan,
+    observer: &mut dyn Observer,
+) -> Result<Calibration, Error> {
+    let t0 = Instant::now();
+    let start = effects.iter().fold(base.clone(), |m, e| m.with_effect(e.clone()));
+    let nudged = differentiable_start(&start, base.params.len());
+    let problem = CalibrationProblem::new(&start.model, train, plan.objective, Bounds::unbounded(nudged.len()))?;
+    let names: Vec<String> = start.model.params().into_iter().map(|p| p.name).collect();
+    let refining = Plan { stages: plan.stages.iter().filter(|s| s.refines_held()).cloned().collect(), ..plan.clone() };
+    let objective = problem.cost(&nudged);
+    let from = Start { x: &nudged, objective, hold_at: &start.params };
+    let fit = pipeline::run(&problem, &refining, from, &names, observer)?;
+    let objective_start = problem.cost(&start.params);
+    // The model keeps its own integration: the start as given is the start fitted from.
+    let outcome = Outcome { fit, identifiability: None, start_as_given: objective_start };
+    outcome.report(&problem, &plan.identify, &start.params, objective_start, t0)
+}
+
+/// `start`'s parameters, with those from `first` on whose value is the lower end of their range (backlash
+/// b ≥ 0 at its null value) moved 2 % inside it, where the model is differentiable.
+pub(crate) fn differentiable_start(start: &FittedModel, first: usize) -> Vec<f64> {
+    let mut x = start.params.clone();
+    for (i, s) in start.model.params().iter().enumerate().skip(first) {
+        if x[i] == s.lower && s.upper > s.lower {
+            x[i] = s.lower + 0.02 * (s.upper - s.lower);
+        }
+    }
+    x
+}
+
+/// `omnical train`: calibrate `start`'s own parameters by `plan` ([`calibrate`]: its stages and truncated
+/// update), then add each of `effects` in turn by [`refine`] — one effect at a time, as diagnose's error
+/// ladder adds them, so that `train --effect E` is the fit diagnose and explore judged. A plan without a
+/// refining stage (the paper's GA alone) fits everything at once instead, as the paper does; so does a fit
+/// the observer stopped (Ctrl-C keeps the base's best so far, the effects at their null values).
+pub fn calibrate_with_effects(
+    start: &FittedModel,
+    effects: &[EffectKind],
+    train: &[Run],
+    plan: &Plan,
+    observer: &mut dyn Observer,
+) -> Result<Calibration, Error> {
+    let with_all = |m: &FittedModel| effects.iter().fold(m.clone(), |m, e| m.with_effect(e.clone()));
+    if effects.is_empty() || !plan.stages.iter().any(|s| s.refines_held()) {
+        return calibrate(&with_all(start), train, plan, observer);
+    }
+    let t0 = Instant::now();
+    let base = calibrate(start, train, plan, observer)?;
+    let stopped = base.stages.iter().any(|s| s.solution.termination == Termination::Stopped);
+    let mut fit = Fitted {
+        x: Vec::new(),
+        evaluations: base.evaluations - 1,
+        at_bound: base.at_bound,
+        stages: base.stages,
+        held: base.held,
+    };
+    let mut current = base.fitted;
+    let mut identifiability = None;
+    for e in effects {
+        if stopped {
+            current = current.with_effect(e.clone());
+            continue;
+        }
+        let step = refine(&current, std::slice::from_ref(e), train, plan, observer)?;
+        fit.evaluations += step.evaluations - 1;
+        fit.stages.extend(step.stages);
+        fit.held = step.held;
+        identifiability = Some(step.identifiability);
+        current = step.fitted;
+    }
+    fit.x = current.params;
+    let full = with_all(start);
+    let model = full.model.clone().with_integration(plan.integration);
+    let bounds = search_box_with(&model, &full.params, plan.box_rule, &plan.half_widths)?;
+    let problem = CalibrationProblem::new(&model, train, plan.objective, bounds)?;
+    let objective_start = problem.cost(&full.params);
+    let start_as_given = objective_as_given(&full, train, plan, objective_start)?;
+    Outcome { fit, identifiability, start_as_given }.report(&problem, &plan.identify, &full.params, objective_start, t0)
+}
+
+/// What a fit ended with, before its report: the pipeline's result and, when already computed at its point,
+/// the identifiability there.
+struct Outcome {
+    fit: Fitted,
+    identifiability: Option<Identifiability>,
+    /// The start's objective as given ([`Calibration::objective_start_as_given`]).
+    start_as_given: f64,
+}
+
+impl Outcome {
+    /// The [`Calibration`] of this fit of `problem` from `start` (objective `objective_start`), begun at `t0`;
+    /// `identify` decides what the runs constrain at the fit.
+    fn report(
+        self,
+        problem: &CalibrationProblem<'_>,
+        identify: &IdentifyOptions,
+        start: &[f64],
+        objective_start: f64,
+        t0: Instant,
+    ) -> Result<Calibration, Error> {
+        let (model, train, fit) = (problem.model(), problem.runs(), self.fit);
+        let bounds = problem.bounds().clone();
+        let names: Vec<String> = model.params().into_iter().map(|p| p.name).collect();
+        let outside_box = names
+            .iter()
+            .enumerate()
+            .filter(|&(i, _)| fit.x[i] < bounds.lower[i] || fit.x[i] > bounds.upper[i])
+            .map(|(_, n)| n.clone())
+            .collect();
+        let fitted = FittedModel::new(model.clone(), fit.x)?;
+        let objective_fitted = problem.cost(&fitted.params);
+        let identifiability = self.identifiability.unwrap_or_else(|| problem.identifiability(&fitted.params, identify));
+        let end_pose_start = cost::cost(model, start, train, CostKind::EndPose)?;
+        let end_pose_fitted = cost::cost(model, &fitted.params, train, CostKind::EndPose)?;
+        Ok(Calibration {
+            fitted,
+            start: FittedModel::new(model.clone(), start.to_vec())?,
+            objective: problem.objective(),
+            objective_start,
+            objective_fitted,
+            objective_start_as_given: self.start_as_given,
+            end_pose_start,
+            end_pose_fitted,
+            evaluations: 1 + fit.evaluations,
+            seconds: t0.elapsed().as_secs_f64(),
+            bounds,
+            at_bound: fit.at_bound,
+            outside_box,
+            stages: fit.stages,
+            identifiability,
+            held: fit.held,
+        })
+    }
 }
 
 #[cfg(test)]

@@ -6,7 +6,10 @@
 //!   an optimizer with its own settings and stopping rules;
 //! - [`search_box`] (`search_box.rs`): the GA's box around the start;
 //! - the pipeline (`pipeline.rs`): the stages in order, then the truncated update;
-//! - [`calibrate`] (`calibration.rs`): all of it, and the [`Calibration`] report.
+//! - [`calibrate`] (`calibration.rs`): all of it, and the [`Calibration`] report; [`refine`]: effects
+//!   added to a fitted model and everything refitted by the refining stages and the truncated update (no
+//!   GA) — the one fit behind `train --effect` ([`calibrate_with_effects`]: the base's calibration, then
+//!   `refine` per effect), diagnose's candidate refit and the explorer's family fit.
 //!
 //! | | `paper` (reproduces the paper) | `default` (ours) |
 //! |---|---|---|
@@ -27,7 +30,8 @@ mod search_box;
 mod stage;
 
 pub use crate::error::Error as CalibrateError;
-pub use calibration::{Calibration, WorseThanStart, calibrate};
+pub(crate) use calibration::differentiable_start;
+pub use calibration::{Calibration, WorseThanStart, calibrate, calibrate_with_effects, refine};
 pub use pipeline::StageOutcome;
 pub use plan::{Plan, Preset, STEP_TOLERANCE, StepMismatch, Unexcited};
 pub use problem::{CalibrationProblem, RunBlock};

@@ -47,21 +47,30 @@ pub(crate) struct Fitted {
     pub held: Vec<WeakDirection>,
 }
 
-/// Runs `plan`'s stages on `problem` from `start` (whose cost is `objective_start`); `names` are the
-/// parameters' names.
+/// Where the pipeline starts.
+pub(crate) struct Start<'a> {
+    /// The stages' first point.
+    pub x: &'a [f64],
+    /// Its objective.
+    pub objective: f64,
+    /// Where the truncated update puts back what the runs do not constrain: `x` itself, or (when `x` was
+    /// nudged off a kink, [`crate::fit::refine`]) the model as given.
+    pub hold_at: &'a [f64],
+}
+
+/// Runs `plan`'s stages on `problem` from `start`; `names` are the parameters' names.
 pub(crate) fn run(
     problem: &CalibrationProblem<'_>,
     plan: &Plan,
-    start: &[f64],
-    objective_start: f64,
+    start: Start<'_>,
     names: &[String],
     observer: &mut dyn Observer,
 ) -> Result<Fitted, Error> {
     let mut fit =
-        Fitted { x: start.to_vec(), evaluations: 0, at_bound: Vec::new(), stages: Vec::new(), held: Vec::new() };
-    let stopped = run_stages(problem, &plan.stages, objective_start, names, &mut fit, observer)?;
+        Fitted { x: start.x.to_vec(), evaluations: 0, at_bound: Vec::new(), stages: Vec::new(), held: Vec::new() };
+    let stopped = run_stages(problem, &plan.stages, start.objective, names, &mut fit, observer)?;
     if plan.unexcited == Unexcited::Hold && !stopped {
-        hold(problem, plan, start, &mut fit, observer)?;
+        hold(problem, plan, start.hold_at, &mut fit, observer)?;
     }
     Ok(fit)
 }

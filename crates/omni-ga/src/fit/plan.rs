@@ -107,6 +107,16 @@ impl Plan {
         }
     }
 
+    /// The plan diagnose and explore refit with ([`crate::fit::refine`]: the refining stages and the
+    /// truncated update; the GA is not run): the default preset's, as `omnical train` uses it, on the path
+    /// objective at every `every`-th ground-truth pose (heading weighted 1 m/rad, train's default).
+    pub fn refit(every: usize) -> Self {
+        let mut plan = Self::preset(Preset::Default, 0);
+        plan.objective =
+            CostKind::Path { every: every.max(1), heading_weight_m_per_rad: CostKind::PATH_HEADING_WEIGHT_M_PER_RAD };
+        plan
+    }
+
     /// The same plan with another seed for every stage that draws random numbers.
     pub fn seed(mut self, seed: u64) -> Self {
         self.stages.iter_mut().for_each(|s| s.set_seed(seed));

@@ -159,6 +159,21 @@ impl<'a> CalibrationProblem<'a> {
         })
     }
 
+    /// The model fitted.
+    pub fn model(&self) -> &'a Model {
+        self.model
+    }
+
+    /// The runs fitted on.
+    pub fn runs(&self) -> &'a [Run] {
+        self.runs
+    }
+
+    /// The objective.
+    pub fn objective(&self) -> CostKind {
+        self.objective
+    }
+
     /// Indices of the parameters of the model's wheel-stage effect, when it has exactly one.
     fn wheel_parameters(&self) -> Vec<usize> {
         let model = self.model;
@@ -177,10 +192,21 @@ impl<'a> CalibrationProblem<'a> {
         self.row_offsets.windows(2).map(|w| w[1] - w[0]).collect()
     }
 
-    /// What the runs constrain at `x` ([`identify::analyse`] on this problem's residuals).
+    /// What the runs constrain at `x` ([`identify::analyse`] on this problem's residuals); too few runs are
+    /// cut into segments by time for the per-run standard errors ([`identify::segment_poses`]).
     pub fn identifiability(&self, x: &[f64], opts: &IdentifyOptions) -> Identifiability {
+        let selection = self.objective.selection();
+        let times: Vec<Vec<f64>> = self
+            .runs
+            .iter()
+            .map(|r| selection.indices(r.truth().len()).iter().map(|&i| r.truth()[i].t_s).collect())
+            .collect();
+        let segments = identify::segment_poses(&times, x.len());
         let mut moments = identify::Moments::new(x.len());
-        self.for_each_run_block(x, &mut |b| moments.add_run(b.jacobian, b.residuals));
+        self.for_each_run_block(x, &mut |b| {
+            let rows: Vec<usize> = segments[b.run].iter().map(|&poses| identify::ROWS_PER_POSE * poses).collect();
+            moments.add_run_segments(b.jacobian, b.residuals, &rows);
+        });
         identify::analyse(self.model, x, &moments, Some(&self.wheel_moment()), opts)
     }
 

@@ -14,7 +14,9 @@
 //!
 //! Unbounded: the calibration layer decides what leaving the GA's box means (it reports it). Guarantee:
 //! the returned cost is never higher than the cost at `start` — when the solver fails, returns a worse
-//! point or meets a non-finite residual, the start is returned with [`Termination::NoImprovement`].
+//! point or meets a non-finite residual, the start is returned with [`Termination::NoImprovement`]; a
+//! solve that spent its budget before a convergence test was met ends with [`Termination::MaxEvaluations`]
+//! (its point kept), otherwise [`Termination::LocalMinimum`].
 //! `evaluations` counts residual and Jacobian evaluations (as the crate reports them; on the normal
 //! equations, each residual vector and each set of normal equations counts one). The observer is called
 //! once, after the solve.
@@ -68,6 +70,16 @@ impl Default for LmConfig {
     }
 }
 
+/// Where a solve ended.
+struct Ended {
+    /// The point.
+    x: Vec<f64>,
+    /// Residual and Jacobian evaluations.
+    evaluations: usize,
+    /// The evaluation budget ran out before a convergence test was met.
+    out_of_budget: bool,
+}
+
 /// Initial damping of the normal-equations solver, relative to the scaled `JᵀJ`'s unit diagonal.
 const INITIAL_DAMPING: f64 = 1e-3;
 /// Damping beyond which the normal-equations solver gives up (the step would be nil).
@@ -107,8 +119,9 @@ impl<P: LeastSquares + ?Sized> LeastSquaresProblem<f64, Dyn, Dyn> for Adapter<'_
 }
 
 impl LevenbergMarquardt {
-    /// The crate's solver (QR of the whole Jacobian). Returns the point it ends at and its evaluations.
-    fn solve_with_crate<P: LeastSquares + ?Sized>(&self, problem: &P, start: &[f64]) -> (Vec<f64>, usize) {
+    /// The crate's solver (QR of the whole Jacobian). Returns the point it ends at, its evaluations and
+    /// whether it spent its budget.
+    fn solve_with_crate<P: LeastSquares + ?Sized>(&self, problem: &P, start: &[f64]) -> Ended {
         let n = start.len().max(1);
         let patience = (self.config.max_evaluations / (n + 1)).max(1);
         let solver = Solver::new()
@@ -117,30 +130,37 @@ impl LevenbergMarquardt {
             .with_gtol(self.config.gtol)
             .with_patience(patience);
         let (adapter, report) = solver.minimize(Adapter { problem, x: DVector::from_column_slice(start) });
-        (adapter.x.iter().copied().collect(), report.number_of_evaluations)
+        Ended {
+            x: adapter.x.iter().copied().collect(),
+            evaluations: report.number_of_evaluations,
+            out_of_budget: report.termination == levenberg_marquardt::TerminationReason::LostPatience,
+        }
     }
 
     /// Marquardt's method on the normal equations (see the module docs). Returns the last kept point (the
-    /// start when no step lowered `rᵀr`) and the evaluations: at most `max_evaluations` residual vectors,
-    /// plus one set of normal equations per kept step.
-    fn solve_normal_equations<P: LeastSquares + ?Sized>(&self, problem: &P, start: &[f64]) -> (Vec<f64>, usize) {
+    /// start when no step lowered `rᵀr`), the evaluations (at most `max_evaluations` residual vectors,
+    /// plus one set of normal equations per kept step) and whether it spent its budget.
+    fn solve_normal_equations<P: LeastSquares + ?Sized>(&self, problem: &P, start: &[f64]) -> Ended {
         let cfg = &self.config;
         let ne = problem.normal_equations(start);
         let mut evaluations = 1;
         let mut trials = 0;
         if !ne.is_finite() || start.is_empty() {
-            return (start.to_vec(), evaluations);
+            return Ended { x: start.to_vec(), evaluations, out_of_budget: false };
         }
         let mut m = Marquardt::new(start, ne);
-        while trials < cfg.max_evaluations {
+        let out_of_budget = loop {
+            if trials >= cfg.max_evaluations {
+                break true;
+            }
             if m.converged(cfg.gtol) {
-                break;
+                break false;
             }
             let t = match m.propose(cfg.xtol) {
-                Proposal::Nothing => break,
+                Proposal::Nothing => break false,
                 // Not positive definite at this damping (rounding on a near-singular JᵀJ): damp more.
                 Proposal::Singular if m.damp_more() => continue,
-                Proposal::Singular => break,
+                Proposal::Singular => break false,
                 Proposal::Step(t) => t,
             };
             let f = m.ne.rtr;
@@ -154,17 +174,17 @@ impl LevenbergMarquardt {
                 evaluations += 1;
                 if !next.is_finite() {
                     m.x = t.x;
-                    break;
+                    break false;
                 }
                 m.accept(t.x, next, rho);
                 if converged {
-                    break;
+                    break false;
                 }
             } else if t.small || !m.damp_more() {
-                break;
+                break false;
             }
-        }
-        (m.x.iter().copied().collect(), evaluations)
+        };
+        Ended { x: m.x.iter().copied().collect(), evaluations, out_of_budget }
     }
 }
 
@@ -271,11 +291,12 @@ impl<P: LeastSquares + ?Sized> Optimizer<P> for LevenbergMarquardt {
         let t0 = Instant::now();
         observer.on_start("lm", start.len());
         let start_cost = problem.cost(start);
-        let (x, evaluations) = if problem.residual_count(start) > self.config.normal_equations_above {
-            self.solve_normal_equations(problem, start)
-        } else {
-            self.solve_with_crate(problem, start)
-        };
+        let Ended { x, evaluations, out_of_budget } =
+            if problem.residual_count(start) > self.config.normal_equations_above {
+                self.solve_normal_equations(problem, start)
+            } else {
+                self.solve_with_crate(problem, start)
+            };
         let cost = if x.iter().all(|v| v.is_finite()) { problem.cost(&x) } else { f64::INFINITY };
         let evaluations = evaluations + 2;
         let improved = cost.is_finite() && cost <= start_cost;
@@ -284,7 +305,11 @@ impl<P: LeastSquares + ?Sized> Optimizer<P> for LevenbergMarquardt {
             cost: if improved { cost } else { start_cost },
             iterations: 1,
             evaluations,
-            termination: if improved { Termination::LocalMinimum } else { Termination::NoImprovement },
+            termination: match (improved, out_of_budget) {
+                (false, _) => Termination::NoImprovement,
+                (true, true) => Termination::MaxEvaluations,
+                (true, false) => Termination::LocalMinimum,
+            },
             seconds: t0.elapsed().as_secs_f64(),
         };
         observer.on_iteration(&Iteration {

@@ -2,17 +2,26 @@
 //! catalogued effect does.
 //!
 //! For each family ([`omni_kin::effect::Family`]: wheel, body, world, time, ground truth) the model gets
-//! the learned correction `learned:<family>` at θ = 0, and θ is fitted together with the base kinematics
-//! on the training runs by Gauss–Newton on the path residuals (the model's predicted pose minus the
-//! measured one at the ground-truth poses, world frame; at most [`ExploreOptions::poses_per_run`] poses
-//! per run), with a forward-difference Jacobian. The baseline is the same fit of the base kinematics
-//! alone, so a family's gain is what its terms add, not what a refit of the base gives.
+//! the learned correction `learned:<family>` at θ = 0, and everything is refitted on the training runs by
+//! [`crate::fit::refine`] with [`Plan::refit`]: Levenberg–Marquardt on train's objective (the path
+//! residuals at every [`ExploreOptions::every`]-th ground-truth pose), then the truncated update, which holds
+//! the terms the runs do not constrain at 0. That is the very fit `omnical train --effect learned:<family>`
+//! runs after fitting the base, so a family's predicted held-out gain is what following the advice delivers
+//! (exactly, when the model is train's fit on the same runs), with the terms train would hold held. The
+//! baseline is the same refit without a family, so a family's gain is what its terms add, not what a refit
+//! of the base gives.
 //!
-//! Standard errors are cluster-robust over runs (the sandwich of [`crate::identify`]'s `per run`). A
-//! family is judged on the held-out runs: its held-out gain is `1 − C_family / C_baseline` with `C` the
+//! Every family is fitted or says why not ([`FamilyStatus`]): `not_excited` (the runs do not move the
+//! residuals along its terms at all), `singular` (they do, but cannot tell its terms from the base
+//! kinematics or from each other: every term is held), `not_converged` (the optimizer ran out of
+//! evaluations, or no step lowered the training cost). Only a fitted family can pass.
+//!
+//! Standard errors are cluster-robust over runs ([`crate::identify`]'s `per run`, as `train` reports them).
+//! A family is judged on the held-out runs: its held-out gain is `1 − C_family / C_baseline` with `C` the
 //! held-out path cost (every ground-truth pose, 1 m/rad); its standard error is that of the per-run
-//! gains' mean. **A family passes** when its held-out gain is at least [`ExploreOptions::min_gain`] (5 %)
-//! and larger than [`ExploreOptions::min_gain_std_errors`] (2) standard errors.
+//! gains' mean. **A family passes** when it is fitted, its held-out gain is at least
+//! [`ExploreOptions::min_gain`] (5 %) and larger than [`ExploreOptions::min_gain_std_errors`] (2) standard
+//! errors.
 //!
 //! `unexplained`: the one decision of diagnose ([`crate::science::diagnose::remains`]) on the error that
 //! remains with the best passing family (or the baseline, when none passes): far above the noise floor, or
@@ -22,13 +31,18 @@
 //! No I/O; the words are made in [`crate::science::text`].
 
 use crate::error::Error;
+use crate::fit::{Calibration, CalibrationProblem, Plan, Stage, refine};
+use crate::optimizer::observe::NoopObserver;
+use crate::optimizer::problem::{Bounds, LeastSquares};
+use crate::optimizer::{LmConfig, Termination};
+use crate::science::coverage::{MotionCoverage, motion_coverage};
 use crate::science::diagnose::{UnexplainedEvidence, remains};
-use crate::science::identify::{self, Moments};
-use nalgebra::{DMatrix, DVector};
+use crate::science::identify::WEAK_LOADING;
 use omni_kin::effect::{Effect, EffectKind, Family, Learned};
 use omni_kin::evaluate::Evaluator;
-use omni_kin::{CostKind, FittedModel, Model, Run, Selection};
+use omni_kin::{CostKind, FittedModel, Run, Selection};
 use serde::{Deserialize, Serialize};
+use std::ops::Range;
 
 /// Settings of [`explore`].
 #[derive(Clone, Debug, PartialEq)]
@@ -39,21 +53,14 @@ pub struct ExploreOptions {
     pub min_gain: f64,
     /// The held-out gain must exceed this many of its standard errors. Default 2.
     pub min_gain_std_errors: f64,
-    /// Training residuals: at most about this many ground-truth poses per run (every k-th). Default 200.
-    pub poses_per_run: usize,
-    /// Gauss–Newton iterations. Default 3.
-    pub iterations: usize,
+    /// Training residuals at every k-th ground-truth pose: train's objective. Default 1
+    /// ([`CostKind::PATH_EVERY`]).
+    pub every: usize,
 }
 
 impl Default for ExploreOptions {
     fn default() -> Self {
-        Self {
-            families: Family::ALL.to_vec(),
-            min_gain: 0.05,
-            min_gain_std_errors: 2.0,
-            poses_per_run: 200,
-            iterations: 3,
-        }
+        Self { families: Family::ALL.to_vec(), min_gain: 0.05, min_gain_std_errors: 2.0, every: CostKind::PATH_EVERY }
     }
 }
 
@@ -68,6 +75,9 @@ pub struct Term {
     pub std_error: f64,
     /// Unit: `m/s`.
     pub unit: String,
+    /// Part of a direction the truncated update held at the start (the runs do not constrain it), as
+    /// `train` holds it: its value is set by the start (0), not by the data.
+    pub held: bool,
 }
 
 impl Term {
@@ -104,11 +114,59 @@ pub struct FeatureCurve {
     pub bins: Vec<Bin>,
 }
 
+/// Why a family's fit did not converge.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Unconverged {
+    /// Levenberg–Marquardt spent its budget of residual evaluations before the cost settled.
+    Budget {
+        /// The budget ([`LmConfig::max_evaluations`]).
+        evaluations: usize,
+    },
+    /// No step lowered the training cost from the start (non-finite residuals, or a start at a kink).
+    NoStep,
+    /// The fit ended with every term at 0 though the runs constrain some of them.
+    AtZero,
+}
+
+/// Whether a family was fitted, and if not, why not (JSON: [`FamilyStatus::id`] and the [`Unconverged`]
+/// reason).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FamilyStatus {
+    /// Fitted: the fit moved at least one term (some may be part of held directions: [`Term::held`]).
+    Fitted,
+    /// The runs do not move the residuals along any of its terms (sensitivity below the analysis's rcond):
+    /// every term stays 0.
+    NotExcited,
+    /// The runs move the residuals along its terms but cannot tell them from the base kinematics or from
+    /// each other: the truncated update holds every term at 0, as `train` would, and none moves.
+    Singular,
+    /// The fit did not converge.
+    NotConverged {
+        /// Why.
+        reason: Unconverged,
+    },
+}
+
+impl FamilyStatus {
+    /// Stable id: `fitted`, `not_excited`, `singular`, `not_converged`.
+    pub fn id(&self) -> &'static str {
+        match self {
+            Self::Fitted => "fitted",
+            Self::NotExcited => "not_excited",
+            Self::Singular => "singular",
+            Self::NotConverged { .. } => "not_converged",
+        }
+    }
+}
+
 /// One family's fit and judgement.
 #[derive(Clone, Debug)]
 pub struct FamilyResult {
     /// The family.
     pub family: Family,
+    /// Whether it was fitted, and if not, why not.
+    pub status: FamilyStatus,
     /// `1 − C_family / C_baseline` on the held-out runs (path cost).
     pub held_out_gain: f64,
     /// Standard error of the mean per-run held-out gain (0 with one held-out run).
@@ -119,6 +177,8 @@ pub struct FamilyResult {
     pub held_out_cost: f64,
     /// The fitted terms.
     pub terms: Vec<Term>,
+    /// Directions the truncated update held (in words), as `train --effect learned:<family>` holds them.
+    pub held: Vec<String>,
     /// The model with the learned effect (`learned:<family>`) at its fitted values.
     pub fitted: FittedModel,
     /// The residual against the strongest term.
@@ -130,7 +190,7 @@ pub struct FamilyResult {
 pub struct Exploration {
     /// Every family, by held-out gain, largest first.
     pub families: Vec<FamilyResult>,
-    /// Held-out path cost of the baseline (the base kinematics refitted alone). m.
+    /// Held-out path cost of the baseline (the model refitted without a family, the same way). m.
     pub baseline_held_out_cost: f64,
     /// The held-out runs' measurement noise floor (path RMS from pose noise alone), when measurable. m.
     pub noise_floor_path_rms: Option<f64>,
@@ -141,6 +201,8 @@ pub struct Exploration {
     pub evidence: UnexplainedEvidence,
     /// Training and held-out run counts.
     pub runs: (usize, usize),
+    /// The training runs' motions against the held-out runs': what the training runs lack.
+    pub coverage: MotionCoverage,
 }
 
 impl Exploration {
@@ -148,13 +210,6 @@ impl Exploration {
     pub fn best(&self) -> Option<&FamilyResult> {
         self.families.iter().find(|f| f.passes)
     }
-}
-
-/// A Gauss–Newton fit: the parameters, and at them the Jacobian (free columns) and residuals.
-struct Fit {
-    params: Vec<f64>,
-    jacobian: DMatrix<f64>,
-    residuals: Vec<f64>,
 }
 
 /// Explore `model` (fitted on `train`): fit every family on `train`, judge it on `validate`.
@@ -167,21 +222,17 @@ pub fn explore(
     if train.is_empty() || validate.is_empty() {
         return Err(Error::NoRuns);
     }
-    let longest = train.iter().map(|r| r.truth().len()).max().unwrap_or(1);
-    let kind =
-        CostKind::Path { every: longest.div_ceil(opts.poses_per_run.max(1)).max(1), heading_weight_m_per_rad: 1.0 };
-    let base_free: Vec<usize> = (0..model.model.n_base()).collect();
-    let baseline = gauss_newton(&model.model, &model.params, &base_free, train, kind, opts.iterations)?;
-    let baseline = FittedModel::new(model.model.clone(), baseline.params)?;
-    let (base_cost, base_runs) = held_out(&baseline, validate)?;
+    let plan = Plan::refit(opts.every);
+    let baseline = refine(model, &[], train, &plan, &mut NoopObserver)?;
+    let (base_cost, base_runs) = held_out(&baseline.fitted, validate)?;
     let mut families = Vec::new();
     for &family in &opts.families {
-        families.push(fit_family(&baseline, family, train, validate, kind, (base_cost, &base_runs), opts)?);
+        families.push(fit_family(model, family, train, validate, &plan, (base_cost, &base_runs), opts)?);
     }
     families.sort_by(|a, b| b.held_out_gain.total_cmp(&a.held_out_gain));
     let (with, held_out_m) = match families.iter().find(|f| f.passes) {
         Some(f) => (&f.fitted, f.held_out_cost),
-        None => (&baseline, base_cost),
+        None => (&baseline.fitted, base_cost),
     };
     let (unexplained, evidence, noise) = remains(with, train, validate, held_out_m, 1)?;
     Ok(Exploration {
@@ -191,48 +242,102 @@ pub fn explore(
         unexplained,
         evidence,
         runs: (train.len(), validate.len()),
+        coverage: motion_coverage(model, train, validate)?,
     })
 }
 
-/// Fit one family on `train` (with the base kinematics) and judge it on `validate` against the baseline's
-/// held-out cost and per-run mean squared errors.
+/// Fit one family on `train` (with everything else, as `train --effect` does) and judge it on `validate`
+/// against the baseline's held-out cost and per-run mean squared errors.
 fn fit_family(
-    baseline: &FittedModel,
+    model: &FittedModel,
     family: Family,
     train: &[Run],
     validate: &[Run],
-    kind: CostKind,
+    plan: &Plan,
     (base_cost, base_runs): (f64, &[f64]),
     opts: &ExploreOptions,
 ) -> Result<FamilyResult, Error> {
-    let learned = EffectKind::Learned(Learned { family, n_wheels: baseline.model.n_wheels() });
+    let learned = EffectKind::Learned(Learned { family, n_wheels: model.model.n_wheels() });
     let specs = learned.params();
-    let start = baseline.with_effect(learned);
-    let n = start.params.len();
-    let first = n - specs.len();
-    let free: Vec<usize> = (0..baseline.model.n_base()).chain(first..n).collect();
-    let fit = gauss_newton(&start.model, &start.params, &free, train, kind, opts.iterations)?;
-    let run_rows = run_rows(&start.model, train, kind)?;
-    let se = cluster_std_errors(&fit.jacobian, &fit.residuals, &run_rows);
-    let nb = baseline.model.n_base();
+    let c = refine(model, std::slice::from_ref(&learned), train, plan, &mut NoopObserver)?;
+    let first = model.params.len();
+    let range = first..c.fitted.params.len();
+    let held = c.held_params();
     let terms: Vec<Term> = specs
         .iter()
-        .enumerate()
-        .map(|(k, s)| Term {
+        .zip(range.clone())
+        .map(|(s, i)| Term {
             name: s.name.clone(),
-            value: fit.params[first + k],
-            std_error: se[nb + k],
+            value: c.fitted.params[i],
+            std_error: c.identifiability.params.get(i).and_then(|u| u.std_error).unwrap_or(f64::NAN),
             unit: s.unit.clone(),
+            held: held.contains(&i),
         })
         .collect();
-    let curve = strongest(&terms).map(|k| feature_curve(&fit, &run_rows, nb + k, &terms[k]));
-    let fitted = FittedModel::new(start.model, fit.params)?;
-    let (cost, per_run) = held_out(&fitted, validate)?;
+    let status = status_of(&c, plan, &terms, range.clone());
+    let curve = match strongest(&terms) {
+        Some(k) if status == FamilyStatus::Fitted => {
+            Some(feature_curve(&c, train, plan.objective, first + k, &terms[k])?)
+        }
+        _ => None,
+    };
+    let (cost, per_run) = held_out(&c.fitted, validate)?;
     let gain = 1.0 - cost / base_cost;
     let gains: Vec<f64> = per_run.iter().zip(base_runs).map(|(c, b)| 1.0 - (c / b).sqrt()).collect();
     let gain_std_error = mean_std_error(&gains);
-    let passes = gain.is_finite() && gain >= opts.min_gain && gain > opts.min_gain_std_errors * gain_std_error;
-    Ok(FamilyResult { family, held_out_gain: gain, gain_std_error, passes, held_out_cost: cost, terms, fitted, curve })
+    let passes = status == FamilyStatus::Fitted
+        && gain.is_finite()
+        && gain >= opts.min_gain
+        && gain > opts.min_gain_std_errors * gain_std_error;
+    Ok(FamilyResult {
+        family,
+        status,
+        held_out_gain: gain,
+        gain_std_error,
+        passes,
+        held_out_cost: cost,
+        terms,
+        held: c.held.iter().map(|w| w.text.clone()).collect(),
+        fitted: c.fitted,
+        curve,
+    })
+}
+
+/// Largest change of a term, in fractions of its scale (the identifiability analysis's), below which the
+/// fit counts as having left the family at its start.
+const UNMOVED: f64 = 1e-9;
+
+/// Whether the family's terms (parameters `range` of the fit `c`) were fitted, and if not, why not.
+fn status_of(c: &Calibration, plan: &Plan, terms: &[Term], range: Range<usize>) -> FamilyStatus {
+    let moved = range.clone().zip(terms).any(|(i, t)| {
+        let scale = c.identifiability.params.get(i).map_or(1.0, |u| u.scale);
+        t.value.abs() > UNMOVED * scale
+    });
+    if !moved && terms.iter().all(|t| t.held) {
+        // Every term in a held direction and none moved: not excited at all when each of those directions
+        // is null (no standard error), else excited but inseparable.
+        let null = |i: usize| {
+            c.held
+                .iter()
+                .filter(|w| w.direction.get(i).is_some_and(|v| v.abs() >= WEAK_LOADING))
+                .all(|w| w.std_error.is_none())
+        };
+        return if range.clone().all(null) { FamilyStatus::NotExcited } else { FamilyStatus::Singular };
+    }
+    // The first stage is the free fit; those after it run within the held subspace.
+    match c.stages.first().map(|s| s.solution.termination) {
+        Some(Termination::MaxEvaluations) => {
+            let evaluations = plan.stages.iter().find_map(|s| match s {
+                Stage::Lm(LmConfig { max_evaluations, .. }) => Some(*max_evaluations),
+                Stage::Ga(_) => None,
+            });
+            let evaluations = evaluations.unwrap_or(0);
+            FamilyStatus::NotConverged { reason: Unconverged::Budget { evaluations } }
+        }
+        Some(Termination::NoImprovement) => FamilyStatus::NotConverged { reason: Unconverged::NoStep },
+        _ if !moved => FamilyStatus::NotConverged { reason: Unconverged::AtZero },
+        _ => FamilyStatus::Fitted,
+    }
 }
 
 /// Held-out path cost (every pose, 1 m/rad) and each run's path mean squared error.
@@ -241,12 +346,6 @@ fn held_out(model: &FittedModel, runs: &[Run]) -> Result<(f64, Vec<f64>), Error>
     let errors = ev.errors(&model.model.resolve(&model.params)?);
     let per_run = (0..errors.n_runs()).map(|i| errors.path_mse(i, 1.0)).collect();
     Ok((errors.path_cost(1.0), per_run))
-}
-
-/// Residual rows of each run at the selection of `kind`.
-fn run_rows(model: &Model, runs: &[Run], kind: CostKind) -> Result<Vec<usize>, Error> {
-    let ev = Evaluator::for_cost(model, runs, kind)?;
-    Ok((0..runs.len()).map(|i| 3 * ev.indices(i).len()).collect())
 }
 
 /// Standard error of a mean (0 with fewer than two values).
@@ -259,111 +358,6 @@ fn mean_std_error(v: &[f64]) -> f64 {
     (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1) as f64 / n as f64).sqrt()
 }
 
-/// Gauss–Newton over the `free` parameters of `model` from `start` on the stacked path residuals of
-/// `kind`, forward differences, steps halved until the cost falls; the Jacobian and residuals at the end.
-fn gauss_newton(
-    model: &Model,
-    start: &[f64],
-    free: &[usize],
-    runs: &[Run],
-    kind: CostKind,
-    iterations: usize,
-) -> Result<Fit, Error> {
-    let ev = Evaluator::for_cost(model, runs, kind)?;
-    let residuals = |x: &[f64]| -> Result<Vec<f64>, Error> { Ok(ev.residual_vector(&model.resolve(x)?, kind)) };
-    let specs = model.params();
-    let steps: Vec<f64> = free
-        .iter()
-        .map(|&j| {
-            let width = specs[j].upper - specs[j].lower;
-            if width.is_finite() && width > 0.0 { 1e-6 * width } else { 1e-7 }
-        })
-        .collect();
-    let mut x = start.to_vec();
-    let mut r = residuals(&x)?;
-    let mut jac = jacobian(&residuals, &x, &r, free, &steps)?;
-    for _ in 0..iterations {
-        let delta = solve(&jac, &r);
-        let cost = sq(&r);
-        let mut accepted = false;
-        let mut t = 1.0;
-        for _ in 0..6 {
-            let mut y = x.clone();
-            for (k, &j) in free.iter().enumerate() {
-                y[j] += t * delta[k];
-            }
-            // A step to parameters the model refuses (a negative wheel radius) counts as a worse one.
-            if let Ok(ry) = residuals(&y)
-                && sq(&ry) < cost
-            {
-                (x, r, accepted) = (y, ry, true);
-                break;
-            }
-            t *= 0.5;
-        }
-        if !accepted {
-            break;
-        }
-        jac = jacobian(&residuals, &x, &r, free, &steps)?;
-    }
-    Ok(Fit { params: x, jacobian: jac, residuals: r })
-}
-
-fn sq(r: &[f64]) -> f64 {
-    r.iter().map(|v| v * v).sum()
-}
-
-/// Forward-difference Jacobian of `f` at `x` (with `f(x) = r`) over the `free` columns.
-fn jacobian(
-    f: &impl Fn(&[f64]) -> Result<Vec<f64>, Error>,
-    x: &[f64],
-    r: &[f64],
-    free: &[usize],
-    steps: &[f64],
-) -> Result<DMatrix<f64>, Error> {
-    let mut jac = DMatrix::zeros(r.len(), free.len());
-    for (k, (&j, &h)) in free.iter().zip(steps).enumerate() {
-        let mut y = x.to_vec();
-        y[j] += h;
-        let ry = f(&y)?;
-        for (i, (a, b)) in ry.iter().zip(r).enumerate() {
-            jac[(i, k)] = (a - b) / h;
-        }
-    }
-    Ok(jac)
-}
-
-/// Relative singular value below which a direction of the unit-column Jacobian counts as undetermined.
-const RCOND: f64 = 1e-7;
-
-/// Column norms of `j` (1 for an empty column, which then stays out of the solution).
-fn column_scales(j: &DMatrix<f64>) -> Vec<f64> {
-    j.column_iter().map(|c| c.norm()).map(|n| if n > 0.0 && n.is_finite() { n } else { 1.0 }).collect()
-}
-
-/// Least-squares step `δ` minimising `|r + J δ|`, on unit-norm columns, singular values below
-/// [`RCOND`] of the largest dropped (directions the runs do not determine stay put).
-fn solve(j: &DMatrix<f64>, r: &[f64]) -> Vec<f64> {
-    let d = column_scales(j);
-    let mut js = j.clone();
-    for (k, mut c) in js.column_iter_mut().enumerate() {
-        c /= d[k];
-    }
-    let svd = js.svd(true, true);
-    let rhs = -DVector::from_column_slice(r);
-    let tol = RCOND * svd.singular_values.max();
-    match svd.solve(&rhs, tol) {
-        Ok(z) => z.iter().zip(&d).map(|(z, d)| if z.is_finite() { z / d } else { 0.0 }).collect(),
-        Err(_) => vec![0.0; j.ncols()],
-    }
-}
-
-/// Standard errors of every column of `j`, residuals `r`, `run_rows` rows per run: the one computation
-/// of [`crate::identify`] ([`identify::column_std_errors`], per-run sandwich). NaN where undetermined.
-fn cluster_std_errors(j: &DMatrix<f64>, r: &[f64], run_rows: &[usize]) -> Vec<f64> {
-    identify::column_std_errors(&Moments::from_dense(j, r, run_rows), RCOND)
-}
-
 /// The term with the largest `|value| / std_error`.
 fn strongest(terms: &[Term]) -> Option<usize> {
     (0..terms.len()).filter(|&k| terms[k].z() > 0.0).max_by(|&a, &b| terms[a].z().total_cmp(&terms[b].z()))
@@ -372,19 +366,38 @@ fn strongest(terms: &[Term]) -> Option<usize> {
 /// Number of bins of a [`FeatureCurve`].
 const CURVE_BINS: usize = 10;
 
-/// The added-variable curve of column `col` (term `term`): the feature `x = −J_col` and the residual
-/// with the term's part put back, `y = r_final − J_col θ`, both unweighted (m), in equal-count bins.
-fn feature_curve(fit: &Fit, run_rows: &[usize], col: usize, term: &Term) -> FeatureCurve {
+/// The added-variable curve of parameter `col` (term `term`) at the fit `c` on `runs` and `objective`: the feature
+/// `x = −J_col` (central differences) and the residual with the term's part put back, `y = r − J_col θ`,
+/// both unweighted (m), in equal-count bins.
+fn feature_curve(
+    c: &Calibration,
+    runs: &[Run],
+    objective: CostKind,
+    col: usize,
+    term: &Term,
+) -> Result<FeatureCurve, Error> {
+    let (model, x) = (&c.fitted.model, &c.fitted.params);
+    let problem = CalibrationProblem::new(model, runs, objective, Bounds::unbounded(x.len()))?;
+    let residuals = problem.residuals(x);
+    let h = 1e-6 * x[col].abs().max(1e-3);
+    let at = |d: f64| {
+        let mut y = x.clone();
+        y[col] += d;
+        problem.residuals(&y)
+    };
+    let (up, down) = (at(h), at(-h));
+    let column: Vec<f64> = up.iter().zip(&down).map(|(a, b)| (a - b) / (2.0 * h)).collect();
+    let run_rows = problem.run_rows();
     let g = run_rows.len().max(1) as f64;
-    let mut points = Vec::with_capacity(fit.residuals.len());
+    let mut points = Vec::with_capacity(residuals.len());
     let mut row = 0;
-    for &rows in run_rows {
+    for &rows in &run_rows {
         // Undo the path cost's weight 1/sqrt(G · poses) of this run.
         let unweight = (g * (rows / 3).max(1) as f64).sqrt();
-        for i in row..(row + rows).min(fit.residuals.len()) {
-            let x = -fit.jacobian[(i, col)] * unweight;
-            let y = (fit.residuals[i] - fit.jacobian[(i, col)] * term.value) * unweight;
-            if x != 0.0 {
+        for i in row..(row + rows).min(residuals.len()) {
+            let x = -column[i] * unweight;
+            let y = (residuals[i] - column[i] * term.value) * unweight;
+            if x != 0.0 && x.is_finite() && y.is_finite() {
                 points.push((x, y));
             }
         }
@@ -403,5 +416,5 @@ fn feature_curve(fit: &Fit, run_rows: &[usize], col: usize, term: &Term) -> Feat
             }
         })
         .collect();
-    FeatureCurve { term: term.name.clone(), unit: term.unit.clone(), slope: term.value, bins }
+    Ok(FeatureCurve { term: term.name.clone(), unit: term.unit.clone(), slope: term.value, bins })
 }

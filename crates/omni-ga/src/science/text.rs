@@ -6,11 +6,14 @@
 //! are made last, from the structured findings ([`Finding`], [`Verdict`], [`WeakDirection`], …), and stored
 //! beside them in the results so that JSON, the CLI and Python show the same text.
 
+use crate::science::coverage::{MotionCoverage, MotionGap, MotionKind};
 use crate::science::diagnose::{
     Conclusion, DecidedBy, ExcitationGap, Finding, GapKind, GroupBasis, HeldOut, NoiseSource, RungKind, Turn,
     UnexplainedEvidence, Verdict,
 };
-use crate::science::identify::{Advice, MotionParts, PatternPresence, WeakDirection, WheelEvidence};
+use crate::science::identify::{
+    Advice, CovarianceKind, Identifiability, MIN_SEGMENT_S, MotionParts, PatternPresence, WeakDirection, WheelEvidence,
+};
 
 /// How the held-out costs were obtained.
 pub fn held_out(protocol: HeldOut) -> &'static str {
@@ -125,6 +128,7 @@ pub fn finding(f: &Finding) -> String {
             "{worse} of {runs} held-out runs end with a larger path error than the design: the fit does not serve every motion (compare the training runs' motions with these)"
         ),
         Finding::Unconstrained(w) => format!("the model itself: {}", warning(w)),
+        Finding::MissingMotions(c) => motion_coverage(c),
         Finding::RepeatabilityFloor { scatter, basis: GroupBasis::Command } => format!(
             "repeatability floor: end-pose errors scatter by {scatter:.4} between repeats of the same command (no deterministic effect removes that part)"
         ),
@@ -132,6 +136,83 @@ pub fn finding(f: &Finding) -> String {
             "end-pose errors scatter by {scatter:.4} between runs of the same kind of path (not repeats of one command: part of it is the paths' own differences)"
         ),
     }
+}
+
+/// Which standard errors an identifiability analysis gives: `per run (robust to correlated errors along a
+/// path)`, with the segments when the runs were cut.
+pub fn covariance(id: &Identifiability) -> String {
+    match id.covariance_kind {
+        CovarianceKind::PerRun if id.clusters > id.runs => format!(
+            "per run (robust to correlated errors along a path; {} runs cut into {} segments of ≥ {MIN_SEGMENT_S:.0} s)",
+            id.runs, id.clusters
+        ),
+        CovarianceKind::PerRun => "per run (robust to correlated errors along a path)".into(),
+        CovarianceKind::Iid => "iid (too few runs for the per-run estimate)".into(),
+        CovarianceKind::Stated => "from the stated noise".into(),
+    }
+}
+
+/// A kind of motion: `translating while rotating (arcs)`.
+pub fn motion_kind(kind: MotionKind) -> &'static str {
+    match kind {
+        MotionKind::Translating => "translating without rotating (straight lines)",
+        MotionKind::Rotating => "rotating on the spot",
+        MotionKind::TranslatingWhileRotating => "translating while rotating (arcs)",
+    }
+}
+
+/// A command to record: `v 0.20 m/s α 0° ω +0.35 rad/s`.
+fn command(c: &omni_kin::Command) -> String {
+    format!("v {:.2} m/s α {:.0}° ω {:+.2} rad/s", c.v_m_s, c.alpha_rad.to_degrees(), c.omega_rad_s)
+}
+
+/// One gap: `translating while rotating (arcs): 93 % of the held-out motion (|v| ≈ 0.20 m/s with
+/// |ω| ≈ 0.35 rad/s), 2 % of the training motion`.
+fn motion_gap(g: &MotionGap) -> String {
+    let magnitudes = match g.kind {
+        MotionKind::Translating => format!("|v| ≈ {:.2} m/s", g.speed_m_s),
+        MotionKind::Rotating => format!("|ω| ≈ {:.2} rad/s", g.turn_rate_rad_s),
+        MotionKind::TranslatingWhileRotating => {
+            format!("|v| ≈ {:.2} m/s with |ω| ≈ {:.2} rad/s", g.speed_m_s, g.turn_rate_rad_s)
+        }
+    };
+    format!(
+        "{}: {} % of the held-out motion ({magnitudes}) where the training runs never go; {} % of the training \
+         motion is of this kind",
+        motion_kind(g.kind),
+        percent_0(g.held_out_share),
+        percent_0(g.train_share)
+    )
+}
+
+/// A share (0…1) as a whole percentage, `<1` for a small non-zero share.
+fn percent_0(share: f64) -> String {
+    let p = 100.0 * share;
+    if p > 0.0 && p < 0.5 { "<1".into() } else { format!("{p:.0}") }
+}
+
+/// What the training runs lack against the held-out runs, and what to record.
+pub fn motion_coverage(c: &MotionCoverage) -> String {
+    if !c.lacking() {
+        return format!(
+            "the training runs cover the held-out motions ({} % of the held-out motion falls where they go)",
+            percent_0(c.covered)
+        );
+    }
+    let gaps: Vec<String> = c.gaps.iter().map(motion_gap).collect();
+    let mut text = format!("the training runs lack motions the held-out runs contain: {}", gaps.join("; "));
+    if !c.unseen_effects.is_empty() {
+        text.push_str(&format!("; no fit on these runs can see {}", c.unseen_effects.join(", ")));
+    }
+    let record: Vec<String> = c.gaps.iter().flat_map(|g| g.record.iter().map(command)).collect();
+    if !record.is_empty() {
+        text.push_str(&format!("; record {}", record.join(", ")));
+    }
+    if !c.unseen_effects.is_empty() {
+        let flags: Vec<String> = c.unseen_effects.iter().map(|e| format!("--effect {e}")).collect();
+        text.push_str(&format!(" (`omnical plan {}` proposes runs that excite them)", flags.join(" ")));
+    }
+    text
 }
 
 /// The verdict of a diagnosis, with the remaining error against the noise floor.
@@ -361,12 +442,25 @@ pub fn warning(w: &WeakDirection) -> String {
 
 // The explorer (issue 18): what a family's fitted terms mean, and the exploration in a few lines.
 
-use crate::science::explore::{Exploration, FamilyResult, Term};
+use crate::science::explore::{Exploration, FamilyResult, FamilyStatus, Term, Unconverged};
 use omni_kin::effect::Family;
 
 /// Terms that stand out: at least two standard errors from zero.
 fn significant(f: &FamilyResult) -> Vec<&Term> {
-    f.terms.iter().filter(|t| t.z() >= 2.0).collect()
+    f.terms.iter().filter(|t| strength(f, t) >= 2.0).collect()
+}
+
+/// How far a term stands out: `|value| / std_error` ([`Term::z`]). A held term (part of a direction the runs
+/// do not constrain, so without a standard error of its own) that still moved is judged against the largest
+/// standard error of the family's terms in its unit: an oval wheel's 3 % harmonic that carries a tenth of a
+/// weak direction is still the finding, not a 0.3 % term beside it.
+fn strength(f: &FamilyResult, t: &Term) -> f64 {
+    if !t.held || t.std_error.is_finite() {
+        return t.z();
+    }
+    let se =
+        f.terms.iter().filter(|u| u.unit == t.unit && u.std_error.is_finite()).map(|u| u.std_error).fold(0.0, f64::max);
+    if se > 0.0 { t.value.abs() / se } else { 0.0 }
 }
 
 fn term<'a>(f: &'a FamilyResult, name: &str) -> Option<&'a Term> {
@@ -377,8 +471,11 @@ fn term<'a>(f: &'a FamilyResult, name: &str) -> Option<&'a Term> {
 /// (+3.9, −2.1) mm/s while moving, one drift shared by the runs: a tilted floor, or a ground-truth frame that
 /// moves".
 pub fn explore_hint(f: &FamilyResult) -> String {
+    if f.status != FamilyStatus::Fitted {
+        return family_status(f);
+    }
     let sig = significant(f);
-    let Some(top) = sig.iter().max_by(|a, b| a.z().total_cmp(&b.z())) else {
+    let Some(top) = sig.iter().max_by(|a, b| strength(f, a).total_cmp(&strength(f, b))) else {
         return "no term stands out from its standard error".into();
     };
     let value = |n: &str| term(f, n).map_or(0.0, |t| t.value);
@@ -413,6 +510,49 @@ pub fn explore_hint(f: &FamilyResult) -> String {
             1e3 * value("lever_y_m"),
             value("yaw_rad").to_degrees()
         ),
+    }
+}
+
+/// Up to four names, then how many more.
+fn some_names(names: &[&str]) -> String {
+    match names.len() {
+        0..=4 => names.join(", "),
+        n => format!("{}, … ({} more)", names[..4].join(", "), n - 4),
+    }
+}
+
+/// Whether a family was fitted, and if not, why not, in words: "fitted", "fitted; 5 of 9 terms undetermined (…)",
+/// "not fitted: …", "not converged: …".
+pub fn family_status(f: &FamilyResult) -> String {
+    let n = f.terms.len();
+    match f.status {
+        FamilyStatus::Fitted => {
+            let held: Vec<&str> = f.terms.iter().filter(|t| t.held).map(|t| t.name.as_str()).collect();
+            if held.is_empty() {
+                "fitted".into()
+            } else {
+                format!(
+                    "fitted; {} of {n} terms undetermined ({}): part of directions the runs do not constrain, held at the start as train holds them",
+                    held.len(),
+                    some_names(&held)
+                )
+            }
+        }
+        FamilyStatus::NotExcited => {
+            format!("not fitted: the runs do not excite its {n} terms (no residual changes with them); all stay 0")
+        }
+        FamilyStatus::Singular => format!(
+            "not fitted: the runs cannot tell its {n} terms from the base kinematics or from each other, so all are held at 0, as train holds them"
+        ),
+        FamilyStatus::NotConverged { reason } => match reason {
+            Unconverged::Budget { evaluations } => format!(
+                "not converged: Levenberg–Marquardt spent its {evaluations} evaluations before the training cost settled (the terms as it left them)"
+            ),
+            Unconverged::NoStep => {
+                "not converged: no step lowered the training cost from the start; all terms stay 0".into()
+            }
+            Unconverged::AtZero => "not converged: the fit left every term at 0".into(),
+        },
     }
 }
 
@@ -479,14 +619,21 @@ fn body_hint(top: &Term) -> String {
     }
 }
 
-/// The exploration in lines: each family's held-out gain and judgement with its hint, then the conclusion.
+/// The exploration in lines: each family's held-out gain and judgement with its hint (or why it was not
+/// fitted, and which terms train holds), then the conclusion.
 pub fn exploration(e: &Exploration) -> Vec<String> {
     let mut lines: Vec<String> = e
         .families
         .iter()
         .map(|f| {
+            let held = f.terms.iter().any(|t| t.held);
+            let status = if f.status == FamilyStatus::Fitted && held {
+                format!(" ({})", family_status(f))
+            } else {
+                String::new()
+            };
             format!(
-                "{:<13} held-out gain {:+6.1} % ± {:4.1} %  {}  {}",
+                "{:<13} held-out gain {:+6.1} % ± {:4.1} %  {}  {}{status}",
                 f.family.id(),
                 100.0 * f.held_out_gain,
                 100.0 * f.gain_std_error,
@@ -516,8 +663,12 @@ pub fn explore_conclusion(e: &Exploration) -> String {
             } else {
                 String::new()
             };
+            let holding = match f.terms.iter().filter(|t| t.held).count() {
+                0 => String::new(),
+                k => format!(", holding the same {k} terms"),
+            };
             format!(
-                "{} explains {:.1} % of the held-out path error ({:.4} m → {:.4} m): {}; add it with --effect learned:{}{rest}",
+                "{} explains {:.1} % of the held-out path error ({:.4} m → {:.4} m): {}; add it with --effect learned:{} (train makes this very fit{holding}){rest}",
                 f.family.id(),
                 100.0 * f.held_out_gain,
                 e.baseline_held_out_cost,

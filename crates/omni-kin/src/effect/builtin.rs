@@ -173,6 +173,37 @@ impl Effect for RotationSlip {
     }
 }
 
+/// `turn_scrub`: the turn rate depends on how fast the robot translates meanwhile — tyres (or rollers)
+/// scrub and slip sideways when the robot turns while it drives, so it turns less (or more) than its wheels
+/// say, and more so the faster it drives; on the spot or driving straight nothing changes. Twist stage:
+/// `ω ← ω (1 + k |v|)`, `|v| = hypot(vx, vy)`. Runs that never translate and rotate at once (squares:
+/// sides, then turns on the spot) cannot see it.
+///
+/// Parameter: `k_s_m` (s/m, null 0, bounds ±1: at 0.2 m/s, ±20 % of the turn rate).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TurnScrub {}
+
+impl Effect for TurnScrub {
+    fn id(&self) -> &str {
+        "turn_scrub"
+    }
+    fn describe(&self) -> String {
+        "tyre scrub while turning and driving at once scales the turn rate by 1 + k·|v|".into()
+    }
+    fn stage(&self) -> Stage {
+        Stage::Twist
+    }
+    fn params(&self) -> Vec<ParamSpec> {
+        vec![ParamSpec::new("k_s_m", "s/m", 0.0, -1.0, 1.0)]
+    }
+    fn twist(&self, p: &[f64], t: Twist2, _w: &[f64]) -> Twist2 {
+        if p[0] == 0.0 {
+            return t;
+        }
+        Twist2 { omega_rad_s: t.omega_rad_s * (1.0 + p[0] * t.vx_m_s.hypot(t.vy_m_s)), ..t }
+    }
+}
+
 /// Window of the moving average that `accel_slip` differentiates. s.
 pub const ACCEL_SLIP_WINDOW_S: f64 = 0.05;
 /// Acceleration below which tyres keep traction (`accel_slip`). rad/s².

@@ -7,7 +7,7 @@
 //! |---|---|---|
 //! | clock | [`Effect::clock_lag_s`] | `time_offset` |
 //! | wheel speeds (per run, may carry state) | [`Effect::wheel_rates`] | `wheel_asymmetry`, `backlash`, `wheel_eccentricity` |
-//! | body twist (per sample) | [`Effect::twist`], [`Effect::twist_at`] (with pose and time) | `rotation_slip`, `world_drift`, `learned:world` |
+//! | body twist (per sample) | [`Effect::twist`], [`Effect::twist_at`] (with pose and time) | `rotation_slip`, `turn_scrub`, `world_drift`, `learned:world` |
 //! | integration | [`Effect::uses_stamps`] | `sample_timing` |
 //! | measurement | [`Effect::sensor_from_body`] | `sensor_offset` |
 //!
@@ -21,7 +21,7 @@ pub mod learned;
 pub use learned::{Family, Learned};
 
 pub use builtin::{
-    AccelSlip, Backlash, RotationSlip, SampleTiming, SensorOffset, SpeedScale, TimeOffset, WheelAsymmetry,
+    AccelSlip, Backlash, RotationSlip, SampleTiming, SensorOffset, SpeedScale, TimeOffset, TurnScrub, WheelAsymmetry,
     WheelEccentricity, WorldDrift,
 };
 
@@ -176,6 +176,8 @@ pub enum EffectKind {
     SpeedScale(SpeedScale),
     /// Translation turned by slip while rotating.
     RotationSlip(RotationSlip),
+    /// Turn rate scaled by the translation speed (scrub while turning and driving).
+    TurnScrub(TurnScrub),
     /// Traction lost while a wheel speeds up.
     AccelSlip(AccelSlip),
     /// Lost motion after a wheel reverses.
@@ -200,6 +202,7 @@ pub const CATALOGUE: &[&str] = &[
     "wheel_asymmetry",
     "speed_scale",
     "rotation_slip",
+    "turn_scrub",
     "accel_slip",
     "backlash",
     "wheel_eccentricity",
@@ -218,6 +221,7 @@ impl EffectKind {
             "wheel_asymmetry" => Self::WheelAsymmetry(WheelAsymmetry { n_wheels }),
             "speed_scale" => Self::SpeedScale(SpeedScale { n_wheels }),
             "rotation_slip" => Self::RotationSlip(RotationSlip {}),
+            "turn_scrub" => Self::TurnScrub(TurnScrub {}),
             "accel_slip" => Self::AccelSlip(AccelSlip { n_wheels }),
             "backlash" => Self::Backlash(Backlash { n_wheels }),
             "wheel_eccentricity" => Self::WheelEccentricity(WheelEccentricity { n_wheels }),
@@ -246,6 +250,7 @@ impl EffectKind {
             Self::WheelAsymmetry(e) => e,
             Self::SpeedScale(e) => e,
             Self::RotationSlip(e) => e,
+            Self::TurnScrub(e) => e,
             Self::AccelSlip(e) => e,
             Self::Backlash(e) => e,
             Self::WheelEccentricity(e) => e,
@@ -282,6 +287,7 @@ impl Effect for EffectKind {
     fn twist(&self, p: &[f64], twist: Twist2, w: &[f64]) -> Twist2 {
         match self {
             Self::RotationSlip(e) => e.twist(p, twist, w),
+            Self::TurnScrub(e) => e.twist(p, twist, w),
             Self::WorldDrift(e) => e.twist(p, twist, w),
             Self::Learned(e) => e.twist(p, twist, w),
             Self::Custom(e) => e.twist(p, twist, w),
@@ -291,6 +297,7 @@ impl Effect for EffectKind {
     fn twist_at(&self, p: &[f64], twist: Twist2, w: &[f64], at: &TwistAt) -> Twist2 {
         match self {
             Self::RotationSlip(e) => e.twist(p, twist, w),
+            Self::TurnScrub(e) => e.twist(p, twist, w),
             Self::WorldDrift(e) => e.twist_at(p, twist, w, at),
             Self::Learned(e) => e.twist_at(p, twist, w, at),
             Self::Custom(e) => e.twist_at(p, twist, w, at),

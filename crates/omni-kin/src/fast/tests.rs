@@ -452,6 +452,7 @@ fn general_walk_agrees_with_the_literal_walk_for_every_effect() {
         (vec!["time_offset"], vec![0.037]),
         (vec!["time_offset"], vec![-0.052]),
         (vec!["rotation_slip"], vec![0.12]),
+        (vec!["turn_scrub"], vec![-0.13]),
         (vec!["world_drift"], vec![0.004, -0.003]),
         (vec!["sample_timing"], vec![]),
         (vec!["learned:body"], vec![0.05, 0.02, 0.1, -0.05, 0.03, 0.02, -0.01, 0.015, 0.01]),
@@ -648,6 +649,7 @@ fn forward_jacobian_matches_central_differences() {
     let runs = jittered_runs(5);
     let cases: Vec<(Vec<&str>, Vec<f64>, usize)> = vec![
         (vec!["rotation_slip"], vec![0.12], 1),
+        (vec!["turn_scrub"], vec![-0.13], 1),
         (vec!["world_drift"], vec![0.004, -0.003], 2),
         (vec!["learned:body"], vec![0.05, 0.02, 0.1, -0.05, 0.03, 0.02, -0.01, 0.015, 0.01], 9),
         (vec!["learned:world"], vec![0.003, -0.002, 0.01, -0.02], 4),

@@ -297,20 +297,30 @@ class Diagnosis:
     @property
     def noise_floor(self) -> Optional[dict[str, Any]]: ...
     @property
+    def coverage(self) -> Optional[dict[str, Any]]:
+        """The training runs' motions against the held-out runs' (with ``validate``): what they lack."""
+    @property
     def final_model(self) -> Optional[Model]: ...
     def to_dict(self) -> dict[str, Any]: ...
 
 @final
 class Exploration:
     """The outcome of ``explore``: each family of features (wheel, body, world, time, ground_truth) fitted
-    on the training runs and judged by its held-out gain."""
+    on the training runs, as ``train(..., effects=["learned:<family>"])`` fits it, and judged by its
+    held-out gain."""
 
     @property
-    def families(self) -> list[dict[str, Any]]: ...
+    def families(self) -> list[dict[str, Any]]:
+        """Largest held-out gain first: family, effect, status (``fitted``, ``not_excited``, ``singular``,
+        ``not_converged``), status_reason, status_text, held_out_gain, gain_std_error, passes,
+        held_out_cost_m, terms (name, value, std_error, unit, held), held, hint, curve."""
     @property
     def unexplained(self) -> bool: ...
     @property
     def best(self) -> Optional[str]: ...
+    @property
+    def coverage(self) -> dict[str, Any]:
+        """The training runs' motions against the held-out runs': what they lack."""
     @property
     def conclusion(self) -> str: ...
     @property

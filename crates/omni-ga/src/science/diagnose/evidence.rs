@@ -6,12 +6,9 @@ use super::compare::{costs_of, path_kind};
 use super::noise::wheel_excitation;
 use super::{Candidate, Costs, DiagnoseOptions, NoiseFloor, ParamValue};
 use crate::error::Error;
-use crate::fit::CalibrationProblem;
-use crate::optimizer::Optimizer;
-use crate::optimizer::lm::{LevenbergMarquardt, LmConfig};
+use crate::fit::{Calibration, CalibrationProblem, Plan, refine};
 use crate::optimizer::observe::NoopObserver;
-use crate::optimizer::problem::{Bounds, LeastSquares, Problem};
-use crate::science::identify::IdentifyOptions;
+use crate::optimizer::problem::{Bounds, LeastSquares};
 use crate::science::text;
 use nalgebra::{DMatrix, DVector};
 use omni_kin::effect::{Effect, Stage};
@@ -28,24 +25,21 @@ pub(crate) fn unbounded<'a>(model: &'a Model, runs: &'a [Run], every: usize) -> 
 /// `model`'s parameters, with effect parameters whose value is the lower end of their range (backlash
 /// b ≥ 0 at its null value) moved 2 % inside it, where the model is differentiable.
 pub fn differentiable_start(model: &FittedModel) -> Vec<f64> {
-    let mut x = model.params.clone();
-    for (i, s) in model.model.params().iter().enumerate() {
-        if i >= model.model.n_base() && x[i] == s.lower && s.upper > s.lower {
-            x[i] = s.lower + 0.02 * (s.upper - s.lower);
-        }
-    }
-    x
+    crate::fit::differentiable_start(model, model.model.n_base())
 }
 
-/// Refit all parameters of `start` on `train` by Levenberg–Marquardt on the path residuals.
-pub fn refit(start: &FittedModel, train: &[Run], every: usize) -> Result<FittedModel, Error> {
-    let x0 = differentiable_start(start);
-    let problem = unbounded(&start.model, train, every)?;
-    let mut lm = LevenbergMarquardt { config: LmConfig::default() };
-    let s = lm.minimize(&problem, &x0, &mut NoopObserver)?;
-    // LM never returns worse than its start; also never worse than the given parameters.
-    let params = if problem.cost(&s.params) <= problem.cost(&start.params) { s.params } else { start.params.clone() };
-    Ok(FittedModel::new(start.model.clone(), params)?)
+/// Add `effect` (or nothing) to `current` and refit on `train`, on the path objective at every `every`-th
+/// pose: [`crate::fit::refine`] with [`Plan::refit`], the very fit `train --effect` runs after fitting the
+/// base — the same start, the same free and held parameters, the same optimizer and stopping — so what
+/// diagnose reports is what train delivers.
+pub fn refit(
+    current: &FittedModel,
+    effect: Option<&EffectKind>,
+    train: &[Run],
+    every: usize,
+) -> Result<Calibration, Error> {
+    let effects: Vec<EffectKind> = effect.into_iter().cloned().collect();
+    refine(current, &effects, train, &Plan::refit(every), &mut NoopObserver)
 }
 
 /// Projection residual: ‖(I − Q Qᵀ) v‖ for an orthonormal basis Q.
@@ -226,11 +220,12 @@ impl Bench<'_> {
                 None => None,
             },
             excitation_gap: gap,
+            held: Vec::new(),
             fitted: None,
         };
         if !absorbed
             && cand.not_excited.is_none()
-            && let Ok(fit) = refit(&current.with_effect(effect.clone()), self.fit_runs, self.every)
+            && let Ok(fit) = refit(current, Some(effect), self.fit_runs, self.every)
         {
             self.judge_refit(&mut cand, effect, &fit, current_costs)?;
         }
@@ -238,15 +233,16 @@ impl Bench<'_> {
     }
 
     /// The held-out gain, the share of the excess error closed and the effect's parameters (with
-    /// standard errors) of a refit with the effect.
+    /// standard errors, and those the truncated update held at their null values) of a refit with the
+    /// effect.
     fn judge_refit(
         &self,
         cand: &mut Candidate,
         effect: &EffectKind,
-        fit: &FittedModel,
+        fit: &Calibration,
         current_costs: &Costs,
     ) -> Result<(), Error> {
-        let c = costs_of(fit, self.fit_runs, self.held_runs, self.every)?;
+        let c = costs_of(&fit.fitted, self.fit_runs, self.held_runs, self.every)?;
         cand.held_out_gain = 1.0 - c.held_out_path / current_costs.held_out_path.max(1e-300);
         if let Some(nf) = self.noise {
             let (b, a, f) = (current_costs.held_out_path, c.held_out_path, nf.path_rms);
@@ -254,23 +250,29 @@ impl Bench<'_> {
         }
         // Standard errors of the effect parameters at the refit: the identifiability analysis's (per-run
         // sandwich), the same computation `train` reports.
-        let n = fit.params.len();
-        let p = unbounded(&fit.model, self.fit_runs, self.every)?;
-        let id = p.identifiability(&fit.params, &IdentifyOptions::default());
-        let r = fit.model.effect_ranges().last().cloned().unwrap_or(n..n);
+        let n = fit.fitted.params.len();
+        let r = fit.fitted.model.effect_ranges().last().cloned().unwrap_or(n..n);
+        let held = fit.held_params();
+        cand.held = effect
+            .params()
+            .iter()
+            .zip(r.clone())
+            .filter(|(_, i)| held.contains(i))
+            .map(|(s, _)| s.name.clone())
+            .collect();
         cand.params = effect
             .params()
             .iter()
             .zip(r)
             .map(|(s, i)| ParamValue {
                 name: s.name.clone(),
-                value: fit.params[i],
+                value: fit.fitted.params[i],
                 unit: s.unit.clone(),
-                std_error: id.params.get(i).and_then(|u| u.std_error),
+                std_error: fit.identifiability.params.get(i).and_then(|u| u.std_error),
             })
             .collect();
         cand.refit = Some(c);
-        cand.fitted = Some(fit.clone());
+        cand.fitted = Some(fit.fitted.clone());
         Ok(())
     }
 }

@@ -6,6 +6,7 @@ use super::noise::ExcitationGap;
 use super::search::passes;
 use super::unexplained::{MISSING_RATIO, UnexplainedEvidence, decide};
 use super::{Candidate, Costs, DiagnoseOptions, GroupReport, Growth, KindOut, NoiseFloor, ParamValue, RunReport};
+use crate::science::coverage::MotionCoverage;
 use crate::science::identify::{Identifiability, WeakDirection};
 
 /// One fact about where the model fails.
@@ -61,6 +62,8 @@ pub enum Finding {
     },
     /// A direction of the model itself that the runs do not constrain.
     Unconstrained(WeakDirection),
+    /// The held-out runs contain motions the training runs never do (e.g. arcs after squares).
+    MissingMotions(MotionCoverage),
     /// Scatter of the end-pose error between repeats of the same command, or runs of one kind (Eq. 6
     /// units).
     RepeatabilityFloor {

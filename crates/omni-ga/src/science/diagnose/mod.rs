@@ -47,6 +47,7 @@ pub use noise::{ExcitationGap, GapKind, WheelGap, noise_floor, wheel_excitation,
 pub use unexplained::{DecidedBy, UnexplainedEvidence};
 
 use crate::error::Error;
+use crate::science::coverage::{MotionCoverage, motion_coverage};
 use crate::science::identify::{Identifiability, IdentifyOptions};
 use crate::science::text;
 use compare::compare;
@@ -191,6 +192,10 @@ pub struct Candidate {
     /// Why the training runs cannot tell this effect, as facts.
     #[serde(skip)]
     pub excitation_gap: Option<ExcitationGap>,
+    /// The effect's parameters the refit held at their null values (truncated update: the runs do not
+    /// constrain them), as `train --effect` holds them; the held-out gain is with them held.
+    #[serde(default)]
+    pub held: Vec<String>,
     /// The refit model with the effect (None when absorbed, not excited or the refit failed).
     #[serde(skip)]
     pub fitted: Option<FittedModel>,
@@ -299,6 +304,9 @@ pub struct Diagnosis {
     /// The verdict's effect validated on kinds of path left out of its fit (straight, turning left,
     /// turning right), when the runs have several kinds.
     pub kind_out: Option<KindOut>,
+    /// The training runs' motions against the held-out runs' (with a validation set): what the training
+    /// runs lack.
+    pub coverage: Option<MotionCoverage>,
     /// The final model (the input, plus effects added by `auto`).
     #[serde(skip)]
     pub final_model: Option<FittedModel>,
@@ -412,6 +420,33 @@ pub fn noise_of(train: &[Run], held: &[Run]) -> Option<NoiseFloor> {
     noise_floor(train).or_else(|| noise_floor(held))
 }
 
+/// What the held-out runs add to `facts` about `model` (against `design`) fitted on `fit_runs`: how many
+/// held-out runs end worse than the design (after the first finding) and, with a validation set, the motions
+/// the training runs lack (first: it bounds what any fit on them can learn). Returns the motion coverage
+/// (with a validation set).
+fn held_out_findings(
+    facts: &mut Vec<Finding>,
+    (model, design): (&FittedModel, &FittedModel),
+    (fit_runs, held_runs): (&[Run], &[Run]),
+    protocol: HeldOut,
+    every: usize,
+) -> Result<Option<MotionCoverage>, Error> {
+    if protocol != HeldOut::TrainingRuns {
+        let (worse, runs) = compare::worse_than_design(model, design, held_runs, every)?;
+        if worse > 0 {
+            facts.insert(facts.len().min(1), Finding::WorseThanDesign { worse, runs });
+        }
+    }
+    let coverage = match protocol {
+        HeldOut::ValidationSet => Some(motion_coverage(model, fit_runs, held_runs)?),
+        _ => None,
+    };
+    if let Some(c) = coverage.as_ref().filter(|c| c.lacking()) {
+        facts.insert(0, Finding::MissingMotions(c.clone()));
+    }
+    Ok(coverage)
+}
+
 /// Diagnose `model` on `train`, holding out `validation` (or cross-validating over repetitions).
 ///
 /// `design`: the design each run is compared with — one model (a `&FittedModel`) or a model per run
@@ -448,12 +483,7 @@ pub fn diagnose(
     let repeat_floor = repeatability_floor(&cmp.groups);
     let mut facts =
         findings(&cmp.runs, &cmp.groups, &cmp.growth, &climb.ranking, identifiability.as_ref(), repeat_floor);
-    if protocol != HeldOut::TrainingRuns {
-        let (worse, runs) = compare::worse_than_design(model, design, &held_runs, every)?;
-        if worse > 0 {
-            facts.insert(facts.len().min(1), Finding::WorseThanDesign { worse, runs });
-        }
-    }
+    let coverage = held_out_findings(&mut facts, (model, design), (&fit_runs, &held_runs), protocol, every)?;
     // The repeat structure with the accepted effects: the verdict's (refitted), or those `auto` added.
     let accepted = match (&verdict, climb.ranking.first(), opts.auto) {
         (Some(_), Some(Candidate { fitted: Some(f), .. }), false) => Some(f),
@@ -492,6 +522,7 @@ pub fn diagnose(
         identifiability,
         repeatability_floor: repeat_floor,
         kind_out: kind_check,
+        coverage,
         final_model: Some(climb.top),
         protocol,
         facts,

@@ -70,7 +70,7 @@ pub(super) fn climb(
                     (Some(fitted), Some(costs)) => (fitted, costs),
                     _ => {
                         let effect = candidate_effect(&b.effect, current.model.n_wheels(), opts)?;
-                        let next = refit(&current.with_effect(effect), bench.fit_runs, bench.every)?;
+                        let next = refit(&current, Some(&effect), bench.fit_runs, bench.every)?.fitted;
                         let costs = costs_of(&next, bench.fit_runs, bench.held_runs, bench.every)?;
                         (next, costs)
                     }
@@ -136,9 +136,9 @@ pub(super) fn kind_out(
         .par_iter()
         .map(|&kind| {
             let (test, fit): (Vec<Run>, Vec<Run>) = runs.iter().cloned().partition(|r| Turn::of_run(r) == Some(kind));
-            let with_effect = model.with_effect(effect.clone());
-            let (base, with) = rayon::join(|| refit(model, &fit, every), || refit(&with_effect, &fit, every));
-            let (base, with) = (base?, with?);
+            let (base, with) =
+                rayon::join(|| refit(model, None, &fit, every), || refit(model, Some(effect), &fit, every));
+            let (base, with) = (base?.fitted, with?.fitted);
             let b = cost::cost(&base.model, &base.params, &test, path_kind(every))?;
             let a = cost::cost(&with.model, &with.params, &test, path_kind(every))?;
             Ok((text::path_kind(kind).to_string(), b, a))

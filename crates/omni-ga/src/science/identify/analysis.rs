@@ -11,8 +11,10 @@ use omni_kin::Model;
 pub(super) struct Noise {
     /// Residual rows.
     pub(super) rows: usize,
-    /// Runs (groups of rows).
+    /// Runs.
     pub(super) runs: usize,
+    /// Clusters of the sandwich: runs, or their segments.
+    pub(super) clusters: usize,
     /// `rᵀr`.
     pub(super) rtr: f64,
     /// Residual variance `s²` (1 for a stated noise level).
@@ -26,19 +28,21 @@ pub(super) struct Noise {
 impl Noise {
     pub(super) fn new(moments: Option<&Moments>, n: usize) -> Self {
         let rows = moments.map_or(0, |mo| mo.rows);
-        let runs = moments.map_or(0, |mo| mo.scores.len());
+        let runs = moments.map_or(0, |mo| mo.runs);
+        let clusters = moments.map_or(0, |mo| mo.scores.len());
         let rtr = moments.map_or(0.0, |mo| mo.rtr);
         let dof = rows.saturating_sub(n).max(1) as f64;
         let s2 = if moments.is_some() { rtr / dof } else { 1.0 };
         let kind = if moments.is_none() {
             CovarianceKind::Stated
-        } else if runs >= n + 2 {
+        } else if clusters >= n + 2 {
             CovarianceKind::PerRun
         } else {
             CovarianceKind::Iid
         };
-        let cr1 = if runs > 1 { runs as f64 / (runs - 1) as f64 * (rows as f64 - 1.0) / dof } else { 1.0 };
-        Self { rows, runs, rtr, s2, kind, cr1 }
+        let g = clusters;
+        let cr1 = if g > 1 { g as f64 / (g - 1) as f64 * (rows as f64 - 1.0) / dof } else { 1.0 };
+        Self { rows, runs, clusters, rtr, s2, kind, cr1 }
     }
 }
 
@@ -112,19 +116,23 @@ impl DirectionCovariances {
 
 /// The unconstrained directions, largest singular value first: null ones (standard error `None`), and
 /// alive ones whose standard error exceeds `max_std_error` or whose excitation is below `min_excitation`.
+/// The excitation rule applies only without per-run standard errors (`kind`): a direction whose per-run
+/// standard error is small is never unconstrained.
 fn unconstrained(
     sp: &Spectrum,
     alive: &[usize],
     chosen: &DMatrix<f64>,
+    kind: CovarianceKind,
     opts: &IdentifyOptions,
 ) -> Vec<(usize, Option<f64>)> {
     let mut weak = Vec::new();
+    let by_excitation = kind != CovarianceKind::PerRun;
     for &k in &sp.order {
         match alive.iter().position(|&a| a == k) {
             None => weak.push((k, None)),
             Some(a) => {
                 let se = chosen[(a, a)].max(0.0).sqrt();
-                if se > opts.max_std_error || sp.sv[k] < opts.min_excitation * sp.smax {
+                if se > opts.max_std_error || (by_excitation && sp.sv[k] < opts.min_excitation * sp.smax) {
                     weak.push((k, Some(se)));
                 }
             }
@@ -137,6 +145,7 @@ fn unconstrained(
 fn undetermined(model: &Model, params: &[f64], scales: &[f64], noise: &Noise) -> Identifiability {
     Identifiability {
         runs: noise.runs,
+        clusters: noise.clusters,
         residuals: noise.rows,
         residual_rms: f64::NAN,
         covariance_kind: CovarianceKind::Iid,
@@ -199,7 +208,7 @@ pub(super) fn analyse_core(
     let alive = sp.alive(opts.rcond);
     let va = DMatrix::from_fn(n, alive.len(), |r, c| sp.v[(r, alive[c])]);
     let dirs = DirectionCovariances::new(&sp, &va, &alive, &scores, &noise);
-    let weak_k = unconstrained(&sp, &alive, dirs.chosen(noise.kind), opts);
+    let weak_k = unconstrained(&sp, &alive, dirs.chosen(noise.kind), noise.kind, opts);
     // Directions that stay: covariance restricted to the constrained subspace, in parameter units.
     let strong: Vec<usize> = (0..alive.len()).filter(|&a| !weak_k.iter().any(|&(k, _)| k == alive[a])).collect();
     let vs = DMatrix::from_fn(n, strong.len(), |r, c| va[(r, strong[c])]);
@@ -211,8 +220,9 @@ pub(super) fn analyse_core(
     let cov = to_params(dirs.chosen(noise.kind));
     let cov_iid = to_params(&dirs.iid);
     let weak_loading = |i: usize| weak_k.iter().map(|&(k, _)| sp.v[(i, k)].abs()).fold(0.0f64, f64::max);
-    let determined =
-        |i: usize| (weak_loading(i) < 0.1).then(|| (cov[(i, i)].max(0.0).sqrt(), cov_iid[(i, i)].max(0.0).sqrt()));
+    let determined = |i: usize| {
+        (weak_loading(i) < super::WEAK_LOADING).then(|| (cov[(i, i)].max(0.0).sqrt(), cov_iid[(i, i)].max(0.0).sqrt()))
+    };
     let weak = weak_k
         .iter()
         .map(|&(k, se)| {
@@ -222,6 +232,7 @@ pub(super) fn analyse_core(
         .collect();
     Identifiability {
         runs: noise.runs,
+        clusters: noise.clusters,
         residuals: noise.rows,
         residual_rms,
         covariance_kind: noise.kind,

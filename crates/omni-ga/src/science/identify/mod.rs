@@ -12,12 +12,17 @@
 //!   every residual as independent. `per run` (the default standard error): the cluster-robust sandwich
 //!   `(JᵀJ)⁻¹ (Σ_runs J_gᵀ r_g r_gᵀ J_g) (JᵀJ)⁻¹ · G/(G − 1) · (m − 1)/(m − p)` over the `G` runs, which
 //!   stays honest when the errors along a path are correlated (wheel noise integrates into drift), as
-//!   they are in odometry. It needs several runs per parameter; with fewer than `2p` runs the iid estimate
-//!   is used (and said).
+//!   they are in odometry. It needs more clusters than parameters (`p + 2`): with fewer runs, each run is
+//!   cut by time into segments of at least [`MIN_SEGMENT_S`] (a few long runs — a square, a circle, a
+//!   figure-eight — become a dozen or more clusters; [`segment_poses`]); with still too few clusters the
+//!   iid estimate is used (and said).
 //! - **Unconstrained directions**: `v_k` whose standard error (in fraction of scale) exceeds
 //!   `max_std_error` (default 5 % of scale: the data cannot pin that combination to better than the size of
-//!   a typical calibration correction), or whose `s_k` is below `min_excitation · s_max` (default 1 %: the
-//!   residuals respond to it 100× less than to the best-excited direction, whatever the noise). Each is named by the
+//!   a typical calibration correction), or — when the standard error is not the per-run (cluster) estimate
+//!   and so not to be trusted alone — whose `s_k` is below `min_excitation · s_max` (default 1 %: the
+//!   residuals respond to it 100× less than to the best-excited direction). A direction whose per-run
+//!   standard error is small is never unconstrained, however weakly it is excited against the others (a
+//!   wheel-radius difference against the wheel separation). Each is named by the
 //!   parameters that carry it ("m21 and m22 move together"); for the base kinematics, the direction is
 //!   mapped to a change of the IK matrix `ΔM`, whose dominant wheel-speed pattern `u` (`ΔM ≈ a uᵀ`) is
 //!   the pattern the runs hardly contain, and whose motion under the design matrix (`M₀ u`) says which
@@ -33,15 +38,20 @@ use nalgebra::{DMatrix, DVector};
 use omni_kin::Model;
 use serde::{Deserialize, Serialize};
 
+/// Share of an unconstrained direction (unit vector in scaled space) from which a parameter counts as part
+/// of it: it then has no standard error, and the truncated update holds it.
+pub const WEAK_LOADING: f64 = 0.1;
+
 /// Settings of the analysis (scaled units: fractions of each parameter's scale).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct IdentifyOptions {
     /// A direction whose standard error exceeds this fraction of the parameters' scale is unconstrained.
     /// Default 0.05.
     pub max_std_error: f64,
-    /// A direction whose singular value is below this fraction of the largest is unconstrained whatever
-    /// the noise: the runs move the residuals along it 100× less than along the best-excited direction.
-    /// Default 0.01.
+    /// Without the per-run (cluster) standard errors, a direction whose singular value is below this
+    /// fraction of the largest is unconstrained: the runs move the residuals along it 100× less than along
+    /// the best-excited direction, and an iid (or stated-noise) standard error alone is no basis for
+    /// trusting it. With per-run standard errors, `max_std_error` alone decides. Default 0.01.
     pub min_excitation: f64,
     /// Singular values below `rcond · s_max` are treated as zero (not excited at all). Default 1e-7 (the
     /// analysis works on `JᵀJ`, whose eigenvalues are the squares).
@@ -179,6 +189,10 @@ pub enum Advice {
 pub struct Identifiability {
     /// Runs.
     pub runs: usize,
+    /// Clusters of the per-run standard errors: the runs, or their segments by time when the runs are
+    /// too few ([`segment_poses`]).
+    #[serde(default)]
+    pub clusters: usize,
     /// Residuals (rows of the Jacobian).
     pub residuals: usize,
     /// Residual RMS per component (x, y, weighted heading), in the objective's unit (m): the noise level
@@ -243,14 +257,90 @@ pub fn param_scales(model: &Model) -> Vec<f64> {
         .collect()
 }
 
+/// Shortest segment a run is cut into for the per-run standard errors when the runs are too few. s.
+/// 5 s: several ground-truth poses at any rate, and long enough that most of a segment's error is its own.
+pub const MIN_SEGMENT_S: f64 = 5.0;
+
+/// How to cut each run's ground-truth poses into clusters for the per-run standard errors of `n_params`
+/// parameters: one cluster per run when there are at least `n_params + 2` runs; otherwise each run (its
+/// poses' times `pose_times_s`, one slice per run) is cut into as many consecutive pieces of at least
+/// [`MIN_SEGMENT_S`] as it holds (at least one, each at least two poses). Returns each run's pose count per
+/// segment, in order.
+pub fn segment_poses(pose_times_s: &[Vec<f64>], n_params: usize) -> Vec<Vec<usize>> {
+    let whole = |t: &Vec<f64>| vec![t.len()];
+    if pose_times_s.len() >= n_params + 2 {
+        return pose_times_s.iter().map(whole).collect();
+    }
+    pose_times_s
+        .iter()
+        .map(|t| {
+            let span = match (t.first(), t.last()) {
+                (Some(a), Some(b)) => b - a,
+                _ => 0.0,
+            };
+            let k = ((span / MIN_SEGMENT_S).floor() as usize).clamp(1, (t.len() / 2).max(1));
+            if k == 1 {
+                return whole(t);
+            }
+            // Pose i belongs to segment ⌊k (t_i − t_0) / span⌋ (the last pose to the last segment).
+            let mut counts = vec![0usize; k];
+            for &ti in t {
+                let s = ((k as f64 * (ti - t[0]) / span) as usize).min(k - 1);
+                counts[s] += 1;
+            }
+            counts.retain(|&c| c > 0);
+            counts
+        })
+        .collect()
+}
+
+/// Residual rows per ground-truth pose: x, y, heading.
+pub const ROWS_PER_POSE: usize = 3;
+/// Share of a segment's last poses whose mean residual anchors the next segment (see
+/// [`Moments::add_run_segments`]): an average, so one pose's measurement noise does not count twice.
+pub const ANCHOR_SHARE: f64 = 0.1;
+
+/// The row ranges `[start, end)` of consecutive segments of `rows` residual rows: `segment_rows` each (cut
+/// to what is left), then the rest if any; empty segments dropped.
+fn segment_bounds(rows: usize, segment_rows: &[usize]) -> Vec<(usize, usize)> {
+    let mut out = Vec::with_capacity(segment_rows.len() + 1);
+    let mut start = 0;
+    for &k in segment_rows.iter().chain(std::iter::once(&usize::MAX)) {
+        let end = start + k.min(rows - start);
+        if end > start {
+            out.push((start, end));
+        }
+        start = end;
+    }
+    out
+}
+
+/// The anchor of segment `g`: 0 for the first; else the mean residual, per component, over the last
+/// [`ANCHOR_SHARE`] of segment `g − 1`'s poses (at least one).
+fn anchor(r: &[f64], bounds: &[(usize, usize)], g: usize) -> [f64; ROWS_PER_POSE] {
+    let mut a = [0.0; ROWS_PER_POSE];
+    let Some(&(start, end)) = g.checked_sub(1).and_then(|p| bounds.get(p)) else { return a };
+    let poses = (end - start) / ROWS_PER_POSE;
+    let m = ((poses as f64 * ANCHOR_SHARE).ceil() as usize).clamp(1, poses.max(1));
+    let first = end.saturating_sub(m * ROWS_PER_POSE).max(start);
+    for row in first..end {
+        a[row % ROWS_PER_POSE] += r[row];
+    }
+    let count = ((end - first) / ROWS_PER_POSE).max(1) as f64;
+    a.iter_mut().for_each(|v| *v /= count);
+    a
+}
+
 /// What the analysis needs from the residuals `r` and their Jacobian `J`, accumulated run by run so the
-/// full Jacobian never has to be held: `JᵀJ`, each run's score `J_gᵀ r_g`, `rᵀr` and the row count.
+/// full Jacobian never has to be held: `JᵀJ`, each cluster's score `J_gᵀ r_g`, `rᵀr` and the row count.
 #[derive(Clone, Debug)]
 pub struct Moments {
     /// `JᵀJ` (parameter units).
     pub jtj: DMatrix<f64>,
-    /// Per run, `J_gᵀ r_g`.
+    /// Per cluster (a run, or a segment of one: [`Moments::add_run_segments`]), `J_gᵀ r_g`.
     pub scores: Vec<DVector<f64>>,
+    /// Runs added.
+    pub runs: usize,
     /// `rᵀr`.
     pub rtr: f64,
     /// Residual rows.
@@ -262,19 +352,60 @@ pub struct Moments {
 impl Moments {
     /// Empty, for `n` parameters.
     pub fn new(n: usize) -> Self {
-        Self { jtj: DMatrix::zeros(n, n), scores: Vec::new(), rtr: 0.0, rows: 0, finite: true }
+        Self { jtj: DMatrix::zeros(n, n), scores: Vec::new(), runs: 0, rtr: 0.0, rows: 0, finite: true }
     }
 
-    /// Add one run's Jacobian rows and residuals.
+    /// Add one run's Jacobian rows and residuals (one cluster).
     pub fn add_run(&mut self, j: &DMatrix<f64>, r: &[f64]) {
+        self.add_run_segments(j, r, &[r.len()]);
+    }
+
+    /// Add one run's Jacobian rows and residuals as consecutive clusters (segments) of `segment_rows` rows
+    /// each, whole ground-truth poses ([`ROWS_PER_POSE`] rows per pose); the rest of the rows, if any, form
+    /// one more.
+    ///
+    /// A path residual is the error accumulated since the run started, so raw segment scores `J_gᵀ r_g` of
+    /// one run share every earlier segment's error: as clusters they give standard errors about 2× too
+    /// small. Each segment's score here counts what its own motion adds instead (summation by parts): its
+    /// residuals measured from its anchor `a_g` (the mean residual over the last [`ANCHOR_SHARE`] of the
+    /// previous segment's poses; 0 for the first), plus the change of anchor it causes, `a_{g+1} − a_g`,
+    /// times the Jacobian rows of every later pose. The segments' scores sum to the run's score `Jᵀ r`
+    /// exactly, whatever the anchors.
+    pub fn add_run_segments(&mut self, j: &DMatrix<f64>, r: &[f64], segment_rows: &[usize]) {
         self.finite &= j.iter().all(|v| v.is_finite()) && r.iter().all(|v| v.is_finite());
         if !self.finite {
             return;
         }
+        self.runs += 1;
         self.jtj += j.transpose() * j;
-        self.scores.push(j.transpose() * DVector::from_column_slice(r));
         self.rtr += r.iter().map(|v| v * v).sum::<f64>();
         self.rows += r.len();
+        let bounds = segment_bounds(r.len(), segment_rows);
+        if bounds.len() <= 1 {
+            self.scores.push(j.transpose() * DVector::from_column_slice(r));
+            return;
+        }
+        let anchors: Vec<[f64; ROWS_PER_POSE]> = (0..=bounds.len()).map(|g| anchor(r, &bounds, g)).collect();
+        // Jacobian rows summed per residual component over every pose after each segment.
+        let mut after = vec![DMatrix::zeros(ROWS_PER_POSE, j.ncols()); bounds.len()];
+        for g in (0..bounds.len() - 1).rev() {
+            let (next_start, next_end) = bounds[g + 1];
+            let mut sum = after[g + 1].clone();
+            for row in next_start..next_end {
+                let mut target = sum.row_mut(row % ROWS_PER_POSE);
+                target += j.row(row);
+            }
+            after[g] = sum;
+        }
+        for (g, &(start, end)) in bounds.iter().enumerate() {
+            let local = DVector::from_fn(end - start, |i, _| r[start + i] - anchors[g][(start + i) % ROWS_PER_POSE]);
+            let mut score = j.rows(start, end - start).transpose() * local;
+            if g + 1 < bounds.len() {
+                let step = DVector::from_fn(ROWS_PER_POSE, |c, _| anchors[g + 1][c] - anchors[g][c]);
+                score += after[g].transpose() * step;
+            }
+            self.scores.push(score);
+        }
     }
 
     /// From a stacked Jacobian and residuals; `run_rows[g]` rows per run, in order.
@@ -360,6 +491,35 @@ pub fn expected(
 mod tests {
     use super::*;
     use omni_kin::IkMatrix;
+
+    #[test]
+    fn segments_cut_few_long_runs_and_their_scores_sum_to_the_run_score() {
+        // Three 30 s runs at 120 Hz, 4 parameters (fewer than 4 + 2 runs): six segments of 5 s each.
+        let times: Vec<Vec<f64>> = (0..3).map(|_| (0..=3600).map(|i| i as f64 / 120.0).collect()).collect();
+        let cut = segment_poses(&times, 4);
+        assert_eq!(cut, vec![vec![600, 600, 600, 600, 600, 601]; 3]);
+        // Enough runs: one cluster each; a short run stays whole.
+        assert_eq!(segment_poses(&times, 1), vec![vec![3601]; 3]);
+        assert_eq!(segment_poses(&[vec![0.0, 1.0, 2.0]], 4), vec![vec![3]]);
+        // The anchored segment scores sum to Jᵀ r (a random walk as residual: the score must not change).
+        let poses = 40;
+        let j = DMatrix::from_fn(3 * poses, 4, |r, c| ((r * 7 + c * 3) as f64 * 0.37).sin());
+        let mut walk = 0.0;
+        let r: Vec<f64> = (0..3 * poses)
+            .map(|i| {
+                walk += ((i * 13 % 7) as f64 - 3.0) * 1e-3;
+                walk
+            })
+            .collect();
+        let mut whole = Moments::new(4);
+        whole.add_run(&j, &r);
+        let mut cut = Moments::new(4);
+        cut.add_run_segments(&j, &r, &[30, 30, 30]);
+        assert_eq!((cut.scores.len(), cut.runs, cut.rows), (4, 1, 3 * poses));
+        let sum = cut.scores.iter().fold(DVector::zeros(4), |a, s| a + s);
+        assert!((&sum - &whole.scores[0]).norm() < 1e-12 * whole.scores[0].norm(), "{sum} vs {}", whole.scores[0]);
+        assert_eq!(cut.jtj, whole.jtj);
+    }
 
     /// A linear toy: residuals r = J x − y with a chosen J; the analysis must find the null direction.
     #[test]
