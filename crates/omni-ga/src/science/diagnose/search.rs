@@ -16,6 +16,13 @@ pub(super) fn passes(c: &Candidate, opts: &DiagnoseOptions) -> bool {
     !c.absorbed && c.not_excited.is_none() && c.held_out_gain >= opts.min_gain
 }
 
+/// A candidate the next rung of the ladder assesses again: separable, excited, and its refit lowered the
+/// held-out path cost at all. One below `min_gain` stays (another effect can mask it: a clock lag beside an
+/// unequal wheel gains little until the wheel is modelled).
+fn worth_retrying(c: &Candidate) -> bool {
+    !c.absorbed && c.not_excited.is_none() && c.held_out_gain > 0.0
+}
+
 /// An effect is named with confidence when it also removes at least `min_excess_closed` of the held-out
 /// error variance above the noise floor (always, when no floor could be estimated).
 pub(super) fn confident(c: &Candidate, opts: &DiagnoseOptions) -> bool {
@@ -38,9 +45,9 @@ pub(super) fn rung(kind: RungKind, costs: &Costs) -> Rung {
 }
 
 /// Ranks the candidates for `model` (costs `costs`); with `opts.auto`, adds the best passing one and
-/// ranks again, up to `opts.max_added` effects. Forward selection: a later rung assesses only the
-/// candidates that passed ([`passes`]) at the rung before; one that did not help the simpler model is not
-/// refitted again (each rung's refits cost as much as the first ranking's).
+/// ranks again, up to `opts.max_added` effects. A later rung assesses only the candidates that helped at
+/// the rung before ([`worth_retrying`]); one that made the simpler model's held-out error worse, or that
+/// the runs cannot tell, is not refitted again (each rung's refits cost as much as the first ranking's).
 pub(super) fn climb(
     bench: &Bench<'_>,
     model: &FittedModel,
@@ -57,7 +64,7 @@ pub(super) fn climb(
     loop {
         let ranking = rank(bench, &current, &current_costs, opts, eligible.as_deref())?;
         let best = ranking.first().filter(|c| passes(c, opts)).cloned();
-        eligible = Some(ranking.iter().filter(|c| passes(c, opts)).map(|c| c.effect.clone()).collect());
+        eligible = Some(ranking.iter().filter(|c| worth_retrying(c)).map(|c| c.effect.clone()).collect());
         if first_ranking.is_none() {
             first_ranking = Some(ranking);
         }
