@@ -41,6 +41,7 @@ use crate::science::identify::WEAK_LOADING;
 use omni_kin::effect::{Effect, EffectKind, Family, Learned};
 use omni_kin::evaluate::Evaluator;
 use omni_kin::{CostKind, FittedModel, Run, Selection};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::ops::Range;
 
@@ -225,10 +226,14 @@ pub fn explore(
     let plan = Plan::refit(opts.every);
     let baseline = refine(model, &[], train, &plan, &mut NoopObserver)?;
     let (base_cost, base_runs) = held_out(&baseline.fitted, validate)?;
-    let mut families = Vec::new();
-    for &family in &opts.families {
-        families.push(fit_family(model, family, train, validate, &plan, (base_cost, &base_runs), opts)?);
-    }
+    // The families are independent fits: in parallel, collected in the options' order (the first error in
+    // that order is the one returned; the same results whatever the thread count).
+    let fitted: Vec<Result<FamilyResult, Error>> = opts
+        .families
+        .par_iter()
+        .map(|&family| fit_family(model, family, train, validate, &plan, (base_cost, &base_runs), opts))
+        .collect();
+    let mut families = fitted.into_iter().collect::<Result<Vec<_>, _>>()?;
     families.sort_by(|a, b| b.held_out_gain.total_cmp(&a.held_out_gain));
     let (with, held_out_m) = match families.iter().find(|f| f.passes) {
         Some(f) => (&f.fitted, f.held_out_cost),
