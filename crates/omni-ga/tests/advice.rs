@@ -5,40 +5,16 @@
 //! end to end in crates/omni-cli/tests/advice.rs.
 #![allow(clippy::unwrap_used)] // test code: a failed unwrap is a failed test
 
+mod support;
 use omni_ga::calibrate::{Calibration, Plan, Preset, calibrate_with_effects};
 use omni_ga::diagnose::{DiagnoseOptions, diagnose};
 use omni_ga::explore::{ExploreOptions, FamilyStatus, explore};
 use omni_ga::observe::NoopObserver;
-use omni_kin::effect::{Effect, Family, Learned, ParamSpec, Stage};
+use omni_kin::effect::{Family, Learned};
 use omni_kin::simulate::{SimConfig, flower_commands, simulate};
-use omni_kin::{CostKind, EffectKind, FittedModel, IkMatrix, Model, Run, Twist2};
+use omni_kin::{CostKind, EffectKind, FittedModel, IkMatrix, Model, Run};
 use std::sync::Arc;
-
-/// The heading drifts in proportion to the distance travelled, `ω += k |v|` (rad/m): outside the
-/// catalogue, expressed by the `body` family's `omega_speed`.
-#[derive(Debug)]
-struct HeadingDrift;
-impl Effect for HeadingDrift {
-    fn id(&self) -> &str {
-        "heading_drift"
-    }
-    fn describe(&self) -> String {
-        "test: heading drift growing with speed".into()
-    }
-    fn stage(&self) -> Stage {
-        Stage::Twist
-    }
-    fn params(&self) -> Vec<ParamSpec> {
-        vec![ParamSpec::new("k", "rad/m", 0.0, -1.0, 1.0)]
-    }
-    fn twist(&self, p: &[f64], t: Twist2, _w: &[f64]) -> Twist2 {
-        Twist2 { omega_rad_s: t.omega_rad_s + p[0] * t.vx_m_s.hypot(t.vy_m_s), ..t }
-    }
-}
-
-fn design() -> FittedModel {
-    FittedModel::nominal(Model::ik(IkMatrix::paper_design()))
-}
+use support::{HeadingDrift, design};
 
 /// The paper's calibrated matrix with `effect` at `params`.
 fn truth_with(effect: EffectKind, params: &[f64]) -> FittedModel {

@@ -4,11 +4,13 @@
 //! down to within 10 % of the true model's; on clean data no family passes.
 #![allow(clippy::unwrap_used)] // test code: a failed unwrap is a failed test
 
+mod support;
 use omni_ga::explore::{Exploration, ExploreOptions, explore};
 use omni_kin::effect::{Effect, Family, ParamSpec, Stage, TwistAt, WheelContext, learned::moving};
 use omni_kin::simulate::{SimConfig, flower_commands, simulate};
-use omni_kin::{CostKind, EffectKind, FittedModel, IkMatrix, Model, Run, Twist2};
+use omni_kin::{CostKind, EffectKind, FittedModel, Run, Twist2};
 use std::sync::Arc;
+use support::{HeadingDrift, design};
 
 /// A constant world-frame velocity while moving (a tilted floor). m/s.
 #[derive(Debug)]
@@ -65,31 +67,6 @@ impl Effect for OvalWheel {
             phi += v * ctx.dt_s[k];
         }
     }
-}
-
-/// The heading drifts in proportion to the distance travelled: `ω += k |v|`. rad/m.
-#[derive(Debug)]
-struct HeadingDrift;
-impl Effect for HeadingDrift {
-    fn id(&self) -> &str {
-        "heading_drift"
-    }
-    fn describe(&self) -> String {
-        "test: heading drift growing with speed".into()
-    }
-    fn stage(&self) -> Stage {
-        Stage::Twist
-    }
-    fn params(&self) -> Vec<ParamSpec> {
-        vec![ParamSpec::new("k", "rad/m", 0.0, -1.0, 1.0)]
-    }
-    fn twist(&self, p: &[f64], t: Twist2, _w: &[f64]) -> Twist2 {
-        Twist2 { omega_rad_s: t.omega_rad_s + p[0] * t.vx_m_s.hypot(t.vy_m_s), ..t }
-    }
-}
-
-fn design() -> FittedModel {
-    FittedModel::nominal(Model::ik(IkMatrix::paper_design()))
 }
 
 /// Training (seed 1) and held-out (seed 2) runs of `truth`: half the flower, 6 s per command.
