@@ -64,6 +64,7 @@ pub enum ModelFileError {
 
 /// One effect in a model file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct EffectEntry {
     /// Effect id, e.g. `time_offset`.
     pub id: String,
@@ -72,8 +73,13 @@ pub struct EffectEntry {
     pub params: BTreeMap<String, f64>,
 }
 
-/// The file's shape (TOML).
+/// Longest fixed integration step a model file may declare: one wheel sample per second. s.
+pub const MAX_STEP_S: f64 = 1.0;
+
+/// The file's shape (TOML). An unknown key is an error (a misspelt `[[effect]]` would otherwise be a model
+/// without its effects).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ModelFile {
     /// Always [`FORMAT`].
     pub format: String,
@@ -143,6 +149,14 @@ impl ModelFile {
         let n_wheels = kinematics.n_wheels();
         if self.wheel_names.len() != n_wheels {
             return Err(format!("wheel_names has {} names for {n_wheels} wheels", self.wheel_names.len()));
+        }
+        if let omni_kin::StepMode::Fixed { dt_s: Some(dt) } = self.integration.step
+            && !(dt > 0.0 && dt <= MAX_STEP_S)
+        {
+            return Err(format!(
+                "integration dt_s = {dt}: the fixed step is the time of one wheel sample in seconds, above 0 and at \
+                 most {MAX_STEP_S} s (the paper's is 0.010); leave it out to take each run's median interval"
+            ));
         }
         let mut model = Model { kinematics, effects: Vec::new(), integration: self.integration };
         for (i, entry) in self.effects.iter().enumerate() {
@@ -300,5 +314,28 @@ mod tests {
             }
             _ => panic!("expected a model error"),
         }
+    }
+
+    #[test]
+    fn unknown_keys_and_impossible_steps_are_refused() {
+        let f = FittedModel::nominal(Model::ik(IkMatrix::paper_design()));
+        let text = to_toml(&f, None).unwrap();
+        let message = |text: &str| match parse(text) {
+            Err(ParseFailure::Toml(m) | ParseFailure::Model(m)) => m,
+            Ok(_) => panic!("accepted:\n{text}"),
+        };
+        let m = message(&format!("{text}\n[[effect]]\nid = \"time_offset\"\n"));
+        assert!(m.contains("unknown field `effect`"), "{m}");
+        let zero = text.replace("[integration]\n", "[integration]\ndt_s = 0.0\n");
+        assert_eq!(
+            message(&zero),
+            "integration dt_s = 0: the fixed step is the time of one wheel sample in seconds, above 0 and at most 1 \
+             s (the paper's is 0.010); leave it out to take each run's median interval"
+        );
+        assert!(
+            message(&text.replace("[integration]\n", "[integration]\ndt_s = 10.0\n"))
+                .starts_with("integration dt_s = 10:")
+        );
+        assert!(parse(&text.replace("[integration]\n", "[integration]\ndt_s = 0.01\n")).is_ok());
     }
 }

@@ -169,6 +169,45 @@ fn position_only_joint_states_are_differentiated() {
     not(python_bag_tools),
     ignore = "needs rosbags, mcap, mcap-ros2-support and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
 )]
+fn joint_states_as_real_systems_publish_them_are_read_with_notes() {
+    let (dir, expected) = fixtures_or_skip!();
+    for name in ["ros2_control", "unstamped"] {
+        let want = &expected[name];
+        let r = read_ok(dir, name);
+        let run = &r.runs[0];
+        close(run.wheel_t_s(), &floats(&want["wheel_t_s"]), 1e-9, "wheel_t_s");
+        // The speeds the positions were integrated from (after the first sample, which takes the second's).
+        close(&run.wheel_rad_s()[3..], &floats(&want["wheel_rad_s_true"])[3..], 1e-9, name);
+        let path = dir.join(format!("{name}.mcap")).display().to_string();
+        let notes: Vec<String> = r.notes.iter().map(|n| n.replace(&path, "BAG")).collect();
+        let expected_notes: &[&str] = if name == "ros2_control" {
+            &[
+                "BAG: topic \"/joint_states\": 51 messages name none of the wheel joints (another publisher on the \
+                 topic): passed over",
+                "BAG: topic \"/joint_states\": 20 messages repeat the one before exactly (stamp and values): dropped",
+                "BAG: topic \"/joint_states\": 201 messages have a NaN wheel velocity beside finite positions: their \
+                 speeds come from the positions",
+                "BAG: topic \"/joint_states\": the position of joint \"wheel_a\" wraps around (an angle modulo 2π): \
+                 unwrapped at 3 jumps before it is differentiated",
+                "BAG: topic \"/joint_states\": the position of joint \"wheel_b\" wraps around (an angle modulo 2π): \
+                 unwrapped at 1 jumps before it is differentiated",
+                "BAG: topic \"/joint_states\": the position of joint \"wheel_c\" wraps around (an angle modulo 2π): \
+                 unwrapped at 1 jumps before it is differentiated",
+                "BAG: topic \"/joint_states\": 201 of 201 messages have no velocity: wheel speeds are differences of \
+                 position over header.stamp",
+            ]
+        } else {
+            &["BAG: topic \"/joint_states\": header.stamp is 0: the messages are stamped by their log time instead"]
+        };
+        assert_eq!(notes, expected_notes, "{name}");
+    }
+}
+
+#[test]
+#[cfg_attr(
+    not(python_bag_tools),
+    ignore = "needs rosbags, mcap, mcap-ros2-support and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
+)]
 fn ground_truth_from_tf_pose_with_covariance_and_odometry() {
     let (dir, expected) = fixtures_or_skip!();
     for name in ["tf", "pose_cov", "odom_truth"] {

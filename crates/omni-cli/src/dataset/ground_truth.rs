@@ -234,18 +234,64 @@ pub fn read_for(opts: &GroundTruthOptions, recording: &Path, name: &str) -> Resu
 /// Reads a ground-truth file (TUM or CSV, by extension).
 pub fn read(path: &Path, csv: &CsvColumns) -> Result<Vec<TruthSample>, DatasetError> {
     let text = std::fs::read_to_string(path).map_err(|e| DatasetError::io(path, e))?;
-    let mut samples = match path.extension().and_then(|e| e.to_str()) {
-        Some("csv") => read_csv(path, &text, csv)?,
-        _ => read_tum(path, &text)?,
+    let mut uprights = Vec::new();
+    let (mut samples, hint) = match path.extension().and_then(|e| e.to_str()) {
+        Some("csv") => (read_csv(path, &text, csv, &mut uprights)?, "--gt-units length=mm (or cm)"),
+        _ => (read_tum(path, &text, &mut uprights)?, "a TUM file holds metres: convert it"),
     };
     if samples.len() < 2 {
         return Err(DatasetError::file(path, format!("has {} poses; at least 2 are needed", samples.len())));
     }
+    plausible(path, &samples, &uprights, hint)?;
     unwrap_yaw(&mut samples);
     Ok(samples)
 }
 
-fn read_tum(path: &Path, text: &str) -> Result<Vec<TruthSample>, DatasetError> {
+/// Fastest plausible ground robot, as the 90th percentile of the speeds between poses. m/s.
+pub const MAX_PLAUSIBLE_SPEED_M_S: f64 = 30.0;
+
+/// Largest median tilt of the poses from upright (body z against world z) a ground robot's ground truth may
+/// show. deg.
+pub const MAX_MEDIAN_TILT_DEG: f64 = 30.0;
+
+/// Refuses ground truth no ground robot can have: positions whose speeds say they are not in metres, and
+/// orientations that are not about z (`uprights`: the z component of the body's z axis per quaternion pose,
+/// `1 − 2(qx² + qy²)`; empty for a heading column).
+fn plausible(path: &Path, samples: &[TruthSample], uprights: &[f64], units_hint: &str) -> Result<(), DatasetError> {
+    let mut speeds: Vec<f64> = samples
+        .windows(2)
+        .map(|w| (w[1].x_m - w[0].x_m).hypot(w[1].y_m - w[0].y_m) / ((w[1].t_ns - w[0].t_ns) as f64 * 1e-9))
+        .collect();
+    speeds.sort_by(f64::total_cmp);
+    let p90 = speeds[(speeds.len() * 9 / 10).min(speeds.len() - 1)];
+    if p90 > MAX_PLAUSIBLE_SPEED_M_S {
+        return Err(DatasetError::file(
+            path,
+            format!(
+                "moves at {p90:.3e} m/s (90th percentile between poses), more than any ground robot ({} m/s): \
+                 are the positions in millimetres? {units_hint}; or is the time column in another unit?",
+                MAX_PLAUSIBLE_SPEED_M_S
+            ),
+        ));
+    }
+    if !uprights.is_empty() {
+        let mut tilts: Vec<f64> = uprights.iter().map(|u| u.clamp(-1.0, 1.0).acos().to_degrees()).collect();
+        tilts.sort_by(f64::total_cmp);
+        let median = tilts[tilts.len() / 2];
+        if median > MAX_MEDIAN_TILT_DEG {
+            return Err(DatasetError::file(
+                path,
+                format!(
+                    "its orientations are tilted {median:.0}° from upright (median), but a ground robot turns about \
+                     z: is the quaternion written w first? The order is qx qy qz qw (w last)"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn read_tum(path: &Path, text: &str, uprights: &mut Vec<f64>) -> Result<Vec<TruthSample>, DatasetError> {
     const COLUMNS: [&str; 8] = ["t", "x", "y", "z", "qx", "qy", "qz", "qw"];
     let mut out: Vec<TruthSample> = Vec::new();
     for (i, line) in text.lines().enumerate() {
@@ -270,12 +316,18 @@ fn read_tum(path: &Path, text: &str) -> Result<Vec<TruthSample>, DatasetError> {
             v[c] = finite(path, &at(COLUMNS[c]), fields[c])?;
         }
         let yaw = yaw_of(path, &format!("line {line_no}"), [v[4], v[5], v[6], v[7]])?;
+        uprights.push(upright([v[4], v[5], v[6], v[7]]));
         push(path, &mut out, line_no, TruthSample { t_ns, x_m: v[1], y_m: v[2], yaw_rad: yaw })?;
     }
     Ok(out)
 }
 
-fn read_csv(path: &Path, text: &str, cols: &CsvColumns) -> Result<Vec<TruthSample>, DatasetError> {
+fn read_csv(
+    path: &Path,
+    text: &str,
+    cols: &CsvColumns,
+    uprights: &mut Vec<f64>,
+) -> Result<Vec<TruthSample>, DatasetError> {
     let mut rdr = ::csv::ReaderBuilder::new().trim(::csv::Trim::All).from_reader(text.as_bytes());
     let header: Vec<String> = rdr
         .headers()
@@ -323,6 +375,7 @@ fn read_csv(path: &Path, text: &str, cols: &CsvColumns) -> Result<Vec<TruthSampl
                 for (k, &i) in q.iter().enumerate() {
                     v[k] = finite(path, &at(i), field(i))?;
                 }
+                uprights.push(upright(v));
                 yaw_of(path, &format!("line {line_no}"), v)?
             }
         };
@@ -379,6 +432,12 @@ fn yaw_of(path: &Path, at: &str, q: [f64; 4]) -> Result<f64, DatasetError> {
     Ok((2.0 * (w * z + x * y)).atan2(w * w + x * x - y * y - z * z))
 }
 
+/// The z component of the body's z axis for a quaternion `[qx, qy, qz, qw]` (1 when upright), normalised.
+fn upright(q: [f64; 4]) -> f64 {
+    let [x, y, z, w] = q;
+    1.0 - 2.0 * (x * x + y * y) / (x * x + y * y + z * z + w * w)
+}
+
 fn unwrap_yaw(samples: &mut [TruthSample]) {
     use std::f64::consts::{PI, TAU};
     for k in 1..samples.len() {
@@ -433,7 +492,7 @@ mod tests {
     #[test]
     fn tum_and_csv_give_the_same_poses() {
         let tum = "# t x y z qx qy qz qw\n1.0 1 2 0 0 0 0 1\n2.5 1.5 2 0 0 0 0.7071067811865476 0.7071067811865476\n";
-        let a = read_tum(Path::new("a.tum"), tum).unwrap();
+        let a = read_tum(Path::new("a.tum"), tum, &mut Vec::new()).unwrap();
         let csv = "n,stamp_ms,px,py,heading\n0,1000,1000,2000,0\n1,2500,1500,2000,90\n";
         let mut cols = CsvColumns::default();
         for (k, v) in [("t", "stamp_ms"), ("x", "px"), ("y", "py"), ("yaw", "heading")] {
@@ -442,7 +501,7 @@ mod tests {
         for (k, v) in [("time", "ms"), ("length", "mm"), ("angle", "deg")] {
             cols.set_unit(k, v).unwrap();
         }
-        let b = read_csv(Path::new("a.csv"), csv, &cols).unwrap();
+        let b = read_csv(Path::new("a.csv"), csv, &cols, &mut Vec::new()).unwrap();
         assert_eq!(a.len(), 2);
         for (p, q) in a.iter().zip(&b) {
             assert_eq!(p.t_ns, q.t_ns);
@@ -454,7 +513,7 @@ mod tests {
 
     #[test]
     fn bad_rows_are_named() {
-        let err = |text: &str| read_tum(Path::new("g.tum"), text).unwrap_err().to_string();
+        let err = |text: &str| read_tum(Path::new("g.tum"), text, &mut Vec::new()).unwrap_err().to_string();
         assert_eq!(err("1 0 0 0 0 0 0 1\n2 nan 0 0 0 0 0 1\n"), "g.tum: line 2, column x: value NaN is not finite");
         assert_eq!(
             err("1 0 0 0 0 0 0 1\n0.5 0 0 0 0 0 0 1\n"),
@@ -462,11 +521,51 @@ mod tests {
         );
         assert_eq!(err("1 0 0 0 0 0 1\n"), "g.tum: line 1: has 7 columns; TUM has 8: t x y z qx qy qz qw");
         assert_eq!(err("1 0 0 0 0 0 0 0\n"), "g.tum: line 1: the quaternion has norm 0, not 1");
-        let e = read_csv(Path::new("g.csv"), "a,b\n1,2\n", &CsvColumns::default()).unwrap_err().to_string();
+        let e = read_csv(Path::new("g.csv"), "a,b\n1,2\n", &CsvColumns::default(), &mut Vec::new())
+            .unwrap_err()
+            .to_string();
         assert_eq!(
             e,
             "g.csv: no column \"t\" for the time (columns: a, b); name it with --gt-columns or [ground_truth] in \
              robot.toml"
+        );
+    }
+
+    /// A ground robot driving a 1 m circle at 0.5 m/s for 4 s, at 50 Hz: TUM text, the quaternion written
+    /// `w_first` or last, positions times `scale`.
+    fn circle_tum(scale: f64, w_first: bool) -> String {
+        let mut text = String::new();
+        for k in 0..200 {
+            let t = 0.02 * k as f64;
+            let yaw = 0.5 * t;
+            let (x, y) = (scale * yaw.sin(), scale * (1.0 - yaw.cos()));
+            let (qz, qw) = ((0.5 * yaw).sin(), (0.5 * yaw).cos());
+            let q = if w_first { format!("{qw} 0 0 {qz}") } else { format!("0 0 {qz} {qw}") };
+            text.push_str(&format!("{t} {x} {y} 0 {q}\n"));
+        }
+        text
+    }
+
+    #[test]
+    fn ground_truth_no_ground_robot_can_have_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let read_text = |name: &str, text: &str| {
+            let p = dir.path().join(name);
+            std::fs::write(&p, text).unwrap();
+            read(&p, &CsvColumns::default())
+                .map_err(|e| e.to_string().replace(&format!("{}/", dir.path().display()), ""))
+        };
+        let good = read_text("good.tum", &circle_tum(1.0, false)).unwrap();
+        assert!((good[199].yaw_rad - 0.5 * 3.98).abs() < 1e-9);
+        assert_eq!(
+            read_text("mm.tum", &circle_tum(1000.0, false)).unwrap_err(),
+            "mm.tum: moves at 5.000e2 m/s (90th percentile between poses), more than any ground robot (30 m/s): are \
+             the positions in millimetres? a TUM file holds metres: convert it; or is the time column in another unit?"
+        );
+        assert_eq!(
+            read_text("wfirst.tum", &circle_tum(1.0, true)).unwrap_err(),
+            "wfirst.tum: its orientations are tilted 123° from upright (median), but a ground robot turns about z: is \
+             the quaternion written w first? The order is qx qy qz qw (w last)"
         );
     }
 }

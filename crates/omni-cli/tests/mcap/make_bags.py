@@ -365,8 +365,10 @@ def all_bags(out):
         return msg
 
     def nan_velocity(kind, k, msg):
+        # NaN with no position beside it (a NaN beside positions is ros2_control's way: see real_joint_states).
         if kind == 'joints' and k == 7:
             msg.velocity[1] = math.nan
+            msg.position = np.zeros(0)
         return msg
 
     def nan_pose(kind, k, msg):
@@ -399,8 +401,49 @@ def all_bags(out):
         bag.write('/mocap/pose', ns, pose_stamped(ns, 'map', 0.0, 0.0, 0.0))
     expected['json_encoding'] = {'file': bag.close()}
 
+    expected.update(real_joint_states(out))
+
     (out / 'not_mcap.mcap').write_text('this is a CSV file, not a bag\nt,x\n0,1\n')
     expected['not_mcap'] = {'file': 'not_mcap.mcap'}
+    return expected
+
+
+def real_joint_states(out):
+    """/joint_states as real systems publish them. `ros2_control`: position-only wheels (velocity NaN), angles
+    wrapped into [-pi, pi], an arm's joint_state_broadcaster on the same topic, and every 10th wheel message
+    recorded twice. `unstamped`: header.stamp never filled (0); the log time is the sample time."""
+    def wrap(a):
+        return (a + math.pi) % (2 * math.pi) - math.pi
+
+    expected = {}
+    for name in ['ros2_control', 'unstamped']:
+        bag = Bag(out, name)
+        bag.topic('/joint_states', JOINT_STATE)
+        bag.topic('/mocap/pose', POSE_STAMPED)
+        js = stamps(T0, 10 * MS, 201)
+        vel = [[4.0 * v for v in wheel_speeds(rel(ns) - rel(T0))] for ns in js]
+        pos = integrate_positions(js, vel)
+        for k, ns in enumerate(js):
+            stamp = ns if name == 'ros2_control' else 0
+            if name == 'ros2_control':
+                msg = T[JOINT_STATE](header=header(stamp, ''), name=list(WHEELS),
+                                     position=np.array([wrap(p) for p in pos[k]]),
+                                     velocity=np.full(3, math.nan), effort=np.zeros(0))
+            else:
+                msg = T[JOINT_STATE](header=header(stamp, ''), name=list(WHEELS), position=np.array(pos[k]),
+                                     velocity=np.array(vel[k]), effort=np.zeros(0))
+            bag.write('/joint_states', ns, msg)
+            if name == 'ros2_control' and k % 10 == 5:
+                bag.write('/joint_states', ns, msg)
+            if name == 'ros2_control' and k % 4 == 0:
+                arm = T[JOINT_STATE](header=header(ns + 3 * MS, ''), name=['shoulder', 'elbow'],
+                                     position=np.array([0.5, -0.5]), velocity=np.zeros(2), effort=np.zeros(0))
+                bag.write('/joint_states', ns + 3 * MS, arm)
+        for ns in stamps(T0, 50 * MS, 41):
+            x, y, th = truth_pose(rel(ns) - rel(T0))
+            bag.write('/mocap/pose', ns, pose_stamped(ns, 'map', x, y, th))
+        expected[name] = {'file': bag.close(), 'wheel_t_s': [rel(ns) for ns in js],
+                          'wheel_rad_s_true': [v for r in vel for v in r]}
     return expected
 
 

@@ -4,6 +4,18 @@
 //! or empty). Velocity is rad/s; when a message has no velocity, the speeds come from position (rad)
 //! differentiated over `header.stamp`: sample `k` covers `(t_{k−1}, t_k]` (omni-kin's convention), so
 //! `v_k = (p_k − p_{k−1}) / (t_k − t_{k−1})`, and the first sample takes the second's speed.
+//!
+//! Topics as real systems publish them (each case counted and named in a note, never silent):
+//! - several publishers on one topic (an arm's and the base's `joint_state_broadcaster`): a message that
+//!   names none of the wheel joints belongs to another publisher and is passed over;
+//! - a message repeated exactly (same stamp, same values: a relay or a recorder subscribed twice) is
+//!   dropped;
+//! - `header.stamp` 0 on the first two messages (a driver that never fills it): the whole topic is
+//!   stamped by its log time instead;
+//! - a wheel velocity that is NaN in a message that has the wheel positions (ros2_control on
+//!   position-only wheels): the speeds come from the positions, as for an empty velocity;
+//! - positions that wrap (an encoder angle reported modulo 2π, in [−π, π] or [0, 2π]): unwrapped before
+//!   they are differentiated.
 
 use super::common::{HEADER_DEF, Header, RosString, Stamp, TIME_DEF, schema_text};
 use serde::{Deserialize, Serialize};
@@ -49,6 +61,19 @@ pub(super) struct JointSeries {
     /// names stay the same (they almost always do).
     names: Vec<RosString>,
     index: Vec<usize>,
+    /// Messages passed over: naming no wheel joint (another publisher), and exact repeats.
+    other_publisher: usize,
+    /// Messages pushed, and the first passed over for naming no wheel joint (its index, and which joint is
+    /// missing): the error when no message names one.
+    seen: usize,
+    first_other: Option<(usize, String)>,
+    duplicates: usize,
+    /// Messages stamped by log time (`header.stamp` 0 on the first two messages), and the first message's
+    /// log time. ns.
+    by_log_time: bool,
+    first_log_ns: i64,
+    /// Messages whose wheel velocity was NaN and whose speeds come from positions.
+    nan_velocity: usize,
 }
 
 /// Wheel data ready to build runs from.
@@ -62,6 +87,8 @@ pub(super) struct Wheels {
     pub position: Option<Vec<f64>>,
     /// Messages without velocity, when the speeds were differentiated from position.
     pub differentiated: Option<usize>,
+    /// What was done to the topic on the way (see the module docs), one sentence each.
+    pub notes: Vec<String>,
 }
 
 impl JointSeries {
@@ -70,8 +97,8 @@ impl JointSeries {
         self.t_ns.len()
     }
 
-    /// Takes message number `self.len()`, or says what is wrong with it.
-    pub fn push(&mut self, msg: JointState, wheel_joints: &[String]) -> Result<(), String> {
+    /// Takes the next message, logged at `log_time_ns`, or says what is wrong with it.
+    pub fn push(&mut self, msg: JointState, wheel_joints: &[String], log_time_ns: i64) -> Result<(), String> {
         let n = msg.name.len();
         for (field, len) in [("position", msg.position.len()), ("velocity", msg.velocity.len())] {
             if len != 0 && len != n {
@@ -81,55 +108,132 @@ impl JointSeries {
         if msg.velocity.is_empty() && msg.position.is_empty() {
             return Err("fields velocity and position are both empty".into());
         }
-        if msg.name != self.names {
-            self.index.clear();
-            for joint in wheel_joints {
-                match msg.name.iter().position(|name| name.0 == *joint) {
-                    Some(i) => self.index.push(i),
-                    None => {
-                        let names: Vec<&str> = msg.name.iter().map(|s| s.0.as_str()).collect();
-                        return Err(format!("wheel joint {joint:?} is missing (names: {})", names.join(", ")));
-                    }
-                }
+        let index = self.seen;
+        self.seen += 1;
+        if !msg.name.iter().any(|name| wheel_joints.contains(&name.0)) {
+            self.other_publisher += 1;
+            if self.first_other.is_none()
+                && let Err(missing) = wheel_index(&msg.name, wheel_joints)
+            {
+                self.first_other = Some((index, missing));
             }
+            return Ok(());
+        }
+        if msg.name != self.names {
+            self.index = wheel_index(&msg.name, wheel_joints)?;
             self.names = msg.name;
         }
-        let t = msg.header.stamp.ns();
-        if let Some(&prev) = self.t_ns.last()
-            && t <= prev
-        {
-            return Err(format!(
-                "header.stamp {} is not after the previous message's {} (stamps must increase)",
-                Stamp(t),
-                Stamp(prev)
-            ));
+        // Never filled: the first two messages both stamped 0 (a real clock is not 0 twice).
+        if self.t_ns.len() == 1 && self.t_ns[0] == 0 && msg.header.stamp.ns() == 0 && !self.by_log_time {
+            self.by_log_time = true;
+            self.t_ns[0] = self.first_log_ns;
+        }
+        if self.t_ns.is_empty() {
+            self.first_log_ns = log_time_ns;
+        }
+        let t = if self.by_log_time { log_time_ns } else { msg.header.stamp.ns() };
+        let wheel = |values: &[f64]| -> Vec<f64> {
+            if values.is_empty() {
+                vec![f64::NAN; self.index.len()]
+            } else {
+                self.index.iter().map(|&i| values[i]).collect()
+            }
+        };
+        let (mut velocity, position) = (wheel(&msg.velocity), wheel(&msg.position));
+        if let Some(&prev) = self.t_ns.last() {
+            if t == prev && self.repeats_last(&velocity, &position) {
+                self.duplicates += 1;
+                return Ok(());
+            }
+            if t <= prev {
+                let what = if self.by_log_time { "log time" } else { "header.stamp" };
+                return Err(format!(
+                    "{what} {} is not after the previous message's {} (stamps must increase)",
+                    Stamp(t),
+                    Stamp(prev)
+                ));
+            }
+        }
+        let nan_velocity = !msg.velocity.is_empty()
+            && velocity.iter().any(|v| v.is_nan())
+            && !msg.position.is_empty()
+            && position.iter().all(|p| p.is_finite());
+        if nan_velocity {
+            velocity.iter_mut().for_each(|v| *v = f64::NAN);
+            self.nan_velocity += 1;
         }
         let k = self.t_ns.len();
         self.t_ns.push(t);
-        for (values, out, first_without) in [
-            (&msg.velocity, &mut self.velocity, &mut self.first_without_velocity),
-            (&msg.position, &mut self.position, &mut self.first_without_position),
-        ] {
-            if values.is_empty() {
-                out.extend(self.index.iter().map(|_| f64::NAN));
-                first_without.get_or_insert(k);
-            } else {
-                out.extend(self.index.iter().map(|&i| values[i]));
-            }
-        }
-        if msg.velocity.is_empty() {
+        if msg.velocity.is_empty() || nan_velocity {
+            self.first_without_velocity.get_or_insert(k);
             self.without_velocity += 1;
         }
+        if msg.position.is_empty() {
+            self.first_without_position.get_or_insert(k);
+        }
+        self.velocity.extend(velocity);
+        self.position.extend(position);
         Ok(())
+    }
+
+    /// When no message names a wheel joint: the first message's index and which joint it lacks.
+    pub fn no_wheel_message(&self) -> Option<&(usize, String)> {
+        self.first_other.as_ref().filter(|_| self.t_ns.is_empty())
+    }
+
+    /// Whether `velocity` and `position` (wheel order) are bit for bit the last message's.
+    fn repeats_last(&self, velocity: &[f64], position: &[f64]) -> bool {
+        let w = velocity.len();
+        let same = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+        same(&self.velocity[self.velocity.len() - w..], velocity)
+            && same(&self.position[self.position.len() - w..], position)
+    }
+
+    /// One sentence per thing done to the topic on the way (see the module docs).
+    fn notes(&self) -> Vec<String> {
+        let mut notes = Vec::new();
+        if self.other_publisher > 0 {
+            notes.push(format!(
+                "{} messages name none of the wheel joints (another publisher on the topic): passed over",
+                self.other_publisher
+            ));
+        }
+        if self.duplicates > 0 {
+            notes.push(format!(
+                "{} messages repeat the one before exactly (stamp and values): dropped",
+                self.duplicates
+            ));
+        }
+        if self.by_log_time {
+            notes.push("header.stamp is 0: the messages are stamped by their log time instead".to_string());
+        }
+        if self.nan_velocity > 0 {
+            notes.push(format!(
+                "{} messages have a NaN wheel velocity beside finite positions: their speeds come from the positions",
+                self.nan_velocity
+            ));
+        }
+        notes
     }
 
     /// The wheel data, given the stamps in seconds (`t_s[k]` for message `k`); `Err((message, problem))`.
     pub fn finish(self, wheel_joints: &[String], t_s: &[f64]) -> Result<Wheels, (usize, String)> {
         let w = wheel_joints.len();
+        let mut notes = self.notes();
         let position = self.first_without_position.is_none().then_some(self.position);
         let (rad_s, differentiated) = match (self.first_without_velocity, position.as_ref()) {
             (None, _) => (self.velocity, None),
-            (Some(_), Some(p)) => (differentiate(t_s, p, w), Some(self.without_velocity)),
+            (Some(_), Some(p)) => {
+                let (unwrapped, wrapped) = unwrap(p, w);
+                for (j, wraps) in wrapped.iter().enumerate().filter(|(_, n)| **n > 0) {
+                    notes.push(format!(
+                        "the position of joint {:?} wraps around (an angle modulo 2π): unwrapped at {wraps} jumps \
+                         before it is differentiated",
+                        wheel_joints[j]
+                    ));
+                }
+                (differentiate(t_s, &unwrapped, w), Some(self.without_velocity))
+            }
             (Some(j), None) => {
                 let k = self.first_without_position.unwrap_or_default();
                 return Err((
@@ -149,8 +253,49 @@ impl JointSeries {
             let (k, j) = (i / w, i % w);
             return Err((k, format!("field {field}[{}] (joint {:?}) is {}", j, wheel_joints[j], values[i])));
         }
-        Ok(Wheels { t_ns: self.t_ns, rad_s, position, differentiated })
+        Ok(Wheels { t_ns: self.t_ns, rad_s, position, differentiated, notes })
     }
+}
+
+/// Where each of `wheel_joints` is in `names`, or which is missing.
+fn wheel_index(names: &[RosString], wheel_joints: &[String]) -> Result<Vec<usize>, String> {
+    wheel_joints
+        .iter()
+        .map(|joint| {
+            names.iter().position(|name| name.0 == *joint).ok_or_else(|| {
+                let names: Vec<&str> = names.iter().map(|s| s.0.as_str()).collect();
+                format!("wheel joint {joint:?} is missing (names: {})", names.join(", "))
+            })
+        })
+        .collect()
+}
+
+/// `position` (`samples × w`) with each joint's wrap-arounds undone, and the jumps undone per joint. A
+/// joint wraps when every position lies in [−π, π] or in [0, 2π] and a step between samples exceeds π
+/// (half a turn): each such step is taken the short way round. A joint that leaves both ranges is
+/// counting turns itself and is left as it is.
+fn unwrap(position: &[f64], w: usize) -> (Vec<f64>, Vec<usize>) {
+    use std::f64::consts::{PI, TAU};
+    const SLACK: f64 = 1e-6;
+    let mut out = position.to_vec();
+    let mut wraps = vec![0; w];
+    for j in 0..w {
+        let column = || position.iter().skip(j).step_by(w).copied();
+        let within = |lo: f64, hi: f64| column().all(|p| (lo - SLACK..=hi + SLACK).contains(&p));
+        if !(within(-PI, PI) || within(0.0, TAU)) {
+            continue;
+        }
+        let mut offset = 0.0;
+        for k in 1..position.len() / w {
+            let step = position[k * w + j] - position[(k - 1) * w + j];
+            if step.abs() > PI {
+                offset -= TAU * (step / TAU).round();
+                wraps[j] += 1;
+            }
+            out[k * w + j] = position[k * w + j] + offset;
+        }
+    }
+    (out, wraps)
 }
 
 /// Backward differences of `position` (`samples × w`) over `t_s`; the first sample takes the second's.
@@ -191,8 +336,8 @@ mod tests {
     #[test]
     fn maps_joints_by_name() {
         let mut s = JointSeries::default();
-        s.push(msg(0, &["x", "wheel_c", "wheel_a", "wheel_b"], &[], &[9.0, 3.0, 1.0, 2.0]), &wheels()).unwrap();
-        s.push(msg(10, &["wheel_b", "wheel_a", "wheel_c"], &[], &[5.0, 4.0, 6.0]), &wheels()).unwrap();
+        s.push(msg(0, &["x", "wheel_c", "wheel_a", "wheel_b"], &[], &[9.0, 3.0, 1.0, 2.0]), &wheels(), 0).unwrap();
+        s.push(msg(10, &["wheel_b", "wheel_a", "wheel_c"], &[], &[5.0, 4.0, 6.0]), &wheels(), 10).unwrap();
         let w = s.finish(&wheels(), &[0.0, 1e-8]).unwrap();
         assert_eq!(w.rad_s, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
         assert_eq!(w.differentiated, None);
@@ -203,9 +348,9 @@ mod tests {
     fn differentiates_position_when_velocity_is_empty() {
         let mut s = JointSeries::default();
         let names = ["wheel_a", "wheel_b", "wheel_c"];
-        s.push(msg(0, &names, &[0.0, 0.0, 0.0], &[]), &wheels()).unwrap();
-        s.push(msg(500_000_000, &names, &[1.0, -2.0, 0.5], &[]), &wheels()).unwrap();
-        s.push(msg(1_000_000_000, &names, &[2.0, -4.0, 0.5], &[]), &wheels()).unwrap();
+        s.push(msg(0, &names, &[0.0, 0.0, 0.0], &[]), &wheels(), 0).unwrap();
+        s.push(msg(500_000_000, &names, &[1.0, -2.0, 0.5], &[]), &wheels(), 500_000_000).unwrap();
+        s.push(msg(1_000_000_000, &names, &[2.0, -4.0, 0.5], &[]), &wheels(), 1_000_000_000).unwrap();
         let w = s.finish(&wheels(), &[0.0, 0.5, 1.0]).unwrap();
         assert_eq!(w.rad_s, [2.0, -4.0, 1.0, 2.0, -4.0, 1.0, 2.0, -4.0, 0.0]);
         assert_eq!(w.differentiated, Some(3));
@@ -214,19 +359,87 @@ mod tests {
     #[test]
     fn problems_name_the_field() {
         let mut s = JointSeries::default();
-        let e = s.push(msg(0, &["wheel_a", "wheel_b"], &[], &[1.0, 2.0]), &wheels()).unwrap_err();
+        let e = s.push(msg(0, &["wheel_a", "wheel_b"], &[], &[1.0, 2.0]), &wheels(), 0).unwrap_err();
         assert_eq!(e, "wheel joint \"wheel_c\" is missing (names: wheel_a, wheel_b)");
-        let e = s.push(msg(0, &["wheel_a", "wheel_b", "wheel_c"], &[], &[1.0, 2.0]), &wheels()).unwrap_err();
+        let e = s.push(msg(0, &["wheel_a", "wheel_b", "wheel_c"], &[], &[1.0, 2.0]), &wheels(), 0).unwrap_err();
         assert_eq!(e, "field velocity has 2 entries, expected 3 (one per name) or none");
         let names = ["wheel_a", "wheel_b", "wheel_c"];
-        s.push(msg(5, &names, &[], &[1.0, f64::NAN, 2.0]), &wheels()).unwrap();
-        let e = s.push(msg(5, &names, &[], &[1.0, 1.0, 2.0]), &wheels()).unwrap_err();
+        s.push(msg(5, &names, &[], &[1.0, f64::NAN, 2.0]), &wheels(), 5).unwrap();
+        let e = s.push(msg(5, &names, &[], &[1.0, 1.0, 2.0]), &wheels(), 5).unwrap_err();
         assert_eq!(
             e,
             "header.stamp 0.000000005 is not after the previous message's 0.000000005 (stamps must increase)"
         );
-        s.push(msg(6, &names, &[], &[1.0, 1.0, 2.0]), &wheels()).unwrap();
+        s.push(msg(6, &names, &[], &[1.0, 1.0, 2.0]), &wheels(), 6).unwrap();
         let e = s.finish(&wheels(), &[0.0, 1e-9]).unwrap_err();
         assert_eq!(e, (0, "field velocity[1] (joint \"wheel_b\") is NaN".to_string()));
+    }
+
+    #[test]
+    fn other_publishers_repeats_and_unfilled_stamps_are_noted_not_refused() {
+        let mut s = JointSeries::default();
+        let names = ["wheel_a", "wheel_b", "wheel_c"];
+        // header.stamp never filled: log time instead (the first message re-stamped).
+        s.push(msg(0, &names, &[], &[1.0, 2.0, 3.0]), &wheels(), 100).unwrap();
+        s.push(msg(0, &["shoulder", "elbow"], &[0.1, 0.2], &[]), &wheels(), 105).unwrap();
+        s.push(msg(0, &names, &[], &[4.0, 5.0, 6.0]), &wheels(), 110).unwrap();
+        s.push(msg(0, &names, &[], &[4.0, 5.0, 6.0]), &wheels(), 110).unwrap();
+        let w = s.finish(&wheels(), &[0.0, 1e-8]).unwrap();
+        assert_eq!(w.t_ns, [100, 110]);
+        assert_eq!(w.rad_s, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+        assert_eq!(
+            w.notes,
+            [
+                "1 messages name none of the wheel joints (another publisher on the topic): passed over",
+                "1 messages repeat the one before exactly (stamp and values): dropped",
+                "header.stamp is 0: the messages are stamped by their log time instead",
+            ]
+        );
+        // A repeated stamp with other values is still an error.
+        let mut s = JointSeries::default();
+        s.push(msg(5, &names, &[], &[1.0, 2.0, 3.0]), &wheels(), 5).unwrap();
+        assert!(s.push(msg(5, &names, &[], &[1.0, 2.0, 4.0]), &wheels(), 6).unwrap_err().contains("not after"));
+    }
+
+    #[test]
+    fn nan_velocity_beside_positions_uses_the_positions() {
+        let mut s = JointSeries::default();
+        let names = ["wheel_a", "wheel_b", "wheel_c"];
+        let nan = f64::NAN;
+        s.push(msg(0, &names, &[0.0, 0.0, 0.0], &[nan, nan, nan]), &wheels(), 0).unwrap();
+        s.push(msg(500_000_000, &names, &[1.0, -2.0, 0.5], &[nan, nan, nan]), &wheels(), 1).unwrap();
+        let w = s.finish(&wheels(), &[0.0, 0.5]).unwrap();
+        assert_eq!(w.rad_s, [2.0, -4.0, 1.0, 2.0, -4.0, 1.0]);
+        assert_eq!(w.differentiated, Some(2));
+        assert_eq!(
+            w.notes,
+            ["2 messages have a NaN wheel velocity beside finite positions: their speeds come from the positions"]
+        );
+    }
+
+    #[test]
+    fn wrapped_positions_are_unwrapped() {
+        use std::f64::consts::{PI, TAU};
+        // Wheel a turns +2 rad/s, wheel b −3 rad/s, reported modulo 2π in [−π, π]; wheel c counts turns.
+        let wrap = |p: f64| (p + PI).rem_euclid(TAU) - PI;
+        let mut s = JointSeries::default();
+        let names = ["wheel_a", "wheel_b", "wheel_c"];
+        let t: Vec<f64> = (0..40).map(|k| 0.1 * k as f64).collect();
+        for (k, &ts) in t.iter().enumerate() {
+            let p = [wrap(2.0 * ts), wrap(-3.0 * ts), 10.0 + ts];
+            s.push(msg(100_000_000 * k as i64 + 1, &names, &p, &[]), &wheels(), 0).unwrap();
+        }
+        let w = s.finish(&wheels(), &t).unwrap();
+        for k in 1..t.len() {
+            let v = &w.rad_s[3 * k..3 * k + 3];
+            assert!((v[0] - 2.0).abs() < 1e-9 && (v[1] + 3.0).abs() < 1e-9 && (v[2] - 1.0).abs() < 1e-9, "{k}: {v:?}");
+        }
+        assert_eq!(
+            w.notes,
+            [
+                "the position of joint \"wheel_a\" wraps around (an angle modulo 2π): unwrapped at 1 jumps before it is differentiated",
+                "the position of joint \"wheel_b\" wraps around (an angle modulo 2π): unwrapped at 2 jumps before it is differentiated",
+            ]
+        );
     }
 }

@@ -123,7 +123,8 @@ impl Channel {
             return;
         }
         let result = match &mut self.content {
-            Content::Joints(s) => decode::<JointState>(data).and_then(|m| s.push(m, wheel_joints)),
+            Content::Joints(s) => decode::<JointState>(data)
+                .and_then(|m| s.push(m, wheel_joints, i64::try_from(log_time_ns).unwrap_or(i64::MAX))),
             Content::Poses(s) => match self.msg_type {
                 MsgType::PoseStamped => decode::<PoseStamped>(data).and_then(|m| {
                     s.check_frame(m.header.frame_id.frame(), None)?;
@@ -796,6 +797,9 @@ pub(crate) fn runs(
     // Wheels.
     let joints_topic = bag.channels[j].topic.clone();
     let Content::Joints(series) = bag.take(j) else { unreachable!("joints() returns JointState channels") };
+    if let Some((k, missing)) = series.no_wheel_message() {
+        return Err(DatasetError::at(path, format!("topic {joints_topic:?}, message {k}"), missing.clone()));
+    }
     let Some(&first_ns) = series.t_ns.first() else {
         return Err(DatasetError::at(path, topic_location(&joints_topic), "has no messages (empty run)"));
     };
@@ -804,6 +808,7 @@ pub(crate) fn runs(
     let wheels = series
         .finish(&opts.wheel_joints, &t_s)
         .map_err(|(k, what)| DatasetError::at(path, format!("topic {joints_topic:?}, message {k}"), what))?;
+    notes.extend(wheels.notes.iter().map(|n| format!("{}: topic {joints_topic:?}: {n}", path.display())));
     if let Some(without) = wheels.differentiated {
         notes.push(format!(
             "{}: topic {joints_topic:?}: {without} of {} messages have no velocity: wheel speeds are differences \
