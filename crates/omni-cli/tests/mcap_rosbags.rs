@@ -208,6 +208,29 @@ fn joint_states_as_real_systems_publish_them_are_read_with_notes() {
     not(python_bag_tools),
     ignore = "needs rosbags, mcap, mcap-ros2-support and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
 )]
+fn a_mocap_topic_on_another_clock_is_aligned_and_a_lag_is_left_to_diagnose() {
+    let (dir, expected) = fixtures_or_skip!();
+    // +0.8 s: another clock, beyond what the time_offset effect models: aligned, within 5 ms.
+    let r = read_ok(dir, "mocap_clock");
+    let clock = r.ground_truth_clock.as_ref().expect("the topic's clock is aligned");
+    assert!((clock.offset_s - 0.8).abs() < 0.005, "{clock:?}");
+    let want = &expected["mocap_clock"]["truth"];
+    let truth = r.runs[0].truth();
+    // The truth as written on the wheel clock: the first pose within the wheel data.
+    let first = want.as_array().unwrap().iter().find(|p| (p[0].as_f64().unwrap() - truth[0].t_s).abs() < 0.01).unwrap();
+    assert!((truth[0].pose.x_m - first[1].as_f64().unwrap()).abs() < 1e-9, "{:?} vs {first}", truth[0]);
+    // 60 ms: a lag the time_offset effect models (diagnose names it): the stamps stay as recorded.
+    let r = read_ok(dir, "mocap_lag");
+    assert!(r.ground_truth_clock.is_none(), "{:?}", r.ground_truth_clock);
+    // Poses every 40 ms from 0.25 s − 60 ms: the first within the wheel data (from 0.25 s) is at 0.27 s.
+    assert!((r.runs[0].truth()[0].t_s - (0.25 - 0.06 + 0.08)).abs() < 1e-9, "{:?}", r.runs[0].truth()[0]);
+}
+
+#[test]
+#[cfg_attr(
+    not(python_bag_tools),
+    ignore = "needs rosbags, mcap, mcap-ros2-support and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
+)]
 fn ground_truth_from_tf_pose_with_covariance_and_odometry() {
     let (dir, expected) = fixtures_or_skip!();
     for name in ["tf", "pose_cov", "odom_truth"] {

@@ -107,6 +107,26 @@ pub enum ClockError {
     },
 }
 
+/// The share of the ground truth's motion the wheels explain when the clocks differ by `offset_s` (the R²
+/// of [`align_clocks`]'s fine step at that one offset, without searching): a cheap check that a ground
+/// truth is on the wheels' clock. `None` when the truth does not move or hardly overlaps the wheel data.
+/// Inputs as for [`align_clocks`].
+pub fn explained_at(
+    wheel_t_s: &[f64],
+    wheel_rad_s: &[f64],
+    n_wheels: usize,
+    truth: &[StampedPose],
+    offset_s: f64,
+) -> Option<f64> {
+    if wheel_t_s.len() < 2 || truth.len() < 2 {
+        return None;
+    }
+    let wheels = WheelAngles::new(wheel_t_s, wheel_rad_s, n_wheels);
+    let fine = Fine::new(&wheels, &Poses(truth), offset_s, offset_s)?;
+    let fit = fine.fit(offset_s)?;
+    Some(1.0 - fit.normalised_rss / fit.channels as f64)
+}
+
 /// Estimates the clock offset `t_wheel = t_truth + offset_s` (see the module docs). Wheel times and speeds as
 /// in [`crate::RunData`] (`rad_s` row-major, `n_wheels` per sample, increasing times); truth poses with
 /// increasing times on their own clock and an unwrapped heading. Times on both sides should be small

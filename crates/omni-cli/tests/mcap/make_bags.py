@@ -402,6 +402,8 @@ def all_bags(out):
     expected['json_encoding'] = {'file': bag.close()}
 
     expected.update(real_joint_states(out))
+    expected['mocap_clock'] = mocap_clock_bag(out, 'mocap_clock', 800 * MS)
+    expected['mocap_lag'] = mocap_clock_bag(out, 'mocap_lag', 60 * MS)
 
     (out / 'not_mcap.mcap').write_text('this is a CSV file, not a bag\nt,x\n0,1\n')
     expected['not_mcap'] = {'file': 'not_mcap.mcap'}
@@ -445,6 +447,35 @@ def real_joint_states(out):
         expected[name] = {'file': bag.close(), 'wheel_t_s': [rel(ns) for ns in js],
                           'wheel_rad_s_true': [v for r in vel for v in r]}
     return expected
+
+
+def mocap_clock_bag(out, name, offset_ns):
+    """6 s of a three-wheeled base whose mocap bridge stamps /mocap/pose with its own clock: truth time =
+    wheel time - offset_ns. The poses follow the wheels (body twist linear in the wheel speeds), so the
+    clocks can be aligned from the motion."""
+    m = [[0.0, 0.0289, -0.0289], [-0.0333, 0.0167, 0.0167], [0.1667, 0.1667, 0.1667]]  # m, m, rad per wheel rad
+    bag = Bag(out, name)
+    bag.topic('/joint_states', JOINT_STATE)
+    bag.topic('/mocap/pose', POSE_STAMPED)
+    js = stamps(T0, 10 * MS, 601)
+    # Chirps: no time shift of the profiles is a linear mix of them (sinusoids of one frequency would be).
+    vel = [[3.0 * math.sin(1.7 * t) + 1.0, 2.0 * math.sin(0.6 * t * t), 2.5 * math.cos(2.3 * t + 0.3 * t * t)]
+           for t in (rel(ns) - rel(T0) for ns in js)]
+    pos = integrate_positions(js, vel)
+    write_joints(bag, js, vel, pos)
+    x = y = th = 0.0
+    truth = [(js[0], x, y, th)]
+    for k in range(1, len(js)):
+        dt = (js[k] - js[k - 1]) * 1e-9
+        vx, vy, w = ([sum(mi * v for mi, v in zip(row, vel[k])) for row in m])
+        x += (vx * math.cos(th) - vy * math.sin(th)) * dt
+        y += (vx * math.sin(th) + vy * math.cos(th)) * dt
+        th += w * dt
+        truth.append((js[k], x, y, th))
+    for ns, x, y, th in truth[::4]:
+        bag.write('/mocap/pose', ns, pose_stamped(ns - offset_ns, 'map', x, y, th))
+    return {'file': bag.close(), 'offset_s': offset_ns * 1e-9,
+            'truth': [[rel(ns), x, y, th] for ns, x, y, th in truth[::4]]}
 
 
 def tiny_bag(out):

@@ -18,7 +18,7 @@ use crate::dataset::ground_truth::{ExternalTruth, GtClock, TruthSample};
 use mcap::sans_io::LinearReaderOptions;
 use omni_kin::clock::ClockAlignment;
 use omni_kin::{KinError, Pose2, Run, RunData, StampedPose};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Schema encodings whose type names this reader knows. `ros2idl` names the same types with the same CDR
 /// layout as `ros2msg` (rosbag2 writes it for types defined in `.idl` files).
@@ -763,6 +763,51 @@ fn external_truth(
     Ok((poses, clock(offset_s, Some(estimate))))
 }
 
+/// Largest clock offset between the wheel data and a ground-truth topic of the same recording taken as
+/// recorded: a lag up to this is physics the `time_offset` effect models (its range) and diagnose names;
+/// beyond it the topic runs on another clock (a motion-capture bridge stamping with its own). s.
+pub const SAME_CLOCK_MAX_OFFSET_S: f64 = 0.5;
+
+/// How clear an estimate must be for a topic's stamps to be moved: its standard error (s) and the share
+/// of the ground truth's motion the wheels explain at it. A topic whose motion hardly follows the wheels
+/// keeps its stamps (whatever is wrong with it, moving it would hide it).
+pub const TOPIC_CLOCK_MAX_STD_ERROR_S: f64 = 0.02;
+pub const TOPIC_CLOCK_MIN_R_SQUARED: f64 = 0.9;
+
+/// Checks a ground-truth topic's clock against the wheels' ([`omni_kin::clock::align_clocks`]): when the
+/// estimated offset is clear and beyond [`SAME_CLOCK_MAX_OFFSET_S`] and three standard errors, the poses
+/// are moved onto the wheel clock and the offset returned (a note); otherwise, or when no estimate is
+/// possible (too little motion), the stamps stay as recorded.
+fn topic_clock(
+    path: &Path,
+    recording: &str,
+    topic: &str,
+    poses: &mut [StampedPose],
+    t_s: &[f64],
+    rad_s: &[f64],
+    n_wheels: usize,
+) -> Option<GtClock> {
+    // On the wheels' clock, or off it by a lag (nearly always): the wheels explain the truth's motion at
+    // offset 0 as well as the search asks of any offset, and no search is needed.
+    if omni_kin::clock::explained_at(t_s, rad_s, n_wheels, poses, 0.0)
+        .is_none_or(|r2| r2 >= omni_kin::clock::MIN_R_SQUARED)
+    {
+        return None;
+    }
+    let a = omni_kin::clock::align_clocks(t_s, rad_s, n_wheels, poses).ok()?;
+    let clear = a.std_error_s <= TOPIC_CLOCK_MAX_STD_ERROR_S && a.r_squared >= TOPIC_CLOCK_MIN_R_SQUARED;
+    if !clear || a.offset_s.abs() <= SAME_CLOCK_MAX_OFFSET_S.max(3.0 * a.std_error_s) {
+        return None;
+    }
+    poses.iter_mut().for_each(|p| p.t_s += a.offset_s);
+    Some(GtClock {
+        recording: recording.to_string(),
+        file: PathBuf::from(format!("{}, topic {topic:?} (on another clock: aligned)", path.display())),
+        offset_s: a.offset_s,
+        estimate: Some(a),
+    })
+}
+
 /// The runs of a recording whose messages are all in `rec`; `path` names it in messages, `stem` names its
 /// runs (`stem`, or `stem#1`, `stem#2`, … when split). See the module docs of [`super`].
 ///
@@ -834,7 +879,9 @@ pub(crate) fn runs(
                 (_, Content::Poses(p)) => p,
                 _ => unreachable!("truth() returns pose channels or TF pairs"),
             };
-            (poses.stamped(origin_s), format!("on {truth_topic:?}"), format!("topic {truth_topic:?}"), None)
+            let mut poses = poses.stamped(origin_s);
+            let clock = topic_clock(path, stem, &truth_topic, &mut poses, &t_s, &wheels.rad_s, n_wheels);
+            (poses, format!("on {truth_topic:?}"), format!("topic {truth_topic:?}"), clock)
         }
         (_, _, Some(ext)) => {
             let (poses, clock) = external_truth(ext, stem, origin_s, &t_s, &wheels.rad_s, n_wheels)?;
