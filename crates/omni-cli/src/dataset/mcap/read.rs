@@ -353,11 +353,13 @@ impl Bag<'_> {
             };
         }
         let mut found: Vec<(Truth, String)> = Vec::new();
+        let mut localizations: Vec<&str> = Vec::new();
         for (i, c) in self.channels.iter().enumerate() {
             if c.messages == 0 {
                 continue;
             }
             match &c.content {
+                Content::Poses(_) if is_localization(&c.topic) => localizations.push(&c.topic),
                 Content::Poses(_) => {
                     let robot_frame = c.frame().is_some_and(|f| ROBOT_FRAMES.contains(&f));
                     if !robot_frame && self.truth_mismatch(i, opts).is_none() {
@@ -389,7 +391,7 @@ impl Bag<'_> {
                         ),
                     },
                     self.listing()
-                ),
+                ) + &localization_hint(&localizations),
             )),
             _ => {
                 let list: Vec<&str> = found.iter().map(|(_, d)| d.as_str()).collect();
@@ -763,6 +765,29 @@ fn external_truth(
     Ok((poses, clock(offset_s, Some(estimate))))
 }
 
+/// Words in a topic's name that mark a localization (AMCL, slam_toolbox, cartographer, robot_localization's
+/// EKF/UKF `odometry/filtered`, …): its poses may fuse the very wheel odometry being calibrated, so it is
+/// never taken as ground truth unless named.
+const LOCALIZATION_WORDS: [&str; 8] = ["amcl", "locali", "slam", "cartographer", "ekf", "ukf", "filtered", "fused"];
+
+/// Whether `topic` names a localization ([`LOCALIZATION_WORDS`], case-insensitive).
+fn is_localization(topic: &str) -> bool {
+    let t = topic.to_ascii_lowercase();
+    LOCALIZATION_WORDS.iter().any(|w| t.contains(w))
+}
+
+/// The end of the "no ground truth" message when localizations were passed over.
+fn localization_hint(localizations: &[&str]) -> String {
+    if localizations.is_empty() {
+        return String::new();
+    }
+    format!(
+        "; {} looks like a localization, which may fuse the wheel odometry being calibrated, so it is not taken \
+         as ground truth unless named with --gt-topic",
+        localizations.join(", ")
+    )
+}
+
 /// Largest clock offset between the wheel data and a ground-truth topic of the same recording taken as
 /// recorded: a lag up to this is physics the `time_offset` effect models (its range) and diagnose names;
 /// beyond it the topic runs on another clock (a motion-capture bridge stamping with its own). s.
@@ -834,6 +859,14 @@ pub(crate) fn runs(
     });
     if let Some(i) = truth_ch {
         bag.check(i)?;
+        let topic = &bag.channels[i].topic;
+        if is_localization(topic) {
+            notes.push(format!(
+                "{}: topic {topic:?} is taken as ground truth as named, but it looks like a localization: if it fuses \
+                 the wheel odometry being calibrated, the fit measures the wheels against themselves",
+                path.display()
+            ));
+        }
     }
     let odom = if opts.recorded_odometry { bag.recorded_odometry(&mut notes) } else { None };
     let odom = odom.filter(|&i| Some(i) != truth_ch);
@@ -1025,5 +1058,29 @@ mod tests {
         let mut notes = Vec::new();
         assert_eq!(bag.commands(None, &mut notes), None);
         assert_eq!(notes, ["a.mcap: topic \"/cmd_vel\", message 2: field linear.x is NaN (the command is left out)"]);
+    }
+
+    #[test]
+    fn a_localization_is_never_taken_as_ground_truth_unless_named() {
+        let path = Path::new("a.mcap");
+        let bag = Bag { path, channels: vec![channel("/amcl_pose", MsgType::Odometry, Some("map"), None)] };
+        let e = bag.truth(&McapOptions::default()).err().unwrap().to_string();
+        assert!(
+            e.ends_with(
+                "; /amcl_pose looks like a localization, which may fuse the wheel odometry being calibrated, so it is \
+                 not taken as ground truth unless named with --gt-topic"
+            ),
+            "{e}"
+        );
+        let named = McapOptions { truth_topic: Some("/amcl_pose".into()), ..Default::default() };
+        assert!(matches!(bag.truth(&named), Ok(Truth::Poses(0))));
+        let bag = Bag {
+            path,
+            channels: vec![
+                channel("/amcl_pose", MsgType::Odometry, Some("map"), None),
+                channel("/mocap/pose", MsgType::Odometry, Some("world"), None),
+            ],
+        };
+        assert!(matches!(bag.truth(&McapOptions::default()), Ok(Truth::Poses(1))));
     }
 }
