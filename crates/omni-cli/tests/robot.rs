@@ -231,7 +231,19 @@ fn bad_robot_files_name_the_file_line_and_field() {
     simulate(d, "sim", &["--format", "csv"]);
     let good = std::fs::read_to_string(d.join("sim/train/robot.toml")).unwrap();
     let cut_last_wheel = good.rsplit_once("\n[[wheels]]").unwrap().0.to_string() + "\n";
-    let cases: [(&str, String, &str); 6] = [
+    let cases: [(&str, String, &str); 8] = [
+        (
+            "mm.toml",
+            good.replacen("radius_m = 0.148", "radius_m = 148.0", 1),
+            "wheels[0].radius_m: 148 m is not a plausible wheel radius (at most 2 m): is it in millimetres?",
+        ),
+        (
+            "radians.toml",
+            good.replace("angle_deg = 60.0", "angle_deg = 1.0471975511965976")
+                .replace("angle_deg = 180.0", "angle_deg = 3.141592653589793")
+                .replace("angle_deg = 300.0", "angle_deg = 5.235987755982989"),
+            "wheels: the wheel angles (1.0471975511965976, 3.141592653589793, 5.235987755982989) all lie within ±2π",
+        ),
         ("joints.toml", cut_last_wheel, "wheels: a omni base needs at least 3"),
         (
             "dup.toml",

@@ -263,6 +263,25 @@ pub enum RobotProblem {
         /// The value.
         value: f64,
     },
+    /// A length no wheeled robot has (a value in millimetres, a typo).
+    #[error("{value} m is not a plausible {what} (at most {max_m} m): is it in millimetres?")]
+    Implausible {
+        /// The value. m.
+        value: f64,
+        /// What it is (`wheel radius`, `distance from the centre`, …).
+        what: &'static str,
+        /// The largest plausible value. m.
+        max_m: f64,
+    },
+    /// Every wheel angle within a few degrees of 0 on a base that needs them spread round it.
+    #[error(
+        "the wheel angles ({values}) all lie within ±2π, which puts the wheels within a few degrees of each \
+         other: angle_deg is in degrees (are these radians?)"
+    )]
+    AnglesInRadians {
+        /// The angles as written. deg.
+        values: String,
+    },
     /// A value that must not be negative is.
     #[error("{value} must be ≥ 0")]
     Negative {
@@ -318,6 +337,16 @@ fn positive(field: String, v: f64) -> Result<f64, RobotError> {
     if v > 0.0 { Ok(v) } else { Err(err(field, RobotProblem::NotPositive { value: v })) }
 }
 
+/// Largest plausible wheel radius. m.
+pub const MAX_WHEEL_RADIUS_M: f64 = 2.0;
+/// Largest plausible distance of a wheel from the base's centre, or wheel separation. m.
+pub const MAX_WHEEL_DISTANCE_M: f64 = 20.0;
+
+/// `v` when it is at most `max_m`, else what it looks like.
+fn plausible(field: String, v: f64, what: &'static str, max_m: f64) -> Result<f64, RobotError> {
+    if v <= max_m { Ok(v) } else { Err(err(field, RobotProblem::Implausible { value: v, what, max_m })) }
+}
+
 /// Angle wrapped into (−π, π]. rad.
 fn wrap_rad(a: f64) -> f64 {
     let w = a.rem_euclid(2.0 * PI);
@@ -354,7 +383,10 @@ impl WheelSpec {
             return Err(err(field("joint"), RobotProblem::EmptyJoint));
         }
         let radius_m = positive(field("radius_m"), self.radius_m)?;
+        let radius_m = plausible(field("radius_m"), radius_m, "wheel radius", MAX_WHEEL_RADIUS_M)?;
         let (distance_m, angle_rad) = self.polar(at)?;
+        let place = if self.distance_m.is_some() { "distance_m" } else { "x_m" };
+        plausible(field(place), distance_m, "distance from the centre", MAX_WHEEL_DISTANCE_M)?;
         let roller_deg = finite(field("roller_angle_deg"), self.roller_angle_deg.unwrap_or(0.0))?;
         match kind {
             BaseKind::Mecanum if ((roller_deg.abs() - 45.0).abs() > MECANUM_ROLLER_TOL_DEG) => {
@@ -389,9 +421,12 @@ impl DiffSpec {
                 RobotProblem::DuplicateJoint { name: self.right_joint.clone(), other: "diff.left_joint".into() },
             ));
         }
-        let half = positive("diff.wheel_separation_m".into(), self.wheel_separation_m)? / 2.0;
-        let left = positive("diff.left_radius_m".into(), self.left_radius_m)?;
-        let right = positive("diff.right_radius_m".into(), self.right_radius_m)?;
+        let separation = positive("diff.wheel_separation_m".into(), self.wheel_separation_m)?;
+        let half =
+            plausible("diff.wheel_separation_m".into(), separation, "wheel separation", MAX_WHEEL_DISTANCE_M)? / 2.0;
+        let radius = |f: &str, v: f64| plausible(f.into(), positive(f.into(), v)?, "wheel radius", MAX_WHEEL_RADIUS_M);
+        let left = radius("diff.left_radius_m", self.left_radius_m)?;
+        let right = radius("diff.right_radius_m", self.right_radius_m)?;
         Ok(RobotGeometry::diff_drive(left, right, 2.0 * half).wheels)
     }
 }
@@ -525,6 +560,13 @@ impl RobotDescription {
                 ));
             }
             out.push(w.to_wheel(kind, &at)?);
+        }
+        let angles: Vec<f64> = self.wheels.iter().filter_map(|w| w.angle_deg).collect();
+        let spread = angles.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+            - angles.iter().copied().fold(f64::INFINITY, f64::min);
+        if angles.len() == n && n >= 3 && angles.iter().all(|a| a.abs() <= 2.0 * PI + 1e-9) && spread > 1.0 {
+            let values: Vec<String> = angles.iter().map(|a| format!("{a}")).collect();
+            return Err(err("wheels", RobotProblem::AnglesInRadians { values: values.join(", ") }));
         }
         Ok(out)
     }
