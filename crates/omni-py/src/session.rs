@@ -5,7 +5,7 @@
 
 use crate::errors::{OmnicalError, value_error};
 use omni_cli::api::diagnose::diagnose_quietly;
-use omni_cli::api::session::{ArgvError, diagnose_request, train_request};
+use omni_cli::api::session::{ArgvError, diagnose_request, fleet_request, train_request};
 use omni_cli::api::train::{Trained, train_quietly};
 use omni_kin::FittedModel;
 use pyo3::prelude::*;
@@ -80,4 +80,31 @@ fn session_json(t: &Trained) -> serde_json::Value {
         "skipped": t.dataset.skipped.iter().map(|s| [&s.source, &s.reason]).collect::<Vec<_>>(),
         "warnings": t.warnings,
     })
+}
+
+/// ``omnical fleet ARGS...`` (``args`` without the program and subcommand names) parsed by the command
+/// line's own parser, where its options are declared: ``(options, "", 0)`` with the options as a dict
+/// (``fleet_dir``, ``out``, ``scheduler``, ``workers``, ``preset``, ``seed``, ``model``, ``diagnose``,
+/// ``train_args``, ``quiet``), or ``(None, text, status)`` for ``--help`` (status 0) and bad arguments
+/// (status 2, the parser's message).
+#[pyfunction]
+pub fn _fleet_args<'py>(py: Python<'py>, args: Vec<String>) -> PyResult<(Option<Bound<'py, PyAny>>, String, i32)> {
+    let r = match fleet_request(&args) {
+        Ok(r) => r,
+        Err(e) => return Ok((None, e.render().to_string(), e.exit_code())),
+    };
+    let doc = json!({
+        "fleet_dir": r.fleet_dir.to_string_lossy(),
+        "out": r.out.to_string_lossy(),
+        "scheduler": r.scheduler,
+        "workers": r.workers,
+        "preset": r.preset,
+        "seed": r.seed,
+        "model": r.model,
+        "diagnose": r.diagnose,
+        "train_args": r.train_args,
+        "quiet": r.quiet,
+    });
+    let text = serde_json::to_string(&doc).map_err(|e| value_error(e.to_string()))?;
+    Ok((Some(py.import("json")?.call_method1("loads", (text,))?), String::new(), 0))
 }

@@ -18,13 +18,40 @@ use crate::api::load::{DataOptions, LoadRequest};
 use crate::dataset;
 use std::path::PathBuf;
 
-/// Arguments of `omnical fleet`, which the Python wheel's console command runs (omnical.fleet, on Dask);
-/// the native binary only says where to find it.
+/// Arguments of `omnical fleet`, which the Python wheel's console command runs (omnical.fleet, on Dask):
+/// declared here once, parsed for it by `omni_cli::api::session::fleet_request`; the native binary only
+/// says where to find it.
 #[derive(Debug, clap::Args)]
+#[command(after_help = "Needs dask[distributed] (pip install \"omnical[fleet]\").")]
 pub struct FleetArgs {
-    /// FLEET_DIR and the options of the wheel's `omnical fleet --help`.
-    #[arg(trailing_var_arg = true, allow_hyphen_values = true, value_name = "ARGS")]
-    pub args: Vec<String>,
+    /// The fleet: one folder per robot, one per session inside (`FLEET_DIR/<robot>/<session>/`); a
+    /// robot.toml per robot folder or one in FLEET_DIR describes the robots.
+    #[arg(value_name = "FLEET_DIR")]
+    pub fleet_dir: PathBuf,
+    /// Output folder: OUT/<robot>/<session>/model.toml, OUT/fleet.csv and OUT/fleet.html.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// A Dask scheduler (default: a local cluster).
+    #[arg(long, value_name = "ADDRESS")]
+    pub scheduler: Option<String>,
+    /// Local worker processes.
+    #[arg(long, value_name = "N", default_value_t = 2)]
+    pub workers: usize,
+    /// Train's recipe (default, paper).
+    #[arg(long, value_name = "NAME", default_value = "default")]
+    pub preset: String,
+    /// GA seed of every session.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub seed: u64,
+    /// Base model to fit.
+    #[arg(long, value_name = "KIND", default_value = "ik")]
+    pub model: String,
+    /// Which sessions to diagnose (auto: those whose cost is off).
+    #[arg(long, value_parser = ["auto", "all", "none"], default_value = "auto")]
+    pub diagnose: String,
+    /// Arguments after `--` go to every `omnical train`.
+    #[arg(last = true, value_name = "TRAIN_ARGS")]
+    pub train_args: Vec<String>,
 }
 
 /// The error of a Python-side command asked of the native binary.
