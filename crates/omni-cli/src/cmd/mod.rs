@@ -28,7 +28,7 @@ pub struct FleetArgs {
     /// robot.toml per robot folder or one in FLEET_DIR describes the robots.
     #[arg(value_name = "FLEET_DIR")]
     pub fleet_dir: PathBuf,
-    /// Output folder: OUT/<robot>/<session>/model.toml, OUT/fleet.csv and OUT/fleet.html.
+    /// Output folder: `OUT/<robot>/<session>/model.toml`, `OUT/fleet.csv` and `OUT/fleet.html`.
     #[arg(long)]
     pub out: PathBuf,
     /// A Dask scheduler (default: a local cluster).

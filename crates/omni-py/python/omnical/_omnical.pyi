@@ -50,6 +50,7 @@ __all__ = [
     "train_files",
     "_calibration_from_state",
     "_dataset_from_state",
+    "_fleet_args",
     "_model_from_toml",
     "_run_from_bytes",
 ]
