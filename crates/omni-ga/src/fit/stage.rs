@@ -42,6 +42,16 @@ impl Stage {
         matches!(self, Stage::Lm(_))
     }
 
+    /// The same stage with a third of its evaluation budget, to scout with: a local method that has not
+    /// converged within it is crawling (see [`crate::fit::pipeline`]). `None` for a stage without such a
+    /// budget.
+    pub fn scout(&self) -> Option<Stage> {
+        match self {
+            Stage::Lm(c) => Some(Stage::Lm(LmConfig { max_evaluations: (c.max_evaluations / 3).max(1), ..c.clone() })),
+            Stage::Ga(_) => None,
+        }
+    }
+
     /// Sets the seed of a stage that draws random numbers.
     pub fn set_seed(&mut self, seed: u64) {
         match self {
