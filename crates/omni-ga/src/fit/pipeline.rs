@@ -21,7 +21,7 @@ use crate::error::Error;
 use crate::fit::plan::{Plan, Unexcited};
 use crate::fit::problem::CalibrationProblem;
 use crate::fit::stage::Stage;
-use crate::optimizer::problem::{Bounds, Problem};
+use crate::optimizer::problem::{Bounds, LeastSquares, Problem};
 use crate::optimizer::subspace::Subspace;
 use crate::optimizer::{Observer, Solution, Termination};
 use crate::science::identify::{Identifiability, WeakDirection};
@@ -82,7 +82,8 @@ pub(crate) fn run(
 ) -> Result<Fitted, Error> {
     let mut fit = Fitted::at(start.x);
     if plan.unexcited == Unexcited::Hold
-        && let Some(scout) = plan.stages.iter().map(Stage::scout).collect::<Option<Vec<_>>>()
+        && let (n, m) = (start.x.len(), problem.residual_count(start.x))
+        && let Some(scout) = plan.stages.iter().map(|s| s.scout(n, m)).collect::<Option<Vec<_>>>()
     {
         let stopped = run_stages(problem, &scout, start.objective, names, &mut fit, observer)?;
         let crawling = fit.stages.last().is_some_and(|s| s.solution.termination == Termination::MaxEvaluations);
