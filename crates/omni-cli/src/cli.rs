@@ -85,6 +85,9 @@ pub enum Command {
     Demo(cmd::demo::Args),
     /// Calibrate every robot-session of a fleet (`FLEET_DIR/<robot>/<session>/`) on Dask and write the fleet
     /// view: the Python wheel's `omnical` only (`pip install "omnical[fleet]"`).
+    ///
+    /// On Dask: a local cluster of N worker processes (--workers), or the scheduler at ADDRESS
+    /// (--scheduler); each session's model is `omnical train`'s, byte for byte.
     Fleet(cmd::FleetArgs),
     /// Show the settings a command would use here (joints, topics, ground truth, frames, preset, seed,
     /// threads, …), each with where it came from: the command line, omnical.toml, robot.toml (with the

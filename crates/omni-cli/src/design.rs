@@ -1,5 +1,6 @@
 //! Design models: the one a dataset's robot declares, the one a fitted model was fitted around, and the
-//! model specs `design` / `paper` / FILE. The command line and the Python binding look them up here.
+//! paper's; the model specs `design` / `paper` / FILE ([`crate::api::ModelSpec`]) resolve to them. The
+//! command line and the Python binding look them up here.
 //!
 //! A dataset's robot is, in this order: `--robot` (a robot.toml or `apr02`), the data's own geometry
 //! (OptiOdom metadata), a robot.toml found beside the data or in the working directory
@@ -16,7 +17,6 @@ use crate::dataset::{Dataset, Declared, group_designs};
 use crate::robot_file::{self, Design, RobotFile, Source};
 use anyhow::Context;
 use omni_kin::{FittedModel, IkMatrix, KinematicsKind, Model, RobotGeometry, RunModels};
-use std::path::Path;
 
 /// The design model of `kind` for a dataset's robot, or `None` when the dataset names no robot. A robot
 /// description's `ik` design is its design matrix (the paper's Eq. 7 for APR-02; the closed form for diff).
@@ -79,16 +79,6 @@ pub fn design_for(model: &FittedModel) -> FittedModel {
 /// simulator's default true robot.
 pub fn paper_calibrated() -> FittedModel {
     FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated()))
-}
-
-/// A model given on the command line: `design` ([`declared`] by the data's robot; none is an error),
-/// `paper` ([`paper_calibrated`]) or a model file.
-pub fn resolve(spec: &str, ds: &Dataset) -> anyhow::Result<FittedModel> {
-    match spec {
-        "design" => declared(ds)?.ok_or_else(|| robot_file::no_design("--model design")),
-        "paper" => Ok(paper_calibrated()),
-        path => crate::model_file::read(Path::new(path)).context("reading the model"),
-    }
 }
 
 /// The design model of each run of `sets` (datasets read with the same data options: training and
@@ -169,15 +159,5 @@ pub fn designs_for(model: &FittedModel, sets: &[&Dataset]) -> RunModels {
             FittedModel::nominal(base)
         }),
         _ => RunModels::from(design_for(model)),
-    }
-}
-
-/// A model spec for every run of `sets`: `design` each run's own ([`declared_each`]; none is an error),
-/// else [`resolve`]'s one model for all.
-pub fn resolve_each(spec: &str, sets: &[&Dataset]) -> anyhow::Result<RunModels> {
-    match (spec, sets.first()) {
-        ("design", _) => declared_each(sets)?.ok_or_else(|| robot_file::no_design("--model design")),
-        (_, Some(ds)) => Ok(RunModels::from(resolve(spec, ds)?)),
-        (_, None) => anyhow::bail!("no runs to resolve {spec} for (a bug)"),
     }
 }

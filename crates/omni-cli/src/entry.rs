@@ -37,7 +37,7 @@ pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
             }) {
                 return 0;
             }
-            if e.downcast_ref::<crate::cmd::train::Refused>().is_some() {
+            if e.downcast_ref::<crate::api::fit::Refused>().is_some() {
                 eprintln!("error: {e:#}");
                 return crate::cmd::train::EXIT_REFUSED;
             }

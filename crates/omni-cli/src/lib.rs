@@ -4,12 +4,14 @@
 //! command built on them.
 #![deny(missing_docs)]
 
+pub mod api;
 pub mod atomic;
 pub mod cli;
 pub mod cmd;
 pub mod dataset;
 pub mod design;
 pub mod entry;
+pub mod export;
 pub mod init;
 pub mod interrupt;
 pub mod logging;

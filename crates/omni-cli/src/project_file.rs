@@ -8,6 +8,7 @@
 //! (`robot_file`), which fills only what is still open. Unknown keys and values the option refuses are
 //! errors naming the file, the line and the key (exit status 2).
 
+use crate::api::settings;
 use clap::Command;
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
@@ -18,29 +19,6 @@ use toml::de::DeTable;
 pub const FILE_NAME: &str = "omnical.toml";
 /// A project file is a few hundred bytes; anything above this is not one. Bytes.
 const MAX_FILE_BYTES: u64 = 1 << 20;
-
-/// The keys a project file may set: the options' long names in snake_case, with what they are.
-pub const KEYS: &[(&str, &str)] = &[
-    ("threads", "worker threads"),
-    ("robot", "robot description: a robot.toml path or apr02"),
-    ("joints", "wheel joint names in wheel order"),
-    ("joints_topic", "MCAP topic of the wheel JointState"),
-    ("gt_topic", "MCAP topic of the ground truth"),
-    ("gt_parent_frame", "parent frame of the ground truth in a TF topic"),
-    ("gt_child_frame", "child frame of the ground truth in a TF topic"),
-    ("gt", "ground truth from a separate file or folder"),
-    ("gt_time_offset", "clock offset of the gt file (s)"),
-    ("split", "cut recordings at standstills at least this long (s)"),
-    ("skip_invalid", "skip runs that fail to load"),
-    ("ticks_per_rev", "encoder ticks per wheel revolution"),
-    ("max_file_mb", "largest input file (MiB)"),
-    ("preset", "training recipe"),
-    ("seed", "seed"),
-    ("objective", "training objective"),
-    ("every", "path objective: every k-th ground-truth pose"),
-    ("heading_weight", "path objective: heading weight (m/rad)"),
-    ("unexcited", "unconstrained directions: hold or move"),
-];
 
 /// Keys whose values are paths: relative ones are relative to the project file's folder.
 const PATH_KEYS: &[&str] = &["robot", "gt"];
@@ -131,7 +109,7 @@ pub fn find(flag: Option<&Path>, cwd: &Path) -> Result<Option<ProjectFile>, Proj
 }
 
 /// Parses the text of a project file (`path` names it in errors and anchors relative paths), checking
-/// every key against [`KEYS`] and every table against the commands of [`crate::cli::Cli`].
+/// every key against the project keys of [`settings::SETTINGS`] and every table against the commands of [`crate::cli::Cli`].
 pub fn parse(text: &str, path: &Path) -> Result<ProjectFile, ProjectFileError> {
     let file = |message: String| ProjectFileError::File { path: path.to_path_buf(), message };
     let values: toml::Table = toml::from_str(text).map_err(|e| file(format!("not TOML: {}", e.message())))?;
@@ -194,8 +172,8 @@ pub fn parse(text: &str, path: &Path) -> Result<ProjectFile, ProjectFileError> {
 
 /// A value as command-line strings, or why it cannot be one.
 fn setting_values(key: &str, value: &toml::Value, base: &Path) -> Result<Vec<String>, String> {
-    if !KEYS.iter().any(|(k, _)| *k == key) {
-        let known: Vec<&str> = KEYS.iter().map(|(k, _)| *k).collect();
+    if !settings::project_keys().any(|s| s.key == key) {
+        let known: Vec<&str> = settings::project_keys().map(|s| s.key).collect();
         return Err(format!("unknown key; known keys: {}", known.join(", ")));
     }
     let scalar = |v: &toml::Value| match v {

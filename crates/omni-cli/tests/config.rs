@@ -150,3 +150,186 @@ fn bad_project_files_name_the_file_line_and_key() {
     let missing = refused(&["--config", "nope.toml", "eval", "x"], d);
     assert!(missing.starts_with("error: nope.toml: No such file"), "{missing}");
 }
+
+// ---------------------------------------------------------------------------------------------------------
+// One declaration per setting (issue 26): `omni_cli::api::settings::SETTINGS` against the clap parser, the
+// project file's keys, the `omnical config` rows and Python's signatures (`#[pyo3(signature)]` and
+// `_omnical.pyi`). A setting added to one of them and not declared (or declared and missing) fails here.
+
+mod settings_table {
+    use clap::CommandFactory;
+    use omni_cli::api::settings::{SETTINGS, Setting, Where};
+    use omni_cli::cli::{Cli, Command};
+    use std::collections::BTreeSet;
+
+    /// The argument ids of a command that are options (not positional, not clap's own help and version).
+    fn option_ids(cmd: &clap::Command) -> BTreeSet<String> {
+        cmd.get_arguments()
+            .filter(|a| !a.is_positional() && !["help", "version"].contains(&a.get_id().as_str()))
+            .map(|a| a.get_id().to_string())
+            .collect()
+    }
+
+    fn keys(filter: impl Fn(&Setting) -> bool) -> BTreeSet<String> {
+        SETTINGS.iter().filter(|s| filter(s)).map(|s| s.key.to_string()).collect()
+    }
+
+    #[test]
+    fn every_option_of_train_and_config_is_declared_once() {
+        let cli = Cli::command();
+        let train = cli.find_subcommand("train").unwrap();
+        let mut options = option_ids(train);
+        options.extend(option_ids(&cli));
+        let flags = keys(|s| s.flag == Where::Yes);
+        assert_eq!(options, flags, "omnical train's options against SETTINGS");
+        // `omnical config` shows settings: each of its options is one.
+        let config = option_ids(cli.find_subcommand("config").unwrap());
+        let missing: Vec<_> = config.difference(&flags).collect();
+        assert!(missing.is_empty(), "options of omnical config not in SETTINGS: {missing:?}");
+        // Every command that reads runs takes the same data options, all declared.
+        for sub in cli.get_subcommands() {
+            let data: BTreeSet<String> = sub
+                .get_arguments()
+                .filter(|a| a.get_help_heading() == Some(omni_cli::cmd::DATA_OPTIONS))
+                .map(|a| a.get_id().to_string())
+                .collect();
+            let missing: Vec<_> = data.difference(&flags).collect();
+            assert!(missing.is_empty(), "data options of omnical {} not in SETTINGS: {missing:?}", sub.get_name());
+        }
+        let mut seen = BTreeSet::new();
+        for s in SETTINGS {
+            assert!(seen.insert(s.key), "{} declared twice", s.key);
+        }
+    }
+
+    #[test]
+    fn the_project_file_takes_the_declared_keys_and_refuses_the_others() {
+        // Each project key is an option (the file's value becomes its default).
+        for s in SETTINGS.iter().filter(|s| s.project_file == Where::Yes) {
+            assert_eq!(s.flag, Where::Yes, "{}: a project key must be an option", s.key);
+        }
+        let dir = tempfile::tempdir().unwrap();
+        for s in SETTINGS {
+            let path = dir.path().join("omnical.toml");
+            std::fs::write(&path, format!("{} = \"x\"\n", s.key)).unwrap();
+            let parsed = omni_cli::project_file::parse(&std::fs::read_to_string(&path).unwrap(), &path);
+            let unknown = matches!(&parsed, Err(e) if e.to_string().contains("unknown key"));
+            assert_eq!(unknown, s.project_file != Where::Yes, "{}: {parsed:?}", s.key);
+        }
+    }
+
+    #[test]
+    fn omnical_config_shows_the_declared_rows() {
+        let cli = <Cli as clap::Parser>::try_parse_from(["omnical", "config"]).unwrap();
+        let Command::Config(a) = cli.command else { panic!("not config") };
+        let rows = omni_cli::cmd::config::rows(&a, None, None).unwrap();
+        let shown: BTreeSet<String> = rows.iter().map(|r| r.key.clone()).collect();
+        assert_eq!(shown, keys(|s| s.config_row == Where::Yes));
+    }
+
+    /// The parameters of a Python signature between its parentheses: (name, default), split at the commas
+    /// outside brackets; `*` alone and `py` left out, `*paths` named `paths`.
+    fn params(list: &str, default_sep: &str) -> Vec<(String, Option<String>)> {
+        let (mut depth, mut start, mut out) = (0i32, 0, Vec::new());
+        let mut push = |part: &str| {
+            let part = part.trim();
+            if part.is_empty() || part == "*" {
+                return;
+            }
+            let (head, default) = match part.split_once(default_sep) {
+                Some((h, d)) => (h, Some(d.trim().to_string())),
+                None => (part, None),
+            };
+            let name = head.split(':').next().unwrap().trim().trim_start_matches('*').to_string();
+            if name != "py" {
+                out.push((name, default));
+            }
+        };
+        for (i, c) in list.char_indices() {
+            match c {
+                '(' | '[' | '{' => depth += 1,
+                ')' | ']' | '}' => depth -= 1,
+                ',' if depth == 0 => {
+                    push(&list[start..i]);
+                    start = i + 1;
+                }
+                _ => {}
+            }
+        }
+        push(&list[start..]);
+        out
+    }
+
+    fn read(path: &str) -> String {
+        std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(path)).unwrap()
+    }
+
+    /// `#[pyo3(signature = (...))]` of `pub fn NAME(` in `file`.
+    fn pyo3_signature(file: &str, name: &str) -> Vec<(String, Option<String>)> {
+        let text = read(file);
+        let at = text.find(&format!("pub fn {name}(")).unwrap_or_else(|| panic!("no fn {name} in {file}"));
+        let start = text[..at].rfind("signature = (").unwrap() + "signature = (".len();
+        let end = start + text[start..].find("))]").unwrap();
+        params(&text[start..end], "=")
+    }
+
+    /// `def NAME(...)` of `_omnical.pyi`.
+    fn stub_signature(name: &str) -> Vec<(String, Option<String>)> {
+        let text = read("omni-py/python/omnical/_omnical.pyi");
+        let start = text.find(&format!("\ndef {name}(")).unwrap() + format!("\ndef {name}(").len();
+        let end = start + text[start..].find(") ->").unwrap();
+        params(&text[start..end], " = ")
+    }
+
+    /// A default as one spelling: Rust's and Python's booleans and empty lists alike, numbers by value.
+    fn normal(default: &str) -> String {
+        let d = default.trim_matches('"');
+        match d {
+            "false" | "False" => "false".into(),
+            "true" | "True" => "true".into(),
+            "Vec::new()" | "..." | "None" => "none".into(),
+            _ => d.parse::<f64>().map_or_else(|_| d.to_string(), |v| format!("{v}")),
+        }
+    }
+
+    #[test]
+    fn python_keywords_and_defaults_are_the_declared_ones() {
+        let mut cli = Cli::command();
+        cli.build(); // the implicit defaults (a switch's `false`) are set when built
+        let train = cli.find_subcommand("train").unwrap();
+        for (function, file, data_args) in
+            [("load", "omni-py/src/run.rs", "paths"), ("train", "omni-py/src/calibrate.rs", "runs")]
+        {
+            let rust = pyo3_signature(file, function);
+            let stub = stub_signature(function);
+            let normalised = |s: &[(String, Option<String>)]| -> Vec<(String, String)> {
+                s.iter().map(|(n, d)| (n.clone(), d.as_deref().map_or_else(String::new, normal))).collect()
+            };
+            assert_eq!(normalised(&rust), normalised(&stub), "{function}: #[pyo3(signature)] against _omnical.pyi");
+            let keywords: BTreeSet<String> = rust.iter().map(|(n, _)| n.clone()).filter(|n| n != data_args).collect();
+            let declared: BTreeSet<String> = SETTINGS
+                .iter()
+                .flat_map(|s| s.python.ok().into_iter().flatten())
+                .filter(|(f, _)| *f == function)
+                .map(|(_, k)| k.to_string())
+                .collect();
+            assert_eq!(keywords, declared, "omnical.{function}'s keywords against SETTINGS");
+            // A keyword that is an option has the option's default.
+            for s in SETTINGS.iter().filter(|s| s.flag == Where::Yes) {
+                let Some((_, keyword)) = s.python.ok().into_iter().flatten().find(|(f, _)| *f == function) else {
+                    continue;
+                };
+                let Some((_, Some(py_default))) = rust.iter().find(|(n, _)| n == keyword) else { continue };
+                let arg = train.get_arguments().chain(cli.get_arguments()).find(|a| a.get_id() == s.key).unwrap();
+                let clap_default =
+                    arg.get_default_values().first().map_or("none".into(), |d| normal(&d.to_string_lossy()));
+                assert_eq!(
+                    normal(py_default),
+                    clap_default,
+                    "omnical.{function}({keyword}=) against --{}",
+                    s.key.replace('_', "-")
+                );
+            }
+        }
+    }
+}

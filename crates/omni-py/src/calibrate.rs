@@ -7,7 +7,8 @@ use crate::model::PyModel;
 use crate::robot::{model_or_design, model_spec, robot_arg};
 use crate::run::runs_from;
 use numpy::PyArray2;
-use omni_cli::cmd::train::{FitArgs, apply_fit_args, check_fit, check_step, prior_half_widths};
+use omni_cli::api::ModelSpec;
+use omni_cli::api::fit::{FitOptions, Refused, check_fit, check_step, prior_half_widths};
 use omni_ga::calibrate::{Calibration, Plan, Preset, calibrate_with_effects};
 use omni_ga::observe::{Control, Iteration, Observer};
 use omni_kin::choice::UnknownChoice;
@@ -344,7 +345,7 @@ pub fn train(
     // As `omnical train`: the parameter count with the effects (the paper preset's GA fits them all at once).
     let plan = Plan::preset(preset, start.model.n_params() + kinds.iter().map(|e| e.params().len()).sum::<usize>());
     let plan = plan.seed(seed);
-    let mut plan = apply_fit_args(plan, &fit).map_err(|e| value_error(flag_names(&format!("omnical.train: {e}"))))?;
+    let mut plan = fit.apply(plan).map_err(|e| value_error(flag_names(&format!("omnical.train: {e}"))))?;
     if from_design {
         plan.half_widths = prior_half_widths(&start, &origin).into_iter().collect();
     }
@@ -383,7 +384,7 @@ pub fn train(
     calibration_of(py, c, adapters, stopped, observer.history)
 }
 
-/// `train`'s objective and identifiability keywords as the CLI's [`FitArgs`].
+/// `train`'s objective and identifiability keywords as the library's [`FitOptions`] (checked when applied).
 fn fit_args(
     objective: Option<&str>,
     every: usize,
@@ -391,15 +392,15 @@ fn fit_args(
     unexcited: Option<&str>,
     max_std_error: f64,
     min_excitation: f64,
-) -> PyResult<FitArgs> {
-    Ok(FitArgs {
+) -> PyResult<FitOptions> {
+    Ok(FitOptions {
         // The CLI's spelling (`end-pose`) and the id Calibration.objective gives (`end_pose`).
         objective: objective
             .map(|o| o.replace('-', "_").parse())
             .transpose()
             .map_err(|e: UnknownChoice| value_error(format!("objective {e}")))?,
         every,
-        heading_weight,
+        heading_weight_m_per_rad: heading_weight,
         unexcited: unexcited
             .map(str::parse)
             .transpose()
@@ -440,8 +441,8 @@ fn calibration_of(
 }
 
 /// A refusal of the CLI's `train` as `omnical.CalibrationError`, in Python's spelling.
-fn refused(e: anyhow::Error) -> PyErr {
-    CalibrationError::new_err(flag_names(&format!("omnical.train: {e:#}")))
+fn refused(e: Refused) -> PyErr {
+    CalibrationError::new_err(flag_names(&format!("omnical.train: {e}")))
 }
 
 /// A `UserWarning` in Python's spelling.
@@ -481,7 +482,7 @@ fn start_model(
             None => Err(crate::robot::no_design("omnical.train")),
         };
     }
-    if model.extract::<String>().is_ok_and(|s| s == "design") {
+    if model.extract::<String>().is_ok_and(|s| ModelSpec::from_path(std::path::Path::new(&s)) == ModelSpec::Design) {
         let (m, a) = model_or_design(None, robot, declared, "omnical.train")?;
         return Ok((m, a, true));
     }

@@ -105,6 +105,6 @@ pub fn explore(
     let (fm, _, _) = model_spec(py, model, robot.as_ref(), declared, "omnical.explore")?;
     let opts = ExploreOptions { min_gain, ..ExploreOptions::default() };
     let e = py.detach(|| rs_explore(&fm, &train, &held_out, &opts)).py()?;
-    let json = omni_cli::cmd::explore::to_json(&e).to_string();
+    let json = omni_cli::api::explore::to_json(&e).to_string();
     Ok(PyExploration { inner: e, json })
 }

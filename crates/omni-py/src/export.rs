@@ -4,7 +4,8 @@
 use crate::errors::{OmnicalError, value_error};
 use crate::robot::{check_order, designs_for, model_spec, per_run};
 use crate::run::{origin_of, runs_from};
-use omni_cli::cmd::export::{write_mcap, write_tum};
+use omni_cli::api::load::DataOptions;
+use omni_cli::export::{write_mcap, write_tum};
 use omni_cli::out_path::OutDir;
 use pyo3::exceptions::{PyFileExistsError, PyFileNotFoundError, PyOSError};
 use pyo3::prelude::*;
@@ -55,7 +56,7 @@ pub fn export(
     let models = per_run(fm.clone(), &spec, robot.as_ref(), &origin)?;
     // The joints the CLI names the wheels by: the data's robot description's, else the model's columns.
     let joints = match origin.robot_file {
-        Some(_) => omni_cli::cmd::wheel_joints(&omni_cli::cmd::DataArgs::default(), &origin),
+        Some(_) => DataOptions::default().wheel_joints(&origin),
         None => fm.model.kinematics.wheel_names(),
     };
     let written = py.detach(|| -> anyhow::Result<Vec<PathBuf>> {

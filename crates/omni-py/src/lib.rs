@@ -51,7 +51,7 @@ mod _omnical {
     #[pymodule_export]
     use crate::run::{_dataset_from_state, _run_from_bytes, PyDataset, PyRun, load};
     #[pymodule_export]
-    use crate::session::{diagnose_files, train_files};
+    use crate::session::{_fleet_args, diagnose_files, train_files};
     #[pymodule_export]
     use crate::simulate::simulate;
 

@@ -6,6 +6,7 @@
 use crate::effect::PyEffect;
 use crate::errors::{io_error, value_error};
 use crate::model::model_arg;
+use omni_cli::api::ModelSpec;
 use omni_cli::robot_file::{self, RobotFile, RobotFileError, Spelling};
 use omni_kin::{FittedModel, KinematicsKind, RunModels};
 use pyo3::prelude::*;
@@ -88,10 +89,10 @@ pub fn model_spec(
         )));
     };
     let label = spec.to_string_lossy().into_owned();
-    match label.as_str() {
-        "design" => Ok((model_or_design(None, robot, data, what)?.0, Vec::new(), label)),
-        "paper" => Ok((omni_cli::design::paper_calibrated(), Vec::new(), label)),
-        _ => {
+    match ModelSpec::from_path(&spec) {
+        ModelSpec::Design => Ok((model_or_design(None, robot, data, what)?.0, Vec::new(), label)),
+        ModelSpec::Paper => Ok((omni_cli::design::paper_calibrated(), Vec::new(), label)),
+        ModelSpec::File(spec) => {
             if let Some(r) = robot {
                 return Err(value_error(format!(
                     "{what}: robot={:?} names a design, and the model file {label:?} is its own model: give \
@@ -149,7 +150,7 @@ pub fn per_run(
     robot: Option<&PathBuf>,
     origin: &omni_cli::dataset::Dataset,
 ) -> PyResult<RunModels> {
-    if spelled != "design" || robot.is_some() {
+    if ModelSpec::from_path(std::path::Path::new(spelled)) != ModelSpec::Design || robot.is_some() {
         return Ok(RunModels::from(model));
     }
     match omni_cli::design::declared_each(&[origin]).map_err(|e| value_error(format!("{e:#}")))? {

@@ -6,7 +6,7 @@ use crate::errors::{PyResultExt, ToPyErr, value_error};
 use crate::model::PyModel;
 use crate::robot::robot_error;
 use numpy::{PyArray1, PyArray2};
-use omni_cli::cmd::{self, DataArgs, RobotArgs};
+use omni_cli::api::load::{DataOptions, LoadRequest};
 use omni_cli::dataset;
 use omni_cli::robot_file::{self, RobotFileError};
 use omni_kin::{Command, FittedModel, Run, RunData};
@@ -342,25 +342,26 @@ pub fn load(
     if paths.is_empty() {
         return Err(value_error("load() needs at least one path"));
     }
-    let data = DataArgs {
-        robot: RobotArgs { robot: robot.map(|r| r.to_string_lossy().into_owned()) },
+    let data = DataOptions {
+        robot: robot.map(|r| r.to_string_lossy().into_owned()),
         joints,
         joints_topic,
         gt_topic,
         gt_parent_frame,
         gt_child_frame,
         gt,
-        gt_time_offset,
+        gt_time_offset_s: gt_time_offset,
         gt_columns: key_values(gt_columns),
         gt_units: key_values(gt_units),
-        split: split_s,
+        split_s,
         skip_invalid,
         ticks_per_rev,
         max_file_mb,
     };
+    let request = LoadRequest { paths, data, recorded_odometry };
     // The CLI's lookup: robot=, else a robot.toml beside the data or in the working directory.
-    let robot = robot_file::resolve(data.robot.robot.as_deref(), &paths).map_err(robot_error)?;
-    let ds = py.detach(|| cmd::load_for_robot(&paths, &data, recorded_odometry, robot)).map_err(load_error)?;
+    let robot = request.robot().map_err(robot_error)?;
+    let ds = py.detach(|| request.read_for_robot(robot)).map_err(load_error)?;
     let design = omni_cli::design::declared(&ds).map_err(|e| value_error(format!("{e:#}")))?;
     let source = ds.robot_file.as_ref().map(|f| f.source.clone());
     let mut notes = ds.notes;

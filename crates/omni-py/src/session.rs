@@ -1,11 +1,12 @@
 //! `train_files`: `omnical train` on files, inside a Python process that runs many of them (the fleet's
-//! Dask workers). The same code path as the command (`omni_cli::cmd::train::train_quietly`), so the model
+//! Dask workers). The same code path as the command (`omni_cli::api::train::train_quietly`), so the model
 //! file it writes is byte-identical to `omnical train … --out FILE`; nothing is printed and no Ctrl-C
 //! handler is installed (the host process keeps its own).
 
 use crate::errors::{OmnicalError, value_error};
-use omni_cli::cli::{Cli, Command};
-use omni_cli::cmd::{diagnose, train};
+use omni_cli::api::diagnose::diagnose_quietly;
+use omni_cli::api::session::{ArgvError, diagnose_request, fleet_request, train_request};
+use omni_cli::api::train::{Trained, train_quietly};
 use omni_kin::FittedModel;
 use pyo3::prelude::*;
 use serde_json::json;
@@ -26,12 +27,8 @@ use serde_json::json;
 /// (36, 'path', 'ik')
 #[pyfunction]
 pub fn train_files<'py>(py: Python<'py>, args: Vec<String>) -> PyResult<Bound<'py, PyAny>> {
-    let argv = ["omnical".to_string(), "train".to_string()].into_iter().chain(args);
-    let cli = <Cli as clap::Parser>::try_parse_from(argv).map_err(|e| value_error(e.render().to_string()))?;
-    let Command::Train(a) = cli.command else {
-        return Err(value_error("train_files: the arguments did not parse as `omnical train`"));
-    };
-    let t = py.detach(|| train::train_quietly(&a)).map_err(|e| OmnicalError::new_err(format!("{e:#}")))?;
+    let request = train_request(&args).map_err(|e| argv_error("train_files", e))?;
+    let t = py.detach(|| train_quietly(&request)).map_err(|e| OmnicalError::new_err(format!("{e:#}")))?;
     let text = serde_json::to_string(&session_json(&t)).map_err(|e| value_error(e.to_string()))?;
     py.import("json")?.call_method1("loads", (text,))
 }
@@ -50,18 +47,23 @@ pub fn train_files<'py>(py: Python<'py>, args: Vec<String>) -> PyResult<Bound<'p
 /// 'time_offset'
 #[pyfunction]
 pub fn diagnose_files<'py>(py: Python<'py>, args: Vec<String>) -> PyResult<Bound<'py, PyAny>> {
-    let argv = ["omnical".to_string(), "diagnose".to_string()].into_iter().chain(args);
-    let cli = <Cli as clap::Parser>::try_parse_from(argv).map_err(|e| value_error(e.render().to_string()))?;
-    let Command::Diagnose(a) = cli.command else {
-        return Err(value_error("diagnose_files: the arguments did not parse as `omnical diagnose`"));
-    };
-    let d = py.detach(|| diagnose::diagnose_quietly(&a)).map_err(|e| OmnicalError::new_err(format!("{e:#}")))?;
+    let request = diagnose_request(&args).map_err(|e| argv_error("diagnose_files", e))?;
+    let d = py.detach(|| diagnose_quietly(&request)).map_err(|e| OmnicalError::new_err(format!("{e:#}")))?;
     let text = serde_json::to_string(&d).map_err(|e| value_error(e.to_string()))?;
     py.import("json")?.call_method1("loads", (text,))
 }
 
+/// An argument list that is not the command's, as `ValueError` (the parser's own message, or `what` and
+/// the command it should have been).
+fn argv_error(what: &str, e: ArgvError) -> PyErr {
+    match e {
+        ArgvError::Parse(message) => value_error(message),
+        other => value_error(format!("{what}: {other}")),
+    }
+}
+
 /// The plain data [`train_files`] returns.
-fn session_json(t: &train::Trained) -> serde_json::Value {
+fn session_json(t: &Trained) -> serde_json::Value {
     let start: &FittedModel = &t.calibration.start;
     let design: serde_json::Map<String, serde_json::Value> =
         start.model.params().into_iter().zip(&start.params).map(|(s, v)| (s.name, json!(v))).collect();
@@ -78,4 +80,31 @@ fn session_json(t: &train::Trained) -> serde_json::Value {
         "skipped": t.dataset.skipped.iter().map(|s| [&s.source, &s.reason]).collect::<Vec<_>>(),
         "warnings": t.warnings,
     })
+}
+
+/// ``omnical fleet ARGS...`` (``args`` without the program and subcommand names) parsed by the command
+/// line's own parser, where its options are declared: ``(options, "", 0)`` with the options as a dict
+/// (``fleet_dir``, ``out``, ``scheduler``, ``workers``, ``preset``, ``seed``, ``model``, ``diagnose``,
+/// ``train_args``, ``quiet``), or ``(None, text, status)`` for ``--help`` (status 0) and bad arguments
+/// (status 2, the parser's message).
+#[pyfunction]
+pub fn _fleet_args<'py>(py: Python<'py>, args: Vec<String>) -> PyResult<(Option<Bound<'py, PyAny>>, String, i32)> {
+    let r = match fleet_request(&args) {
+        Ok(r) => r,
+        Err(e) => return Ok((None, e.render().to_string(), e.exit_code())),
+    };
+    let doc = json!({
+        "fleet_dir": r.fleet_dir.to_string_lossy(),
+        "out": r.out.to_string_lossy(),
+        "scheduler": r.scheduler,
+        "workers": r.workers,
+        "preset": r.preset,
+        "seed": r.seed,
+        "model": r.model,
+        "diagnose": r.diagnose,
+        "train_args": r.train_args,
+        "quiet": r.quiet,
+    });
+    let text = serde_json::to_string(&doc).map_err(|e| value_error(e.to_string()))?;
+    Ok((Some(py.import("json")?.call_method1("loads", (text,))?), String::new(), 0))
 }

@@ -26,7 +26,7 @@ use std::path::PathBuf;
 /// >>> len(runs), runs[0].name, runs[0].n_wheels
 /// (36, 'train/00-r0', 3)
 #[pyfunction]
-// The defaults are `omnical simulate`'s (SimConfig::default(), omni_cli::cmd::simulate::DEFAULT_SEED),
+// The defaults are `omnical simulate`'s (SimConfig::default() and its --seed default, 7),
 // spelt out so that help() shows them; tests/test_mirror.py compares them with the CLI's --help.
 #[pyo3(signature = (truth = None, *, robot = None, runs_per_command = 5, duration_s = 10.0, seed = 7, noise_free = false, prefix = "train/", sample_drop_probability = 0.0, sample_jitter_s = 0.0))]
 #[allow(clippy::too_many_arguments)]

@@ -1,11 +1,12 @@
 //! `omnical demo`: the whole story on built-in simulated data with a hidden effect — simulate, train,
 //! diagnose, add the effect, retrain — printing the error ladder — and write the HTML report.
 
+use super::OutputArgs;
 use super::diagnose::print_diagnosis;
 use super::sim_spec::apply_effect_spec;
 use super::simulate::{self as simulate_cmd, DEFAULT_SEED, Format};
 use super::train::print_summary;
-use super::{DataArgs, OutputArgs};
+use crate::api::load::{DataOptions, LoadRequest};
 use crate::design::{design_for, paper_calibrated};
 use crate::out_path::OutDir;
 use crate::report::{self, ReportInput};
@@ -144,7 +145,7 @@ fn simulate_and_keep(setup: &Setup, dir: &Path, quiet: bool) -> anyhow::Result<(
         simulate_cmd::write_robot(&dir.join(split), &setup.robot, Format::Mcap)?;
         let paths = [dir.join(split)];
         let robot = robot_file::resolve(None, &paths)?;
-        splits.push(super::load_for_robot(&paths, &DataArgs::default(), false, robot)?.runs);
+        splits.push(LoadRequest::new(&paths, &DataOptions::default()).read_for_robot(robot)?.runs);
     }
     spinner.finish_and_clear();
     let val = splits.pop().unwrap_or_default();
@@ -315,7 +316,7 @@ fn demo_json(
         "hidden": a.hidden,
         "true_robot": setup.true_robot,
         "runs": { "train": train.len(), "validation": val.len() },
-        "train": super::train::summary(fit, Preset::Default.id(), 0, train.len())?,
+        "train": crate::api::train::summary(fit, Preset::Default.id(), 0, train.len())?,
         "diagnosis": { "verdict": d.verdict, "verdict_text": d.verdict_text, "costs": d.costs, "ladder": d.ladder },
         "report": super::report::written_json(w, &dir.join(REPORT)),
         "written": {

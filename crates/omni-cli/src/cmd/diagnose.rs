@@ -1,15 +1,13 @@
 //! `omnical diagnose`: compare, locate, and name the missing effect; `--auto` climbs the error ladder.
 
-use super::{DataArgs, OutputArgs, load_with_held_out, resolve_model};
+use super::{DataArgs, OutputArgs};
+use crate::api::ModelSpec;
+use crate::api::diagnose::{DiagnoseRequest, diagnose_loaded};
 use crate::cli::effect_help;
-use crate::design::designs_for;
 use crate::units::{std_error_text, value_text};
-use crate::{atomic, model_file};
-use anyhow::Context;
-use omni_ga::diagnose::{DiagnoseOptions, Diagnosis, diagnose};
+use omni_ga::diagnose::{DiagnoseOptions, Diagnosis};
 use omni_ga::explore::{Exploration, ExploreOptions, explore};
 use omni_ga::science::text;
-use omni_kin::{FittedModel, Run};
 use std::path::PathBuf;
 
 /// Arguments of `omnical diagnose`.
@@ -17,7 +15,7 @@ use std::path::PathBuf;
 pub struct Args {
     /// Model file (from `train --out`) or `design`.
     #[arg(long)]
-    pub model: String,
+    pub model: ModelSpec,
     /// Training runs (the ones the model was fitted on).
     #[arg(required = true)]
     pub runs: Vec<PathBuf>,
@@ -47,9 +45,27 @@ pub struct Args {
     pub data: DataArgs,
 }
 
+impl Args {
+    /// What these flags ask `omnical diagnose` to do.
+    pub fn request(&self) -> DiagnoseRequest {
+        let mut options = DiagnoseOptions { auto: self.auto, min_gain: self.min_gain, ..DiagnoseOptions::default() };
+        if !self.candidates.is_empty() {
+            options.candidates = self.candidates.clone();
+        }
+        DiagnoseRequest {
+            model: self.model.clone(),
+            runs: self.runs.clone(),
+            validate: self.validate.clone(),
+            data: self.data.options(),
+            options,
+            out: self.out.clone(),
+        }
+    }
+}
+
 /// Runs `omnical diagnose`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
-    let (d, loaded) = diagnose_loaded(a)?;
+    let (d, loaded) = diagnose_loaded(&a.request())?;
     // The explorer stage of `--auto`: whenever the catalogue leaves the held-out error above the noise floor
     // (or something missing), on the same training and held-out runs, from the model the ladder ended with.
     let explore_stage = a.auto && d.error_remains();
@@ -63,7 +79,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     if a.output.json {
         let mut doc = serde_json::to_value(&d)?;
         if let Some(e) = &exploration {
-            doc["explore"] = super::explore::to_json(e);
+            doc["explore"] = crate::api::explore::to_json(e);
         }
         doc["out"] =
             serde_json::json!(a.out.as_ref().filter(|_| d.final_model.is_some()).map(|p| p.display().to_string()));
@@ -75,42 +91,6 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         }
     }
     Ok(())
-}
-
-/// `omnical diagnose` without printing (the Python wheel's fleet workers): loads, diagnoses and writes
-/// `--out` as [`run`] does, and returns the diagnosis.
-pub fn diagnose_quietly(a: &Args) -> anyhow::Result<Diagnosis> {
-    Ok(diagnose_loaded(a)?.0)
-}
-
-/// What [`diagnose_loaded`] loaded: the training runs, the held-out runs (if given) and the model.
-struct Loaded {
-    train: Vec<Run>,
-    validate: Option<Vec<Run>>,
-    model: FittedModel,
-}
-
-/// Loads, diagnoses and writes `--out`; returns the diagnosis and what it was computed on.
-fn diagnose_loaded(a: &Args) -> anyhow::Result<(Diagnosis, Loaded)> {
-    if let Some(out) = &a.out {
-        crate::out_path::check_file(out, "--out")?;
-    }
-    let (ds, val_ds) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
-    let model = resolve_model(&a.model, &ds)?;
-    // Each run is compared with its own input's design.
-    let design = designs_for(&model, &[Some(&ds), val_ds.as_ref()].into_iter().flatten().collect::<Vec<_>>());
-    let val = val_ds.map(|v| v.runs);
-    super::held_out::check("diagnose", &a.runs, &ds.runs, val.as_deref().unwrap_or_default())?;
-    let mut opts = DiagnoseOptions { auto: a.auto, min_gain: a.min_gain, ..DiagnoseOptions::default() };
-    if !a.candidates.is_empty() {
-        opts.candidates = a.candidates.clone();
-    }
-    let d = diagnose(&model, &design, &ds.runs, val.as_deref(), &opts)?;
-    if let (Some(out), Some(fm)) = (&a.out, &d.final_model) {
-        let text = model_file::to_toml(fm, None).map_err(anyhow::Error::msg)?;
-        atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))?;
-    }
-    Ok((d, Loaded { train: ds.runs, validate: val, model }))
 }
 
 /// The explorer stage in text: the ranking and the best family's hint (or why it did not run).

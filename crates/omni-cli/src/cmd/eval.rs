@@ -1,7 +1,8 @@
 //! `omnical eval`: the cost of a model on runs — the summary first (Eq. 6, path RMS, statistics of the
 //! end-position and end-heading errors, as evo_ape prints them), each run's row with `--per-run`.
 
-use super::{DataArgs, OutputArgs, load_runs};
+use super::{DataArgs, OutputArgs};
+use crate::api::ModelSpec;
 use omni_kin::PoseError;
 use omni_kin::cost::CostKind;
 use serde_json::json;
@@ -13,7 +14,7 @@ pub struct Args {
     /// `design` (the data's design model, each run its own input's when the inputs declare different
     /// designs), `paper` (the paper's Eq. 9) or a model file.
     #[arg(long, default_value = "design")]
-    pub model: String,
+    pub model: ModelSpec,
     /// Run files or folders.
     #[arg(required = true)]
     pub runs: Vec<PathBuf>,
@@ -82,10 +83,11 @@ fn heading_stats(errors: &[PoseError]) -> Stats {
 
 /// Runs `omnical eval`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
-    let model = a.model.as_str();
-    let ds = load_runs(&a.runs, &a.data)?;
+    let spelled = a.model.to_string();
+    let model = spelled.as_str();
+    let ds = a.data.request(&a.runs).load()?;
     // `design`: each run its own input's design (the pooled figures are the run-weighted means).
-    let models = crate::design::resolve_each(model, &[&ds])?;
+    let models = a.model.resolve_each(&[&ds])?;
     let all = models.errors(&ds.runs, CostKind::PATH.selection())?;
     let errors = all.ends();
     let c = all.end_pose_cost();

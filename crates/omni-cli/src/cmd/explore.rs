@@ -1,23 +1,23 @@
 //! `omnical explore`: which family of physical features (wheel, body, world, time, ground truth) explains
 //! the error a model leaves, each fitted on the training runs and judged on the held-out runs.
 
-use super::{DataArgs, OutputArgs, load_with_held_out, resolve_model};
+use super::{DataArgs, OutputArgs};
+use crate::api::ModelSpec;
+use crate::api::explore::to_json;
+use crate::api::load::load_with_held_out;
 use crate::{atomic, model_file};
 use anyhow::Context;
-use omni_ga::explore::{Exploration, ExploreOptions, FamilyResult, FamilyStatus, explore};
+use omni_ga::explore::{Exploration, ExploreOptions, explore};
 use omni_ga::science::text;
-use serde_json::{Value, json};
+use serde_json::json;
 use std::path::PathBuf;
-
-/// Version of the `--json` layout: the one of every command's (docs/json.md).
-pub const SCHEMA_VERSION: u32 = super::JSON_SCHEMA_VERSION;
 
 /// Arguments of `omnical explore`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Model file (from `train --out`) or `design`.
     #[arg(long)]
-    pub model: String,
+    pub model: ModelSpec,
     /// Training runs (the families are fitted on them).
     #[arg(required = true)]
     pub runs: Vec<PathBuf>,
@@ -45,10 +45,10 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     if let Some(out) = &a.out {
         crate::out_path::check_file(out, "--out")?;
     }
-    let (ds, val) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
-    let model = resolve_model(&a.model, &ds)?;
+    let (ds, val) = load_with_held_out(&a.runs, &a.validate, &a.data.options())?;
+    let model = a.model.resolve(&ds)?;
     let val = val.map(|v| v.runs).unwrap_or_default();
-    super::held_out::check("explore", &a.runs, &ds.runs, &val)?;
+    crate::api::held_out::check("explore", &a.runs, &ds.runs, &val)?;
     let opts = ExploreOptions { min_gain: a.min_gain, ..ExploreOptions::default() };
     let e = explore(&model, &ds.runs, &val, &opts)?;
     if let Some(out) = &a.out {
@@ -69,53 +69,6 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         print_exploration(&e, a.min_gain);
     }
     Ok(())
-}
-
-/// One family in JSON: `{family, effect, status, status_reason, status_text, held_out_gain, gain_std_error,
-/// passes, held_out_cost_m, terms, held, hint, curve}`.
-fn family_json(f: &FamilyResult) -> Value {
-    let reason = match f.status {
-        FamilyStatus::NotConverged { reason } => serde_json::to_value(reason).unwrap_or(Value::Null),
-        _ => Value::Null,
-    };
-    json!({
-        "family": f.family.id(),
-        "effect": format!("learned:{}", f.family.id()),
-        "status": f.status.id(),
-        "status_reason": reason,
-        "status_text": text::family_status(f),
-        "held_out_gain": f.held_out_gain,
-        "gain_std_error": f.gain_std_error,
-        "passes": f.passes,
-        "held_out_cost_m": f.held_out_cost,
-        "terms": f.terms.iter().map(|t| json!({
-            "name": t.name,
-            "value": t.value,
-            "std_error": if t.std_error.is_finite() { json!(t.std_error) } else { Value::Null },
-            "unit": t.unit,
-            "held": t.held,
-        })).collect::<Vec<_>>(),
-        "held": f.held,
-        "hint": text::explore_hint(f),
-        "curve": f.curve,
-    })
-}
-
-/// The `--json` document.
-pub fn to_json(e: &Exploration) -> Value {
-    json!({
-        "schema_version": SCHEMA_VERSION,
-        "families": e.families.iter().map(family_json).collect::<Vec<_>>(),
-        "unexplained": e.unexplained,
-        "unexplained_evidence": e.evidence,
-        "best": e.best().map(|f| f.family.id()),
-        "baseline_held_out_cost_m": e.baseline_held_out_cost,
-        "noise_floor_path_rms_m": e.noise_floor_path_rms,
-        "runs": { "train": e.runs.0, "held_out": e.runs.1 },
-        "coverage": e.coverage,
-        "coverage_text": text::motion_coverage(&e.coverage),
-        "conclusion": text::explore_conclusion(e),
-    })
 }
 
 /// Human-readable exploration: the ranking, the best family's terms, the conclusion.

@@ -1,15 +1,15 @@
 //! `omnical export`: trajectories for other tools — TUM files for evo, MCAP bags with the calibrated
 //! odometry for Foxglove.
 
-use super::{DataArgs, OutputArgs, load_runs_with_odometry, resolve_model, wheel_joints};
-use crate::dataset::mcap::{WriteOptions, write_run};
+use super::{DataArgs, OutputArgs};
+use crate::api::ModelSpec;
+use crate::api::load::{DataOptions, LoadRequest};
 use crate::design::{design_for, designs_for};
+use crate::export::{joint_names, write_mcap, write_tum};
 use crate::out_path::{self, OutDir};
 use crate::report::tum;
-use crate::{atomic, robot_config};
-use anyhow::Context;
-use omni_kin::odometry::{self, Selection};
-use omni_kin::{FittedModel, Run, RunModels, StampedPose};
+use crate::robot_config;
+use omni_kin::RunModels;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `omnical export`.
@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 pub struct Args {
     /// Model file (from `train --out`) or `design`.
     #[arg(long)]
-    pub model: String,
+    pub model: ModelSpec,
     /// Run files or folders.
     #[arg(required = true)]
     pub runs: Vec<PathBuf>,
@@ -50,20 +50,6 @@ pub struct Args {
     pub data: DataArgs,
 }
 
-/// The odometry of the measured point: every wheel-sample step plus the exact predictions at the
-/// ground-truth stamps (so tools that match poses by time find an exact match), in time order.
-pub fn odometry_poses(model: &FittedModel, run: &Run) -> anyhow::Result<Vec<StampedPose>> {
-    let res = model.model.resolve(&model.params).with_context(|| format!("run {}", run.name()))?;
-    let dense = odometry::integrate(&res, run);
-    let mut poses: Vec<StampedPose> =
-        dense.t_s.iter().zip(&dense.poses).map(|(&t_s, &pose)| StampedPose { t_s, pose }).collect();
-    let at_truth = odometry::residuals(&res, run, Selection::Path(1));
-    poses.retain(|p| !at_truth.iter().any(|r| (r.t_s - p.t_s).abs() < 1e-9));
-    poses.extend(at_truth.iter().map(|r| StampedPose { t_s: r.t_s, pose: r.predicted }));
-    poses.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
-    Ok(poses)
-}
-
 /// The output folders of `export`, claimed before the work: `--tum` and `--mcap` are new or emptied
 /// ([`OutDir`]), `--robot-config` is created if missing. Refuses one folder named twice.
 fn claim_folders(a: &Args) -> anyhow::Result<(Option<OutDir>, Option<OutDir>)> {
@@ -91,20 +77,22 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         anyhow::bail!("nothing to export: give --tum DIR and/or --mcap DIR (or --robot-config DIR)");
     }
     let (tum_dir, mcap_dir) = claim_folders(a)?;
-    let ds = load_runs_with_odometry(&a.runs, &a.data)?;
-    let model = resolve_model(&a.model, &ds)?;
+    let data = a.data.options();
+    let ds = LoadRequest { recorded_odometry: true, ..LoadRequest::new(&a.runs, &data) }.load()?;
+    let model = a.model.resolve(&ds)?;
     // Each run's own input's design (for the design's odometry and accuracy); `--model design` is each
     // run's own in the trajectories too.
     let designs = designs_for(&model, &[&ds]);
     let design = design_for(&model);
-    let models = crate::design::resolve_each(&a.model, &[&ds])?;
-    let mut doc = serde_json::json!({ "model": a.model, "runs": ds.runs.len() });
+    let models = a.model.resolve_each(&[&ds])?;
+    let spec = a.model.to_string();
+    let mut doc = serde_json::json!({ "model": spec, "runs": ds.runs.len() });
     if let Some(out) = tum_dir {
         let dir = out.target().to_path_buf();
         let mut files = Vec::new();
         for run in &ds.runs {
             files.extend(
-                write_tum(out.path(), run, designs.for_run(run)?, models.for_run(run)?, &a.model)?
+                write_tum(out.path(), run, designs.for_run(run)?, models.for_run(run)?, &spec)?
                     .iter()
                     .map(|f| out.shown(f)),
             );
@@ -124,7 +112,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         }
     }
     if let Some(out) = mcap_dir {
-        let files: Vec<PathBuf> = write_mcaps(out.path(), a, &ds, &models)?.iter().map(|f| out.shown(f)).collect();
+        let files: Vec<PathBuf> = write_mcaps(out.path(), &data, &ds, &models)?.iter().map(|f| out.shown(f)).collect();
         let dir = out.target().to_path_buf();
         out.commit()?;
         doc["mcap"] = serde_json::json!({ "dir": dir, "files": files });
@@ -141,9 +129,9 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             model: &model,
             design: &design,
             designs: &designs,
-            spec: &a.model,
+            spec: &spec,
             runs: &ds.runs,
-            wheel_names: joint_names(&model, &wheel_joints(&a.data, &ds)),
+            wheel_names: joint_names(&model, &data.wheel_joints(&ds)),
             controller: a.controller,
         };
         let config = robot_config::build(&request)?;
@@ -164,10 +152,15 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
 }
 
 /// One MCAP bag per run in `dir`, with the calibrated odometry; returns the paths.
-fn write_mcaps(dir: &Path, a: &Args, ds: &crate::dataset::Dataset, models: &RunModels) -> anyhow::Result<Vec<PathBuf>> {
+fn write_mcaps(
+    dir: &Path,
+    data: &DataOptions,
+    ds: &crate::dataset::Dataset,
+    models: &RunModels,
+) -> anyhow::Result<Vec<PathBuf>> {
     let mut files = Vec::with_capacity(ds.runs.len());
     for run in &ds.runs {
-        files.push(write_mcap(dir, run, models.for_run(run)?, &wheel_joints(&a.data, ds))?);
+        files.push(write_mcap(dir, run, models.for_run(run)?, &data.wheel_joints(ds))?);
     }
     Ok(files)
 }
@@ -207,56 +200,4 @@ fn robot_config_json(c: &robot_config::RobotConfig, dir: &Path) -> serde_json::V
             "controller": acc(&c.controller_accuracy),
         },
     })
-}
-
-/// Joint names in the model's column order: the model's own, or `--joints` when the model only has the
-/// default names `wheel_a`, `wheel_b`, ….
-fn joint_names(model: &FittedModel, joints: &[String]) -> Vec<String> {
-    let names = model.model.kinematics.wheel_names();
-    if names == omni_kin::geometry::default_wheel_names(names.len()) && joints.len() == names.len() {
-        joints.to_vec()
-    } else {
-        names
-    }
-}
-
-/// Writes one run's MCAP bag `DIR/<run>.mcap` (`--mcap`): its wheel data (joints `wheel_joints`), ground
-/// truth, recorded odometry if any, and `model`'s odometry on /omnical/odometry; a run whose clock starts
-/// before 0 s (a simulated one) is put at the simulator's epoch. Returns the path.
-pub fn write_mcap(dir: &Path, run: &Run, model: &FittedModel, wheel_joints: &[String]) -> anyhow::Result<PathBuf> {
-    let opts = WriteOptions {
-        wheel_joints: wheel_joints.to_vec(),
-        design_odometry: (!run.recorded_odometry().is_empty()).then(|| run.recorded_odometry().to_vec()),
-        calibrated_odometry: Some(odometry_poses(model, run)?),
-        // Simulated clocks start before 0 s (as `simulate` does): put them at its epoch.
-        origin_s: if run.wheel_t_s().first().is_some_and(|&t| t < 0.0) { super::simulate::SIM_EPOCH_S } else { 0 },
-    };
-    let path = dir.join(format!("{}.mcap", tum::file_stem(run.name())));
-    write_run(&path, run, &opts)?;
-    Ok(path)
-}
-
-/// Writes one run's TUM files (`--tum`): `DIR/<run>.gt.tum`, `.design.tum` and `.calibrated.tum`, the
-/// latter two the odometry of `design` and of `model` (named `spec` in the header). Returns the paths.
-pub fn write_tum(
-    dir: &Path,
-    run: &Run,
-    design: &FittedModel,
-    model: &FittedModel,
-    spec: &str,
-) -> anyhow::Result<Vec<PathBuf>> {
-    let stem = tum::file_stem(run.name());
-    let files = [
-        ("gt", format!("run {}: ground truth", run.name()), run.truth().to_vec()),
-        ("design", format!("run {}: odometry of the design model", run.name()), odometry_poses(design, run)?),
-        ("calibrated", format!("run {}: odometry of {spec}", run.name()), odometry_poses(model, run)?),
-    ];
-    let mut written = Vec::with_capacity(files.len());
-    for (kind, comment, poses) in files {
-        let path = dir.join(format!("{stem}.{kind}.tum"));
-        let text = tum::to_tum(&format!("{comment}\ntimestamp tx ty tz qx qy qz qw (s, m, unit quaternion)"), &poses);
-        atomic::write_atomic(&path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))?;
-        written.push(path);
-    }
-    Ok(written)
 }

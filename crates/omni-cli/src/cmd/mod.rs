@@ -6,7 +6,6 @@ pub mod diagnose;
 pub mod eval;
 pub mod explore;
 pub mod export;
-pub mod held_out;
 pub mod init;
 pub mod plan;
 pub mod report;
@@ -15,18 +14,44 @@ pub mod sim_spec;
 pub mod simulate;
 pub mod train;
 
-use crate::dataset::{self, Dataset, LoadOptions};
-use crate::robot_file;
-use omni_kin::FittedModel;
+use crate::api::load::{DataOptions, LoadRequest};
+use crate::dataset;
 use std::path::PathBuf;
 
-/// Arguments of `omnical fleet`, which the Python wheel's console command runs (omnical.fleet, on Dask);
-/// the native binary only says where to find it.
+/// Arguments of `omnical fleet`, which the Python wheel's console command runs (omnical.fleet, on Dask):
+/// declared here once, parsed for it by `omni_cli::api::session::fleet_request`; the native binary only
+/// says where to find it.
 #[derive(Debug, clap::Args)]
+#[command(after_help = "Needs dask[distributed] (pip install \"omnical[fleet]\").")]
 pub struct FleetArgs {
-    /// FLEET_DIR and the options of the wheel's `omnical fleet --help`.
-    #[arg(trailing_var_arg = true, allow_hyphen_values = true, value_name = "ARGS")]
-    pub args: Vec<String>,
+    /// The fleet: one folder per robot, one per session inside (`FLEET_DIR/<robot>/<session>/`); a
+    /// robot.toml per robot folder or one in FLEET_DIR describes the robots.
+    #[arg(value_name = "FLEET_DIR")]
+    pub fleet_dir: PathBuf,
+    /// Output folder: `OUT/<robot>/<session>/model.toml`, `OUT/fleet.csv` and `OUT/fleet.html`.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// A Dask scheduler (default: a local cluster).
+    #[arg(long, value_name = "ADDRESS")]
+    pub scheduler: Option<String>,
+    /// Local worker processes.
+    #[arg(long, value_name = "N", default_value_t = 2)]
+    pub workers: usize,
+    /// Train's recipe (default, paper).
+    #[arg(long, value_name = "NAME", default_value = "default")]
+    pub preset: String,
+    /// GA seed of every session.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub seed: u64,
+    /// Base model to fit.
+    #[arg(long, value_name = "KIND", default_value = "ik")]
+    pub model: String,
+    /// Which sessions to diagnose (auto: those whose cost is off).
+    #[arg(long, value_parser = ["auto", "all", "none"], default_value = "auto")]
+    pub diagnose: String,
+    /// Arguments after `--` go to every `omnical train`.
+    #[arg(last = true, value_name = "TRAIN_ARGS")]
+    pub train_args: Vec<String>,
 }
 
 /// The error of a Python-side command asked of the native binary.
@@ -37,9 +62,7 @@ pub fn python_only(what: &str) -> anyhow::Error {
     )
 }
 
-/// Version of the layout of every `--json` document (docs/json.md): each carries it as `schema_version`,
-/// with the command's name as `command`. Raised when a field changes meaning or is removed.
-pub const JSON_SCHEMA_VERSION: u32 = 1;
+pub use crate::api::JSON_SCHEMA_VERSION;
 
 /// Commands that produce no results of their own, so take no `--json`: `fleet` (the Python wheel's),
 /// `completions` and `man` (their output is a script and a man page).
@@ -136,199 +159,29 @@ pub struct DataArgs {
     pub max_file_mb: u64,
 }
 
-impl Default for DataArgs {
-    /// No flag given: what the command line parses from no data options.
-    fn default() -> Self {
-        Self {
-            robot: RobotArgs::default(),
-            joints: None,
-            joints_topic: None,
-            gt_topic: None,
-            gt_parent_frame: None,
-            gt_child_frame: None,
-            gt: None,
-            gt_time_offset: None,
-            gt_columns: Vec::new(),
-            gt_units: Vec::new(),
-            split: None,
-            skip_invalid: false,
-            ticks_per_rev: None,
-            max_file_mb: dataset::DEFAULT_MAX_FILE_BYTES >> 20,
+impl DataArgs {
+    /// The data options these flags give.
+    pub fn options(&self) -> DataOptions {
+        DataOptions {
+            robot: self.robot.robot.clone(),
+            joints: self.joints.clone(),
+            joints_topic: self.joints_topic.clone(),
+            gt_topic: self.gt_topic.clone(),
+            gt_parent_frame: self.gt_parent_frame.clone(),
+            gt_child_frame: self.gt_child_frame.clone(),
+            gt: self.gt.clone(),
+            gt_time_offset_s: self.gt_time_offset,
+            gt_columns: self.gt_columns.clone(),
+            gt_units: self.gt_units.clone(),
+            split_s: self.split,
+            skip_invalid: self.skip_invalid,
+            ticks_per_rev: self.ticks_per_rev,
+            max_file_mb: self.max_file_mb,
         }
     }
-}
 
-/// Load runs from files/folders, printing what was skipped or noticed on stderr. The runs' recorded
-/// odometry is left out (no command but `export` shows it, and it would take as much memory as the wheel
-/// data).
-pub fn load_runs(paths: &[PathBuf], data: &DataArgs) -> anyhow::Result<Dataset> {
-    let ds = load(paths, data, false)?;
-    say_load_notes(&[&ds]);
-    Ok(ds)
-}
-
-/// [`load_runs`], keeping the runs' recorded odometry.
-pub fn load_runs_with_odometry(paths: &[PathBuf], data: &DataArgs) -> anyhow::Result<Dataset> {
-    let ds = load(paths, data, true)?;
-    say_load_notes(&[&ds]);
-    Ok(ds)
-}
-
-/// Training runs and held-out runs (`None` when `held_out` is empty), read as [`load_runs`] does, with the
-/// notes of both said once: a note both sets raise is one line with the count of every file.
-pub fn load_with_held_out(
-    runs: &[PathBuf],
-    held_out: &[PathBuf],
-    data: &DataArgs,
-) -> anyhow::Result<(Dataset, Option<Dataset>)> {
-    let train = load(runs, data, false)?;
-    let held = if held_out.is_empty() { None } else { Some(load(held_out, data, false)?) };
-    if let Some(h) = &held {
-        dataset::check_same_robot(train.robot_kind.as_ref(), h.robot_kind.as_ref())?;
+    /// The runs at `paths`, read with these options.
+    pub fn request(&self, paths: &[PathBuf]) -> LoadRequest {
+        LoadRequest::new(paths, &self.options())
     }
-    say_load_notes(&[Some(&train), held.as_ref()].into_iter().flatten().collect::<Vec<_>>());
-    Ok((train, held))
-}
-
-fn load(paths: &[PathBuf], data: &DataArgs, recorded_odometry: bool) -> anyhow::Result<Dataset> {
-    let started = std::time::Instant::now();
-    let robot = robot_file::resolve(data.robot.robot.as_deref(), paths)?;
-    if let Some(r) = &robot {
-        robot_file::announce(&r.source);
-    }
-    let ds = load_for_robot(paths, data, recorded_odometry, robot)?;
-    tracing::info!(
-        "read {} run{} from {} in {:.2} s",
-        ds.runs.len(),
-        if ds.runs.len() == 1 { "" } else { "s" },
-        paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "),
-        started.elapsed().as_secs_f64()
-    );
-    Ok(ds)
-}
-
-/// Reads runs as [`load_runs`] does for the robot `robot` (resolved from `data` by
-/// [`robot_file::resolve`]: its joints, topics and ground-truth file fill what `data` leaves open), printing
-/// nothing: notes, skipped inputs and ground-truth clocks stay in the dataset. The Python binding's `load`.
-pub fn load_for_robot(
-    paths: &[PathBuf],
-    data: &DataArgs,
-    recorded_odometry: bool,
-    robot: Option<robot_file::RobotFile>,
-) -> anyhow::Result<Dataset> {
-    let mut mcap = dataset::mcap::McapOptions {
-        wheel_joints: data.joints.clone().unwrap_or_default(),
-        joints_topic: data.joints_topic.clone(),
-        truth_topic: data.gt_topic.clone(),
-        truth_parent_frame: data.gt_parent_frame.clone(),
-        truth_child_frame: data.gt_child_frame.clone(),
-        split: data.split,
-        skip_invalid: data.skip_invalid,
-        recorded_odometry,
-        ..Default::default()
-    };
-    robot_file::fill_mcap_options(&mut mcap, data.joints.is_none(), robot.as_ref().map(|r| &r.description));
-    let opts = LoadOptions {
-        skip_invalid: data.skip_invalid,
-        ticks_per_rev: data.ticks_per_rev,
-        mcap,
-        recorded_odometry,
-        max_file_bytes: data.max_file_mb.saturating_mul(1 << 20),
-        ground_truth: ground_truth_options(data, robot.as_ref())?,
-        csv_joints: csv_joints(data, robot.as_ref()),
-    };
-    let mut ds = dataset::load(paths, &opts)?;
-    ds.robot_file = robot;
-    Ok(ds)
-}
-
-/// The joints CSV runs are read by: `--joints`, else a robot description file's. The built-in `apr02`'s
-/// names are the simulator's placeholders, so with it each file keeps its own column order.
-fn csv_joints(data: &DataArgs, robot: Option<&robot_file::RobotFile>) -> Vec<String> {
-    let from_file = robot.filter(|r| r.source != robot_file::Source::Builtin).map(|r| r.description.joints());
-    data.joints.clone().or(from_file).unwrap_or_default()
-}
-
-/// Says the datasets' notes on stderr, each distinct note once with the count of the files that raised it
-/// (the same note from many files differs only in the file name before its first `: `), then skipped
-/// inputs (shown even with `-q`) and ground-truth clocks.
-fn say_load_notes(sets: &[&Dataset]) {
-    let mut seen: Vec<(&str, &str, usize)> = Vec::new();
-    for n in sets.iter().flat_map(|ds| &ds.notes) {
-        let key = n.split_once(": ").map_or(n.as_str(), |(_, rest)| rest);
-        match seen.iter_mut().find(|(k, _, _)| *k == key) {
-            Some(entry) => entry.2 += 1,
-            None => seen.push((key, n, 1)),
-        }
-    }
-    for (_, first, count) in seen {
-        match count {
-            1 => crate::note!("note: {first}"),
-            2 => crate::note!("note: {first} (and 1 more file)"),
-            _ => crate::note!("note: {first} (and {} more files)", count - 1),
-        }
-    }
-    for s in sets.iter().flat_map(|ds| &ds.skipped) {
-        tracing::warn!(target: crate::logging::NOTE, "skipped {}: {}", s.source, s.reason);
-    }
-    for c in sets.iter().flat_map(|ds| &ds.ground_truth_clocks) {
-        crate::note!("{}", c.describe());
-    }
-}
-
-/// `--gt` and its options, over the robot description's `[ground_truth]` (its `file` relative to the
-/// description's folder).
-fn ground_truth_options(
-    data: &DataArgs,
-    robot: Option<&robot_file::RobotFile>,
-) -> anyhow::Result<Option<dataset::ground_truth::GroundTruthOptions>> {
-    let from_robot = robot.and_then(|r| r.description.ground_truth.as_ref().map(|g| (r, g)));
-    let path = match (&data.gt, from_robot.and_then(|(r, g)| g.file.as_ref().map(|f| (r, f)))) {
-        (Some(p), _) => p.clone(),
-        (None, Some((r, file))) => match &r.source {
-            robot_file::Source::Flag(p) | robot_file::Source::Discovered(p) => {
-                p.parent().unwrap_or(std::path::Path::new("")).join(file)
-            }
-            robot_file::Source::Builtin => PathBuf::from(file),
-        },
-        (None, None) => return Ok(None),
-    };
-    let mut csv = dataset::ground_truth::CsvColumns::default();
-    let settings = |list: &[String]| -> Vec<(String, String)> {
-        list.iter()
-            .filter_map(|kv| kv.split_once('=').map(|(k, v)| (k.trim().to_string(), v.trim().to_string())))
-            .collect()
-    };
-    let (mut columns, mut units) = (Vec::new(), Vec::new());
-    if let Some((_, g)) = from_robot {
-        columns.extend(g.columns.iter().map(|(k, v)| (k.clone(), v.clone())));
-        units.extend(g.units.iter().map(|(k, v)| (k.clone(), v.clone())));
-    }
-    for kv in data.gt_columns.iter().chain(&data.gt_units) {
-        anyhow::ensure!(kv.contains('='), "--gt-columns/--gt-units {kv:?}: expected KEY=VALUE");
-    }
-    columns.extend(settings(&data.gt_columns));
-    units.extend(settings(&data.gt_units));
-    for (k, v) in &columns {
-        csv.set_column(k, v).map_err(anyhow::Error::msg)?;
-    }
-    for (k, v) in &units {
-        csv.set_unit(k, v).map_err(anyhow::Error::msg)?;
-    }
-    let time_offset_s = data.gt_time_offset.or(from_robot.and_then(|(_, g)| g.time_offset_s));
-    Ok(Some(dataset::ground_truth::GroundTruthOptions { path, time_offset_s, csv }))
-}
-
-/// `design` / `paper` or a model file ([`crate::design::resolve`]), for the data's robot.
-pub fn resolve_model(spec: &str, ds: &Dataset) -> anyhow::Result<FittedModel> {
-    crate::design::resolve(spec, ds)
-}
-
-/// The wheel joint names the runs were read with: `--joints`, else the robot description's, else the
-/// default `wheel_a`, `wheel_b`, `wheel_c`.
-pub fn wheel_joints(data: &DataArgs, ds: &Dataset) -> Vec<String> {
-    let mut mcap =
-        dataset::mcap::McapOptions { wheel_joints: data.joints.clone().unwrap_or_default(), ..Default::default() };
-    robot_file::fill_mcap_options(&mut mcap, data.joints.is_none(), ds.robot_file.as_ref().map(|r| &r.description));
-    mcap.wheel_joints
 }

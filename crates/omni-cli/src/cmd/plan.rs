@@ -1,6 +1,6 @@
 //! `omnical plan`: propose calibration runs that excite every parameter.
 
-use super::{DataArgs, OutputArgs, load_runs};
+use super::{DataArgs, OutputArgs};
 use crate::cli::{choice, effect_help};
 use crate::{atomic, design, robot_file};
 use anyhow::Context;
@@ -116,7 +116,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
 /// them or in the working directory. Plan needs it to turn commands into wheel speeds.
 fn plan_robot(a: &Args) -> anyhow::Result<RobotGeometry> {
     if !a.robot_from.is_empty() {
-        return design::geometry(&load_runs(&a.robot_from, &a.data)?);
+        return design::geometry(&a.data.request(&a.robot_from).load()?);
     }
     match robot_file::resolve(a.data.robot.robot.as_deref(), &[])? {
         Some(r) => {

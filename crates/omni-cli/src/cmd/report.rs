@@ -1,6 +1,8 @@
 //! `omnical report`: the HTML report of a model on runs (diagnosis included unless `--no-diagnose`).
 
-use super::{DataArgs, OutputArgs, load_with_held_out, resolve_model};
+use super::{DataArgs, OutputArgs};
+use crate::api::ModelSpec;
+use crate::api::load::load_with_held_out;
 use crate::design::designs_for;
 use crate::progress;
 use crate::report::{self, ReportInput};
@@ -12,7 +14,7 @@ use std::path::PathBuf;
 pub struct Args {
     /// Model file (from `train --out`) or `design`.
     #[arg(long)]
-    pub model: String,
+    pub model: ModelSpec,
     /// Training runs (the ones the model was fitted on).
     #[arg(required = true)]
     pub runs: Vec<PathBuf>,
@@ -48,12 +50,12 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     if let Some(dir) = &a.png {
         crate::out_path::prepare_dir(dir, "--png")?;
     }
-    let (ds, val_ds) = load_with_held_out(&a.runs, &a.validate, &a.data)?;
-    let model = resolve_model(&a.model, &ds)?;
+    let (ds, val_ds) = load_with_held_out(&a.runs, &a.validate, &a.data.options())?;
+    let model = a.model.resolve(&ds)?;
     // Each run is compared with its own input's design.
     let design = designs_for(&model, &[Some(&ds), val_ds.as_ref()].into_iter().flatten().collect::<Vec<_>>());
     let val = val_ds.map(|v| v.runs).unwrap_or_default();
-    super::held_out::check("report", &a.runs, &ds.runs, &val)?;
+    crate::api::held_out::check("report", &a.runs, &ds.runs, &val)?;
     let diagnosis = if a.no_diagnose {
         None
     } else {

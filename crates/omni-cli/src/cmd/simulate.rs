@@ -13,8 +13,7 @@ use omni_kin::{FittedModel, IkMatrix, Model, RobotGeometry, Run};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
-/// ROS time of the simulator's t = 0 in MCAP output (2023-11-14T22:13:20Z). s.
-pub const SIM_EPOCH_S: i64 = 1_700_000_000;
+pub use crate::dataset::mcap::SIM_EPOCH_S;
 
 /// Seed of the training split (validation: seed + 1), here and in `demo`.
 pub const DEFAULT_SEED: u64 = 7;

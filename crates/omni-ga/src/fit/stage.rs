@@ -42,6 +42,17 @@ impl Stage {
         matches!(self, Stage::Lm(_))
     }
 
+    /// The same stage with a third of its evaluation budget on a problem of `n_params` parameters and
+    /// `n_residuals` residuals, to scout with: a local method that has not converged within it is crawling
+    /// (the fit pipeline's scouting, [`crate::fit::refine`]). `None` for a stage without such a budget, or
+    /// when the cut leaves the budget as it is ([`LmConfig::scout`]).
+    pub fn scout(&self, n_params: usize, n_residuals: usize) -> Option<Stage> {
+        match self {
+            Stage::Lm(c) => c.scout(n_params, n_residuals).map(Stage::Lm),
+            Stage::Ga(_) => None,
+        }
+    }
+
     /// Sets the seed of a stage that draws random numbers.
     pub fn set_seed(&mut self, seed: u64) {
         match self {

@@ -58,6 +58,22 @@ fn default_normal_equations_above() -> usize {
     50_000
 }
 
+impl LmConfig {
+    /// The same settings with a third of the budget, when that is smaller than the whole budget on a problem
+    /// of `n_params` parameters and `n_residuals` residuals (the crate counts in units of `n + 1`, so a
+    /// large `n` leaves nothing to cut); `None` otherwise.
+    pub fn scout(&self, n_params: usize, n_residuals: usize) -> Option<LmConfig> {
+        let scout = LmConfig { max_evaluations: (self.max_evaluations / 3).max(1), ..self.clone() };
+        let patience = |c: &LmConfig| (c.max_evaluations / (n_params.max(1) + 1)).max(1);
+        let smaller = if n_residuals > self.normal_equations_above {
+            scout.max_evaluations < self.max_evaluations
+        } else {
+            patience(&scout) < patience(self)
+        };
+        smaller.then_some(scout)
+    }
+}
+
 impl Default for LmConfig {
     fn default() -> Self {
         Self {

@@ -50,6 +50,7 @@ __all__ = [
     "train_files",
     "_calibration_from_state",
     "_dataset_from_state",
+    "_fleet_args",
     "_model_from_toml",
     "_run_from_bytes",
 ]
@@ -452,6 +453,10 @@ def train_files(args: list[str]) -> dict[str, Any]:
 
 def diagnose_files(args: list[str]) -> dict[str, Any]:
     """``omnical diagnose ARGS...`` inside this process; returns what ``--json`` prints."""
+
+def _fleet_args(args: list[str]) -> tuple[Optional[dict[str, Any]], str, int]:
+    """``omnical fleet ARGS...`` parsed by the command line's parser: (options, "", 0), or (None, text,
+    status) for ``--help`` and bad arguments."""
 
 # Unpickling (the targets of the classes' __reduce__).
 def _run_from_bytes(data: bytes) -> Run: ...

@@ -972,16 +972,6 @@ def _simulate_session(session_dir: Path, seed: int, effects: list[str], duration
 # ---------------------------------------------------------------------------------------- the command
 
 
-USAGE = """usage: omnical fleet FLEET_DIR --out OUT [--scheduler ADDRESS] [--workers N] [--preset NAME] [--seed N]
-                     [--model KIND] [--diagnose auto|all|none] [--quiet] [-- TRAIN_ARGS...]
-
-Calibrate every robot-session FLEET_DIR/<robot>/<session>/ on Dask (a local cluster of N worker processes,
-or the scheduler at ADDRESS) and write OUT/<robot>/<session>/model.toml, OUT/fleet.csv and OUT/fleet.html.
-A robot.toml per robot folder or one in FLEET_DIR describes the robots. Arguments after `--` go to every
-`omnical train`. Needs dask[distributed] (pip install "omnical[fleet]").
-"""
-
-
 def main(argv: Sequence[str]) -> int:
     """``omnical fleet ...`` (``argv`` after the subcommand); returns the exit status (0, 2 on bad
     input, 130 after Ctrl-C).
@@ -989,36 +979,23 @@ def main(argv: Sequence[str]) -> int:
     >>> main(["no-such-fleet/", "--out", "fleet-out/"])  # prints "error: fleet folder ... does not exist"
     2
     """
-    import argparse
-
-    p = argparse.ArgumentParser(prog="omnical fleet", usage=USAGE.split("\n\n")[0][len("usage: ") :], description=USAGE.split("\n\n")[1])
-    p.add_argument("fleet_dir", metavar="FLEET_DIR")
-    p.add_argument("--out", required=True, help="output folder")
-    p.add_argument("--scheduler", metavar="ADDRESS", help="a Dask scheduler (default: a local cluster)")
-    p.add_argument("--workers", type=int, default=2, metavar="N", help="local worker processes (default 2)")
-    p.add_argument("--preset", default="default", help="train's recipe (default, paper)")
-    p.add_argument("--seed", type=int, default=0, help="GA seed of every session (default 0)")
-    p.add_argument("--model", default="ik", help="base model to fit (default ik)")
-    p.add_argument("--diagnose", choices=("auto", "all", "none"), default="auto", help="which sessions to diagnose (default: those whose cost is off)")
-    p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
-    argv = list(argv)
-    extra: list[str] = []
-    if "--" in argv:
-        i = argv.index("--")
-        argv, extra = argv[:i], argv[i + 1 :]
-    a = p.parse_args(argv)
+    # The options are declared once, in the native command line's parser (`omnical fleet --help`).
+    a, message, status = _omnical._fleet_args(list(argv))
+    if a is None:
+        print(message, end="", file=sys.stdout if status == 0 else sys.stderr)
+        return status
     try:
         r = calibrate_fleet(
-            a.fleet_dir,
-            a.out,
-            scheduler=a.scheduler,
-            n_workers=a.workers,
-            preset=a.preset,
-            seed=a.seed,
-            model=a.model,
-            extra_train_args=extra,
-            diagnose=a.diagnose,
-            progress=False if a.quiet else None,
+            a["fleet_dir"],
+            a["out"],
+            scheduler=a["scheduler"],
+            n_workers=a["workers"],
+            preset=a["preset"],
+            seed=a["seed"],
+            model=a["model"],
+            extra_train_args=a["train_args"],
+            diagnose=a["diagnose"],
+            progress=False if a["quiet"] else None,
         )
     except KeyboardInterrupt:
         return 130

@@ -78,6 +78,9 @@ pub(crate) use inspect::InventorySink;
 pub use inspect::{Inventory, ROBOT_DESCRIPTION_TOPIC, TopicSummary, inspect, inspect_bytes};
 pub use write::{COMMAND_TOPIC, JOINTS_TOPIC, TRUTH_TOPIC};
 
+/// ROS time of the simulator's t = 0 in MCAP output (2023-11-14T22:13:20Z). s.
+pub const SIM_EPOCH_S: i64 = 1_700_000_000;
+
 /// The default wheel joint names, in wheel order.
 pub const DEFAULT_WHEEL_JOINTS: [&str; 3] = ["wheel_a", "wheel_b", "wheel_c"];
 

@@ -1,0 +1,248 @@
+//! Reading runs: which inputs, for which robot, with which data options ([`LoadRequest`]); the notes of
+//! a load said once on stderr.
+
+use crate::dataset::{self, Dataset, LoadOptions};
+use crate::robot_file;
+use std::path::PathBuf;
+
+/// How runs are read: the robot description and the options that fill or override it (the command
+/// line's "Data options", Python's `load` keywords). `Default` is what no option gives.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DataOptions {
+    /// The robot description: a robot.toml path or `apr02`; `None`: a robot.toml beside the data (the first
+    /// input's folder) or in the working directory.
+    pub robot: Option<String>,
+    /// Wheel joint names in wheel order (MCAP JointState); `None`: the robot description's, else the default.
+    pub joints: Option<Vec<String>>,
+    /// MCAP topic of the wheel JointState (`None`: the only one).
+    pub joints_topic: Option<String>,
+    /// MCAP topic of the ground truth (`None`: the only map/world-frame pose source).
+    pub gt_topic: Option<String>,
+    /// Parent frame of the ground truth in a TF topic.
+    pub gt_parent_frame: Option<String>,
+    /// Child frame of the ground truth in a TF topic.
+    pub gt_child_frame: Option<String>,
+    /// Ground truth from a separate file or folder instead of a topic.
+    pub gt: Option<PathBuf>,
+    /// Clock offset of the ground-truth file: wheel time = ground-truth time + this (s); `None`: estimated.
+    pub gt_time_offset_s: Option<f64>,
+    /// CSV columns of the ground-truth file, `KEY=COLUMN` each (checked when a file is read).
+    pub gt_columns: Vec<String>,
+    /// Units of the ground-truth CSV columns, `KEY=UNIT` each (checked when a file is read).
+    pub gt_units: Vec<String>,
+    /// Cut MCAP files into runs at standstills at least this long (s).
+    pub split_s: Option<f64>,
+    /// Skip runs that fail to load (listed) instead of stopping.
+    pub skip_invalid: bool,
+    /// Encoder ticks per wheel revolution (CSV tick columns).
+    pub ticks_per_rev: Option<f64>,
+    /// Largest input file (MiB); each is read into memory whole.
+    pub max_file_mb: u64,
+}
+
+impl Default for DataOptions {
+    fn default() -> Self {
+        Self {
+            robot: None,
+            joints: None,
+            joints_topic: None,
+            gt_topic: None,
+            gt_parent_frame: None,
+            gt_child_frame: None,
+            gt: None,
+            gt_time_offset_s: None,
+            gt_columns: Vec::new(),
+            gt_units: Vec::new(),
+            split_s: None,
+            skip_invalid: false,
+            ticks_per_rev: None,
+            max_file_mb: dataset::DEFAULT_MAX_FILE_BYTES >> 20,
+        }
+    }
+}
+
+impl DataOptions {
+    /// The wheel joint names runs of `ds` were read with: [`DataOptions::joints`], else the robot
+    /// description's, else the default `wheel_a`, `wheel_b`, `wheel_c`.
+    pub fn wheel_joints(&self, ds: &Dataset) -> Vec<String> {
+        let mut mcap =
+            dataset::mcap::McapOptions { wheel_joints: self.joints.clone().unwrap_or_default(), ..Default::default() };
+        robot_file::fill_mcap_options(&mut mcap, self.joints.is_none(), ds.robot_file.as_ref().map(|r| &r.description));
+        mcap.wheel_joints
+    }
+}
+
+/// Runs to read: the inputs (files and folders), the data options, and whether to keep the runs' recorded
+/// odometry (only `export` shows it, and it takes as much memory as the wheel data).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoadRequest {
+    /// Files and folders.
+    pub paths: Vec<PathBuf>,
+    /// How to read them.
+    pub data: DataOptions,
+    /// Keep the runs' recorded odometry.
+    pub recorded_odometry: bool,
+}
+
+impl LoadRequest {
+    /// `paths` read with `data`, without the recorded odometry.
+    pub fn new(paths: &[PathBuf], data: &DataOptions) -> Self {
+        Self { paths: paths.to_vec(), data: data.clone(), recorded_odometry: false }
+    }
+
+    /// The robot description the runs are read for: [`DataOptions::robot`], else one found beside the data
+    /// or in the working directory ([`robot_file::resolve`]).
+    pub fn robot(&self) -> Result<Option<robot_file::RobotFile>, robot_file::RobotFileError> {
+        robot_file::resolve(self.data.robot.as_deref(), &self.paths)
+    }
+
+    /// Reads the runs, saying what was skipped or noticed on stderr.
+    pub fn load(&self) -> anyhow::Result<Dataset> {
+        let ds = self.load_silently()?;
+        say_load_notes(&[&ds]);
+        Ok(ds)
+    }
+
+    /// Reads the runs as [`LoadRequest::load`] does, notes left in the dataset.
+    fn load_silently(&self) -> anyhow::Result<Dataset> {
+        let started = std::time::Instant::now();
+        let robot = self.robot()?;
+        if let Some(r) = &robot {
+            robot_file::announce(&r.source);
+        }
+        let ds = self.read_for_robot(robot)?;
+        tracing::info!(
+            "read {} run{} from {} in {:.2} s",
+            ds.runs.len(),
+            if ds.runs.len() == 1 { "" } else { "s" },
+            self.paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "),
+            started.elapsed().as_secs_f64()
+        );
+        Ok(ds)
+    }
+
+    /// Reads the runs for the robot `robot` (resolved by [`LoadRequest::robot`]: its joints, topics and
+    /// ground-truth file fill what the data options leave open), printing nothing: notes, skipped inputs and
+    /// ground-truth clocks stay in the dataset. The Python binding's `load`.
+    pub fn read_for_robot(&self, robot: Option<robot_file::RobotFile>) -> anyhow::Result<Dataset> {
+        let data = &self.data;
+        let recorded_odometry = self.recorded_odometry;
+        let mut mcap = dataset::mcap::McapOptions {
+            wheel_joints: data.joints.clone().unwrap_or_default(),
+            joints_topic: data.joints_topic.clone(),
+            truth_topic: data.gt_topic.clone(),
+            truth_parent_frame: data.gt_parent_frame.clone(),
+            truth_child_frame: data.gt_child_frame.clone(),
+            split: data.split_s,
+            skip_invalid: data.skip_invalid,
+            recorded_odometry,
+            ..Default::default()
+        };
+        robot_file::fill_mcap_options(&mut mcap, data.joints.is_none(), robot.as_ref().map(|r| &r.description));
+        let opts = LoadOptions {
+            skip_invalid: data.skip_invalid,
+            ticks_per_rev: data.ticks_per_rev,
+            mcap,
+            recorded_odometry,
+            max_file_bytes: data.max_file_mb.saturating_mul(1 << 20),
+            ground_truth: ground_truth_options(data, robot.as_ref())?,
+            csv_joints: csv_joints(data, robot.as_ref()),
+        };
+        let mut ds = dataset::load(&self.paths, &opts)?;
+        ds.robot_file = robot;
+        Ok(ds)
+    }
+}
+
+/// Training runs and held-out runs (`None` when `held_out` is empty), read as [`LoadRequest::load`] does,
+/// with the notes of both said once: a note both sets raise is one line with the count of every file.
+pub fn load_with_held_out(
+    runs: &[PathBuf],
+    held_out: &[PathBuf],
+    data: &DataOptions,
+) -> anyhow::Result<(Dataset, Option<Dataset>)> {
+    let train = LoadRequest::new(runs, data).load_silently()?;
+    let held = if held_out.is_empty() { None } else { Some(LoadRequest::new(held_out, data).load_silently()?) };
+    if let Some(h) = &held {
+        dataset::check_same_robot(train.robot_kind.as_ref(), h.robot_kind.as_ref())?;
+    }
+    say_load_notes(&[Some(&train), held.as_ref()].into_iter().flatten().collect::<Vec<_>>());
+    Ok((train, held))
+}
+
+/// The joints CSV runs are read by: the joints option, else a robot description file's. The built-in
+/// `apr02`'s names are the simulator's placeholders, so with it each file keeps its own column order.
+fn csv_joints(data: &DataOptions, robot: Option<&robot_file::RobotFile>) -> Vec<String> {
+    let from_file = robot.filter(|r| r.source != robot_file::Source::Builtin).map(|r| r.description.joints());
+    data.joints.clone().or(from_file).unwrap_or_default()
+}
+
+/// Says the datasets' notes on stderr, each distinct note once with the count of the files that raised it
+/// (the same note from many files differs only in the file name before its first `: `), then skipped
+/// inputs (shown even with `-q`) and ground-truth clocks.
+fn say_load_notes(sets: &[&Dataset]) {
+    let mut seen: Vec<(&str, &str, usize)> = Vec::new();
+    for n in sets.iter().flat_map(|ds| &ds.notes) {
+        let key = n.split_once(": ").map_or(n.as_str(), |(_, rest)| rest);
+        match seen.iter_mut().find(|(k, _, _)| *k == key) {
+            Some(entry) => entry.2 += 1,
+            None => seen.push((key, n, 1)),
+        }
+    }
+    for (_, first, count) in seen {
+        match count {
+            1 => crate::note!("note: {first}"),
+            2 => crate::note!("note: {first} (and 1 more file)"),
+            _ => crate::note!("note: {first} (and {} more files)", count - 1),
+        }
+    }
+    for s in sets.iter().flat_map(|ds| &ds.skipped) {
+        tracing::warn!(target: crate::logging::NOTE, "skipped {}: {}", s.source, s.reason);
+    }
+    for c in sets.iter().flat_map(|ds| &ds.ground_truth_clocks) {
+        crate::note!("{}", c.describe());
+    }
+}
+
+/// `--gt` and its options, over the robot description's `[ground_truth]` (its `file` relative to the
+/// description's folder).
+fn ground_truth_options(
+    data: &DataOptions,
+    robot: Option<&robot_file::RobotFile>,
+) -> anyhow::Result<Option<dataset::ground_truth::GroundTruthOptions>> {
+    let from_robot = robot.and_then(|r| r.description.ground_truth.as_ref().map(|g| (r, g)));
+    let path = match (&data.gt, from_robot.and_then(|(r, g)| g.file.as_ref().map(|f| (r, f)))) {
+        (Some(p), _) => p.clone(),
+        (None, Some((r, file))) => match &r.source {
+            robot_file::Source::Flag(p) | robot_file::Source::Discovered(p) => {
+                p.parent().unwrap_or(std::path::Path::new("")).join(file)
+            }
+            robot_file::Source::Builtin => PathBuf::from(file),
+        },
+        (None, None) => return Ok(None),
+    };
+    let mut csv = dataset::ground_truth::CsvColumns::default();
+    let settings = |list: &[String]| -> Vec<(String, String)> {
+        list.iter()
+            .filter_map(|kv| kv.split_once('=').map(|(k, v)| (k.trim().to_string(), v.trim().to_string())))
+            .collect()
+    };
+    let (mut columns, mut units) = (Vec::new(), Vec::new());
+    if let Some((_, g)) = from_robot {
+        columns.extend(g.columns.iter().map(|(k, v)| (k.clone(), v.clone())));
+        units.extend(g.units.iter().map(|(k, v)| (k.clone(), v.clone())));
+    }
+    for kv in data.gt_columns.iter().chain(&data.gt_units) {
+        anyhow::ensure!(kv.contains('='), "--gt-columns/--gt-units {kv:?}: expected KEY=VALUE");
+    }
+    columns.extend(settings(&data.gt_columns));
+    units.extend(settings(&data.gt_units));
+    for (k, v) in &columns {
+        csv.set_column(k, v).map_err(anyhow::Error::msg)?;
+    }
+    for (k, v) in &units {
+        csv.set_unit(k, v).map_err(anyhow::Error::msg)?;
+    }
+    let time_offset_s = data.gt_time_offset_s.or(from_robot.and_then(|(_, g)| g.time_offset_s));
+    Ok(Some(dataset::ground_truth::GroundTruthOptions { path, time_offset_s, csv }))
+}

@@ -1,0 +1,96 @@
+//! The library API both front ends call: typed requests, validated once, and the work they describe.
+//!
+//! The command line's clap `Args` (what was typed, `cmd/`) convert into these requests (what to do); the
+//! Python binding (omni-py) builds the same requests from its keyword arguments. Nothing here parses a
+//! command line but [`session`], which reads `omnical train` / `omnical diagnose` argument lists for
+//! callers that take them as such (the Python wheel's fleet workers).
+//!
+//! - [`ModelSpec`]: the model a command works with (`design`, `paper` or a model file).
+//! - [`load::LoadRequest`] and [`load::DataOptions`]: which runs to read and how.
+//! - [`fit::FitOptions`]: a preset's objective and identifiability overrides, and the refusals of a fit.
+//! - [`train::TrainRequest`], [`diagnose::DiagnoseRequest`]: `omnical train` and `omnical diagnose`
+//!   without a terminal.
+//! - [`settings`]: every setting's one declaration (its flag, project-file key, `omnical config` row and
+//!   Python keyword).
+
+pub mod diagnose;
+pub mod explore;
+pub mod fit;
+pub mod held_out;
+pub mod load;
+pub mod session;
+pub mod settings;
+pub mod train;
+
+use crate::dataset::Dataset;
+use crate::{design, robot_file};
+use anyhow::Context;
+use omni_kin::{FittedModel, RunModels};
+use std::path::{Path, PathBuf};
+
+/// Version of the layout of every `--json` document (docs/json.md): each carries it as `schema_version`,
+/// with the command's name as `command`. Raised when a field changes meaning or is removed.
+pub const JSON_SCHEMA_VERSION: u32 = 1;
+
+/// A model named as the command line's `--model` names it: `design` (the design model the data's robot
+/// declares, each run its own input's where they differ), `paper` (the paper's calibrated APR-02, Eq. 9)
+/// or a model file (`train --out`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ModelSpec {
+    /// The data's design model ([`design::declared`]).
+    Design,
+    /// The paper's calibrated APR-02 ([`design::paper_calibrated`]).
+    Paper,
+    /// A model file.
+    File(PathBuf),
+}
+
+impl ModelSpec {
+    /// The spec a path spells: `design` and `paper` are the built-in names, anything else a model file.
+    pub fn from_path(path: &Path) -> Self {
+        match path.to_str() {
+            Some("design") => Self::Design,
+            Some("paper") => Self::Paper,
+            _ => Self::File(path.to_path_buf()),
+        }
+    }
+
+    /// The one model this spec stands for on `ds`'s runs: `design` the one the most runs declare (none is
+    /// an error), `paper`, or the model file read.
+    pub fn resolve(&self, ds: &Dataset) -> anyhow::Result<FittedModel> {
+        match self {
+            Self::Design => design::declared(ds)?.ok_or_else(|| robot_file::no_design("--model design")),
+            Self::Paper => Ok(design::paper_calibrated()),
+            Self::File(path) => crate::model_file::read(path).context("reading the model"),
+        }
+    }
+
+    /// The model of every run of `sets`: `design` each run's own ([`design::declared_each`]; none is an
+    /// error), else [`ModelSpec::resolve`]'s one model for all.
+    pub fn resolve_each(&self, sets: &[&Dataset]) -> anyhow::Result<RunModels> {
+        match (self, sets.first()) {
+            (Self::Design, _) => design::declared_each(sets)?.ok_or_else(|| robot_file::no_design("--model design")),
+            (_, Some(ds)) => Ok(RunModels::from(self.resolve(ds)?)),
+            (_, None) => anyhow::bail!("no runs to resolve {self} for (a bug)"),
+        }
+    }
+}
+
+impl std::str::FromStr for ModelSpec {
+    type Err = std::convert::Infallible;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Ok(Self::from_path(Path::new(s)))
+    }
+}
+
+impl std::fmt::Display for ModelSpec {
+    /// As spelt on the command line (`design`, `paper`, the file's path).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Design => f.write_str("design"),
+            Self::Paper => f.write_str("paper"),
+            Self::File(p) => write!(f, "{}", p.display()),
+        }
+    }
+}

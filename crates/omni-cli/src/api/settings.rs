@@ -1,0 +1,179 @@
+//! Every setting of `omnical train` and of the data options, declared once: its command-line option (the
+//! clap argument id, the long flag in kebab-case), whether omnical.toml may set it (the project file's
+//! keys are this table's), whether `omnical config` shows it, and its Python keyword. The clap `Args`
+//! structs, the `omnical config` rows and the Python signatures (`#[pyo3(signature)]`, `_omnical.pyi`) are
+//! checked against it by `crates/omni-cli/tests/config.rs`, so a setting added to one front end and not to
+//! the others (or not here) fails a test.
+
+use Where::{No, Yes};
+
+/// A setting's Python keywords, each a function (`load`, `train`) and the keyword's name there; or why it
+/// has none.
+pub type Python = Result<&'static [(&'static str, &'static str)], &'static str>;
+
+/// Where a setting appears in one front end, or why it does not.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Where {
+    /// It appears.
+    Yes,
+    /// It does not, for this reason.
+    No(&'static str),
+}
+
+/// One setting.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Setting {
+    /// The clap argument id, the project file's key and the `omnical config` row's key (`gt_time_offset`);
+    /// the long flag is it in kebab-case.
+    pub key: &'static str,
+    /// What it is, as the project file's key list says it.
+    pub about: &'static str,
+    /// An option of `omnical train` (or a global one, or a data option of every command that reads runs).
+    pub flag: Where,
+    /// A key of omnical.toml.
+    pub project_file: Where,
+    /// A row of `omnical config`.
+    pub config_row: Where,
+    /// Its Python keywords.
+    pub python: Python,
+}
+
+const fn setting(
+    key: &'static str,
+    about: &'static str,
+    project_file: Where,
+    config_row: Where,
+    python: Python,
+) -> Setting {
+    Setting { key, about, flag: Where::Yes, project_file, config_row, python }
+}
+
+/// Why a data option's Python keyword is `load`'s: the other calls take runs already loaded.
+const LOAD: &str = "load";
+/// Python's training call.
+const TRAIN: &str = "train";
+/// Settings a project file has no key for.
+const NOT_SHOWN: Where = No("`omnical config` shows the settings a user repeats across commands");
+
+/// The settings, in the order of the project file's key list.
+pub const SETTINGS: &[Setting] = &[
+    setting("threads", "worker threads", Yes, Yes, Err("RAYON_NUM_THREADS sets rayon's pool in Python")),
+    setting(
+        "robot",
+        "robot description: a robot.toml path or apr02",
+        Yes,
+        Yes,
+        Ok(&[(LOAD, "robot"), (TRAIN, "robot")]),
+    ),
+    setting("joints", "wheel joint names in wheel order", Yes, Yes, Ok(&[(LOAD, "joints")])),
+    setting("joints_topic", "MCAP topic of the wheel JointState", Yes, Yes, Ok(&[(LOAD, "joints_topic")])),
+    setting("gt_topic", "MCAP topic of the ground truth", Yes, Yes, Ok(&[(LOAD, "gt_topic")])),
+    setting(
+        "gt_parent_frame",
+        "parent frame of the ground truth in a TF topic",
+        Yes,
+        Yes,
+        Ok(&[(LOAD, "gt_parent_frame")]),
+    ),
+    setting(
+        "gt_child_frame",
+        "child frame of the ground truth in a TF topic",
+        Yes,
+        Yes,
+        Ok(&[(LOAD, "gt_child_frame")]),
+    ),
+    setting("gt", "ground truth from a separate file or folder", Yes, Yes, Ok(&[(LOAD, "gt")])),
+    setting("gt_time_offset", "clock offset of the gt file (s)", Yes, Yes, Ok(&[(LOAD, "gt_time_offset")])),
+    setting("split", "cut recordings at standstills at least this long (s)", Yes, Yes, Ok(&[(LOAD, "split_s")])),
+    setting("skip_invalid", "skip runs that fail to load", Yes, NOT_SHOWN, Ok(&[(LOAD, "skip_invalid")])),
+    setting("ticks_per_rev", "encoder ticks per wheel revolution", Yes, NOT_SHOWN, Ok(&[(LOAD, "ticks_per_rev")])),
+    setting("max_file_mb", "largest input file (MiB)", Yes, NOT_SHOWN, Ok(&[(LOAD, "max_file_mb")])),
+    setting("preset", "training recipe", Yes, Yes, Ok(&[(TRAIN, "preset")])),
+    setting("seed", "seed", Yes, Yes, Ok(&[(TRAIN, "seed")])),
+    setting("objective", "training objective", Yes, Yes, Ok(&[(TRAIN, "objective")])),
+    setting("every", "path objective: every k-th ground-truth pose", Yes, NOT_SHOWN, Ok(&[(TRAIN, "every")])),
+    setting(
+        "heading_weight",
+        "path objective: heading weight (m/rad)",
+        Yes,
+        NOT_SHOWN,
+        Ok(&[(TRAIN, "heading_weight")]),
+    ),
+    setting("unexcited", "unconstrained directions: hold or move", Yes, NOT_SHOWN, Ok(&[(TRAIN, "unexcited")])),
+    setting(
+        "gt_columns",
+        "CSV columns of the gt file",
+        No("a robot.toml's [ground_truth] columns table holds them for a robot"),
+        NOT_SHOWN,
+        Ok(&[(LOAD, "gt_columns")]),
+    ),
+    setting(
+        "gt_units",
+        "units of the gt file's CSV columns",
+        No("a robot.toml's [ground_truth] units table holds them for a robot"),
+        NOT_SHOWN,
+        Ok(&[(LOAD, "gt_units")]),
+    ),
+    setting(
+        "max_std_error",
+        "largest standard error of a constrained direction (fraction of the scale)",
+        No("a per-fit threshold"),
+        NOT_SHOWN,
+        Ok(&[(TRAIN, "max_std_error")]),
+    ),
+    setting(
+        "min_excitation",
+        "smallest singular value of a constrained direction (fraction of the largest)",
+        No("a per-fit threshold"),
+        NOT_SHOWN,
+        Ok(&[(TRAIN, "min_excitation")]),
+    ),
+    setting("model", "base model to fit", No(PER_RUN), NOT_SHOWN, Ok(&[(TRAIN, "model")])),
+    setting("start", "start model file", No(PER_RUN), NOT_SHOWN, Err("an omnical.Model as model= is the start")),
+    setting("effects", "effects to add to the fit", No(PER_RUN), NOT_SHOWN, Ok(&[(TRAIN, "effects")])),
+    setting("out", "fitted model file", No(PER_RUN), NOT_SHOWN, Err("train returns the model; Model.save writes it")),
+    setting("force", "fit and write a refused fit", No(PER_RUN), NOT_SHOWN, Ok(&[(TRAIN, "force")])),
+    setting("json", "results as JSON", No(PER_RUN), NOT_SHOWN, Err("results are Python objects")),
+    setting("quiet", "fewer notes", No(PER_RUN), NOT_SHOWN, Err(NO_TERMINAL)),
+    setting("verbose", "more notes", No(PER_RUN), NOT_SHOWN, Err(NO_TERMINAL)),
+    setting("config", "the project file", No("it names the project file"), NOT_SHOWN, Err(NO_TERMINAL)),
+    Setting {
+        key: "command_topic",
+        about: "MCAP topic of the velocity command",
+        flag: No("a robot.toml's [topics] command sets it"),
+        project_file: No("a robot.toml's [topics] command sets it"),
+        config_row: Yes,
+        python: Err("a robot.toml's [topics] command sets it"),
+    },
+    Setting {
+        key: "recorded_odometry",
+        about: "keep the runs' recorded odometry",
+        flag: No("`omnical export` keeps it, the other commands do not need it"),
+        project_file: No("not an option of the command line"),
+        config_row: NOT_SHOWN,
+        python: Ok(&[(LOAD, "recorded_odometry")]),
+    },
+    Setting {
+        key: "progress",
+        about: "a callback per optimizer iteration",
+        flag: No("the command line shows a progress bar (-q hides it)"),
+        project_file: No("not an option of the command line"),
+        config_row: NOT_SHOWN,
+        python: Ok(&[(TRAIN, "progress")]),
+    },
+];
+
+/// Why a setting of one run is not a project default.
+const PER_RUN: &str = "it names this run's inputs or outputs";
+/// Why a terminal setting has no Python keyword.
+const NO_TERMINAL: &str = "Python prints nothing (logging is the host's)";
+
+/// The settings omnical.toml may set.
+pub fn project_keys() -> impl Iterator<Item = &'static Setting> {
+    SETTINGS.iter().filter(|s| s.project_file == Where::Yes)
+}
+
+/// The setting of `key`.
+pub fn get(key: &str) -> Option<&'static Setting> {
+    SETTINGS.iter().find(|s| s.key == key)
+}

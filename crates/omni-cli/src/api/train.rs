@@ -1,0 +1,234 @@
+//! `omnical train` as a request ([`TrainRequest`]): loading, the start model, the plan and the fit, and the
+//! model file it writes. The command prints around it; [`train_quietly`] runs it without a terminal.
+
+use crate::api::fit::{FitOptions, PriorUse, check_fit, check_step, robot_priors};
+use crate::api::load::{DataOptions, LoadRequest};
+use crate::dataset::Dataset;
+use crate::{atomic, design, interrupt, model_file, out_path};
+use anyhow::Context;
+use omni_ga::calibrate::{Calibration, Plan, Preset, calibrate_with_effects};
+use omni_kin::cost::CostKind;
+use omni_kin::effect::Effect;
+use omni_kin::robot::PRIOR_BOX_SIGMAS;
+use omni_kin::{EffectKind, FittedModel, KinematicsKind, Model};
+use serde_json::json;
+use std::path::PathBuf;
+
+/// What `omnical train` does: the runs and how to read them, the start, the preset and its overrides, the
+/// effects to add, where the model goes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrainRequest {
+    /// Training run files or folders.
+    pub runs: Vec<PathBuf>,
+    /// How to read them.
+    pub data: DataOptions,
+    /// Base model to fit (at the robot's design) when no start model is given.
+    pub model: KinematicsKind,
+    /// Start from this model file instead of the design.
+    pub start: Option<PathBuf>,
+    /// Training recipe.
+    pub preset: Preset,
+    /// Seed of the genetic algorithm.
+    pub seed: u64,
+    /// Effect ids to add to the fit.
+    pub effects: Vec<String>,
+    /// Where to write the fitted model (`None`: nowhere).
+    pub out: Option<PathBuf>,
+    /// Fit and write even when the fit is refused.
+    pub force: bool,
+    /// Objective and identifiability overrides.
+    pub fit: FitOptions,
+}
+
+/// The fit summary as JSON (also written into the model file's `[fit]` table).
+pub fn summary(c: &Calibration, preset: &str, seed: u64, runs: usize) -> anyhow::Result<serde_json::Value> {
+    Ok(json!({
+        "preset": preset,
+        "seed": seed,
+        "runs": runs,
+        "objective": c.objective.name(),
+        "cost_design": c.end_pose_start,
+        "cost_fitted": c.end_pose_fitted,
+        "improvement_pct": c.improvement_pct(),
+        "objective_design": c.objective_start,
+        "objective_fitted": c.objective_fitted,
+        "matrix": c.fitted.ik()?.rows(),
+        "params": c.fitted.model.params().iter().zip(&c.fitted.params)
+            .map(|(s, v)| json!({"name": s.name, "unit": s.unit, "value": v})).collect::<Vec<_>>(),
+        "evaluations": c.evaluations,
+        "seconds": c.seconds,
+        "at_bound": c.at_bound,
+        "outside_box": c.outside_box,
+        "held_at_start": c.held.iter().map(|w| &w.text).collect::<Vec<_>>(),
+        "warnings": c.identifiability.warnings(),
+        "identifiability": c.identifiability,
+    }))
+}
+
+/// JSON made fit for TOML, which has no null: null fields are dropped, null array items become "none".
+fn toml_safe(v: serde_json::Value) -> serde_json::Value {
+    use serde_json::Value;
+    match v {
+        Value::Object(m) => {
+            Value::Object(m.into_iter().filter(|(_, v)| !v.is_null()).map(|(k, v)| (k, toml_safe(v))).collect())
+        }
+        Value::Array(a) => Value::Array(
+            a.into_iter().map(|v| if v.is_null() { Value::String("none".into()) } else { toml_safe(v) }).collect(),
+        ),
+        v => v,
+    }
+}
+
+/// The design model with its columns named: the robot description's joints (already), else `--joints`
+/// (the order the runs were read in); the model file carries them. `--joints` in another order than the
+/// robot description's is warned about: the design's columns follow the description.
+fn named_columns(design: Model, joints: Option<&[String]>) -> anyhow::Result<Model> {
+    let Some(joints) = joints.filter(|j| j.len() == design.n_wheels()) else { return Ok(design) };
+    let names = design.kinematics.wheel_names();
+    if names == omni_kin::geometry::default_wheel_names(names.len()) {
+        return Ok(design.with_wheel_names(joints)?);
+    }
+    if names != joints {
+        tracing::warn!(
+            "--joints reads the wheels as {}, but the design's columns are the robot's {}: give the \
+             joints in the robot description's order",
+            joints.join(", "),
+            names.join(", ")
+        );
+    }
+    Ok(design)
+}
+
+/// What `omnical train` fits: the runs, the start model, the effects to add to it, the plan and the robot
+/// description's priors.
+pub struct Prepared {
+    /// The training runs.
+    pub ds: Dataset,
+    /// The start model.
+    pub start: FittedModel,
+    /// The effects added to it.
+    pub effects: Vec<EffectKind>,
+    /// The plan: the preset with the request's overrides and the priors' box.
+    pub plan: Plan,
+    /// The robot description's priors (none with a start model).
+    pub priors: Vec<PriorUse>,
+}
+
+/// Loads the runs and builds the start model, the effects and the plan, as `omnical train` does. A Ctrl-C
+/// (when the handler is installed) during loading ends it with [`interrupt::Interrupted`].
+pub fn prepare(a: &TrainRequest) -> anyhow::Result<Prepared> {
+    let ds = LoadRequest::new(&a.runs, &a.data).load()?;
+    if interrupt::requested() {
+        return Err(interrupt::Interrupted.into());
+    }
+    let start = match &a.start {
+        Some(p) => model_file::read(p).context("reading --start")?,
+        None => FittedModel::nominal(named_columns(design::model(a.model, &ds)?, a.data.joints.as_deref())?),
+    };
+    let effects = a
+        .effects
+        .iter()
+        .map(|id| EffectKind::from_id(id, start.model.n_wheels()).with_context(|| format!("--effect {id}")))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    // The parameter count with the effects: the paper preset's GA fits them all at once.
+    let n_params = start.model.n_params() + effects.iter().map(|e| e.params().len()).sum::<usize>();
+    let mut plan = a.fit.apply(Plan::preset(a.preset, n_params).seed(a.seed))?;
+    let priors = if a.start.is_none() { robot_priors(&start, &ds) } else { Vec::new() };
+    plan.half_widths = priors.iter().map(|p| (p.name.clone(), PRIOR_BOX_SIGMAS * p.std)).collect();
+    Ok(Prepared { ds, start, effects, plan, priors })
+}
+
+/// Writes the model file of a fit with its summary `s` as the `[fit]` table, atomically. Everything but the
+/// wall time goes in: the same data, preset and seed give a byte-identical file.
+pub fn write_model(c: &Calibration, s: &serde_json::Value, out: &std::path::Path) -> anyhow::Result<()> {
+    let mut fit: toml::Table = toml::Table::try_from(toml_safe(s.clone())).context("fit summary")?;
+    fit.remove("seconds");
+    let text = model_file::to_toml(&c.fitted, Some(fit)).map_err(anyhow::Error::msg)?;
+    atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))
+}
+
+/// What [`train_quietly`] gives back.
+pub struct Trained {
+    /// The fit.
+    pub calibration: Calibration,
+    /// The JSON summary that `--json` prints (without the ground-truth clocks) and the model file holds.
+    pub summary: serde_json::Value,
+    /// The dataset the runs came from (notes, skipped inputs, ground-truth clocks).
+    pub dataset: Dataset,
+    /// What `omnical train` would print as `warning:` lines before training.
+    pub warnings: Vec<String>,
+}
+
+/// `omnical train` without a terminal, for callers that run many trainings in one process (the Python
+/// wheel's fleet workers): the same loading, start model, plan and fit as the command, and the same model file
+/// written to `--out` (byte-identical: the same `write_model` either way), but nothing printed, no progress bar
+/// and no Ctrl-C handler installed.
+pub fn train_quietly(a: &TrainRequest) -> anyhow::Result<Trained> {
+    if let Some(out) = &a.out {
+        out_path::check_file(out, "--out")?;
+    }
+    let Prepared { ds, start, effects, plan, .. } = prepare(a)?;
+    let mut warnings: Vec<String> = check_step(&plan, &ds.runs, a.force)?.into_iter().collect();
+    let c = calibrate_with_effects(&start, &effects, &ds.runs, &plan, &mut omni_ga::observe::NoopObserver)?;
+    warnings.extend(check_fit(&c, &plan, &ds.runs, a.force)?);
+    let mut s = summary(&c, a.preset.id(), a.seed, ds.runs.len())?;
+    if let Some(d) = designs_figure(&c, &ds, &plan, a.start.is_none())? {
+        s["designs"] = d.to_json();
+    }
+    if let Some(out) = &a.out {
+        write_model(&c, &s, out)?;
+    }
+    Ok(Trained { calibration: c, summary: s, dataset: ds, warnings })
+}
+
+/// The design figure when the training runs' inputs declare different designs: each run under its own
+/// input's design (in the fit's kinematics and integration), against the one design the fit started from.
+pub struct DesignsFigure {
+    /// Distinct designs.
+    pub designs: usize,
+    /// Eq. 6 on the training runs, each under its own design.
+    pub end_pose: f64,
+    /// The objective on the training runs, each under its own design.
+    pub objective: f64,
+    /// The input whose design the fit started from (`None`: a `--start` model).
+    pub start: Option<String>,
+}
+
+impl DesignsFigure {
+    /// The figure as JSON (`omnical train --json`'s `designs`).
+    pub fn to_json(&self) -> serde_json::Value {
+        json!({ "designs": self.designs, "cost": self.end_pose, "objective": self.objective, "start": self.start })
+    }
+
+    /// The figure in words.
+    pub fn describe(&self) -> String {
+        let start = self.start.as_ref().map_or("the --start model".to_string(), |s| format!("{s}'s design"));
+        format!(
+            "design, each run its own input's ({} designs): Eq. 6 {:.5}, objective {:.5}; the fit started from {start} \
+             (the \"design\" above)",
+            self.designs, self.end_pose, self.objective
+        )
+    }
+}
+
+/// [`DesignsFigure`] for a fit on `ds`'s runs, `None` when its inputs declare one design (or none).
+pub fn designs_figure(
+    c: &Calibration,
+    ds: &Dataset,
+    plan: &Plan,
+    from_design: bool,
+) -> anyhow::Result<Option<DesignsFigure>> {
+    let designs = design::designs_for(&c.start, &[ds]);
+    if designs.single().is_some() {
+        return Ok(None);
+    }
+    let start = ds.declared_start().filter(|_| from_design).map(|d| {
+        d.source.file_name().map_or_else(|| d.source.display().to_string(), |n| n.to_string_lossy().into_owned())
+    });
+    Ok(Some(DesignsFigure {
+        designs: designs.models().len(),
+        end_pose: designs.cost(&ds.runs, CostKind::EndPose)?,
+        objective: designs.cost(&ds.runs, plan.objective)?,
+        start,
+    }))
+}

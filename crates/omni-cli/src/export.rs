@@ -1,0 +1,76 @@
+//! Trajectories for other tools, as `omnical export` and Python's `export` write them: TUM files for evo,
+//! MCAP bags with a model's odometry on `/omnical/odometry` for Foxglove.
+
+use crate::atomic;
+use crate::dataset::mcap::{WriteOptions, write_run};
+use crate::report::tum;
+use anyhow::Context;
+use omni_kin::odometry::{self, Selection};
+use omni_kin::{FittedModel, Run, StampedPose};
+use std::path::{Path, PathBuf};
+
+/// The odometry of the measured point: every wheel-sample step plus the exact predictions at the
+/// ground-truth stamps (so tools that match poses by time find an exact match), in time order.
+pub fn odometry_poses(model: &FittedModel, run: &Run) -> anyhow::Result<Vec<StampedPose>> {
+    let res = model.model.resolve(&model.params).with_context(|| format!("run {}", run.name()))?;
+    let dense = odometry::integrate(&res, run);
+    let mut poses: Vec<StampedPose> =
+        dense.t_s.iter().zip(&dense.poses).map(|(&t_s, &pose)| StampedPose { t_s, pose }).collect();
+    let at_truth = odometry::residuals(&res, run, Selection::Path(1));
+    poses.retain(|p| !at_truth.iter().any(|r| (r.t_s - p.t_s).abs() < 1e-9));
+    poses.extend(at_truth.iter().map(|r| StampedPose { t_s: r.t_s, pose: r.predicted }));
+    poses.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
+    Ok(poses)
+}
+
+/// Joint names in the model's column order: the model's own, or `--joints` when the model only has the
+/// default names `wheel_a`, `wheel_b`, ….
+pub fn joint_names(model: &FittedModel, joints: &[String]) -> Vec<String> {
+    let names = model.model.kinematics.wheel_names();
+    if names == omni_kin::geometry::default_wheel_names(names.len()) && joints.len() == names.len() {
+        joints.to_vec()
+    } else {
+        names
+    }
+}
+
+/// Writes one run's MCAP bag `DIR/<run>.mcap` (`--mcap`): its wheel data (joints `wheel_joints`), ground
+/// truth, recorded odometry if any, and `model`'s odometry on /omnical/odometry; a run whose clock starts
+/// before 0 s (a simulated one) is put at the simulator's epoch. Returns the path.
+pub fn write_mcap(dir: &Path, run: &Run, model: &FittedModel, wheel_joints: &[String]) -> anyhow::Result<PathBuf> {
+    let opts = WriteOptions {
+        wheel_joints: wheel_joints.to_vec(),
+        design_odometry: (!run.recorded_odometry().is_empty()).then(|| run.recorded_odometry().to_vec()),
+        calibrated_odometry: Some(odometry_poses(model, run)?),
+        // Simulated clocks start before 0 s (as `simulate` does): put them at its epoch.
+        origin_s: if run.wheel_t_s().first().is_some_and(|&t| t < 0.0) { crate::dataset::mcap::SIM_EPOCH_S } else { 0 },
+    };
+    let path = dir.join(format!("{}.mcap", tum::file_stem(run.name())));
+    write_run(&path, run, &opts)?;
+    Ok(path)
+}
+
+/// Writes one run's TUM files (`--tum`): `DIR/<run>.gt.tum`, `.design.tum` and `.calibrated.tum`, the
+/// latter two the odometry of `design` and of `model` (named `spec` in the header). Returns the paths.
+pub fn write_tum(
+    dir: &Path,
+    run: &Run,
+    design: &FittedModel,
+    model: &FittedModel,
+    spec: &str,
+) -> anyhow::Result<Vec<PathBuf>> {
+    let stem = tum::file_stem(run.name());
+    let files = [
+        ("gt", format!("run {}: ground truth", run.name()), run.truth().to_vec()),
+        ("design", format!("run {}: odometry of the design model", run.name()), odometry_poses(design, run)?),
+        ("calibrated", format!("run {}: odometry of {spec}", run.name()), odometry_poses(model, run)?),
+    ];
+    let mut written = Vec::with_capacity(files.len());
+    for (kind, comment, poses) in files {
+        let path = dir.join(format!("{stem}.{kind}.tum"));
+        let text = tum::to_tum(&format!("{comment}\ntimestamp tx ty tz qx qy qz qw (s, m, unit quaternion)"), &poses);
+        atomic::write_atomic(&path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))?;
+        written.push(path);
+    }
+    Ok(written)
+}
