@@ -235,3 +235,23 @@ fn the_report_names_one_worst_run() {
     assert_eq!(finding_run, figure_run);
     assert_eq!(html.matches("worst held-out run").count(), 0);
 }
+
+/// An option that changes nothing is an error (issue 27): `--gt-time-offset` on runs with neither a `--gt`
+/// file nor a ground-truth topic; on a recording's topic it is applied and reported like a file's.
+#[test]
+fn a_clock_offset_that_changes_nothing_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    ok(&["simulate", "--out", "csv", "--runs-per-command", "1", "--duration", "2", "--format", "csv"], d);
+    let err = fails(&["eval", "csv/train", "--gt-time-offset", "0.1"], d);
+    assert_eq!(
+        err.lines().last().unwrap(),
+        "error: --gt-time-offset 0.1 changes nothing here: it applies to a --gt file or to a ground-truth topic of a \
+         recording (MCAP, rosbag2), and these runs have neither"
+    );
+    simulate(d, "1", &[]);
+    let (out, _) = ok(&["eval", "sim/train", "--gt-time-offset", "0", "--json"], d);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["ground_truth_clock"].as_array().map(Vec::len), Some(36), "{v}");
+    assert_eq!(v["ground_truth_clock"][0]["estimated"], false);
+}

@@ -219,6 +219,11 @@ fn a_mocap_topic_on_another_clock_is_aligned_and_a_lag_is_left_to_diagnose() {
     // The truth as written on the wheel clock: the first pose within the wheel data.
     let first = want.as_array().unwrap().iter().find(|p| (p[0].as_f64().unwrap() - truth[0].t_s).abs() < 0.01).unwrap();
     assert!((truth[0].pose.x_m - first[1].as_f64().unwrap()).abs() < 1e-9, "{:?} vs {first}", truth[0]);
+    // Forced (--gt-time-offset without --gt): applied as given, not estimated.
+    let forced = McapOptions { truth_time_offset_s: Some(0.75), ..Default::default() };
+    let r = read(dir, "mocap_clock", &forced).unwrap();
+    let clock = r.ground_truth_clock.as_ref().unwrap();
+    assert!(clock.offset_s == 0.75 && clock.estimate.is_none(), "{clock:?}");
     // 60 ms: a lag the time_offset effect models (diagnose names it): the stamps stay as recorded.
     let r = read_ok(dir, "mocap_lag");
     assert!(r.ground_truth_clock.is_none(), "{:?}", r.ground_truth_clock);

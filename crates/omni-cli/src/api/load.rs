@@ -139,16 +139,30 @@ impl LoadRequest {
             ..Default::default()
         };
         robot_file::fill_mcap_options(&mut mcap, data.joints.is_none(), robot.as_ref().map(|r| &r.description));
+        let ground_truth = ground_truth_options(data, robot.as_ref())?;
+        if ground_truth.is_none() {
+            mcap.truth_time_offset_s = data.gt_time_offset_s;
+        }
         let opts = LoadOptions {
             skip_invalid: data.skip_invalid,
             ticks_per_rev: data.ticks_per_rev,
             mcap,
             recorded_odometry,
             max_file_bytes: data.max_file_mb.saturating_mul(1 << 20),
-            ground_truth: ground_truth_options(data, robot.as_ref())?,
+            ground_truth,
             csv_joints: csv_joints(data, robot.as_ref()),
         };
         let mut ds = dataset::load(&self.paths, &opts)?;
+        // An option that changes nothing is an error: the offset applies to a --gt file or to the ground-truth
+        // topic of a recording, and every run so read reports its clock.
+        if let Some(offset_s) = data.gt_time_offset_s
+            && ds.ground_truth_clocks.is_empty()
+        {
+            anyhow::bail!(
+                "--gt-time-offset {offset_s} changes nothing here: it applies to a --gt file or to a ground-truth \
+                 topic of a recording (MCAP, rosbag2), and these runs have neither"
+            );
+        }
         ds.robot_file = robot;
         Ok(ds)
     }

@@ -110,6 +110,9 @@ pub struct McapOptions {
     /// takes as much memory as the wheel data (a pose per `/odom` message), so commands that do not show
     /// it turn this off. Default true.
     pub recorded_odometry: bool,
+    /// Force the clock offset of a ground-truth topic (`--gt-time-offset` without `--gt`): `t_wheel =
+    /// t_truth + offset`. s. Default: the stamps as recorded, unless the topic is found on another clock.
+    pub truth_time_offset_s: Option<f64>,
 }
 
 impl Default for McapOptions {
@@ -124,6 +127,7 @@ impl Default for McapOptions {
             split: None,
             skip_invalid: false,
             recorded_odometry: true,
+            truth_time_offset_s: None,
         }
     }
 }

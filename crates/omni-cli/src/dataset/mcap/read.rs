@@ -913,7 +913,18 @@ pub(crate) fn runs(
                 _ => unreachable!("truth() returns pose channels or TF pairs"),
             };
             let mut poses = poses.stamped(origin_s);
-            let clock = topic_clock(path, stem, &truth_topic, &mut poses, &t_s, &wheels.rad_s, n_wheels);
+            let clock = match opts.truth_time_offset_s {
+                Some(offset_s) => {
+                    poses.iter_mut().for_each(|p| p.t_s += offset_s);
+                    Some(GtClock {
+                        recording: stem.to_string(),
+                        file: PathBuf::from(format!("{}, topic {truth_topic:?}", path.display())),
+                        offset_s,
+                        estimate: None,
+                    })
+                }
+                None => topic_clock(path, stem, &truth_topic, &mut poses, &t_s, &wheels.rad_s, n_wheels),
+            };
             (poses, format!("on {truth_topic:?}"), format!("topic {truth_topic:?}"), clock)
         }
         (_, _, Some(ext)) => {
