@@ -184,7 +184,8 @@ impl JointSeries {
     /// Whether `velocity` and `position` (wheel order) are bit for bit the last message's.
     fn repeats_last(&self, velocity: &[f64], position: &[f64]) -> bool {
         let w = velocity.len();
-        let same = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+        let same =
+            |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits() || x.is_nan() && y.is_nan());
         same(&self.velocity[self.velocity.len() - w..], velocity)
             && same(&self.position[self.position.len() - w..], position)
     }

@@ -407,6 +407,29 @@ impl Bag<'_> {
         }
     }
 
+    /// The ground truth `src` on channel `ch` (taken out of the bag): its topic and its poses in seconds
+    /// since `origin_s`; a TF pair's problem is an error naming the message.
+    fn truth_poses(
+        &mut self,
+        src: Truth,
+        ch: usize,
+        origin_s: i64,
+    ) -> Result<(String, Vec<StampedPose>), DatasetError> {
+        let topic = self.channels[ch].topic.clone();
+        let poses = match (src, self.take(ch)) {
+            (Truth::Tf(_, k), Content::Tf(mut pairs)) => {
+                let pair = pairs.pairs.swap_remove(k);
+                if let Some((m, what)) = pair.problem {
+                    return Err(DatasetError::at(self.path, format!("topic {topic:?}, message {m}"), what));
+                }
+                pair.poses
+            }
+            (_, Content::Poses(p)) => p,
+            _ => unreachable!("truth() returns pose channels or TF pairs"),
+        };
+        Ok((topic, poses.stamped(origin_s)))
+    }
+
     /// The robot's recorded wheel odometry: `/odom` if it is one, else the only one.
     fn recorded_odometry(&self, notes: &mut Vec<String>) -> Option<usize> {
         self.optional(Channel::is_wheel_odometry, "/odom", "recorded odometry", notes)
@@ -776,6 +799,17 @@ fn is_localization(topic: &str) -> bool {
     LOCALIZATION_WORDS.iter().any(|w| t.contains(w))
 }
 
+/// The note for a ground-truth topic named although it looks like a localization.
+fn localization_note(path: &Path, topic: &str) -> Option<String> {
+    is_localization(topic).then(|| {
+        format!(
+            "{}: topic {topic:?} is taken as ground truth as named, but it looks like a localization: if it fuses \
+             the wheel odometry being calibrated, the fit measures the wheels against themselves",
+            path.display()
+        )
+    })
+}
+
 /// The end of the "no ground truth" message when localizations were passed over.
 fn localization_hint(localizations: &[&str]) -> String {
     if localizations.is_empty() {
@@ -799,19 +833,32 @@ pub const SAME_CLOCK_MAX_OFFSET_S: f64 = 0.5;
 pub const TOPIC_CLOCK_MAX_STD_ERROR_S: f64 = 0.02;
 pub const TOPIC_CLOCK_MIN_R_SQUARED: f64 = 0.9;
 
-/// Checks a ground-truth topic's clock against the wheels' ([`omni_kin::clock::align_clocks`]): when the
+/// The clock of a ground-truth topic: `forced_s` when given (`--gt-time-offset`), else checked against the
+/// wheels' ([`omni_kin::clock::align_clocks`]): when the
 /// estimated offset is clear and beyond [`SAME_CLOCK_MAX_OFFSET_S`] and three standard errors, the poses
 /// are moved onto the wheel clock and the offset returned (a note); otherwise, or when no estimate is
 /// possible (too little motion), the stamps stay as recorded.
+#[allow(clippy::too_many_arguments)] // the topic's names, its poses and the wheel data they are checked against
 fn topic_clock(
     path: &Path,
     recording: &str,
     topic: &str,
+    forced_s: Option<f64>,
     poses: &mut [StampedPose],
     t_s: &[f64],
     rad_s: &[f64],
     n_wheels: usize,
 ) -> Option<GtClock> {
+    let clock = |offset_s: f64, estimate| GtClock {
+        recording: recording.to_string(),
+        file: PathBuf::from(format!("{}, topic {topic:?}", path.display())),
+        offset_s,
+        estimate,
+    };
+    if let Some(offset_s) = forced_s {
+        poses.iter_mut().for_each(|p| p.t_s += offset_s);
+        return Some(clock(offset_s, None));
+    }
     // On the wheels' clock, or off it by a lag (nearly always): the wheels explain the truth's motion at
     // offset 0 as well as the search asks of any offset, and no search is needed.
     if omni_kin::clock::explained_at(t_s, rad_s, n_wheels, poses, 0.0)
@@ -825,12 +872,7 @@ fn topic_clock(
         return None;
     }
     poses.iter_mut().for_each(|p| p.t_s += a.offset_s);
-    Some(GtClock {
-        recording: recording.to_string(),
-        file: PathBuf::from(format!("{}, topic {topic:?} (on another clock: aligned)", path.display())),
-        offset_s: a.offset_s,
-        estimate: Some(a),
-    })
+    Some(clock(a.offset_s, Some(a)))
 }
 
 /// The runs of a recording whose messages are all in `rec`; `path` names it in messages, `stem` names its
@@ -859,14 +901,7 @@ pub(crate) fn runs(
     });
     if let Some(i) = truth_ch {
         bag.check(i)?;
-        let topic = &bag.channels[i].topic;
-        if is_localization(topic) {
-            notes.push(format!(
-                "{}: topic {topic:?} is taken as ground truth as named, but it looks like a localization: if it fuses \
-                 the wheel odometry being calibrated, the fit measures the wheels against themselves",
-                path.display()
-            ));
-        }
+        notes.extend(localization_note(path, &bag.channels[i].topic));
     }
     let odom = if opts.recorded_odometry { bag.recorded_odometry(&mut notes) } else { None };
     let odom = odom.filter(|&i| Some(i) != truth_ch);
@@ -900,31 +935,9 @@ pub(crate) fn runs(
     let n_wheels = opts.wheel_joints.len();
     let (all_truth, truth_where, truth_label, clock) = match (truth_src, truth_ch, external) {
         (Some(src), Some(ch), _) => {
-            let truth_topic = bag.channels[ch].topic.clone();
-            let poses = match (src, bag.take(ch)) {
-                (Truth::Tf(_, k), Content::Tf(mut pairs)) => {
-                    let pair = pairs.pairs.swap_remove(k);
-                    if let Some((m, what)) = pair.problem {
-                        return Err(DatasetError::at(path, format!("topic {truth_topic:?}, message {m}"), what));
-                    }
-                    pair.poses
-                }
-                (_, Content::Poses(p)) => p,
-                _ => unreachable!("truth() returns pose channels or TF pairs"),
-            };
-            let mut poses = poses.stamped(origin_s);
-            let clock = match opts.truth_time_offset_s {
-                Some(offset_s) => {
-                    poses.iter_mut().for_each(|p| p.t_s += offset_s);
-                    Some(GtClock {
-                        recording: stem.to_string(),
-                        file: PathBuf::from(format!("{}, topic {truth_topic:?}", path.display())),
-                        offset_s,
-                        estimate: None,
-                    })
-                }
-                None => topic_clock(path, stem, &truth_topic, &mut poses, &t_s, &wheels.rad_s, n_wheels),
-            };
+            let (truth_topic, mut poses) = bag.truth_poses(src, ch, origin_s)?;
+            let forced = opts.truth_time_offset_s;
+            let clock = topic_clock(path, stem, &truth_topic, forced, &mut poses, &t_s, &wheels.rad_s, n_wheels);
             (poses, format!("on {truth_topic:?}"), format!("topic {truth_topic:?}"), clock)
         }
         (_, _, Some(ext)) => {
