@@ -64,13 +64,17 @@ impl LmConfig {
     /// large `n` leaves nothing to cut); `None` otherwise.
     pub fn scout(&self, n_params: usize, n_residuals: usize) -> Option<LmConfig> {
         let scout = LmConfig { max_evaluations: (self.max_evaluations / 3).max(1), ..self.clone() };
-        let patience = |c: &LmConfig| (c.max_evaluations / (n_params.max(1) + 1)).max(1);
         let smaller = if n_residuals > self.normal_equations_above {
             scout.max_evaluations < self.max_evaluations
         } else {
-            patience(&scout) < patience(self)
+            scout.crate_patience(n_params) < self.crate_patience(n_params)
         };
         smaller.then_some(scout)
+    }
+
+    /// The budget as the crate's patience on `n_params` parameters (it counts in units of `n + 1`).
+    fn crate_patience(&self, n_params: usize) -> usize {
+        (self.max_evaluations / (n_params.max(1) + 1)).max(1)
     }
 }
 
@@ -138,8 +142,7 @@ impl LevenbergMarquardt {
     /// The crate's solver (QR of the whole Jacobian). Returns the point it ends at, its evaluations and
     /// whether it spent its budget.
     fn solve_with_crate<P: LeastSquares + ?Sized>(&self, problem: &P, start: &[f64]) -> Ended {
-        let n = start.len().max(1);
-        let patience = (self.config.max_evaluations / (n + 1)).max(1);
+        let patience = self.config.crate_patience(start.len());
         let solver = Solver::new()
             .with_ftol(self.config.ftol)
             .with_xtol(self.config.xtol)
