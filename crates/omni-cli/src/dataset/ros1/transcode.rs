@@ -72,7 +72,7 @@ struct Cdr(Vec<u8>);
 impl Cdr {
     /// Pads to a multiple of `n` from the end of the 4-byte encapsulation header.
     fn align(&mut self, n: usize) {
-        while (self.0.len() - 4) % n != 0 {
+        while !(self.0.len() - 4).is_multiple_of(n) {
             self.0.push(0);
         }
     }
