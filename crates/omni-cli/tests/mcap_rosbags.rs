@@ -236,6 +236,27 @@ fn a_mocap_topic_on_another_clock_is_aligned_and_a_lag_is_left_to_diagnose() {
     not(python_bag_tools),
     ignore = "needs rosbags, mcap, mcap-ros2-support and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
 )]
+fn ros1_bags_give_the_runs_of_the_same_messages_in_mcap() {
+    let (dir, _) = fixtures_or_skip!();
+    let want = read_ok(dir, "ros1_pair");
+    for name in ["ros1_bz2", "ros1_lz4"] {
+        let got = omni_cli::dataset::ros1::read_bag(&dir.join(format!("{name}.bag")), &McapOptions::default(), None)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(got.runs.len(), 1, "{name}");
+        let (a, b) = (&got.runs[0], &want.runs[0]);
+        assert_eq!(a.wheel_t_s(), b.wheel_t_s(), "{name}");
+        assert_eq!(a.wheel_rad_s(), b.wheel_rad_s(), "{name}");
+        assert_eq!(a.truth(), b.truth(), "{name}");
+        assert_eq!(got.origin_s, want.origin_s, "{name}");
+        assert_eq!(got.notes.len(), want.notes.len(), "{name}: {:?} vs {:?}", got.notes, want.notes);
+    }
+}
+
+#[test]
+#[cfg_attr(
+    not(python_bag_tools),
+    ignore = "needs rosbags, mcap, mcap-ros2-support and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
+)]
 fn ground_truth_from_tf_pose_with_covariance_and_odometry() {
     let (dir, expected) = fixtures_or_skip!();
     for name in ["tf", "pose_cov", "odom_truth"] {
