@@ -404,7 +404,7 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
     if opts.ground_truth.is_some() && matches!(input, Input::Csv(_) | Input::OptiOdom(_)) {
         return Err(DatasetError::file(
             input.path(),
-            "--gt gives the ground truth of ROS recordings (.mcap, .db3, rosbag2 folders); this input has its own",
+            "--gt gives the ground truth of ROS recordings (.mcap, .db3, rosbag2 folders, .bag); this input has its own",
         ));
     }
     match input {

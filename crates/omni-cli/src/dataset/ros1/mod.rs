@@ -42,6 +42,7 @@ pub(crate) fn feed(path: &Path, sink: &mut impl MessageSink) -> Result<(), Datas
 }
 
 fn scan(path: &Path, sink: &mut impl MessageSink) -> Result<(), DatasetError> {
+    check_index(path)?;
     let bag = RosBag::new(path).map_err(|e| DatasetError::file(path, format!("not a ROS 1 bag: {e}")))?;
     let bad = |e: rosbag::Error| DatasetError::file(path, format!("the bag is damaged: {e}"));
     // Connection id → (sink channel, the layout to transcode with).
@@ -83,4 +84,62 @@ fn scan(path: &Path, sink: &mut impl MessageSink) -> Result<(), DatasetError> {
         }
     }
     Ok(())
+}
+
+/// The bag header's promise that the file holds its index (at `index_pos`), which the reader needs: a bag
+/// whose recording was interrupted has none (`index_pos` 0) or ends before it (truncated copy).
+fn check_index(path: &Path) -> Result<(), DatasetError> {
+    const MAGIC: &[u8] = b"#ROSBAG V2.0\n";
+    use std::io::Read;
+    let cannot = |e: std::io::Error| DatasetError::file(path, format!("cannot read it: {e}"));
+    let file = std::fs::File::open(path).map_err(cannot)?;
+    let len = file.metadata().map_err(cannot)?.len();
+    // The bag header record is padded to 4096 bytes by `rosbag record`; its fields come first.
+    let mut bytes = Vec::with_capacity(4096);
+    file.take(4096).read_to_end(&mut bytes).map_err(cannot)?;
+    let Some(rest) = bytes.strip_prefix(MAGIC) else {
+        return Err(DatasetError::file(path, "not a ROS 1 bag: it does not start with \"#ROSBAG V2.0\""));
+    };
+    let index_pos = bag_header_field(rest, b"index_pos").and_then(|v| <[u8; 8]>::try_from(v).ok());
+    let Some(index_pos) = index_pos.map(u64::from_le_bytes) else {
+        return Err(DatasetError::file(
+            path,
+            "the bag is damaged: its first record is not a bag header with index_pos",
+        ));
+    };
+    let reindex = format!("run `rosbag reindex {}` (ROS 1) and read the reindexed bag", path.display());
+    if index_pos == 0 {
+        return Err(DatasetError::file(
+            path,
+            format!("the bag has no index (was its recording interrupted?): {reindex}"),
+        ));
+    }
+    if index_pos >= len {
+        return Err(DatasetError::file(
+            path,
+            format!(
+                "the file is truncated: its index should start at byte {index_pos} but the file has {} bytes; if \
+                 the recording was interrupted, {reindex}",
+                len
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The value of field `name` in the header of the record at the start of `rest` (ROS 1 bag record: header
+/// length, then `length name=value` fields, all lengths u32 little-endian).
+fn bag_header_field<'a>(rest: &'a [u8], name: &[u8]) -> Option<&'a [u8]> {
+    let u32_at = |b: &[u8], at: usize| Some(u32::from_le_bytes(b.get(at..at + 4)?.try_into().ok()?) as usize);
+    let header = rest.get(4..4 + u32_at(rest, 0)?)?;
+    let mut at = 0;
+    while at < header.len() {
+        let field = header.get(at + 4..at + 4 + u32_at(header, at)?)?;
+        at += 4 + field.len();
+        let eq = field.iter().position(|&c| c == b'=')?;
+        if &field[..eq] == name {
+            return Some(&field[eq + 1..]);
+        }
+    }
+    None
 }
