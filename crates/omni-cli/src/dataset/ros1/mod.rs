@@ -1,7 +1,7 @@
 //! ROS 1 bags (`.bag`, format 2.0 as `rosbag record` writes it; many labs' archives): the container read by
 //! the `rosbag` crate (chunks: bz2, lz4 or none; connections), each message of a type omnical reads
-//! transcoded to ROS 2 CDR ([`transcode`]) and fed, in time order, to the same message pipeline as MCAP and
-//! rosbag2 ([`MessageSink`]): the same topic choice, notes and errors. ROS 1 type names
+//! transcoded to ROS 2 CDR (module `transcode`) and fed, in time order, to the same message pipeline as MCAP and
+//! rosbag2 (`MessageSink`): the same topic choice, notes and errors. ROS 1 type names
 //! (`sensor_msgs/JointState`) become ROS 2's (`sensor_msgs/msg/JointState`); `tf/tfMessage` is read as
 //! `tf2_msgs/TFMessage`. Messages of other types are passed on untouched (and ignored, as in MCAP).
 
