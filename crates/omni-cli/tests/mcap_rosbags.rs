@@ -257,6 +257,56 @@ fn ros1_bags_give_the_runs_of_the_same_messages_in_mcap() {
     not(python_bag_tools),
     ignore = "needs rosbags, mcap, mcap-ros2-support and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
 )]
+fn encoder_counts_and_motor_rpm_are_read_with_the_declared_units() {
+    use omni_kin::robot::{PositionUnit, VelocityUnit, WheelData};
+    let (dir, _) = fixtures_or_skip!();
+    let want = read_ok(dir, "ros1_pair");
+    let units = WheelData {
+        position: PositionUnit::Counts,
+        velocity: VelocityUnit::Rpm,
+        counts_per_rev: Some(1024.0),
+        gear_ratio: Some(30.0),
+    };
+    let opts = McapOptions { wheel_data: units, ..Default::default() };
+    let read = |name: &str, opts: &McapOptions| {
+        omni_cli::dataset::ros1::read_bag(&dir.join(format!("{name}.bag")), opts, None)
+            .unwrap_or_else(|e| panic!("{name}: {e}"))
+    };
+    // Motor rpm: the wheel speeds written, to rounding.
+    let rpm = read("ros1_counts_rpm", &opts);
+    let (a, b) = (&rpm.runs[0], &want.runs[0]);
+    assert_eq!(a.wheel_t_s(), b.wheel_t_s());
+    let worst = a.wheel_rad_s().iter().zip(b.wheel_rad_s()).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+    assert!(worst < 1e-12, "rpm: {worst}");
+    assert!(rpm.notes.iter().any(|n| n.ends_with(
+        "joint positions in counts and velocities in rpm (1024 counts per revolution) behind a 30:1 gear are \
+         converted to the wheel's rad and rad/s ([wheel_data] in the robot description)"
+    )), "{:?}", rpm.notes);
+    // Counts only: speeds are differences of counts, each count 2π / 30720 rad, over 10 ms steps.
+    let counts = read("ros1_counts", &opts);
+    let quantum_rad_s = std::f64::consts::TAU / (30.0 * 1024.0) / 0.01;
+    let a = &counts.runs[0];
+    let worst = a.wheel_rad_s().iter().zip(b.wheel_rad_s()).skip(3).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+    assert!(worst <= quantum_rad_s * 1.0001, "counts: {worst} vs one count per step {quantum_rad_s}");
+    // Read as radians, the counts turn the wheels 4889 times too fast: refused, saying what to declare.
+    let e = omni_cli::dataset::ros1::read_bag(&dir.join("ros1_counts.bag"), &McapOptions::default(), None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.ends_with(
+            "topic \"/joint_states\", message 0: run ros1_counts: wheel sample 0 has wheel_rad_s[2] = \
+             12199.999999999989, beyond the plausible limit ±10000: are the joints in encoder counts, rpm or \
+             degrees? Declare their units in robot.toml's [wheel_data] (docs/formats.md)"
+        ),
+        "{e}"
+    );
+}
+
+#[test]
+#[cfg_attr(
+    not(python_bag_tools),
+    ignore = "needs rosbags, mcap, mcap-ros2-support and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
+)]
 fn unindexed_and_truncated_ros1_bags_say_to_reindex() {
     let (dir, _) = fixtures_or_skip!();
     let bytes = std::fs::read(dir.join("ros1_bz2.bag")).unwrap();

@@ -28,6 +28,7 @@ pub mod robot;
 pub mod run;
 pub mod run_models;
 pub mod simulate;
+pub mod travel;
 
 pub use choice::Choice;
 pub use cost::{CostKind, CostName};

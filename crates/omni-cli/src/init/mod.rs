@@ -283,6 +283,7 @@ pub fn draft(
         frames: Frames::default(),
         ground_truth: None,
         priors: None,
+        wheel_data: Default::default(),
     };
     let wheel_notes = match kind {
         BaseKind::Diff if wheels.len() == 2 => {

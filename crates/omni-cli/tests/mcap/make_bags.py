@@ -521,14 +521,29 @@ def ros1_bags(out):
     for topic, msgtype, ns, fields in msgs:
         with_mcap.write(topic, ns, build(T, False, topic, msgtype, ns, fields))
     expected = {'ros1_pair': {'file': with_mcap.close()}}
-    for name, fmt in [('ros1_bz2', Ros1Writer.CompressionFormat.BZ2), ('ros1_lz4', Ros1Writer.CompressionFormat.LZ4)]:
+
+    def encoder(msgs, with_rpm):
+        """The joints as a driver outside ros2_control publishes them: positions in counts of a 1024-count
+        motor encoder behind a 30:1 gear, velocities in motor rpm (or none)."""
+        out = []
+        for topic, msgtype, ns, fields in msgs:
+            if msgtype == JOINT_STATE:
+                fields = dict(fields, position=np.round(fields['position'] * 30 * 1024 / (2 * math.pi)),
+                              velocity=fields['velocity'] * 30 * 60 / (2 * math.pi) if with_rpm else np.zeros(0))
+            out.append((topic, msgtype, ns, fields))
+        return out
+
+    bz2, lz4 = Ros1Writer.CompressionFormat.BZ2, Ros1Writer.CompressionFormat.LZ4
+    for name, fmt, written in [('ros1_bz2', bz2, msgs), ('ros1_lz4', lz4, msgs),
+                               ('ros1_counts_rpm', lz4, encoder(msgs, True)),
+                               ('ros1_counts', lz4, encoder(msgs, False))]:
         path = out / f'{name}.bag'
         w = Ros1Writer(path)
         w.set_compression(fmt)
         w.open()
         conns = {t: w.add_connection(t, m, typestore=ts1) for t, m in
                  [('/joint_states', JOINT_STATE), ('/mocap/pose', POSE_STAMPED), ('/cmd_vel', TWIST)]}
-        for topic, msgtype, ns, fields in msgs:
+        for topic, msgtype, ns, fields in written:
             w.write(conns[topic], ns, ts1.serialize_ros1(build(ts1.types, True, topic, msgtype, ns, fields), msgtype))
         w.close()
         expected[name] = {'file': path.name}

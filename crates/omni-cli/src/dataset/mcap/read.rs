@@ -919,7 +919,7 @@ pub(crate) fn runs(
     let origin_s = first_ns.div_euclid(NS_PER_S);
     let t_s: Vec<f64> = series.t_ns.iter().map(|&t| seconds_since(t, origin_s)).collect();
     let wheels = series
-        .finish(&opts.wheel_joints, &t_s)
+        .finish(&opts.wheel_joints, &t_s, &opts.wheel_data)
         .map_err(|(k, what)| DatasetError::at(path, format!("topic {joints_topic:?}, message {k}"), what))?;
     notes.extend(wheels.notes.iter().map(|n| format!("{}: topic {joints_topic:?}: {n}", path.display())));
     if let Some(without) = wheels.differentiated {
@@ -1023,11 +1023,19 @@ pub(crate) fn runs(
                 let e = match &source {
                     // A bad wheel sample is the JointState message of the same index.
                     KinError::NonFinite { what: "wheel sample", index, .. }
-                    | KinError::NotIncreasing { what: "wheel sample", index, .. }
-                    | KinError::Implausible { what: "wheel sample", index, .. } => DatasetError::at(
+                    | KinError::NotIncreasing { what: "wheel sample", index, .. } => DatasetError::at(
                         path,
                         format!("topic {joints_topic:?}, message {}", lo + index),
                         source.to_string(),
+                    ),
+                    // No wheel turns at 10⁴ rad/s: the joints are in another unit.
+                    KinError::Implausible { what: "wheel sample", index, .. } => DatasetError::at(
+                        path,
+                        format!("topic {joints_topic:?}, message {}", lo + index),
+                        format!(
+                            "{source}: are the joints in encoder counts, rpm or degrees? Declare their units in \
+                             robot.toml's [wheel_data] (docs/formats.md)"
+                        ),
                     ),
                     _ => DatasetError::Run { path: path.to_path_buf(), error: source },
                 };
