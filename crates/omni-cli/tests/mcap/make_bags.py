@@ -329,6 +329,29 @@ def tf_bag(out, name):
     return simple_expected(bag, js, vel, gt, poses)
 
 
+def tf_marker_bag(out, name):
+    """Ground truth as TF world -> marker on /tf, a motion-capture marker mounted off the robot's centre:
+    /tf_static holds marker -> mount -> base_link (10 cm back, 5 cm left, turned 30 degrees) and
+    base_link -> laser. The expected poses are base_link's."""
+    bag, js, vel, pos, _, _ = simple_bag(out, name, truth_topic=None,
+                                         extra=[('/tf', TF_MESSAGE), ('/tf_static', TF_MESSAGE)])
+    tfm = T[TF_MESSAGE]
+    # marker -> mount (-0.1, 0, 0), mount -> base_link (0, 0.05, 30 deg): base_link in marker.
+    statics = [('marker', 'mount', (-0.1, 0.0, 0.0)), ('mount', 'base_link', (0.0, 0.05, math.radians(30))),
+               ('base_link', 'laser', (0.2, 0.0, 0.0))]
+    bag.write('/tf_static', T0 - 100 * MS, tfm(transforms=[transform(T0 - 100 * MS, p, c, *o) for p, c, o in statics]))
+    ox, oy, oth = -0.1, 0.05, math.radians(30)
+    gt = stamps(T0 + 5 * MS, 50 * MS, 20)
+    poses = [truth_pose(rel(ns) - rel(T0)) for ns in gt]
+    for ns, (x, y, th) in zip(gt, poses):
+        # marker = base_link composed with the inverse of (ox, oy, oth).
+        mth = th - oth
+        mx = x - (math.cos(mth) * ox - math.sin(mth) * oy)
+        my = y - (math.sin(mth) * ox + math.cos(mth) * oy)
+        bag.write('/tf', ns, tfm(transforms=[transform(ns, 'world', 'marker', mx, my, mth)]))
+    return simple_expected(bag, js, vel, gt, poses)
+
+
 def odom_truth_bag(out, name):
     """Ground truth as nav_msgs/Odometry in frame `world`, beside the wheel odometry on /odom (frame odom)."""
     bag, js, vel, pos, gt, poses = simple_bag(out, name, truth_topic='/ground_truth/odom', truth_type=ODOMETRY,
@@ -348,6 +371,7 @@ def all_bags(out):
         'split_gap': split_bag(out, 'split_gap', gap=True),
         'position_only': position_only_bag(out, 'position_only'),
         'tf': tf_bag(out, 'tf'),
+        'tf_marker': tf_marker_bag(out, 'tf_marker'),
         'odom_truth': odom_truth_bag(out, 'odom_truth'),
     }
     bag, js, vel, pos, gt, poses = simple_bag(out, 'pose_cov', truth_topic='/mocap/pose_cov',

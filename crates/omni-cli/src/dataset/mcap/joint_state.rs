@@ -271,11 +271,7 @@ impl JointSeries {
 
 /// One sentence: what the joint values were converted from.
 fn describe_units(units: &WheelData) -> String {
-    let mut s = format!(
-        "joint positions in {} and velocities in {}",
-        units.position.name(),
-        units.velocity.name()
-    );
+    let mut s = format!("joint positions in {} and velocities in {}", units.position.name(), units.velocity.name());
     if let Some(c) = units.counts_per_rev {
         s.push_str(&format!(" ({c} counts per revolution)"));
     }
@@ -503,10 +499,8 @@ mod tests {
         }
         assert_eq!(
             w.notes,
-            [
-                "joint positions in counts and velocities in rpm (1024 counts per revolution) behind a 30:1 gear are \
-                 converted to the wheel's rad and rad/s ([wheel_data] in the robot description)"
-            ]
+            ["joint positions in counts and velocities in rpm (1024 counts per revolution) behind a 30:1 gear are \
+                 converted to the wheel's rad and rad/s ([wheel_data] in the robot description)"]
         );
     }
 }

@@ -65,6 +65,7 @@ mod pose_stamped;
 mod poses;
 pub(crate) mod read;
 pub mod split;
+mod statics;
 mod tf;
 mod twist;
 mod write;

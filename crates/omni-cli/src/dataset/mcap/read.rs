@@ -10,6 +10,7 @@ use super::joint_state::{self, JointSeries, JointState};
 use super::odometry::{self, ODOM_FRAME, Odometry};
 use super::pose_stamped::{self, PoseStamped, PoseWithCovarianceStamped};
 use super::poses::{PoseSeries, start_heading_in_half_turn};
+use super::statics::{self, StaticTree};
 use super::tf::{self, TfMessage, TfPairs};
 use super::twist::{self, Commands, TwistStamped};
 use super::{McapOptions, McapRead, split};
@@ -313,13 +314,14 @@ impl Bag<'_> {
     /// transform or pose topic seen; kept together so the messages can name them.
     fn truth(&self, opts: &McapOptions) -> Result<Truth, DatasetError> {
         let (parent, child) = (opts.truth_parent_frame.as_deref(), opts.truth_child_frame.as_deref());
+        let statics = self.statics();
         if let Some(topic) = &opts.truth_topic {
             let i = self.find(topic, "--gt-topic")?;
             let c = &self.channels[i];
             return match (&c.content, c.msg_type) {
                 (Content::Tf(pairs), _) => {
                     self.check(i)?;
-                    let found = pairs.candidates(parent, child);
+                    let found = pairs.candidates(parent, child, &statics);
                     match found[..] {
                         [k] => Ok(Truth::Tf(i, k)),
                         _ => {
@@ -366,8 +368,9 @@ impl Bag<'_> {
                         found.push((Truth::Poses(i), c.candidate()));
                     }
                 }
+                Content::Tf(_) if tf::is_static_topic(&c.topic) => {}
                 Content::Tf(pairs) => {
-                    for k in pairs.candidates(parent, child) {
+                    for k in pairs.candidates(parent, child, &statics) {
                         let p = &pairs.pairs[k];
                         found.push((Truth::Tf(i, k), format!("{} ({} → {})", c.topic, p.parent, p.child)));
                     }
@@ -414,13 +417,19 @@ impl Bag<'_> {
         src: Truth,
         ch: usize,
         origin_s: i64,
+        opts: &McapOptions,
+        notes: &mut Vec<String>,
     ) -> Result<(String, Vec<StampedPose>), DatasetError> {
         let topic = self.channels[ch].topic.clone();
+        let statics = self.statics();
         let poses = match (src, self.take(ch)) {
             (Truth::Tf(_, k), Content::Tf(mut pairs)) => {
-                let pair = pairs.pairs.swap_remove(k);
+                let mut pair = pairs.pairs.swap_remove(k);
                 if let Some((m, what)) = pair.problem {
                     return Err(DatasetError::at(self.path, format!("topic {topic:?}, message {m}"), what));
+                }
+                if let Some(note) = to_base_frame(&mut pair, &statics, opts.truth_child_frame.as_deref()) {
+                    notes.push(format!("{}: topic {topic:?}: {note}", self.path.display()));
                 }
                 pair.poses
             }
@@ -491,9 +500,47 @@ impl Bag<'_> {
     }
 
     /// Moves a channel's content out.
+    /// The static transforms of every TF topic.
+    fn statics(&self) -> StaticTree {
+        let mut tree = StaticTree::default();
+        for c in &self.channels {
+            if let Content::Tf(pairs) = &c.content {
+                pairs.add_statics(tf::is_static_topic(&c.topic), &mut tree);
+            }
+        }
+        tree
+    }
+
     fn take(&mut self, i: usize) -> Content {
         std::mem::replace(&mut self.channels[i].content, Content::Nothing)
     }
+}
+
+/// The robot frames a tracked frame is moved to by default, the first that static transforms reach.
+const BASE_FRAMES: [&str; 2] = ["base_link", "base_footprint"];
+
+/// Moves a TF pair's poses from its child frame (a motion-capture marker) along static transforms to
+/// `target` (`--gt-child-frame`), or by default to the first of [`BASE_FRAMES`] they reach; says so.
+fn to_base_frame(pair: &mut tf::Pair, statics: &StaticTree, target: Option<&str>) -> Option<String> {
+    let (to, (offset, frames)) = match target {
+        Some(t) => (t, statics.offset(&pair.child, t)?),
+        None if BASE_FRAMES.contains(&pair.child.as_str()) => return None,
+        None => BASE_FRAMES.iter().find_map(|&t| statics.offset(&pair.child, t).map(|o| (t, o)))?,
+    };
+    for p in &mut pair.poses.xy_yaw {
+        let moved = statics::compose(*p, offset);
+        *p = [moved[0], moved[1], omni_kin::pose::wrap_angle(moved[2])];
+    }
+    Some(format!(
+        "the ground truth tracks {:?}; it is moved to {to:?} through static transforms ({} → {}: x {:.4} m, \
+         y {:.4} m, yaw {:.2}°)",
+        pair.child,
+        pair.child,
+        frames.join(" → "),
+        offset[0],
+        offset[1],
+        offset[2].to_degrees()
+    ))
 }
 
 fn schema_or_none(schema: &str) -> &str {
@@ -935,7 +982,7 @@ pub(crate) fn runs(
     let n_wheels = opts.wheel_joints.len();
     let (all_truth, truth_where, truth_label, clock) = match (truth_src, truth_ch, external) {
         (Some(src), Some(ch), _) => {
-            let (truth_topic, mut poses) = bag.truth_poses(src, ch, origin_s)?;
+            let (truth_topic, mut poses) = bag.truth_poses(src, ch, origin_s, opts, &mut notes)?;
             let forced = opts.truth_time_offset_s;
             let clock = topic_clock(path, stem, &truth_topic, forced, &mut poses, &t_s, &wheels.rad_s, n_wheels);
             (poses, format!("on {truth_topic:?}"), format!("topic {truth_topic:?}"), clock)
