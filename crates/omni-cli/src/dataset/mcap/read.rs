@@ -800,6 +800,26 @@ pub(super) fn read_bytes(
 
 /// The poses of a ground-truth file on the wheel clock (seconds since `origin_s`), with the clock offset:
 /// the forced one, or one estimated from the wheel data (`omni_kin::clock`). Errors name the file.
+/// A `--gt` file's poses for a run on the wheel clock, its place for messages (`in FILE (+0.1 s clock
+/// offset)`), its label (`ground truth FILE`) and its clock.
+fn external_file(
+    ext: &ExternalTruth,
+    stem: &str,
+    origin_s: i64,
+    t_s: &[f64],
+    rad_s: &[f64],
+    n_wheels: usize,
+) -> Result<(Vec<StampedPose>, String, String, Option<GtClock>), DatasetError> {
+    let (poses, clock) = external_truth(ext, stem, origin_s, t_s, rad_s, n_wheels)?;
+    let file = ext.path.display();
+    Ok((
+        poses,
+        format!("in {file} ({:+.4} s clock offset)", clock.offset_s),
+        format!("ground truth {file}"),
+        Some(clock),
+    ))
+}
+
 fn external_truth(
     ext: &ExternalTruth,
     recording: &str,
@@ -987,16 +1007,20 @@ pub(crate) fn runs(
             let clock = topic_clock(path, stem, &truth_topic, forced, &mut poses, &t_s, &wheels.rad_s, n_wheels);
             (poses, format!("on {truth_topic:?}"), format!("topic {truth_topic:?}"), clock)
         }
-        (_, _, Some(ext)) => {
-            let (poses, clock) = external_truth(ext, stem, origin_s, &t_s, &wheels.rad_s, n_wheels)?;
-            let file = ext.path.display();
-            (
-                poses,
-                format!("in {file} ({:+.4} s clock offset)", clock.offset_s),
-                format!("ground truth {file}"),
-                Some(clock),
-            )
+        (_, _, Some(ext)) if !ext.by_time.is_empty() => {
+            let at = |t: f64| origin_s * NS_PER_S + (t * 1e9).round() as i64;
+            let (ext, share) = ext
+                .overlapping(at(t_s[0]), at(t_s[t_s.len() - 1]))
+                .map_err(|e| DatasetError::file(path, format!("--gt folder {}: {e}", ext.path.display())))?;
+            notes.push(format!(
+                "{}: no file of the --gt folder is named after it: {} covers {:.0} % of its span and is its ground truth",
+                path.display(),
+                ext.path.display(),
+                100.0 * share
+            ));
+            external_file(&ext, stem, origin_s, &t_s, &wheels.rad_s, n_wheels)?
         }
+        (_, _, Some(ext)) => external_file(ext, stem, origin_s, &t_s, &wheels.rad_s, n_wheels)?,
         _ => unreachable!("the ground truth comes from a topic or a file"),
     };
     let (w0, w1) = (t_s[0], t_s[t_s.len() - 1]);
