@@ -22,7 +22,7 @@ pub struct Travel {
 
 /// The windows travel is measured over: ground-truth poses at least this far apart, so that its noise
 /// (millimetres at a few hundred hertz) does not lengthen its path. s.
-const WINDOW_S: f64 = 0.1;
+pub const WINDOW_S: f64 = 0.1;
 
 impl Travel {
     /// The travel of `runs` through `ik` (runs whose wheel count is not the matrix's are left out): over

@@ -179,20 +179,20 @@ const SCALE_MIN_RAD: f64 = std::f64::consts::PI;
 const SCALE_MAX_FACTOR: f64 = 3.0;
 
 /// Refuses runs whose wheels, through the robot description's design, travel and turn more than
-/// [`SCALE_MAX_FACTOR`] times more, or less, than their ground truth (both, when both are measurable):
+/// [`SCALE_MAX_FACTOR`] times more, or less, than their ground truth (both measurable, both off):
 /// joints in rpm, degrees or counts read as rad/s, or a radius in the wrong unit.
 fn check_wheel_scale(ds: &Dataset, robot: &robot_file::RobotFile) -> anyhow::Result<()> {
     use std::f64::consts::TAU;
     let Ok(ik) = robot.description.design_ik() else { return Ok(()) };
     let travel = omni_kin::travel::Travel::of(&ds.runs, &ik);
-    let ratios = [travel.distance_ratio(SCALE_MIN_M), travel.turning_ratio(SCALE_MIN_RAD)];
-    let off = |r: f64| r > SCALE_MAX_FACTOR || r < 1.0 / SCALE_MAX_FACTOR;
-    let measured: Vec<f64> = ratios.iter().flatten().copied().collect();
-    let same_side = measured.iter().all(|&r| r > 1.0) || measured.iter().all(|&r| r < 1.0);
-    if measured.is_empty() || !same_side || !measured.iter().all(|&r| off(r)) {
+    let (Some(ratio), Some(turning)) = (travel.distance_ratio(SCALE_MIN_M), travel.turning_ratio(SCALE_MIN_RAD)) else {
+        return Ok(());
+    };
+    // A unit scales distance and turning alike; one alone off is the data's or the design's own business.
+    let (lo, hi) = (1.0 / SCALE_MAX_FACTOR, SCALE_MAX_FACTOR);
+    if !(ratio > hi && turning > hi || ratio < lo && turning < lo) {
         return Ok(());
     }
-    let ratio = measured[0];
     // The factor of a unit read as rad/s, within what a calibration corrects besides.
     let units = [(60.0 / TAU, "rpm"), (360.0 / TAU, "deg_s"), (TAU.recip(), "rev_s")];
     let unit = units
