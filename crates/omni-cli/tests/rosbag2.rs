@@ -220,6 +220,67 @@ fn ground_truth_files_on_other_clocks_are_aligned_within_5_ms() {
     }
 }
 
+/// Recordings read with one `--gt` folder share its clock: one whose ground truth is too short to align on
+/// its own (1.5 s of poses, one every 0.25 s) is read at the offset the other was aligned at, with a note,
+/// instead of stopping the command.
+#[test]
+#[cfg_attr(
+    not(python_bag_tools),
+    ignore = "needs rosbags and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
+)]
+fn a_recording_too_sparse_to_align_takes_the_clock_of_the_others() {
+    let (dir, expected) = fixtures();
+    let work = tempfile::tempdir().unwrap();
+    let w = work.path();
+    for name in ["full", "sparse"] {
+        let to = w.join(name);
+        std::fs::create_dir_all(&to).unwrap();
+        for e in std::fs::read_dir(dir.join("nogt/rec")).unwrap() {
+            let e = e.unwrap();
+            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+        }
+    }
+    std::fs::create_dir_all(w.join("mocap")).unwrap();
+    let tum = std::fs::read_to_string(dir.join("gt/tum_3s/rec.tum")).unwrap();
+    std::fs::write(w.join("mocap/full.tum"), &tum).unwrap();
+    let rows: Vec<&str> = tum.lines().filter(|l| !l.starts_with('#')).collect();
+    let t0: f64 = rows[0].split(' ').next().unwrap().parse().unwrap();
+    // Past the first motion's start (0.5 s after the wheels' first stamp), 1.5 s of one pose per 0.25 s.
+    let sparse: Vec<&str> = rows
+        .iter()
+        .copied()
+        .filter(|l| {
+            let t: f64 = l.split(' ').next().unwrap().parse::<f64>().unwrap() - t0;
+            (2.0..3.5).contains(&t) && (t * 4.0 - (t * 4.0).round()).abs() < 0.02
+        })
+        .collect();
+    assert!(sparse.len() >= 5, "{}", sparse.len());
+    std::fs::write(w.join("mocap/sparse.tum"), sparse.join("\n") + "\n").unwrap();
+    let args = |gt: &str| -> Vec<String> {
+        ["eval", "full", "sparse", "--robot", "apr02", "--model", "paper", "--json", "--gt", gt]
+            .map(String::from)
+            .to_vec()
+    };
+    let out = Command::new(env!("CARGO_BIN_EXE_omnical")).args(args("mocap")).current_dir(w).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let clocks = v["ground_truth_clock"].as_array().unwrap();
+    assert_eq!(clocks.len(), 2, "{v}");
+    let truth = expected["offsets_s"]["3s"].as_f64().unwrap();
+    let found = clocks[0]["offset_s"].as_f64().unwrap();
+    assert!((found - truth).abs() < 0.005, "{found}");
+    assert_eq!((clocks[1]["offset_s"].as_f64().unwrap(), &clocks[1]["estimated"]), (found, &Value::Bool(false)));
+    assert!(
+        err.contains("mocap/sparse.tum: cannot align its clock with recording \"sparse\": ")
+            && err.contains(&format!(
+                "; the ground truth is read at {found:+.4} s, the median offset of the 1 recording(s) aligned with \
+                 the same --gt (one clock)"
+            )),
+        "{err}"
+    );
+}
+
 #[test]
 #[cfg_attr(
     not(python_bag_tools),

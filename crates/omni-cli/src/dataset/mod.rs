@@ -194,7 +194,8 @@ pub fn load(paths: &[PathBuf], opts: &LoadOptions) -> Result<Dataset, DatasetErr
     check_one_truth_file(&inputs, opts)?;
     // The inputs are read in parallel (one file or recording per task) and merged in their order, so the
     // dataset, its notes and the first error are those of a serial load whatever the thread count.
-    let reads: Vec<_> = inputs.par_iter().map(|i| i.as_ref().ok().map(|i| read_input(i, opts))).collect();
+    let mut reads: Vec<_> = inputs.par_iter().map(|i| i.as_ref().ok().map(|i| read_input(i, opts))).collect();
+    let shared_clock = shared_clock_retry(&inputs, &mut reads, opts);
     let mut ds = Dataset::default();
     for (input, read) in inputs.into_iter().zip(reads) {
         // A path that is no input (unreadable, unsupported) stops the load where it stands in the order.
@@ -204,6 +205,7 @@ pub fn load(paths: &[PathBuf], opts: &LoadOptions) -> Result<Dataset, DatasetErr
         }
     }
     ds.notes.extend(designs_note(&ds));
+    ds.notes.extend(shared_clock);
     if ds.runs.is_empty() {
         let what = paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ");
         return Err(match ds.skipped.first() {
@@ -215,6 +217,47 @@ pub fn load(paths: &[PathBuf], opts: &LoadOptions) -> Result<Dataset, DatasetErr
         });
     }
     Ok(ds)
+}
+
+/// The reads of [`load`], one per input.
+type Reads = Vec<Option<Result<Result<Loaded, DatasetError>, DatasetError>>>;
+
+/// Recordings read with one `--gt` source share its clock: a recording whose own alignment failed (a short,
+/// still or sparsely tracked one) is read again with the median offset the others were aligned at, and a
+/// note per such recording says so. Nothing changes when the offset is forced or no recording aligned.
+fn shared_clock_retry(inputs: &[Result<Input, DatasetError>], reads: &mut Reads, opts: &LoadOptions) -> Vec<String> {
+    let Some(gt) = opts.ground_truth.as_ref().filter(|g| g.time_offset_s.is_none()) else { return vec![] };
+    let failed = |r: &Option<Result<Result<Loaded, DatasetError>, DatasetError>>| {
+        matches!(r, Some(Ok(Err(DatasetError::Clock { .. }))))
+    };
+    let mut offsets: Vec<f64> = reads
+        .iter()
+        .filter_map(|r| r.as_ref()?.as_ref().ok()?.as_ref().ok())
+        .flat_map(|l| l.clock.iter().filter(|c| c.estimate.is_some()).map(|c| c.offset_s))
+        .collect();
+    if offsets.is_empty() || !reads.iter().any(failed) {
+        return vec![];
+    }
+    offsets.sort_by(f64::total_cmp);
+    let median = offsets[offsets.len() / 2];
+    let forced = LoadOptions {
+        ground_truth: Some(ground_truth::GroundTruthOptions { time_offset_s: Some(median), ..gt.clone() }),
+        ..opts.clone()
+    };
+    let mut notes = Vec::new();
+    for (input, read) in inputs.iter().zip(reads.iter_mut()) {
+        if let (Ok(input), true) = (input, failed(read)) {
+            let Some(Ok(Err(e))) = read.take() else { unreachable!("checked above") };
+            notes.push(format!(
+                "{}: {e}; the ground truth is read at {median:+.4} s, the median offset of the {} recording(s) \
+                 aligned with the same --gt (one clock)",
+                input.path().display(),
+                offsets.len()
+            ));
+            *read = Some(read_input(input, &forced));
+        }
+    }
+    notes
 }
 
 /// When the inputs declare different designs, the note that says so: each run is evaluated with its own
@@ -556,6 +599,16 @@ pub enum DatasetError {
         /// The file.
         path: PathBuf,
         /// What is wrong.
+        message: String,
+    },
+    /// A `--gt` file's clock could not be aligned with a recording's wheels from their motion (too short,
+    /// too little motion, too sparse): [`load`] then uses the offset found on the other recordings read
+    /// with the same ground truth, when there are any.
+    #[error("{path}: {message}")]
+    Clock {
+        /// The ground-truth file.
+        path: PathBuf,
+        /// What failed.
         message: String,
     },
     /// The data parsed but does not form a valid run.

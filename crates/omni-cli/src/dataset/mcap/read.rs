@@ -843,8 +843,9 @@ fn external_truth(
     // The truth's times relative to its own first whole second (small numbers for the estimate).
     let truth_origin_s = ext.samples.first().map_or(0, |s| s.t_ns.div_euclid(NS_PER_S));
     let own: Vec<StampedPose> = ext.samples.iter().map(|s| pose(s, seconds_since(s.t_ns, truth_origin_s))).collect();
-    let a = omni_kin::clock::align_clocks(t_s, rad_s, n_wheels, &own).map_err(|e| {
-        DatasetError::file(&ext.path, format!("cannot align its clock with recording {recording:?}: {e}"))
+    let a = omni_kin::clock::align_clocks(t_s, rad_s, n_wheels, &own).map_err(|e| DatasetError::Clock {
+        path: ext.path.clone(),
+        message: format!("cannot align its clock with recording {recording:?}: {e}"),
     })?;
     // own + a.offset_s is on the wheel clock since origin_s.
     let poses = own.iter().map(|p| StampedPose { t_s: p.t_s + a.offset_s, ..*p }).collect();
