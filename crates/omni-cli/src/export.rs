@@ -35,15 +35,26 @@ pub fn joint_names(model: &FittedModel, joints: &[String]) -> Vec<String> {
 }
 
 /// Writes one run's MCAP bag `DIR/<run>.mcap` (`--mcap`): its wheel data (joints `wheel_joints`), ground
-/// truth, recorded odometry if any, and `model`'s odometry on /omnical/odometry; a run whose clock starts
-/// before 0 s (a simulated one) is put at the simulator's epoch. Returns the path.
-pub fn write_mcap(dir: &Path, run: &Run, model: &FittedModel, wheel_joints: &[String]) -> anyhow::Result<PathBuf> {
+/// truth, recorded odometry if any, and `model`'s odometry on /omnical/odometry, stamped in the recording's
+/// time base (`recording_origin_s`, the Unix second its times count from); a run without one whose clock
+/// starts before 0 s (a simulated one) is put at the simulator's epoch. Returns the path.
+pub fn write_mcap(
+    dir: &Path,
+    run: &Run,
+    model: &FittedModel,
+    wheel_joints: &[String],
+    recording_origin_s: Option<i64>,
+) -> anyhow::Result<PathBuf> {
     let opts = WriteOptions {
         wheel_joints: wheel_joints.to_vec(),
         design_odometry: (!run.recorded_odometry().is_empty()).then(|| run.recorded_odometry().to_vec()),
         calibrated_odometry: Some(odometry_poses(model, run)?),
-        // Simulated clocks start before 0 s (as `simulate` does): put them at its epoch.
-        origin_s: if run.wheel_t_s().first().is_some_and(|&t| t < 0.0) { crate::dataset::mcap::SIM_EPOCH_S } else { 0 },
+        // The recording's time base; simulated clocks start before 0 s (as `simulate` does): its epoch.
+        origin_s: match recording_origin_s {
+            Some(o) => o,
+            None if run.wheel_t_s().first().is_some_and(|&t| t < 0.0) => crate::dataset::mcap::SIM_EPOCH_S,
+            None => 0,
+        },
     };
     let path = dir.join(format!("{}.mcap", tum::file_stem(run.name())));
     write_run(&path, run, &opts)?;
@@ -51,13 +62,15 @@ pub fn write_mcap(dir: &Path, run: &Run, model: &FittedModel, wheel_joints: &[St
 }
 
 /// Writes one run's TUM files (`--tum`): `DIR/<run>.gt.tum`, `.design.tum` and `.calibrated.tum`, the
-/// latter two the odometry of `design` and of `model` (named `spec` in the header). Returns the paths.
+/// latter two the odometry of `design` and of `model` (named `spec` in the header), stamped in the
+/// recording's Unix time when it has one (`recording_origin_s`). Returns the paths.
 pub fn write_tum(
     dir: &Path,
     run: &Run,
     design: &FittedModel,
     model: &FittedModel,
     spec: &str,
+    recording_origin_s: Option<i64>,
 ) -> anyhow::Result<Vec<PathBuf>> {
     let stem = tum::file_stem(run.name());
     let files = [
@@ -68,7 +81,8 @@ pub fn write_tum(
     let mut written = Vec::with_capacity(files.len());
     for (kind, comment, poses) in files {
         let path = dir.join(format!("{stem}.{kind}.tum"));
-        let text = tum::to_tum(&format!("{comment}\ntimestamp tx ty tz qx qy qz qw (s, m, unit quaternion)"), &poses);
+        let header = format!("{comment}\ntimestamp tx ty tz qx qy qz qw (s, m, unit quaternion)");
+        let text = tum::to_tum_at(&header, &poses, recording_origin_s.unwrap_or(0));
         atomic::write_atomic(&path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))?;
         written.push(path);
     }

@@ -220,6 +220,44 @@ fn ground_truth_files_on_other_clocks_are_aligned_within_5_ms() {
     }
 }
 
+/// Exports keep the recording's time base: the TUM ground truth of a recording carries the absolute stamps
+/// of its ground-truth topic (those a TUM file on the same clock has), and the exported MCAP starts at the
+/// recording's own second, so both line up with the original in evo and Foxglove.
+#[test]
+#[cfg_attr(
+    not(python_bag_tools),
+    ignore = "needs rosbags and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
+)]
+fn exports_keep_the_recordings_time_base() {
+    let (dir, _) = fixtures();
+    let work = tempfile::tempdir().unwrap();
+    let w = work.path();
+    let rec = dir.join("db3/rec");
+    let (code, _, err) = omnical(&[
+        "export",
+        rec.to_str().unwrap(),
+        "--robot",
+        "apr02",
+        "--model",
+        "paper",
+        "--tum",
+        w.join("tum").to_str().unwrap(),
+        "--mcap",
+        w.join("mcap").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let stamps = |text: &str| -> Vec<String> {
+        text.lines().filter(|l| !l.starts_with('#')).map(|l| l.split(' ').next().unwrap().to_string()).collect()
+    };
+    let exported = stamps(&std::fs::read_to_string(w.join("tum/rec.gt.tum")).unwrap());
+    let same_clock = stamps(&std::fs::read_to_string(dir.join("gt/same_clock.tum")).unwrap());
+    assert!(exported[0].starts_with("17000000"), "{}", exported[0]);
+    assert!(same_clock.contains(&exported[0]) && same_clock.contains(&exported[exported.len() - 1]), "{exported:?}");
+    // make_recordings.py's ORIGIN_S: the recording's first second.
+    let back = read_file(&w.join("mcap/rec.mcap"), &McapOptions::default()).unwrap();
+    assert_eq!(back.origin_s, 1_700_000_000);
+}
+
 /// Recordings read with one `--gt` folder share its clock: one whose ground truth is too short to align on
 /// its own (1.5 s of poses, one every 0.25 s) is read at the offset the other was aligned at, with a note,
 /// instead of stopping the command.

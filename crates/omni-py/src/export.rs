@@ -66,16 +66,24 @@ pub fn export(
         if let Some(out) = tum {
             for run in &runs {
                 written.extend(
-                    write_tum(out.path(), run, designs.for_run(run)?, models.for_run(run)?, &spec)?
-                        .iter()
-                        .map(|f| out.shown(f)),
+                    write_tum(
+                        out.path(),
+                        run,
+                        designs.for_run(run)?,
+                        models.for_run(run)?,
+                        &spec,
+                        origin.time_origins_s.get(run.name()).copied(),
+                    )?
+                    .iter()
+                    .map(|f| out.shown(f)),
                 );
             }
             out.commit()?;
         }
         if let Some(out) = mcap {
             for run in &runs {
-                written.push(out.shown(&write_mcap(out.path(), run, models.for_run(run)?, &joints)?));
+                let origin_s = origin.time_origins_s.get(run.name()).copied();
+                written.push(out.shown(&write_mcap(out.path(), run, models.for_run(run)?, &joints, origin_s)?));
             }
             out.commit()?;
         }

@@ -92,9 +92,16 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         let mut files = Vec::new();
         for run in &ds.runs {
             files.extend(
-                write_tum(out.path(), run, designs.for_run(run)?, models.for_run(run)?, &spec)?
-                    .iter()
-                    .map(|f| out.shown(f)),
+                write_tum(
+                    out.path(),
+                    run,
+                    designs.for_run(run)?,
+                    models.for_run(run)?,
+                    &spec,
+                    ds.time_origins_s.get(run.name()).copied(),
+                )?
+                .iter()
+                .map(|f| out.shown(f)),
             );
         }
         out.commit()?;
@@ -160,7 +167,8 @@ fn write_mcaps(
 ) -> anyhow::Result<Vec<PathBuf>> {
     let mut files = Vec::with_capacity(ds.runs.len());
     for run in &ds.runs {
-        files.push(write_mcap(dir, run, models.for_run(run)?, &data.wheel_joints(ds))?);
+        let origin_s = ds.time_origins_s.get(run.name()).copied();
+        files.push(write_mcap(dir, run, models.for_run(run)?, &data.wheel_joints(ds), origin_s)?);
     }
     Ok(files)
 }

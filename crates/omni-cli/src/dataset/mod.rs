@@ -35,6 +35,9 @@ pub struct Dataset {
     pub robot_file: Option<crate::robot_file::RobotFile>,
     /// The clock offsets of ground truths read from separate files (`--gt`), one per recording.
     pub ground_truth_clocks: Vec<ground_truth::GtClock>,
+    /// The Unix second each recording's run times count from, by run name (ROS recordings: exports write
+    /// absolute stamps with it, so they line up with the recording).
+    pub time_origins_s: std::collections::BTreeMap<String, i64>,
 }
 
 /// The design one input declares (an OptiOdom set's metadata), with the runs read from it.
@@ -359,6 +362,9 @@ struct Loaded {
     /// The robot type and design geometry the input declares (an OptiOdom set).
     declared: Option<(&'static str, RobotGeometry)>,
     clock: Option<ground_truth::GtClock>,
+    /// The Unix second a recording's run times count from (`None`: CSV and OptiOdom runs, whose times are
+    /// their own).
+    origin_s: Option<i64>,
 }
 
 /// `--gt FILE` is one recording's ground truth: it cannot serve several.
@@ -439,6 +445,7 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
         notes: r.notes,
         declared: None,
         clock: r.ground_truth_clock,
+        origin_s: Some(r.origin_s),
     };
     // The ground-truth file of a ROS recording, when --gt is given.
     let truth = |p: &Path, folder: bool| -> Result<Option<ground_truth::ExternalTruth>, DatasetError> {
@@ -485,7 +492,7 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
                 }
             })?;
             let declared = Some((set.kind, set.robot));
-            Ok(Ok(Loaded { runs: set.runs, skipped, notes: Vec::new(), declared, clock: None }))
+            Ok(Ok(Loaded { runs: set.runs, skipped, notes: Vec::new(), declared, clock: None, origin_s: None }))
         }
     }
 }
@@ -528,10 +535,14 @@ fn merge(
                 let runs = l.runs.iter().map(|r| r.name().to_string()).collect();
                 ds.declared.push(Declared { source: source.to_path_buf(), kind: kind.into(), geometry, runs });
             }
+            if let Some(origin_s) = l.origin_s {
+                ds.time_origins_s.extend(l.runs.iter().map(|r| (r.name().to_string(), origin_s)));
+            }
             ds.runs.extend(l.runs);
             ds.skipped.extend(l.skipped);
             ds.notes.extend(l.notes);
             ds.ground_truth_clocks.extend(l.clock);
+
             Ok(())
         }
         Err(e) if opts.skip_invalid => {

@@ -8,13 +8,25 @@ use std::fmt::Write;
 
 /// The TUM text of a planar trajectory, with a leading `#` comment line.
 pub fn to_tum(comment: &str, poses: &[StampedPose]) -> String {
+    to_tum_at(comment, poses, 0)
+}
+
+/// [`to_tum`] with stamps `origin_s + t_s` (the recording's Unix time), written exactly to the nanosecond
+/// (an f64 of 1.7e9 s would keep only about 0.2 µs).
+pub fn to_tum_at(comment: &str, poses: &[StampedPose], origin_s: i64) -> String {
     let mut s = String::with_capacity(64 * (poses.len() + 1));
     for line in comment.lines() {
         let _ = writeln!(s, "# {line}");
     }
     for p in poses {
         let (qz, qw) = (0.5 * p.pose.theta_rad).sin_cos();
-        let _ = writeln!(s, "{:.9} {:.9} {:.9} 0 0 0 {:.12} {:.12}", p.t_s, p.pose.x_m, p.pose.y_m, qz, qw);
+        if origin_s == 0 {
+            let _ = write!(s, "{:.9}", p.t_s);
+        } else {
+            let ns = origin_s as i128 * 1_000_000_000 + (p.t_s * 1e9).round() as i128;
+            let _ = write!(s, "{}.{:09}", ns.div_euclid(1_000_000_000), ns.rem_euclid(1_000_000_000));
+        }
+        let _ = writeln!(s, " {:.9} {:.9} 0 0 0 {:.12} {:.12}", p.pose.x_m, p.pose.y_m, qz, qw);
     }
     s
 }
