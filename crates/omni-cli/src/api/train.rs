@@ -22,8 +22,9 @@ pub struct TrainRequest {
     pub runs: Vec<PathBuf>,
     /// How to read them.
     pub data: DataOptions,
-    /// Base model to fit (at the robot's design) when no start model is given.
-    pub model: KinematicsKind,
+    /// Base model to fit (at the robot's design) when no start model is given; `None`: the robot's own
+    /// ([`design::default_kind`]).
+    pub model: Option<KinematicsKind>,
     /// Start from this model file instead of the design.
     pub start: Option<PathBuf>,
     /// Training recipe.
@@ -123,7 +124,10 @@ pub fn prepare(a: &TrainRequest) -> anyhow::Result<Prepared> {
     }
     let start = match &a.start {
         Some(p) => model_file::read(p).context("reading --start")?,
-        None => FittedModel::nominal(named_columns(design::model(a.model, &ds)?, a.data.joints.as_deref())?),
+        None => {
+            let kind = a.model.unwrap_or_else(|| design::default_kind(&ds));
+            FittedModel::nominal(named_columns(design::model(kind, &ds)?, a.data.joints.as_deref())?)
+        }
     };
     let effects = a
         .effects
