@@ -53,7 +53,9 @@ fn recipe(variant: &str, extra: &[&str]) {
     let ratio = r_right / r_left;
     let true_ratio = truth("r_right_m") / truth("r_left_m");
     assert!((ratio / true_ratio - 1.0).abs() < 0.002, "{variant}: r_right / r_left {ratio} against {true_ratio}");
-    for (got, want) in [(r_left, truth("r_left_m")), (r_right, truth("r_right_m")), (param(&v, "b"), truth("separation_m"))] {
+    for (got, want) in
+        [(r_left, truth("r_left_m")), (r_right, truth("r_right_m")), (param(&v, "b"), truth("separation_m"))]
+    {
         assert!((got / want - 1.0).abs() < 0.002, "{variant}: {got} against {want}");
     }
     let clocks = v["ground_truth_clock"].as_array().unwrap();
@@ -67,13 +69,19 @@ fn recipe(variant: &str, extra: &[&str]) {
 }
 
 #[test]
-#[cfg_attr(not(python_bag_tools), ignore = "needs rosbags and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them")]
+#[cfg_attr(
+    not(python_bag_tools),
+    ignore = "needs rosbags and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
+)]
 fn readme_recipe_on_humble_recordings_with_mocap_in_the_bag() {
     recipe("bag", &[]);
 }
 
 #[test]
-#[cfg_attr(not(python_bag_tools), ignore = "needs rosbags and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them")]
+#[cfg_attr(
+    not(python_bag_tools),
+    ignore = "needs rosbags and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
+)]
 fn readme_recipe_on_humble_recordings_with_mocap_in_files() {
     recipe("file", &["--gt", "mocap"]);
 }

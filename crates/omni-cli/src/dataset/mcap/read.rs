@@ -932,7 +932,8 @@ fn topic_clock(
     // On the wheels' clock, or off it by a small lag (nearly always): the wheels explain nearly all the
     // truth's motion at offset 0, and no search is needed. (Half of it is not enough: slow, smooth motion
     // 0.8 s off is still 60 % explained.)
-    if omni_kin::clock::explained_at(t_s, rad_s, n_wheels, poses, 0.0).is_none_or(|r2| r2 >= TOPIC_CLOCK_SEARCH_BELOW_R2)
+    if omni_kin::clock::explained_at(t_s, rad_s, n_wheels, poses, 0.0)
+        .is_none_or(|r2| r2 >= TOPIC_CLOCK_SEARCH_BELOW_R2)
     {
         return None;
     }
