@@ -23,7 +23,7 @@ pub struct TrainRequest {
     /// How to read them.
     pub data: DataOptions,
     /// Base model to fit (at the robot's design) when no start model is given; `None`: the robot's own
-    /// ([`design::default_kind`]).
+    /// ([`design::default_kind`]), or the matrix under the paper preset.
     pub model: Option<KinematicsKind>,
     /// Start from this model file instead of the design.
     pub start: Option<PathBuf>,
@@ -125,7 +125,11 @@ pub fn prepare(a: &TrainRequest) -> anyhow::Result<Prepared> {
     let start = match &a.start {
         Some(p) => model_file::read(p).context("reading --start")?,
         None => {
-            let kind = a.model.unwrap_or_else(|| design::default_kind(&ds));
+            // The paper's method fits the matrix whatever the base.
+            let kind = a.model.unwrap_or_else(|| match a.preset {
+                Preset::Paper => KinematicsKind::Ik,
+                Preset::Default => design::default_kind(&ds),
+            });
             FittedModel::nominal(named_columns(design::model(kind, &ds)?, a.data.joints.as_deref())?)
         }
     };
