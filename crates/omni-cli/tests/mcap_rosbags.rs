@@ -236,6 +236,60 @@ fn a_mocap_topic_on_another_clock_is_aligned_and_a_lag_is_left_to_diagnose() {
     not(python_bag_tools),
     ignore = "needs rosbags, mcap, mcap-ros2-support and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
 )]
+fn ros1_bags_give_the_runs_of_the_same_messages_in_mcap() {
+    let (dir, _) = fixtures_or_skip!();
+    let want = read_ok(dir, "ros1_pair");
+    for name in ["ros1_bz2", "ros1_lz4"] {
+        let got = omni_cli::dataset::ros1::read_bag(&dir.join(format!("{name}.bag")), &McapOptions::default(), None)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(got.runs.len(), 1, "{name}");
+        let (a, b) = (&got.runs[0], &want.runs[0]);
+        assert_eq!(a.wheel_t_s(), b.wheel_t_s(), "{name}");
+        assert_eq!(a.wheel_rad_s(), b.wheel_rad_s(), "{name}");
+        assert_eq!(a.truth(), b.truth(), "{name}");
+        assert_eq!(got.origin_s, want.origin_s, "{name}");
+        assert_eq!(got.notes.len(), want.notes.len(), "{name}: {:?} vs {:?}", got.notes, want.notes);
+    }
+}
+
+#[test]
+#[cfg_attr(
+    not(python_bag_tools),
+    ignore = "needs rosbags, mcap, mcap-ros2-support and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
+)]
+fn unindexed_and_truncated_ros1_bags_say_to_reindex() {
+    let (dir, _) = fixtures_or_skip!();
+    let bytes = std::fs::read(dir.join("ros1_bz2.bag")).unwrap();
+    let read_err = |name: &str, bytes: &[u8]| {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let e = omni_cli::dataset::ros1::read_bag(&path, &McapOptions::default(), None).unwrap_err();
+        (e.to_string(), path.display().to_string())
+    };
+    // An interrupted `rosbag record` leaves index_pos 0 in the bag header.
+    let at = bytes.windows(10).position(|w| w == b"index_pos=").unwrap() + 10;
+    let mut unindexed = bytes.clone();
+    unindexed[at..at + 8].fill(0);
+    let (e, path) = read_err("unindexed.bag", &unindexed);
+    assert_eq!(
+        e,
+        format!(
+            "{path}: the bag has no index (was its recording interrupted?): run `rosbag reindex {path}` (ROS 1) and \
+             read the reindexed bag"
+        )
+    );
+    let (e, path) = read_err("cut.bag", &bytes[..bytes.len() / 2]);
+    assert!(e.starts_with(&format!("{path}: the file is truncated: its index should start at byte ")), "{e}");
+    assert!(e.ends_with(&format!("run `rosbag reindex {path}` (ROS 1) and read the reindexed bag")), "{e}");
+    let (e, path) = read_err("text.bag", b"not a bag");
+    assert_eq!(e, format!("{path}: not a ROS 1 bag: it does not start with \"#ROSBAG V2.0\""));
+}
+
+#[test]
+#[cfg_attr(
+    not(python_bag_tools),
+    ignore = "needs rosbags, mcap, mcap-ros2-support and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
+)]
 fn ground_truth_from_tf_pose_with_covariance_and_odometry() {
     let (dir, expected) = fixtures_or_skip!();
     for name in ["tf", "pose_cov", "odom_truth"] {

@@ -14,8 +14,8 @@ use std::path::{Path, PathBuf};
 /// Arguments of `omnical init`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The recording: a ROS 2 bag (.mcap, .db3), a rosbag2 folder (metadata.yaml), or a folder of them
-    /// (the first is inspected).
+    /// The recording: a ROS 2 bag (.mcap, .db3), a rosbag2 folder (metadata.yaml), a ROS 1 bag (.bag), or a
+    /// folder of them (the first is inspected).
     pub recording: PathBuf,
     /// The robot's URDF (default: the recording's /robot_description topic).
     #[arg(long, value_name = "FILE")]

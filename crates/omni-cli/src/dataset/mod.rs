@@ -7,6 +7,7 @@ pub mod csv;
 pub mod ground_truth;
 pub mod mcap;
 pub mod optiodom;
+pub mod ros1;
 pub mod rosbag2;
 
 use omni_kin::{KinError, RobotGeometry, Run};
@@ -181,7 +182,7 @@ impl Default for LoadOptions {
 }
 
 /// Supported inputs, for messages.
-pub const SUPPORTED: &str = ".csv (omnical run), .mcap (ROS 2 bag), .db3 (rosbag2 sqlite3), a rosbag2 recording \
+pub const SUPPORTED: &str = ".csv (omnical run), .mcap (ROS 2 bag), .db3 (rosbag2 sqlite3), .bag (ROS 1), a rosbag2 recording \
                              folder (metadata.yaml), or a folder of them / an OptiOdom set folder";
 
 /// Load runs from files and folders, in the order given (folders: files sorted by name).
@@ -261,7 +262,7 @@ pub fn inspect(path: &Path, max_file_bytes: u64) -> Result<Inspected, DatasetErr
     let mut recordings = Vec::new();
     for input in inputs {
         match input? {
-            i @ (Input::Mcap(_) | Input::Db3(_) | Input::Recording(_)) => recordings.push(i),
+            i @ (Input::Mcap(_) | Input::Db3(_) | Input::Recording(_) | Input::Ros1(_)) => recordings.push(i),
             Input::Csv(_) | Input::OptiOdom(_) => {}
         }
     }
@@ -275,6 +276,7 @@ pub fn inspect(path: &Path, max_file_bytes: u64) -> Result<Inspected, DatasetErr
     let inventory = match first {
         Input::Db3(p) => rosbag2::inspect_db3(p, max_file_bytes)?,
         Input::Recording(p) => rosbag2::inspect_recording(p, max_file_bytes)?,
+        Input::Ros1(p) => ros1::inspect(p)?,
         mcap => mcap::inspect(mcap.path(), max_file_bytes)?,
     };
     Ok(Inspected { recording: first.path().to_path_buf(), inventory, recordings: recordings.len() })
@@ -291,6 +293,8 @@ enum Input {
     Db3(PathBuf),
     /// A rosbag2 recording folder (metadata.yaml).
     Recording(PathBuf),
+    /// A ROS 1 bag.
+    Ros1(PathBuf),
     /// An OptiOdom set folder.
     OptiOdom(PathBuf),
 }
@@ -298,7 +302,7 @@ enum Input {
 impl Input {
     fn path(&self) -> &Path {
         match self {
-            Self::Csv(p) | Self::Mcap(p) | Self::Db3(p) | Self::Recording(p) | Self::OptiOdom(p) => p,
+            Self::Csv(p) | Self::Mcap(p) | Self::Db3(p) | Self::Recording(p) | Self::Ros1(p) | Self::OptiOdom(p) => p,
         }
     }
 }
@@ -317,8 +321,10 @@ struct Loaded {
 /// `--gt FILE` is one recording's ground truth: it cannot serve several.
 fn check_one_truth_file(inputs: &[Result<Input, DatasetError>], opts: &LoadOptions) -> Result<(), DatasetError> {
     let Some(gt) = &opts.ground_truth else { return Ok(()) };
-    let recordings =
-        inputs.iter().filter(|i| matches!(i, Ok(Input::Mcap(_) | Input::Db3(_) | Input::Recording(_)))).count();
+    let recordings = inputs
+        .iter()
+        .filter(|i| matches!(i, Ok(Input::Mcap(_) | Input::Db3(_) | Input::Recording(_) | Input::Ros1(_))))
+        .count();
     if recordings > 1 && !gt.path.is_dir() {
         return Err(DatasetError::file(
             &gt.path,
@@ -357,7 +363,9 @@ fn expand(p: &Path, out: &mut Vec<Result<Input, DatasetError>>) {
         };
         let mut entries: Vec<PathBuf> = entries
             .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|q| q.is_dir() || q.extension().is_some_and(|e| e == "csv" || e == "mcap" || e == "db3"))
+            .filter(|q| {
+                q.is_dir() || q.extension().is_some_and(|e| e == "csv" || e == "mcap" || e == "db3" || e == "bag")
+            })
             .collect();
         entries.sort();
         for e in entries {
@@ -369,6 +377,7 @@ fn expand(p: &Path, out: &mut Vec<Result<Input, DatasetError>>) {
         Some("csv") => Ok(Input::Csv(p.to_path_buf())),
         Some("mcap") => Ok(Input::Mcap(p.to_path_buf())),
         Some("db3") => Ok(Input::Db3(p.to_path_buf())),
+        Some("bag") => Ok(Input::Ros1(p.to_path_buf())),
         _ => Err(DatasetError::file(p, format!("unsupported input (expected {SUPPORTED})"))),
     });
 }
@@ -395,7 +404,7 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
     if opts.ground_truth.is_some() && matches!(input, Input::Csv(_) | Input::OptiOdom(_)) {
         return Err(DatasetError::file(
             input.path(),
-            "--gt gives the ground truth of ROS recordings (.mcap, .db3, rosbag2 folders); this input has its own",
+            "--gt gives the ground truth of ROS recordings (.mcap, .db3, rosbag2 folders, .bag); this input has its own",
         ));
     }
     match input {
@@ -412,6 +421,10 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
         }
         Input::Db3(p) => {
             Ok(truth(p, false).and_then(|t| rosbag2::read_db3(p, &mo, opts.max_file_bytes, t.as_ref())).map(from_bag))
+        }
+        Input::Ros1(p) => {
+            check_size(p, opts.max_file_bytes)?;
+            Ok(truth(p, false).and_then(|t| ros1::read_bag(p, &mo, t.as_ref())).map(from_bag))
         }
         Input::Recording(p) => Ok(truth(p, true)
             .and_then(|t| rosbag2::read_recording(p, &mo, opts.max_file_bytes, t.as_ref()))

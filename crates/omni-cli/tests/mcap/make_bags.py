@@ -25,6 +25,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from rosbags.rosbag1 import Writer as Ros1Writer
 from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
@@ -404,6 +405,7 @@ def all_bags(out):
     expected.update(real_joint_states(out))
     expected['mocap_clock'] = mocap_clock_bag(out, 'mocap_clock', 800 * MS)
     expected['mocap_lag'] = mocap_clock_bag(out, 'mocap_lag', 60 * MS)
+    expected.update(ros1_bags(out))
 
     (out / 'not_mcap.mcap').write_text('this is a CSV file, not a bag\nt,x\n0,1\n')
     expected['not_mcap'] = {'file': 'not_mcap.mcap'}
@@ -476,6 +478,61 @@ def mocap_clock_bag(out, name, offset_ns):
         bag.write('/mocap/pose', ns, pose_stamped(ns - offset_ns, 'map', x, y, th))
     return {'file': bag.close(), 'offset_s': offset_ns * 1e-9,
             'truth': [[rel(ns), x, y, th] for ns, x, y, th in truth[::4]]}
+
+
+def ros1_bags(out):
+    """The mocap_clock bag's messages (joints, mocap on the same clock, a TF, a Twist) written once more as
+    ROS 1 bags (Noetic serialization: Header with seq, no NUL after strings), with bz2 and lz4 chunks: read,
+    they must give the MCAP's runs exactly."""
+    ts1 = get_typestore(Stores.ROS1_NOETIC)
+    with_mcap = Bag(out, 'ros1_pair')
+    for topic, msgtype in [('/joint_states', JOINT_STATE), ('/mocap/pose', POSE_STAMPED), ('/cmd_vel', TWIST)]:
+        with_mcap.topic(topic, msgtype)
+    js = stamps(T0, 10 * MS, 301)
+    vel = [[3.0 * math.sin(1.7 * t) + 1.0, 2.0 * math.sin(0.6 * t * t), 2.5 * math.cos(2.3 * t + 0.3 * t * t)]
+           for t in (rel(ns) - rel(T0) for ns in js)]
+    pos = integrate_positions(js, vel)
+    msgs = []
+    for k, ns in enumerate(js):
+        msgs.append(('/joint_states', JOINT_STATE, ns, dict(
+            header=(ns, ''), name=list(WHEELS), position=np.array(pos[k]), velocity=np.array(vel[k]),
+            effort=np.zeros(0))))
+    for k, ns in enumerate(js[::5]):
+        x, y, th = truth_pose(rel(ns) - rel(T0))
+        msgs.append(('/mocap/pose', POSE_STAMPED, ns, dict(header=(ns, 'map'), pose=(x, y, th))))
+    msgs.append(('/cmd_vel', TWIST, T0, None))
+
+    def build(types, ros1, topic, msgtype, ns, fields):
+        if msgtype == TWIST:
+            v3 = types['geometry_msgs/msg/Vector3']
+            return types[TWIST](linear=v3(x=0.25, y=-0.25, z=0.0), angular=v3(x=0.0, y=0.0, z=0.5))
+        t, frame = fields['header']
+        stamp = types['builtin_interfaces/msg/Time'](sec=t // 10**9, nanosec=t % 10**9)
+        hdr = types['std_msgs/msg/Header']
+        h = hdr(seq=7, stamp=stamp, frame_id=frame) if ros1 else hdr(stamp=stamp, frame_id=frame)
+        if msgtype == JOINT_STATE:
+            return types[JOINT_STATE](header=h, **{k: v for k, v in fields.items() if k != 'header'})
+        x, y, th = fields['pose']
+        p = types['geometry_msgs/msg/Pose'](position=types['geometry_msgs/msg/Point'](x=x, y=y, z=0.0),
+                                            orientation=types['geometry_msgs/msg/Quaternion'](
+                                                x=0.0, y=0.0, z=math.sin(th / 2), w=math.cos(th / 2)))
+        return types[POSE_STAMPED](header=h, pose=p)
+
+    for topic, msgtype, ns, fields in msgs:
+        with_mcap.write(topic, ns, build(T, False, topic, msgtype, ns, fields))
+    expected = {'ros1_pair': {'file': with_mcap.close()}}
+    for name, fmt in [('ros1_bz2', Ros1Writer.CompressionFormat.BZ2), ('ros1_lz4', Ros1Writer.CompressionFormat.LZ4)]:
+        path = out / f'{name}.bag'
+        w = Ros1Writer(path)
+        w.set_compression(fmt)
+        w.open()
+        conns = {t: w.add_connection(t, m, typestore=ts1) for t, m in
+                 [('/joint_states', JOINT_STATE), ('/mocap/pose', POSE_STAMPED), ('/cmd_vel', TWIST)]}
+        for topic, msgtype, ns, fields in msgs:
+            w.write(conns[topic], ns, ts1.serialize_ros1(build(ts1.types, True, topic, msgtype, ns, fields), msgtype))
+        w.close()
+        expected[name] = {'file': path.name}
+    return expected
 
 
 def tiny_bag(out):
