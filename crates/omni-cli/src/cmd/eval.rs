@@ -21,7 +21,8 @@ pub struct Args {
     #[arg(required = true)]
     pub runs: Vec<PathBuf>,
     /// Also print each run's end-pose error (after the summary): dx, dy, position error (m) and heading
-    /// error (deg). `--json` always lists the runs.
+    /// error (deg); and its relative pose error: pairs, translation RMSE (m), mean drift (%). `--json`
+    /// always lists the runs.
     #[arg(long)]
     pub per_run: bool,
     /// Window of the relative pose error (RPE, as evo_rpe's consecutive pairs, taken on the ground truth):
