@@ -200,6 +200,7 @@ pub fn fill_mcap_options(mcap: &mut McapOptions, joints_open: bool, robot: Optio
     fill(&mut mcap.command_topic, &r.topics.command);
     fill(&mut mcap.truth_parent_frame, &r.frames.ground_truth_parent);
     fill(&mut mcap.truth_child_frame, &r.frames.ground_truth_child);
+    mcap.wheel_data = r.wheel_data.clone();
 }
 
 /// Where a command's design comes from.

@@ -255,3 +255,36 @@ fn a_clock_offset_that_changes_nothing_is_refused() {
     assert_eq!(v["ground_truth_clock"].as_array().map(Vec::len), Some(36), "{v}");
     assert_eq!(v["ground_truth_clock"][0]["estimated"], false);
 }
+
+/// Wheel data in another unit than the robot description says (issue 27: rpm read as rad/s, or the
+/// reverse) would train a matrix off by that factor; the wheels' distance and turning against the ground
+/// truth's refuse it, saying what to declare.
+#[test]
+fn wheels_in_another_unit_than_declared_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    simulate(d, "1", &[]);
+    let robot = std::fs::read_to_string(d.join("sim/train/robot.toml")).unwrap();
+    // The simulated joints are rad/s; declared rpm, they go 2π/60 as far as the ground truth.
+    std::fs::write(d.join("rpm.toml"), format!("{robot}\n[wheel_data]\nvelocity = \"rpm\"\n")).unwrap();
+    let err = fails(&["eval", "sim/train", "--robot", "rpm.toml"], d);
+    let last = err.lines().last().unwrap();
+    assert!(last.starts_with("error: through the design of rpm.toml, the wheels of these 36 runs travel "), "{err}");
+    assert!(
+        last.ends_with(
+            ": 0.10 times, beyond what a calibration corrects. Are the joints in another unit (rpm, deg/s, encoder \
+             counts)? Declare it in the robot description's [wheel_data] (docs/formats.md); otherwise check its \
+             radius_m and distances"
+        ),
+        "{err}"
+    );
+    // A radius 60/2π too large looks like rpm read as rad/s.
+    let big = robot.replace("radius_m = 0.148", &format!("radius_m = {}", 0.148 * 60.0 / std::f64::consts::TAU));
+    assert_ne!(big, robot);
+    std::fs::write(d.join("big.toml"), big).unwrap();
+    let err = fails(&["eval", "sim/train", "--robot", "big.toml"], d);
+    // 9.55 times the simulated robot's wheels, which go 9.6 % further than the design's.
+    assert!(err.contains(": 8.72 times, beyond what a calibration corrects."), "{err}");
+    assert!(err.contains("(docs/formats.md) (8.72 is near 9.549, the factor of velocity = \"rpm\")"), "{err}");
+    ok(&["eval", "sim/train"], d);
+}

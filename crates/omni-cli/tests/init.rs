@@ -143,8 +143,22 @@ fn omni3_urdf_gives_the_papers_design() {
     let r = robot_file::read(&d.join("robot.toml")).unwrap();
     assert_eq!(r.joints(), ["wheel_a", "wheel_b", "wheel_c"], "the recording's order");
     assert_eq!(r.topics.joint_states.as_deref(), Some("/joint_states"));
-    // Positions in base_footprint (the root); the design matrix is the paper's Eq. 7 to the file's 1e-9 m.
+    // Positions in base_link; the design matrix is the paper's Eq. 7 to the file's 1e-9 m.
     let ik = r.design_ik().unwrap();
+    for (a, b) in ik.entries().iter().zip(IkMatrix::paper_design().entries()) {
+        assert!((a - b).abs() < 1e-8, "{a} vs {b}\n{text}");
+    }
+    // base_link off base_footprint in the plane (10 cm forward, 2 cm left, turned 0.3 rad): the wheels are
+    // still where they are on base_link, so the design is still Eq. 7, and the file says which frame.
+    let urdf = std::fs::read_to_string(d.join("omni3.urdf")).unwrap();
+    let shifted = urdf.replace(r#"<origin xyz="0 0 0.148"/>"#, r#"<origin xyz="0.1 0.02 0.148" rpy="0 0 0.3"/>"#);
+    assert_ne!(shifted, urdf);
+    std::fs::write(d.join("shifted.urdf"), shifted).unwrap();
+    let out = omnical(&["init", "rec.mcap", "--urdf", "shifted.urdf", "--out", "shifted.toml"], d);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = std::fs::read_to_string(d.join("shifted.toml")).unwrap();
+    assert!(text.contains("positions and axles are in base_link (at (0.1, 0.02, 0.148) m in base_footprint"), "{text}");
+    let ik = robot_file::read(&d.join("shifted.toml")).unwrap().design_ik().unwrap();
     for (a, b) in ik.entries().iter().zip(IkMatrix::paper_design().entries()) {
         assert!((a - b).abs() < 1e-8, "{a} vs {b}\n{text}");
     }

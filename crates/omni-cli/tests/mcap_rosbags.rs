@@ -257,6 +257,60 @@ fn ros1_bags_give_the_runs_of_the_same_messages_in_mcap() {
     not(python_bag_tools),
     ignore = "needs rosbags, mcap, mcap-ros2-support and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
 )]
+fn encoder_counts_and_motor_rpm_are_read_with_the_declared_units() {
+    use omni_kin::robot::{PositionUnit, VelocityUnit, WheelData};
+    let (dir, _) = fixtures_or_skip!();
+    let want = read_ok(dir, "ros1_pair");
+    let units = WheelData {
+        position: PositionUnit::Counts,
+        velocity: VelocityUnit::Rpm,
+        counts_per_rev: Some(1024.0),
+        gear_ratio: Some(30.0),
+    };
+    let opts = McapOptions { wheel_data: units, ..Default::default() };
+    let read = |name: &str, opts: &McapOptions| {
+        omni_cli::dataset::ros1::read_bag(&dir.join(format!("{name}.bag")), opts, None)
+            .unwrap_or_else(|e| panic!("{name}: {e}"))
+    };
+    // Motor rpm: the wheel speeds written, to rounding.
+    let rpm = read("ros1_counts_rpm", &opts);
+    let (a, b) = (&rpm.runs[0], &want.runs[0]);
+    assert_eq!(a.wheel_t_s(), b.wheel_t_s());
+    let worst = a.wheel_rad_s().iter().zip(b.wheel_rad_s()).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+    assert!(worst < 1e-12, "rpm: {worst}");
+    assert!(
+        rpm.notes.iter().any(|n| n.ends_with(
+            "joint positions in counts and velocities in rpm (1024 counts per revolution) behind a 30:1 gear are \
+         converted to the wheel's rad and rad/s ([wheel_data] in the robot description)"
+        )),
+        "{:?}",
+        rpm.notes
+    );
+    // Counts only: speeds are differences of counts, each count 2π / 30720 rad, over 10 ms steps.
+    let counts = read("ros1_counts", &opts);
+    let quantum_rad_s = std::f64::consts::TAU / (30.0 * 1024.0) / 0.01;
+    let a = &counts.runs[0];
+    let worst = a.wheel_rad_s().iter().zip(b.wheel_rad_s()).skip(3).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+    assert!(worst <= quantum_rad_s * 1.0001, "counts: {worst} vs one count per step {quantum_rad_s}");
+    // Read as radians, the counts turn the wheels 4889 times too fast: refused, saying what to declare.
+    let e = omni_cli::dataset::ros1::read_bag(&dir.join("ros1_counts.bag"), &McapOptions::default(), None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.ends_with(
+            "topic \"/joint_states\", message 0: run ros1_counts: wheel sample 0 has wheel_rad_s[2] = \
+             12199.999999999989, beyond the plausible limit ±10000: are the joints in encoder counts, rpm or \
+             degrees? Declare their units in robot.toml's [wheel_data] (docs/formats.md)"
+        ),
+        "{e}"
+    );
+}
+
+#[test]
+#[cfg_attr(
+    not(python_bag_tools),
+    ignore = "needs rosbags, mcap, mcap-ros2-support and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
+)]
 fn unindexed_and_truncated_ros1_bags_say_to_reindex() {
     let (dir, _) = fixtures_or_skip!();
     let bytes = std::fs::read(dir.join("ros1_bz2.bag")).unwrap();
@@ -296,6 +350,27 @@ fn ground_truth_from_tf_pose_with_covariance_and_odometry() {
         let r = read_ok(dir, name);
         check_run(&r.runs[0], &expected[name]);
     }
+    // A marker's TF, moved to base_link through /tf_static (marker → mount → base_link), with a note.
+    let r = read_ok(dir, "tf_marker");
+    check_run(&r.runs[0], &expected["tf_marker"]);
+    assert!(
+        r.notes.iter().any(|n| n.ends_with(
+            "topic \"/tf\": the ground truth tracks \"marker\"; it is moved to \"base_link\" through static \
+             transforms (marker → mount → base_link: x -0.1000 m, y 0.0500 m, yaw 30.00°)"
+        )),
+        "{:?}",
+        r.notes
+    );
+    // Named, the child frame may be any frame the statics reach; the marker itself is the marker's poses.
+    let laser = read(dir, "tf_marker", &McapOptions { truth_child_frame: Some("laser".into()), ..Default::default() });
+    let (at_laser, at_base) = (laser.unwrap().runs[0].truth()[5], r.runs[0].truth()[5]);
+    let th = at_base.pose.theta_rad;
+    assert!((at_laser.pose.x_m - at_base.pose.x_m - 0.2 * th.cos()).abs() < 1e-9, "{at_laser:?} {at_base:?}");
+    assert!((at_laser.pose.y_m - at_base.pose.y_m - 0.2 * th.sin()).abs() < 1e-9, "{at_laser:?} {at_base:?}");
+    let marker =
+        read(dir, "tf_marker", &McapOptions { truth_child_frame: Some("marker".into()), ..Default::default() });
+    let at_marker = marker.unwrap().runs[0].truth()[5];
+    assert!((at_marker.pose.theta_rad - (th - 30f64.to_radians())).abs() < 1e-9, "{at_marker:?}");
     // The world-frame Odometry is the truth; the odom-frame one is the recorded odometry (x twice the truth's).
     let r = read_ok(dir, "odom_truth");
     let (odom, truth) = (r.runs[0].recorded_odometry(), r.runs[0].truth());

@@ -250,6 +250,31 @@ fn bag_and_tum_give_the_costs_of_the_bag_with_its_topic() {
     let got = eval_json(dir, &["--gt", tum.to_str().unwrap()]);
     let (a, b) = (got["cost"].as_f64().unwrap(), want["cost"].as_f64().unwrap());
     assert!((a - b).abs() < 1e-6 * b, "{a} vs {b}");
+    // A folder whose files are not named after the recording (a mocap take's own name): the file that covers
+    // the recording's span is its ground truth; a take 1000 s later is not.
+    let takes = dir.join("gt_takes");
+    std::fs::create_dir_all(&takes).unwrap();
+    let text = std::fs::read_to_string(&tum).unwrap();
+    let later: String = text
+        .lines()
+        .map(|l| match l.split_once(' ') {
+            Some((t, rest)) if !l.starts_with('#') => format!("{} {rest}\n", t.parse::<f64>().unwrap() + 1000.0),
+            _ => format!("{l}\n"),
+        })
+        .collect();
+    std::fs::write(takes.join("take_002.tum"), later).unwrap();
+    std::fs::write(takes.join("take_001.tum"), &text).unwrap();
+    let got = eval_json(dir, &["--gt", takes.to_str().unwrap(), "--gt-time-offset", "0"]);
+    assert_eq!(got["cost"], want["cost"]);
+    assert!(got["ground_truth_clock"][0]["file"].as_str().unwrap().ends_with("take_001.tum"), "{got}");
+    std::fs::remove_file(takes.join("take_001.tum")).unwrap();
+    let input = dir.join("nogt/rec");
+    let (code, _, err) =
+        omnical(&["eval", input.to_str().unwrap(), "--robot", "apr02", "--gt", takes.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("none covers half of its span"), "{err}");
+    assert!(err.contains("(files: take_002.tum "), "{err}");
+    assert!(err.ends_with("name the file after the recording, or give it with --gt FILE\n"), "{err}");
 }
 
 #[test]

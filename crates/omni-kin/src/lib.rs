@@ -30,6 +30,7 @@ pub mod run;
 pub mod run_models;
 pub mod simulate;
 pub mod stats;
+pub mod travel;
 
 pub use choice::Choice;
 pub use cost::{CostKind, CostName};

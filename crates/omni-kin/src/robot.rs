@@ -91,6 +91,9 @@ pub struct RobotDescription {
     /// How well the design values are known. Optional.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub priors: Option<Priors>,
+    /// The units of the wheels' joint data in a recording. Default: rad and rad/s on the wheel's shaft.
+    #[serde(default, skip_serializing_if = "WheelData::is_default")]
+    pub wheel_data: WheelData,
 }
 
 /// One wheel of an `omni` or `mecanum` base. Give the position either as `x_m`, `y_m` or as
@@ -490,6 +493,7 @@ impl RobotDescription {
             frames: Frames::default(),
             ground_truth: None,
             priors: None,
+            wheel_data: Default::default(),
         }
     }
 
@@ -531,6 +535,7 @@ impl RobotDescription {
         if let Some(p) = &self.priors {
             p.validate()?;
         }
+        self.wheel_data.validate()?;
         let g = RobotGeometry { wheel_names: self.joints(), wheels };
         let rank = g.rank();
         if rank < self.kind.dof() {
@@ -633,3 +638,6 @@ pub enum GeometryError {
 
 #[cfg(test)]
 mod tests;
+mod wheel_data;
+
+pub use wheel_data::{PositionUnit, VelocityUnit, WheelData};

@@ -163,9 +163,54 @@ impl LoadRequest {
                  topic of a recording (MCAP, rosbag2), and these runs have neither"
             );
         }
+        if let Some(r) = &robot {
+            check_wheel_scale(&ds, r)?;
+        }
         ds.robot_file = robot;
         Ok(ds)
     }
+}
+
+/// Ground truth must have gone this far (m) or turned this much (rad) to judge the wheels' scale.
+const SCALE_MIN_M: f64 = 1.0;
+const SCALE_MIN_RAD: f64 = std::f64::consts::PI;
+/// A calibration corrects a few per cent; the wheels' distance or turning off by more than this factor
+/// from the ground truth's is wheel data in another unit, or a design far from the robot.
+const SCALE_MAX_FACTOR: f64 = 3.0;
+
+/// Refuses runs whose wheels, through the robot description's design, travel and turn more than
+/// [`SCALE_MAX_FACTOR`] times more, or less, than their ground truth (both measurable, both off):
+/// joints in rpm, degrees or counts read as rad/s, or a radius in the wrong unit.
+fn check_wheel_scale(ds: &Dataset, robot: &robot_file::RobotFile) -> anyhow::Result<()> {
+    use std::f64::consts::TAU;
+    let Ok(ik) = robot.description.design_ik() else { return Ok(()) };
+    let travel = omni_kin::travel::Travel::of(&ds.runs, &ik);
+    let (Some(ratio), Some(turning)) = (travel.distance_ratio(SCALE_MIN_M), travel.turning_ratio(SCALE_MIN_RAD)) else {
+        return Ok(());
+    };
+    // A unit scales distance and turning alike; one alone off is the data's or the design's own business.
+    let (lo, hi) = (1.0 / SCALE_MAX_FACTOR, SCALE_MAX_FACTOR);
+    if !(ratio > hi && turning > hi || ratio < lo && turning < lo) {
+        return Ok(());
+    }
+    // The factor of a unit read as rad/s, within what a calibration corrects besides.
+    let units = [(60.0 / TAU, "rpm"), (360.0 / TAU, "deg_s"), (TAU.recip(), "rev_s")];
+    let unit = units
+        .into_iter()
+        .find(|(f, _)| (ratio / f - 1.0).abs() < 0.15)
+        .map_or_else(String::new, |(f, u)| format!(" ({ratio:.2} is near {f:.3}, the factor of velocity = {u:?})"));
+    anyhow::bail!(
+        "through the design of {}, the wheels of these {} runs travel {:.1} m and turn {:.1} rad where their ground \
+         truth travels {:.1} m and turns {:.1} rad: {ratio:.2} times, beyond what a calibration corrects. Are the \
+         joints in another unit (rpm, deg/s, encoder counts)? Declare it in the robot description's [wheel_data] \
+         (docs/formats.md){unit}; otherwise check its radius_m and distances",
+        robot.source,
+        ds.runs.len(),
+        travel.wheels_m,
+        travel.wheels_rad,
+        travel.truth_m,
+        travel.truth_rad,
+    )
 }
 
 /// Training runs and held-out runs (`None` when `held_out` is empty), read as [`LoadRequest::load`] does,

@@ -151,6 +151,56 @@ pub struct ExternalTruth {
     pub samples: Vec<TruthSample>,
     /// The forced clock offset, if any. s.
     pub time_offset_s: Option<f64>,
+    /// When no file of a `--gt` folder is named after the recording: every file of the folder, read, to be
+    /// matched to each run by time overlap ([`ExternalTruth::overlapping`]). Empty otherwise.
+    pub by_time: Vec<(PathBuf, Vec<TruthSample>)>,
+}
+
+/// The share of a run's span a ground-truth file must cover to be matched to it by time.
+pub const MIN_TIME_OVERLAP: f64 = 0.5;
+
+impl ExternalTruth {
+    /// The file of the folder whose poses cover most of the absolute span `[t0_ns, t1_ns]` of a run (at
+    /// least [`MIN_TIME_OVERLAP`]), as the truth to read the run with, and the share covered; or an error
+    /// listing each file's span.
+    pub fn overlapping(&self, t0_ns: i64, t1_ns: i64) -> Result<(Self, f64), String> {
+        let span = (t1_ns - t0_ns).max(1) as f64;
+        let cover = |s: &[TruthSample]| match (s.first(), s.last()) {
+            (Some(a), Some(b)) => (b.t_ns.min(t1_ns) - a.t_ns.max(t0_ns)).max(0) as f64 / span,
+            _ => 0.0,
+        };
+        let best = self.by_time.iter().map(|(p, s)| (p, s, cover(s))).max_by(|a, b| a.2.total_cmp(&b.2));
+        match best {
+            Some((path, samples, share)) if share >= MIN_TIME_OVERLAP => Ok((
+                Self {
+                    path: path.clone(),
+                    samples: samples.clone(),
+                    time_offset_s: self.time_offset_s,
+                    by_time: vec![],
+                },
+                share,
+            )),
+            _ => {
+                let secs = |ns: i64| ns as f64 * 1e-9;
+                let spans: Vec<String> = self
+                    .by_time
+                    .iter()
+                    .map(|(p, s)| {
+                        let name =
+                            p.file_name().map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into());
+                        format!("{name} {:.3}..{:.3} s", secs(s[0].t_ns), secs(s[s.len() - 1].t_ns))
+                    })
+                    .collect();
+                Err(format!(
+                    "no ground-truth file is named after it and none covers half of its span {:.3}..{:.3} s (files: \
+                     {}); name the file after the recording, or give it with --gt FILE",
+                    secs(t0_ns),
+                    secs(t1_ns),
+                    spans.join(", ")
+                ))
+            }
+        }
+    }
 }
 
 /// The clock offset a recording's ground-truth file was read with.
@@ -225,10 +275,43 @@ pub fn file_for(opts: &GroundTruthOptions, recording: &Path, name: &str) -> Resu
 }
 
 /// Reads the ground truth for the recording named `name` at `recording`.
+/// When no file is named after the recording, every file of a `--gt` folder is read, to be matched to the
+/// recording's runs by time ([`ExternalTruth::overlapping`]); a folder without such files is the error
+/// [`file_for`] gives.
 pub fn read_for(opts: &GroundTruthOptions, recording: &Path, name: &str) -> Result<ExternalTruth, DatasetError> {
-    let path = file_for(opts, recording, name)?;
+    let path = match file_for(opts, recording, name) {
+        Ok(path) => path,
+        Err(e) => {
+            let by_time = folder_files(&opts.path)
+                .into_iter()
+                .map(|p| read(&p, &opts.csv).map(|s| (p, s)))
+                .collect::<Result<Vec<_>, _>>()?;
+            if by_time.is_empty() {
+                return Err(e);
+            }
+            return Ok(ExternalTruth {
+                path: opts.path.clone(),
+                samples: vec![],
+                time_offset_s: opts.time_offset_s,
+                by_time,
+            });
+        }
+    };
     let samples = read(&path, &opts.csv)?;
-    Ok(ExternalTruth { path, samples, time_offset_s: opts.time_offset_s })
+    Ok(ExternalTruth { path, samples, time_offset_s: opts.time_offset_s, by_time: vec![] })
+}
+
+/// The ground-truth files (`.tum`, `.txt`, `.csv`) of a folder, sorted; none when it is not a folder.
+fn folder_files(dir: &Path) -> Vec<PathBuf> {
+    let Ok(entries) = std::fs::read_dir(dir) else { return vec![] };
+    let mut files: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.is_file() && p.extension().and_then(|e| e.to_str()).is_some_and(|e| ["tum", "txt", "csv"].contains(&e))
+        })
+        .collect();
+    files.sort();
+    files
 }
 
 /// Reads a ground-truth file (TUM or CSV, by extension).

@@ -257,11 +257,24 @@ pub fn draft(
     ];
     header.extend(inventory_lines(inv, recording));
     header.push(String::new());
-    header.push(format!(
-        "Read from the URDF ({}): robot {:?}, root link {} (positions and axles are in its frame); wheels are \
-         continuous joints whose child link has a cylinder.",
-        urdf.label, found.robot, found.root
-    ));
+    header.push(match &found.base_in_root {
+        None => format!(
+            "Read from the URDF ({}): robot {:?}, root link {} (positions and axles are in its frame); wheels \
+             are continuous joints whose child link has a cylinder.",
+            urdf.label, found.robot, found.root
+        ),
+        Some((root, t)) => format!(
+            "Read from the URDF ({}): robot {:?}, root link {root}; positions and axles are in {} (at ({}, {}, \
+             {}) m in {root}: the frame a ground truth is moved to by default); wheels are continuous joints \
+             whose child link has a cylinder.",
+            urdf.label,
+            found.robot,
+            found.root,
+            round(t[0], 9),
+            round(t[1], 9),
+            round(t[2], 9)
+        ),
+    });
     if !found.without_cylinder.is_empty() {
         header.push(format!("Not wheels (no cylinder on the child link): {}.", found.without_cylinder.join(", ")));
     }
@@ -283,6 +296,7 @@ pub fn draft(
         frames: Frames::default(),
         ground_truth: None,
         priors: None,
+        wheel_data: Default::default(),
     };
     let wheel_notes = match kind {
         BaseKind::Diff if wheels.len() == 2 => {

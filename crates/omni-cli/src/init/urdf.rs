@@ -46,8 +46,11 @@ impl UrdfWheel {
 pub struct UrdfWheels {
     /// The robot's name in the URDF.
     pub robot: String,
-    /// The root link: positions and axles are in its frame.
+    /// The frame positions and axles are in: `base_link` when the URDF has one (the robot's base, which a
+    /// ground truth tracks by default), else the root link.
     pub root: String,
+    /// When `root` is `base_link` below the URDF's root link: that link, and `base_link`'s origin in it. m.
+    pub base_in_root: Option<(String, [f64; 3])>,
     /// The wheels, in URDF order.
     pub wheels: Vec<UrdfWheel>,
     /// Continuous joints whose child link has no cylinder (not taken as wheels).
@@ -127,7 +130,22 @@ pub fn wheels(text: &str) -> Result<UrdfWheels, String> {
         [] => return Err("the URDF has no root link (every link is some joint's child)".into()),
         _ => return Err(format!("the URDF has several root links ({}); it must be one tree", roots.join(", "))),
     };
-    let mut out = UrdfWheels { robot: robot.name.clone(), root, ..UrdfWheels::default() };
+    // Positions in base_link, not in a base_footprint above it that sits elsewhere in the plane.
+    const BASE: &str = "base_link";
+    let base =
+        (root != BASE && robot.links.iter().any(|l| l.name == BASE)).then(|| pose_in_root(&robot, BASE)).flatten();
+    let to_base = |v: [f64; 3], t: [f64; 3]| match &base {
+        // Rᵀ (v − t): a root-frame vector in base_link's frame.
+        Some((r, _)) => [0, 1, 2].map(|i| (0..3).map(|k| r[k][i] * (v[k] - t[k])).sum()),
+        None => v,
+    };
+    let base_origin = base.as_ref().map_or([0.0; 3], |(_, t)| *t);
+    let mut out = UrdfWheels {
+        robot: robot.name.clone(),
+        root: if base.is_some() { BASE.to_string() } else { root.clone() },
+        base_in_root: base.as_ref().map(|(_, t)| (root.clone(), *t)),
+        ..UrdfWheels::default()
+    };
     for j in robot.joints.iter().filter(|j| j.joint_type == urdf_rs::JointType::Continuous) {
         let Some(link) = robot.links.iter().find(|l| l.name == j.child.link) else {
             return Err(format!("joint {:?}: its child link {:?} is not defined", j.name, j.child.link));
@@ -148,8 +166,8 @@ pub fn wheels(text: &str) -> Result<UrdfWheels, String> {
         out.wheels.push(UrdfWheel {
             joint: j.name.clone(),
             link: link.name.clone(),
-            position_m,
-            axle: a.map(|v| v / norm),
+            position_m: to_base(position_m, base_origin),
+            axle: to_base(a.map(|v| v / norm), [0.0; 3]),
             radius_m,
             radius_from,
         });

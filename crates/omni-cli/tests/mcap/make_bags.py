@@ -329,6 +329,29 @@ def tf_bag(out, name):
     return simple_expected(bag, js, vel, gt, poses)
 
 
+def tf_marker_bag(out, name):
+    """Ground truth as TF world -> marker on /tf, a motion-capture marker mounted off the robot's centre:
+    /tf_static holds marker -> mount -> base_link (10 cm back, 5 cm left, turned 30 degrees) and
+    base_link -> laser. The expected poses are base_link's."""
+    bag, js, vel, pos, _, _ = simple_bag(out, name, truth_topic=None,
+                                         extra=[('/tf', TF_MESSAGE), ('/tf_static', TF_MESSAGE)])
+    tfm = T[TF_MESSAGE]
+    # marker -> mount (-0.1, 0, 0), mount -> base_link (0, 0.05, 30 deg): base_link in marker.
+    statics = [('marker', 'mount', (-0.1, 0.0, 0.0)), ('mount', 'base_link', (0.0, 0.05, math.radians(30))),
+               ('base_link', 'laser', (0.2, 0.0, 0.0))]
+    bag.write('/tf_static', T0 - 100 * MS, tfm(transforms=[transform(T0 - 100 * MS, p, c, *o) for p, c, o in statics]))
+    ox, oy, oth = -0.1, 0.05, math.radians(30)
+    gt = stamps(T0 + 5 * MS, 50 * MS, 20)
+    poses = [truth_pose(rel(ns) - rel(T0)) for ns in gt]
+    for ns, (x, y, th) in zip(gt, poses):
+        # marker = base_link composed with the inverse of (ox, oy, oth).
+        mth = th - oth
+        mx = x - (math.cos(mth) * ox - math.sin(mth) * oy)
+        my = y - (math.sin(mth) * ox + math.cos(mth) * oy)
+        bag.write('/tf', ns, tfm(transforms=[transform(ns, 'world', 'marker', mx, my, mth)]))
+    return simple_expected(bag, js, vel, gt, poses)
+
+
 def odom_truth_bag(out, name):
     """Ground truth as nav_msgs/Odometry in frame `world`, beside the wheel odometry on /odom (frame odom)."""
     bag, js, vel, pos, gt, poses = simple_bag(out, name, truth_topic='/ground_truth/odom', truth_type=ODOMETRY,
@@ -348,6 +371,7 @@ def all_bags(out):
         'split_gap': split_bag(out, 'split_gap', gap=True),
         'position_only': position_only_bag(out, 'position_only'),
         'tf': tf_bag(out, 'tf'),
+        'tf_marker': tf_marker_bag(out, 'tf_marker'),
         'odom_truth': odom_truth_bag(out, 'odom_truth'),
     }
     bag, js, vel, pos, gt, poses = simple_bag(out, 'pose_cov', truth_topic='/mocap/pose_cov',
@@ -521,14 +545,29 @@ def ros1_bags(out):
     for topic, msgtype, ns, fields in msgs:
         with_mcap.write(topic, ns, build(T, False, topic, msgtype, ns, fields))
     expected = {'ros1_pair': {'file': with_mcap.close()}}
-    for name, fmt in [('ros1_bz2', Ros1Writer.CompressionFormat.BZ2), ('ros1_lz4', Ros1Writer.CompressionFormat.LZ4)]:
+
+    def encoder(msgs, with_rpm):
+        """The joints as a driver outside ros2_control publishes them: positions in counts of a 1024-count
+        motor encoder behind a 30:1 gear, velocities in motor rpm (or none)."""
+        out = []
+        for topic, msgtype, ns, fields in msgs:
+            if msgtype == JOINT_STATE:
+                fields = dict(fields, position=np.round(fields['position'] * 30 * 1024 / (2 * math.pi)),
+                              velocity=fields['velocity'] * 30 * 60 / (2 * math.pi) if with_rpm else np.zeros(0))
+            out.append((topic, msgtype, ns, fields))
+        return out
+
+    bz2, lz4 = Ros1Writer.CompressionFormat.BZ2, Ros1Writer.CompressionFormat.LZ4
+    for name, fmt, written in [('ros1_bz2', bz2, msgs), ('ros1_lz4', lz4, msgs),
+                               ('ros1_counts_rpm', lz4, encoder(msgs, True)),
+                               ('ros1_counts', lz4, encoder(msgs, False))]:
         path = out / f'{name}.bag'
         w = Ros1Writer(path)
         w.set_compression(fmt)
         w.open()
         conns = {t: w.add_connection(t, m, typestore=ts1) for t, m in
                  [('/joint_states', JOINT_STATE), ('/mocap/pose', POSE_STAMPED), ('/cmd_vel', TWIST)]}
-        for topic, msgtype, ns, fields in msgs:
+        for topic, msgtype, ns, fields in written:
             w.write(conns[topic], ns, ts1.serialize_ros1(build(ts1.types, True, topic, msgtype, ns, fields), msgtype))
         w.close()
         expected[name] = {'file': path.name}

@@ -33,6 +33,7 @@ fn base(kind: BaseKind, wheels: Vec<WheelSpec>) -> RobotDescription {
         frames: Frames::default(),
         ground_truth: None,
         priors: None,
+        wheel_data: Default::default(),
     }
 }
 

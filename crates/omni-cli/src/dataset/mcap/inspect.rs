@@ -99,7 +99,9 @@ impl InventorySink {
     /// Decodes what the inventory keeps of a message of topic `i`.
     fn decode(&mut self, i: usize, data: &[u8]) -> Result<(), String> {
         let t = &mut self.inv.topics[i];
-        let is_urdf = t.topic == ROBOT_DESCRIPTION_TOPIC && t.msg_type == "std_msgs/msg/String";
+        // A namespaced robot publishes it as `/robot1/robot_description`.
+        let is_urdf = (t.topic == ROBOT_DESCRIPTION_TOPIC || t.topic.ends_with(ROBOT_DESCRIPTION_TOPIC))
+            && t.msg_type == "std_msgs/msg/String";
         if t.msg_type != joint_state::NAME && !is_urdf {
             return Ok(());
         }

@@ -18,6 +18,7 @@
 //!   they are differentiated.
 
 use super::common::{HEADER_DEF, Header, RosString, Stamp, TIME_DEF, schema_text};
+use omni_kin::robot::WheelData;
 use serde::{Deserialize, Serialize};
 
 /// The schema name.
@@ -217,15 +218,25 @@ impl JointSeries {
         notes
     }
 
-    /// The wheel data, given the stamps in seconds (`t_s[k]` for message `k`); `Err((message, problem))`.
-    pub fn finish(self, wheel_joints: &[String], t_s: &[f64]) -> Result<Wheels, (usize, String)> {
+    /// The wheel data, given the stamps in seconds (`t_s[k]` for message `k`) and the units the joints are
+    /// published in (`[wheel_data]`: turned into the wheel's rad and rad/s); `Err((message, problem))`.
+    pub fn finish(self, wheel_joints: &[String], t_s: &[f64], units: &WheelData) -> Result<Wheels, (usize, String)> {
         let w = wheel_joints.len();
         let mut notes = self.notes();
-        let position = self.first_without_position.is_none().then_some(self.position);
+        let (mut velocity, mut position) = (self.velocity, self.position);
+        if !units.is_identity() {
+            let (p, v) = (units.position_rad_per_unit(), units.velocity_rad_s_per_unit());
+            velocity.iter_mut().for_each(|x| *x *= v);
+            position.iter_mut().for_each(|x| *x *= p);
+            notes.push(format!("{} ([wheel_data] in the robot description)", describe_units(units)));
+        }
+        let position = self.first_without_position.is_none().then_some(position);
         let (rad_s, differentiated) = match (self.first_without_velocity, position.as_ref()) {
-            (None, _) => (self.velocity, None),
+            (None, _) => (velocity, None),
             (Some(_), Some(p)) => {
-                let (unwrapped, wrapped) = unwrap(p, w);
+                // An encoder behind a gearbox wraps on its own shaft, not on the wheel's: left as it is.
+                let geared = units.gear_ratio.is_some_and(|g| g != 1.0);
+                let (unwrapped, wrapped) = if geared { (p.clone(), vec![0; w]) } else { unwrap(p, w) };
                 for (j, wraps) in wrapped.iter().enumerate().filter(|(_, n)| **n > 0) {
                     notes.push(format!(
                         "the position of joint {:?} wraps around (an angle modulo 2π): unwrapped at {wraps} jumps \
@@ -256,6 +267,19 @@ impl JointSeries {
         }
         Ok(Wheels { t_ns: self.t_ns, rad_s, position, differentiated, notes })
     }
+}
+
+/// One sentence: what the joint values were converted from.
+fn describe_units(units: &WheelData) -> String {
+    let mut s = format!("joint positions in {} and velocities in {}", units.position.name(), units.velocity.name());
+    if let Some(c) = units.counts_per_rev {
+        s.push_str(&format!(" ({c} counts per revolution)"));
+    }
+    if let Some(g) = units.gear_ratio.filter(|&g| g != 1.0) {
+        s.push_str(&format!(" behind a {g}:1 gear"));
+    }
+    s.push_str(" are converted to the wheel's rad and rad/s");
+    s
 }
 
 /// Where each of `wheel_joints` is in `names`, or which is missing.
@@ -339,7 +363,7 @@ mod tests {
         let mut s = JointSeries::default();
         s.push(msg(0, &["x", "wheel_c", "wheel_a", "wheel_b"], &[], &[9.0, 3.0, 1.0, 2.0]), &wheels(), 0).unwrap();
         s.push(msg(10, &["wheel_b", "wheel_a", "wheel_c"], &[], &[5.0, 4.0, 6.0]), &wheels(), 10).unwrap();
-        let w = s.finish(&wheels(), &[0.0, 1e-8]).unwrap();
+        let w = s.finish(&wheels(), &[0.0, 1e-8], &WheelData::default()).unwrap();
         assert_eq!(w.rad_s, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
         assert_eq!(w.differentiated, None);
         assert_eq!(w.position, None);
@@ -352,7 +376,7 @@ mod tests {
         s.push(msg(0, &names, &[0.0, 0.0, 0.0], &[]), &wheels(), 0).unwrap();
         s.push(msg(500_000_000, &names, &[1.0, -2.0, 0.5], &[]), &wheels(), 500_000_000).unwrap();
         s.push(msg(1_000_000_000, &names, &[2.0, -4.0, 0.5], &[]), &wheels(), 1_000_000_000).unwrap();
-        let w = s.finish(&wheels(), &[0.0, 0.5, 1.0]).unwrap();
+        let w = s.finish(&wheels(), &[0.0, 0.5, 1.0], &WheelData::default()).unwrap();
         assert_eq!(w.rad_s, [2.0, -4.0, 1.0, 2.0, -4.0, 1.0, 2.0, -4.0, 0.0]);
         assert_eq!(w.differentiated, Some(3));
     }
@@ -372,7 +396,7 @@ mod tests {
             "header.stamp 0.000000005 is not after the previous message's 0.000000005 (stamps must increase)"
         );
         s.push(msg(6, &names, &[], &[1.0, 1.0, 2.0]), &wheels(), 6).unwrap();
-        let e = s.finish(&wheels(), &[0.0, 1e-9]).unwrap_err();
+        let e = s.finish(&wheels(), &[0.0, 1e-9], &WheelData::default()).unwrap_err();
         assert_eq!(e, (0, "field velocity[1] (joint \"wheel_b\") is NaN".to_string()));
     }
 
@@ -385,7 +409,7 @@ mod tests {
         s.push(msg(0, &["shoulder", "elbow"], &[0.1, 0.2], &[]), &wheels(), 105).unwrap();
         s.push(msg(0, &names, &[], &[4.0, 5.0, 6.0]), &wheels(), 110).unwrap();
         s.push(msg(0, &names, &[], &[4.0, 5.0, 6.0]), &wheels(), 110).unwrap();
-        let w = s.finish(&wheels(), &[0.0, 1e-8]).unwrap();
+        let w = s.finish(&wheels(), &[0.0, 1e-8], &WheelData::default()).unwrap();
         assert_eq!(w.t_ns, [100, 110]);
         assert_eq!(w.rad_s, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
         assert_eq!(
@@ -409,7 +433,7 @@ mod tests {
         let nan = f64::NAN;
         s.push(msg(0, &names, &[0.0, 0.0, 0.0], &[nan, nan, nan]), &wheels(), 0).unwrap();
         s.push(msg(500_000_000, &names, &[1.0, -2.0, 0.5], &[nan, nan, nan]), &wheels(), 1).unwrap();
-        let w = s.finish(&wheels(), &[0.0, 0.5]).unwrap();
+        let w = s.finish(&wheels(), &[0.0, 0.5], &WheelData::default()).unwrap();
         assert_eq!(w.rad_s, [2.0, -4.0, 1.0, 2.0, -4.0, 1.0]);
         assert_eq!(w.differentiated, Some(2));
         assert_eq!(
@@ -430,7 +454,7 @@ mod tests {
             let p = [wrap(2.0 * ts), wrap(-3.0 * ts), 10.0 + ts];
             s.push(msg(100_000_000 * k as i64 + 1, &names, &p, &[]), &wheels(), 0).unwrap();
         }
-        let w = s.finish(&wheels(), &t).unwrap();
+        let w = s.finish(&wheels(), &t, &WheelData::default()).unwrap();
         for k in 1..t.len() {
             let v = &w.rad_s[3 * k..3 * k + 3];
             assert!((v[0] - 2.0).abs() < 1e-9 && (v[1] + 3.0).abs() < 1e-9 && (v[2] - 1.0).abs() < 1e-9, "{k}: {v:?}");
@@ -441,6 +465,42 @@ mod tests {
                 "the position of joint \"wheel_a\" wraps around (an angle modulo 2π): unwrapped at 1 jumps before it is differentiated",
                 "the position of joint \"wheel_b\" wraps around (an angle modulo 2π): unwrapped at 2 jumps before it is differentiated",
             ]
+        );
+    }
+
+    #[test]
+    fn counts_and_rpm_behind_a_gear_become_wheel_radians() {
+        use omni_kin::robot::{PositionUnit, VelocityUnit};
+        use std::f64::consts::TAU;
+        let names = ["wheel_a", "wheel_b", "wheel_c"];
+        // A motor-side encoder of 1024 counts behind a 30:1 gear; velocities in motor rpm.
+        let units = WheelData {
+            position: PositionUnit::Counts,
+            velocity: VelocityUnit::Rpm,
+            counts_per_rev: Some(1024.0),
+            gear_ratio: Some(30.0),
+        };
+        // Wheel speeds 1, −2, 0.5 rad/s: motor rpm = ω · 30 · 60 / 2π; counts = θ · 30 · 1024 / 2π.
+        let omega = [1.0, -2.0, 0.5];
+        let rpm: Vec<f64> = omega.iter().map(|w| w * 30.0 * 60.0 / TAU).collect();
+        let mut s = JointSeries::default();
+        let t = [0.0, 0.5];
+        for (k, ts) in t.iter().enumerate() {
+            let counts: Vec<f64> = omega.iter().map(|w| (w * ts * 30.0 * 1024.0 / TAU).round()).collect();
+            s.push(msg(500_000_000 * k as i64 + 1, &names, &counts, &rpm), &wheels(), 0).unwrap();
+        }
+        let w = s.finish(&wheels(), &t, &units).unwrap();
+        for (got, want) in w.rad_s.iter().zip(omega.iter().chain(&omega)) {
+            assert!((got - want).abs() < 1e-12, "{got} vs {want}");
+        }
+        let p = w.position.unwrap();
+        for (got, want) in p[3..].iter().zip(omega.map(|w| w * 0.5)) {
+            assert!((got - want).abs() < TAU / (30.0 * 1024.0), "{got} vs {want}");
+        }
+        assert_eq!(
+            w.notes,
+            ["joint positions in counts and velocities in rpm (1024 counts per revolution) behind a 30:1 gear are \
+                 converted to the wheel's rad and rad/s ([wheel_data] in the robot description)"]
         );
     }
 }

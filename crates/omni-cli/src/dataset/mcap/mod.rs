@@ -65,6 +65,7 @@ mod pose_stamped;
 mod poses;
 pub(crate) mod read;
 pub mod split;
+mod statics;
 mod tf;
 mod twist;
 mod write;
@@ -113,6 +114,8 @@ pub struct McapOptions {
     /// Force the clock offset of a ground-truth topic (`--gt-time-offset` without `--gt`): `t_wheel =
     /// t_truth + offset`. s. Default: the stamps as recorded, unless the topic is found on another clock.
     pub truth_time_offset_s: Option<f64>,
+    /// The units of the wheel joints' values (`[wheel_data]` in robot.toml). Default rad and rad/s.
+    pub wheel_data: omni_kin::robot::WheelData,
 }
 
 impl Default for McapOptions {
@@ -128,6 +131,7 @@ impl Default for McapOptions {
             skip_invalid: false,
             recorded_odometry: true,
             truth_time_offset_s: None,
+            wheel_data: Default::default(),
         }
     }
 }

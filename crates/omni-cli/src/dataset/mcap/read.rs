@@ -10,6 +10,7 @@ use super::joint_state::{self, JointSeries, JointState};
 use super::odometry::{self, ODOM_FRAME, Odometry};
 use super::pose_stamped::{self, PoseStamped, PoseWithCovarianceStamped};
 use super::poses::{PoseSeries, start_heading_in_half_turn};
+use super::statics::{self, StaticTree};
 use super::tf::{self, TfMessage, TfPairs};
 use super::twist::{self, Commands, TwistStamped};
 use super::{McapOptions, McapRead, split};
@@ -313,13 +314,14 @@ impl Bag<'_> {
     /// transform or pose topic seen; kept together so the messages can name them.
     fn truth(&self, opts: &McapOptions) -> Result<Truth, DatasetError> {
         let (parent, child) = (opts.truth_parent_frame.as_deref(), opts.truth_child_frame.as_deref());
+        let statics = self.statics();
         if let Some(topic) = &opts.truth_topic {
             let i = self.find(topic, "--gt-topic")?;
             let c = &self.channels[i];
             return match (&c.content, c.msg_type) {
                 (Content::Tf(pairs), _) => {
                     self.check(i)?;
-                    let found = pairs.candidates(parent, child);
+                    let found = pairs.candidates(parent, child, &statics);
                     match found[..] {
                         [k] => Ok(Truth::Tf(i, k)),
                         _ => {
@@ -366,8 +368,9 @@ impl Bag<'_> {
                         found.push((Truth::Poses(i), c.candidate()));
                     }
                 }
+                Content::Tf(_) if tf::is_static_topic(&c.topic) => {}
                 Content::Tf(pairs) => {
-                    for k in pairs.candidates(parent, child) {
+                    for k in pairs.candidates(parent, child, &statics) {
                         let p = &pairs.pairs[k];
                         found.push((Truth::Tf(i, k), format!("{} ({} → {})", c.topic, p.parent, p.child)));
                     }
@@ -414,13 +417,19 @@ impl Bag<'_> {
         src: Truth,
         ch: usize,
         origin_s: i64,
+        opts: &McapOptions,
+        notes: &mut Vec<String>,
     ) -> Result<(String, Vec<StampedPose>), DatasetError> {
         let topic = self.channels[ch].topic.clone();
+        let statics = self.statics();
         let poses = match (src, self.take(ch)) {
             (Truth::Tf(_, k), Content::Tf(mut pairs)) => {
-                let pair = pairs.pairs.swap_remove(k);
+                let mut pair = pairs.pairs.swap_remove(k);
                 if let Some((m, what)) = pair.problem {
                     return Err(DatasetError::at(self.path, format!("topic {topic:?}, message {m}"), what));
+                }
+                if let Some(note) = to_base_frame(&mut pair, &statics, opts.truth_child_frame.as_deref()) {
+                    notes.push(format!("{}: topic {topic:?}: {note}", self.path.display()));
                 }
                 pair.poses
             }
@@ -491,9 +500,47 @@ impl Bag<'_> {
     }
 
     /// Moves a channel's content out.
+    /// The static transforms of every TF topic.
+    fn statics(&self) -> StaticTree {
+        let mut tree = StaticTree::default();
+        for c in &self.channels {
+            if let Content::Tf(pairs) = &c.content {
+                pairs.add_statics(tf::is_static_topic(&c.topic), &mut tree);
+            }
+        }
+        tree
+    }
+
     fn take(&mut self, i: usize) -> Content {
         std::mem::replace(&mut self.channels[i].content, Content::Nothing)
     }
+}
+
+/// The robot frames a tracked frame is moved to by default, the first that static transforms reach.
+const BASE_FRAMES: [&str; 2] = ["base_link", "base_footprint"];
+
+/// Moves a TF pair's poses from its child frame (a motion-capture marker) along static transforms to
+/// `target` (`--gt-child-frame`), or by default to the first of [`BASE_FRAMES`] they reach; says so.
+fn to_base_frame(pair: &mut tf::Pair, statics: &StaticTree, target: Option<&str>) -> Option<String> {
+    let (to, (offset, frames)) = match target {
+        Some(t) => (t, statics.offset(&pair.child, t)?),
+        None if BASE_FRAMES.contains(&pair.child.as_str()) => return None,
+        None => BASE_FRAMES.iter().find_map(|&t| statics.offset(&pair.child, t).map(|o| (t, o)))?,
+    };
+    for p in &mut pair.poses.xy_yaw {
+        let moved = statics::compose(*p, offset);
+        *p = [moved[0], moved[1], omni_kin::pose::wrap_angle(moved[2])];
+    }
+    Some(format!(
+        "the ground truth tracks {:?}; it is moved to {to:?} through static transforms ({} → {}: x {:.4} m, \
+         y {:.4} m, yaw {:.2}°)",
+        pair.child,
+        pair.child,
+        frames.join(" → "),
+        offset[0],
+        offset[1],
+        offset[2].to_degrees()
+    ))
 }
 
 fn schema_or_none(schema: &str) -> &str {
@@ -753,6 +800,26 @@ pub(super) fn read_bytes(
 
 /// The poses of a ground-truth file on the wheel clock (seconds since `origin_s`), with the clock offset:
 /// the forced one, or one estimated from the wheel data (`omni_kin::clock`). Errors name the file.
+/// A `--gt` file's poses for a run on the wheel clock, its place for messages (`in FILE (+0.1 s clock
+/// offset)`), its label (`ground truth FILE`) and its clock.
+fn external_file(
+    ext: &ExternalTruth,
+    stem: &str,
+    origin_s: i64,
+    t_s: &[f64],
+    rad_s: &[f64],
+    n_wheels: usize,
+) -> Result<(Vec<StampedPose>, String, String, Option<GtClock>), DatasetError> {
+    let (poses, clock) = external_truth(ext, stem, origin_s, t_s, rad_s, n_wheels)?;
+    let file = ext.path.display();
+    Ok((
+        poses,
+        format!("in {file} ({:+.4} s clock offset)", clock.offset_s),
+        format!("ground truth {file}"),
+        Some(clock),
+    ))
+}
+
 fn external_truth(
     ext: &ExternalTruth,
     recording: &str,
@@ -919,7 +986,7 @@ pub(crate) fn runs(
     let origin_s = first_ns.div_euclid(NS_PER_S);
     let t_s: Vec<f64> = series.t_ns.iter().map(|&t| seconds_since(t, origin_s)).collect();
     let wheels = series
-        .finish(&opts.wheel_joints, &t_s)
+        .finish(&opts.wheel_joints, &t_s, &opts.wheel_data)
         .map_err(|(k, what)| DatasetError::at(path, format!("topic {joints_topic:?}, message {k}"), what))?;
     notes.extend(wheels.notes.iter().map(|n| format!("{}: topic {joints_topic:?}: {n}", path.display())));
     if let Some(without) = wheels.differentiated {
@@ -935,21 +1002,25 @@ pub(crate) fn runs(
     let n_wheels = opts.wheel_joints.len();
     let (all_truth, truth_where, truth_label, clock) = match (truth_src, truth_ch, external) {
         (Some(src), Some(ch), _) => {
-            let (truth_topic, mut poses) = bag.truth_poses(src, ch, origin_s)?;
+            let (truth_topic, mut poses) = bag.truth_poses(src, ch, origin_s, opts, &mut notes)?;
             let forced = opts.truth_time_offset_s;
             let clock = topic_clock(path, stem, &truth_topic, forced, &mut poses, &t_s, &wheels.rad_s, n_wheels);
             (poses, format!("on {truth_topic:?}"), format!("topic {truth_topic:?}"), clock)
         }
-        (_, _, Some(ext)) => {
-            let (poses, clock) = external_truth(ext, stem, origin_s, &t_s, &wheels.rad_s, n_wheels)?;
-            let file = ext.path.display();
-            (
-                poses,
-                format!("in {file} ({:+.4} s clock offset)", clock.offset_s),
-                format!("ground truth {file}"),
-                Some(clock),
-            )
+        (_, _, Some(ext)) if !ext.by_time.is_empty() => {
+            let at = |t: f64| origin_s * NS_PER_S + (t * 1e9).round() as i64;
+            let (ext, share) = ext
+                .overlapping(at(t_s[0]), at(t_s[t_s.len() - 1]))
+                .map_err(|e| DatasetError::file(path, format!("--gt folder {}: {e}", ext.path.display())))?;
+            notes.push(format!(
+                "{}: no file of the --gt folder is named after it: {} covers {:.0} % of its span and is its ground truth",
+                path.display(),
+                ext.path.display(),
+                100.0 * share
+            ));
+            external_file(&ext, stem, origin_s, &t_s, &wheels.rad_s, n_wheels)?
         }
+        (_, _, Some(ext)) => external_file(ext, stem, origin_s, &t_s, &wheels.rad_s, n_wheels)?,
         _ => unreachable!("the ground truth comes from a topic or a file"),
     };
     let (w0, w1) = (t_s[0], t_s[t_s.len() - 1]);
@@ -1023,11 +1094,19 @@ pub(crate) fn runs(
                 let e = match &source {
                     // A bad wheel sample is the JointState message of the same index.
                     KinError::NonFinite { what: "wheel sample", index, .. }
-                    | KinError::NotIncreasing { what: "wheel sample", index, .. }
-                    | KinError::Implausible { what: "wheel sample", index, .. } => DatasetError::at(
+                    | KinError::NotIncreasing { what: "wheel sample", index, .. } => DatasetError::at(
                         path,
                         format!("topic {joints_topic:?}, message {}", lo + index),
                         source.to_string(),
+                    ),
+                    // No wheel turns at 10⁴ rad/s: the joints are in another unit.
+                    KinError::Implausible { what: "wheel sample", index, .. } => DatasetError::at(
+                        path,
+                        format!("topic {joints_topic:?}, message {}", lo + index),
+                        format!(
+                            "{source}: are the joints in encoder counts, rpm or degrees? Declare their units in \
+                             robot.toml's [wheel_data] (docs/formats.md)"
+                        ),
                     ),
                     _ => DatasetError::Run { path: path.to_path_buf(), error: source },
                 };

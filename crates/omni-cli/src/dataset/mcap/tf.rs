@@ -6,6 +6,7 @@
 
 use super::common::{Header, Quaternion, RosString, Vector3};
 use super::poses::PoseSeries;
+use super::statics::StaticTree;
 use serde::{Deserialize, Serialize};
 
 /// The schema name.
@@ -53,7 +54,23 @@ pub(super) struct TfPairs {
     pub pairs: Vec<Pair>,
 }
 
+/// Whether `topic` holds static transforms (`/tf_static`, `/robot1/tf_static`).
+pub(super) fn is_static_topic(topic: &str) -> bool {
+    topic.trim_end_matches('/').ends_with("tf_static")
+}
+
 impl TfPairs {
+    /// Adds the static transforms of this topic to `tree`: every pair of a static topic, and on another
+    /// topic the pairs published once.
+    pub fn add_statics(&self, is_static_topic: bool, tree: &mut StaticTree) {
+        for p in &self.pairs {
+            let once = p.poses.t_ns.len() == 1 && p.problem.is_none();
+            if let (true, Some(xy_yaw)) = (is_static_topic || once, p.poses.xy_yaw.first()) {
+                tree.add(&p.parent, &p.child, *xy_yaw);
+            }
+        }
+    }
+
     /// Takes message `index`.
     pub fn push(&mut self, index: usize, msg: &TfMessage) {
         for (i, tr) in msg.transforms.iter().enumerate() {
@@ -88,15 +105,17 @@ impl TfPairs {
     }
 
     /// The pairs that can hold a ground truth: from a root of the TF tree (a frame that is nobody's child)
-    /// to a frame other than `odom`, with at least 2 poses; or exactly the given frames.
-    pub fn candidates(&self, parent: Option<&str>, child: Option<&str>) -> Vec<usize> {
+    /// to a frame other than `odom`, with at least 2 poses; or exactly the given frames, a given child also
+    /// through static transforms below the pair's child (`statics`).
+    pub fn candidates(&self, parent: Option<&str>, child: Option<&str>, statics: &StaticTree) -> Vec<usize> {
         let is_child = |f: &str| self.pairs.iter().any(|p| p.child == f);
         (0..self.pairs.len())
             .filter(|&k| {
                 let p = &self.pairs[k];
+                let below = |f: &str| f == p.child || statics.offset(&p.child, f).is_some();
                 let frames_ok = match (parent, child) {
                     (None, None) => !is_child(&p.parent),
-                    _ => parent.is_none_or(|f| f == p.parent) && child.is_none_or(|f| f == p.child),
+                    _ => parent.is_none_or(|f| f == p.parent) && child.is_none_or(below),
                 };
                 frames_ok
                     && p.child != super::odometry::ODOM_FRAME
