@@ -59,7 +59,7 @@ fn command_line_defaults_are_the_library_defaults() {
     let cli = Cli::try_parse_from(["omnical", "train", "runs/"]).unwrap();
     let Command::Train(t) = cli.command else { panic!("train") };
     assert_eq!(t.preset, Preset::default());
-    assert_eq!(t.model, KinematicsKind::default());
+    assert_eq!(t.model, None, "train fits the robot's own kind: diff for a differential drive, else ik");
     let id = IdentifyOptions::default();
     assert_eq!((t.fit.max_std_error, t.fit.min_excitation), (id.max_std_error, id.min_excitation));
     assert_eq!(t.fit.max_std_error, 0.05);

@@ -40,6 +40,18 @@ pub fn robot_model(kind: KinematicsKind, f: &RobotFile) -> anyhow::Result<Model>
     Ok(Model::design(kind, Some(&g))?)
 }
 
+/// The base model `train` fits when none is named: `diff` for a two-wheel base (three physical parameters:
+/// a 3 × 2 matrix has a fourth direction, weakly determined, that trades the radii's ratio against the
+/// turning), else `ik`, the paper's matrix.
+pub fn default_kind(ds: &Dataset) -> KinematicsKind {
+    let two_wheels = match robot_file::design(ds) {
+        Some(Design::File(f)) => f.description.kind == omni_kin::BaseKind::Diff,
+        Some(Design::Data(g)) => g.n_wheels() == 2,
+        None => false,
+    };
+    if two_wheels { KinematicsKind::Diff } else { KinematicsKind::Ik }
+}
+
 /// [`model_of`], where no robot is an error saying how to describe it.
 pub fn model(kind: KinematicsKind, ds: &Dataset) -> anyhow::Result<Model> {
     model_of(kind, ds)?.ok_or_else(|| robot_file::no_design("the design model"))

@@ -136,7 +136,8 @@ fn diff_diagnosed_clock_offset_is_trains() {
     assert_eq!(c["effect"], "time_offset", "{dg:#}");
     let reported = c["params"][0]["value"].as_f64().expect("tau_s");
     let t = omnical(&["train", &fit, "--effect", "time_offset", "--json"], d);
-    assert_close(&[reported], &trained(&t, &["tau_s"]), 1e-6, "time_offset");
+    // The same fit to the LM's stopping tolerance (2.8e-6 of τ with the diff model, 1.4e-8 s).
+    assert_close(&[reported], &trained(&t, &["tau_s"]), 1e-5, "time_offset");
     // Held by the truncated update in both, or fitted in both: diagnose says which.
     let held_by_train = t["held_at_start"].as_array().unwrap().iter().any(|h| h.as_str().unwrap().contains("tau_s"));
     let held_by_diagnose = c["held"].as_array().unwrap().iter().any(|h| h == "tau_s");

@@ -118,6 +118,32 @@ fn the_project_file_sets_defaults_and_flags_win() {
     assert_eq!(row(&r, "joints"), ("wheel_a, wheel_b, wheel_c", "proj/r.toml:6"));
 }
 
+/// eval's RPE window from the project file (its own table or the top level); the flag wins; a bad window
+/// is refused with the file, line and key.
+#[test]
+fn the_project_file_sets_evals_rpe_window() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    simulate(d);
+    let window = |args: &[&str]| -> (f64, String) {
+        let v: serde_json::Value =
+            serde_json::from_str(&ok(&[&["eval", "sim/validation", "--json"][..], args].concat(), d)).unwrap();
+        (v["rpe"]["delta"].as_f64().unwrap(), v["rpe"]["delta_unit"].as_str().unwrap().to_string())
+    };
+    assert_eq!(window(&[]), (1.0, "m".into()));
+    std::fs::write(d.join("omnical.toml"), "[eval]\nrpe_delta = \"0.5s\"\n").unwrap();
+    assert_eq!(window(&[]), (0.5, "s".into()));
+    assert_eq!(window(&["--rpe-delta", "2m"]), (2.0, "m".into()));
+    std::fs::write(d.join("omnical.toml"), "rpe_delta = \"0.25m\"\n").unwrap();
+    assert_eq!(window(&[]), (0.25, "m".into()));
+    std::fs::write(d.join("omnical.toml"), "seed = 1\nrpe_delta = \"1km\"\n").unwrap();
+    assert_eq!(
+        refused(&["eval", "sim/validation"], d).lines().next().unwrap(),
+        "error: omnical.toml: line 2: rpe_delta: invalid value '1km' for '--rpe-delta <WINDOW>': expected a \
+         distance in metres or a time in seconds, as 1m or 2s"
+    );
+}
+
 #[test]
 fn bad_project_files_name_the_file_line_and_key() {
     let tmp = tempfile::tempdir().unwrap();
@@ -127,7 +153,7 @@ fn bad_project_files_name_the_file_line_and_key() {
             "seed = 5\nsed = 3\n",
             "error: omnical.toml: line 2: sed: unknown key; known keys: threads, robot, joints, joints_topic, \
              gt_topic, gt_parent_frame, gt_child_frame, gt, gt_time_offset, split, skip_invalid, ticks_per_rev, \
-             max_file_mb, preset, seed, objective, every, heading_weight, unexcited",
+             max_file_mb, preset, seed, objective, every, heading_weight, unexcited, rpe_delta",
         ),
         (
             "preset = \"fast\"\n",
@@ -158,7 +184,7 @@ fn bad_project_files_name_the_file_line_and_key() {
 
 mod settings_table {
     use clap::CommandFactory;
-    use omni_cli::api::settings::{SETTINGS, Setting, Where};
+    use omni_cli::api::settings::{Flag, SETTINGS, Setting, Where};
     use omni_cli::cli::{Cli, Command};
     use std::collections::BTreeSet;
 
@@ -180,8 +206,15 @@ mod settings_table {
         let train = cli.find_subcommand("train").unwrap();
         let mut options = option_ids(train);
         options.extend(option_ids(&cli));
-        let flags = keys(|s| s.flag == Where::Yes);
+        let flags = keys(|s| s.flag == Flag::Train);
         assert_eq!(options, flags, "omnical train's options against SETTINGS");
+        // A setting of another command is its option.
+        for s in SETTINGS {
+            if let Flag::Of(name) = s.flag {
+                let sub = cli.find_subcommand(name).unwrap_or_else(|| panic!("{}: no command {name}", s.key));
+                assert!(option_ids(sub).contains(s.key), "{}: not an option of omnical {name}", s.key);
+            }
+        }
         // `omnical config` shows settings: each of its options is one.
         let config = option_ids(cli.find_subcommand("config").unwrap());
         let missing: Vec<_> = config.difference(&flags).collect();
@@ -206,7 +239,7 @@ mod settings_table {
     fn the_project_file_takes_the_declared_keys_and_refuses_the_others() {
         // Each project key is an option (the file's value becomes its default).
         for s in SETTINGS.iter().filter(|s| s.project_file == Where::Yes) {
-            assert_eq!(s.flag, Where::Yes, "{}: a project key must be an option", s.key);
+            assert!(!matches!(s.flag, Flag::No(_)), "{}: a project key must be an option", s.key);
         }
         let dir = tempfile::tempdir().unwrap();
         for s in SETTINGS {
@@ -296,10 +329,12 @@ mod settings_table {
     fn python_keywords_and_defaults_are_the_declared_ones() {
         let mut cli = Cli::command();
         cli.build(); // the implicit defaults (a switch's `false`) are set when built
-        let train = cli.find_subcommand("train").unwrap();
-        for (function, file, data_args) in
-            [("load", "omni-py/src/run.rs", "paths"), ("train", "omni-py/src/calibrate.rs", "runs")]
-        {
+        for (function, file, data_args, command) in [
+            ("load", "omni-py/src/run.rs", "paths", "train"),
+            ("train", "omni-py/src/calibrate.rs", "runs", "train"),
+            ("evaluate", "omni-py/src/evaluate.rs", "runs", "eval"),
+        ] {
+            let sub = cli.find_subcommand(command).unwrap();
             let rust = pyo3_signature(file, function);
             let stub = stub_signature(function);
             let normalised = |s: &[(String, Option<String>)]| -> Vec<(String, String)> {
@@ -315,12 +350,12 @@ mod settings_table {
                 .collect();
             assert_eq!(keywords, declared, "omnical.{function}'s keywords against SETTINGS");
             // A keyword that is an option has the option's default.
-            for s in SETTINGS.iter().filter(|s| s.flag == Where::Yes) {
+            for s in SETTINGS.iter().filter(|s| !matches!(s.flag, Flag::No(_))) {
                 let Some((_, keyword)) = s.python.ok().into_iter().flatten().find(|(f, _)| *f == function) else {
                     continue;
                 };
                 let Some((_, Some(py_default))) = rust.iter().find(|(n, _)| n == keyword) else { continue };
-                let arg = train.get_arguments().chain(cli.get_arguments()).find(|a| a.get_id() == s.key).unwrap();
+                let arg = sub.get_arguments().chain(cli.get_arguments()).find(|a| a.get_id() == s.key).unwrap();
                 let clap_default =
                     arg.get_default_values().first().map_or("none".into(), |d| normal(&d.to_string_lossy()));
                 assert_eq!(

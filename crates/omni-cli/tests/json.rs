@@ -131,6 +131,16 @@ fn every_json_document_is_versioned_and_says_what_the_text_says() {
     assert_eq!(format!("{heading_deg:.4}").parse::<f64>().unwrap(), *numbers_on(&t, "heading deg").last().unwrap());
     assert_eq!(e["runs"].as_array().unwrap().len(), 36);
     assert!(e["runs"][0].get("pos_err_m").is_some(), "{}", e["runs"][0]);
+    // 4 s runs are 0.8 m long: 0.5 m windows.
+    let e = json(&["eval", "sim/validation", "--rpe-delta", "0.5m"], d);
+    let t = text(&["eval", "sim/validation", "--rpe-delta", "0.5m"], d);
+    assert_eq!(e["rpe"]["pairs"], 36);
+    assert_eq!(printed(&e["rpe"]["translation_m"]["rmse"], 4), numbers_on(&t, "translation m")[2]);
+    assert_eq!(printed(&e["rpe"]["drift_pct"]["mean"], 4), numbers_on(&t, "drift % of distance")[0]);
+    assert_eq!(
+        e["rpe"]["pairs"].as_u64(),
+        e["runs"].as_array().unwrap().iter().map(|r| r["rpe"]["pairs"].as_u64()).sum()
+    );
 
     let tr = json(&["train", "sim/train", "--out", "fit.toml"], d);
     let t = text(&["train", "sim/train"], d);

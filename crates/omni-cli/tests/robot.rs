@@ -214,7 +214,10 @@ fn priors_bound_the_parametric_search_and_are_reported() {
     // The ik matrix's entries are not geometry: the priors are unused, and that is said (a warning: shown
     // with -q).
     std::fs::write(d.join("sim/train/robot.toml"), format!("{DIFF}{priors}")).unwrap();
-    let (v, e) = fit(&[]);
+    // train's default on a differential drive is its diff model, which the priors bound.
+    let (v, _) = fit(&[]);
+    assert_eq!(v["priors"].as_array().map(Vec::len), Some(3), "{v}");
+    let (v, e) = fit(&["--model", "ik"]);
     assert!(v.get("priors").is_none(), "{v}");
     assert!(
         e.contains(

@@ -44,6 +44,9 @@ use thiserror::Error;
 pub const COARSE_INTERVALS: usize = 4000;
 /// The finest coarse grid step. s.
 pub const MIN_COARSE_STEP_S: f64 = 0.010;
+/// A body velocity channel (v_x or v_y) whose sum of squares is below this share of the other's is a
+/// direction the base does not move in, left out of the fit's score.
+pub const STILL_CHANNEL_SHARE: f64 = 0.01;
 /// Wheel data and ground truth must overlap at least this long. s.
 pub const MIN_OVERLAP_S: f64 = 2.0;
 /// The fine stage compares truth intervals of about this length (whole truth sample intervals). s.
@@ -367,11 +370,15 @@ impl<'a> Fine<'a> {
                 y[(r, c)] = v[c];
             }
         }
+        let tss: [f64; 3] = std::array::from_fn(|c| y.column(c).norm_squared());
         let mut weights = [0.0; 3];
         for (c, w) in weights.iter_mut().enumerate() {
-            let tss = y.column(c).norm_squared();
-            if tss > 0.0 {
-                *w = 1.0 / tss;
+            // A direction the base does not move in (a differential drive's v_y: the truth's noise, or
+            // far less than its motion the other way) has nothing an offset could explain; scoring it
+            // would cap the explained share of a diff robot at two thirds.
+            let still = c < 2 && tss[c] < STILL_CHANNEL_SHARE * tss[1 - c];
+            if tss[c] > 0.0 && !still {
+                *w = 1.0 / tss[c];
             }
         }
         weights.iter().any(|&w| w > 0.0).then_some(Self { wheels, intervals, y, weights })

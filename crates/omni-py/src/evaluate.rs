@@ -1,14 +1,16 @@
 //! `evaluate` (costs and per-run residuals as arrays) and `integrate` (one run's odometry path).
 
 use crate::arrays::{to_matrix, to_vector};
-use crate::errors::PyResultExt;
+use crate::errors::{PyResultExt, value_error};
 use crate::robot::{check_order, model_spec, per_run};
 use crate::run::{PyRun, origin_of, runs_from};
 use numpy::{PyArray1, PyArray2};
-use omni_kin::PoseError;
 use omni_kin::cost::{self, CostKind};
 use omni_kin::odometry::{self, Residual};
+use omni_kin::relative::{RelativeErrors, RpeSummary};
+use omni_kin::{PoseError, RpeDelta, Stats};
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 use rayon::prelude::*;
 use std::path::PathBuf;
 
@@ -28,6 +30,27 @@ pub struct PyRunResiduals {
     path_rms: f64,
     residuals: Vec<Residual>,
     end: PoseError,
+    rpe: RpeSummary,
+}
+
+/// `mean`, `median`, `rmse`, `max` (NaN where there was no value).
+fn stats_dict<'py>(py: Python<'py>, s: Stats) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    for (k, v) in [("mean", s.mean), ("median", s.median), ("rmse", s.rmse), ("max", s.max)] {
+        d.set_item(k, v)?;
+    }
+    Ok(d)
+}
+
+/// The relative pose error of some pairs as `omnical eval --json`'s `rpe` object (without the window).
+fn rpe_dict<'py>(py: Python<'py>, s: &RpeSummary) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("pairs", s.pairs)?;
+    d.set_item("translation_m", stats_dict(py, s.translation_m)?)?;
+    d.set_item("rotation_rad", stats_dict(py, s.rotation_rad)?)?;
+    d.set_item("drift_pairs", s.drift_pairs)?;
+    d.set_item("drift_pct", stats_dict(py, s.drift_pct)?)?;
+    Ok(d)
 }
 
 #[pymethods]
@@ -59,6 +82,13 @@ impl PyRunResiduals {
     fn end_error<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         to_vector(py, vec![self.end.dx_m, self.end.dy_m, self.end.dtheta_rad])
     }
+    /// The run's relative pose error over the evaluation's window, as ``omnical eval --json``'s
+    /// ``runs[].rpe``: ``pairs``, ``translation_m`` [m] and ``rotation_rad`` [rad] (each ``mean``,
+    /// ``median``, ``rmse``, ``max``), ``drift_pairs``, ``drift_pct`` [% of distance].
+    #[getter]
+    fn rpe<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        rpe_dict(py, &self.rpe)
+    }
     fn __repr__(&self) -> String {
         format!("RunResiduals({:?}, {} poses, path RMS {:.4})", self.name, self.residuals.len(), self.path_rms)
     }
@@ -79,6 +109,8 @@ pub struct PyEvaluation {
     #[pyo3(get)]
     path_cost: f64,
     runs: Vec<Py<PyRunResiduals>>,
+    rpe_delta: RpeDelta,
+    rpe: RpeSummary,
 }
 
 #[pymethods]
@@ -102,13 +134,25 @@ impl PyEvaluation {
         });
         to_matrix(py, self.runs.len(), 3, d.collect())
     }
+    /// The relative pose error over every pair of every run, as ``omnical eval --json``'s ``rpe``:
+    /// ``delta`` and ``delta_unit`` (``"m"`` travelled or ``"s"``), ``pairs``, ``translation_m`` [m],
+    /// ``rotation_rad`` [rad] (each ``mean``, ``median``, ``rmse``, ``max``), ``drift_pairs``,
+    /// ``drift_pct`` [% of distance].
+    #[getter]
+    fn rpe<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = rpe_dict(py, &self.rpe)?;
+        d.set_item("delta", self.rpe_delta.value())?;
+        d.set_item("delta_unit", self.rpe_delta.unit())?;
+        Ok(d)
+    }
     fn __repr__(&self) -> String {
         format!("Evaluation(Eq. 6 cost {:.5}, path cost {:.5}, {} runs)", self.cost, self.path_cost, self.runs.len())
     }
 }
 
-/// Evaluate a model on runs, as ``omnical eval --model MODEL RUNS``: the Eq. 6 cost, the path cost, and
-/// per-run residuals as arrays.
+/// Evaluate a model on runs, as ``omnical eval --model MODEL RUNS``: the Eq. 6 cost, the path cost, the
+/// relative pose error over ``rpe_delta`` (``--rpe-delta``: ``"1m"`` travelled, or a time as ``"2s"``;
+/// evo_rpe's consecutive pairs on the ground truth), and per-run residuals as arrays.
 ///
 /// ``model``: an :class:`omnical.Model`, ``"design"`` (the design model of ``robot``, a ``robot.toml`` path
 /// or ``"apr02"``, else of the data's robot: a Dataset's ``design``, each run its own input's when the
@@ -121,14 +165,16 @@ impl PyEvaluation {
 /// >>> round(ev.path_cost, 3), len(ev.runs), ev.runs[0].error.shape[1]
 /// (0.016, 36, 3)
 #[pyfunction]
-#[pyo3(signature = (model, runs, *, robot = None))]
+#[pyo3(signature = (model, runs, *, robot = None, rpe_delta = "1m"))]
 pub fn evaluate(
     py: Python<'_>,
     model: &Bound<'_, PyAny>,
     runs: &Bound<'_, PyAny>,
     robot: Option<PathBuf>,
+    rpe_delta: &str,
 ) -> PyResult<PyEvaluation> {
     check_order(model, runs, "omnical.evaluate")?;
+    let delta: RpeDelta = rpe_delta.parse().map_err(|e| value_error(format!("rpe_delta={rpe_delta:?}: {e}")))?;
     let origin = origin_of(runs);
     let (runs, design) = runs_from(runs, "runs")?;
     let (fm, adapters, spelled) = model_spec(py, model, robot.as_ref(), design, "omnical.evaluate")?;
@@ -138,6 +184,7 @@ pub fn evaluate(
     let out = py.detach(|| -> Result<_, omni_kin::KinError> {
         let selection = CostKind::PATH.selection();
         let errors = models.errors(&runs, selection)?;
+        let relative = RelativeErrors::new(&runs, &errors, delta)?;
         let residuals = runs
             .par_iter()
             .map(|r| {
@@ -145,9 +192,9 @@ pub fn evaluate(
                 Ok(odometry::residuals(&fm.model.resolve(&fm.params)?, r, selection))
             })
             .collect::<Result<Vec<Vec<Residual>>, omni_kin::KinError>>()?;
-        Ok((errors, residuals))
+        Ok((errors, residuals, relative))
     });
-    let (errors, residuals) = errors.check(out)?.py()?;
+    let (errors, residuals, relative) = errors.check(out)?.py()?;
     let w = CostKind::PATH.heading_weight();
     let per_run = runs
         .iter()
@@ -155,11 +202,12 @@ pub fn evaluate(
         .enumerate()
         .map(|(i, (r, residuals))| {
             let (path_rms, end) = (cost::path_rms(errors.run(i)), errors.ends()[i]);
-            Py::new(py, PyRunResiduals { name: r.name().to_string(), path_rms, residuals, end })
+            let rpe = relative.run_summary(i);
+            Py::new(py, PyRunResiduals { name: r.name().to_string(), path_rms, residuals, end, rpe })
         })
         .collect::<PyResult<_>>()?;
     let (c, path, runs) = (errors.end_pose_cost(), errors.path_cost(w), per_run);
-    Ok(PyEvaluation { cost: c, path_cost: path, runs })
+    Ok(PyEvaluation { cost: c, path_cost: path, runs, rpe_delta: delta, rpe: relative.summary() })
 }
 
 /// Integrate one run's wheel speeds through a model, from its first ground-truth pose. ``model`` as in

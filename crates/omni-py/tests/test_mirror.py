@@ -156,6 +156,27 @@ def test_train_options_give_the_cli_fit(csv_runs: Path, tmp_path: Path) -> None:
         omnical.train("ik", ds, unexcited="free")
 
 
+def test_evaluate_gives_the_cli_relative_pose_error(csv_runs: Path) -> None:
+    ds = omnical.load(csv_runs / "validation")
+    for window in ("0.25m", "0.5s"):  # 2 s runs: 0.4 m long
+        theirs = json.loads(cli("eval", str(csv_runs / "validation"), "--rpe-delta", window, "--json").stdout)
+        ev = omnical.evaluate("design", ds, rpe_delta=window)
+        ours = ev.rpe
+        assert (ours["delta"], ours["delta_unit"]) == (theirs["rpe"]["delta"], theirs["rpe"]["delta_unit"])
+        assert ours["pairs"] == theirs["rpe"]["pairs"] > 0
+        for key in ("translation_m", "rotation_rad", "drift_pct"):
+            for stat in ("mean", "median", "rmse", "max"):
+                assert ours[key][stat] == pytest.approx(theirs["rpe"][key][stat], rel=1e-12, abs=1e-15), (key, stat)
+        assert ev.runs[0].rpe["pairs"] == theirs["runs"][0]["rpe"]["pairs"]
+        assert ev.runs[0].rpe["translation_m"]["rmse"] == pytest.approx(
+            theirs["runs"][0]["rpe"]["translation_m"]["rmse"], rel=1e-12)
+    assert inspect.signature(omnical.evaluate).parameters["rpe_delta"].default == cli_defaults("eval")["rpe_delta"]
+    with pytest.raises(ValueError, match=r'rpe_delta="1km": expected a distance in metres or a time in seconds'):
+        omnical.evaluate("design", ds, rpe_delta="1km")
+    with pytest.raises(ValueError, match=r'rpe_delta="0s": the window must be longer than 0 \(got 0s\)'):
+        omnical.evaluate("design", ds, rpe_delta="0s")
+
+
 def test_unexcited_move_lets_unconstrained_directions_go(truth: omnical.Model) -> None:
     straight = [r for r in omnical.simulate(truth, runs_per_command=1, duration_s=2.0, seed=5)
                 if r.command is not None and r.command[2] == 0.0][:4]

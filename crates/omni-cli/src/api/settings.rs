@@ -1,4 +1,5 @@
-//! Every setting of `omnical train` and of the data options, declared once: its command-line option (the
+//! Every setting of `omnical train`, of the data options and of the other commands' options a project may
+//! set (`eval --rpe-delta`), declared once: its command-line option (the
 //! clap argument id, the long flag in kebab-case), whether omnical.toml may set it (the project file's
 //! keys are this table's), whether `omnical config` shows it, and its Python keyword. The clap `Args`
 //! structs, the `omnical config` rows and the Python signatures (`#[pyo3(signature)]`, `_omnical.pyi`) are
@@ -7,8 +8,8 @@
 
 use Where::{No, Yes};
 
-/// A setting's Python keywords, each a function (`load`, `train`) and the keyword's name there; or why it
-/// has none.
+/// A setting's Python keywords, each a function (`load`, `train`, `evaluate`) and the keyword's name there;
+/// or why it has none.
 pub type Python = Result<&'static [(&'static str, &'static str)], &'static str>;
 
 /// Where a setting appears in one front end, or why it does not.
@@ -20,6 +21,17 @@ pub enum Where {
     No(&'static str),
 }
 
+/// Which commands take a setting as a command-line option.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Flag {
+    /// An option of `omnical train`, a global one, or a data option of every command that reads runs.
+    Train,
+    /// An option of this command only (`eval`).
+    Of(&'static str),
+    /// None, for this reason.
+    No(&'static str),
+}
+
 /// One setting.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Setting {
@@ -28,8 +40,8 @@ pub struct Setting {
     pub key: &'static str,
     /// What it is, as the project file's key list says it.
     pub about: &'static str,
-    /// An option of `omnical train` (or a global one, or a data option of every command that reads runs).
-    pub flag: Where,
+    /// Which commands take it as an option.
+    pub flag: Flag,
     /// A key of omnical.toml.
     pub project_file: Where,
     /// A row of `omnical config`.
@@ -45,13 +57,15 @@ const fn setting(
     config_row: Where,
     python: Python,
 ) -> Setting {
-    Setting { key, about, flag: Where::Yes, project_file, config_row, python }
+    Setting { key, about, flag: Flag::Train, project_file, config_row, python }
 }
 
 /// Why a data option's Python keyword is `load`'s: the other calls take runs already loaded.
 const LOAD: &str = "load";
 /// Python's training call.
 const TRAIN: &str = "train";
+/// Python's evaluation call (`omnical eval`'s).
+const EVALUATE: &str = "evaluate";
 /// Settings a project file has no key for.
 const NOT_SHOWN: Where = No("`omnical config` shows the settings a user repeats across commands");
 
@@ -63,7 +77,7 @@ pub const SETTINGS: &[Setting] = &[
         "robot description: a robot.toml path or apr02",
         Yes,
         Yes,
-        Ok(&[(LOAD, "robot"), (TRAIN, "robot")]),
+        Ok(&[(LOAD, "robot"), (TRAIN, "robot"), (EVALUATE, "robot")]),
     ),
     setting("joints", "wheel joint names in wheel order", Yes, Yes, Ok(&[(LOAD, "joints")])),
     setting("joints_topic", "MCAP topic of the wheel JointState", Yes, Yes, Ok(&[(LOAD, "joints_topic")])),
@@ -100,6 +114,14 @@ pub const SETTINGS: &[Setting] = &[
         Ok(&[(TRAIN, "heading_weight")]),
     ),
     setting("unexcited", "unconstrained directions: hold or move", Yes, NOT_SHOWN, Ok(&[(TRAIN, "unexcited")])),
+    Setting {
+        key: "rpe_delta",
+        about: "eval: window of the relative pose error, a distance (1m) or a time (2s)",
+        flag: Flag::Of("eval"),
+        project_file: Yes,
+        config_row: NOT_SHOWN,
+        python: Ok(&[(EVALUATE, "rpe_delta")]),
+    },
     setting(
         "gt_columns",
         "CSV columns of the gt file",
@@ -128,7 +150,7 @@ pub const SETTINGS: &[Setting] = &[
         NOT_SHOWN,
         Ok(&[(TRAIN, "min_excitation")]),
     ),
-    setting("model", "base model to fit", No(PER_RUN), NOT_SHOWN, Ok(&[(TRAIN, "model")])),
+    setting("model", "base model to fit", No(PER_RUN), NOT_SHOWN, Ok(&[(TRAIN, "model"), (EVALUATE, "model")])),
     setting("start", "start model file", No(PER_RUN), NOT_SHOWN, Err("an omnical.Model as model= is the start")),
     setting("effects", "effects to add to the fit", No(PER_RUN), NOT_SHOWN, Ok(&[(TRAIN, "effects")])),
     setting("out", "fitted model file", No(PER_RUN), NOT_SHOWN, Err("train returns the model; Model.save writes it")),
@@ -140,7 +162,7 @@ pub const SETTINGS: &[Setting] = &[
     Setting {
         key: "command_topic",
         about: "MCAP topic of the velocity command",
-        flag: No("a robot.toml's [topics] command sets it"),
+        flag: Flag::No("a robot.toml's [topics] command sets it"),
         project_file: No("a robot.toml's [topics] command sets it"),
         config_row: Yes,
         python: Err("a robot.toml's [topics] command sets it"),
@@ -148,7 +170,7 @@ pub const SETTINGS: &[Setting] = &[
     Setting {
         key: "recorded_odometry",
         about: "keep the runs' recorded odometry",
-        flag: No("`omnical export` keeps it, the other commands do not need it"),
+        flag: Flag::No("`omnical export` keeps it, the other commands do not need it"),
         project_file: No("not an option of the command line"),
         config_row: NOT_SHOWN,
         python: Ok(&[(LOAD, "recorded_odometry")]),
@@ -156,7 +178,7 @@ pub const SETTINGS: &[Setting] = &[
     Setting {
         key: "progress",
         about: "a callback per optimizer iteration",
-        flag: No("the command line shows a progress bar (-q hides it)"),
+        flag: Flag::No("the command line shows a progress bar (-q hides it)"),
         project_file: No("not an option of the command line"),
         config_row: NOT_SHOWN,
         python: Ok(&[(TRAIN, "progress")]),

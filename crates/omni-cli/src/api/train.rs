@@ -22,8 +22,9 @@ pub struct TrainRequest {
     pub runs: Vec<PathBuf>,
     /// How to read them.
     pub data: DataOptions,
-    /// Base model to fit (at the robot's design) when no start model is given.
-    pub model: KinematicsKind,
+    /// Base model to fit (at the robot's design) when no start model is given; `None`: the robot's own
+    /// ([`design::default_kind`]), or the matrix under the paper preset.
+    pub model: Option<KinematicsKind>,
     /// Start from this model file instead of the design.
     pub start: Option<PathBuf>,
     /// Training recipe.
@@ -123,7 +124,14 @@ pub fn prepare(a: &TrainRequest) -> anyhow::Result<Prepared> {
     }
     let start = match &a.start {
         Some(p) => model_file::read(p).context("reading --start")?,
-        None => FittedModel::nominal(named_columns(design::model(a.model, &ds)?, a.data.joints.as_deref())?),
+        None => {
+            // The paper's method fits the matrix whatever the base.
+            let kind = a.model.unwrap_or_else(|| match a.preset {
+                Preset::Paper => KinematicsKind::Ik,
+                Preset::Default => design::default_kind(&ds),
+            });
+            FittedModel::nominal(named_columns(design::model(kind, &ds)?, a.data.joints.as_deref())?)
+        }
     };
     let effects = a
         .effects

@@ -1,10 +1,12 @@
 //! `omnical eval`: the cost of a model on runs — the summary first (Eq. 6, path RMS, statistics of the
-//! end-position and end-heading errors, as evo_ape prints them), each run's row with `--per-run`.
+//! end-position and end-heading errors, as evo_ape prints them; the relative pose error over a window of
+//! travel or time, as evo_rpe's, and its drift in % of distance), each run's row with `--per-run`.
 
 use super::{DataArgs, OutputArgs};
 use crate::api::ModelSpec;
-use omni_kin::PoseError;
 use omni_kin::cost::CostKind;
+use omni_kin::relative::{RelativeErrors, RpeSummary};
+use omni_kin::{PoseError, RpeDelta, Stats};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -19,9 +21,15 @@ pub struct Args {
     #[arg(required = true)]
     pub runs: Vec<PathBuf>,
     /// Also print each run's end-pose error (after the summary): dx, dy, position error (m) and heading
-    /// error (deg). `--json` always lists the runs.
+    /// error (deg); and its relative pose error: pairs, translation RMSE (m), mean drift (%). `--json`
+    /// always lists the runs.
     #[arg(long)]
     pub per_run: bool,
+    /// Window of the relative pose error (RPE, as evo_rpe's consecutive pairs, taken on the ground truth):
+    /// a distance travelled in metres (`1m`, as `evo_rpe --delta 1 --delta_unit m`) or a time in seconds
+    /// (`2s`).
+    #[arg(long, value_name = "WINDOW", default_value_t = RpeDelta::DEFAULT, allow_hyphen_values = true)]
+    pub rpe_delta: RpeDelta,
     /// Output options.
     #[command(flatten)]
     pub output: OutputArgs,
@@ -30,45 +38,9 @@ pub struct Args {
     pub data: DataArgs,
 }
 
-/// Summary statistics of one error over the runs (of its absolute values), in the error's unit.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Stats {
-    /// Mean.
-    pub mean: f64,
-    /// Median (the mean of the two middle values for an even count).
-    pub median: f64,
-    /// Root mean square.
-    pub rmse: f64,
-    /// Largest.
-    pub max: f64,
-}
-
-impl Stats {
-    /// The statistics of `values`' absolute values (NaN for none).
-    pub fn of(values: impl IntoIterator<Item = f64>) -> Self {
-        let mut v: Vec<f64> = values.into_iter().map(f64::abs).collect();
-        if v.is_empty() {
-            return Self { mean: f64::NAN, median: f64::NAN, rmse: f64::NAN, max: f64::NAN };
-        }
-        v.sort_by(f64::total_cmp);
-        let n = v.len();
-        let median = if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) };
-        Self {
-            mean: v.iter().sum::<f64>() / n as f64,
-            median,
-            rmse: (v.iter().map(|x| x * x).sum::<f64>() / n as f64).sqrt(),
-            max: v[n - 1],
-        }
-    }
-
-    /// Every statistic times `k` (a change of unit).
-    fn scaled(self, k: f64) -> Self {
-        Self { mean: k * self.mean, median: k * self.median, rmse: k * self.rmse, max: k * self.max }
-    }
-
-    fn to_json(self) -> serde_json::Value {
-        json!({ "mean": self.mean, "median": self.median, "rmse": self.rmse, "max": self.max })
-    }
+/// A statistics object in JSON: `mean`, `median`, `rmse`, `max` (null where there was no value).
+fn stats_json(s: Stats) -> serde_json::Value {
+    json!({ "mean": s.mean, "median": s.median, "rmse": s.rmse, "max": s.max })
 }
 
 /// End-position error of each run (m) and its statistics.
@@ -88,7 +60,9 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let ds = a.data.request(&a.runs).load()?;
     // `design`: each run its own input's design (the pooled figures are the run-weighted means).
     let models = a.model.resolve_each(&[&ds])?;
+    // Every ground-truth pose (the path cost's): the relative errors read the odometry at each.
     let all = models.errors(&ds.runs, CostKind::PATH.selection())?;
+    let relative = RelativeErrors::new(&ds.runs, &all, a.rpe_delta)?;
     let errors = all.ends();
     let c = all.end_pose_cost();
     let path = all.path_cost(CostKind::PATH.heading_weight());
@@ -98,18 +72,24 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             .runs
             .iter()
             .zip(errors)
-            .map(|(r, e)| {
+            .enumerate()
+            .map(|(i, (r, e))| {
                 json!({
                     "name": r.name(),
                     "command": r.command(),
                     "dx_m": e.dx_m, "dy_m": e.dy_m, "dtheta_rad": e.dtheta_rad,
                     "pos_err_m": e.position_m(), "eq6_term": e.norm(),
+                    "rpe": rpe_json(&relative.run_summary(i)),
                 })
             })
             .collect();
+        let mut rpe = rpe_json(&relative.summary());
+        rpe["delta"] = a.rpe_delta.value().into();
+        rpe["delta_unit"] = a.rpe_delta.unit().into();
         let mut out = json!({
             "cost": c, "path_cost": path, "model": model, "runs": runs,
-            "end_position_error_m": position.to_json(), "end_heading_error_rad": heading.to_json(),
+            "end_position_error_m": stats_json(position), "end_heading_error_rad": stats_json(heading),
+            "rpe": rpe,
         });
         if !ds.ground_truth_clocks.is_empty() {
             out["ground_truth_clock"] = ds.ground_truth_clocks.iter().map(|g| g.to_json()).collect();
@@ -117,36 +97,95 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         return super::print_json("eval", out);
     }
     print_summary(model, ds.runs.len(), c, path, position, heading.scaled(180.0 / std::f64::consts::PI));
+    print_rpe(&relative);
     if a.per_run {
         println!();
-        print_rows(&ds.runs, errors);
+        print_rows(&ds.runs, errors, &relative);
     }
     Ok(())
+}
+
+/// The relative pose error of some pairs in JSON: SI units (m, rad), drift in %.
+fn rpe_json(s: &RpeSummary) -> serde_json::Value {
+    json!({
+        "pairs": s.pairs,
+        "translation_m": stats_json(s.translation_m),
+        "rotation_rad": stats_json(s.rotation_rad),
+        "drift_pairs": s.drift_pairs,
+        "drift_pct": stats_json(s.drift_pct),
+    })
 }
 
 /// The summary: the costs, then the statistics of the end-position (m) and end-heading (deg) errors.
 fn print_summary(model: &str, runs: usize, cost: f64, path: f64, position_m: Stats, heading_deg: Stats) {
     println!("model {model}: {}", crate::units::count(runs, "run"));
     println!("cost (Eq. 6) {cost:.5} (mean of sqrt(dx² + dy² + dθ²), m and rad with weight 1); path RMS {path:.5} m");
-    println!("{:<22} {:>9} {:>9} {:>9} {:>9}", "end-pose error", "mean", "median", "rmse", "max");
-    for (name, s) in [("position m", position_m), ("heading deg (|dθ|)", heading_deg)] {
+    print_stats("end-pose error", &[("position m", position_m), ("heading deg (|dθ|)", heading_deg)]);
+}
+
+/// A table of statistics, one row per error.
+fn print_stats(title: &str, rows: &[(&str, Stats)]) {
+    println!("{title:<22} {:>9} {:>9} {:>9} {:>9}", "mean", "median", "rmse", "max");
+    for (name, s) in rows {
         println!("{name:<22} {:>9.4} {:>9.4} {:>9.4} {:>9.4}", s.mean, s.median, s.rmse, s.max);
     }
 }
 
-/// One row per run: the end-pose error in m and deg.
-fn print_rows(runs: &[omni_kin::Run], errors: &[PoseError]) {
-    println!("{:<28} {:>18} {:>9} {:>9} {:>10} {:>12}", "run", "command", "dx_m", "dy_m", "pos_err_m", "yaw_err_deg");
-    for (r, e) in runs.iter().zip(errors) {
+/// The relative pose error over all pairs: translation (m), rotation (deg) and drift (% of distance).
+fn print_rpe(relative: &RelativeErrors) {
+    let delta = relative.delta();
+    let over = match delta {
+        RpeDelta::DistanceM(d) => format!("{d} m of travel"),
+        RpeDelta::TimeS(t) => format!("{t} s"),
+    };
+    let s = relative.summary();
+    println!();
+    if s.pairs == 0 {
+        println!("relative pose error over {over}: no pair (no run spans {over}; see --rpe-delta)");
+        return;
+    }
+    println!(
+        "relative pose error over {over}: {} (evo_rpe's consecutive pairs, on the ground truth)",
+        crate::units::count(s.pairs, "pair")
+    );
+    let rows =
+        [("translation m", s.translation_m), ("rotation deg", s.rotation_rad.scaled(180.0 / std::f64::consts::PI))];
+    print_stats("RPE per window", &rows);
+    if s.drift_pairs == 0 {
+        println!("drift: no pair travels {} m or more", delta.drift_min_distance_m());
+        return;
+    }
+    let (d, counted) = (s.drift_pct, s.drift_pairs);
+    let of = if counted == s.pairs {
+        String::new()
+    } else {
+        format!(" ({counted} pairs of {:.1} m or more)", delta.drift_min_distance_m())
+    };
+    println!("{:<22} {:>9.4} {:>9.4} {:>9.4} {:>9.4}{of}", "drift % of distance", d.mean, d.median, d.rmse, d.max);
+}
+
+/// One row per run: the end-pose error in m and deg, the RPE's pairs, translation RMSE (m) and mean drift (%).
+fn print_rows(runs: &[omni_kin::Run], errors: &[PoseError], relative: &RelativeErrors) {
+    println!(
+        "{:<28} {:>18} {:>9} {:>9} {:>10} {:>12} {:>9} {:>11} {:>9}",
+        "run", "command", "dx_m", "dy_m", "pos_err_m", "yaw_err_deg", "rpe_pairs", "rpe_rmse_m", "drift_pct"
+    );
+    for (i, (r, e)) in runs.iter().zip(errors).enumerate() {
         let cmd = r.command().map(|c| c.label()).unwrap_or_else(|| "-".into());
+        let rpe = relative.run_summary(i);
+        let (t, d) = (rpe.translation_m.rmse, rpe.drift_pct.mean);
+        let cell = |v: f64, prec: usize| if v.is_nan() { "-".to_string() } else { format!("{v:.prec$}") };
         println!(
-            "{:<28} {:>18} {:>9.4} {:>9.4} {:>10.4} {:>12.3}",
+            "{:<28} {:>18} {:>9.4} {:>9.4} {:>10.4} {:>12.3} {:>9} {:>11} {:>9}",
             r.name(),
             cmd,
             e.dx_m,
             e.dy_m,
             e.position_m(),
-            e.dtheta_rad.to_degrees()
+            e.dtheta_rad.to_degrees(),
+            rpe.pairs,
+            cell(t, 4),
+            cell(d, 2)
         );
     }
 }

@@ -20,9 +20,11 @@ pub struct Args {
     /// Training run files or folders.
     #[arg(required = true)]
     pub runs: Vec<PathBuf>,
-    /// Base model to fit.
-    #[arg(long, value_parser = choice::<KinematicsKind>(), default_value_t = KinematicsKind::default())]
-    pub model: KinematicsKind,
+    /// Base model to fit. Default: `diff` for a differential drive (its three parameters; a 3 × 2 matrix
+    /// has a fourth, weakly determined direction that trades the radii's ratio), else, and under
+    /// `--preset paper`, `ik` (the paper's matrix).
+    #[arg(long, value_parser = choice::<KinematicsKind>())]
+    pub model: Option<KinematicsKind>,
     /// Start from this model file instead of the design.
     #[arg(long)]
     pub start: Option<PathBuf>,

@@ -252,6 +252,10 @@ class RunResiduals:
     @property
     def end_error(self) -> _F64:
         """(3,) end-pose error (the run's Eq. 6 term)."""
+    @property
+    def rpe(self) -> dict[str, Any]:
+        """The run's relative pose error: pairs, translation_m [m], rotation_rad [rad] (each mean, median,
+        rmse, max), drift_pairs, drift_pct [% of distance]."""
 
 @final
 class Evaluation:
@@ -270,6 +274,10 @@ class Evaluation:
     @property
     def end_errors(self) -> _F64:
         """(R, 3) dx_m, dy_m, dtheta_rad."""
+    @property
+    def rpe(self) -> dict[str, Any]:
+        """The relative pose error over every pair of every run: delta, delta_unit ("m" or "s"), pairs,
+        translation_m [m], rotation_rad [rad] (each mean, median, rmse, max), drift_pairs, drift_pct [%]."""
 
 @final
 class Diagnosis:
@@ -408,9 +416,10 @@ def train(
     runs' sampling and for a fit worse than its start on its own training runs; ``force=True`` returns it
     with a ``UserWarning``."""
 
-def evaluate(model: _ModelArg, runs: _Runs, *, robot: Optional[_Path] = None) -> Evaluation:
+def evaluate(model: _ModelArg, runs: _Runs, *, robot: Optional[_Path] = None, rpe_delta: str = "1m") -> Evaluation:
     """Costs of ``model`` (a Model, ``"design"``, ``"paper"`` or a model file) on ``runs``; ``"design"`` is
-    each run's own input's design when a Dataset's inputs declare different designs."""
+    each run's own input's design when a Dataset's inputs declare different designs. ``rpe_delta``: the
+    relative pose error's window, a distance travelled (``"1m"``) or a time (``"2s"``)."""
 def integrate(model: _ModelArg, run: Run, *, robot: Optional[_Path] = None) -> _F64:
     """(N, 4) t_s [s], x_m [m], y_m [m], theta_rad [rad] through ``model``."""
 

@@ -1,0 +1,496 @@
+//! Relative pose error (RPE) as evo's `evo_rpe` computes it (Sturm et al. 2012, the TUM RGB-D
+//! benchmark), in SE(2): how wrong the model's odometry is over a window of travel, whatever error it
+//! accumulated before the window.
+//!
+//! For a pair of ground-truth samples `(i, j)`, with `Q` the ground truth (reference) and `P` the model's
+//! odometry at the same stamps (estimate), the error is the relative motion of the estimate seen from the
+//! reference's:
+//!
+//! $$ E_{ij} = (Q_i^{-1} Q_j)^{-1} \\, (P_i^{-1} P_j) $$
+//!
+//! Its translation error is `|t(E)|` (m), its rotation error `|θ(E)|` wrapped to [0, π] (rad), and its
+//! drift `100 |t(E)| / d_ij` (% of distance), `d_ij` the ground truth's path length from `i` to `j` (the
+//! KITTI odometry benchmark's ratio, averaged over pairs).
+//!
+//! Pairs: evo's consecutive pairs (`all_pairs` off), taken on the ground truth (`evo_rpe
+//! --pairs_from_reference`; evo's default takes them on the estimate, so a scale error would move them).
+//! Starting at sample 0, the window is accumulated sample by sample: for a distance window the length of
+//! each step `sqrt(dx² + dy²)`, for a time window the time since the pair's first sample; the first sample
+//! where it reaches `Δ` (`≥ Δ`) ends the pair and starts the next one (the overshoot is dropped, as evo's).
+//! So the pairs chain `(0, k1), (k1, k2), …`, each spanning at least `Δ`; a run shorter than `Δ` has none.
+//! evo has no time unit: the time window is this rule with elapsed time in place of distance.
+//!
+//! Plain data: no I/O. The model's odometry at the ground-truth stamps is read off the evaluator's errors
+//! at every pose ([`crate::odometry::Selection::Path`]`(1)`), the numbers `eval` already reports.
+
+use crate::error::KinError;
+use crate::evaluate::RunErrors;
+use crate::pose::{Pose2, PoseError, StampedPose, wrap_angle};
+use crate::run::Run;
+use crate::stats::Stats;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::str::FromStr;
+
+/// Pairs of a time window shorter than this path length (m) are left out of the drift: standing still,
+/// the ratio is the ground truth's noise over nothing. A distance window's pairs all count.
+pub const DRIFT_MIN_DISTANCE_M: f64 = 0.1;
+
+/// The window between the two poses of a pair.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RpeDelta {
+    /// A distance travelled by the ground truth (evo's `--delta D --delta_unit m`). m, > 0.
+    DistanceM(f64),
+    /// A time. s, > 0.
+    TimeS(f64),
+}
+
+impl RpeDelta {
+    /// The default window: 1 m of travel (evo's `--delta 1 --delta_unit m`).
+    pub const DEFAULT: RpeDelta = RpeDelta::DistanceM(1.0);
+
+    /// The window's size in its unit (m or s).
+    pub fn value(&self) -> f64 {
+        match *self {
+            RpeDelta::DistanceM(v) | RpeDelta::TimeS(v) => v,
+        }
+    }
+
+    /// The unit's symbol: `m` or `s`.
+    pub fn unit(&self) -> &'static str {
+        match self {
+            RpeDelta::DistanceM(_) => "m",
+            RpeDelta::TimeS(_) => "s",
+        }
+    }
+
+    /// The shortest path (m) of a pair that counts in the drift.
+    pub fn drift_min_distance_m(&self) -> f64 {
+        match self {
+            RpeDelta::DistanceM(_) => 0.0,
+            RpeDelta::TimeS(_) => DRIFT_MIN_DISTANCE_M,
+        }
+    }
+}
+
+impl Default for RpeDelta {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+impl fmt::Display for RpeDelta {
+    /// `1m`, `2.5s`: the spelling [`FromStr`] reads.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}{}", self.value(), self.unit())
+    }
+}
+
+/// Why a window's spelling is refused.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum RpeDeltaError {
+    /// No unit, or one other than `m` and `s`.
+    #[error("expected a distance in metres or a time in seconds, as 1m or 2s")]
+    Unit,
+    /// The number before the unit does not parse, or is not finite.
+    #[error("`{0}` is not a finite number (expected a distance in metres or a time in seconds, as 1m or 2s)")]
+    Number(String),
+    /// Zero or negative.
+    #[error("the window must be longer than 0 (got {0}{1})")]
+    NotPositive(f64, &'static str),
+}
+
+impl FromStr for RpeDelta {
+    type Err = RpeDeltaError;
+
+    /// `1m`, `0.5 m`, `2s`: a positive, finite number and its unit, `m` (distance travelled) or `s` (time).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let s = s.trim();
+        let (number, make, unit): (&str, fn(f64) -> RpeDelta, &'static str) = if let Some(n) = s.strip_suffix('m') {
+            (n, RpeDelta::DistanceM, "m")
+        } else if let Some(n) = s.strip_suffix('s') {
+            (n, RpeDelta::TimeS, "s")
+        } else {
+            return Err(RpeDeltaError::Unit);
+        };
+        let number = number.trim();
+        let v: f64 = match number.parse() {
+            Ok(v) => v,
+            // `1km`, `m`: another unit, or none.
+            Err(_) if number.is_empty() || number.ends_with(|c: char| c.is_alphabetic()) => {
+                return Err(RpeDeltaError::Unit);
+            }
+            Err(_) => return Err(RpeDeltaError::Number(number.into())),
+        };
+        if !v.is_finite() {
+            return Err(RpeDeltaError::Number(number.into()));
+        }
+        if v <= 0.0 {
+            return Err(RpeDeltaError::NotPositive(v, unit));
+        }
+        Ok(make(v))
+    }
+}
+
+/// The error of one pair of ground-truth samples.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PairError {
+    /// Index of the pair's first ground-truth sample in its run.
+    pub from: usize,
+    /// Index of its last.
+    pub to: usize,
+    /// `|t(E)|`: the relative motion's position error. m.
+    pub translation_m: f64,
+    /// `|θ(E)|`: the relative motion's heading error, in [0, π]. rad.
+    pub rotation_rad: f64,
+    /// The ground truth's path length from `from` to `to`. m.
+    pub distance_m: f64,
+    /// The time from `from` to `to`. s.
+    pub duration_s: f64,
+}
+
+impl PairError {
+    /// The translation error in % of the distance travelled (infinite for a pair that did not move).
+    pub fn drift_pct(&self) -> f64 {
+        100.0 * self.translation_m / self.distance_m
+    }
+}
+
+/// evo's consecutive pairs of `reference`'s samples for window `delta` (the module's rule).
+pub fn pairs(reference: &[StampedPose], delta: RpeDelta) -> Vec<(usize, usize)> {
+    let Some(first) = reference.first() else { return Vec::new() };
+    let mut ids = vec![0];
+    let mut travelled = 0.0;
+    let mut start_s = first.t_s;
+    for (k, w) in reference.windows(2).enumerate() {
+        let (a, b) = (w[0], w[1]);
+        let reached = match delta {
+            RpeDelta::DistanceM(d) => {
+                let (dx, dy) = (b.pose.x_m - a.pose.x_m, b.pose.y_m - a.pose.y_m);
+                travelled += (dx * dx + dy * dy).sqrt();
+                travelled >= d
+            }
+            RpeDelta::TimeS(t) => b.t_s - start_s >= t,
+        };
+        if reached {
+            ids.push(k + 1);
+            travelled = 0.0;
+            start_s = b.t_s;
+        }
+    }
+    ids.windows(2).map(|w| (w[0], w[1])).collect()
+}
+
+/// `E = (Q_i⁻¹ Q_j)⁻¹ (P_i⁻¹ P_j)`: the estimate's relative motion `p_i → p_j` seen from the reference's
+/// `q_i → q_j`.
+pub fn relative_pose_error(q_i: &Pose2, q_j: &Pose2, p_i: &Pose2, p_j: &Pose2) -> Pose2 {
+    let reference = q_i.inverse().compose(q_j);
+    let estimate = p_i.inverse().compose(p_j);
+    reference.inverse().compose(&estimate)
+}
+
+/// The error of each of evo's pairs ([`pairs`] on `reference`) of an estimate given at `reference`'s
+/// stamps (one pose each, in order).
+pub fn pair_errors(reference: &[StampedPose], estimate: &[Pose2], delta: RpeDelta) -> Result<Vec<PairError>, KinError> {
+    if estimate.len() != reference.len() {
+        return Err(KinError::Shape {
+            what: "estimated poses (one per reference pose)".into(),
+            got: estimate.len(),
+            expected: reference.len(),
+        });
+    }
+    let mut along = Vec::with_capacity(reference.len());
+    let mut d = 0.0;
+    for (k, q) in reference.iter().enumerate() {
+        if k > 0 {
+            let p = reference[k - 1].pose;
+            d += (q.pose.x_m - p.x_m).hypot(q.pose.y_m - p.y_m);
+        }
+        along.push(d);
+    }
+    Ok(pairs(reference, delta)
+        .into_iter()
+        .map(|(i, j)| {
+            let e = relative_pose_error(&reference[i].pose, &reference[j].pose, &estimate[i], &estimate[j]);
+            PairError {
+                from: i,
+                to: j,
+                translation_m: e.x_m.hypot(e.y_m),
+                rotation_rad: wrap_angle(e.theta_rad).abs(),
+                distance_m: along[j] - along[i],
+                duration_s: reference[j].t_s - reference[i].t_s,
+            }
+        })
+        .collect())
+}
+
+/// The model's odometry at every ground-truth sample of a run: the first sample itself (odometry starts
+/// there), then each sample plus its error (`errors_after_first`: one per later sample, as the evaluator
+/// gives them at [`crate::odometry::Selection::Path`]`(1)`).
+pub fn estimate_at_truth(truth: &[StampedPose], errors_after_first: &[PoseError]) -> Vec<Pose2> {
+    let first = truth.first().map(|s| s.pose);
+    let later = truth
+        .iter()
+        .skip(1)
+        .zip(errors_after_first)
+        .map(|(q, e)| Pose2::new(q.pose.x_m + e.dx_m, q.pose.y_m + e.dy_m, q.pose.theta_rad + e.dtheta_rad));
+    first.into_iter().chain(later).collect()
+}
+
+/// Statistics of the pair errors of one run or of all.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RpeSummary {
+    /// Number of pairs.
+    pub pairs: usize,
+    /// Translation error `|t(E)|`. m.
+    pub translation_m: Stats,
+    /// Rotation error `|θ(E)|`. rad.
+    pub rotation_rad: Stats,
+    /// Pairs counted in the drift (all of a distance window's; a time window's that travelled at least
+    /// [`DRIFT_MIN_DISTANCE_M`]).
+    pub drift_pairs: usize,
+    /// Drift: translation error over distance travelled, per pair. % (of distance).
+    pub drift_pct: Stats,
+}
+
+impl RpeSummary {
+    /// The statistics of `pairs` (each pair counting once) for window `delta`.
+    pub fn of(pairs: &[PairError], delta: RpeDelta) -> Self {
+        let min = delta.drift_min_distance_m();
+        let drift: Vec<f64> =
+            pairs.iter().filter(|p| p.distance_m >= min && p.distance_m > 0.0).map(PairError::drift_pct).collect();
+        Self {
+            pairs: pairs.len(),
+            translation_m: Stats::of(pairs.iter().map(|p| p.translation_m)),
+            rotation_rad: Stats::of(pairs.iter().map(|p| p.rotation_rad)),
+            drift_pairs: drift.len(),
+            drift_pct: Stats::of(drift),
+        }
+    }
+}
+
+/// The pair errors of every run, in run order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RelativeErrors {
+    delta: RpeDelta,
+    runs: Vec<Vec<PairError>>,
+}
+
+impl RelativeErrors {
+    /// The pair errors of `runs` from their errors at every ground-truth pose after the first (`errors`
+    /// from an evaluator at [`crate::odometry::Selection::Path`]`(1)`, in run order); errors at other
+    /// poses are refused, naming the run.
+    pub fn new(runs: &[Run], errors: &RunErrors, delta: RpeDelta) -> Result<Self, KinError> {
+        if errors.n_runs() != runs.len() {
+            return Err(KinError::Shape { what: "runs' errors".into(), got: errors.n_runs(), expected: runs.len() });
+        }
+        let each = runs
+            .iter()
+            .enumerate()
+            .map(|(i, r)| {
+                let (truth, e) = (r.truth(), errors.run(i));
+                if e.len() + 1 != truth.len() {
+                    return Err(KinError::Shape {
+                        what: format!("run {}: errors at the ground-truth poses after the first", r.name()),
+                        got: e.len(),
+                        expected: truth.len() - 1,
+                    });
+                }
+                pair_errors(truth, &estimate_at_truth(truth, e), delta)
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(Self { delta, runs: each })
+    }
+
+    /// The window.
+    pub fn delta(&self) -> RpeDelta {
+        self.delta
+    }
+
+    /// Run `i`'s pairs.
+    pub fn run(&self, i: usize) -> &[PairError] {
+        &self.runs[i]
+    }
+
+    /// Run `i`'s statistics.
+    pub fn run_summary(&self, i: usize) -> RpeSummary {
+        RpeSummary::of(&self.runs[i], self.delta)
+    }
+
+    /// The statistics of every pair of every run (each pair counting once, so a long run counts more).
+    pub fn summary(&self) -> RpeSummary {
+        let all: Vec<PairError> = self.runs.iter().flatten().copied().collect();
+        RpeSummary::of(&all, self.delta)
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    fn stamped(t_s: f64, x_m: f64, y_m: f64, theta_rad: f64) -> StampedPose {
+        StampedPose { t_s, pose: Pose2::new(x_m, y_m, theta_rad) }
+    }
+
+    /// A straight line along x at `v` m/s sampled every 0.25 s (exact binary steps), heading `heading`.
+    fn line(n: usize, v: f64, heading: f64) -> Vec<StampedPose> {
+        (0..n).map(|k| stamped(0.25 * k as f64, v * 0.25 * k as f64, 0.0, heading)).collect()
+    }
+
+    #[test]
+    fn windows_parse_and_bad_ones_say_why() {
+        assert_eq!("1m".parse(), Ok(RpeDelta::DistanceM(1.0)));
+        assert_eq!(" 0.5 m".parse(), Ok(RpeDelta::DistanceM(0.5)));
+        assert_eq!("2s".parse(), Ok(RpeDelta::TimeS(2.0)));
+        assert_eq!("1e-1s".parse(), Ok(RpeDelta::TimeS(0.1)));
+        assert_eq!(RpeDelta::TimeS(2.5).to_string(), "2.5s");
+        assert_eq!(RpeDelta::default().to_string(), "1m");
+        let err = |s: &str| s.parse::<RpeDelta>().unwrap_err().to_string();
+        assert_eq!(err("1km"), "expected a distance in metres or a time in seconds, as 1m or 2s");
+        assert_eq!(err("1"), "expected a distance in metres or a time in seconds, as 1m or 2s");
+        assert_eq!(err("m"), "expected a distance in metres or a time in seconds, as 1m or 2s");
+        assert_eq!(err("-1m"), "the window must be longer than 0 (got -1m)");
+        assert_eq!(err("0s"), "the window must be longer than 0 (got 0s)");
+        assert_eq!(
+            err("infm"),
+            "`inf` is not a finite number (expected a distance in metres or a time in seconds, as 1m or 2s)"
+        );
+        assert_eq!(
+            err("1.2.3s"),
+            "`1.2.3` is not a finite number (expected a distance in metres or a time in seconds, as 1m or 2s)"
+        );
+    }
+
+    /// evo's rule: the step lengths accumulate until they reach Δ, the overshoot dropped.
+    #[test]
+    fn pairs_chain_as_evos_consecutive_pairs() {
+        let steps = [0.0, 0.6, 0.6, 0.3, 0.5, 0.6, 0.2];
+        let mut x = 0.0;
+        let path: Vec<StampedPose> = steps
+            .iter()
+            .enumerate()
+            .map(|(k, s)| {
+                x += s;
+                stamped(k as f64, x, 0.0, 0.0)
+            })
+            .collect();
+        // 0.6 + 0.6 = 1.2 ≥ 1 ends at 2; then 0.3 + 0.5 + 0.6 = 1.4 ends at 5; 0.2 is left over.
+        assert_eq!(pairs(&path, RpeDelta::DistanceM(1.0)), [(0, 2), (2, 5)]);
+        // Time: 3 s windows from 0, then from 3.
+        assert_eq!(pairs(&path, RpeDelta::TimeS(3.0)), [(0, 3), (3, 6)]);
+        assert_eq!(pairs(&path, RpeDelta::DistanceM(5.0)), []);
+        assert_eq!(pairs(&[], RpeDelta::DistanceM(1.0)), []);
+        // Exactly Δ counts (0.25 m steps add up exactly).
+        assert_eq!(pairs(&line(9, 1.0, 0.0), RpeDelta::DistanceM(1.0)), [(0, 4), (4, 8)]);
+    }
+
+    #[test]
+    fn identical_trajectories_have_no_error() {
+        let q: Vec<StampedPose> =
+            (0..40).map(|k| k as f64 * 0.1).map(|t| stamped(t, t.sin(), 2.0 * t.cos(), 0.3 * t)).collect();
+        let p: Vec<Pose2> = q.iter().map(|s| s.pose).collect();
+        let e = pair_errors(&q, &p, RpeDelta::DistanceM(0.5)).unwrap();
+        assert!(e.len() >= 5, "{} pairs", e.len());
+        let s = RpeSummary::of(&e, RpeDelta::DistanceM(0.5));
+        // Zero but for the rounding of the compositions.
+        assert!(s.translation_m.max < 1e-15 && s.rotation_rad.max < 1e-15 && s.drift_pct.max < 1e-13, "{s:?}");
+    }
+
+    /// A 2 % scale error along a straight line (driven sideways, heading 90°): 2 % drift, exactly.
+    #[test]
+    fn a_two_percent_scale_error_is_two_percent_drift() {
+        let q = line(41, 0.5, std::f64::consts::FRAC_PI_2);
+        let p: Vec<Pose2> = q.iter().map(|s| Pose2::new(1.02 * s.pose.x_m, s.pose.y_m, s.pose.theta_rad)).collect();
+        let e = pair_errors(&q, &p, RpeDelta::DistanceM(1.0)).unwrap();
+        // 0.125 m steps: eight of them make a pair of 1 m exactly, 5 m in 5 pairs.
+        assert_eq!(e.len(), 5);
+        let s = RpeSummary::of(&e, RpeDelta::DistanceM(1.0));
+        assert_relative_eq!(s.drift_pct.mean, 2.0, epsilon = 1e-12);
+        assert_relative_eq!(s.drift_pct.max, 2.0, epsilon = 1e-12);
+        assert_relative_eq!(s.translation_m.rmse, 0.02, epsilon = 1e-12);
+        assert_eq!(s.rotation_rad.max, 0.0);
+        assert_eq!(s.drift_pairs, 5);
+    }
+
+    /// A yaw-rate bias `b` on a straight run at `v`: the estimate drives arcs of rate `b`. Every 2 s pair
+    /// turns `2b` too far, and its end lands on the arc's chord instead of the line.
+    #[test]
+    fn a_yaw_rate_bias_gives_its_rotation_per_window() {
+        let (v, b, window) = (0.5, 0.05, 2.0);
+        let q = line(33, v, 0.0); // 8 s
+        let arc = |t: f64| Pose2::new(v / b * (b * t).sin(), v / b * (1.0 - (b * t).cos()), b * t);
+        let p: Vec<Pose2> = q.iter().map(|s| arc(s.t_s)).collect();
+        let e = pair_errors(&q, &p, RpeDelta::TimeS(window)).unwrap();
+        assert_eq!(e.iter().map(|e| (e.from, e.to)).collect::<Vec<_>>(), [(0, 8), (8, 16), (16, 24), (24, 32)]);
+        let s = RpeSummary::of(&e, RpeDelta::TimeS(window));
+        assert_relative_eq!(s.rotation_rad.rmse, b * window, epsilon = 1e-12);
+        assert_relative_eq!(s.rotation_rad.max, b * window, epsilon = 1e-12);
+        let a = b * window;
+        let t = (v / b * a.sin() - v * window).hypot(v / b * (1.0 - a.cos()));
+        assert_relative_eq!(s.translation_m.rmse, t, epsilon = 1e-12);
+        assert_relative_eq!(s.drift_pct.mean, 100.0 * t / (v * window), epsilon = 1e-9);
+    }
+
+    /// A time window's pair standing still stays out of the drift (its creep would be divided by 0 m); it
+    /// counts in the translation error.
+    #[test]
+    fn standing_pairs_stay_out_of_the_drift() {
+        let q: Vec<StampedPose> = (0..9).map(|k| stamped(k as f64, if k > 4 { 1.0 } else { 0.0 }, 0.0, 0.0)).collect();
+        // 10 % too far and 1 mm of creep per second.
+        let p: Vec<Pose2> = q.iter().map(|s| Pose2::new(1.1 * s.pose.x_m + 0.001 * s.t_s, 0.0, 0.0)).collect();
+        let e = pair_errors(&q, &p, RpeDelta::TimeS(4.0)).unwrap();
+        assert_eq!(e.iter().map(|e| (e.from, e.to, e.distance_m)).collect::<Vec<_>>(), [(0, 4, 0.0), (4, 8, 1.0)]);
+        let s = RpeSummary::of(&e, RpeDelta::TimeS(4.0));
+        assert_eq!((s.pairs, s.drift_pairs), (2, 1));
+        assert_relative_eq!(s.translation_m.max, 0.104, epsilon = 1e-12);
+        assert_relative_eq!(s.translation_m.mean, 0.054, epsilon = 1e-12);
+        assert_relative_eq!(s.drift_pct.mean, 10.4, epsilon = 1e-9);
+        let short = pair_errors(&q, &p[1..], RpeDelta::TimeS(4.0)).unwrap_err().to_string();
+        assert_eq!(short, "estimated poses (one per reference pose) has 8 entries, expected 9");
+    }
+    /// The estimate read off the evaluator's errors is the walk's odometry at the ground-truth stamps;
+    /// errors at other poses than every one are refused, naming the run.
+    #[test]
+    fn the_estimate_is_the_odometry_at_the_ground_truth_stamps() {
+        use crate::odometry::{Selection, residuals};
+        use crate::simulate::{SimConfig, flower_commands, simulate};
+        use crate::{FittedModel, IkMatrix, Model, RunModels};
+        let config = SimConfig {
+            commands: flower_commands().into_iter().step_by(9).collect(),
+            runs_per_command: 1,
+            duration_s: 3.0,
+            seed: 3,
+            ..SimConfig::default()
+        };
+        let runs = simulate(&config, &FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated())), "").unwrap();
+        let design = FittedModel::paper_design();
+        let errors = RunModels::from(&design).errors(&runs, Selection::Path(1)).unwrap();
+        let rel = RelativeErrors::new(&runs, &errors, RpeDelta::DistanceM(0.5)).unwrap();
+        let res = design.model.resolve(&design.params).unwrap();
+        for (i, run) in runs.iter().enumerate() {
+            let walk = residuals(&res, run, Selection::Path(1));
+            let ours = estimate_at_truth(run.truth(), errors.run(i));
+            assert_eq!(ours[0], run.truth()[0].pose);
+            for (w, o) in walk.iter().zip(&ours[1..]) {
+                let e = w.predicted.error_to(o);
+                assert!(e.position_m() < 1e-9 && e.dtheta_rad.abs() < 1e-9, "run {i}: {e:?}");
+            }
+        }
+        let all = rel.summary();
+        assert_eq!(all.pairs, (0..runs.len()).map(|i| rel.run(i).len()).sum::<usize>());
+        assert!(all.pairs >= runs.len() && all.drift_pct.mean > 0.1, "{all:?}");
+        let ends = RunModels::from(&design).errors(&runs, Selection::End).unwrap();
+        let e = RelativeErrors::new(&runs, &ends, RpeDelta::DEFAULT).unwrap_err().to_string();
+        let n = runs[0].truth().len() - 1;
+        assert_eq!(
+            e,
+            format!(
+                "run {}: errors at the ground-truth poses after the first has 1 entries, expected {n}",
+                runs[0].name()
+            )
+        );
+    }
+}
