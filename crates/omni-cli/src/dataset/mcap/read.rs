@@ -10,7 +10,7 @@ use super::joint_state::{self, JointSeries, JointState};
 use super::odometry::{self, ODOM_FRAME, Odometry};
 use super::pose_stamped::{self, PoseStamped, PoseWithCovarianceStamped};
 use super::poses::{PoseSeries, start_heading_in_half_turn};
-use super::statics::{self, StaticTree};
+use super::statics::StaticTree;
 use super::tf::{self, TfMessage, TfPairs};
 use super::twist::{self, Commands, TwistStamped};
 use super::{McapOptions, McapRead, split};
@@ -528,8 +528,8 @@ fn to_base_frame(pair: &mut tf::Pair, statics: &StaticTree, target: Option<&str>
         None => BASE_FRAMES.iter().find_map(|&t| statics.offset(&pair.child, t).map(|o| (t, o)))?,
     };
     for p in &mut pair.poses.xy_yaw {
-        let moved = statics::compose(*p, offset);
-        *p = [moved[0], moved[1], omni_kin::pose::wrap_angle(moved[2])];
+        let moved = Pose2::new(p[0], p[1], p[2]).compose(&offset);
+        *p = [moved.x_m, moved.y_m, omni_kin::pose::wrap_angle(moved.theta_rad)];
     }
     Some(format!(
         "the ground truth tracks {:?}; it is moved to {to:?} through static transforms ({} → {}: x {:.4} m, \
@@ -537,9 +537,9 @@ fn to_base_frame(pair: &mut tf::Pair, statics: &StaticTree, target: Option<&str>
         pair.child,
         pair.child,
         frames.join(" → "),
-        offset[0],
-        offset[1],
-        offset[2].to_degrees()
+        offset.x_m,
+        offset.y_m,
+        offset.theta_rad.to_degrees()
     ))
 }
 

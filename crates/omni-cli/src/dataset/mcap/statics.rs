@@ -2,21 +2,13 @@
 //! fixed offsets between a tracked frame (a motion-capture marker) and the robot's base, through any
 //! number of frames. The ground truth of a TF pair is moved along them to the frame the wheels move.
 
+use omni_kin::Pose2;
 use std::collections::BTreeMap;
-
-/// A planar pose `[x_m, y_m, yaw_rad]`.
-pub(super) type Planar = [f64; 3];
 
 /// The static transforms of a recording: each child frame's parent and its pose in it.
 #[derive(Debug, Default)]
 pub(super) struct StaticTree {
-    parent_of: BTreeMap<String, (String, Planar)>,
-}
-
-/// `a ∘ b`: the pose `b`, given in the frame whose pose is `a`, expressed in `a`'s parent frame.
-pub(super) fn compose(a: Planar, b: Planar) -> Planar {
-    let (s, c) = a[2].sin_cos();
-    [a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], a[2] + b[2]]
+    parent_of: BTreeMap<String, (String, Pose2)>,
 }
 
 /// Longest chain followed (a TF tree is shallow; this stops a cycle).
@@ -24,14 +16,14 @@ const MAX_DEPTH: usize = 64;
 
 impl StaticTree {
     /// Takes `child` at `pose` in `parent` (the first one given for a child wins: a latched topic repeats).
-    pub fn add(&mut self, parent: &str, child: &str, pose: Planar) {
+    pub fn add(&mut self, parent: &str, child: &str, pose: Pose2) {
         self.parent_of.entry(child.to_string()).or_insert_with(|| (parent.to_string(), pose));
     }
 
     /// The pose of frame `to` in frame `from` through static transforms down from `from`, and the frames
     /// crossed after `from` (ending with `to`); `None` when `to` does not hang from `from` by them.
-    pub fn offset(&self, from: &str, to: &str) -> Option<(Planar, Vec<String>)> {
-        let mut pose = [0.0; 3];
+    pub fn offset(&self, from: &str, to: &str) -> Option<(Pose2, Vec<String>)> {
+        let mut pose = Pose2::IDENTITY;
         let mut frames = vec![to.to_string()];
         let mut at = to;
         for _ in 0..MAX_DEPTH {
@@ -41,7 +33,7 @@ impl StaticTree {
                 return (!frames.is_empty()).then_some((pose, frames));
             }
             let (parent, local) = self.parent_of.get(at)?;
-            pose = compose(*local, pose);
+            pose = local.compose(&pose);
             frames.push(parent.clone());
             at = parent;
         }
@@ -56,23 +48,20 @@ mod tests {
     #[test]
     fn a_chain_of_static_transforms_composes_to_the_offset_of_its_end() {
         let mut tree = StaticTree::default();
-        tree.add("marker", "mount", [-0.1, 0.0, 0.0]);
-        tree.add("mount", "base_link", [0.0, 0.05, std::f64::consts::FRAC_PI_2]);
-        tree.add("base_link", "laser", [0.2, 0.0, 0.0]);
+        tree.add("marker", "mount", Pose2::new(-0.1, 0.0, 0.0));
+        tree.add("mount", "base_link", Pose2::new(0.0, 0.05, std::f64::consts::FRAC_PI_2));
+        tree.add("base_link", "laser", Pose2::new(0.2, 0.0, 0.0));
         let (p, frames) = tree.offset("marker", "base_link").unwrap();
         assert_eq!(frames, ["mount", "base_link"]);
-        assert!(
-            (p[0] + 0.1).abs() < 1e-15
-                && (p[1] - 0.05).abs() < 1e-15
-                && (p[2] - std::f64::consts::FRAC_PI_2).abs() < 1e-15
-        );
+        assert!((p.x_m + 0.1).abs() < 1e-15 && (p.y_m - 0.05).abs() < 1e-15, "{p:?}");
+        assert!((p.theta_rad - std::f64::consts::FRAC_PI_2).abs() < 1e-15, "{p:?}");
         // laser is 0.2 m along base_link's x, which points along marker's y.
         let (p, frames) = tree.offset("marker", "laser").unwrap();
         assert_eq!(frames, ["mount", "base_link", "laser"]);
-        assert!((p[0] + 0.1).abs() < 1e-12 && (p[1] - 0.25).abs() < 1e-12, "{p:?}");
+        assert!((p.x_m + 0.1).abs() < 1e-12 && (p.y_m - 0.25).abs() < 1e-12, "{p:?}");
         assert_eq!(tree.offset("base_link", "marker"), None);
         assert_eq!(tree.offset("marker", "marker"), None);
-        tree.add("laser", "marker", [0.0; 3]);
+        tree.add("laser", "marker", Pose2::IDENTITY);
         assert_eq!(tree.offset("odom", "marker"), None, "a cycle ends");
     }
 }

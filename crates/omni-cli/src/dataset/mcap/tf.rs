@@ -65,8 +65,8 @@ impl TfPairs {
     pub fn add_statics(&self, is_static_topic: bool, tree: &mut StaticTree) {
         for p in &self.pairs {
             let once = p.poses.t_ns.len() == 1 && p.problem.is_none();
-            if let (true, Some(xy_yaw)) = (is_static_topic || once, p.poses.xy_yaw.first()) {
-                tree.add(&p.parent, &p.child, *xy_yaw);
+            if let (true, Some(&[x, y, yaw])) = (is_static_topic || once, p.poses.xy_yaw.first()) {
+                tree.add(&p.parent, &p.child, omni_kin::Pose2::new(x, y, yaw));
             }
         }
     }
