@@ -38,6 +38,12 @@ pub struct Dataset {
     /// The Unix second each recording's run times count from, by run name (ROS recordings: exports write
     /// absolute stamps with it, so they line up with the recording).
     pub time_origins_s: std::collections::BTreeMap<String, i64>,
+    /// What the ground truth measures: a relative reference's runs are its windows
+    /// ([`omni_kin::reference::windows`]), and a fit adds the sensor's mount.
+    pub reference: omni_kin::reference::ReferenceKind,
+    /// The measured point's pose in the base frame, when given (`--gt-mount`): the ground truth was moved
+    /// to the base by it, and no fit adds a mount.
+    pub mount: Option<omni_kin::Pose2>,
 }
 
 /// The design one input declares (an OptiOdom set's metadata), with the runs read from it.
