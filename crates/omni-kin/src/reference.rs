@@ -144,7 +144,8 @@ mod tests {
     fn run(secs: f64, gap: Option<(f64, f64)>) -> Run {
         let n = (secs * 100.0) as usize + 1;
         let wheel_t_s: Vec<f64> = (0..n).map(|k| k as f64 * 0.01).collect();
-        let wheel_rad_s = wheel_t_s.iter().flat_map(|&t| if t < secs / 2.0 { [1.0, 2.0] } else { [0.0, 0.0] }).collect();
+        let wheel_rad_s =
+            wheel_t_s.iter().flat_map(|&t| if t < secs / 2.0 { [1.0, 2.0] } else { [0.0, 0.0] }).collect();
         let truth = (0..=(secs * 50.0) as usize)
             .map(|k| k as f64 * 0.02)
             .filter(|t| gap.is_none_or(|(a, b)| *t <= a || *t >= b))

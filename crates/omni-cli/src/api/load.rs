@@ -1,10 +1,10 @@
 //! Reading runs: which inputs, for which robot, with which data options ([`LoadRequest`]); the notes of
 //! a load said once on stderr.
 
-use omni_kin::reference::ReferenceKind;
-use anyhow::Context;
 use crate::dataset::{self, Dataset, LoadOptions};
 use crate::robot_file;
+use anyhow::Context;
+use omni_kin::reference::ReferenceKind;
 use std::path::PathBuf;
 
 /// How runs are read: the robot description and the options that fill or override it (the command
@@ -241,7 +241,11 @@ fn cut_into_windows(ds: &mut Dataset, data: &DataOptions) -> anyhow::Result<()> 
         ds.runs.len()
     );
     for d in &mut ds.declared {
-        d.runs = d.runs.iter().flat_map(|n| renamed.iter().filter(move |(r, _)| r == n).flat_map(|(_, w)| w.clone())).collect();
+        d.runs = d
+            .runs
+            .iter()
+            .flat_map(|n| renamed.iter().filter(move |(r, _)| r == n).flat_map(|(_, w)| w.clone()))
+            .collect();
     }
     for (run, names) in &renamed {
         if let Some(origin) = ds.time_origins_s.remove(run) {

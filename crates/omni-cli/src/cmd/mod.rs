@@ -14,9 +14,9 @@ pub mod sim_spec;
 pub mod simulate;
 pub mod train;
 
-use omni_kin::reference::ReferenceKind;
 use crate::api::load::{DataOptions, LoadRequest};
 use crate::dataset;
+use omni_kin::reference::ReferenceKind;
 use std::path::PathBuf;
 
 /// Arguments of `omnical fleet`, which the Python wheel's console command runs (omnical.fleet, on Dask):

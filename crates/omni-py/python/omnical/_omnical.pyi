@@ -366,7 +366,7 @@ def load(
     gt_time_offset: Optional[float] = None,
     gt_columns: Optional[dict[str, str]] = None,
     gt_units: Optional[dict[str, str]] = None,
-    gt_kind: str = "absolute",
+    gt_kind: Optional[str] = None,
     gt_window_s: Optional[float] = None,
     gt_mount: Optional[tuple[float, float, float]] = None,
     split_s: Optional[float] = None,
