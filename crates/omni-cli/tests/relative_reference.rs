@@ -143,3 +143,96 @@ fn bad_reference_options_are_refused_naming_the_option() {
         assert!(error.starts_with(want), "{args:?}: {err}");
     }
 }
+
+/// Simulated MCAP runs of the diff drive (left wheel 2 % large, separation 1 % wide) and a table of their
+/// end poses in their start's frame, as a tape measure gives them (rounded to the millimetre and 0.1°),
+/// for the first `n` runs.
+fn tape_measured(dir: &Path, n: usize) -> std::path::PathBuf {
+    let robot = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/diff_robot.toml");
+    let out = omnical(
+        &[
+            "simulate",
+            "--robot",
+            robot.to_str().unwrap(),
+            "--out",
+            "tape",
+            "--runs-per-command",
+            "1",
+            "--effect",
+            "wheel_radius:a=0.02",
+            "--effect",
+            "wheel_separation=0.01",
+            "-q",
+        ],
+        dir,
+    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let request = omni_cli::api::load::LoadRequest::new(&[dir.join("tape/train")], &Default::default());
+    let ds = request.read_for_robot(request.robot().unwrap()).unwrap();
+    let mut table = String::from("run,x_mm,y_mm,yaw_deg\n");
+    let keep = dir.join("umbmark");
+    std::fs::create_dir(&keep).unwrap();
+    for run in ds.runs.iter().take(n) {
+        let start = run.truth_at(run.wheel_t_s()[0]);
+        let end = start.inverse().compose(&run.truth_at(*run.wheel_t_s().last().unwrap()));
+        let (x, y, yaw) =
+            ((end.x_m * 1e3).round(), (end.y_m * 1e3).round(), (end.theta_rad.to_degrees() * 10.0).round() / 10.0);
+        table += &format!("{},{x},{y},{yaw}\n", run.name());
+        let file = format!("{}.mcap", run.name());
+        std::fs::copy(dir.join("tape/train").join(&file), keep.join(&file)).unwrap();
+    }
+    std::fs::copy(dir.join("tape/train/robot.toml"), keep.join("robot.toml")).unwrap();
+    std::fs::write(dir.join("ends.csv"), table).unwrap();
+    keep
+}
+
+#[test]
+fn tape_measured_end_poses_recover_a_diff_drives_ratio_and_separation() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    tape_measured(d, 10);
+    let (fit, stderr) = json(&["train", "umbmark", "--gt-kind", "end-pose", "--gt", "ends.csv"], d);
+    assert!(stderr.contains("measured end poses: 10 runs from ends.csv"), "{stderr}");
+    let (r_left, _) = param(&fit, "r_left");
+    let (r_right, _) = param(&fit, "r_right");
+    let (b, _) = param(&fit, "b");
+    // True: left 0.033 × 1.02, right 0.033, separation 0.287 × 1.01.
+    let ratio = r_left / r_right;
+    eprintln!(
+        "end poses of 10 runs: radius ratio {ratio:.5} (true 1.02), separation {b:.5} m (true {:.5})",
+        0.287 * 1.01
+    );
+    assert!((ratio / 1.02 - 1.0).abs() < 0.005, "radius ratio {ratio} vs 1.02");
+    assert!((b / (0.287 * 1.01) - 1.0).abs() < 0.005, "separation {b} vs {}", 0.287 * 1.01);
+}
+
+#[test]
+fn bad_end_pose_tables_are_refused_naming_the_file_and_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    tape_measured(d, 3);
+    let table = std::fs::read_to_string(d.join("ends.csv")).unwrap();
+    let first = table.lines().nth(1).unwrap().split(',').next().unwrap().to_string();
+    std::fs::write(d.join("extra.csv"), format!("{table}ghost,1,2,3\n")).unwrap();
+    std::fs::write(d.join("short.csv"), table.lines().take(3).collect::<Vec<_>>().join("\n")).unwrap();
+    let cases: [(&[&str], String); 4] = [
+        (
+            &["--gt", "extra.csv"],
+            "error: extra.csv: line 5: run \"ghost\" is not among the recordings read".to_string(),
+        ),
+        (&["--gt", "short.csv"], "error: run ".to_string() + ""),
+        (&[], "error: --gt-kind end-pose needs --gt FILE: the table of measured end poses".to_string()),
+        (&["--gt", "ends.csv", "--split", "1"], "error: --split does not go with --gt-kind end-pose".to_string()),
+    ];
+    for (args, want) in cases {
+        let out = omnical(&[&["train", "umbmark", "--gt-kind", "end-pose"], args].concat(), d);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8(out.stderr).unwrap();
+        let error = err.lines().find(|l| l.starts_with("error:")).unwrap_or_default();
+        assert!(error.starts_with(&want), "{args:?}: {err}");
+        if args.first() == Some(&"--gt") && args[1] == "short.csv" {
+            assert!(error.contains("has no measured end pose in short.csv"), "{error}");
+            assert!(!error.contains(&first), "{error}");
+        }
+    }
+}

@@ -20,12 +20,17 @@ pub enum ReferenceKind {
     /// The motion of a sensor mounted on the robot at an unknown pose, in a frame of its own that may drift
     /// (lidar or visual odometry): compared over windows, the mount fitted with the wheels.
     Relative,
+    /// Hand-measured end poses (a tape measure, UMBmark): the robot starts at rest at the origin and its
+    /// measured pose where it stopped is the only reference; the paper's end-pose cost.
+    EndPose,
 }
 
 choice!(ReferenceKind, default = Absolute, {
     Absolute => "absolute": "the pose of a point on the robot in a fixed world frame (motion capture)",
     Relative => "relative": "a sensor's own motion (lidar or visual odometry): compared over windows, the \
                              sensor's mount fitted with the wheels",
+    EndPose => "end_pose": "hand-measured end poses (a tape measure): --gt names a table run,x_m,y_m,yaw_deg, each \
+                            in the frame of the run's start",
 });
 
 /// Windows of a relative reference shorter than this are not cut (s).

@@ -152,7 +152,9 @@ impl LoadRequest {
             ..Default::default()
         };
         robot_file::fill_mcap_options(&mut mcap, data.joints.is_none(), robot.as_ref().map(|r| &r.description));
-        let ground_truth = ground_truth_options(data, robot.as_ref())?;
+        let end_poses = end_pose_file(data)?;
+        mcap.wheels_only = end_poses.is_some();
+        let ground_truth = if end_poses.is_some() { None } else { ground_truth_options(data, robot.as_ref())? };
         if ground_truth.is_none() {
             mcap.truth_time_offset_s = data.gt_time_offset_s;
         }
@@ -176,7 +178,9 @@ impl LoadRequest {
                  topic of a recording (MCAP, rosbag2), and these runs have neither"
             );
         }
-        if let Some(r) = &robot {
+        if let Some(file) = &end_poses {
+            set_end_poses(&mut ds, file)?;
+        } else if let Some(r) = &robot {
             check_wheel_scale(&ds, r)?;
         }
         ds.robot_file = robot;
@@ -184,6 +188,68 @@ impl LoadRequest {
         cut_into_windows(&mut ds, data)?;
         Ok(ds)
     }
+}
+
+/// The measured end-pose table of `--gt-kind end-pose` (its `--gt`), checked against the other options.
+fn end_pose_file(data: &DataOptions) -> anyhow::Result<Option<PathBuf>> {
+    if data.gt_kind != ReferenceKind::EndPose {
+        return Ok(None);
+    }
+    let Some(file) = &data.gt else {
+        anyhow::bail!(
+            "--gt-kind end-pose needs --gt FILE: the table of measured end poses (a header run,x_m,y_m,yaw_deg and one \
+             row per recording; docs/formats.md, \"Measured end poses\"; `omnical plan --umbmark` writes one to fill in)"
+        );
+    };
+    for (set, flag) in [(data.split_s.is_some(), "--split"), (data.gt_topic.is_some(), "--gt-topic")] {
+        anyhow::ensure!(
+            !set,
+            "{flag} does not go with --gt-kind end-pose: each recording is one run from its start mark to where it \
+             stopped, measured by hand"
+        );
+    }
+    Ok(Some(file.clone()))
+}
+
+/// Each run's placeholder end replaced by its measured end pose from `file`; a row naming no run read, or a
+/// run without a row, is an error naming both.
+fn set_end_poses(ds: &mut Dataset, file: &std::path::Path) -> anyhow::Result<()> {
+    let measured = dataset::end_poses::read(file)?;
+    let names: Vec<&str> = ds.runs.iter().map(omni_kin::Run::name).collect();
+    if let Some(e) = measured.iter().find(|e| !names.contains(&e.run.as_str())) {
+        anyhow::bail!(
+            "{}: line {}: run {:?} is not among the recordings read ({}): name each row after its recording's file \
+             name without extension",
+            file.display(),
+            e.line,
+            e.run,
+            names.join(", ")
+        );
+    }
+    let runs = std::mem::take(&mut ds.runs);
+    ds.runs = runs
+        .into_iter()
+        .map(|run| {
+            let Some(e) = measured.iter().find(|e| e.run == run.name()) else {
+                anyhow::bail!(
+                    "run {} has no measured end pose in {}: add its row (run,x_m,y_m,yaw_deg), or leave the recording out",
+                    run.name(),
+                    file.display()
+                );
+            };
+            let mut d = run.into_data();
+            d.truth[1].pose = e.pose;
+            Ok(omni_kin::Run::new(d)?)
+        })
+        .collect::<anyhow::Result<_>>()?;
+    ds.notes.push(format!(
+        "measured end poses: {} runs from {}, each from rest at the origin at its first wheel sample to its measured \
+         pose at its last (the end-pose cost)",
+        ds.runs.len(),
+        file.display()
+    ));
+    ds.reference = ReferenceKind::EndPose;
+    Ok(())
 }
 
 /// The ground truth of every run moved from the measured point to the base by `--gt-mount`, with a note.
@@ -215,7 +281,7 @@ fn move_to_base(ds: &mut Dataset, data: &DataOptions) -> anyhow::Result<()> {
 /// `--gt-window` without `--gt-kind relative` is an error (it would change nothing).
 fn cut_into_windows(ds: &mut Dataset, data: &DataOptions) -> anyhow::Result<()> {
     use omni_kin::reference::{DEFAULT_WINDOW_S, windows};
-    if data.gt_kind == ReferenceKind::Absolute {
+    if data.gt_kind != ReferenceKind::Relative {
         if let Some(w) = data.gt_window_s {
             anyhow::bail!(
                 "--gt-window {w} changes nothing here: it is the window of a relative reference (--gt-kind relative: \

@@ -4,6 +4,7 @@
 //! Every error names the file and, where it applies, the line, topic, message, run and field.
 
 pub mod csv;
+pub mod end_poses;
 pub mod ground_truth;
 pub mod mcap;
 pub mod optiodom;
@@ -457,6 +458,13 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
     let truth = |p: &Path, folder: bool| -> Result<Option<ground_truth::ExternalTruth>, DatasetError> {
         opts.ground_truth.as_ref().map(|g| ground_truth::read_for(g, p, &recording_name(p, folder))).transpose()
     };
+    if opts.mcap.wheels_only && matches!(input, Input::Csv(_) | Input::OptiOdom(_)) {
+        return Err(DatasetError::file(
+            input.path(),
+            "measured end poses (--gt-kind end-pose) go with ROS recordings (.mcap, .db3, rosbag2 folders, .bag); \
+             this input carries its own ground truth",
+        ));
+    }
     if opts.ground_truth.is_some() && matches!(input, Input::Csv(_) | Input::OptiOdom(_)) {
         return Err(DatasetError::file(
             input.path(),
