@@ -236,3 +236,21 @@ fn bad_end_pose_tables_are_refused_naming_the_file_and_run() {
         }
     }
 }
+
+#[test]
+fn plan_umbmark_writes_the_table_to_fill_in() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let out = omnical(&["plan", "--umbmark", "3", "--out", "ends.csv"], d);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let table = std::fs::read_to_string(d.join("ends.csv")).unwrap();
+    let rows: Vec<&str> = table.lines().collect();
+    assert_eq!(rows.len(), 13);
+    assert_eq!(rows[..3], ["run,x_mm,y_mm,yaw_deg", "umbmark-cw-1,,,", "umbmark-cw-2,,,"]);
+    assert_eq!(rows[12], "umbmark-straight-2,,,");
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert!(stdout.starts_with("UMBmark for a tape measure: 12 runs, 10 squares of 3 m sides"), "{stdout}");
+    // The table as written, unfilled, names its first empty cell.
+    let err = omni_cli::dataset::end_poses::read(&d.join("ends.csv")).unwrap_err().to_string();
+    assert!(err.ends_with("ends.csv: line 2, column x_mm: \"\" is not a finite number"), "{err}");
+}
