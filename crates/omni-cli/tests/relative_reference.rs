@@ -75,6 +75,18 @@ fn a_diff_drive_from_its_sensors_own_motion_matches_motion_capture() {
     let (dx, _) = param(&relative, "sensor_offset_yaw.dx_m");
     let (dy, _) = param(&relative, "sensor_offset_yaw.dy_m");
     let (dyaw, dyaw_se) = param(&relative, "sensor_offset_yaw.dyaw_rad");
+    eprintln!(
+        "relative: r_left {:.6} r_right {:.6} b {:.6}; mount {dx:.5} m, {dy:.5} m, {:.4}° ± {:.4}°; motion capture r_left {:.6} \
+         r_right {:.6} b {:.6}",
+        param(&relative, "r_left").0,
+        param(&relative, "r_right").0,
+        param(&relative, "b").0,
+        dyaw.to_degrees(),
+        dyaw_se.to_degrees(),
+        param(&mocap, "r_left").0,
+        param(&mocap, "r_right").0,
+        param(&mocap, "b").0,
+    );
     assert!((dx - 0.2).abs() < 0.01 && dy.abs() < 0.01, "mount {dx} m, {dy} m");
     assert!((dyaw.to_degrees() - 5.0).abs() < 0.5, "mount yaw {}°", dyaw.to_degrees());
     assert!(dyaw_se.to_degrees() < 0.1, "the mount yaw's standard error {}°", dyaw_se.to_degrees());
