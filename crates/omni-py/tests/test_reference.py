@@ -30,17 +30,17 @@ def test_relative_windows_fit_the_mount_with_the_wheels(diff_sim: Path) -> None:
     ds = omnical.load(diff_sim, gt_kind="relative", gt_window_s=4.0)
     assert len(ds) == 36 and ds[0].name.endswith("#1")
     assert any("relative reference: 12 runs cut into 36 windows" in n for n in ds.notes)
-    fit = omnical.train(ds)
-    p = fit.model.params()
+    fit = omnical.train("diff", ds)
+    p = fit.model.params
     assert abs(p["sensor_offset_yaw.dx_m"] - 0.2) < 0.01 and abs(p["sensor_offset_yaw.dy_m"]) < 0.01
     assert abs(p["sensor_offset_yaw.dyaw_rad"] - 0.0872665) < 0.5 / 57.3
-    assert abs(p["r_left"] - 0.03366) < 1e-3 * 0.03366 and abs(p["r_right"] - 0.033) < 1e-3 * 0.033
+    assert abs(p["r_left"] - 0.03366) < 5e-3 * 0.03366 and abs(p["r_right"] - 0.033) < 5e-3 * 0.033
 
 
 def test_a_given_mount_moves_the_truth_and_bad_kinds_are_refused(diff_sim: Path) -> None:
     ds = omnical.load(diff_sim, gt_kind="relative", gt_mount=(0.2, 0.0, 5.0))
-    fit = omnical.train(ds)
-    assert not any(k.startswith("sensor") for k in fit.model.params())
-    assert abs(fit.model.params()["r_left"] - 0.03366) < 1e-3 * 0.03366
-    with pytest.raises(ValueError, match='gt_kind "lidar": expected "absolute" or "relative"'):
+    fit = omnical.train("diff", ds)
+    assert not any(k.startswith("sensor") for k in fit.model.params)
+    assert abs(fit.model.params["r_left"] - 0.03366) < 5e-3 * 0.03366
+    with pytest.raises(ValueError, match='gt_kind "lidar": expected "absolute", "relative" or "end_pose"'):
         omnical.load(diff_sim, gt_kind="lidar")
