@@ -12,7 +12,7 @@ pub mod room;
 
 pub use icp::{MatchQuality, MatchSettings, Rejection, ScanMatch, match_scans};
 pub use path::{SensorPath, sensor_path};
-pub use room::{Room, ScanSettings, simulate_scan};
+pub use room::{CLEARANCE_M, Room, ScanSettings, first_collision, simulate_scan, simulate_scans};
 
 /// One scan, as `sensor_msgs/msg/LaserScan` carries it: beam `i` points at `angle_min_rad + i ·
 /// angle_increment_rad` in the sensor frame and measured `ranges_m[i]`. A range that is not finite or lies

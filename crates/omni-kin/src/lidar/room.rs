@@ -9,8 +9,8 @@
 
 use super::Scan;
 use crate::error::KinError;
-use crate::pose::Pose2;
-use rand::RngExt;
+use crate::pose::{Pose2, StampedPose};
+use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
@@ -220,10 +220,35 @@ pub fn simulate_scan(
     }
 }
 
+/// Salt mixed into the simulator's seed for the lidar's draws, so that adding a lidar leaves every other
+/// draw of a simulated dataset as it was.
+const LIDAR_SEED_SALT: u64 = 0x6c69_6461_7220_3238;
+
+/// The scans of a sensor at `base_from_sensor` on a robot whose true base poses (`room_from_base`, the
+/// run starting at the room's origin) are `base`, one scan per pose at its time: random stream `stream` of
+/// `seed` (the run's own, as the simulator's), so the same seed gives the same scans whatever the thread
+/// count.
+pub fn simulate_scans(
+    room: &Room,
+    base: &[StampedPose],
+    base_from_sensor: &Pose2,
+    settings: &ScanSettings,
+    seed: u64,
+    stream: u64,
+) -> Vec<Scan> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ LIDAR_SEED_SALT);
+    rng.set_stream(stream);
+    base.iter().map(|b| simulate_scan(room, &b.pose.compose(base_from_sensor), b.t_s, settings, &mut rng)).collect()
+}
+
+/// The first base pose (room frame) closer than `clearance_m` to a wall or obstacle, or outside the room.
+pub fn first_collision(room: &Room, base: &[StampedPose], clearance_m: f64) -> Option<StampedPose> {
+    base.iter().find(|b| !room.is_free([b.pose.x_m, b.pose.y_m], clearance_m)).copied()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand::SeedableRng;
 
     #[test]
     fn ray_casting_gives_exact_ranges_in_the_room() {
