@@ -73,6 +73,9 @@ pub enum Command {
     /// Export trajectories: TUM files (ground truth, design and calibrated odometry) for evo, and MCAP bags
     /// with the calibrated odometry on `/omnical/odometry` for Foxglove.
     Export(cmd::export::Args),
+    /// A lidar's own path from its LaserScan messages (scan-to-scan point-to-line ICP): matches accepted and
+    /// rejected, their quality, and the path as a TUM file.
+    ScanOdometry(cmd::scan_odometry::Args),
     /// Propose calibration runs that excite every parameter of a model (and its effects), with the
     /// standard errors they would give for a stated ground-truth noise.
     Plan(cmd::plan::Args),
@@ -148,6 +151,7 @@ fn run_command(cli: Cli) -> anyhow::Result<()> {
         Command::Explore(a) => cmd::explore::run(&a),
         Command::Report(a) => cmd::report::run(&a, cli.quiet),
         Command::Export(a) => cmd::export::run(&a),
+        Command::ScanOdometry(a) => cmd::scan_odometry::run(&a),
         Command::Plan(a) => cmd::plan::run(&a),
         Command::Init(a) => cmd::init::run(&a),
         Command::Demo(a) => cmd::demo::run(&a, cli.quiet),

@@ -14,6 +14,7 @@ pub mod entry;
 pub mod export;
 pub mod init;
 pub mod interrupt;
+pub mod lidar;
 pub mod logging;
 pub mod model_file;
 pub mod out_path;

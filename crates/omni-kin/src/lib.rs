@@ -20,6 +20,7 @@ pub mod fast;
 pub mod geometry;
 pub mod ik;
 pub mod kinematics;
+pub mod lidar;
 pub mod model;
 pub mod odometry;
 pub mod plan;

@@ -262,6 +262,42 @@ fn check_truth(config: &SimConfig, truth: &FittedModel) -> Result<(), KinError> 
 /// Simulate every command × repetition. Run `i` uses random stream `i` of `config.seed`. Run names are
 /// `{prefix}{command index:02}-r{repetition}` and carry their command and repetition.
 pub fn simulate(config: &SimConfig, truth: &FittedModel, prefix: &str) -> Result<Vec<Run>, KinError> {
+    Ok(simulate_jobs(config, truth, prefix, None)?.into_iter().map(|s| s.run).collect())
+}
+
+/// A simulated run with its true base pose every `period_s` on the true clock, for simulated sensors.
+#[derive(Clone, Debug)]
+pub struct SampledRun {
+    /// The run, exactly as [`simulate`] makes it.
+    pub run: Run,
+    /// The true `world_from_base` (the run's start: the identity) at t = 0, `period_s`, 2 `period_s`, …
+    /// up to the end of the rest after the motion (the ground truth's span), noise-free. s, m, rad.
+    pub base: Vec<StampedPose>,
+}
+
+/// [`simulate`], each run with its true base pose every `period_s` (s, > 0). The runs are the same as
+/// [`simulate`]'s (sampling draws no random numbers).
+pub fn simulate_sampled(
+    config: &SimConfig,
+    truth: &FittedModel,
+    prefix: &str,
+    period_s: f64,
+) -> Result<Vec<SampledRun>, KinError> {
+    if !(period_s > 0.0 && period_s.is_finite()) {
+        return Err(KinError::Invalid {
+            what: "simulator sampling period".into(),
+            why: format!("{period_s} s is not > 0"),
+        });
+    }
+    simulate_jobs(config, truth, prefix, Some(period_s))
+}
+
+fn simulate_jobs(
+    config: &SimConfig,
+    truth: &FittedModel,
+    prefix: &str,
+    period_s: Option<f64>,
+) -> Result<Vec<SampledRun>, KinError> {
     check_truth(config, truth)?;
     let jobs: Vec<(usize, Command, usize)> = config
         .commands
@@ -271,7 +307,11 @@ pub fn simulate(config: &SimConfig, truth: &FittedModel, prefix: &str) -> Result
         .collect();
     jobs.par_iter()
         .enumerate()
-        .map(|(i, &(ci, c, rep))| simulate_run(config, truth, c, rep, i as u64, format!("{prefix}{ci:02}-r{rep}")))
+        .map(|(i, &(ci, c, rep))| {
+            let legs = [Leg { command: c, duration_s: config.duration_s }];
+            let name = format!("{prefix}{ci:02}-r{rep}");
+            simulate_motion(config, truth, &legs, Some((c, rep)), i as u64, name, period_s)
+        })
         .collect()
 }
 
@@ -324,7 +364,7 @@ pub fn simulate_legs(
     let commands = legs.iter().map(|l| l.command).collect();
     let config = SimConfig { commands, runs_per_command: 1, duration_s, ..config.clone() };
     check_truth(&config, truth)?;
-    simulate_motion(&config, truth, legs, None, stream, name)
+    Ok(simulate_motion(&config, truth, legs, None, stream, name, None)?.run)
 }
 
 /// Zero-mean Gaussian noise of standard deviation `sigma` (one draw, always, so streams stay aligned).
@@ -343,11 +383,12 @@ pub fn simulate_run(
     name: String,
 ) -> Result<Run, KinError> {
     let legs = [Leg { command, duration_s: config.duration_s }];
-    simulate_motion(config, truth, &legs, Some((command, repetition)), stream, name)
+    Ok(simulate_motion(config, truth, &legs, Some((command, repetition)), stream, name, None)?.run)
 }
 
 /// Simulate one run of `legs` in a row (their durations sum to `config.duration_s`) on random stream
-/// `stream`; the run carries `label` (its command and repetition) when there is one.
+/// `stream`; the run carries `label` (its command and repetition) when there is one; the true base pose
+/// every `base_period_s` over [0, total] comes with it (none without).
 ///
 /// long: one fine-step loop applying every effect stage in order (clock, wheel speeds, twist, integration,
 /// measurement) on shared per-step state; to split into stage helpers (issue 15 leftover).
@@ -358,7 +399,8 @@ fn simulate_motion(
     label: Option<(Command, usize)>,
     stream: u64,
     name: String,
-) -> Result<Run, KinError> {
+    base_period_s: Option<f64>,
+) -> Result<SampledRun, KinError> {
     let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
     rng.set_stream(stream);
     let res = truth.model.resolve(&truth.params)?;
@@ -536,7 +578,14 @@ fn simulate_motion(
         })
         .collect();
 
-    Run::new(RunData {
+    let base = base_period_s.map_or_else(Vec::new, |p| {
+        (0..)
+            .map(|k| k as f64 * p)
+            .take_while(|&t| t <= total)
+            .map(|t| StampedPose { t_s: t, pose: body_at(t) })
+            .collect()
+    });
+    let run = Run::new(RunData {
         name,
         wheel_t_s,
         wheel_rad_s,
@@ -546,7 +595,8 @@ fn simulate_motion(
         repetition: label.map(|(_, r)| r as u32),
         recorded_odometry,
         wheel_start_rad,
-    })
+    })?;
+    Ok(SampledRun { run, base })
 }
 
 #[cfg(test)]

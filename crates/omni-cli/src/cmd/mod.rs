@@ -9,6 +9,7 @@ pub mod export;
 pub mod init;
 pub mod plan;
 pub mod report;
+pub mod scan_odometry;
 pub mod shell;
 pub mod sim_spec;
 pub mod simulate;

@@ -2,14 +2,16 @@
 
 use super::{OutputArgs, sim_spec};
 use crate::cli::effect_help;
+use crate::dataset::mcap::LidarTrack;
+use crate::lidar::{self, Room, ScanSettings};
 use crate::out_path::OutDir;
 use crate::robot_file::{self, RobotFile};
 use crate::{atomic, dataset, design, model_file};
 use anyhow::{Context, bail};
 use omni_kin::cost::{self, CostKind};
 use omni_kin::robot::RobotDescription;
-use omni_kin::simulate::{SimConfig, simulate};
-use omni_kin::{FittedModel, IkMatrix, Model, RobotGeometry, Run};
+use omni_kin::simulate::{SimConfig, simulate, simulate_sampled};
+use omni_kin::{FittedModel, IkMatrix, Model, Pose2, RobotGeometry, Run};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
@@ -84,9 +86,119 @@ pub struct Args {
     /// With --fleet: sessions per robot.
     #[arg(long, value_name = "S", requires = "fleet")]
     pub sessions: Option<usize>,
+    /// The simulated lidar.
+    #[command(flatten)]
+    pub lidar: LidarArgs,
     /// Output options (JSON: what was written, with the design's and the true robot's costs).
     #[command(flatten)]
     pub output: OutputArgs,
+}
+
+/// The simulated 2D lidar (`--lidar`); defaults from [`ScanSettings::default`].
+#[derive(Debug, clap::Args)]
+#[command(next_help_heading = "Simulated lidar")]
+pub struct LidarArgs {
+    /// Simulate a 2D lidar in ROOM and write its scans (/scan, sensor_msgs/msg/LaserScan, frame laser) and
+    /// its mount (/tf_static base_link → laser) into every MCAP run. ROOM: `room` (10 × 8 m with boxes and
+    /// pillars), `corridor` (40 × 5 m: constrains no motion along it) or a room file (TOML polygons,
+    /// docs/formats.md). Every run starts at the room's origin heading +x; a run that comes within 0.25 m of
+    /// a wall is refused.
+    #[arg(long, value_name = "ROOM")]
+    pub lidar: Option<String>,
+    /// The lidar's pose on the robot, in the base frame: X,Y in metres, YAW in degrees.
+    #[arg(long, value_name = "X,Y,YAW_DEG", default_value = "0,0,0", requires = "lidar")]
+    pub lidar_mount: String,
+    /// Scans per second (Hz).
+    #[arg(long, value_name = "HZ", default_value_t = ScanSettings::default().rate_hz, requires = "lidar")]
+    pub lidar_rate: f64,
+    /// Beams per scan, over 360°.
+    #[arg(long, value_name = "N", default_value_t = ScanSettings::default().beams, requires = "lidar")]
+    pub lidar_beams: usize,
+    /// Longest range (m): farther walls give no return (+inf).
+    #[arg(long, value_name = "M", default_value_t = ScanSettings::default().range_max_m, requires = "lidar")]
+    pub lidar_max_range: f64,
+    /// Gaussian range noise (m).
+    #[arg(long, value_name = "M", default_value_t = ScanSettings::default().range_noise_m, requires = "lidar")]
+    pub lidar_noise: f64,
+    /// Share of beams that return nothing (NaN), at random.
+    #[arg(long, value_name = "SHARE", default_value_t = ScanSettings::default().dropout, requires = "lidar")]
+    pub lidar_dropout: f64,
+}
+
+/// A configured lidar: the room, its name as given, the mount and the scan settings.
+pub(crate) struct Lidar {
+    room: Room,
+    name: String,
+    base_from_sensor: Pose2,
+    settings: ScanSettings,
+}
+
+impl LidarArgs {
+    /// The lidar these arguments ask for (`None` without `--lidar`).
+    fn lidar(&self, format: Format) -> anyhow::Result<Option<Lidar>> {
+        let Some(name) = &self.lidar else { return Ok(None) };
+        if format != Format::Mcap {
+            bail!("--lidar writes LaserScan messages into ROS 2 bags: use --format mcap (the default)");
+        }
+        let room = lidar::room_from_arg(name).context("--lidar")?;
+        let v: Vec<f64> = self
+            .lidar_mount
+            .split(',')
+            .map(|x| x.trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .ok()
+            .filter(|v: &Vec<f64>| v.len() == 3 && v.iter().all(|x| x.is_finite()))
+            .with_context(|| {
+                format!("--lidar-mount {:?}: expected X,Y,YAW_DEG (three numbers, e.g. 0.2,0,5)", self.lidar_mount)
+            })?;
+        let settings = ScanSettings {
+            rate_hz: self.lidar_rate,
+            beams: self.lidar_beams,
+            range_max_m: self.lidar_max_range,
+            range_noise_m: self.lidar_noise,
+            dropout: self.lidar_dropout,
+            ..ScanSettings::default()
+        };
+        settings.check().context("--lidar settings")?;
+        Ok(Some(Lidar {
+            room,
+            name: name.clone(),
+            base_from_sensor: Pose2::new(v[0], v[1], v[2].to_radians()),
+            settings,
+        }))
+    }
+}
+
+/// Simulates a split's runs, with their lidar tracks when `lidar` is given (each run's scans on its own
+/// random stream of `seed`); refuses a run that leaves the room.
+fn simulate_split(
+    cfg: &SimConfig,
+    truth: &FittedModel,
+    split: &str,
+    lidar: Option<&Lidar>,
+) -> anyhow::Result<(Vec<Run>, Option<Vec<LidarTrack>>)> {
+    let prefix = format!("{split}/");
+    let Some(l) = lidar else { return Ok((simulate(cfg, truth, &prefix)?, None)) };
+    let sampled = simulate_sampled(cfg, truth, &prefix, 1.0 / l.settings.rate_hz)?;
+    let mut tracks = Vec::with_capacity(sampled.len());
+    for (i, s) in sampled.iter().enumerate() {
+        if let Some(hit) = lidar::first_collision(&l.room, &s.base, lidar::CLEARANCE_M) {
+            bail!(
+                "--lidar {}: run {} leaves the room: at t = {:.1} s its base is at ({:.2}, {:.2}) m, less than {} m \
+                 from a wall or obstacle (every run starts at the room's origin heading +x); shorten --duration, \
+                 slow the --commands, or give a larger room",
+                l.name,
+                s.run.name(),
+                hit.t_s,
+                hit.pose.x_m,
+                hit.pose.y_m,
+                lidar::CLEARANCE_M
+            );
+        }
+        let scans = lidar::simulate_scans(&l.room, &s.base, &l.base_from_sensor, &l.settings, cfg.seed, i as u64);
+        tracks.push(LidarTrack { scans, base_from_sensor: l.base_from_sensor });
+    }
+    Ok((sampled.into_iter().map(|s| s.run).collect(), Some(tracks)))
 }
 
 /// Writes each run as one file of `format` into `dir` (created), named after the run; returns the paths.
@@ -95,10 +207,11 @@ pub(crate) fn write_split(
     runs: &[Run],
     format: Format,
     wheel_names: &[String],
+    lidar: Option<&[LidarTrack]>,
 ) -> anyhow::Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let mut written = Vec::with_capacity(runs.len());
-    for r in runs {
+    for (i, r) in runs.iter().enumerate() {
         let stem = r.name().rsplit('/').next().unwrap_or(r.name());
         let ext = match format {
             Format::Csv => "csv",
@@ -113,6 +226,7 @@ pub(crate) fn write_split(
                     design_odometry: Some(r.recorded_odometry().to_vec()),
                     // Simulated clocks start at 0 s (wheel data from −0.5 s): put them at a plausible epoch.
                     origin_s: SIM_EPOCH_S,
+                    lidar: lidar.and_then(|l| l.get(i)).cloned(),
                     ..Default::default()
                 };
                 dataset::mcap::write_run(&path, r, &w)?
@@ -229,13 +343,14 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     for spec in &a.effects {
         sim_spec::apply_effect_spec(spec, &mut truth, &mut config, &wheel_names)?;
     }
+    let lidar = a.lidar.lidar(a.format)?;
     let out = OutDir::claim(&a.out, "--out", a.force)?;
     let (mut summary, mut written) = (serde_json::Map::new(), serde_json::Map::new());
     for (split, seed) in [("train", a.seed), ("validation", a.seed.wrapping_add(1))] {
         let cfg = SimConfig { seed, ..config.clone() };
         let spinner = crate::progress::spinner(format!("simulating and writing {split} runs"), quiet);
-        let runs = simulate(&cfg, &truth, &format!("{split}/"))?;
-        let files = write_split(&out.path().join(split), &runs, a.format, &wheel_names)?;
+        let (runs, tracks) = simulate_split(&cfg, &truth, split, lidar.as_ref())?;
+        let files = write_split(&out.path().join(split), &runs, a.format, &wheel_names, tracks.as_deref())?;
         write_robot(&out.path().join(split), &robot, a.format)?;
         spinner.finish_and_clear();
         let costs = split_costs(&design, &truth, &runs)?;
@@ -262,7 +377,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         written.insert(split.into(), listed.into());
         summary.insert(split.into(), serde_json::Value::Object(entry));
     }
-    write_truth(a, out.path(), &truth, summary, &config)?;
+    write_truth(a, out.path(), &truth, summary, &config, lidar.as_ref())?;
     out.commit()?;
     if a.output.json {
         let format = match a.format {
@@ -285,6 +400,7 @@ fn write_truth(
     truth: &FittedModel,
     summary: serde_json::Map<String, serde_json::Value>,
     config: &SimConfig,
+    lidar: Option<&Lidar>,
 ) -> anyhow::Result<()> {
     let truth_toml = model_file::to_toml(truth, None).map_err(anyhow::Error::msg)?;
     atomic::write_atomic(&dir.join("truth_model.toml"), truth_toml.as_bytes())
@@ -299,6 +415,18 @@ fn write_truth(
         "simulator": config,
         "cost": "design_cost and oracle_cost are the paper's Eq. 6 with exact-arc odometry; path costs are RMS over every ground-truth pose",
     });
+    let mut doc = doc;
+    if let Some(l) = lidar {
+        let m = &l.base_from_sensor;
+        doc["lidar"] = json!({
+            "room": l.name,
+            "polygons_m": l.room.polygons(),
+            "base_from_sensor": { "x_m": m.x_m, "y_m": m.y_m, "theta_rad": m.theta_rad },
+            "scans": l.settings,
+            "topic": dataset::mcap::SCAN_TOPIC,
+            "frame": dataset::mcap::LASER_FRAME,
+        });
+    }
     let text = serde_json::to_string_pretty(&doc)?;
     atomic::write_atomic(&dir.join("truth.json"), text.as_bytes())
         .with_context(|| format!("writing {}", a.out.join("truth.json").display()))

@@ -438,6 +438,52 @@ fn expand(p: &Path, out: &mut Vec<Result<Input, DatasetError>>) {
     });
 }
 
+/// Feeds every message of the one ROS recording at `path` (a `.mcap`, `.db3` or `.bag` file, or a rosbag2
+/// recording folder; each storage file at most `max_file_bytes` long) into the sink `make(zstd_messages)`
+/// makes (`zstd_messages`: rosbag2's per-message compression, which the sink undoes).
+pub(crate) fn feed_ros<S: mcap::read::MessageSink>(
+    path: &Path,
+    max_file_bytes: u64,
+    make: impl FnOnce(bool) -> S,
+) -> Result<S, DatasetError> {
+    let mut inputs = Vec::new();
+    expand(path, &mut inputs);
+    let not_one = |found: String| {
+        DatasetError::file(
+            path,
+            format!("expected one ROS recording (a .mcap, .db3 or .bag file, or a rosbag2 folder), found {found}"),
+        )
+    };
+    let input = match inputs.len() {
+        1 => inputs.pop().ok_or_else(|| not_one("none".into()))??,
+        0 => return Err(not_one("none".into())),
+        n => return Err(not_one(format!("{n} inputs"))),
+    };
+    match input {
+        Input::Recording(dir) => rosbag2::feed_recording(&dir, max_file_bytes, make),
+        Input::Mcap(p) => {
+            check_size(&p, max_file_bytes)?;
+            let buf = std::fs::read(&p).map_err(|e| DatasetError::io(&p, e))?;
+            let mut sink = make(false);
+            mcap::read::feed_mcap(&p, &buf, &mut sink)?;
+            Ok(sink)
+        }
+        Input::Db3(p) => {
+            let mut sink = make(false);
+            rosbag2::feed_db3(&p, max_file_bytes, &mut sink)?;
+            Ok(sink)
+        }
+        Input::Ros1(p) => {
+            let mut sink = make(false);
+            ros1::feed(&p, &mut sink)?;
+            Ok(sink)
+        }
+        Input::Csv(p) | Input::OptiOdom(p) => {
+            Err(DatasetError::file(&p, "not a ROS recording: it holds no lidar scans"))
+        }
+    }
+}
+
 /// Reads one input. The outer error always stops the load (a file above the size cap); the inner one is
 /// the input's own failure, which [`merge`] lists as skipped under `skip_invalid`.
 fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, DatasetError>, DatasetError> {

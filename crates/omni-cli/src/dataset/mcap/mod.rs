@@ -60,6 +60,7 @@
 mod common;
 mod inspect;
 mod joint_state;
+mod laser_scan;
 mod odometry;
 mod pose_stamped;
 mod poses;
@@ -77,7 +78,9 @@ use std::path::Path;
 
 pub(crate) use inspect::InventorySink;
 pub use inspect::{Inventory, ROBOT_DESCRIPTION_TOPIC, TopicSummary, inspect, inspect_bytes};
-pub use write::{COMMAND_TOPIC, JOINTS_TOPIC, TRUTH_TOPIC};
+pub use laser_scan::ScanRead;
+pub(crate) use laser_scan::ScanSink;
+pub use write::{COMMAND_TOPIC, JOINTS_TOPIC, LASER_FRAME, SCAN_TOPIC, TF_STATIC_TOPIC, TRUTH_TOPIC};
 
 /// ROS time of the simulator's t = 0 in MCAP output (2023-11-14T22:13:20Z). s.
 pub const SIM_EPOCH_S: i64 = 1_700_000_000;
@@ -170,6 +173,18 @@ pub struct WriteOptions {
     pub calibrated_odometry: Option<Vec<StampedPose>>,
     /// Stamps are this many seconds plus the run's `t_s`. s. Default 0 (sim time).
     pub origin_s: i64,
+    /// A lidar's scans, on `/scan` (LaserScan, frame `laser`), and its mount on `/tf_static`
+    /// (`base_link` → `laser`). Default none.
+    pub lidar: Option<LidarTrack>,
+}
+
+/// A lidar to write into a bag: its scans (stamps on the run's clock) and where it sits on the robot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LidarTrack {
+    /// The scans, in time order.
+    pub scans: Vec<omni_kin::lidar::Scan>,
+    /// The lidar's pose in the base frame (m, rad).
+    pub base_from_sensor: omni_kin::Pose2,
 }
 
 impl Default for WriteOptions {
@@ -179,6 +194,7 @@ impl Default for WriteOptions {
             design_odometry: None,
             calibrated_odometry: None,
             origin_s: 0,
+            lidar: None,
         }
     }
 }

@@ -7,6 +7,7 @@
 use super::WriteOptions;
 use super::common::{Header, Pose, RosString, Time, Twist, encode};
 use super::joint_state::{self, JointState};
+use super::laser_scan::{self, LaserScan};
 use super::odometry::{self, BASE_FRAME, ODOM_FRAME, Odometry, TwistWithCovariance};
 use super::pose_stamped::{self, PoseStamped, PoseWithCovariance};
 use super::twist::{self, TwistStamped, twist_of};
@@ -29,6 +30,12 @@ pub const COMMAND_TOPIC: &str = "/cmd_vel";
 pub(super) const ODOM_TOPIC: &str = "/odom";
 /// The calibrated odometry (`omnical export --mcap`).
 pub(super) const CALIBRATED_TOPIC: &str = "/omnical/odometry";
+/// A lidar's scans (`sensor_msgs/msg/LaserScan`, [`super::WriteOptions::lidar`]).
+pub const SCAN_TOPIC: &str = "/scan";
+/// The lidar's frame.
+pub const LASER_FRAME: &str = "laser";
+/// Static transforms (the lidar's mount).
+pub const TF_STATIC_TOPIC: &str = "/tf_static";
 /// The world frame of the ground truth.
 pub(super) const TRUTH_FRAME: &str = "map";
 
@@ -93,7 +100,7 @@ fn body_twists(poses: &[StampedPose]) -> Vec<Twist> {
 }
 
 /// Writes the file's messages. Channel slots: 0 joints, 1 truth, 2 command, 3 odometry, 4 calibrated
-/// odometry.
+/// odometry, 5 scans, 6 static transforms.
 fn messages(path: &Path, run: &Run, w: &WriteOptions) -> Result<Vec<Pending>, DatasetError> {
     let n = run.n_wheels();
     let mut m = Messages { path, origin_s: w.origin_s, out: Vec::new() };
@@ -137,9 +144,43 @@ fn messages(path: &Path, run: &Run, w: &WriteOptions) -> Result<Vec<Pending>, Da
             m.push(msg.header.stamp, slot, &msg)?;
         }
     }
+    if let Some(lidar) = &w.lidar {
+        lidar_messages(&mut m, lidar, t.first().copied().unwrap_or(0.0))?;
+    }
     // Time order; at equal times, channel order (joints first), and message order within a channel.
     m.out.sort_by_key(|&(t, slot, _)| (t, slot));
     Ok(m.out)
+}
+
+/// The lidar's scans (frame `laser`) and its mount, one `/tf_static` message at `first_t_s` (the first
+/// wheel sample).
+fn lidar_messages(m: &mut Messages<'_>, lidar: &super::LidarTrack, first_t_s: f64) -> Result<(), DatasetError> {
+    let stamp = m.stamp(first_t_s)?;
+    let tf = laser_scan::static_transform(header(stamp, BASE_FRAME), LASER_FRAME, &lidar.base_from_sensor);
+    m.push(stamp, 6, &tf)?;
+    for (k, scan) in lidar.scans.iter().enumerate() {
+        let n = scan.ranges_m.len();
+        let scan_time = lidar
+            .scans
+            .get(k + 1)
+            .or(k.checked_sub(1).and_then(|j| lidar.scans.get(j)))
+            .map_or(0.0, |o| (o.t_s - scan.t_s).abs());
+        let msg = LaserScan {
+            header: header(m.stamp(scan.t_s)?, LASER_FRAME),
+            angle_min: scan.angle_min_rad as f32,
+            angle_max: (scan.angle_min_rad + n.saturating_sub(1) as f64 * scan.angle_increment_rad) as f32,
+            angle_increment: scan.angle_increment_rad as f32,
+            // The simulated scan is instantaneous.
+            time_increment: 0.0,
+            scan_time: scan_time as f32,
+            range_min: scan.range_min_m as f32,
+            range_max: scan.range_max_m as f32,
+            ranges: scan.ranges_m.clone(),
+            intensities: Vec::new(),
+        };
+        m.push(msg.header.stamp, 5, &msg)?;
+    }
+    Ok(())
 }
 
 fn planar(p: &StampedPose) -> Pose {
@@ -195,6 +236,8 @@ fn write_file(tmp: &Path, run: &Run, w: &WriteOptions, pending: &[Pending]) -> R
         (twist::STAMPED_NAME, twist::stamped_schema(), COMMAND_TOPIC, run.command().is_some()),
         (odometry::NAME, odometry::schema(), ODOM_TOPIC, w.design_odometry.is_some()),
         (odometry::NAME, odometry::schema(), CALIBRATED_TOPIC, w.calibrated_odometry.is_some()),
+        (laser_scan::NAME, laser_scan::schema(), SCAN_TOPIC, w.lidar.is_some()),
+        (super::tf::NAME, laser_scan::tf_schema(), TF_STATIC_TOPIC, w.lidar.is_some()),
     ] {
         let id = if used {
             let schema = out.add_schema(name, "ros2msg", text.as_bytes()).map_err(mcap_err)?;

@@ -17,6 +17,10 @@ pub(super) enum Field {
     F64(usize),
     /// `float64[]`.
     F64Seq,
+    /// `float32[N]` (N = 1 for a plain float32).
+    F32(usize),
+    /// `float32[]`.
+    F32Seq,
     /// `string[]`.
     StrSeq,
     /// `geometry_msgs/TransformStamped[]`.
@@ -41,6 +45,7 @@ pub(super) fn layout(ros1_type: &str) -> Option<(&'static str, &'static [Field])
         "tf2_msgs/TFMessage" | "tf/tfMessage" => ("tf2_msgs/msg/TFMessage", &[TransformSeq]),
         "geometry_msgs/Twist" => ("geometry_msgs/msg/Twist", &[F64(6)]),
         "geometry_msgs/TwistStamped" => ("geometry_msgs/msg/TwistStamped", &[Header, F64(6)]),
+        "sensor_msgs/LaserScan" => ("sensor_msgs/msg/LaserScan", &[Header, F32(7), F32Seq, F32Seq]),
         _ => return None,
     })
 }
@@ -85,6 +90,13 @@ impl Cdr {
         self.0.extend_from_slice(s);
         self.0.push(0);
     }
+    /// float32 values.
+    fn f32s(&mut self, b: &[u8]) {
+        if !b.is_empty() {
+            self.align(4);
+            self.0.extend_from_slice(b);
+        }
+    }
     /// float64 values (none: no padding either, as CDR writers do for an empty sequence).
     fn f64s(&mut self, b: &[u8]) {
         if !b.is_empty() {
@@ -125,6 +137,12 @@ fn fields_to_cdr(r: &mut Ros1<'_>, w: &mut Cdr, fields: &[Field]) -> Result<(), 
                 let n = r.u32()?;
                 w.u32(n);
                 w.f64s(r.bytes(8 * n as usize)?);
+            }
+            F32(n) => w.f32s(r.bytes(4 * n)?),
+            F32Seq => {
+                let n = r.u32()?;
+                w.u32(n);
+                w.f32s(r.bytes(4 * n as usize)?);
             }
             StrSeq => {
                 let n = r.u32()?;

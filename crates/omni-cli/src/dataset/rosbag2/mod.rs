@@ -112,6 +112,25 @@ fn feed_files(
     Ok(())
 }
 
+/// Feeds every message of the recording in folder `dir` into the sink `make(zstd_messages)` makes
+/// (`zstd_messages`: each payload is zstd-compressed on its own, which the sink undoes).
+pub(crate) fn feed_recording<S: MessageSink>(
+    dir: &Path,
+    max_file_bytes: u64,
+    make: impl FnOnce(bool) -> S,
+) -> Result<S, DatasetError> {
+    let meta = metadata::read(dir)?;
+    let mut sink = make(meta.compression == Compression::MessageZstd);
+    feed_files(dir, &meta, max_file_bytes, &mut sink)?;
+    Ok(sink)
+}
+
+/// Feeds every message of a bare rosbag2 sqlite3 file (`.db3`) into `sink`.
+pub(crate) fn feed_db3(path: &Path, max_file_bytes: u64, sink: &mut impl MessageSink) -> Result<(), DatasetError> {
+    check_size(path, max_file_bytes)?;
+    sqlite::feed(path, None, sink)
+}
+
 /// What the recording in folder `dir` holds (topics, types, counts, joint names, URDF), for `omnical init`;
 /// all its files are read as [`read_recording`] reads them.
 pub fn inspect_recording(dir: &Path, max_file_bytes: u64) -> Result<Inventory, DatasetError> {

@@ -1,0 +1,93 @@
+//! A planar (2D) lidar: scans as `sensor_msgs/LaserScan` carries them, simulated by ray casting in a room
+//! of polygons ([`room`]), and matched scan to scan ([`icp`]) into the sensor's own path ([`path`]) — a
+//! relative reference for calibration when no motion-capture system is at hand (issue 28).
+//!
+//! Frames: a scan's points are in the sensor frame (`laser`: x along the beam at angle 0, y left, REP-103);
+//! the sensor sits at `base_from_sensor` on the robot (the `/tf_static` base_link → laser). Units: m, rad,
+//! s. No I/O: recordings are read by `omni_cli::lidar`.
+
+pub mod icp;
+pub mod path;
+pub mod room;
+
+pub use icp::{MatchQuality, MatchSettings, Rejection, ScanMatch, match_scans};
+pub use path::{SensorPath, sensor_path};
+pub use room::{CLEARANCE_M, Room, ScanSettings, first_collision, simulate_scan, simulate_scans};
+
+/// One scan, as `sensor_msgs/msg/LaserScan` carries it: beam `i` points at `angle_min_rad + i ·
+/// angle_increment_rad` in the sensor frame and measured `ranges_m[i]`. A range that is not finite or lies
+/// outside [`range_min_m`, `range_max_m`) is no return (REP-117: +inf nothing in range, NaN an erroneous
+/// reading). The scan is taken as instantaneous at `t_s` (no motion during the sweep).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scan {
+    /// When the scan was taken (`header.stamp`). s (since the reader's origin).
+    pub t_s: f64,
+    /// Angle of the first beam. rad.
+    pub angle_min_rad: f64,
+    /// Angle between beams (counter-clockwise when positive). rad.
+    pub angle_increment_rad: f64,
+    /// Shortest valid range. m.
+    pub range_min_m: f64,
+    /// Longest valid range (a range at or beyond it is no return). m.
+    pub range_max_m: f64,
+    /// One range per beam. m. Single precision, as the message carries them.
+    pub ranges_m: Vec<f32>,
+}
+
+impl Scan {
+    /// Whether beam `i`'s range is a return: finite and in [`range_min_m`, `range_max_m`).
+    ///
+    /// [`range_min_m`]: Self::range_min_m
+    /// [`range_max_m`]: Self::range_max_m
+    pub fn is_return(&self, i: usize) -> bool {
+        let r = f64::from(self.ranges_m[i]);
+        r.is_finite() && r >= self.range_min_m && r < self.range_max_m
+    }
+
+    /// The returns as points in the sensor frame (m), in beam order, with their beam indices.
+    pub fn points(&self) -> ScanPoints {
+        let mut out = ScanPoints { xy_m: Vec::with_capacity(self.ranges_m.len()), beam: Vec::new() };
+        out.beam.reserve(self.ranges_m.len());
+        for (i, &r) in self.ranges_m.iter().enumerate() {
+            if self.is_return(i) {
+                let a = self.angle_min_rad + i as f64 * self.angle_increment_rad;
+                let (s, c) = a.sin_cos();
+                let r = f64::from(r);
+                out.xy_m.push([r * c, r * s]);
+                out.beam.push(i);
+            }
+        }
+        out
+    }
+}
+
+/// A scan's returns as points in the sensor frame.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ScanPoints {
+    /// Point `k` (x, y). m.
+    pub xy_m: Vec<[f64; 2]>,
+    /// The beam index of point `k` (increasing).
+    pub beam: Vec<usize>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn points_skip_every_kind_of_no_return() {
+        let scan = Scan {
+            t_s: 0.0,
+            angle_min_rad: 0.0,
+            angle_increment_rad: std::f64::consts::FRAC_PI_2,
+            range_min_m: 0.1,
+            range_max_m: 10.0,
+            ranges_m: vec![2.0, f32::INFINITY, f32::NAN, 0.05, 10.0, 3.0],
+        };
+        let p = scan.points();
+        assert_eq!(p.beam, vec![0, 5]);
+        assert_eq!(p.xy_m[0], [2.0, 0.0]);
+        // Beam 5 at 5 · 90° = 450° ≡ 90°.
+        assert!((p.xy_m[1][0]).abs() < 1e-12 && (p.xy_m[1][1] - 3.0).abs() < 1e-12);
+    }
+}
