@@ -10,6 +10,7 @@
 
 use crate::choice;
 use crate::error::KinError;
+use crate::pose::StampedPose;
 use crate::run::{Run, RunData};
 
 /// What the ground truth measures.
@@ -106,9 +107,19 @@ pub fn windows(run: &Run, window_s: f64) -> Result<Windows, KinError> {
 
 /// The window of `run` over its ground-truth poses `first..=last`, the `k`-th of the run.
 fn window(run: &Run, first: usize, last: usize, k: usize) -> Result<Run, KinError> {
-    let truth = &run.truth()[first..=last];
+    with_truth(run, run.truth()[first..=last].to_vec(), format!("{}#{k}", run.name()))
+}
+
+/// `run`'s wheel samples that cover `truth` (and [`WHEEL_MARGIN_S`] more on each side, clamped to the run),
+/// with `truth` as the ground truth, named `name`; the wheel start angles carried forward to the first
+/// sample kept when the run has them. A sensor's path replaces a placeholder truth this way, one run per
+/// stretch of the path.
+pub fn with_truth(run: &Run, truth: Vec<StampedPose>, name: String) -> Result<Run, KinError> {
     let t = run.wheel_t_s();
-    let (t0, t1) = (truth[0].t_s - WHEEL_MARGIN_S, truth[truth.len() - 1].t_s + WHEEL_MARGIN_S);
+    let (Some(first), Some(last)) = (truth.first(), truth.last()) else {
+        return Err(KinError::TooShort { run: name, what: "ground-truth poses", got: 0, min: 2 });
+    };
+    let (t0, t1) = (first.t_s - WHEEL_MARGIN_S, last.t_s + WHEEL_MARGIN_S);
     // The last sample at or before t0 and the first at or after t1 (clamped to the run).
     let a = t.partition_point(|&s| s <= t0).saturating_sub(1);
     let b = (t.partition_point(|&s| s < t1) + 1).min(t.len());
@@ -127,11 +138,11 @@ fn window(run: &Run, first: usize, last: usize, k: usize) -> Result<Run, KinErro
         angle
     };
     Run::new(RunData {
-        name: format!("{}#{k}", run.name()),
+        name,
         wheel_t_s: t[a..b].to_vec(),
         wheel_rad_s: run.wheel_rad_s()[a * n..b * n].to_vec(),
         n_wheels: n,
-        truth: truth.to_vec(),
+        truth,
         command: None,
         repetition: None,
         recorded_odometry: Vec::new(),
@@ -142,7 +153,7 @@ fn window(run: &Run, first: usize, last: usize, k: usize) -> Result<Run, KinErro
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pose::{Pose2, StampedPose};
+    use crate::pose::Pose2;
 
     /// A run of `secs` seconds at 100 Hz wheels and 50 Hz truth, turning in place for the first half and
     /// standing still for the second, with the truth missing over `gap`.

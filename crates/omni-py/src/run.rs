@@ -312,6 +312,8 @@ pub fn _dataset_from_state(
 /// sensor's own motion, as lidar or visual odometry: the runs become windows of ``gt_window_s`` seconds,
 /// default 4, and ``train`` fits the sensor's mount with the wheels); ``gt_mount``: the measured point's pose
 /// in the base frame when known, ``(x_m, y_m, yaw_deg)`` (the ground truth is moved to the base by it).
+/// ``gt_scans``: the ground truth from a 2D lidar, its LaserScan topic (``"/scan"``) matched scan to scan
+/// into the lidar's path (a relative reference).
 /// ``recorded_odometry``: keep the runs' recorded odometry (for ``export``'s MCAP bags).
 ///
 /// >>> import tempfile
@@ -322,7 +324,7 @@ pub fn _dataset_from_state(
 /// >>> len(ds), ds[0].name, ds.design.n_wheels
 /// (36, '00-r0', 3)
 #[pyfunction]
-#[pyo3(signature = (*paths, robot = None, joints = None, joints_topic = None, gt_topic = None, gt_parent_frame = None, gt_child_frame = None, gt = None, gt_time_offset = None, gt_columns = None, gt_units = None, gt_kind = None, gt_window_s = None, gt_mount = None, split_s = None, skip_invalid = false, ticks_per_rev = None, max_file_mb = 1024, recorded_odometry = false))]
+#[pyo3(signature = (*paths, robot = None, joints = None, joints_topic = None, gt_topic = None, gt_parent_frame = None, gt_child_frame = None, gt = None, gt_time_offset = None, gt_columns = None, gt_units = None, gt_kind = None, gt_window_s = None, gt_mount = None, gt_scans = None, split_s = None, skip_invalid = false, ticks_per_rev = None, max_file_mb = 1024, recorded_odometry = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn load(
     py: Python<'_>,
@@ -340,6 +342,7 @@ pub fn load(
     gt_kind: Option<&str>,
     gt_window_s: Option<f64>,
     gt_mount: Option<(f64, f64, f64)>,
+    gt_scans: Option<String>,
     split_s: Option<f64>,
     skip_invalid: bool,
     ticks_per_rev: Option<f64>,
@@ -367,6 +370,7 @@ pub fn load(
             .unwrap_or_default(),
         gt_window_s,
         gt_mount: gt_mount.map(|(x, y, yaw_deg)| omni_kin::Pose2::new(x, y, yaw_deg.to_radians())),
+        gt_scans,
         split_s,
         skip_invalid,
         ticks_per_rev,

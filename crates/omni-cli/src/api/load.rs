@@ -40,6 +40,9 @@ pub struct DataOptions {
     /// The measured point's (the sensor's, the marker's) pose in the base frame, when known (a URDF, a tape
     /// measure): the ground truth is moved to the base by it, and no fit adds a mount.
     pub gt_mount: Option<omni_kin::Pose2>,
+    /// The ground truth from a 2D lidar: this LaserScan topic's scans matched into the sensor's own path, a
+    /// relative reference (`--gt-kind relative` is implied).
+    pub gt_scans: Option<String>,
     /// Cut MCAP files into runs at standstills at least this long (s).
     pub split_s: Option<f64>,
     /// Skip runs that fail to load (listed) instead of stopping.
@@ -66,6 +69,7 @@ impl Default for DataOptions {
             gt_kind: ReferenceKind::Absolute,
             gt_window_s: None,
             gt_mount: None,
+            gt_scans: None,
             split_s: None,
             skip_invalid: false,
             ticks_per_rev: None,
@@ -153,8 +157,9 @@ impl LoadRequest {
         };
         robot_file::fill_mcap_options(&mut mcap, data.joints.is_none(), robot.as_ref().map(|r| &r.description));
         let end_poses = end_pose_file(data)?;
-        mcap.wheels_only = end_poses.is_some();
-        let ground_truth = if end_poses.is_some() { None } else { ground_truth_options(data, robot.as_ref())? };
+        let scans = scans_topic(data)?;
+        mcap.wheels_only = end_poses.is_some() || scans.is_some();
+        let ground_truth = if mcap.wheels_only { None } else { ground_truth_options(data, robot.as_ref())? };
         if ground_truth.is_none() {
             mcap.truth_time_offset_s = data.gt_time_offset_s;
         }
@@ -166,6 +171,7 @@ impl LoadRequest {
             max_file_bytes: data.max_file_mb.saturating_mul(1 << 20),
             ground_truth,
             csv_joints: csv_joints(data, robot.as_ref()),
+            scans: scans.map(|t| (t, crate::lidar::MatchSettings::default())),
         };
         let mut ds = dataset::load(&self.paths, &opts)?;
         // An option that changes nothing is an error: the offset applies to a --gt file or to the ground-truth
@@ -188,6 +194,20 @@ impl LoadRequest {
         cut_into_windows(&mut ds, data)?;
         Ok(ds)
     }
+}
+
+/// The LaserScan topic of `--gt-scans`, checked against the other options: a lidar is a relative
+/// reference, and the only ground truth.
+fn scans_topic(data: &DataOptions) -> anyhow::Result<Option<String>> {
+    let Some(topic) = &data.gt_scans else { return Ok(None) };
+    anyhow::ensure!(
+        data.gt_kind != ReferenceKind::EndPose,
+        "--gt-scans {topic} does not go with --gt-kind end-pose: a lidar's path is a relative reference"
+    );
+    for (set, flag) in [(data.gt.is_some(), "--gt"), (data.gt_topic.is_some(), "--gt-topic")] {
+        anyhow::ensure!(!set, "{flag} does not go with --gt-scans {topic}: the lidar's path is the ground truth");
+    }
+    Ok(Some(topic.clone()))
 }
 
 /// The measured end-pose table of `--gt-kind end-pose` (its `--gt`), checked against the other options.
@@ -281,7 +301,7 @@ fn move_to_base(ds: &mut Dataset, data: &DataOptions) -> anyhow::Result<()> {
 /// `--gt-window` without `--gt-kind relative` is an error (it would change nothing).
 fn cut_into_windows(ds: &mut Dataset, data: &DataOptions) -> anyhow::Result<()> {
     use omni_kin::reference::{DEFAULT_WINDOW_S, windows};
-    if data.gt_kind != ReferenceKind::Relative {
+    if data.gt_kind != ReferenceKind::Relative && data.gt_scans.is_none() {
         if let Some(w) = data.gt_window_s {
             anyhow::bail!(
                 "--gt-window {w} changes nothing here: it is the window of a relative reference (--gt-kind relative: \

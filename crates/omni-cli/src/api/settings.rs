@@ -113,6 +113,13 @@ pub const SETTINGS: &[Setting] = &[
         Yes,
         Ok(&[(LOAD, "gt_mount")]),
     ),
+    setting(
+        "gt_scans",
+        "ground truth from a 2D lidar: its LaserScan topic, matched scan to scan",
+        Yes,
+        NOT_SHOWN,
+        Ok(&[(LOAD, "gt_scans")]),
+    ),
     setting("split", "cut recordings at standstills at least this long (s)", Yes, Yes, Ok(&[(LOAD, "split_s")])),
     setting("skip_invalid", "skip runs that fail to load", Yes, NOT_SHOWN, Ok(&[(LOAD, "skip_invalid")])),
     setting("ticks_per_rev", "encoder ticks per wheel revolution", Yes, NOT_SHOWN, Ok(&[(LOAD, "ticks_per_rev")])),

@@ -160,6 +160,11 @@ pub struct DataArgs {
     /// X,Y in metres, YAW in degrees. The ground truth is moved to the base by it, and no mount is fitted.
     #[arg(long, value_name = "X,Y,YAW_DEG", value_parser = parse_mount, allow_hyphen_values = true)]
     pub gt_mount: Option<omni_kin::Pose2>,
+    /// The ground truth from a 2D lidar without motion capture: the scans of this LaserScan topic (e.g.
+    /// `/scan`) matched scan to scan into the lidar's own path, a relative reference (`--gt-kind relative`
+    /// implied); its mount from the recording's /tf_static when there, corrected by the fit.
+    #[arg(long, value_name = "TOPIC")]
+    pub gt_scans: Option<String>,
     /// Cut MCAP files into runs where the robot stands still at least this long (s).
     #[arg(long)]
     pub split: Option<f64>,
@@ -203,6 +208,7 @@ impl DataArgs {
             gt_kind: self.gt_kind.unwrap_or_default(),
             gt_window_s: self.gt_window,
             gt_mount: self.gt_mount,
+            gt_scans: self.gt_scans.clone(),
             split_s: self.split,
             skip_invalid: self.skip_invalid,
             ticks_per_rev: self.ticks_per_rev,

@@ -6,6 +6,7 @@
 pub mod csv;
 pub mod end_poses;
 pub mod ground_truth;
+mod lidar_reference;
 pub mod mcap;
 pub mod optiodom;
 pub mod ros1;
@@ -175,6 +176,9 @@ pub struct LoadOptions {
     /// `<joint>_ticks` columns, read in this order): a robot description's or `--joints`. Default empty:
     /// each file's own column order.
     pub csv_joints: Vec<String>,
+    /// A ROS recording's ground truth from its 2D lidar: the LaserScan topic, matched scan to scan with these
+    /// settings (`--gt-scans`); the recording is read wheels only. Default none.
+    pub scans: Option<(String, crate::lidar::MatchSettings)>,
 }
 
 impl Default for LoadOptions {
@@ -187,6 +191,7 @@ impl Default for LoadOptions {
             max_file_bytes: DEFAULT_MAX_FILE_BYTES,
             ground_truth: None,
             csv_joints: Vec::new(),
+            scans: None,
         }
     }
 }
@@ -500,6 +505,11 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
         clock: r.ground_truth_clock,
         origin_s: Some(r.origin_s),
     };
+    // The lidar's path as a ROS recording's ground truth, when --gt-scans is given.
+    let lidar = |p: &Path, l: Loaded| match &opts.scans {
+        Some((topic, settings)) => lidar_reference::with_lidar_path(p, topic, settings, l),
+        None => Ok(l),
+    };
     // The ground-truth file of a ROS recording, when --gt is given.
     let truth = |p: &Path, folder: bool| -> Result<Option<ground_truth::ExternalTruth>, DatasetError> {
         opts.ground_truth.as_ref().map(|g| ground_truth::read_for(g, p, &recording_name(p, folder))).transpose()
@@ -507,8 +517,8 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
     if opts.mcap.wheels_only && matches!(input, Input::Csv(_) | Input::OptiOdom(_)) {
         return Err(DatasetError::file(
             input.path(),
-            "measured end poses (--gt-kind end-pose) go with ROS recordings (.mcap, .db3, rosbag2 folders, .bag); \
-             this input carries its own ground truth",
+            "measured end poses (--gt-kind end-pose) and lidar scans (--gt-scans) go with ROS recordings (.mcap, \
+             .db3, rosbag2 folders, .bag); this input carries its own ground truth",
         ));
     }
     if opts.ground_truth.is_some() && matches!(input, Input::Csv(_) | Input::OptiOdom(_)) {
@@ -527,18 +537,23 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
         }
         Input::Mcap(p) => {
             check_size(p, opts.max_file_bytes)?;
-            Ok(truth(p, false).and_then(|t| mcap::read_file_with_truth(p, &mo, t.as_ref())).map(from_bag))
+            Ok(truth(p, false)
+                .and_then(|t| mcap::read_file_with_truth(p, &mo, t.as_ref()))
+                .map(from_bag)
+                .and_then(|l| lidar(p, l)))
         }
-        Input::Db3(p) => {
-            Ok(truth(p, false).and_then(|t| rosbag2::read_db3(p, &mo, opts.max_file_bytes, t.as_ref())).map(from_bag))
-        }
+        Input::Db3(p) => Ok(truth(p, false)
+            .and_then(|t| rosbag2::read_db3(p, &mo, opts.max_file_bytes, t.as_ref()))
+            .map(from_bag)
+            .and_then(|l| lidar(p, l))),
         Input::Ros1(p) => {
             check_size(p, opts.max_file_bytes)?;
-            Ok(truth(p, false).and_then(|t| ros1::read_bag(p, &mo, t.as_ref())).map(from_bag))
+            Ok(truth(p, false).and_then(|t| ros1::read_bag(p, &mo, t.as_ref())).map(from_bag).and_then(|l| lidar(p, l)))
         }
         Input::Recording(p) => Ok(truth(p, true)
             .and_then(|t| rosbag2::read_recording(p, &mo, opts.max_file_bytes, t.as_ref()))
-            .map(from_bag)),
+            .map(from_bag)
+            .and_then(|l| lidar(p, l))),
         Input::OptiOdom(p) => {
             // The set's runs are checked one by one (skipped under skip_invalid); a failure of the set
             // itself stops the load.

@@ -369,6 +369,7 @@ def load(
     gt_kind: Optional[str] = None,
     gt_window_s: Optional[float] = None,
     gt_mount: Optional[tuple[float, float, float]] = None,
+    gt_scans: Optional[str] = None,
     split_s: Optional[float] = None,
     skip_invalid: bool = False,
     ticks_per_rev: Optional[float] = None,

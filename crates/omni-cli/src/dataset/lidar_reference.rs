@@ -1,0 +1,129 @@
+//! A 2D lidar as the reference of a ROS recording (`--gt-scans TOPIC`): its scans matched into the
+//! sensor's own path ([`crate::lidar::sensor_path`]), which replaces the runs' placeholder ground truth (the
+//! recording was read wheels only). Each stretch of the path (a segment ends where the matches failed) is a
+//! run of its own; a relative reference's windows cut them further (`api::load`). When the recording's
+//! static transforms hold the lidar's pose on the base, the path is moved to the base by it (the fit then
+//! corrects the mount around it); otherwise the mount is fitted from zero.
+
+use super::{DatasetError, Loaded};
+use crate::lidar::{self, MatchSettings};
+use omni_kin::{Pose2, Run, StampedPose};
+use std::path::Path;
+
+/// The runs of `loaded` (read wheels only from the recording at `path`) with the lidar's path on `topic` as
+/// their ground truth.
+pub(super) fn with_lidar_path(
+    path: &Path,
+    topic: &str,
+    settings: &MatchSettings,
+    mut loaded: Loaded,
+) -> Result<Loaded, DatasetError> {
+    let read = lidar::read_scans(path, topic)?;
+    let sensor = lidar::sensor_path(&read.scans, settings)
+        .map_err(|e| DatasetError::at(path, format!("topic {topic:?}"), e.to_string()))?;
+    if sensor.matched == 0 {
+        return Err(DatasetError::at(
+            path,
+            format!("topic {topic:?}"),
+            format!(
+                "no scan matched the one before it ({} rejected: {}): the scans see too little structure, or the \
+                 robot moves too far between scans; the lidar cannot be the reference here",
+                sensor.rejected,
+                rejections(&sensor.rejected_why)
+            ),
+        ));
+    }
+    // Scan times on the runs' clock (seconds since the recording's first wheel message's second).
+    let shift_s = loaded.origin_s.map_or(0.0, |o| (read.origin_s - o) as f64);
+    let to_base = read.base_from_sensor.map(|m| m.inverse());
+    let segments: Vec<Vec<StampedPose>> = sensor
+        .segments
+        .iter()
+        .map(|seg| {
+            seg.iter()
+                .map(|p| StampedPose { t_s: p.t_s + shift_s, pose: to_base.map_or(p.pose, |b| p.pose.compose(&b)) })
+                .collect()
+        })
+        .collect();
+    let mut runs = Vec::new();
+    for run in &loaded.runs {
+        runs.extend(stretches(run, &segments).map_err(|e| DatasetError::Run { path: path.to_path_buf(), error: e })?);
+    }
+    if runs.is_empty() {
+        return Err(DatasetError::at(
+            path,
+            format!("topic {topic:?}"),
+            "the lidar's path does not overlap the wheel data (two matched scans within it are needed)",
+        ));
+    }
+    loaded.notes.push(note(path, topic, &read.frame_id, &sensor, read.base_from_sensor, runs.len()));
+    loaded.runs = runs;
+    Ok(loaded)
+}
+
+/// `run` once per stretch of `segments` that has two poses within its wheel data: named as the run when
+/// there is one, `RUN~K` when there are more.
+fn stretches(run: &Run, segments: &[Vec<StampedPose>]) -> Result<Vec<Run>, omni_kin::KinError> {
+    let (w0, w1) = (run.wheel_t_s()[0], run.wheel_t_s()[run.n_samples() - 1]);
+    let within: Vec<Vec<StampedPose>> = segments
+        .iter()
+        .map(|s| s.iter().copied().filter(|p| (w0..=w1).contains(&p.t_s)).collect::<Vec<_>>())
+        .filter(|s| s.len() >= 2)
+        .collect();
+    let many = within.len() > 1;
+    within
+        .into_iter()
+        .enumerate()
+        .map(|(k, truth)| {
+            let name = if many { format!("{}~{}", run.name(), k + 1) } else { run.name().to_string() };
+            omni_kin::reference::with_truth(run, truth, name)
+        })
+        .collect()
+}
+
+/// Rejection counts as `kind N, kind M`.
+fn rejections(why: &std::collections::BTreeMap<&'static str, usize>) -> String {
+    if why.is_empty() {
+        return "none".into();
+    }
+    why.iter().map(|(k, n)| format!("{k} {n}")).collect::<Vec<_>>().join(", ")
+}
+
+/// The note a lidar reference leaves: matches, rejections, stretches and the mount's source.
+fn note(
+    path: &Path,
+    topic: &str,
+    frame: &str,
+    sensor: &lidar::SensorPath,
+    mount: Option<Pose2>,
+    runs: usize,
+) -> String {
+    let rms = {
+        let mut r: Vec<f64> = sensor.qualities.iter().map(|q| q.rms_m).collect();
+        r.sort_by(f64::total_cmp);
+        r.get(r.len() / 2).copied().unwrap_or(f64::NAN)
+    };
+    let mount = match mount {
+        Some(m) => format!(
+            "moved to the base by the static transform to {frame:?} (x {:.3} m, y {:.3} m, yaw {:.2}°); the fit \
+             corrects that mount",
+            m.x_m,
+            m.y_m,
+            m.theta_rad.to_degrees()
+        ),
+        None => format!(
+            "no static transform from the base to {frame:?}: the lidar's mount is fitted from zero (within \
+             ±0.5 m, ±28.6°; give it with --gt-mount when it is turned further)"
+        ),
+    };
+    format!(
+        "{}: lidar {topic:?}: {} scan matches, {} rejected ({}), median match RMS {:.1} mm, {} stretch{}; {mount}",
+        path.display(),
+        sensor.matched,
+        sensor.rejected,
+        rejections(&sensor.rejected_why),
+        rms * 1e3,
+        runs,
+        if runs == 1 { "" } else { "es" },
+    )
+}
