@@ -303,3 +303,77 @@ fn real_diff_drive_from_windows_agrees_with_motion_capture() {
     eprintln!("real diff, held out: whole runs {plain:.4}, windows {windowed:.4}");
     assert!(windowed < 0.8 * plain, "held-out Eq. 6: windows {windowed} vs whole runs {plain}");
 }
+
+/// Simulated MCAP runs of the diff drive (left wheel 2 % large) with a 2D lidar in `room` at 0.2 m, 0, 5°.
+fn simulate_lidar(dir: &Path, room: &str, runs_per_command: &str) {
+    let robot = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/diff_robot.toml");
+    let out = omnical(
+        &[
+            "simulate",
+            "--robot",
+            robot.to_str().unwrap(),
+            "--out",
+            "sim",
+            "--lidar",
+            room,
+            "--lidar-mount",
+            "0.2,0,5",
+            "--effect",
+            "wheel_radius:a=0.02",
+            "--runs-per-command",
+            runs_per_command,
+            "--duration",
+            "6",
+            "-q",
+        ],
+        dir,
+    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+/// The lidar alone against motion capture on the same runs: the wheels within 2 standard errors of the
+/// motion-capture fit, and the held-out path error within 1.2× of its model's.
+#[test]
+fn a_lidar_alone_calibrates_as_motion_capture_does() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    simulate_lidar(d, "room", "2");
+    let (mocap, _) = json(&["train", "sim/train", "--out", "mocap.toml"], d);
+    let (lidar, stderr) = json(&["train", "sim/train", "--gt-scans", "/scan", "--out", "lidar.toml"], d);
+    assert!(stderr.contains("lidar \"/scan\": "), "{stderr}");
+    assert!(
+        stderr.contains("moved to the base by the static transform to \"laser\" (x 0.200 m, y 0.000 m, yaw 5.00°)")
+    );
+    for name in ["r_left", "r_right", "b"] {
+        let (m, m_se) = param(&mocap, name);
+        let (l, _) = param(&lidar, name);
+        eprintln!("{name}: lidar {l:.6}, motion capture {m:.6} ± {m_se:.1e}");
+        assert!((l - m).abs() <= 2.0 * m_se, "{name}: lidar {l} vs motion capture {m} ± {m_se}");
+    }
+    let held = |model: &str| json(&["eval", "--model", model, "sim/validation"], d).0["path_cost"].as_f64().unwrap();
+    let (m, l) = (held("mocap.toml"), held("lidar.toml"));
+    eprintln!("held-out path RMS: lidar {l:.5} m, motion capture {m:.5} m");
+    assert!(l <= 1.2 * m, "held-out path RMS: lidar {l} vs motion capture {m}");
+}
+
+#[test]
+fn lidar_references_that_cannot_serve_are_refused_naming_the_file_and_topic() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    simulate_lidar(d, "corridor", "1");
+    let cases: [(&[&str], &str); 3] = [
+        (&["--gt-scans", "/scan"], "error: sim/train/00-r0.mcap: topic \"/scan\": no scan matched the one before it"),
+        (&["--gt-scans", "/laser"], "error: sim/train/00-r0.mcap: no topic \"/laser\" in the recording"),
+        (
+            &["--gt-scans", "/scan", "--gt-kind", "end-pose"],
+            "error: --gt-scans /scan does not go with --gt-kind end-pose",
+        ),
+    ];
+    for (args, want) in cases {
+        let out = omnical(&[&["train", "sim/train"], args].concat(), d);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8(out.stderr).unwrap();
+        let error = err.lines().find(|l| l.starts_with("error:")).unwrap_or_default();
+        assert!(error.starts_with(want), "{args:?}: {err}");
+    }
+}

@@ -156,8 +156,8 @@ impl LoadRequest {
             ..Default::default()
         };
         robot_file::fill_mcap_options(&mut mcap, data.joints.is_none(), robot.as_ref().map(|r| &r.description));
-        let end_poses = end_pose_file(data)?;
         let scans = scans_topic(data)?;
+        let end_poses = end_pose_file(data)?;
         mcap.wheels_only = end_poses.is_some() || scans.is_some();
         let ground_truth = if mcap.wheels_only { None } else { ground_truth_options(data, robot.as_ref())? };
         if ground_truth.is_none() {
