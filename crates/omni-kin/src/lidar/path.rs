@@ -175,7 +175,9 @@ pub fn sensor_path(scans: &[Scan], s: &MatchSettings) -> Result<SensorPath, KinE
             why: format!("{} scan(s): at least 2 are needed to match", scans.len()),
         });
     }
-    if let Some(k) = (1..scans.len()).find(|&k| !(scans[k].t_s > scans[k - 1].t_s)) {
+    if let Some(k) =
+        (1..scans.len()).find(|&k| scans[k].t_s.partial_cmp(&scans[k - 1].t_s) != Some(std::cmp::Ordering::Greater))
+    {
         return Err(KinError::Invalid {
             what: format!("lidar scan {k}"),
             why: format!("its stamp {} s does not follow the previous scan's {} s", scans[k].t_s, scans[k - 1].t_s),
