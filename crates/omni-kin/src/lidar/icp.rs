@@ -383,6 +383,12 @@ mod tests {
             let m = matched("room", a, b, Pose2::IDENTITY);
             let truth = a.inverse().compose(&b);
             let e = m.reference_from_current.error_to(&truth);
+            eprintln!(
+                "increment ({dx}, {dy}, {dth_deg}°): error {:.3} mm, {:.4}°, condition {:.2}",
+                1e3 * e.dx_m.hypot(e.dy_m),
+                e.dtheta_rad.to_degrees(),
+                m.quality.condition
+            );
             assert!(m.rejected.is_none(), "{m:?}");
             assert!(e.dx_m.hypot(e.dy_m) < 1e-3, "position error {e:?} for {truth:?}");
             assert!(e.dtheta_rad.abs().to_degrees() < 0.05, "heading error {e:?}");
@@ -396,6 +402,7 @@ mod tests {
         let a = Pose2::new(0.0, 0.3, 0.0);
         let b = a.compose(&Pose2::new(0.02, 0.0, 0.01));
         let m = matched("corridor", a, b, Pose2::IDENTITY);
+        eprintln!("corridor: condition {:.0}", m.quality.condition);
         assert!(matches!(m.rejected, Some(Rejection::IllConditioned { .. })), "{m:?}");
         assert!(m.quality.condition > 100.0, "{:?}", m.quality);
     }
