@@ -117,6 +117,19 @@ fn simulate_writes_the_lidar_and_scan_odometry_follows_it_whatever_the_threads()
     // 0.2 m/s for 4 s (command 12: straight ahead, no turn): about 0.8 m, whatever the mount
     let length = j["segments"][0]["travelled_m"].as_f64().unwrap();
     assert!((0.7..0.85).contains(&length), "{length}");
+
+    // The same bag as a rosbag2 recording (MCAP storage): the same scans, matches and path.
+    std::fs::create_dir(d.join("rec")).unwrap();
+    std::fs::copy(d.join("one/train/12-r0.mcap"), d.join("rec/rec_0.mcap")).unwrap();
+    std::fs::write(
+        d.join("rec/metadata.yaml"),
+        "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: mcap\n  relative_file_paths: [rec_0.mcap]\n",
+    )
+    .unwrap();
+    let r: serde_json::Value = serde_json::from_str(&ok(&["scan-odometry", "rec", "--json"], d)).unwrap();
+    for key in ["scans", "matched", "rejected", "segments", "quality", "base_from_sensor"] {
+        assert_eq!(r[key], j[key], "{key}");
+    }
 }
 
 #[test]

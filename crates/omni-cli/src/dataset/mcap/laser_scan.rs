@@ -95,6 +95,19 @@ pub struct ScanRead {
     pub base_from_sensor: Option<Pose2>,
 }
 
+impl ScanRead {
+    /// Puts the scans' times on another time base: seconds since `origin_s` (e.g. the runs'
+    /// [`super::McapRead::origin_s`], so scans and wheel samples share one clock). Exact: only whole seconds
+    /// move.
+    pub fn rebase(&mut self, origin_s: i64) {
+        let shift_s = (self.origin_s - origin_s) as f64;
+        for s in &mut self.scans {
+            s.t_s += shift_s;
+        }
+        self.origin_s = origin_s;
+    }
+}
+
 /// One topic as the storage declares it.
 struct Declared {
     topic: String,
@@ -330,7 +343,9 @@ mod tests {
             run(&[]).unwrap_err().to_string(),
             "rec.mcap: topic \"/scan\": holds no scans: record the lidar while the robot moves"
         );
-        let ok = run(&[scan(2, 0.1), scan(3, 0.1)]).unwrap();
+        let mut ok = run(&[scan(2, 0.1), scan(3, 0.1)]).unwrap();
         assert_eq!((ok.origin_s, ok.scans[1].t_s, ok.base_from_sensor), (2, 1.0, None));
+        ok.rebase(-1);
+        assert_eq!((ok.origin_s, ok.scans[0].t_s, ok.scans[1].t_s), (-1, 3.0, 4.0));
     }
 }
