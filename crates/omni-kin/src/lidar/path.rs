@@ -5,7 +5,9 @@
 //! scan `k` is left out and scan `k + 1` is matched against that last accepted scan (starting from its
 //! constant-velocity extrapolation), so one bad scan costs no drift. When the last accepted scan is older
 //! than [`MatchSettings::max_gap_s`] the chain cannot be trusted across the gap: the **segment ends**, and
-//! a new one starts at the next scan, again at the identity. Segments of one pose are dropped.
+//! a new one starts at the rejected scan, again at the identity; a segment whose first match is rejected
+//! starts again at once at the next scan (its first scan may be the bad one). Segments of one pose are
+//! dropped.
 //!
 //! **Keyframes.** Chaining every scan-to-scan motion adds up each match's noise (at 10 Hz and 0.2 m/s,
 //! 50 matches per metre: about 7 mm/m of drift with 1 cm range noise). So the chain is refined: the first
@@ -89,7 +91,8 @@ fn scan_to_scan(scans: &[Scan], s: &MatchSettings, out: &mut SensorPath) -> Vec<
             Some(why) => {
                 out.rejected += 1;
                 *out.rejected_why.entry(why.id()).or_default() += 1;
-                if dt_s > s.max_gap_s {
+                // A segment with nothing accepted yet restarts at once (its start may be the bad scan).
+                if dt_s > s.max_gap_s || chain.len() == 1 {
                     if chain.len() > 1 {
                         chains.push(std::mem::take(&mut chain));
                     }
@@ -235,6 +238,27 @@ mod tests {
         // 1.2 m of travel: a few mm of drift at most.
         assert!(e.dx_m.hypot(e.dy_m) < 0.006, "{e:?}");
         assert!(e.dtheta_rad.abs().to_degrees() < 0.2, "{e:?}");
+    }
+
+    #[test]
+    fn a_blank_scan_is_skipped_and_a_long_gap_ends_the_segment() {
+        let (mut scans, truth) = arc_scans("room", 60);
+        let blank = |s: &mut Scan| s.ranges_m.iter_mut().for_each(|r| *r = f32::INFINITY);
+        blank(&mut scans[10]);
+        let path = sensor_path(&scans, &MatchSettings::default()).unwrap();
+        assert_eq!((path.matched, path.rejected, path.segments.len()), (58, 1, 1));
+        assert_eq!(path.rejected_why.get("too_few_points"), Some(&1));
+        let seg = &path.segments[0];
+        assert_eq!(seg.len(), 59);
+        assert!(seg.iter().all(|p| (p.t_s - 1.0).abs() > 1e-9), "scan 10 (t = 1 s) is left out");
+        let e = seg[58].pose.error_to(&truth[0].inverse().compose(&truth[59]));
+        assert!(e.dx_m.hypot(e.dy_m) < 0.006, "{e:?}");
+        // Scans 10 to 24 blank: 1.5 s without a match, beyond max_gap_s = 1 s: two segments.
+        (11..25).for_each(|k| blank(&mut scans[k]));
+        let path = sensor_path(&scans, &MatchSettings::default()).unwrap();
+        assert_eq!(path.segments.len(), 2);
+        assert_eq!((path.segments[0].len(), path.segments[1][0].t_s), (10, 2.5));
+        assert_eq!(path.segments[1][0].pose, Pose2::IDENTITY);
     }
 
     #[test]
