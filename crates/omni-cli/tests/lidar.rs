@@ -51,6 +51,7 @@ fn chained_scan_path_of_simulated_runs_matches_the_true_sensor_path_within_milli
     let truth = FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated()));
     let runs = simulate_sampled(&config, &truth, "", 0.1).unwrap();
     let (mut worst_m_per_m, mut worst_rad_per_m, mut travelled) = (0.0f64, 0.0f64, 0.0);
+    let (mut worst_window_m, mut worst_window_rad) = (0.0f64, 0.0f64);
     for (i, s) in runs.iter().enumerate() {
         assert!(lidar::first_collision(&room, &s.base, lidar::CLEARANCE_M).is_none(), "{}", s.run.name());
         let scans = lidar::simulate_scans(&room, &s.base, &mount, &settings, config.seed, i as u64);
@@ -74,17 +75,31 @@ fn chained_scan_path_of_simulated_runs_matches_the_true_sensor_path_within_milli
         let sensor: Vec<StampedPose> =
             s.base.iter().map(|b| StampedPose { t_s: b.t_s, pose: b.pose.compose(&mount) }).collect();
         let (m_per_m, rad_per_m, length) = drift(&path.segments[0], &sensor);
+        // Relative motion over 1 s windows (10 scans), as a windowed relative reference compares it.
+        let seg = &path.segments[0];
+        for w in seg.windows(11) {
+            let at = |t: f64| sensor.iter().find(|p| (p.t_s - t).abs() < 1e-6).unwrap().pose;
+            let truth = at(w[0].t_s).inverse().compose(&at(w[10].t_s));
+            let e = w[0].pose.inverse().compose(&w[10].pose).error_to(&truth);
+            worst_window_m = worst_window_m.max(e.dx_m.hypot(e.dy_m));
+            worst_window_rad = worst_window_rad.max(e.dtheta_rad.abs());
+        }
         worst_m_per_m = worst_m_per_m.max(m_per_m);
         worst_rad_per_m = worst_rad_per_m.max(rad_per_m);
         travelled += length;
     }
     eprintln!(
-        "8 runs, {travelled:.2} m of sensor travel: worst end drift {:.2} mm/m, {:.4}°/m",
+        "8 runs, {travelled:.2} m of sensor travel: worst end drift {:.2} mm/m, {:.4}°/m; worst 1 s window {:.2} mm, \
+         {:.4}°",
         1e3 * worst_m_per_m,
-        worst_rad_per_m.to_degrees()
+        worst_rad_per_m.to_degrees(),
+        1e3 * worst_window_m,
+        worst_window_rad.to_degrees()
     );
     assert!(travelled > 8.0, "{travelled}");
     assert!(worst_m_per_m < 0.003, "worst drift {:.2} mm per m", 1e3 * worst_m_per_m);
+    assert!(worst_window_m < 0.005, "worst 1 s window {:.2} mm", 1e3 * worst_window_m);
+    assert!(worst_window_rad.to_degrees() < 0.1, "worst 1 s window {:.4}°", worst_window_rad.to_degrees());
     assert!(worst_rad_per_m.to_degrees() < 0.05, "worst heading drift {:.4}° per m", worst_rad_per_m.to_degrees());
 }
 
