@@ -25,6 +25,7 @@ pub mod model;
 pub mod odometry;
 pub mod plan;
 pub mod pose;
+pub mod reference;
 pub mod relative;
 pub mod robot;
 pub mod run;

@@ -339,6 +339,8 @@ pub fn train(
     let mut origin = crate::run::origin_of(runs);
     let (runs, design) = runs_from(runs, "runs")?;
     let (start, mut adapters, from_design) = start_model(py, model, robot.as_ref(), design, &mut origin)?;
+    // As `omnical train`: a relative reference's runs fit the sensor's mount with the base.
+    let start = omni_cli::api::train::with_sensor_mount(start, &origin);
     let made = effects.iter().map(|e| effect_from(e, start.model.n_wheels())).collect::<PyResult<Vec<_>>>()?;
     let (kinds, added): (Vec<_>, Vec<_>) = made.into_iter().unzip();
     adapters.extend(added.into_iter().flatten());
@@ -370,6 +372,9 @@ pub fn train(
     let c = errors.check(result)?.py()?;
     // A fit worse than its start on its own training runs is refused (force=True keeps it, with a warning).
     if let Some(w) = check_fit(&c, &plan, &runs, force).map_err(refused)? {
+        warn(py, &w)?;
+    }
+    if let Some(w) = omni_cli::api::train::mount_warning(&c) {
         warn(py, &w)?;
     }
     if observer.interrupted {

@@ -308,6 +308,10 @@ pub fn _dataset_from_state(
 /// forces its clock offset [s] (wheel time = ground-truth time + offset; default: estimated from the data,
 /// see ``Dataset.ground_truth_clocks``), ``gt_columns`` / ``gt_units`` name its CSV columns and units
 /// (``{"t": "stamp_ns", "x": "pos_x_mm"}``, ``{"time": "ns", "length": "mm", "angle": "deg"}``).
+/// ``gt_kind``: what the ground truth measures, ``"absolute"`` (motion capture, the default) or ``"relative"`` (a
+/// sensor's own motion, as lidar or visual odometry: the runs become windows of ``gt_window_s`` seconds,
+/// default 4, and ``train`` fits the sensor's mount with the wheels); ``gt_mount``: the measured point's pose
+/// in the base frame when known, ``(x_m, y_m, yaw_deg)`` (the ground truth is moved to the base by it).
 /// ``recorded_odometry``: keep the runs' recorded odometry (for ``export``'s MCAP bags).
 ///
 /// >>> import tempfile
@@ -318,7 +322,7 @@ pub fn _dataset_from_state(
 /// >>> len(ds), ds[0].name, ds.design.n_wheels
 /// (36, '00-r0', 3)
 #[pyfunction]
-#[pyo3(signature = (*paths, robot = None, joints = None, joints_topic = None, gt_topic = None, gt_parent_frame = None, gt_child_frame = None, gt = None, gt_time_offset = None, gt_columns = None, gt_units = None, split_s = None, skip_invalid = false, ticks_per_rev = None, max_file_mb = 1024, recorded_odometry = false))]
+#[pyo3(signature = (*paths, robot = None, joints = None, joints_topic = None, gt_topic = None, gt_parent_frame = None, gt_child_frame = None, gt = None, gt_time_offset = None, gt_columns = None, gt_units = None, gt_kind = None, gt_window_s = None, gt_mount = None, split_s = None, skip_invalid = false, ticks_per_rev = None, max_file_mb = 1024, recorded_odometry = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn load(
     py: Python<'_>,
@@ -333,6 +337,9 @@ pub fn load(
     gt_time_offset: Option<f64>,
     gt_columns: Option<std::collections::BTreeMap<String, String>>,
     gt_units: Option<std::collections::BTreeMap<String, String>>,
+    gt_kind: Option<&str>,
+    gt_window_s: Option<f64>,
+    gt_mount: Option<(f64, f64, f64)>,
     split_s: Option<f64>,
     skip_invalid: bool,
     ticks_per_rev: Option<f64>,
@@ -353,6 +360,13 @@ pub fn load(
         gt_time_offset_s: gt_time_offset,
         gt_columns: key_values(gt_columns),
         gt_units: key_values(gt_units),
+        gt_kind: gt_kind
+            .map(str::parse)
+            .transpose()
+            .map_err(|e| value_error(format!("gt_kind {e}")))?
+            .unwrap_or_default(),
+        gt_window_s,
+        gt_mount: gt_mount.map(|(x, y, yaw_deg)| omni_kin::Pose2::new(x, y, yaw_deg.to_radians())),
         split_s,
         skip_invalid,
         ticks_per_rev,
@@ -373,6 +387,8 @@ pub fn load(
         robot_kind: ds.robot_kind,
         robot_file: ds.robot_file,
         ground_truth_clocks: ds.ground_truth_clocks,
+        reference: ds.reference,
+        mount: ds.mount,
         ..Default::default()
     };
     Ok(PyDataset {
@@ -440,6 +456,8 @@ pub fn origin_of(obj: &Bound<'_, PyAny>) -> omni_cli::dataset::Dataset {
                 declared: o.declared.clone(),
                 robot_kind: o.robot_kind.clone(),
                 robot_file: o.robot_file.clone(),
+                reference: o.reference,
+                mount: o.mount,
                 ..Default::default()
             }
         }

@@ -3,6 +3,8 @@
 
 use crate::dataset::{self, Dataset, LoadOptions};
 use crate::robot_file;
+use anyhow::Context;
+use omni_kin::reference::ReferenceKind;
 use std::path::PathBuf;
 
 /// How runs are read: the robot description and the options that fill or override it (the command
@@ -30,6 +32,14 @@ pub struct DataOptions {
     pub gt_columns: Vec<String>,
     /// Units of the ground-truth CSV columns, `KEY=UNIT` each (checked when a file is read).
     pub gt_units: Vec<String>,
+    /// What the ground truth measures: a fixed world frame's pose (motion capture), or a sensor's own motion
+    /// (lidar or visual odometry), compared over windows with the sensor's mount fitted.
+    pub gt_kind: ReferenceKind,
+    /// The window of a relative reference (s); `None`: [`omni_kin::reference::DEFAULT_WINDOW_S`].
+    pub gt_window_s: Option<f64>,
+    /// The measured point's (the sensor's, the marker's) pose in the base frame, when known (a URDF, a tape
+    /// measure): the ground truth is moved to the base by it, and no fit adds a mount.
+    pub gt_mount: Option<omni_kin::Pose2>,
     /// Cut MCAP files into runs at standstills at least this long (s).
     pub split_s: Option<f64>,
     /// Skip runs that fail to load (listed) instead of stopping.
@@ -53,6 +63,9 @@ impl Default for DataOptions {
             gt_time_offset_s: None,
             gt_columns: Vec::new(),
             gt_units: Vec::new(),
+            gt_kind: ReferenceKind::Absolute,
+            gt_window_s: None,
+            gt_mount: None,
             split_s: None,
             skip_invalid: false,
             ticks_per_rev: None,
@@ -139,7 +152,9 @@ impl LoadRequest {
             ..Default::default()
         };
         robot_file::fill_mcap_options(&mut mcap, data.joints.is_none(), robot.as_ref().map(|r| &r.description));
-        let ground_truth = ground_truth_options(data, robot.as_ref())?;
+        let end_poses = end_pose_file(data)?;
+        mcap.wheels_only = end_poses.is_some();
+        let ground_truth = if end_poses.is_some() { None } else { ground_truth_options(data, robot.as_ref())? };
         if ground_truth.is_none() {
             mcap.truth_time_offset_s = data.gt_time_offset_s;
         }
@@ -163,12 +178,157 @@ impl LoadRequest {
                  topic of a recording (MCAP, rosbag2), and these runs have neither"
             );
         }
-        if let Some(r) = &robot {
+        if let Some(file) = &end_poses {
+            set_end_poses(&mut ds, file)?;
+        } else if let Some(r) = &robot {
             check_wheel_scale(&ds, r)?;
         }
         ds.robot_file = robot;
+        move_to_base(&mut ds, data)?;
+        cut_into_windows(&mut ds, data)?;
         Ok(ds)
     }
+}
+
+/// The measured end-pose table of `--gt-kind end-pose` (its `--gt`), checked against the other options.
+fn end_pose_file(data: &DataOptions) -> anyhow::Result<Option<PathBuf>> {
+    if data.gt_kind != ReferenceKind::EndPose {
+        return Ok(None);
+    }
+    let Some(file) = &data.gt else {
+        anyhow::bail!(
+            "--gt-kind end-pose needs --gt FILE: the table of measured end poses (a header run,x_m,y_m,yaw_deg and one \
+             row per recording; docs/formats.md, \"Measured end poses\"; `omnical plan --umbmark` writes one to fill in)"
+        );
+    };
+    for (set, flag) in [(data.split_s.is_some(), "--split"), (data.gt_topic.is_some(), "--gt-topic")] {
+        anyhow::ensure!(
+            !set,
+            "{flag} does not go with --gt-kind end-pose: each recording is one run from its start mark to where it \
+             stopped, measured by hand"
+        );
+    }
+    Ok(Some(file.clone()))
+}
+
+/// Each run's placeholder end replaced by its measured end pose from `file`; a row naming no run read, or a
+/// run without a row, is an error naming both.
+fn set_end_poses(ds: &mut Dataset, file: &std::path::Path) -> anyhow::Result<()> {
+    let measured = dataset::end_poses::read(file)?;
+    let names: Vec<&str> = ds.runs.iter().map(omni_kin::Run::name).collect();
+    if let Some(e) = measured.iter().find(|e| !names.contains(&e.run.as_str())) {
+        anyhow::bail!(
+            "{}: line {}: run {:?} is not among the recordings read ({}): name each row after its recording's file \
+             name without extension",
+            file.display(),
+            e.line,
+            e.run,
+            names.join(", ")
+        );
+    }
+    let runs = std::mem::take(&mut ds.runs);
+    ds.runs = runs
+        .into_iter()
+        .map(|run| {
+            let Some(e) = measured.iter().find(|e| e.run == run.name()) else {
+                anyhow::bail!(
+                    "run {} has no measured end pose in {}: add its row (run,x_m,y_m,yaw_deg), or leave the recording out",
+                    run.name(),
+                    file.display()
+                );
+            };
+            let mut d = run.into_data();
+            d.truth[1].pose = e.pose;
+            Ok(omni_kin::Run::new(d)?)
+        })
+        .collect::<anyhow::Result<_>>()?;
+    ds.notes.push(format!(
+        "measured end poses: {} runs from {}, each from rest at the origin at its first wheel sample to its measured \
+         pose at its last (the end-pose cost)",
+        ds.runs.len(),
+        file.display()
+    ));
+    ds.reference = ReferenceKind::EndPose;
+    Ok(())
+}
+
+/// The ground truth of every run moved from the measured point to the base by `--gt-mount`, with a note.
+fn move_to_base(ds: &mut Dataset, data: &DataOptions) -> anyhow::Result<()> {
+    let Some(mount) = data.gt_mount else { return Ok(()) };
+    let to_base = mount.inverse();
+    let runs = std::mem::take(&mut ds.runs);
+    ds.runs = runs
+        .into_iter()
+        .map(|run| {
+            let mut d = run.into_data();
+            for p in &mut d.truth {
+                p.pose = p.pose.compose(&to_base);
+            }
+            omni_kin::Run::new(d)
+        })
+        .collect::<Result<_, _>>()?;
+    ds.notes.push(format!(
+        "ground truth moved to the base from the measured point at x {:.4} m, y {:.4} m, yaw {:.3}° (--gt-mount)",
+        mount.x_m,
+        mount.y_m,
+        mount.theta_rad.to_degrees()
+    ));
+    ds.mount = Some(mount);
+    Ok(())
+}
+
+/// A relative reference's runs replaced by their windows ([`omni_kin::reference::windows`]), with a note;
+/// `--gt-window` without `--gt-kind relative` is an error (it would change nothing).
+fn cut_into_windows(ds: &mut Dataset, data: &DataOptions) -> anyhow::Result<()> {
+    use omni_kin::reference::{DEFAULT_WINDOW_S, windows};
+    if data.gt_kind != ReferenceKind::Relative {
+        if let Some(w) = data.gt_window_s {
+            anyhow::bail!(
+                "--gt-window {w} changes nothing here: it is the window of a relative reference (--gt-kind relative: \
+                 the ground truth is a sensor's own motion, as lidar or visual odometry)"
+            );
+        }
+        return Ok(());
+    }
+    let window_s = data.gt_window_s.unwrap_or(DEFAULT_WINDOW_S);
+    let (mut runs, mut still, mut gaps) = (Vec::new(), 0, 0);
+    let mut renamed: Vec<(String, Vec<String>)> = Vec::new();
+    for run in &ds.runs {
+        let w = windows(run, window_s).with_context(|| format!("run {}", run.name()))?;
+        still += w.still;
+        gaps += w.gaps;
+        renamed.push((run.name().to_string(), w.runs.iter().map(|r| r.name().to_string()).collect()));
+        runs.extend(w.runs);
+    }
+    anyhow::ensure!(
+        !runs.is_empty(),
+        "the relative reference of these {} runs never moves in a window of {window_s} s: nothing to compare the \
+         wheels with (drive the robot, or check --gt-topic / --gt names the sensor's path)",
+        ds.runs.len()
+    );
+    for d in &mut ds.declared {
+        d.runs = d
+            .runs
+            .iter()
+            .flat_map(|n| renamed.iter().filter(move |(r, _)| r == n).flat_map(|(_, w)| w.clone()))
+            .collect();
+    }
+    for (run, names) in &renamed {
+        if let Some(origin) = ds.time_origins_s.remove(run) {
+            ds.time_origins_s.extend(names.iter().map(|n| (n.clone(), origin)));
+        }
+    }
+    ds.notes.push(format!(
+        "relative reference: {} runs cut into {} windows of at most {window_s} s ({still} where the reference stands \
+         still dropped{}){}",
+        ds.runs.len(),
+        runs.len(),
+        if gaps > 0 { format!(", {gaps} gaps in the reference") } else { String::new() },
+        if ds.mount.is_none() { "; the sensor's mount is fitted with the wheels" } else { "" },
+    ));
+    ds.runs = runs;
+    ds.reference = ReferenceKind::Relative;
+    Ok(())
 }
 
 /// Ground truth must have gone this far (m) or turned this much (rad) to judge the wheels' scale.

@@ -133,6 +133,7 @@ pub fn prepare(a: &TrainRequest) -> anyhow::Result<Prepared> {
             FittedModel::nominal(named_columns(design::model(kind, &ds)?, a.data.joints.as_deref())?)
         }
     };
+    let start = with_sensor_mount(start, &ds);
     let effects = a
         .effects
         .iter()
@@ -144,6 +145,52 @@ pub fn prepare(a: &TrainRequest) -> anyhow::Result<Prepared> {
     let priors = if a.start.is_none() { robot_priors(&start, &ds) } else { Vec::new() };
     plan.half_widths = priors.iter().map(|p| (p.name.clone(), PRIOR_BOX_SIGMAS * p.std)).collect();
     Ok(Prepared { ds, start, effects, plan, priors })
+}
+
+/// `start` with the sensor's mount (`sensor_offset_yaw`, at its null value) when `ds`'s reference is a
+/// sensor's own motion and `start` has no mount yet: the mount is part of what such a reference measures,
+/// so it is fitted with the base from the first stage on. Not when the mount was given (`--gt-mount`).
+pub fn with_sensor_mount(start: FittedModel, ds: &Dataset) -> FittedModel {
+    use omni_kin::effect::SensorOffset;
+    let has_mount = start.model.effects.iter().any(|e| matches!(e, EffectKind::SensorOffset(_)));
+    if ds.reference != omni_kin::reference::ReferenceKind::Relative || ds.mount.is_some() || has_mount {
+        return start;
+    }
+    start.with_effect(EffectKind::SensorOffset(SensorOffset { with_yaw: true }))
+}
+
+/// Share of a weak direction a mount parameter must carry for the mount to be called undetermined.
+const MOUNT_SHARE: f64 = 0.2;
+
+/// A warning when the fit could not tell the sensor's mount (fitted for a relative reference) from the base:
+/// some unconstrained direction moves it. A base model as free as a matrix absorbs any mount (the sensor
+/// moves with the base, so its twist is a fixed linear map of the base's), whatever the motions.
+pub fn mount_warning(c: &Calibration) -> Option<String> {
+    let mount = |name: &str| name.starts_with("sensor_offset");
+    let weak: Vec<&str> = c
+        .identifiability
+        .weak
+        .iter()
+        .flat_map(|w| w.loadings.iter().filter(|(n, s)| mount(n) && s.abs() >= MOUNT_SHARE).map(|(n, _)| n.as_str()))
+        .collect();
+    if weak.is_empty() {
+        return None;
+    }
+    let kind = c.fitted.model.kinematics.kind();
+    let why = match kind {
+        KinematicsKind::Ik | KinematicsKind::Geometry => format!(
+            "the {} model absorbs any mount: the sensor moves with the base, so its twist is a fixed linear map of the \
+             base's, and a free matrix (or geometry) fits the sensor's own odometry exactly, whatever the motions",
+            kind.id()
+        ),
+        _ => "the runs do not determine it: add runs that turn on the spot and drive straight".to_string(),
+    };
+    Some(format!(
+        "the sensor's mount is not determined ({}): {why}. Give the mount with --gt-mount X,Y,YAW_DEG (from the \
+         robot's URDF, its /tf_static or a tape measure), or fit a base model with fewer parameters than its \
+         matrix (a diff drive's radii and separation)",
+        weak.into_iter().collect::<std::collections::BTreeSet<_>>().into_iter().collect::<Vec<_>>().join(", ")
+    ))
 }
 
 /// Writes the model file of a fit with its summary `s` as the `[fit]` table, atomically. Everything but the
@@ -179,6 +226,7 @@ pub fn train_quietly(a: &TrainRequest) -> anyhow::Result<Trained> {
     let mut warnings: Vec<String> = check_step(&plan, &ds.runs, a.force)?.into_iter().collect();
     let c = calibrate_with_effects(&start, &effects, &ds.runs, &plan, &mut omni_ga::observe::NoopObserver)?;
     warnings.extend(check_fit(&c, &plan, &ds.runs, a.force)?);
+    warnings.extend(mount_warning(&c));
     let mut s = summary(&c, a.preset.id(), a.seed, ds.runs.len())?;
     if let Some(d) = designs_figure(&c, &ds, &plan, a.start.is_none())? {
         s["designs"] = d.to_json();

@@ -110,6 +110,8 @@ fn robot_row(flag: Option<&str>, robot: Option<&RobotFile>, project: Option<&Pro
 }
 
 /// The rows `omnical config` shows.
+///
+/// long: a flat table, one row per setting in the order `omnical config` prints them, each naming its layers.
 pub fn rows(a: &Args, threads: Option<usize>, project: Option<&ProjectFile>) -> anyhow::Result<Vec<Row>> {
     let d = &a.data;
     let from_project = |key: &str| project.and_then(|p| p.get(SHOWN_FOR, key)).map(|s| s.values.join(", "));
@@ -174,6 +176,9 @@ pub fn rows(a: &Args, threads: Option<usize>, project: Option<&ProjectFile>) -> 
             Some(("ground_truth.time_offset_s", gt.and_then(|g| g.time_offset_s).map(|s| format!("{s} s")))),
             "estimated from the data",
         ),
+    ];
+    rows.extend(reference_rows(&layers, d));
+    rows.extend([
         layers.row("split", d.split.map(|s| format!("{s} s")), None, "none: one file is one run"),
         layers.row("preset", a.preset.map(|p| p.id().to_string()), None, Preset::default().id()),
         layers.row("seed", a.seed.map(|s| s.to_string()), None, "0 (train), 7 (simulate)"),
@@ -184,7 +189,7 @@ pub fn rows(a: &Args, threads: Option<usize>, project: Option<&ProjectFile>) -> 
             None,
             format!("all cores ({})", rayon::current_num_threads()),
         ),
-    ];
+    ]);
     // What the project file sets for one command only.
     for s in project.iter().flat_map(|p| p.settings.iter().filter(|s| s.command.is_some()).map(move |s| (p, s))) {
         let (p, s) = s;
@@ -192,6 +197,20 @@ pub fn rows(a: &Args, threads: Option<usize>, project: Option<&ProjectFile>) -> 
         rows.push(Row { key, value: s.values.join(", "), source: p.at(s) });
     }
     Ok(rows)
+}
+
+/// The rows of what the ground truth measures: its kind, a relative reference's window, the mount.
+fn reference_rows(layers: &Layers<'_>, d: &super::DataArgs) -> [Row; 3] {
+    [
+        layers.row("gt_kind", d.gt_kind.map(|k| k.id().to_string()), None, "absolute"),
+        layers.row("gt_window", d.gt_window.map(|s| format!("{s} s")), None, "4 s (relative references)"),
+        layers.row(
+            "gt_mount",
+            d.gt_mount.map(|m| format!("{} m, {} m, {}°", m.x_m, m.y_m, m.theta_rad.to_degrees())),
+            None,
+            "fitted (relative references)",
+        ),
+    ]
 }
 
 /// Runs `omnical config`: the rows as a table on stdout.

@@ -17,6 +17,7 @@ pub mod train;
 
 use crate::api::load::{DataOptions, LoadRequest};
 use crate::dataset;
+use omni_kin::reference::ReferenceKind;
 use std::path::PathBuf;
 
 /// Arguments of `omnical fleet`, which the Python wheel's console command runs (omnical.fleet, on Dask):
@@ -146,6 +147,19 @@ pub struct DataArgs {
     /// Units of the `--gt` CSV columns, e.g. `time=ns,length=mm,angle=deg` (default s, m, rad).
     #[arg(long, value_delimiter = ',', value_name = "KEY=UNIT")]
     pub gt_units: Vec<String>,
+    /// What the ground truth measures: `absolute`, the pose of a point on the robot in a fixed world frame
+    /// (motion capture); `relative`, a sensor's own motion (lidar or visual odometry) at an unknown mount,
+    /// compared over windows (`--gt-window`), the mount fitted with the wheels. Default absolute.
+    #[arg(long, value_name = "KIND", value_parser = crate::cli::choice::<ReferenceKind>())]
+    pub gt_kind: Option<ReferenceKind>,
+    /// The window of a relative reference (s): the model's motion is compared with the sensor's over
+    /// windows this long, so that the reference's drift stays small. Default 4.
+    #[arg(long, value_name = "SECONDS")]
+    pub gt_window: Option<f64>,
+    /// The measured point's pose in the base frame, when known (from the robot's URDF or a tape measure):
+    /// X,Y in metres, YAW in degrees. The ground truth is moved to the base by it, and no mount is fitted.
+    #[arg(long, value_name = "X,Y,YAW_DEG", value_parser = parse_mount, allow_hyphen_values = true)]
+    pub gt_mount: Option<omni_kin::Pose2>,
     /// Cut MCAP files into runs where the robot stands still at least this long (s).
     #[arg(long)]
     pub split: Option<f64>,
@@ -158,6 +172,18 @@ pub struct DataArgs {
     /// Refuse input files (CSV, MCAP) larger than this (MiB); each is read into memory whole.
     #[arg(long, value_name = "MIB", default_value_t = dataset::DEFAULT_MAX_FILE_BYTES >> 20)]
     pub max_file_mb: u64,
+}
+
+/// `X,Y,YAW_DEG` (m, m, degrees) as a pose.
+fn parse_mount(s: &str) -> Result<omni_kin::Pose2, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>().map_err(|_| format!("{x:?} is not a number")))
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [x, y, yaw] if v.iter().all(|v| v.is_finite()) => Ok(omni_kin::Pose2::new(x, y, yaw.to_radians())),
+        _ => Err(format!("expected X,Y,YAW_DEG (metres, metres, degrees), got {} values", v.len())),
+    }
 }
 
 impl DataArgs {
@@ -174,6 +200,9 @@ impl DataArgs {
             gt_time_offset_s: self.gt_time_offset,
             gt_columns: self.gt_columns.clone(),
             gt_units: self.gt_units.clone(),
+            gt_kind: self.gt_kind.unwrap_or_default(),
+            gt_window_s: self.gt_window,
+            gt_mount: self.gt_mount,
             split_s: self.split,
             skip_invalid: self.skip_invalid,
             ticks_per_rev: self.ticks_per_rev,

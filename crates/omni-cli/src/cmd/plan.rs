@@ -50,7 +50,13 @@ pub struct Args {
     /// Ground-truth heading noise (rad).
     #[arg(long, default_value_t = PlanRequest::default().truth_noise_rad, value_name = "RAD")]
     pub truth_noise_rad: f64,
-    /// Write the planned commands as CSV here (v_m_s, alpha_deg, omega_rad_s, repetitions).
+    /// Plan runs for a tape measure instead (no motion capture): UMBmark's square paths of SIDE metres,
+    /// 5 clockwise and 5 counter-clockwise, and 2 straight runs of SIDE metres for the wheels' scale; prints
+    /// the protocol, and with --out writes the end-pose table to fill in (`train --gt-kind end-pose`).
+    #[arg(long, value_name = "SIDE_M")]
+    pub umbmark: Option<f64>,
+    /// Write the planned commands as CSV here (v_m_s, alpha_deg, omega_rad_s, repetitions); with
+    /// --umbmark, the end-pose table to fill in.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Output options.
@@ -84,6 +90,9 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     if let Some(out) = &a.out {
         crate::out_path::check_file(out, "--out")?;
     }
+    if let Some(side_m) = a.umbmark {
+        return umbmark(side_m, a);
+    }
     let robot = plan_robot(a)?;
     let mut model = FittedModel::nominal(Model::design(a.model, Some(&robot))?);
     for id in &a.effects {
@@ -108,6 +117,68 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     print_plan(&plan, flower.as_ref(), req, benchmark_name(model.model.n_wheels()));
     if let Some(out) = &a.out {
         println!("plan written to {}", out.display());
+    }
+    Ok(())
+}
+
+/// UMBmark's runs per direction (Borenstein and Feng, 1996).
+const UMBMARK_RUNS: usize = 5;
+/// Straight runs for the wheels' scale, which closed squares leave undetermined.
+const STRAIGHT_RUNS: usize = 2;
+
+/// The runs of `plan --umbmark`: `umbmark-cw-1` … `umbmark-ccw-5`, `umbmark-straight-1`, ….
+fn umbmark_runs() -> Vec<String> {
+    let square = |dir: &'static str| (1..=UMBMARK_RUNS).map(move |k| format!("umbmark-{dir}-{k}"));
+    square("cw").chain(square("ccw")).chain((1..=STRAIGHT_RUNS).map(|k| format!("umbmark-straight-{k}"))).collect()
+}
+
+/// `omnical plan --umbmark SIDE_M`: the protocol in words, the end-pose table to fill in with `--out`.
+fn umbmark(side_m: f64, a: &Args) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        side_m.is_finite() && (0.5..=50.0).contains(&side_m),
+        "--umbmark {side_m}: the side of the square must be between 0.5 and 50 m (UMBmark uses 4 m; take what the \
+         floor allows, the longer the better)"
+    );
+    let runs = umbmark_runs();
+    let table: String = std::iter::once("run,x_mm,y_mm,yaw_deg".to_string())
+        .chain(runs.iter().map(|r| format!("{r},,,")))
+        .map(|l| l + "\n")
+        .collect();
+    if let Some(out) = &a.out {
+        atomic::write_atomic(out, table.as_bytes()).with_context(|| format!("writing {}", out.display()))?;
+    }
+    if a.output.json {
+        let out = a.out.as_ref().map(|p| p.display().to_string());
+        return super::print_json("plan", serde_json::json!({"umbmark": {"side_m": side_m, "runs": runs}, "out": out}));
+    }
+    let n_square = 2 * UMBMARK_RUNS;
+    println!(
+        "UMBmark for a tape measure: {} runs, {n_square} squares of {side_m} m sides ({UMBMARK_RUNS} clockwise, \
+         {UMBMARK_RUNS} counter-clockwise) and {STRAIGHT_RUNS} straight runs of {side_m} m",
+        runs.len()
+    );
+    println!("  1. Mark the start on the floor: the robot's centre, and its heading by a second mark along its side.");
+    println!(
+        "  2. Record each run as its own recording named after it ({} … {}): start at rest on the mark; for a \
+         square drive {side_m} m straight and turn 90° on the spot, four times (right for cw, left for ccw); for a \
+         straight run drive {side_m} m straight; stop.",
+        runs[0],
+        runs[runs.len() - 1]
+    );
+    println!(
+        "  3. Measure where it stopped, in the start's frame: x along the start heading and y to its left (mm), and \
+         how much its heading turned (degrees, counter-clockwise positive)."
+    );
+    println!(
+        "  4. Fill the table{} and train: omnical train umbmark-*.mcap --gt-kind end-pose --gt TABLE",
+        a.out.as_ref().map_or_else(String::new, |p| format!(" ({})", p.display()))
+    );
+    println!(
+        "The squares' end poses determine the radius ratio and the wheel separation (UMBmark's type A and B errors); \
+         a closed square hides the wheels' common scale, which the straight runs give."
+    );
+    if let Some(out) = &a.out {
+        println!("table written to {}", out.display());
     }
     Ok(())
 }

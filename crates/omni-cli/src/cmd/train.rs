@@ -142,6 +142,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     if let Some(w) = check_fit(&c, &plan, &ds.runs, a.force)? {
         tracing::warn!("{w}");
     }
+    let mount = crate::api::train::mount_warning(&c);
     let interrupted = interrupt::requested();
     let mut s = summary(&c, preset_name, a.seed, ds.runs.len())?;
     let designs = designs_figure(&c, &ds, &plan, a.start.is_none())?;
@@ -153,6 +154,9 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     }
     if interrupted {
         s["interrupted"] = json!(true);
+    }
+    if let (Some(w), Some(list)) = (&mount, s["warnings"].as_array_mut()) {
+        list.push(json!(w));
     }
     if let Some(out) = &a.out {
         write_model(&c, &s, out)?;
@@ -178,6 +182,9 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
             let what = if interrupted { "best-so-far model" } else { "model" };
             println!("{what} written to {}", out.display());
         }
+    }
+    if let Some(w) = &mount {
+        tracing::warn!("{w}");
     }
     if a.out.is_none() {
         crate::note!("note: the fitted model was not written (no --out FILE)");

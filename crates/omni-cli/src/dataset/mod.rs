@@ -4,6 +4,7 @@
 //! Every error names the file and, where it applies, the line, topic, message, run and field.
 
 pub mod csv;
+pub mod end_poses;
 pub mod ground_truth;
 pub mod mcap;
 pub mod optiodom;
@@ -38,6 +39,12 @@ pub struct Dataset {
     /// The Unix second each recording's run times count from, by run name (ROS recordings: exports write
     /// absolute stamps with it, so they line up with the recording).
     pub time_origins_s: std::collections::BTreeMap<String, i64>,
+    /// What the ground truth measures: a relative reference's runs are its windows
+    /// ([`omni_kin::reference::windows`]), and a fit adds the sensor's mount.
+    pub reference: omni_kin::reference::ReferenceKind,
+    /// The measured point's pose in the base frame, when given (`--gt-mount`): the ground truth was moved
+    /// to the base by it, and no fit adds a mount.
+    pub mount: Option<omni_kin::Pose2>,
 }
 
 /// The design one input declares (an OptiOdom set's metadata), with the runs read from it.
@@ -497,6 +504,13 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
     let truth = |p: &Path, folder: bool| -> Result<Option<ground_truth::ExternalTruth>, DatasetError> {
         opts.ground_truth.as_ref().map(|g| ground_truth::read_for(g, p, &recording_name(p, folder))).transpose()
     };
+    if opts.mcap.wheels_only && matches!(input, Input::Csv(_) | Input::OptiOdom(_)) {
+        return Err(DatasetError::file(
+            input.path(),
+            "measured end poses (--gt-kind end-pose) go with ROS recordings (.mcap, .db3, rosbag2 folders, .bag); \
+             this input carries its own ground truth",
+        ));
+    }
     if opts.ground_truth.is_some() && matches!(input, Input::Csv(_) | Input::OptiOdom(_)) {
         return Err(DatasetError::file(
             input.path(),

@@ -119,6 +119,10 @@ pub struct McapOptions {
     pub truth_time_offset_s: Option<f64>,
     /// The units of the wheel joints' values (`[wheel_data]` in robot.toml). Default rad and rad/s.
     pub wheel_data: omni_kin::robot::WheelData,
+    /// Read the wheels only: each run's ground truth is a placeholder, the start at rest at the origin at the
+    /// first wheel sample and the same pose at the last, for measured end poses to replace
+    /// (`--gt-kind end-pose`). Default false.
+    pub wheels_only: bool,
 }
 
 impl Default for McapOptions {
@@ -131,6 +135,7 @@ impl Default for McapOptions {
             truth_child_frame: None,
             command_topic: None,
             split: None,
+            wheels_only: false,
             skip_invalid: false,
             recorded_odometry: true,
             truth_time_offset_s: None,

@@ -966,6 +966,7 @@ pub(crate) fn runs(
     bag.check(j)?;
     let truth_src = match external {
         Some(_) => None,
+        None if opts.wheels_only => None,
         None => Some(bag.truth(opts)?),
     };
     let truth_ch = truth_src.map(|t| match t {
@@ -1026,6 +1027,11 @@ pub(crate) fn runs(
             external_file(&ext, stem, origin_s, &t_s, &wheels.rad_s, n_wheels)?
         }
         (_, _, Some(ext)) => external_file(ext, stem, origin_s, &t_s, &wheels.rad_s, n_wheels)?,
+        _ if opts.wheels_only => {
+            let at = |t_s: f64| StampedPose { t_s, pose: omni_kin::Pose2::IDENTITY };
+            let placeholder = vec![at(t_s[0]), at(t_s[t_s.len() - 1])];
+            (placeholder, "measured at the end".to_string(), "the measured end pose".to_string(), None)
+        }
         _ => unreachable!("the ground truth comes from a topic or a file"),
     };
     let (w0, w1) = (t_s[0], t_s[t_s.len() - 1]);
