@@ -581,7 +581,7 @@ fn simulate_motion(
     let base = base_period_s.map_or_else(Vec::new, |p| {
         (0..)
             .map(|k| k as f64 * p)
-            .take_while(|&t| t <= total)
+            .take_while(|&t| t <= total + 1e-9 * p)
             .map(|t| StampedPose { t_s: t, pose: body_at(t) })
             .collect()
     });

@@ -9,7 +9,7 @@
 //! `max_correspondence_m` are dropped), giving residuals `e = n · (R(θ) p + t − c)`. Each iteration weighs
 //! the residuals robustly — those beyond `trim_sigmas` robust standard deviations (1.4826 × the median
 //! absolute residual, at least `sigma_floor_m`) are trimmed — and takes the Gauss–Newton step
-//! `H δ = −g`, `H = Σ J Jᵀ`, `J = [n_x, n_y, n · R'(θ) p]`, until the step is below 10 µm and 10 µrad (or the steps cycle between two sets of pairs: then half-way).
+//! `H δ = −g`, `H = Σ J Jᵀ`, `J = [n_x, n_y, n · R'(θ) p]`, until the step is below 10 µm and 10 µrad (or the estimates cycle, pairs flipping between lines: then the cycle's mean).
 //!
 //! Quality of a match ([`MatchQuality`]): the inliers' residual RMS, the inlier share of the current
 //! scan's returns, and the condition number of the normal matrix `H` with the angle measured in metres at
@@ -48,6 +48,11 @@ pub struct MatchSettings {
     pub max_condition: f64,
     /// A larger inlier residual RMS rejects the match. m. Default 0.05.
     pub max_rms_m: f64,
+    /// A scan this far from the keyframe (by the scan-to-scan chain) becomes the next keyframe
+    /// ([`super::path`]). m. Default 0.3.
+    pub keyframe_distance_m: f64,
+    /// A scan turned this much from the keyframe becomes the next keyframe. rad. Default 0.26 (15°).
+    pub keyframe_angle_rad: f64,
     /// A rejected interval is skipped (the next scan is matched against the last accepted one) until the
     /// last accepted scan is this old; then the path's segment ends. s. Default 1.
     pub max_gap_s: f64,
@@ -67,6 +72,8 @@ impl Default for MatchSettings {
             min_inlier_share: 0.5,
             max_condition: 100.0,
             max_rms_m: 0.05,
+            keyframe_distance_m: 0.3,
+            keyframe_angle_rad: 0.26,
             max_gap_s: 1.0,
         }
     }
@@ -274,6 +281,18 @@ fn build_system(
     sys
 }
 
+/// Whether two estimates are the same (to 1 nm and 1 nrad): a cycle closed.
+fn same_estimate(a: &Pose2, b: &Pose2) -> bool {
+    (a.x_m - b.x_m).abs() < 1e-9 && (a.y_m - b.y_m).abs() < 1e-9 && (a.theta_rad - b.theta_rad).abs() < 1e-9
+}
+
+/// The component-wise mean of nearby estimates.
+fn mean_pose(poses: &[Pose2]) -> Pose2 {
+    let n = poses.len() as f64;
+    let sum = poses.iter().fold([0.0; 3], |a, p| [a[0] + p.x_m, a[1] + p.y_m, a[2] + p.theta_rad]);
+    Pose2::new(sum[0] / n, sum[1] / n, sum[2] / n)
+}
+
 /// The condition number of `Σ J Jᵀ` with the angle column divided by `length_m`.
 fn condition(rows: &[[f64; 3]], length_m: f64) -> f64 {
     let mut h = Matrix3::zeros();
@@ -298,21 +317,24 @@ pub fn match_scans(reference: &Reference, current: &Scan, guess: Pose2, s: &Matc
     };
     let mut converged = false;
     let mut sys = build_system(reference, tree, &points, &t, s);
-    let mut previous = Vector3::zeros();
+    // Every estimate so far: pairs flipping between two lines can make the steps cycle (δ₁, δ₂, …, back to
+    // an estimate seen before); the fixed point then lies at the cycle's mean.
+    let mut visited = vec![t];
     while quality.iterations < s.max_iterations && sys.inliers >= 3 {
         let Some(step) = sys.h.cholesky().map(|c| c.solve(&(-sys.g))) else { break };
         quality.iterations += 1;
-        // A pair flipping between two lines makes the steps cycle (δ, −δ, δ, …): the fixed point lies
-        // half-way.
-        let cycling = (step + previous).norm() < 1e-3 * step.norm();
-        let step = if cycling { 0.5 * step } else { step };
         t = Pose2::new(t.x_m + step[0], t.y_m + step[1], t.theta_rad + step[2]);
-        sys = build_system(reference, tree, &points, &t, s);
-        if cycling || (step[0].hypot(step[1]) < CONVERGED_M && step[2].abs() < CONVERGED_RAD) {
+        if step[0].hypot(step[1]) < CONVERGED_M && step[2].abs() < CONVERGED_RAD {
             converged = true;
+        } else if let Some(j) = visited.iter().rposition(|v| same_estimate(v, &t)) {
+            t = mean_pose(&visited[j..]);
+            converged = true;
+        }
+        sys = build_system(reference, tree, &points, &t, s);
+        if converged {
             break;
         }
-        previous = step;
+        visited.push(t);
     }
     quality.inliers = sys.inliers;
     quality.inlier_share = if points.is_empty() { 0.0 } else { sys.inliers as f64 / points.len() as f64 };
@@ -361,6 +383,12 @@ mod tests {
             let m = matched("room", a, b, Pose2::IDENTITY);
             let truth = a.inverse().compose(&b);
             let e = m.reference_from_current.error_to(&truth);
+            eprintln!(
+                "increment ({dx}, {dy}, {dth_deg}°): error {:.3} mm, {:.4}°, condition {:.2}",
+                1e3 * e.dx_m.hypot(e.dy_m),
+                e.dtheta_rad.to_degrees(),
+                m.quality.condition
+            );
             assert!(m.rejected.is_none(), "{m:?}");
             assert!(e.dx_m.hypot(e.dy_m) < 1e-3, "position error {e:?} for {truth:?}");
             assert!(e.dtheta_rad.abs().to_degrees() < 0.05, "heading error {e:?}");
@@ -374,6 +402,7 @@ mod tests {
         let a = Pose2::new(0.0, 0.3, 0.0);
         let b = a.compose(&Pose2::new(0.02, 0.0, 0.01));
         let m = matched("corridor", a, b, Pose2::IDENTITY);
+        eprintln!("corridor: condition {:.0}", m.quality.condition);
         assert!(matches!(m.rejected, Some(Rejection::IllConditioned { .. })), "{m:?}");
         assert!(m.quality.condition > 100.0, "{:?}", m.quality);
     }

@@ -95,6 +95,19 @@ pub struct ScanRead {
     pub base_from_sensor: Option<Pose2>,
 }
 
+impl ScanRead {
+    /// Puts the scans' times on another time base: seconds since `origin_s` (e.g. the runs'
+    /// [`super::McapRead::origin_s`], so scans and wheel samples share one clock). Exact: only whole seconds
+    /// move.
+    pub fn rebase(&mut self, origin_s: i64) {
+        let shift_s = (self.origin_s - origin_s) as f64;
+        for s in &mut self.scans {
+            s.t_s += shift_s;
+        }
+        self.origin_s = origin_s;
+    }
+}
+
 /// One topic as the storage declares it.
 struct Declared {
     topic: String,
@@ -273,7 +286,7 @@ mod tests {
     fn laser_scan_round_trips_with_inf_and_nan() {
         let m = LaserScan {
             header: Header { stamp: Time { sec: 5, nanosec: 7 }, frame_id: RosString("laser".into()) },
-            angle_min: -3.14,
+            angle_min: -3.0,
             angle_max: 3.1,
             angle_increment: 0.0087,
             time_increment: 0.0,
@@ -288,5 +301,51 @@ mod tests {
         assert_eq!(back.ranges[..2], m.ranges[..2]);
         assert!(back.ranges[2].is_nan());
         assert_eq!((back.angle_increment, back.range_max), (0.0087, 12.0));
+    }
+
+    #[test]
+    fn a_bad_scan_names_the_message_and_the_field() {
+        let path = Path::new("rec.mcap");
+        let scan = |sec: i32, inc: f32| LaserScan {
+            header: Header { stamp: Time { sec, nanosec: 0 }, frame_id: RosString("laser".into()) },
+            angle_min: -3.0,
+            angle_max: 3.0,
+            angle_increment: inc,
+            time_increment: 0.0,
+            scan_time: 0.1,
+            range_min: 0.05,
+            range_max: 12.0,
+            ranges: vec![1.0; 4],
+            intensities: vec![],
+        };
+        let run = |msgs: &[LaserScan]| {
+            let mut sink = ScanSink::new("/scan", false);
+            let i = sink.channel("/scan", NAME, "ros2msg", "cdr");
+            for m in msgs {
+                sink.message(i, &encode(m).unwrap(), 0);
+            }
+            sink.finish(path)
+        };
+        let err = run(&[scan(1, 0.1), scan(2, 0.0)]).unwrap_err().to_string();
+        assert_eq!(
+            err,
+            "rec.mcap: topic \"/scan\", message 1: field angle_increment is 0: the beams have no directions"
+        );
+        let err = run(&[scan(1, 0.1), scan(2, f32::NAN)]).unwrap_err().to_string();
+        assert_eq!(err, "rec.mcap: topic \"/scan\", message 1: field angle_increment is NaN");
+        let err = run(&[scan(2, 0.1), scan(1, 0.1)]).unwrap_err().to_string();
+        assert_eq!(
+            err,
+            "rec.mcap: topic \"/scan\", message 1: field header.stamp 1.000000000 is not after the previous scan's \
+             2.000000000 (message 0)"
+        );
+        assert_eq!(
+            run(&[]).unwrap_err().to_string(),
+            "rec.mcap: topic \"/scan\": holds no scans: record the lidar while the robot moves"
+        );
+        let mut ok = run(&[scan(2, 0.1), scan(3, 0.1)]).unwrap();
+        assert_eq!((ok.origin_s, ok.scans[1].t_s, ok.base_from_sensor), (2, 1.0, None));
+        ok.rebase(-1);
+        assert_eq!((ok.origin_s, ok.scans[0].t_s, ok.scans[1].t_s), (-1, 3.0, 4.0));
     }
 }

@@ -163,3 +163,46 @@ fn fields_to_cdr(r: &mut Ros1<'_>, w: &mut Cdr, fields: &[Field]) -> Result<(), 
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn laser_scan_becomes_cdr_with_float32_alignment() {
+        let Some((name, fields)) = layout("sensor_msgs/LaserScan") else { panic!("no LaserScan layout") };
+        assert_eq!(name, "sensor_msgs/msg/LaserScan");
+        // ROS 1: seq, stamp (sec, nsec), frame "laser", 7 float32, ranges [1.5, inf], intensities [].
+        let mut ros1 = Vec::new();
+        for v in [9u32, 5, 7, 5] {
+            ros1.extend_from_slice(&v.to_le_bytes());
+        }
+        ros1.extend_from_slice(b"laser");
+        for v in [-3.0f32, 3.0, 0.5, 0.0, 0.1, 0.05, 12.0] {
+            ros1.extend_from_slice(&v.to_le_bytes());
+        }
+        ros1.extend_from_slice(&2u32.to_le_bytes());
+        ros1.extend_from_slice(&1.5f32.to_le_bytes());
+        ros1.extend_from_slice(&f32::INFINITY.to_le_bytes());
+        ros1.extend_from_slice(&0u32.to_le_bytes());
+        // CDR: encapsulation, stamp, frame with its NUL (6 bytes, then 2 of padding to the float32s), the
+        // float32s, the sequences with their lengths.
+        let mut cdr = vec![0u8, 1, 0, 0];
+        for v in [5u32, 7, 6] {
+            cdr.extend_from_slice(&v.to_le_bytes());
+        }
+        cdr.extend_from_slice(b"laser\0\0\0");
+        for v in [-3.0f32, 3.0, 0.5, 0.0, 0.1, 0.05, 12.0] {
+            cdr.extend_from_slice(&v.to_le_bytes());
+        }
+        cdr.extend_from_slice(&2u32.to_le_bytes());
+        cdr.extend_from_slice(&1.5f32.to_le_bytes());
+        cdr.extend_from_slice(&f32::INFINITY.to_le_bytes());
+        cdr.extend_from_slice(&0u32.to_le_bytes());
+        assert_eq!(to_cdr(&ros1, fields).unwrap(), cdr);
+        assert_eq!(
+            to_cdr(&ros1[..ros1.len() - 6], fields).unwrap_err(),
+            "the message is cut short: 59 bytes, field at byte 53 needs 8 more"
+        );
+    }
+}
