@@ -56,7 +56,7 @@ fn chained_scan_path_of_simulated_runs_matches_the_true_sensor_path_within_milli
         assert!(lidar::first_collision(&room, &s.base, lidar::CLEARANCE_M).is_none(), "{}", s.run.name());
         let scans = lidar::simulate_scans(&room, &s.base, &mount, &settings, config.seed, i as u64);
         let file = tmp.path().join(format!("{i}.mcap"));
-        let lidar = Some(LidarTrack { scans, base_from_sensor: mount });
+        let lidar = Some(LidarTrack { scans, base_from_sensor: Some(mount) });
         write_run(&file, &s.run, &WriteOptions { origin_s: SIM_EPOCH_S, lidar, ..Default::default() }).unwrap();
 
         let read = lidar::read_scans(&file, "/scan").unwrap();

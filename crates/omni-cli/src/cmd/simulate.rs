@@ -108,6 +108,10 @@ pub struct LidarArgs {
     /// The lidar's pose on the robot, in the base frame: X,Y in metres, YAW in degrees.
     #[arg(long, value_name = "X,Y,YAW_DEG", default_value = "0,0,0", requires = "lidar")]
     pub lidar_mount: String,
+    /// The mount the recordings' /tf_static states: X,Y,YAW_DEG as a rough URDF would give it, or `none`
+    /// for no /tf_static (a robot without a description). Default: the true mount (--lidar-mount).
+    #[arg(long, value_name = "X,Y,YAW_DEG|none", requires = "lidar")]
+    pub lidar_tf: Option<String>,
     /// Scans per second (Hz).
     #[arg(long, value_name = "HZ", default_value_t = ScanSettings::default().rate_hz, requires = "lidar")]
     pub lidar_rate: f64,
@@ -130,7 +134,21 @@ pub(crate) struct Lidar {
     room: Room,
     name: String,
     base_from_sensor: Pose2,
+    /// The mount /tf_static states (`None`: none written).
+    stated: Option<Pose2>,
     settings: ScanSettings,
+}
+
+/// `X,Y,YAW_DEG` (m, m, degrees) of option `flag` as a pose.
+fn mount_arg(text: &str, flag: &str) -> anyhow::Result<Pose2> {
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .ok()
+        .filter(|v: &Vec<f64>| v.len() == 3 && v.iter().all(|x| x.is_finite()))
+        .with_context(|| format!("{flag} {text:?}: expected X,Y,YAW_DEG (three numbers, e.g. 0.2,0,5)"))?;
+    Ok(Pose2::new(v[0], v[1], v[2].to_radians()))
 }
 
 impl LidarArgs {
@@ -141,16 +159,12 @@ impl LidarArgs {
             bail!("--lidar writes LaserScan messages into ROS 2 bags: use --format mcap (the default)");
         }
         let room = lidar::room_from_arg(name).context("--lidar")?;
-        let v: Vec<f64> = self
-            .lidar_mount
-            .split(',')
-            .map(|x| x.trim().parse::<f64>())
-            .collect::<Result<_, _>>()
-            .ok()
-            .filter(|v: &Vec<f64>| v.len() == 3 && v.iter().all(|x| x.is_finite()))
-            .with_context(|| {
-                format!("--lidar-mount {:?}: expected X,Y,YAW_DEG (three numbers, e.g. 0.2,0,5)", self.lidar_mount)
-            })?;
+        let base_from_sensor = mount_arg(&self.lidar_mount, "--lidar-mount")?;
+        let stated = match self.lidar_tf.as_deref() {
+            None => Some(base_from_sensor),
+            Some("none") => None,
+            Some(tf) => Some(mount_arg(tf, "--lidar-tf")?),
+        };
         let settings = ScanSettings {
             rate_hz: self.lidar_rate,
             beams: self.lidar_beams,
@@ -160,12 +174,7 @@ impl LidarArgs {
             ..ScanSettings::default()
         };
         settings.check().context("--lidar settings")?;
-        Ok(Some(Lidar {
-            room,
-            name: name.clone(),
-            base_from_sensor: Pose2::new(v[0], v[1], v[2].to_radians()),
-            settings,
-        }))
+        Ok(Some(Lidar { room, name: name.clone(), base_from_sensor, stated, settings }))
     }
 }
 
@@ -196,7 +205,7 @@ fn simulate_split(
             );
         }
         let scans = lidar::simulate_scans(&l.room, &s.base, &l.base_from_sensor, &l.settings, cfg.seed, i as u64);
-        tracks.push(LidarTrack { scans, base_from_sensor: l.base_from_sensor });
+        tracks.push(LidarTrack { scans, base_from_sensor: l.stated });
     }
     Ok((sampled.into_iter().map(|s| s.run).collect(), Some(tracks)))
 }
@@ -423,6 +432,7 @@ fn write_truth(
             "polygons_m": l.room.polygons(),
             "base_from_sensor": { "x_m": m.x_m, "y_m": m.y_m, "theta_rad": m.theta_rad },
             "scans": l.settings,
+            "tf_static": l.stated.map(|m| json!({ "x_m": m.x_m, "y_m": m.y_m, "theta_rad": m.theta_rad })),
             "topic": dataset::mcap::SCAN_TOPIC,
             "frame": dataset::mcap::LASER_FRAME,
         });

@@ -56,7 +56,7 @@ pub(super) fn with_lidar_path(
             "the lidar's path does not overlap the wheel data (two matched scans within it are needed)",
         ));
     }
-    loaded.notes.push(note(path, topic, &read.frame_id, &sensor, read.base_from_sensor, runs.len()));
+    loaded.notes.extend(notes(path, topic, &read.frame_id, &sensor, read.base_from_sensor, runs.len()));
     loaded.runs = runs;
     Ok(loaded)
 }
@@ -89,24 +89,20 @@ fn rejections(why: &std::collections::BTreeMap<&'static str, usize>) -> String {
     why.iter().map(|(k, n)| format!("{k} {n}")).collect::<Vec<_>>().join(", ")
 }
 
-/// The note a lidar reference leaves: matches, rejections, stretches and the mount's source.
-fn note(
+/// The notes a lidar reference leaves: where the mount came from (the same words for every recording, so a
+/// load says it once), and the rejected matches and stretches when there were any.
+fn notes(
     path: &Path,
     topic: &str,
     frame: &str,
     sensor: &lidar::SensorPath,
     mount: Option<Pose2>,
     runs: usize,
-) -> String {
-    let rms = {
-        let mut r: Vec<f64> = sensor.qualities.iter().map(|q| q.rms_m).collect();
-        r.sort_by(f64::total_cmp);
-        r.get(r.len() / 2).copied().unwrap_or(f64::NAN)
-    };
+) -> Vec<String> {
     let mount = match mount {
         Some(m) => format!(
-            "moved to the base by the static transform to {frame:?} (x {:.3} m, y {:.3} m, yaw {:.2}°); the fit \
-             corrects that mount",
+            "its path moved to the base by the static transform to {frame:?} (x {:.3} m, y {:.3} m, yaw {:.2}°); \
+             the fit corrects that mount",
             m.x_m,
             m.y_m,
             m.theta_rad.to_degrees()
@@ -116,14 +112,24 @@ fn note(
              ±0.5 m, ±28.6°; give it with --gt-mount when it is turned further)"
         ),
     };
-    format!(
-        "{}: lidar {topic:?}: {} scan matches, {} rejected ({}), median match RMS {:.1} mm, {} stretch{}; {mount}",
-        path.display(),
-        sensor.matched,
-        sensor.rejected,
-        rejections(&sensor.rejected_why),
-        rms * 1e3,
-        runs,
-        if runs == 1 { "" } else { "es" },
-    )
+    let mut out = vec![format!("{}: lidar {topic:?} matched scan to scan as the reference; {mount}", path.display())];
+    if sensor.rejected > 0 {
+        let rms = {
+            let mut r: Vec<f64> = sensor.qualities.iter().map(|q| q.rms_m).collect();
+            r.sort_by(f64::total_cmp);
+            r.get(r.len() / 2).copied().unwrap_or(f64::NAN)
+        };
+        out.push(format!(
+            "{}: lidar {topic:?}: {} of {} scan matches rejected ({}), median match RMS {:.1} mm; {} stretch{} of \
+             accepted matches",
+            path.display(),
+            sensor.rejected,
+            sensor.rejected + sensor.matched,
+            rejections(&sensor.rejected_why),
+            rms * 1e3,
+            runs,
+            if runs == 1 { "" } else { "es" },
+        ));
+    }
+    out
 }

@@ -183,8 +183,8 @@ pub struct WriteOptions {
 pub struct LidarTrack {
     /// The scans, in time order.
     pub scans: Vec<omni_kin::lidar::Scan>,
-    /// The lidar's pose in the base frame (m, rad).
-    pub base_from_sensor: omni_kin::Pose2,
+    /// The lidar's pose in the base frame that `/tf_static` states (m, rad); `None`: no `/tf_static`.
+    pub base_from_sensor: Option<omni_kin::Pose2>,
 }
 
 impl Default for WriteOptions {

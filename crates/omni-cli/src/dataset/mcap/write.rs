@@ -152,12 +152,14 @@ fn messages(path: &Path, run: &Run, w: &WriteOptions) -> Result<Vec<Pending>, Da
     Ok(m.out)
 }
 
-/// The lidar's scans (frame `laser`) and its mount, one `/tf_static` message at `first_t_s` (the first
-/// wheel sample).
+/// The lidar's scans (frame `laser`) and its stated mount, one `/tf_static` message at `first_t_s` (the
+/// first wheel sample), when it has one.
 fn lidar_messages(m: &mut Messages<'_>, lidar: &super::LidarTrack, first_t_s: f64) -> Result<(), DatasetError> {
     let stamp = m.stamp(first_t_s)?;
-    let tf = laser_scan::static_transform(header(stamp, BASE_FRAME), LASER_FRAME, &lidar.base_from_sensor);
-    m.push(stamp, 6, &tf)?;
+    if let Some(mount) = &lidar.base_from_sensor {
+        let tf = laser_scan::static_transform(header(stamp, BASE_FRAME), LASER_FRAME, mount);
+        m.push(stamp, 6, &tf)?;
+    }
     for (k, scan) in lidar.scans.iter().enumerate() {
         let n = scan.ranges_m.len();
         let scan_time = lidar
