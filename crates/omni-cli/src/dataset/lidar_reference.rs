@@ -7,7 +7,7 @@
 
 use super::{DatasetError, Loaded};
 use crate::lidar::{self, MatchSettings};
-use omni_kin::{Pose2, Run, StampedPose};
+use omni_kin::{Run, StampedPose};
 use std::path::Path;
 
 /// The runs of `loaded` (read wheels only from the recording at `path`) with the lidar's path on `topic` as
@@ -56,7 +56,7 @@ pub(super) fn with_lidar_path(
             "the lidar's path does not overlap the wheel data (two matched scans within it are needed)",
         ));
     }
-    loaded.notes.extend(notes(path, topic, &read.frame_id, &sensor, read.base_from_sensor, runs.len()));
+    loaded.notes.extend(notes(path, topic, &read, &sensor, runs.len()));
     loaded.runs = runs;
     Ok(loaded)
 }
@@ -91,18 +91,13 @@ fn rejections(why: &std::collections::BTreeMap<&'static str, usize>) -> String {
 
 /// The notes a lidar reference leaves: where the mount came from (the same words for every recording, so a
 /// load says it once), and the rejected matches and stretches when there were any.
-fn notes(
-    path: &Path,
-    topic: &str,
-    frame: &str,
-    sensor: &lidar::SensorPath,
-    mount: Option<Pose2>,
-    runs: usize,
-) -> Vec<String> {
-    let mount = match mount {
+fn notes(path: &Path, topic: &str, read: &lidar::ScanRead, sensor: &lidar::SensorPath, runs: usize) -> Vec<String> {
+    let frame = &read.frame_id;
+    let upside_down = if read.mirrored { " (mounted upside down: its scans are read mirrored)" } else { "" };
+    let mount = match read.base_from_sensor {
         Some(m) => format!(
-            "its path moved to the base by the static transform to {frame:?} (x {:.3} m, y {:.3} m, yaw {:.2}°); \
-             the fit corrects that mount",
+            "its path moved to the base by the static transform to {frame:?}{upside_down} (x {:.3} m, y {:.3} m, \
+             yaw {:.2}°); the fit corrects that mount",
             m.x_m,
             m.y_m,
             m.theta_rad.to_degrees()

@@ -93,6 +93,9 @@ pub struct ScanRead {
     pub frame_id: String,
     /// The lidar's pose in `base_link` from the recording's static transforms, when they hold it (m, rad).
     pub base_from_sensor: Option<Pose2>,
+    /// The static transforms mount the lidar upside down: the scans' beam angles were mirrored (negated), so
+    /// that they sweep counter-clockwise seen from above as the base's frame does.
+    pub mirrored: bool,
 }
 
 impl ScanRead {
@@ -199,7 +202,10 @@ impl ScanSink {
             let hint = if scans.is_empty() {
                 "no topic holds sensor_msgs/msg/LaserScan: record the lidar's scans".to_string()
             } else {
-                format!("the LaserScan topics are {}: choose one with --topic", scans.join(", "))
+                format!(
+                    "the LaserScan topics are {}: name one (--gt-scans TOPIC, scan-odometry --topic TOPIC)",
+                    scans.join(", ")
+                )
             };
             return Err(DatasetError::file(
                 path,
@@ -221,8 +227,22 @@ impl ScanSink {
         let origin_s = first_ns.div_euclid(NS_PER_S);
         let frame_id = self.frame_id.unwrap_or_default();
         let base_from_sensor = self.statics.offset(BASE_FRAME, &frame_id).map(|(p, _)| p);
-        let scans = self.scans.into_iter().map(|(ns, s)| Scan { t_s: seconds_since(ns, origin_s), ..s }).collect();
-        Ok(ScanRead { scans, origin_s, frame_id, base_from_sensor })
+        // A lidar mounted upside down sweeps clockwise seen from above: its beams' angles are mirrored.
+        let mirrored = self.statics.mirrored(BASE_FRAME, &frame_id) == Some(true);
+        let scans = self
+            .scans
+            .into_iter()
+            .map(|(ns, s)| {
+                let t_s = seconds_since(ns, origin_s);
+                match mirrored {
+                    true => {
+                        Scan { t_s, angle_min_rad: -s.angle_min_rad, angle_increment_rad: -s.angle_increment_rad, ..s }
+                    }
+                    false => Scan { t_s, ..s },
+                }
+            })
+            .collect();
+        Ok(ScanRead { scans, origin_s, frame_id, base_from_sensor, mirrored })
     }
 }
 
@@ -271,6 +291,10 @@ impl MessageSink for ScanSink {
                 if p.x.is_finite() && p.y.is_finite() && q.yaw_rad().is_finite() {
                     let pose = Pose2::new(p.x, p.y, q.yaw_rad());
                     self.statics.add(t.header.frame_id.frame(), t.child_frame_id.frame(), pose);
+                    // The child's z axis in the parent: R₂₂ = w² − x² − y² + z² (over the norm).
+                    if q.w * q.w - q.x * q.x - q.y * q.y + q.z * q.z < 0.0 {
+                        self.statics.mark_flipped(t.child_frame_id.frame());
+                    }
                 }
             }
         }
@@ -301,6 +325,47 @@ mod tests {
         assert_eq!(back.ranges[..2], m.ranges[..2]);
         assert!(back.ranges[2].is_nan());
         assert_eq!((back.angle_increment, back.range_max), (0.0087, 12.0));
+    }
+
+    /// A lidar whose /tf_static turns it upside down (roll π, yaw 90°) is read mirrored: the beams sweep
+    /// clockwise seen from above, and its mount keeps the yaw of its x axis.
+    #[test]
+    fn an_upside_down_lidar_is_read_mirrored() {
+        let scan = LaserScan {
+            header: Header { stamp: Time { sec: 1, nanosec: 0 }, frame_id: RosString("laser".into()) },
+            angle_min: -3.0,
+            angle_max: 3.0,
+            angle_increment: 0.5,
+            time_increment: 0.0,
+            scan_time: 0.1,
+            range_min: 0.05,
+            range_max: 12.0,
+            ranges: vec![1.0; 13],
+            intensities: vec![],
+        };
+        let read = |roll_pi: bool| {
+            let mut tf =
+                static_transform(Header::default(), "laser", &Pose2::new(0.1, 0.0, std::f64::consts::FRAC_PI_2));
+            if roll_pi {
+                // Rz(90°)·Rx(180°): the rotation by π about the axis (cos 45°, sin 45°, 0).
+                let h = std::f64::consts::FRAC_1_SQRT_2;
+                tf.transforms[0].transform.rotation = super::super::common::Quaternion { x: h, y: h, z: 0.0, w: 0.0 };
+            }
+            tf.transforms[0].header.frame_id = RosString("base_link".into());
+            let mut sink = ScanSink::new("/scan", false);
+            let t = sink.channel("/tf_static", tf::NAME, "ros2msg", "cdr");
+            let i = sink.channel("/scan", NAME, "ros2msg", "cdr");
+            sink.message(t, &encode(&tf).unwrap(), 0);
+            sink.message(i, &encode(&scan).unwrap(), 0);
+            sink.finish(Path::new("rec.mcap")).unwrap()
+        };
+        let upright = read(false);
+        assert!(!upright.mirrored && upright.scans[0].angle_min_rad == -3.0);
+        let flipped = read(true);
+        assert!(flipped.mirrored);
+        assert_eq!((flipped.scans[0].angle_min_rad, flipped.scans[0].angle_increment_rad), (3.0, -0.5));
+        let m = flipped.base_from_sensor.unwrap();
+        assert!((m.x_m - 0.1).abs() < 1e-12 && (m.theta_rad - std::f64::consts::FRAC_PI_2).abs() < 1e-12, "{m:?}");
     }
 
     #[test]

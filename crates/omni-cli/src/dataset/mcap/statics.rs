@@ -9,6 +9,9 @@ use std::collections::BTreeMap;
 #[derive(Debug, Default)]
 pub(super) struct StaticTree {
     parent_of: BTreeMap<String, (String, Pose2)>,
+    /// Child frames whose transform turns z downwards (a lidar mounted upside down): seen from above, such a
+    /// frame is mirrored, its y axis opposite to what its yaw says.
+    flipped: std::collections::BTreeSet<String>,
 }
 
 /// Longest chain followed (a TF tree is shallow; this stops a cycle).
@@ -18,6 +21,18 @@ impl StaticTree {
     /// Takes `child` at `pose` in `parent` (the first one given for a child wins: a latched topic repeats).
     pub fn add(&mut self, parent: &str, child: &str, pose: Pose2) {
         self.parent_of.entry(child.to_string()).or_insert_with(|| (parent.to_string(), pose));
+    }
+
+    /// Marks `child`'s transform as turning z downwards (see [`StaticTree::flipped`]).
+    pub fn mark_flipped(&mut self, child: &str) {
+        self.flipped.insert(child.to_string());
+    }
+
+    /// Whether frame `to`, seen from above in frame `from`, is mirrored: an odd number of the transforms
+    /// between them turn z downwards. `None` when `to` does not hang from `from`.
+    pub fn mirrored(&self, from: &str, to: &str) -> Option<bool> {
+        let (_, frames) = self.offset(from, to)?;
+        Some(frames.iter().filter(|f| self.flipped.contains(*f)).count() % 2 == 1)
     }
 
     /// The pose of frame `to` in frame `from` through static transforms down from `from`, and the frames
@@ -63,5 +78,18 @@ mod tests {
         assert_eq!(tree.offset("marker", "marker"), None);
         tree.add("laser", "marker", Pose2::IDENTITY);
         assert_eq!(tree.offset("odom", "marker"), None, "a cycle ends");
+    }
+
+    #[test]
+    fn a_frame_under_an_odd_number_of_flips_is_mirrored() {
+        let mut tree = StaticTree::default();
+        tree.add("base_link", "plate", Pose2::new(0.1, 0.0, 0.0));
+        tree.add("plate", "laser", Pose2::new(0.05, 0.0, 0.0));
+        assert_eq!(tree.mirrored("base_link", "laser"), Some(false));
+        tree.mark_flipped("laser");
+        assert_eq!(tree.mirrored("base_link", "laser"), Some(true));
+        tree.mark_flipped("plate");
+        assert_eq!(tree.mirrored("base_link", "laser"), Some(false));
+        assert_eq!(tree.mirrored("laser", "base_link"), None);
     }
 }
