@@ -404,3 +404,56 @@ fn a_lidars_mount_is_found_from_its_motion() {
         assert!((r_left / 0.03366 - 1.0).abs() < 2e-3, "{tf}: r_left {r_left}");
     }
 }
+
+/// The workbench with a lidar as its only reference: a hidden 60 ms wheel-clock lag is named by diagnose
+/// from the lidar's path alone, and adding it brings the held-out error down.
+#[test]
+fn diagnose_names_a_hidden_clock_lag_from_the_lidar_alone() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let robot = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/diff_robot.toml");
+    let args = [
+        "simulate",
+        "--robot",
+        robot.to_str().unwrap(),
+        "--out",
+        "sim",
+        "--lidar",
+        "room",
+        "--lidar-mount",
+        "0.2,0,5",
+        "--lidar-tf",
+        "none",
+        "--effect",
+        "time_offset=0.06",
+        "--runs-per-command",
+        "1",
+        "--duration",
+        "6",
+        "-q",
+    ];
+    assert!(omnical(&args, d).status.success());
+    json(&["train", "sim/train", "--gt-scans", "/scan", "--out", "fit.toml"], d);
+    let (diagnosis, _) = json(
+        &[
+            "diagnose",
+            "--model",
+            "fit.toml",
+            "sim/train",
+            "--validate",
+            "sim/validation",
+            "--gt-scans",
+            "/scan",
+            "--candidates",
+            "time_offset,backlash,wheel_asymmetry",
+        ],
+        d,
+    );
+    let best = &diagnosis["ranking"][0];
+    assert_eq!(best["effect"], "time_offset", "{}", diagnosis["verdict_text"]);
+    let tau = best["params"].as_array().unwrap()[0]["value"].as_f64().unwrap();
+    let gain = best["held_out_gain"].as_f64().unwrap();
+    eprintln!("lidar alone: time_offset {tau:.4} s, held-out gain {:.1} %", 100.0 * gain);
+    assert!((tau - 0.06).abs() < 0.005, "tau {tau}");
+    assert!(gain > 0.5, "{best}");
+}
