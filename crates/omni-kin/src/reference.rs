@@ -1,7 +1,7 @@
 //! What a run's ground truth is a measurement of. Motion capture gives the pose of a point on the robot in a
-//! fixed world frame ([`Reference::Absolute`]). A sensor's own odometry (lidar scan matching, visual
+//! fixed world frame ([`ReferenceKind::Absolute`]). A sensor's own odometry (lidar scan matching, visual
 //! odometry) gives the motion of the sensor, mounted at an unknown pose on the robot, in a frame of its own
-//! that drifts ([`Reference::Relative`]): such a path is trusted only over short windows. [`windows`] cuts a
+//! that drifts ([`ReferenceKind::Relative`]): such a path is trusted only over short windows. [`windows`] cuts a
 //! run into windows, each a run of its own that starts at the reference's pose there, so that every
 //! objective compares the model's motion with the sensor's over the window only; the sensor's mount is the
 //! `sensor_offset_yaw` effect, fitted with the wheels (the model's predicted sensor pose is the body pose
