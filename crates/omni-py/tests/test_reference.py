@@ -44,3 +44,21 @@ def test_a_given_mount_moves_the_truth_and_bad_kinds_are_refused(diff_sim: Path)
     assert abs(fit.model.params["r_left"] - 0.03366) < 5e-3 * 0.03366
     with pytest.raises(ValueError, match='gt_kind "lidar": expected "absolute", "relative" or "end_pose"'):
         omnical.load(diff_sim, gt_kind="lidar")
+
+
+def test_a_lidar_is_the_reference_from_python(tmp_path: Path) -> None:
+    """``load(gt_scans="/scan")``: the lidar's path as the ground truth, its mount fitted with the wheels."""
+    subprocess.run(
+        [*omnical_command(), "simulate", "--robot", str(REPO / "crates/omni-cli/tests/data/diff_robot.toml"),
+         "--out", str(tmp_path / "sim"), "--runs-per-command", "1", "--duration", "6", "--lidar", "room",
+         "--lidar-mount", "0.2,0,5", "--lidar-tf", "none", "--effect", "wheel_radius:a=0.02"],
+        check=True,
+        capture_output=True,
+    )
+    ds = omnical.load(tmp_path / "sim" / "train", gt_scans="/scan")
+    assert any('lidar "/scan" matched scan to scan as the reference' in n for n in ds.notes)
+    p = omnical.train("diff", ds).model.params
+    assert abs(p["sensor_offset_yaw.dx_m"] - 0.2) < 0.01 and abs(p["sensor_offset_yaw.dyaw_rad"] - 0.0872665) < 0.5 / 57.3
+    assert abs(p["r_left"] / p["r_right"] - 1.02) < 0.005
+    with pytest.raises(omnical.OmnicalError, match='no topic "/laser" in the recording'):
+        omnical.load(tmp_path / "sim" / "train", gt_scans="/laser")
