@@ -18,6 +18,7 @@ pub mod error;
 pub mod evaluate;
 pub mod fast;
 pub mod geometry;
+pub mod gyro;
 pub mod ik;
 pub mod kinematics;
 pub mod lidar;

@@ -1,0 +1,186 @@
+//! A gyro as a rotation reference. An IMU's yaw rate senses the base's turning and nothing of its
+//! translation: it reaches the rotation row of the wheel matrix (ω = m₃ · w) and no other. The row is linear
+//! in the data, so it is fitted by least squares, with the gyro's bias, over windows: each window's turn as
+//! the gyro integrates it against the wheels' angles over the same window,
+//!
+//! `∫ω_gyro dt = m₃ · ∫w dt + b · Δt`,
+//!
+//! which holds at any sample rate of either (the gyro's rate integrated by the trapezoid rule, the wheel
+//! speeds held over their intervals as the integrator holds them). A gyro's scale error multiplies the row
+//! and cannot be told from it with the gyro alone.
+
+use crate::error::KinError;
+use crate::run::Run;
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+
+/// One gyro sample: the yaw rate about the base's z axis. rad/s, at `t_s` on the run's clock (s).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct GyroSample {
+    /// s.
+    pub t_s: f64,
+    /// rad/s.
+    pub z_rad_s: f64,
+}
+
+/// The rotation row fitted from a gyro.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RotationFit {
+    /// ω per wheel speed, one entry per wheel (the wheel matrix's rotation row). rad/s per rad/s.
+    pub row: Vec<f64>,
+    /// Standard errors of `row` (iid windows).
+    pub row_std: Vec<f64>,
+    /// The gyro's bias. rad/s.
+    pub bias_rad_s: f64,
+    /// Standard error of the bias. rad/s.
+    pub bias_std_rad_s: f64,
+    /// Windows fitted.
+    pub windows: usize,
+    /// RMS of the windows' turn residuals. rad.
+    pub residual_rms_rad: f64,
+    /// Total turn the gyro saw (sum of |turn| per window). rad.
+    pub turned_rad: f64,
+}
+
+/// The least turn the windows must add up to for a fit (rad): below it, the row is noise.
+pub const MIN_TURN_RAD: f64 = 1.0;
+
+/// Integral of the gyro rate over `[a, b]` (trapezoid rule on the samples, linear between them; `a`, `b`
+/// within the samples' span).
+fn gyro_turn(g: &[GyroSample], a: f64, b: f64) -> f64 {
+    let at = |t: f64| {
+        let i = g.partition_point(|s| s.t_s <= t).clamp(1, g.len() - 1);
+        let (p, q) = (g[i - 1], g[i]);
+        let f = ((t - p.t_s) / (q.t_s - p.t_s)).clamp(0.0, 1.0);
+        (i, p.z_rad_s + f * (q.z_rad_s - p.z_rad_s))
+    };
+    let (ia, za) = at(a);
+    let (ib, zb) = at(b);
+    if ia == ib {
+        return 0.5 * (za + zb) * (b - a);
+    }
+    let mut sum = 0.5 * (za + g[ia].z_rad_s) * (g[ia].t_s - a);
+    for k in ia..ib - 1 {
+        sum += 0.5 * (g[k].z_rad_s + g[k + 1].z_rad_s) * (g[k + 1].t_s - g[k].t_s);
+    }
+    sum + 0.5 * (g[ib - 1].z_rad_s + zb) * (b - g[ib - 1].t_s)
+}
+
+/// Each wheel's angle turned over `[a, b]`: the speeds held over their intervals (rad).
+fn wheel_turns(run: &Run, a: f64, b: f64) -> Vec<f64> {
+    let t = run.wheel_t_s();
+    let mut out = vec![0.0; run.n_wheels()];
+    for k in 0..t.len() - 1 {
+        let (lo, hi) = (t[k].max(a), t[k + 1].min(b));
+        if hi > lo {
+            for (o, w) in out.iter_mut().zip(run.wheel_sample(k)) {
+                *o += w * (hi - lo);
+            }
+        }
+    }
+    out
+}
+
+/// Fits the rotation row and the gyro's bias from `runs` and their gyro samples (`gyro[i]` for `runs[i]`,
+/// in time order, on the run's clock) over windows of `window_s`. Errors when the runs and gyro streams do
+/// not pair up, overlap too little, or turn less than [`MIN_TURN_RAD`] in all.
+pub fn fit_rotation_row(runs: &[Run], gyro: &[Vec<GyroSample>], window_s: f64) -> Result<RotationFit, KinError> {
+    let invalid = |why: String| KinError::Invalid { what: "the gyro reference".into(), why };
+    if runs.len() != gyro.len() || runs.is_empty() {
+        return Err(invalid(format!("{} runs but {} gyro streams", runs.len(), gyro.len())));
+    }
+    if !(window_s.is_finite() && window_s > 0.0) {
+        return Err(invalid(format!("window {window_s} s: it must be longer than 0")));
+    }
+    let n = runs[0].n_wheels();
+    let (mut rows, mut ys) = (Vec::new(), Vec::new());
+    for (run, g) in runs.iter().zip(gyro) {
+        if g.len() < 2 {
+            continue;
+        }
+        let t = run.wheel_t_s();
+        let (start, end) = (t[0].max(g[0].t_s), t[t.len() - 1].min(g[g.len() - 1].t_s));
+        let count = ((end - start) / window_s).floor();
+        for k in 0..count.max(0.0) as usize {
+            let (a, b) = (start + k as f64 * window_s, start + (k + 1) as f64 * window_s);
+            let mut row = wheel_turns(run, a, b);
+            row.push(b - a);
+            rows.push(row);
+            ys.push(gyro_turn(g, a, b));
+        }
+    }
+    let turned_rad: f64 = ys.iter().map(|y| y.abs()).sum();
+    if rows.len() < n + 2 || turned_rad < MIN_TURN_RAD {
+        return Err(invalid(format!(
+            "{} windows of {window_s} s where the wheels and the gyro overlap, turning {turned_rad:.2} rad in all: \
+             at least {} windows and {MIN_TURN_RAD} rad are needed (drive turns while both are recorded)",
+            rows.len(),
+            n + 2
+        )));
+    }
+    let x = DMatrix::from_fn(rows.len(), n + 1, |r, c| rows[r][c]);
+    let y = DVector::from_vec(ys);
+    let svd = x.clone().svd(true, true);
+    let beta = svd.solve(&y, 1e-12).map_err(|e| invalid(e.to_string()))?;
+    let resid = &y - &x * &beta;
+    let dof = (rows.len() - (n + 1)).max(1) as f64;
+    let sigma2 = resid.norm_squared() / dof;
+    let cov = (x.transpose() * &x).try_inverse().ok_or_else(|| {
+        invalid("the wheels' turns do not determine the row (one wheel pattern only, or none turning)".into())
+    })? * sigma2;
+    Ok(RotationFit {
+        row: beta.iter().take(n).copied().collect(),
+        row_std: (0..n).map(|i| cov[(i, i)].sqrt()).collect(),
+        bias_rad_s: beta[n],
+        bias_std_rad_s: cov[(n, n)].sqrt(),
+        windows: rows.len(),
+        residual_rms_rad: (resid.norm_squared() / rows.len() as f64).sqrt(),
+        turned_rad,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pose::{Pose2, StampedPose};
+    use crate::run::RunData;
+
+    /// A run of two wheels whose speeds vary, and its gyro at `rate_hz`: ω = 0.1·w₁ − 0.12·w₂ + 0.01.
+    fn run_and_gyro(rate_hz: f64) -> (Run, Vec<GyroSample>) {
+        let n = 2001;
+        let wheel_t_s: Vec<f64> = (0..n).map(|k| k as f64 * 0.01).collect();
+        let speeds = |t: f64| [3.0 * (0.7 * t).sin() + 1.0, 2.0 * (0.3 * t).cos()];
+        let wheel_rad_s = wheel_t_s.iter().flat_map(|&t| speeds(t)).collect();
+        let truth = vec![StampedPose { t_s: 0.0, pose: Pose2::IDENTITY }, StampedPose { t_s: 20.0, pose: Pose2::IDENTITY }];
+        let run = Run::new(RunData { name: "r".into(), wheel_t_s, wheel_rad_s, n_wheels: 2, truth, ..Default::default() })
+            .unwrap();
+        // The gyro samples the turn rate the held wheel speeds give (the speed of the interval it falls in).
+        let gyro = (0..(20.0 * rate_hz) as usize)
+            .map(|k| {
+                let t = k as f64 / rate_hz;
+                let held = (t / 0.01).floor() * 0.01;
+                let w = speeds(held);
+                GyroSample { t_s: t, z_rad_s: 0.1 * w[0] - 0.12 * w[1] + 0.01 }
+            })
+            .collect();
+        (run, gyro)
+    }
+
+    #[test]
+    fn the_row_and_the_bias_come_back_at_any_gyro_rate() {
+        for rate in [100.0, 1000.0] {
+            let (run, gyro) = run_and_gyro(rate);
+            let fit = fit_rotation_row(&[run], &[gyro], 1.0).unwrap();
+            let tol = if rate < 500.0 { 2e-3 } else { 2e-4 };
+            assert!((fit.row[0] - 0.1).abs() < tol && (fit.row[1] + 0.12).abs() < tol, "{rate} Hz: {fit:?}");
+            assert!((fit.bias_rad_s - 0.01).abs() < tol, "{rate} Hz: {fit:?}");
+        }
+    }
+
+    #[test]
+    fn too_little_turning_is_refused() {
+        let (run, gyro) = run_and_gyro(100.0);
+        let err = fit_rotation_row(&[run], &[gyro[..150].to_vec()], 1.0).unwrap_err().to_string();
+        assert!(err.starts_with("the gyro reference: 1 windows of 1 s where the wheels and the gyro overlap, turning 0.03 rad in all"), "{err}");
+    }
+}
