@@ -76,6 +76,9 @@ pub enum Command {
     /// A lidar's own path from its LaserScan messages (scan-to-scan point-to-line ICP): matches accepted and
     /// rejected, their quality, and the path as a TUM file.
     ScanOdometry(cmd::scan_odometry::Args),
+    /// An IMU's yaw rate as a rotation reference: the wheel matrix's rotation row and the gyro's bias (the
+    /// translation rows need a reference that senses translation).
+    Imu(cmd::imu::Args),
     /// Propose calibration runs that excite every parameter of a model (and its effects), with the
     /// standard errors they would give for a stated ground-truth noise.
     Plan(cmd::plan::Args),
@@ -152,6 +155,7 @@ fn run_command(cli: Cli) -> anyhow::Result<()> {
         Command::Report(a) => cmd::report::run(&a, cli.quiet),
         Command::Export(a) => cmd::export::run(&a),
         Command::ScanOdometry(a) => cmd::scan_odometry::run(&a),
+        Command::Imu(a) => cmd::imu::run(&a),
         Command::Plan(a) => cmd::plan::run(&a),
         Command::Init(a) => cmd::init::run(&a),
         Command::Demo(a) => cmd::demo::run(&a, cli.quiet),

@@ -50,12 +50,13 @@ pub fn write_mcap(
         design_odometry: (!run.recorded_odometry().is_empty()).then(|| run.recorded_odometry().to_vec()),
         calibrated_odometry: Some(odometry_poses(model, run)?),
         // The recording's time base; simulated clocks start before 0 s (as `simulate` does): its epoch.
-        lidar: None,
         origin_s: match recording_origin_s {
             Some(o) => o,
             None if run.wheel_t_s().first().is_some_and(|&t| t < 0.0) => crate::dataset::mcap::SIM_EPOCH_S,
             None => 0,
         },
+        lidar: None,
+        imu: None,
     };
     let path = dir.join(format!("{}.mcap", tum::file_stem(run.name())));
     write_run(&path, run, &opts)?;

@@ -10,6 +10,7 @@
 //! and cannot be told from it with the gyro alone.
 
 use crate::error::KinError;
+use crate::pose::StampedPose;
 use crate::run::Run;
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
@@ -139,10 +140,37 @@ pub fn fit_rotation_row(runs: &[Run], gyro: &[Vec<GyroSample>], window_s: f64) -
     })
 }
 
+/// Salt of the gyro's random stream, so that its noise draws none of the simulator's other numbers.
+const GYRO_SEED_SALT: u64 = 0x1a2b_3c4d_5e6f_7081;
+
+/// A simulated upright gyro on the base: the yaw rate of the true base poses `base` (central differences of
+/// the heading at each pose's stamp), plus `bias_rad_s` and Gaussian noise of `noise_rad_s`, drawn from
+/// stream `stream` of `seed` (one per run: the same seed gives the same samples whatever the threads).
+pub fn simulate_gyro(
+    base: &[StampedPose],
+    bias_rad_s: f64,
+    noise_rad_s: f64,
+    seed: u64,
+    stream: u64,
+) -> Vec<GyroSample> {
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, StandardNormal};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ GYRO_SEED_SALT);
+    rng.set_stream(stream);
+    (0..base.len())
+        .map(|k| {
+            let (a, b) = (base[k.saturating_sub(1)], base[(k + 1).min(base.len() - 1)]);
+            let rate = if b.t_s > a.t_s { (b.pose.theta_rad - a.pose.theta_rad) / (b.t_s - a.t_s) } else { 0.0 };
+            let z: f64 = StandardNormal.sample(&mut rng);
+            GyroSample { t_s: base[k].t_s, z_rad_s: rate + bias_rad_s + noise_rad_s * z }
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pose::{Pose2, StampedPose};
+    use crate::pose::Pose2;
     use crate::run::RunData;
 
     /// A run of two wheels whose speeds vary, and its gyro at `rate_hz`: ω = 0.1·w₁ − 0.12·w₂ + 0.01.
@@ -151,9 +179,11 @@ mod tests {
         let wheel_t_s: Vec<f64> = (0..n).map(|k| k as f64 * 0.01).collect();
         let speeds = |t: f64| [3.0 * (0.7 * t).sin() + 1.0, 2.0 * (0.3 * t).cos()];
         let wheel_rad_s = wheel_t_s.iter().flat_map(|&t| speeds(t)).collect();
-        let truth = vec![StampedPose { t_s: 0.0, pose: Pose2::IDENTITY }, StampedPose { t_s: 20.0, pose: Pose2::IDENTITY }];
-        let run = Run::new(RunData { name: "r".into(), wheel_t_s, wheel_rad_s, n_wheels: 2, truth, ..Default::default() })
-            .unwrap();
+        let truth =
+            vec![StampedPose { t_s: 0.0, pose: Pose2::IDENTITY }, StampedPose { t_s: 20.0, pose: Pose2::IDENTITY }];
+        let run =
+            Run::new(RunData { name: "r".into(), wheel_t_s, wheel_rad_s, n_wheels: 2, truth, ..Default::default() })
+                .unwrap();
         // The gyro samples the turn rate the held wheel speeds give (the speed of the interval it falls in).
         let gyro = (0..(20.0 * rate_hz) as usize)
             .map(|k| {
@@ -181,6 +211,11 @@ mod tests {
     fn too_little_turning_is_refused() {
         let (run, gyro) = run_and_gyro(100.0);
         let err = fit_rotation_row(&[run], &[gyro[..150].to_vec()], 1.0).unwrap_err().to_string();
-        assert!(err.starts_with("the gyro reference: 1 windows of 1 s where the wheels and the gyro overlap, turning 0.03 rad in all"), "{err}");
+        assert!(
+            err.starts_with(
+                "the gyro reference: 1 windows of 1 s where the wheels and the gyro overlap, turning 0.03 rad in all"
+            ),
+            "{err}"
+        );
     }
 }

@@ -376,7 +376,7 @@ pub fn load(
         ticks_per_rev,
         max_file_mb,
     };
-    let request = LoadRequest { paths, data, recorded_odometry };
+    let request = LoadRequest { paths, data, recorded_odometry, wheels_only: false };
     // The CLI's lookup: robot=, else a robot.toml beside the data or in the working directory.
     let robot = request.robot().map_err(robot_error)?;
     let ds = py.detach(|| request.read_for_robot(robot)).map_err(load_error)?;

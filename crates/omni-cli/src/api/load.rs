@@ -99,12 +99,15 @@ pub struct LoadRequest {
     pub data: DataOptions,
     /// Keep the runs' recorded odometry.
     pub recorded_odometry: bool,
+    /// Read the wheels only, each run's ground truth a placeholder (at rest at the origin at its first and
+    /// last wheel sample) for another reference to replace (`omnical imu`).
+    pub wheels_only: bool,
 }
 
 impl LoadRequest {
     /// `paths` read with `data`, without the recorded odometry.
     pub fn new(paths: &[PathBuf], data: &DataOptions) -> Self {
-        Self { paths: paths.to_vec(), data: data.clone(), recorded_odometry: false }
+        Self { paths: paths.to_vec(), data: data.clone(), recorded_odometry: false, wheels_only: false }
     }
 
     /// The robot description the runs are read for: [`DataOptions::robot`], else one found beside the data
@@ -158,7 +161,7 @@ impl LoadRequest {
         robot_file::fill_mcap_options(&mut mcap, data.joints.is_none(), robot.as_ref().map(|r| &r.description));
         let scans = scans_topic(data)?;
         let end_poses = end_pose_file(data)?;
-        mcap.wheels_only = end_poses.is_some() || scans.is_some();
+        mcap.wheels_only = self.wheels_only || end_poses.is_some() || scans.is_some();
         let ground_truth = if mcap.wheels_only { None } else { ground_truth_options(data, robot.as_ref())? };
         if ground_truth.is_none() {
             mcap.truth_time_offset_s = data.gt_time_offset_s;

@@ -141,7 +141,13 @@ fn simulate_and_keep(setup: &Setup, dir: &Path, quiet: bool) -> anyhow::Result<(
     let mut splits = Vec::with_capacity(2);
     for (split, seed) in [(TRAIN, DEFAULT_SEED), (VALIDATION, DEFAULT_SEED + 1)] {
         let runs = simulate(&SimConfig { seed, ..setup.config.clone() }, &setup.truth, &format!("{split}/"))?;
-        simulate_cmd::write_split(&dir.join(split), &runs, Format::Mcap, &setup.wheels, None)?;
+        simulate_cmd::write_split(
+            &dir.join(split),
+            &runs,
+            Format::Mcap,
+            &setup.wheels,
+            simulate_cmd::Sensors { lidar: None, imu: None },
+        )?;
         simulate_cmd::write_robot(&dir.join(split), &setup.robot, Format::Mcap)?;
         let paths = [dir.join(split)];
         let robot = robot_file::resolve(None, &paths)?;

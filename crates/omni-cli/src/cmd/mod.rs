@@ -6,6 +6,7 @@ pub mod diagnose;
 pub mod eval;
 pub mod explore;
 pub mod export;
+pub mod imu;
 pub mod init;
 pub mod plan;
 pub mod report;

@@ -9,6 +9,7 @@ use crate::robot_file::{self, RobotFile};
 use crate::{atomic, dataset, design, model_file};
 use anyhow::{Context, bail};
 use omni_kin::cost::{self, CostKind};
+use omni_kin::gyro::GyroSample;
 use omni_kin::robot::RobotDescription;
 use omni_kin::simulate::{SimConfig, simulate, simulate_sampled};
 use omni_kin::{FittedModel, IkMatrix, Model, Pose2, RobotGeometry, Run};
@@ -89,6 +90,9 @@ pub struct Args {
     /// The simulated lidar.
     #[command(flatten)]
     pub lidar: LidarArgs,
+    /// The simulated IMU.
+    #[command(flatten)]
+    pub imu: ImuArgs,
     /// Output options (JSON: what was written, with the design's and the true robot's costs).
     #[command(flatten)]
     pub output: OutputArgs,
@@ -127,6 +131,49 @@ pub struct LidarArgs {
     /// Share of beams that return nothing (NaN), at random.
     #[arg(long, value_name = "SHARE", default_value_t = ScanSettings::default().dropout, requires = "lidar")]
     pub lidar_dropout: f64,
+}
+
+/// The simulated IMU (`--imu`): an upright gyro on the base.
+#[derive(Debug, clap::Args)]
+#[command(next_help_heading = "Simulated IMU")]
+pub struct ImuArgs {
+    /// Write an IMU's yaw rate (/imu, sensor_msgs/msg/Imu, frame imu_link: the base's true turn rate plus
+    /// the bias and noise below) into every MCAP run.
+    #[arg(long)]
+    pub imu: bool,
+    /// IMU messages per second (Hz).
+    #[arg(long, value_name = "HZ", default_value_t = 100.0, requires = "imu")]
+    pub imu_rate: f64,
+    /// The gyro's bias (rad/s).
+    #[arg(long, value_name = "RAD_S", default_value_t = 0.005, requires = "imu", allow_hyphen_values = true)]
+    pub imu_bias: f64,
+    /// Gaussian noise of each yaw-rate sample (rad/s).
+    #[arg(long, value_name = "RAD_S", default_value_t = 0.002, requires = "imu")]
+    pub imu_noise: f64,
+}
+
+impl ImuArgs {
+    /// The checked settings (`None` without `--imu`).
+    fn settings(&self, format: Format) -> anyhow::Result<Option<&Self>> {
+        if !self.imu {
+            return Ok(None);
+        }
+        if format != Format::Mcap {
+            bail!("--imu writes Imu messages into ROS 2 bags: use --format mcap (the default)");
+        }
+        let ok = |v: f64| v.is_finite() && v >= 0.0;
+        if !(self.imu_rate.is_finite() && (1.0..=10_000.0).contains(&self.imu_rate)) {
+            bail!("--imu-rate {}: expected 1 to 10000 Hz", self.imu_rate);
+        }
+        if !(self.imu_bias.is_finite() && ok(self.imu_noise)) {
+            bail!(
+                "--imu-bias {} / --imu-noise {}: expected finite values, the noise ≥ 0",
+                self.imu_bias,
+                self.imu_noise
+            );
+        }
+        Ok(Some(self))
+    }
 }
 
 /// A configured lidar: the room, its name as given, the mount and the scan settings.
@@ -210,14 +257,37 @@ fn simulate_split(
     Ok((sampled.into_iter().map(|s| s.run).collect(), Some(tracks)))
 }
 
+/// Each run's simulated gyro (`None` without `--imu`): the true base every `1 / imu_rate` s (the same runs
+/// as [`simulate`]'s), each run's noise its own stream of the split's seed.
+fn imu_tracks(
+    cfg: &SimConfig,
+    truth: &FittedModel,
+    split: &str,
+    imu: Option<&ImuArgs>,
+) -> anyhow::Result<Option<Vec<Vec<GyroSample>>>> {
+    let Some(i) = imu else { return Ok(None) };
+    let sampled = simulate_sampled(cfg, truth, &format!("{split}/"), 1.0 / i.imu_rate)?;
+    let gyro = |(k, s): (usize, &omni_kin::simulate::SampledRun)| {
+        omni_kin::gyro::simulate_gyro(&s.base, i.imu_bias, i.imu_noise, cfg.seed, k as u64)
+    };
+    Ok(Some(sampled.iter().enumerate().map(gyro).collect()))
+}
+
+/// The sensors simulated beside a split's runs, one entry per run: a lidar's track, an IMU's yaw rates.
+pub(crate) struct Sensors<'a> {
+    pub lidar: Option<&'a [LidarTrack]>,
+    pub imu: Option<&'a [Vec<GyroSample>]>,
+}
+
 /// Writes each run as one file of `format` into `dir` (created), named after the run; returns the paths.
 pub(crate) fn write_split(
     dir: &Path,
     runs: &[Run],
     format: Format,
     wheel_names: &[String],
-    lidar: Option<&[LidarTrack]>,
+    sensors: Sensors<'_>,
 ) -> anyhow::Result<Vec<PathBuf>> {
+    let Sensors { lidar, imu } = sensors;
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let mut written = Vec::with_capacity(runs.len());
     for (i, r) in runs.iter().enumerate() {
@@ -236,6 +306,7 @@ pub(crate) fn write_split(
                     // Simulated clocks start at 0 s (wheel data from −0.5 s): put them at a plausible epoch.
                     origin_s: SIM_EPOCH_S,
                     lidar: lidar.and_then(|l| l.get(i)).cloned(),
+                    imu: imu.and_then(|g| g.get(i)).cloned(),
                     ..Default::default()
                 };
                 dataset::mcap::write_run(&path, r, &w)?
@@ -353,13 +424,16 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         sim_spec::apply_effect_spec(spec, &mut truth, &mut config, &wheel_names)?;
     }
     let lidar = a.lidar.lidar(a.format)?;
+    let imu = a.imu.settings(a.format)?;
     let out = OutDir::claim(&a.out, "--out", a.force)?;
     let (mut summary, mut written) = (serde_json::Map::new(), serde_json::Map::new());
     for (split, seed) in [("train", a.seed), ("validation", a.seed.wrapping_add(1))] {
         let cfg = SimConfig { seed, ..config.clone() };
         let spinner = crate::progress::spinner(format!("simulating and writing {split} runs"), quiet);
         let (runs, tracks) = simulate_split(&cfg, &truth, split, lidar.as_ref())?;
-        let files = write_split(&out.path().join(split), &runs, a.format, &wheel_names, tracks.as_deref())?;
+        let gyro = imu_tracks(&cfg, &truth, split, imu)?;
+        let sensors = Sensors { lidar: tracks.as_deref(), imu: gyro.as_deref() };
+        let files = write_split(&out.path().join(split), &runs, a.format, &wheel_names, sensors)?;
         write_robot(&out.path().join(split), &robot, a.format)?;
         spinner.finish_and_clear();
         let costs = split_costs(&design, &truth, &runs)?;

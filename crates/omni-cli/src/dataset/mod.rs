@@ -406,6 +406,24 @@ fn recording_name(p: &Path, folder: bool) -> String {
 
 /// The inputs under `p`, in order: a folder's entries sorted by name, recursively; a recording folder or an
 /// OptiOdom set is one input. A path that is no input is an error in its place.
+/// The ROS recordings at `paths` (files, rosbag2 folders, folders of them), in the order `load` reads them;
+/// anything else is an error naming it.
+pub(crate) fn ros_recordings(paths: &[PathBuf]) -> Result<Vec<PathBuf>, DatasetError> {
+    let mut inputs = Vec::new();
+    for p in paths {
+        expand(p, &mut inputs);
+    }
+    inputs
+        .into_iter()
+        .map(|i| match i? {
+            Input::Csv(p) | Input::OptiOdom(p) => {
+                Err(DatasetError::file(&p, "not a ROS recording (.mcap, .db3, .bag or a rosbag2 folder)"))
+            }
+            i => Ok(i.path().to_path_buf()),
+        })
+        .collect()
+}
+
 fn expand(p: &Path, out: &mut Vec<Result<Input, DatasetError>>) {
     let meta = match std::fs::metadata(p) {
         Ok(m) => m,

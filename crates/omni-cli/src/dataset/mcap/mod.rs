@@ -58,6 +58,7 @@
 //! release mode on one core of a 2-core machine (`tests/mcap_speed.rs`).
 
 mod common;
+mod imu;
 mod inspect;
 mod joint_state;
 mod laser_scan;
@@ -76,11 +77,13 @@ use crate::dataset::ground_truth::{ExternalTruth, GtClock};
 use omni_kin::{Run, StampedPose};
 use std::path::Path;
 
+pub use imu::GyroRead;
+pub(crate) use imu::ImuSink;
 pub(crate) use inspect::InventorySink;
 pub use inspect::{Inventory, ROBOT_DESCRIPTION_TOPIC, TopicSummary, inspect, inspect_bytes};
 pub use laser_scan::ScanRead;
 pub(crate) use laser_scan::ScanSink;
-pub use write::{COMMAND_TOPIC, JOINTS_TOPIC, LASER_FRAME, SCAN_TOPIC, TF_STATIC_TOPIC, TRUTH_TOPIC};
+pub use write::{COMMAND_TOPIC, IMU_TOPIC, JOINTS_TOPIC, LASER_FRAME, SCAN_TOPIC, TF_STATIC_TOPIC, TRUTH_TOPIC};
 
 /// ROS time of the simulator's t = 0 in MCAP output (2023-11-14T22:13:20Z). s.
 pub const SIM_EPOCH_S: i64 = 1_700_000_000;
@@ -176,6 +179,9 @@ pub struct WriteOptions {
     /// A lidar's scans, on `/scan` (LaserScan, frame `laser`), and its mount on `/tf_static`
     /// (`base_link` → `laser`). Default none.
     pub lidar: Option<LidarTrack>,
+    /// An IMU's yaw rates (on the run's clock), on `/imu` (`sensor_msgs/msg/Imu`, frame `imu_link`). Default
+    /// none.
+    pub imu: Option<Vec<omni_kin::gyro::GyroSample>>,
 }
 
 /// A lidar to write into a bag: its scans (stamps on the run's clock) and where it sits on the robot.
@@ -195,6 +201,7 @@ impl Default for WriteOptions {
             calibrated_odometry: None,
             origin_s: 0,
             lidar: None,
+            imu: None,
         }
     }
 }

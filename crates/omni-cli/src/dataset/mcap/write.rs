@@ -5,7 +5,8 @@
 //! the stamp the simulator gave it, not a log time a reader has to trust.
 
 use super::WriteOptions;
-use super::common::{Header, Pose, RosString, Time, Twist, encode};
+use super::common::{Header, Pose, Quaternion, RosString, Time, Twist, Vector3, encode};
+use super::imu;
 use super::joint_state::{self, JointState};
 use super::laser_scan::{self, LaserScan};
 use super::odometry::{self, BASE_FRAME, ODOM_FRAME, Odometry, TwistWithCovariance};
@@ -36,6 +37,10 @@ pub const SCAN_TOPIC: &str = "/scan";
 pub const LASER_FRAME: &str = "laser";
 /// Static transforms (the lidar's mount).
 pub const TF_STATIC_TOPIC: &str = "/tf_static";
+/// An IMU's messages (`sensor_msgs/msg/Imu`, [`super::WriteOptions::imu`]).
+pub const IMU_TOPIC: &str = "/imu";
+/// The IMU's frame (on the base, upright).
+const IMU_FRAME: &str = "imu_link";
 /// The world frame of the ground truth.
 pub(super) const TRUTH_FRAME: &str = "map";
 
@@ -147,6 +152,19 @@ fn messages(path: &Path, run: &Run, w: &WriteOptions) -> Result<Vec<Pending>, Da
     if let Some(lidar) = &w.lidar {
         lidar_messages(&mut m, lidar, t.first().copied().unwrap_or(0.0))?;
     }
+    for g in w.imu.iter().flatten() {
+        let msg = imu::Imu {
+            header: header(m.stamp(g.t_s)?, IMU_FRAME),
+            orientation: Quaternion { x: 0.0, y: 0.0, z: 0.0, w: 1.0 },
+            // REP-145: an orientation covariance of −1 says the IMU gives no orientation.
+            orientation_covariance: [-1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            angular_velocity: Vector3 { x: 0.0, y: 0.0, z: g.z_rad_s },
+            angular_velocity_covariance: [0.0; 9],
+            linear_acceleration: Vector3::default(),
+            linear_acceleration_covariance: [0.0; 9],
+        };
+        m.push(msg.header.stamp, 7, &msg)?;
+    }
     // Time order; at equal times, channel order (joints first), and message order within a channel.
     m.out.sort_by_key(|&(t, slot, _)| (t, slot));
     Ok(m.out)
@@ -240,6 +258,7 @@ fn write_file(tmp: &Path, run: &Run, w: &WriteOptions, pending: &[Pending]) -> R
         (odometry::NAME, odometry::schema(), CALIBRATED_TOPIC, w.calibrated_odometry.is_some()),
         (laser_scan::NAME, laser_scan::schema(), SCAN_TOPIC, w.lidar.is_some()),
         (super::tf::NAME, laser_scan::tf_schema(), TF_STATIC_TOPIC, w.lidar.is_some()),
+        (imu::NAME, imu::schema(), IMU_TOPIC, w.imu.is_some()),
     ] {
         let id = if used {
             let schema = out.add_schema(name, "ros2msg", text.as_bytes()).map_err(mcap_err)?;

@@ -45,6 +45,7 @@ pub(super) fn layout(ros1_type: &str) -> Option<(&'static str, &'static [Field])
         "tf2_msgs/TFMessage" | "tf/tfMessage" => ("tf2_msgs/msg/TFMessage", &[TransformSeq]),
         "geometry_msgs/Twist" => ("geometry_msgs/msg/Twist", &[F64(6)]),
         "geometry_msgs/TwistStamped" => ("geometry_msgs/msg/TwistStamped", &[Header, F64(6)]),
+        "sensor_msgs/Imu" => ("sensor_msgs/msg/Imu", &[Header, F64(4), F64(9), F64(3), F64(9), F64(3), F64(9)]),
         "sensor_msgs/LaserScan" => ("sensor_msgs/msg/LaserScan", &[Header, F32(7), F32Seq, F32Seq]),
         _ => return None,
     })

@@ -1,0 +1,96 @@
+//! An IMU's yaw rate as a rotation reference (issue 28, `omnical imu`, `simulate --imu`) through the real
+//! binary: on simulated runs of the paper's robot the rotation row comes back as motion capture gives it,
+//! at any gyro rate, with the gyro's bias; the command says the translation is not reached; bad inputs are
+//! refused naming the file and topic.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use serde_json::Value;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn omnical(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir).output().expect("run omnical")
+}
+
+fn ok(args: &[&str], dir: &Path) -> String {
+    let out = omnical(args, dir);
+    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// Simulated MCAP runs with an IMU at `rate` Hz, bias 0.005 rad/s.
+fn simulate(dir: &Path, out: &str, rate: &str) {
+    ok(
+        &[
+            "simulate",
+            "--out",
+            out,
+            "--imu",
+            "--imu-rate",
+            rate,
+            "--imu-bias",
+            "0.005",
+            "--runs-per-command",
+            "1",
+            "--duration",
+            "6",
+            "-q",
+        ],
+        dir,
+    );
+}
+
+#[test]
+fn the_rotation_row_comes_back_at_any_gyro_rate_and_the_translation_is_not_reached() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    simulate(d, "sim", "100");
+    let fit: Value = serde_json::from_str(&ok(&["train", "sim/train", "--json"], d)).unwrap();
+    let mocap: Vec<f64> = fit["matrix"][2].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    let imu: Value = serde_json::from_str(&ok(&["imu", "sim/train", "--json"], d)).unwrap();
+    let row: Vec<f64> = imu["fit"]["row"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    for (i, (r, m)) in row.iter().zip(&mocap).enumerate() {
+        eprintln!("wheel {i}: IMU {r:.6}, motion capture {m:.6} ({:+.3} %)", 100.0 * (r / m - 1.0));
+        assert!((r / m - 1.0).abs() < 0.003, "wheel {i}: IMU {r} vs motion capture {m}");
+    }
+    let (bias, se) = (imu["fit"]["bias_rad_s"].as_f64().unwrap(), imu["fit"]["bias_std_rad_s"].as_f64().unwrap());
+    assert!((bias - 0.005).abs() < (4.0 * se).max(2e-4), "bias {bias} ± {se}");
+    // Another gyro rate (37 Hz, not a multiple of the wheels' 100 Hz) gives the same row.
+    simulate(d, "slow", "37");
+    let slow: Value = serde_json::from_str(&ok(&["imu", "slow/train", "--json"], d)).unwrap();
+    for (a, b) in slow["fit"]["row"].as_array().unwrap().iter().zip(&row) {
+        assert!((a.as_f64().unwrap() / b - 1.0).abs() < 0.003, "37 Hz {a} vs 100 Hz {b}");
+    }
+    let text = ok(&["imu", "sim/train", "--out", "imu.toml"], d);
+    assert!(text.contains("an IMU senses no translation: the translation rows are not reached"), "{text}");
+    assert!(d.join("imu.toml").exists());
+}
+
+#[test]
+fn bad_imu_inputs_are_refused_naming_the_file_and_topic() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    simulate(d, "sim", "100");
+    ok(&["simulate", "--out", "plain", "--runs-per-command", "1", "--duration", "2", "-q"], d);
+    let cases: [(&[&str], &str); 3] = [
+        (
+            &["imu", "sim/train/00-r0.mcap", "--topic", "/imu2"],
+            "error: sim/train/00-r0.mcap: no topic \"/imu2\" in the recording; the Imu topics are /imu: name one (--topic)",
+        ),
+        (
+            &["imu", "plain/train/00-r0.mcap"],
+            "error: plain/train/00-r0.mcap: no topic \"/imu\" in the recording; no topic holds sensor_msgs/msg/Imu: record the IMU",
+        ),
+        (
+            &["simulate", "--out", "csv", "--imu", "--format", "csv"],
+            "error: --imu writes Imu messages into ROS 2 bags: use --format mcap (the default)",
+        ),
+    ];
+    for (args, want) in cases {
+        let out = omnical(args, d);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8(out.stderr).unwrap();
+        let error = err.lines().find(|l| l.starts_with("error:")).unwrap_or_default();
+        assert_eq!(error, want, "{args:?}: {err}");
+    }
+}
