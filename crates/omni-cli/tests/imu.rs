@@ -72,7 +72,11 @@ fn bad_imu_inputs_are_refused_naming_the_file_and_topic() {
     let d = tmp.path();
     simulate(d, "sim", "100");
     ok(&["simulate", "--out", "plain", "--runs-per-command", "1", "--duration", "2", "-q"], d);
-    let cases: [(&[&str], &str); 3] = [
+    let cases: [(&[&str], &str); 4] = [
+        (
+            &["imu", "sim/train", "--gt-scans", "/scan"],
+            "error: --gt-scans changes nothing for `omnical imu`: the IMU is the reference, and each recording one run",
+        ),
         (
             &["imu", "sim/train/00-r0.mcap", "--topic", "/imu2"],
             "error: sim/train/00-r0.mcap: no topic \"/imu2\" in the recording; the Imu topics are /imu: name one (--topic)",

@@ -39,13 +39,27 @@ pub struct Args {
     pub data: DataArgs,
 }
 
-/// Reads each recording's wheels and gyro; the gyro on the run's clock.
+/// Reads each recording's wheels and gyro; the gyro on the run's clock. Ground-truth options and `--split`
+/// would change nothing (the gyro is the reference, each recording one run): they are refused.
 fn read(a: &Args) -> anyhow::Result<(dataset::Dataset, Vec<Run>, Vec<Vec<GyroSample>>)> {
+    let d = &a.data;
+    let unused = [
+        (d.gt.is_some(), "--gt"),
+        (d.gt_topic.is_some(), "--gt-topic"),
+        (d.gt_scans.is_some(), "--gt-scans"),
+        (d.gt_kind.is_some(), "--gt-kind"),
+        (d.gt_window.is_some(), "--gt-window"),
+        (d.gt_mount.is_some(), "--gt-mount"),
+        (d.gt_time_offset.is_some(), "--gt-time-offset"),
+        (d.split.is_some(), "--split"),
+    ];
+    if let Some((_, flag)) = unused.iter().find(|(set, _)| *set) {
+        anyhow::bail!("{flag} changes nothing for `omnical imu`: the IMU is the reference, and each recording one run");
+    }
     let (mut runs, mut gyro) = (Vec::new(), Vec::new());
     let mut first = None;
     for path in &dataset::ros_recordings(&a.recordings)? {
-        let mut request = LoadRequest { wheels_only: true, ..a.data.request(std::slice::from_ref(path)) };
-        request.data.split_s = None;
+        let request = LoadRequest { wheels_only: true, ..a.data.request(std::slice::from_ref(path)) };
         let ds = request.read_for_robot(request.robot()?)?;
         let sink = dataset::feed_ros(path, dataset::DEFAULT_MAX_FILE_BYTES, |zstd| {
             dataset::mcap::ImuSink::new(&a.topic, zstd)
