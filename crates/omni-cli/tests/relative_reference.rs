@@ -20,28 +20,25 @@ fn json(args: &[&str], dir: &Path) -> (Value, String) {
     (serde_json::from_slice(&out.stdout).unwrap(), stderr)
 }
 
+/// `omnical simulate --robot ROBOT ARGS… -q` in `dir`, which must succeed.
+fn simulate_with(dir: &Path, robot: &str, args: &[&str]) {
+    let out = omnical(&[&["simulate", "--robot", robot], args, &["-q"]].concat(), dir);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+/// The test robot.toml of a differential drive.
+fn diff_robot() -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/diff_robot.toml").to_str().unwrap().to_string()
+}
+
 /// Simulated runs of `robot` (a robot.toml path, or `apr02`) with the sensor mounted at 0.2 m, 0, 5°.
 fn simulate(dir: &Path, robot: &str) {
-    let out = omnical(
-        &[
-            "simulate",
-            "--robot",
-            robot,
-            "--out",
-            "sim",
-            "--runs-per-command",
-            "2",
-            "--format",
-            "csv",
-            "--effect",
-            "sensor_offset_yaw=0.2,0,0.0872665",
-            "--effect",
-            "wheel_radius:a=0.02",
-            "-q",
-        ],
+    let effects = ["--effect", "sensor_offset_yaw=0.2,0,0.0872665", "--effect", "wheel_radius:a=0.02"];
+    simulate_with(
         dir,
+        robot,
+        &[&["--out", "sim", "--runs-per-command", "2", "--format", "csv"][..], &effects].concat(),
     );
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 }
 
 /// A fitted parameter's value and standard error from `train --json`.
@@ -57,8 +54,7 @@ fn param(fit: &Value, name: &str) -> (f64, f64) {
 fn a_diff_drive_from_its_sensors_own_motion_matches_motion_capture() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
-    let robot = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/diff_robot.toml");
-    simulate(d, robot.to_str().unwrap());
+    simulate(d, &diff_robot());
     let (mocap, _) = json(&["train", "sim/train", "--effect", "sensor_offset_yaw"], d);
     let (relative, stderr) = json(&["train", "sim/train", "--gt-kind", "relative"], d);
     assert!(
@@ -160,25 +156,8 @@ fn bad_reference_options_are_refused_naming_the_option() {
 /// end poses in their start's frame, as a tape measure gives them (rounded to the millimetre and 0.1°),
 /// for the first `n` runs.
 fn tape_measured(dir: &Path, n: usize) -> std::path::PathBuf {
-    let robot = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/diff_robot.toml");
-    let out = omnical(
-        &[
-            "simulate",
-            "--robot",
-            robot.to_str().unwrap(),
-            "--out",
-            "tape",
-            "--runs-per-command",
-            "1",
-            "--effect",
-            "wheel_radius:a=0.02",
-            "--effect",
-            "wheel_separation=0.01",
-            "-q",
-        ],
-        dir,
-    );
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let effects = ["--effect", "wheel_radius:a=0.02", "--effect", "wheel_separation=0.01"];
+    simulate_with(dir, &diff_robot(), &[&["--out", "tape", "--runs-per-command", "1"][..], &effects].concat());
     let request = omni_cli::api::load::LoadRequest::new(&[dir.join("tape/train")], &Default::default());
     let ds = request.read_for_robot(request.robot().unwrap()).unwrap();
     let mut table = String::from("run,x_mm,y_mm,yaw_deg\n");
@@ -307,31 +286,28 @@ fn real_diff_drive_from_windows_agrees_with_motion_capture() {
 /// Simulated MCAP runs of the diff drive (left wheel 2 % large) with a 2D lidar in `room` at 0.2 m, 0, 5°,
 /// the recordings' /tf_static stating the mount `tf` (`none`: no /tf_static).
 fn simulate_lidar(dir: &Path, room: &str, runs_per_command: &str, tf: &str) {
-    let robot = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/diff_robot.toml");
-    let out = omnical(
-        &[
-            "simulate",
-            "--robot",
-            robot.to_str().unwrap(),
-            "--out",
-            "sim",
-            "--lidar",
-            room,
-            "--lidar-mount",
-            "0.2,0,5",
-            "--lidar-tf",
-            tf,
-            "--effect",
-            "wheel_radius:a=0.02",
-            "--runs-per-command",
-            runs_per_command,
-            "--duration",
-            "6",
-            "-q",
-        ],
-        dir,
-    );
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    simulate_with(dir, &diff_robot(), &lidar_args(room, tf, "wheel_radius:a=0.02", runs_per_command));
+}
+
+/// `simulate`'s arguments for runs of 6 s with a lidar in `room` at 0.2 m, 0, 5° (its /tf_static `tf`) and
+/// the hidden `effect`.
+fn lidar_args<'a>(room: &'a str, tf: &'a str, effect: &'a str, runs_per_command: &'a str) -> Vec<&'a str> {
+    vec![
+        "--out",
+        "sim",
+        "--lidar",
+        room,
+        "--lidar-mount",
+        "0.2,0,5",
+        "--lidar-tf",
+        tf,
+        "--effect",
+        effect,
+        "--runs-per-command",
+        runs_per_command,
+        "--duration",
+        "6",
+    ]
 }
 
 /// The lidar alone against motion capture on the same runs: the wheels within 2 standard errors of the
@@ -411,28 +387,7 @@ fn a_lidars_mount_is_found_from_its_motion() {
 fn diagnose_names_a_hidden_clock_lag_from_the_lidar_alone() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
-    let robot = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/diff_robot.toml");
-    let args = [
-        "simulate",
-        "--robot",
-        robot.to_str().unwrap(),
-        "--out",
-        "sim",
-        "--lidar",
-        "room",
-        "--lidar-mount",
-        "0.2,0,5",
-        "--lidar-tf",
-        "none",
-        "--effect",
-        "time_offset=0.06",
-        "--runs-per-command",
-        "1",
-        "--duration",
-        "6",
-        "-q",
-    ];
-    assert!(omnical(&args, d).status.success());
+    simulate_with(d, &diff_robot(), &lidar_args("room", "none", "time_offset=0.06", "1"));
     json(&["train", "sim/train", "--gt-scans", "/scan", "--out", "fit.toml"], d);
     let (diagnosis, _) = json(
         &[

@@ -306,20 +306,25 @@ mod tests {
     use super::super::common::{Time, decode, encode};
     use super::*;
 
-    #[test]
-    fn laser_scan_round_trips_with_inf_and_nan() {
-        let m = LaserScan {
-            header: Header { stamp: Time { sec: 5, nanosec: 7 }, frame_id: RosString("laser".into()) },
+    /// A scan of frame `laser` stamped `stamp`: `ranges` from −3 rad every `angle_increment` rad, 0.05 to 12 m.
+    fn message(stamp: Time, angle_increment: f32, ranges: Vec<f32>) -> LaserScan {
+        LaserScan {
+            header: Header { stamp, frame_id: RosString("laser".into()) },
             angle_min: -3.0,
-            angle_max: 3.1,
-            angle_increment: 0.0087,
+            angle_max: 3.0,
+            angle_increment,
             time_increment: 0.0,
             scan_time: 0.1,
             range_min: 0.05,
             range_max: 12.0,
-            ranges: vec![1.5, f32::INFINITY, f32::NAN],
+            ranges,
             intensities: vec![],
-        };
+        }
+    }
+
+    #[test]
+    fn laser_scan_round_trips_with_inf_and_nan() {
+        let m = message(Time { sec: 5, nanosec: 7 }, 0.0087, vec![1.5, f32::INFINITY, f32::NAN]);
         let back: LaserScan = decode(&encode(&m).unwrap()).unwrap();
         assert_eq!(back.header, m.header);
         assert_eq!(back.ranges[..2], m.ranges[..2]);
@@ -331,18 +336,7 @@ mod tests {
     /// clockwise seen from above, and its mount keeps the yaw of its x axis.
     #[test]
     fn an_upside_down_lidar_is_read_mirrored() {
-        let scan = LaserScan {
-            header: Header { stamp: Time { sec: 1, nanosec: 0 }, frame_id: RosString("laser".into()) },
-            angle_min: -3.0,
-            angle_max: 3.0,
-            angle_increment: 0.5,
-            time_increment: 0.0,
-            scan_time: 0.1,
-            range_min: 0.05,
-            range_max: 12.0,
-            ranges: vec![1.0; 13],
-            intensities: vec![],
-        };
+        let scan = message(Time { sec: 1, nanosec: 0 }, 0.5, vec![1.0; 13]);
         let read = |roll_pi: bool| {
             let mut tf =
                 static_transform(Header::default(), "laser", &Pose2::new(0.1, 0.0, std::f64::consts::FRAC_PI_2));
@@ -371,18 +365,7 @@ mod tests {
     #[test]
     fn a_bad_scan_names_the_message_and_the_field() {
         let path = Path::new("rec.mcap");
-        let scan = |sec: i32, inc: f32| LaserScan {
-            header: Header { stamp: Time { sec, nanosec: 0 }, frame_id: RosString("laser".into()) },
-            angle_min: -3.0,
-            angle_max: 3.0,
-            angle_increment: inc,
-            time_increment: 0.0,
-            scan_time: 0.1,
-            range_min: 0.05,
-            range_max: 12.0,
-            ranges: vec![1.0; 4],
-            intensities: vec![],
-        };
+        let scan = |sec: i32, inc: f32| message(Time { sec, nanosec: 0 }, inc, vec![1.0; 4]);
         let run = |msgs: &[LaserScan]| {
             let mut sink = ScanSink::new("/scan", false);
             let i = sink.channel("/scan", NAME, "ros2msg", "cdr");
