@@ -6,6 +6,20 @@ use clap::error::{ContextKind, ContextValue, Error, ErrorKind};
 use clap::{CommandFactory, FromArgMatches, Parser};
 use std::ffi::OsString;
 
+/// Caps the cost kernel's lane arithmetic at `OMNICAL_SIMD` (`avx512`, `avx2` or `portable`) when it is
+/// set: for comparing paths on one machine (the results are the same bits on each).
+fn simd_from_env() -> Result<(), String> {
+    let Some(value) = std::env::var_os("OMNICAL_SIMD") else { return Ok(()) };
+    let value = value.to_string_lossy();
+    if value.trim().is_empty() {
+        return Ok(());
+    }
+    let path = omni_kin::fast::SimdPath::from_name(&value)
+        .ok_or_else(|| format!("OMNICAL_SIMD={value}: expected avx512, avx2 or portable"))?;
+    omni_kin::fast::limit_simd_path(path);
+    Ok(())
+}
+
 /// Parses `args` (the program name first, as `std::env::args_os`) and runs the command. Returns the exit
 /// status: 0 on success and for `--help`/`--version` and a closed pipe, 2 on errors (printed on stderr as
 /// `error: {e:#}`), 1 for a refused fit (`train`: its step, or a fit worse than its start; `--force`), 130
@@ -24,6 +38,10 @@ pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
             return e.exit_code();
         }
     };
+    if let Err(e) = simd_from_env() {
+        eprintln!("error: {e}");
+        return 2;
+    }
     let cli = match with_project_defaults(cli, &args) {
         Ok(cli) => cli,
         Err(status) => return status,

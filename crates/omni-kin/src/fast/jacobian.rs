@@ -190,6 +190,8 @@ pub(super) fn lane_rows<const N: usize, const ARC: bool>(
     let mut next = 0;
     let mut u = [0.0; N];
     let increments: &[Lanes] = inc.u;
+    // The kernel's re-anchoring: not past the lane's last step.
+    let lane_steps = g.plans()[lane].steps;
     for k in 0..=g.steps {
         while next < mine.len() && mine[next].1 == k {
             let (qi, _, slot) = mine[next];
@@ -215,7 +217,7 @@ pub(super) fn lane_rows<const N: usize, const ARC: bool>(
         if let Some((p, _)) = parts {
             pt.add(&w, p.u[k * np..(k + 1) * np].iter().map(|v| v[lane]));
         }
-        if k % RESYNC_STEPS == RESYNC_STEPS - 1 {
+        if k % RESYNC_STEPS == RESYNC_STEPS - 1 && k < lane_steps {
             (st.s, st.c) = st.th.sin_cos();
         }
     }

@@ -1,10 +1,12 @@
-//! The step kernel: four runs at once in SIMD lanes. Each step's body displacement is `M u` (3 × N
+//! The step kernel: a group's eight runs at once in SIMD lanes (one AVX-512 vector, two AVX2 ones or
+//! plain arrays: [`SimdPath`], the same bits on each). Each step's body displacement is `M u` (3 × N
 //! multiply-adds on the wheel-angle increments), the arc factors and the heading's rotation come from
 //! short polynomials in the step angle (exact to < 1e-16 for `|a| ≤ 0.1` rad), and the heading's cosine
-//! and sine are re-taken from the summed heading every [`RESYNC_STEPS`] steps.
+//! and sine are re-taken from the summed heading every [`RESYNC_STEPS`] steps of a lane's own steps (not
+//! past its last one, so a run's numbers do not depend on the runs it shares a group with).
 
 use super::LANES;
-use super::lanes::{LaneOps, Portable};
+use super::lanes::{Fused, LaneOps, SimdPath};
 use super::prepare::{Group, Increments};
 use crate::pose::{Pose2, PoseError, wrap_angle};
 
@@ -84,8 +86,10 @@ pub(super) fn measured_error(st: LaneState, sensor: Pose2, truth: &Pose2) -> Pos
     }
 }
 
-/// Walks group `g` with increments `inc` (N wheels, exact arcs or Euler), AVX2 + FMA where available.
+/// Walks group `g` with increments `inc` (N wheels, exact arcs or Euler) on `path` (or the widest
+/// narrower one this CPU has).
 pub(super) fn walk<const N: usize, const ARC: bool>(
+    path: SimdPath,
     g: &Group,
     inc: &Increments<'_>,
     m: &[f64],
@@ -93,10 +97,33 @@ pub(super) fn walk<const N: usize, const ARC: bool>(
     on_query: &mut dyn FnMut(usize, PoseError),
 ) -> [PoseError; LANES] {
     #[cfg(target_arch = "x86_64")]
-    if let Some(simd) = pulp::x86::V3::try_new() {
+    if path == SimdPath::Avx512
+        && let Some(simd) = pulp::x86::V4::try_new()
+    {
         return simd.vectorize(|| kernel::<_, N, ARC>(simd, g, inc, m, sensor, on_query));
     }
-    kernel::<_, N, ARC>(Portable, g, inc, m, sensor, on_query)
+    #[cfg(target_arch = "x86_64")]
+    if path >= SimdPath::Avx2
+        && let Some(simd) = pulp::x86::V3::try_new()
+    {
+        let wide = pulp::x86::V3_512b(simd);
+        return simd.vectorize(|| kernel::<_, N, ARC>(wide, g, inc, m, sensor, on_query));
+    }
+    let _ = path;
+    kernel::<_, N, ARC>(Fused, g, inc, m, sensor, on_query)
+}
+
+/// The heading's cosine and sine `(c, s)` after step `k`, re-taken from the summed heading `th` in the
+/// lanes that walked step `k` (`k < lane_steps[lane]`), kept in the others (past their last step).
+#[inline(never)]
+fn resync<O: LaneOps>(o: O, k: usize, lane_steps: &[usize; LANES], th: O::V, c: O::V, s: O::V) -> (O::V, O::V) {
+    let (t, mut c, mut s) = (o.store(th), o.store(c), o.store(s));
+    for l in 0..LANES {
+        if k < lane_steps[l] {
+            (s[l], c[l]) = t[l].sin_cos();
+        }
+    }
+    (o.load(c), o.load(s))
 }
 
 /// The lane states of a group, unpacked.
@@ -134,6 +161,7 @@ fn kernel<O: LaneOps, const N: usize, const ARC: bool>(
     let (s1, s2, s3, s4) = (o.splat(S1), o.splat(S2), o.splat(S3), o.splat(S4));
     let (c0, c1, c2, c3, c4) = (o.splat(C0), o.splat(C1), o.splat(C2), o.splat(C3), o.splat(C4));
     let one = o.splat(1.0);
+    let lane_steps: [usize; LANES] = std::array::from_fn(|l| g.plans().get(l).map_or(0, |p| p.steps));
     let mut qi = 0;
     let mut next_query = g.queries.first().map_or(usize::MAX, |q| q.step);
     let mut answer = |qi: &mut usize, next_query: &mut usize, v: &[O::V; 5]| {
@@ -182,10 +210,7 @@ fn kernel<O: LaneOps, const N: usize, const ARC: bool>(
         c = c_next;
         th = o.add(th, a);
         if k % RESYNC_STEPS == RESYNC_STEPS - 1 {
-            let t = o.store(th);
-            let sc = t.map(f64::sin_cos);
-            s = o.load(sc.map(|v| v.0));
-            c = o.load(sc.map(|v| v.1));
+            (c, s) = resync(o, k, &lane_steps, th, c, s);
         }
     }
     let v = [x, y, th, c, s];

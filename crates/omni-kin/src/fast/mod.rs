@@ -8,12 +8,14 @@
 //!   body displacement is `M u_k` — 3 × N multiply-adds — for both Eq. 1 (Euler) and exact arcs. The
 //!   increments are kept up to [`KEPT_INCREMENTS_MAX_BYTES`] (8 B per wheel and sample); for larger
 //!   datasets each walk redoes a lane group's increments from the runs' own wheel columns (the same
-//!   products, so the same numbers). Runs are interleaved four to a lane group (struct of arrays). A clock
+//!   products, so the same numbers). Runs are interleaved eight to a lane group (struct of arrays). A clock
 //!   lag takes lane groups prepared for it (the last 4 lags are kept).
 //! - `features.rs`: the parts of an affine wheel-stage effect (each parameter's change of the speeds),
 //!   taken once; an evaluation adds them to the increments instead of running the effect.
-//! - `lanes.rs`: the four lanes' arithmetic, AVX2 + FMA on x86-64 CPUs that have them (checked at run time
-//!   through `pulp`, no `-C target-cpu` needed), plain arrays otherwise.
+//! - `lanes.rs`: the eight lanes' arithmetic and its [`SimdPath`]: one AVX-512 vector, two AVX2 + FMA
+//!   vectors, or plain arrays with fused multiply-adds, the widest the CPU has (checked at run time through
+//!   `pulp`, no `-C target-cpu` needed) under a ceiling ([`limit_simd_path`], `OMNICAL_SIMD` on the command
+//!   line). Every path gives the same bits.
 //! - `kernel.rs`: the step loop; the heading's cosine and sine advance by polynomial rotations.
 //! - `twist.rs`: the built-in twist-stage effects per lane (the hooks' formulas), a step loop with them,
 //!   and their exact slopes.
@@ -31,7 +33,8 @@
 //! walk.
 //!
 //! Results are deterministic: groups and runs are evaluated in parallel and collected in run order, so they
-//! do not depend on the thread count. With FMA the last bits differ from a CPU without it.
+//! do not depend on the thread count. The lane kernel's paths ([`SimdPath`]) give the same bits; a run's
+//! numbers do not depend on the runs that share its group.
 
 mod features;
 pub(crate) mod forward;
@@ -48,6 +51,7 @@ use crate::plan::wheel_speeds;
 use crate::pose::PoseError;
 use crate::run::Run;
 use features::{WheelFeatures, affine_wheel_effect};
+pub use lanes::{SimdPath, limit_simd_path};
 use nalgebra::DMatrix;
 use prepare::{Group, GroupParts, Increments, max_per_wheel};
 use rayon::prelude::*;
@@ -55,8 +59,9 @@ use std::borrow::Cow;
 use std::cell::RefCell;
 use std::sync::{Arc, Mutex, OnceLock};
 
-/// Runs per lane group.
-pub const LANES: usize = 4;
+/// Runs per lane group (one AVX-512 vector of f64; the same grouping on every [`SimdPath`], so the same
+/// numbers).
+pub const LANES: usize = 8;
 /// Largest step angle the polynomials serve. rad.
 pub const MAX_STEP_ANGLE_RAD: f64 = 0.1;
 /// Largest wheel count the fast path serves (its kernels are compiled for 1 to 8 wheels; more take the
@@ -255,6 +260,12 @@ impl PreparedRuns {
     /// Errors at the selected ground-truth poses and at each run's end, in run order. `None` when `res`
     /// needs the literal walk (or `runs` are not the prepared runs).
     pub fn errors(&self, res: &Resolved<'_>, runs: &[Run]) -> Option<FastErrors> {
+        self.errors_on(SimdPath::selected(), res, runs)
+    }
+
+    /// [`Self::errors`] on the lane arithmetic of `path` (or the widest narrower one this CPU has): the
+    /// same bits on every path.
+    pub fn errors_on(&self, path: SimdPath, res: &Resolved<'_>, runs: &[Run]) -> Option<FastErrors> {
         if !self.supports(res) {
             return None;
         }
@@ -262,7 +273,7 @@ impl PreparedRuns {
         let per_group: Vec<Option<(Vec<PoseError>, [PoseError; LANES])>> = (groups.par_iter())
             .map(|g| {
                 let mut at = vec![PoseError::default(); g.queries.len()];
-                let ends = self.walk_group(g, res, runs, &mut |slot, e| at[slot] = e)?;
+                let ends = self.walk_group(g, (res, path), runs, &mut |slot, e| at[slot] = e)?;
                 Some((at, ends))
             })
             .collect();
@@ -281,9 +292,9 @@ impl PreparedRuns {
         if !self.supports(res) {
             return None;
         }
-        let groups = self.groups_for(res.clock_lag_s, runs)?;
+        let (groups, path) = (self.groups_for(res.clock_lag_s, runs)?, SimdPath::selected());
         let per_group: Vec<Option<[PoseError; LANES]>> =
-            groups.par_iter().map(|g| self.walk_group(g, res, runs, &mut |_, _| {})).collect();
+            groups.par_iter().map(|g| self.walk_group(g, (res, path), runs, &mut |_, _| {})).collect();
         let mut out = Vec::with_capacity(self.n_runs);
         for (g, ends) in groups.iter().zip(per_group) {
             out.extend_from_slice(&ends?[..g.lanes]);
@@ -345,11 +356,12 @@ impl PreparedRuns {
         Some(())
     }
 
-    /// Walks one group: calls `on_query(slot, error)` for each query and returns the end-pose errors.
+    /// Walks one group on `path`: calls `on_query(slot, error)` for each query and returns the end-pose
+    /// errors.
     fn walk_group(
         &self,
         g: &Group,
-        res: &Resolved<'_>,
+        (res, path): (&Resolved<'_>, SimdPath),
         runs: &[Run],
         on_query: &mut dyn FnMut(usize, PoseError),
     ) -> Option<[PoseError; LANES]> {
@@ -359,7 +371,7 @@ impl PreparedRuns {
         let (m, arc, sensor) = (res.ik.entries(), res.scheme == Scheme::ExactArc, res.sensor_from_body);
         if res.twist_effects.is_empty() {
             return self.with_increments(g, res, runs, |inc| {
-                by_wheels!(self.n_wheels, arc, kernel::walk(g, inc, m, sensor, on_query))
+                by_wheels!(self.n_wheels, arc, kernel::walk(path, g, inc, m, sensor, on_query))
             })?;
         }
         let twists = twist::lane_twists(res)?;

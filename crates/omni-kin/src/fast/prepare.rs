@@ -1,4 +1,4 @@
-//! Preparation: each run's [`StepPlan`] (for one clock lag), four runs interleaved to a lane group (struct of
+//! Preparation: each run's [`StepPlan`] (for one clock lag), eight runs interleaved to a lane group (struct of
 //! arrays), and the wheel-angle increments `u = f h w` of their steps — kept, redone from the runs' wheel
 //! columns, or redone from wheel speeds rewritten by wheel-stage effects, always by [`Group::fill`].
 
@@ -31,7 +31,7 @@ impl Query {
     }
 }
 
-/// Four runs interleaved.
+/// [`LANES`] runs interleaved.
 #[derive(Clone, Debug)]
 pub(super) struct Group {
     /// Index of the group's first run.
@@ -208,11 +208,10 @@ impl Group {
         let h = self.h;
         u.clear();
         u.reserve(self.steps * n);
-        // Whole steps: f = 1, and (1 · h) · w = h · w exactly; four lanes at a time while all have steps.
+        // Whole steps: f = 1, and (1 · h) · w = h · w exactly; every lane at once while all have steps.
         let common = w.iter().map(|s| s.len()).min().unwrap_or(0);
-        let [a, b, c, d] = w.map(|s| &s[..common]);
-        for (((a, b), c), d) in a.iter().zip(b).zip(c).zip(d) {
-            u.push([h[0] * a, h[1] * b, h[2] * c, h[3] * d]);
+        for i in 0..common {
+            u.push(std::array::from_fn(|l| h[l] * w[l][i]));
         }
         for i in common..self.steps * n {
             u.push(std::array::from_fn(|l| w[l].get(i).map_or(0.0, |v| h[l] * v)));

@@ -5,6 +5,7 @@ use super::*;
 use crate::cost::CostKind;
 use crate::effect::EffectKind;
 use crate::evaluate::{Evaluator, IkBlock, Route};
+use crate::fast::kernel::RESYNC_STEPS;
 use crate::geometry::RobotGeometry;
 use crate::ik::IkMatrix;
 use crate::model::{FittedModel, Integration, Model};
@@ -64,11 +65,16 @@ fn agrees_with_the_literal_walk_on_a_paper_size_set() {
 /// A run of `n` wheels with smooth speeds (100 Hz, 6 s) and ground truth every 0.1 s off the sample
 /// stamps (the poses only need to exist: the fast path and the walk are compared with each other).
 fn synthetic_run(n: usize, seed: usize) -> Run {
-    let wheel_t_s: Vec<f64> = (0..600).map(|k| 0.01 * k as f64).collect();
+    synthetic_run_of(n, seed, 600)
+}
+
+/// [`synthetic_run`] of `samples` wheel samples (at least 100).
+fn synthetic_run_of(n: usize, seed: usize, samples: usize) -> Run {
+    let wheel_t_s: Vec<f64> = (0..samples).map(|k| 0.01 * k as f64).collect();
     let wheel_rad_s = (wheel_t_s.iter())
         .flat_map(|t| (0..n).map(move |j| 1.0 + 2.0 * (0.7 * t + j as f64 + seed as f64).sin()))
         .collect();
-    let truth = (0..58)
+    let truth = (0..samples / 10 - 2)
         .map(|k| {
             let t = 0.003 + 0.1 * k as f64;
             StampedPose { t_s: t, pose: Pose2::new(0.1 * t, 0.01 * t * t, 0.05 * t) }
@@ -744,5 +750,81 @@ fn kernel_serves_builtin_twist_effects_as_the_walk_does() {
                 assert!(count >= runs.len());
             }
         }
+    }
+}
+
+/// Runs of 3 wheels and 19 lengths (700 to 3,166 samples: some end before a re-anchoring of the heading
+/// that a longer run of their group reaches), so the groups mix lengths.
+fn mixed_length_runs() -> Vec<Run> {
+    (0..19).map(|seed| synthetic_run_of(3, seed, 700 + 137 * seed)).collect()
+}
+
+/// Every lane-arithmetic path this CPU has (portable, AVX2, AVX-512) gives the same bits, at the queries
+/// and the ends, for Euler and exact arcs, with a measurement-stage and an affine wheel-stage effect; and
+/// those numbers are the literal walk's within 1e-9 m.
+#[test]
+fn every_simd_path_gives_the_same_bits() {
+    let runs = mixed_length_runs();
+    assert!(runs.iter().any(|r| r.n_samples() < RESYNC_STEPS) && runs.iter().any(|r| r.n_samples() > 3 * RESYNC_STEPS));
+    let paths = SimdPath::available();
+    assert_eq!(paths[0], SimdPath::Portable);
+    assert_eq!(SimdPath::selected(), *paths.last().unwrap());
+    eprintln!("paths compared: {paths:?}");
+    for integration in [Integration::PAPER, Integration::DEFAULT] {
+        let model = Model::ik(spread_ik(3))
+            .with_integration(integration)
+            .with_effect(EffectKind::from_id("sensor_offset", 3).unwrap())
+            .with_effect(EffectKind::from_id("wheel_asymmetry", 3).unwrap());
+        let mut p = spread_ik(3).entries().to_vec();
+        p.extend([0.02, -0.01, 0.03, -0.02, 0.01]);
+        let res = model.resolve(&p).unwrap();
+        for selection in [Selection::End, Selection::Path(1)] {
+            let (gap, _) = max_gap(&model, &p, &runs, selection);
+            assert!(gap < 1e-9, "{integration:?} {selection:?}: gap {gap:e} m");
+            let prepared = PreparedRuns::new(&runs, res.fixed_dt_s, selection);
+            let portable = prepared.errors_on(SimdPath::Portable, &res, &runs).unwrap();
+            assert_eq!(portable.ends.len(), runs.len());
+            for &path in &paths {
+                let errors = prepared.errors_on(path, &res, &runs).unwrap();
+                assert_eq!(bits(&errors), bits(&portable), "{path:?} {integration:?} {selection:?}");
+            }
+        }
+    }
+}
+
+/// A run's errors and IK Jacobian rows are the same bits whether it shares a lane group with longer and
+/// shorter runs or walks alone (the heading is not re-anchored past a lane's last step), with a sensor
+/// offset (which reads the carried cosine and sine at the end).
+#[test]
+fn a_runs_numbers_do_not_depend_on_the_runs_in_its_group() {
+    let runs = mixed_length_runs();
+    // A sensor offset: the end pose reads the heading's cosine and sine.
+    let model = Model::ik(spread_ik(3))
+        .with_integration(Integration::DEFAULT)
+        .with_effect(EffectKind::from_id("sensor_offset", 3).unwrap());
+    let mut p = spread_ik(3).entries().to_vec();
+    p.extend([0.05, -0.03]);
+    let res = model.resolve(&p).unwrap();
+    let pose_bits = |e: &PoseError| [e.dx_m, e.dy_m, e.dtheta_rad].map(f64::to_bits);
+    let rows = |p: &PreparedRuns, runs: &[Run]| {
+        let mut out = Vec::new();
+        p.ik_jacobian_rows(&res, runs, &mut |r| out.push((r.errors.to_vec(), r.jacobian.clone()))).unwrap();
+        out
+    };
+    for selection in [Selection::End, Selection::Path(1)] {
+        let prepared = PreparedRuns::new(&runs, None, selection);
+        let (all, all_rows) = (prepared.errors(&res, &runs).unwrap(), rows(&prepared, &runs));
+        let mut first_query = 0;
+        for (i, run) in runs.iter().enumerate() {
+            let one = std::slice::from_ref(run);
+            let alone_prepared = PreparedRuns::new(one, None, selection);
+            let alone = alone_prepared.errors(&res, one).unwrap();
+            assert_eq!(pose_bits(&alone.ends[0]), pose_bits(&all.ends[i]), "run {i} {selection:?}");
+            let queries = &all.at_queries[first_query..first_query + alone.at_queries.len()];
+            assert!(queries.iter().zip(&alone.at_queries).all(|(a, b)| pose_bits(a) == pose_bits(b)), "run {i}");
+            first_query += alone.at_queries.len();
+            assert_eq!(rows(&alone_prepared, one)[0], all_rows[i], "run {i} {selection:?}");
+        }
+        assert_eq!(first_query, all.at_queries.len());
     }
 }

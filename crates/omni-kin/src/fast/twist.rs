@@ -1,6 +1,6 @@
 //! The built-in twist-stage effects in the lane kernel: `rotation_slip`, `world_drift` and the learned
 //! `body`, `world` and `time` families, each the same formula as its [`crate::effect::Effect::twist_at`]
-//! hook, four lanes at a time, with the heading's cosine and sine the kernel carries (no `sin_cos` per step
+//! hook, a group's lanes at a time (plain arrays), with the heading's cosine and sine the kernel carries (no `sin_cos` per step
 //! but `rotation_slip`'s turn beyond the polynomials' range). A model with any other twist-stage effect
 //! (a user's) takes the general walk.
 //!
@@ -236,7 +236,8 @@ pub(super) fn walk<const N: usize, const ARC: bool>(
                 return None;
             }
             *st = step_lane::<ARC>(*st, dx, dy, a);
-            if k % RESYNC_STEPS == RESYNC_STEPS - 1 {
+            // Not past the lane's last step (the same numbers whatever runs share the group).
+            if k % RESYNC_STEPS == RESYNC_STEPS - 1 && g.plans().get(l).is_some_and(|p| k < p.steps) {
                 (st.s, st.c) = st.th.sin_cos();
             }
         }
