@@ -127,3 +127,42 @@ fn outputs_are_byte_identical_to_the_golden_files() {
     }
     assert!(failures.is_empty(), "outputs changed:\n{}", failures.join("\n"));
 }
+
+/// `OMNICAL_SIMD` caps the cost kernel's lane arithmetic; whatever the path (portable, AVX2, AVX-512, as the
+/// CPU allows), training gives the golden files byte for byte (the paths are the same bits).
+#[test]
+fn training_is_the_same_bits_on_every_simd_path() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let sim = ["simulate", "--runs-per-command", "1", "--duration", "4", "--seed", "3"];
+    omnical(&[&sim[..], &["--out", "sim", "--effect", "time_offset=0.04"]].concat(), d);
+    let mut failures = Vec::new();
+    for path in ["portable", "avx2", "avx512"] {
+        for (name, extra) in [("paper", &["--preset", "paper"][..]), ("geometry_tau", &["--model", "geometry"])] {
+            let model = format!("{name}.toml");
+            let args = [&["train", "sim/train", "--json", "--out", &model][..], extra].concat();
+            let args = if name == "geometry_tau" { [&args[..], &["--effect", "time_offset"]].concat() } else { args };
+            let out = Command::new(env!("CARGO_BIN_EXE_omnical"))
+                .env("OMNICAL_SIMD", path)
+                .args(["--threads", "2", "-q"])
+                .args(&args)
+                .current_dir(d)
+                .output()
+                .unwrap();
+            assert!(out.status.success(), "{path}: {}", String::from_utf8_lossy(&out.stderr));
+            let before = failures.len();
+            check(&format!("train_{name}.json"), &json_without_timing(&out.stdout), &mut failures);
+            check(&format!("{name}.toml"), &read(d, &model), &mut failures);
+            failures[before..].iter_mut().for_each(|f| *f = format!("OMNICAL_SIMD={path}: {f}"));
+        }
+    }
+    assert!(failures.is_empty(), "outputs changed:\n{}", failures.join("\n"));
+    let out = Command::new(env!("CARGO_BIN_EXE_omnical"))
+        .env("OMNICAL_SIMD", "sse9")
+        .args(["train", "sim/train"])
+        .current_dir(d)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(String::from_utf8_lossy(&out.stderr), "error: OMNICAL_SIMD=sse9: expected avx512, avx2 or portable\n");
+}
