@@ -9,7 +9,7 @@ use omnical::ga::{LevenbergMarquardt, LmConfig, NoopObserver, Optimizer, Problem
 use omnical::kin::RobotGeometry;
 use omnical::kin::cost::{CostKind, mean_end_pose_error};
 use omnical::kin::evaluate::{Evaluator, Route};
-use omnical::kin::fast::PreparedRuns;
+use omnical::kin::fast::{PreparedRuns, SimdPath, limit_simd_path};
 use omnical::kin::odometry::end_pose_error;
 use omnical::kin::simulate::{SimConfig, simulate};
 use omnical::kin::{FittedModel, IkMatrix, Integration, Model, Run, Selection};
@@ -173,5 +173,120 @@ fn by_wheel_count(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(calibration, benches, by_wheel_count);
+/// The cost kernel (fast path, Eq. 6, Eq. 1 Euler 10 ms, the paper-size set) on every lane-arithmetic path
+/// this CPU has ([`SimdPath`], capped as `OMNICAL_SIMD` does), on 1 and 2 threads; then this machine's
+/// limit: the bare arithmetic of the same steps ([`limit::eq1_steps`]) at the widest lanes.
+fn lane_paths(c: &mut Criterion) {
+    let runs = paper_size(1, "train/");
+    let samples: usize = runs.iter().map(Run::n_samples).sum();
+    let model = Model::ik(IkMatrix::paper_design()).with_integration(Integration::PAPER);
+    let params = model.nominal();
+    let (Ok(res), Ok(ev)) = (model.resolve(&params), Evaluator::new(&model, &runs, Selection::End)) else { return };
+    let mut g = c.benchmark_group("issue 29, lane paths");
+    g.throughput(Throughput::Elements(samples as u64));
+    for path in SimdPath::available() {
+        for threads in [1, 2] {
+            let Some(pool) = pool(threads) else { continue };
+            limit_simd_path(path);
+            g.bench_function(format!("fast, Eq. 6, Eq. 1 Euler 10 ms, {}, {threads} thread(s)", path.name()), |b| {
+                pool.install(|| b.iter(|| black_box(ev.cost(&res, CostKind::EndPose))))
+            });
+        }
+    }
+    limit_simd_path(SimdPath::Avx512);
+    let steps = 1 << 16;
+    for chains in [1, 2, 3] {
+        g.throughput(Throughput::Elements((steps * 8 * chains) as u64));
+        g.bench_function(format!("limit: bare Eq. 1 steps, widest lanes, {chains} chain(s), 1 thread"), |b| {
+            b.iter(|| black_box(limit::run(chains, steps, black_box(1.0))))
+        });
+    }
+    g.finish();
+}
+
+/// The bare arithmetic of the kernel's Eq. 1 step (3 wheels, Euler) on eight f64 lanes, every operand in
+/// registers: no loads, no stores, no queries; the measured limit the kernel is compared with.
+mod limit {
+    use pulp::{Simd, f64x8};
+    use std::hint::black_box;
+
+    /// `steps` steps of `chains` independent lane groups (1 to 3: more chains hide the FMA latency of the
+    /// heading's rotation) at the widest lanes this CPU has; returns the sum of the lanes' x (so that
+    /// nothing is optimised away). `seed` (1.0) scales the increments.
+    pub fn run(chains: usize, steps: usize, seed: f64) -> f64 {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if let Some(simd) = pulp::x86::V4::try_new() {
+                return simd.vectorize(|| by_chains(simd, chains, steps, seed));
+            }
+            if let Some(simd) = pulp::x86::V3::try_new() {
+                let wide = pulp::x86::V3_512b(simd);
+                return simd.vectorize(|| by_chains(wide, chains, steps, seed));
+            }
+        }
+        let _ = (chains, steps, seed);
+        f64::NAN
+    }
+
+    #[inline(always)]
+    fn by_chains<S: Simd<f64s = f64x8>>(s: S, chains: usize, steps: usize, seed: f64) -> f64 {
+        match chains {
+            1 => eq1_steps::<S, 1>(s, steps, seed),
+            2 => eq1_steps::<S, 2>(s, steps, seed),
+            _ => eq1_steps::<S, 3>(s, steps, seed),
+        }
+    }
+
+    /// long: one register-resident loop, the kernel's step (`crates/omni-kin/src/fast/kernel.rs`) for
+    /// `ARC = false`, N = 3, operation for operation; the increments advance by one add per wheel (standing
+    /// in for the kernel's three loads), so the step angle changes and nothing can be hoisted.
+    #[inline(always)]
+    pub fn eq1_steps<S: Simd<f64s = f64x8>, const CHAINS: usize>(o: S, steps: usize, seed: f64) -> f64 {
+        let sp = |v: f64| o.splat_f64s(black_box(v));
+        let m: [f64x8; 9] = std::array::from_fn(|i| sp([-0.085, 0.0, 0.085, 0.049, -0.099, 0.049, 0.25, 0.25, 0.25][i]));
+        let mut u: [f64x8; 3] = std::array::from_fn(|j| sp(seed * (0.01 + 0.001 * j as f64)));
+        let du: [f64x8; 3] = std::array::from_fn(|j| sp(1e-9 * (1.0 + j as f64)));
+        let (s1, s2, s3, s4) = (sp(-1.0 / 6.0), sp(1.0 / 120.0), sp(-1.0 / 5040.0), sp(1.0 / 362_880.0));
+        let (c0, c1, c2, c3, c4) =
+            (sp(0.5), sp(-1.0 / 24.0), sp(1.0 / 720.0), sp(-1.0 / 40_320.0), sp(1.0 / 3_628_800.0));
+        let one = sp(1.0);
+        let mut st: [[f64x8; 5]; CHAINS] = [[sp(0.0), sp(0.0), sp(0.0), sp(1.0), sp(0.0)]; CHAINS];
+        for _ in 0..steps {
+            for j in 0..3 {
+                u[j] = o.add_f64s(u[j], du[j]);
+            }
+            for [x, y, th, c, s] in st.iter_mut() {
+                let mut dx = o.mul_f64s(m[0], u[0]);
+                let mut dy = o.mul_f64s(m[3], u[0]);
+                let mut a = o.mul_f64s(m[6], u[0]);
+                for j in 1..3 {
+                    dx = o.mul_add_e_f64s(m[j], u[j], dx);
+                    dy = o.mul_add_e_f64s(m[3 + j], u[j], dy);
+                    a = o.mul_add_e_f64s(m[6 + j], u[j], a);
+                }
+                let a2 = o.mul_f64s(a, a);
+                let p = o.mul_add_e_f64s(a2, s4, s3);
+                let p = o.mul_add_e_f64s(a2, p, s2);
+                let p = o.mul_add_e_f64s(a2, p, s1);
+                let sinc = o.mul_add_e_f64s(a2, p, one);
+                let q = o.mul_add_e_f64s(a2, c4, c3);
+                let q = o.mul_add_e_f64s(a2, q, c2);
+                let q = o.mul_add_e_f64s(a2, q, c1);
+                let cosc = o.mul_f64s(a, o.mul_add_e_f64s(a2, q, c0));
+                *x = o.mul_add_e_f64s(*c, dx, o.negate_mul_add_e_f64s(*s, dy, *x));
+                *y = o.mul_add_e_f64s(*s, dx, o.mul_add_e_f64s(*c, dy, *y));
+                let sa = o.mul_f64s(a, sinc);
+                let ac = o.mul_f64s(a, cosc);
+                let c_next = o.negate_mul_add_e_f64s(*c, ac, o.negate_mul_add_e_f64s(*s, sa, *c));
+                *s = o.negate_mul_add_e_f64s(*s, ac, o.mul_add_e_f64s(*c, sa, *s));
+                *c = c_next;
+                *th = o.add_f64s(*th, a);
+            }
+        }
+        let lanes: [f64; 8] = pulp::cast(st.iter().fold(sp(0.0), |acc, v| o.add_f64s(acc, v[0])));
+        lanes.iter().sum()
+    }
+}
+
+criterion_group!(calibration, benches, by_wheel_count, lane_paths);
 criterion_main!(calibration);
