@@ -193,6 +193,18 @@ fn lane_paths(c: &mut Criterion) {
             });
         }
     }
+    // The first 32 runs (≈ 0.9 MB of increments, within a core's L2): the kernel without the L3 traffic.
+    let few = &runs[..32];
+    let few_samples: usize = few.iter().map(Run::n_samples).sum();
+    if let (Ok(few_ev), Some(pool)) = (Evaluator::new(&model, few, Selection::End), pool(1)) {
+        g.throughput(Throughput::Elements(few_samples as u64));
+        for path in SimdPath::available().into_iter().filter(|p| *p != SimdPath::Portable) {
+            limit_simd_path(path);
+            g.bench_function(format!("fast, Eq. 6, Eq. 1 Euler 10 ms, 32 runs, {}, 1 thread", path.name()), |b| {
+                pool.install(|| b.iter(|| black_box(few_ev.cost(&res, CostKind::EndPose))))
+            });
+        }
+    }
     limit_simd_path(SimdPath::Avx512);
     let steps = 1 << 16;
     for chains in [1, 2, 3] {
@@ -210,8 +222,8 @@ mod limit {
     use pulp::{Simd, f64x8};
     use std::hint::black_box;
 
-    /// `steps` steps of `chains` independent lane groups (1 to 3: more chains hide the FMA latency of the
-    /// heading's rotation) at the widest lanes this CPU has; returns the sum of the lanes' x (so that
+    /// `steps` steps of `chains` independent lane groups (1 to 3: more chains would hide the FMA latency
+    /// of the heading's rotation, if latency bound it) at the widest lanes this CPU has; returns the sum of the lanes' x (so that
     /// nothing is optimised away). `seed` (1.0) scales the increments.
     pub fn run(chains: usize, steps: usize, seed: f64) -> f64 {
         #[cfg(target_arch = "x86_64")]
@@ -238,13 +250,16 @@ mod limit {
     }
 
     /// long: one register-resident loop, the kernel's step (`crates/omni-kin/src/fast/kernel.rs`) for
-    /// `ARC = false`, N = 3, operation for operation; the increments advance by one add per wheel (standing
-    /// in for the kernel's three loads), so the step angle changes and nothing can be hoisted.
+    /// `ARC = false`, N = 3, operation for operation; each chain's increments advance by one add per wheel
+    /// (standing in for the kernel's three loads), so the step angle changes, nothing can be hoisted out
+    /// of the loop, and no chain shares a product with another.
     #[inline(always)]
     pub fn eq1_steps<S: Simd<f64s = f64x8>, const CHAINS: usize>(o: S, steps: usize, seed: f64) -> f64 {
         let sp = |v: f64| o.splat_f64s(black_box(v));
-        let m: [f64x8; 9] = std::array::from_fn(|i| sp([-0.085, 0.0, 0.085, 0.049, -0.099, 0.049, 0.25, 0.25, 0.25][i]));
-        let mut u: [f64x8; 3] = std::array::from_fn(|j| sp(seed * (0.01 + 0.001 * j as f64)));
+        let m: [f64x8; 9] =
+            std::array::from_fn(|i| sp([-0.085, 0.0, 0.085, 0.049, -0.099, 0.049, 0.25, 0.25, 0.25][i]));
+        let mut u: [[f64x8; 3]; CHAINS] =
+            std::array::from_fn(|i| std::array::from_fn(|j| sp(seed * (0.01 + 0.001 * j as f64 + 0.003 * i as f64))));
         let du: [f64x8; 3] = std::array::from_fn(|j| sp(1e-9 * (1.0 + j as f64)));
         let (s1, s2, s3, s4) = (sp(-1.0 / 6.0), sp(1.0 / 120.0), sp(-1.0 / 5040.0), sp(1.0 / 362_880.0));
         let (c0, c1, c2, c3, c4) =
@@ -252,10 +267,10 @@ mod limit {
         let one = sp(1.0);
         let mut st: [[f64x8; 5]; CHAINS] = [[sp(0.0), sp(0.0), sp(0.0), sp(1.0), sp(0.0)]; CHAINS];
         for _ in 0..steps {
-            for j in 0..3 {
-                u[j] = o.add_f64s(u[j], du[j]);
-            }
-            for [x, y, th, c, s] in st.iter_mut() {
+            for ([x, y, th, c, s], u) in st.iter_mut().zip(u.iter_mut()) {
+                for j in 0..3 {
+                    u[j] = o.add_f64s(u[j], du[j]);
+                }
                 let mut dx = o.mul_f64s(m[0], u[0]);
                 let mut dy = o.mul_f64s(m[3], u[0]);
                 let mut a = o.mul_f64s(m[6], u[0]);
