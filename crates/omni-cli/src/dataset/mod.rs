@@ -340,6 +340,29 @@ pub fn inspect(path: &Path, max_file_bytes: u64) -> Result<Inspected, DatasetErr
     Ok(Inspected { recording: first.path().to_path_buf(), inventory, recordings: recordings.len() })
 }
 
+/// One ROS recording at `path` looked at for `omnical info`: its topics, and the role each would play in a
+/// read with `opts` ([`mcap::TopicReview`]); `truth_elsewhere` says where the ground truth comes from when
+/// it is not a topic.
+pub fn review(
+    path: &Path,
+    max_file_bytes: u64,
+    opts: &mcap::McapOptions,
+    truth_elsewhere: Option<&str>,
+) -> Result<(mcap::Inventory, Vec<mcap::TopicReview>), DatasetError> {
+    let inventory = feed_ros(path, max_file_bytes, |zstd| {
+        let mut sink = mcap::InventorySink::new(path);
+        sink.zstd_messages = zstd;
+        sink
+    })?
+    .finish()?;
+    let rec = feed_ros(path, max_file_bytes, |zstd| {
+        let mut rec = mcap::read::Recording::new(&opts.wheel_joints);
+        rec.zstd_messages = zstd;
+        rec
+    })?;
+    Ok((inventory, mcap::review::review(path, rec, opts, truth_elsewhere)))
+}
+
 /// One thing to read: it gives runs on its own.
 #[derive(Clone, Debug)]
 enum Input {

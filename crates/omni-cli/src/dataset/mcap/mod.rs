@@ -66,6 +66,7 @@ mod odometry;
 mod pose_stamped;
 mod poses;
 pub(crate) mod read;
+pub(crate) mod review;
 pub mod split;
 mod statics;
 mod tf;
@@ -83,6 +84,7 @@ pub(crate) use inspect::InventorySink;
 pub use inspect::{Inventory, ROBOT_DESCRIPTION_TOPIC, TopicSummary, inspect, inspect_bytes};
 pub use laser_scan::ScanRead;
 pub(crate) use laser_scan::ScanSink;
+pub use review::{Role, TopicReview};
 pub use write::{COMMAND_TOPIC, IMU_TOPIC, JOINTS_TOPIC, LASER_FRAME, SCAN_TOPIC, TF_STATIC_TOPIC, TRUTH_TOPIC};
 
 /// ROS time of the simulator's t = 0 in MCAP output (2023-11-14T22:13:20Z). s.
