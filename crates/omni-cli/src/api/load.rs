@@ -84,7 +84,7 @@ impl DataOptions {
     pub fn wheel_joints(&self, ds: &Dataset) -> Vec<String> {
         let mut mcap =
             dataset::mcap::McapOptions { wheel_joints: self.joints.clone().unwrap_or_default(), ..Default::default() };
-        robot_file::fill_mcap_options(&mut mcap, self.joints.is_none(), ds.robot_file.as_ref().map(|r| &r.description));
+        robot_file::fill_mcap_options(&mut mcap, self.joints.is_none(), ds.robot_file.as_ref());
         mcap.wheel_joints
     }
 }
@@ -198,8 +198,8 @@ impl LoadRequest {
             recorded_odometry: self.recorded_odometry,
             ..Default::default()
         };
-        robot_file::fill_mcap_options(&mut mcap, data.joints.is_none(), robot.map(|r| &r.description));
-        mcap.wheels_only = self.wheels_only || end_pose_file(data)?.is_some() || scans_topic(data)?.is_some();
+        robot_file::fill_mcap_options(&mut mcap, data.joints.is_none(), robot);
+        mcap.wheels_only = self.wheels_only || scans_topic(data)?.is_some() || end_pose_file(data)?.is_some();
         if mcap.wheels_only || ground_truth_options(data, robot)?.is_none() {
             mcap.truth_time_offset_s = data.gt_time_offset_s;
         }

@@ -363,6 +363,16 @@ pub fn review(
     Ok((inventory, mcap::review::review(path, rec, opts, truth_elsewhere)))
 }
 
+/// The text of a file a user writes by hand or a spreadsheet exports (a table, a ground-truth file, a
+/// plan), without the UTF-8 byte-order mark Excel and Notepad put in front, as the run CSV reader takes it.
+pub fn read_text(path: &Path) -> Result<String, DatasetError> {
+    let text = std::fs::read_to_string(path).map_err(|e| DatasetError::io(path, e))?;
+    Ok(match text.strip_prefix('\u{feff}') {
+        Some(rest) => rest.to_string(),
+        None => text,
+    })
+}
+
 /// One thing to read: it gives runs on its own.
 #[derive(Clone, Debug)]
 enum Input {

@@ -13,7 +13,7 @@ use super::poses::{PoseSeries, start_heading_in_half_turn};
 use super::statics::StaticTree;
 use super::tf::{self, TfMessage, TfPairs};
 use super::twist::{self, Commands, TwistStamped};
-use super::{McapOptions, McapRead, split};
+use super::{McapOptions, McapRead, Origin, split};
 use crate::dataset::DatasetError;
 use crate::dataset::ground_truth::{ExternalTruth, GtClock, TruthSample};
 use mcap::sans_io::LinearReaderOptions;
@@ -223,10 +223,11 @@ impl Bag<'_> {
         if list.is_empty() { "none".into() } else { list.join(", ") }
     }
 
-    /// The channel of an explicitly chosen topic.
-    fn find(&self, topic: &str, flag: &str) -> Result<usize, DatasetError> {
+    /// The channel of an explicitly chosen topic, set at `origin`.
+    fn find(&self, topic: &str, origin: &Origin) -> Result<usize, DatasetError> {
         self.channels.iter().position(|c| c.topic == topic).ok_or_else(|| {
-            DatasetError::file(self.path, format!("{flag} {topic}: no such topic; topics: {}", self.listing()))
+            let named = origin.naming(topic);
+            DatasetError::file(self.path, format!("{named}: no such topic; topics: {}", self.listing()))
         })
     }
 
@@ -244,7 +245,7 @@ impl Bag<'_> {
 
     pub(super) fn joints(&self, opts: &McapOptions) -> Result<usize, DatasetError> {
         if let Some(topic) = &opts.joints_topic {
-            let i = self.find(topic, "--joints-topic")?;
+            let i = self.find(topic, &opts.origins.joints_topic)?;
             let c = &self.channels[i];
             if c.msg_type != MsgType::JointState {
                 return Err(DatasetError::at(
@@ -300,12 +301,12 @@ impl Bag<'_> {
         if let Some(p) = &opts.truth_parent_frame
             && p != frame
         {
-            return Some(format!("has frame {frame:?}, but --gt-parent-frame is {p:?}"));
+            return Some(format!("has frame {frame:?}, but {}", opts.origins.truth_parent_frame.naming(p)));
         }
         if let (Some(want), Some(child)) = (&opts.truth_child_frame, &s.child)
             && want != child
         {
-            return Some(format!("has child frame {child:?}, but --gt-child-frame is {want:?}"));
+            return Some(format!("has child frame {child:?}, but {}", opts.origins.truth_child_frame.naming(want)));
         }
         None
     }
@@ -316,7 +317,7 @@ impl Bag<'_> {
         let (parent, child) = (opts.truth_parent_frame.as_deref(), opts.truth_child_frame.as_deref());
         let statics = self.statics();
         if let Some(topic) = &opts.truth_topic {
-            let i = self.find(topic, "--gt-topic")?;
+            let i = self.find(topic, &opts.origins.truth_topic)?;
             let c = &self.channels[i];
             return match (&c.content, c.msg_type) {
                 (Content::Tf(pairs), _) => {
