@@ -79,6 +79,10 @@ pub enum Command {
     /// An IMU's yaw rate as a rotation reference: the wheel matrix's rotation row and the gyro's bias (the
     /// translation rows need a reference that senses translation).
     Imu(cmd::imu::Args),
+    /// What a ROS recording holds (topics, types, counts, rates, joints) and what omnical makes of it: each
+    /// topic's role and why, the runs a read gives (samples, rates, gaps, the ground truth's clock), its
+    /// notes, or the error that stops it.
+    Info(cmd::info::Args),
     /// Propose calibration runs that excite every parameter of a model (and its effects), with the
     /// standard errors they would give for a stated ground-truth noise.
     Plan(cmd::plan::Args),
@@ -156,6 +160,7 @@ fn run_command(cli: Cli) -> anyhow::Result<()> {
         Command::Export(a) => cmd::export::run(&a),
         Command::ScanOdometry(a) => cmd::scan_odometry::run(&a),
         Command::Imu(a) => cmd::imu::run(&a),
+        Command::Info(a) => cmd::info::run(&a),
         Command::Plan(a) => cmd::plan::run(&a),
         Command::Init(a) => cmd::init::run(&a),
         Command::Demo(a) => cmd::demo::run(&a, cli.quiet),

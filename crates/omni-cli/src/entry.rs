@@ -42,8 +42,8 @@ pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
         eprintln!("error: {e}");
         return 2;
     }
-    let cli = match with_project_defaults(cli, &args) {
-        Ok(cli) => cli,
+    let (cli, project) = match with_project_defaults(cli, &args) {
+        Ok(found) => found,
         Err(status) => return status,
     };
     match run_quiet_on_closed_pipe(cli) {
@@ -63,23 +63,60 @@ pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
                 eprintln!("omnical: {e:#}");
                 return crate::interrupt::EXIT_INTERRUPTED;
             }
-            eprintln!("error: {e:#}");
+            let text = format!("{e:#}");
+            eprintln!("error: {}", project.map_or_else(|| text.clone(), |p| with_project_origins(&text, &p, &args)));
             2
         }
     }
 }
 
+/// An error message with the project file's values named where they came from: a flag the file set
+/// (`--joints-topic /js`) becomes the file's key with its line (`joints_topic = "/js" (omnical.toml, line
+/// 2)`), and a path it set that the message names gets a note giving the key and line. Values given on the
+/// command line itself are left alone.
+pub fn with_project_origins(text: &str, project: &crate::project_file::ProjectFile, args: &[OsString]) -> String {
+    let cli = Cli::command();
+    let Some(command) = args.iter().skip(1).find_map(|a| cli.find_subcommand(a).map(|c| c.get_name().to_string()))
+    else {
+        return text.to_string();
+    };
+    let mut text = text.to_string();
+    let mut notes = Vec::new();
+    let mut keys: Vec<&str> = project.settings.iter().map(|s| s.key.as_str()).collect();
+    keys.sort_unstable();
+    keys.dedup();
+    for key in keys {
+        let Some(s) = project.get(&command, key) else { continue };
+        let flag = format!("--{}", key.replace('_', "-"));
+        let on_command_line =
+            args.iter().any(|a| a.to_str().is_some_and(|a| a == flag || a.starts_with(&format!("{flag}="))));
+        if on_command_line {
+            continue;
+        }
+        let value = s.values.join(",");
+        let (file, line) = (project.path.display(), s.line);
+        let origin = format!("{key} = {value:?} ({file}, line {line})");
+        let as_flag = format!("{flag} {value}");
+        if text.contains(&as_flag) {
+            text = text.replace(&as_flag, &origin);
+        } else if crate::project_file::is_path_key(key) && text.contains(&value) {
+            notes.push(format!("\n  note: {key} = {value:?} is set in {file}, line {line}"));
+        }
+    }
+    text + &notes.concat()
+}
+
 /// The command line parsed again with the project file's values (`--config FILE` or ./omnical.toml) as
 /// the options' defaults; unchanged without one, and for `omnical config`, which shows the layers itself.
 /// `Err` is the exit status after the error was printed (2 for a bad project file).
-fn with_project_defaults(cli: Cli, args: &[OsString]) -> Result<Cli, i32> {
+fn with_project_defaults(cli: Cli, args: &[OsString]) -> Result<(Cli, Option<crate::project_file::ProjectFile>), i32> {
     if matches!(cli.command, crate::cli::Command::Config(_)) {
-        return Ok(cli);
+        return Ok((cli, None));
     }
     let cwd = std::env::current_dir().unwrap_or_default();
     let project = match crate::project_file::find(cli.config.as_deref(), &cwd) {
         Ok(Some(p)) => p,
-        Ok(None) => return Ok(cli),
+        Ok(None) => return Ok((cli, None)),
         Err(e) => {
             eprintln!("error: {e}");
             return Err(2);
@@ -89,10 +126,11 @@ fn with_project_defaults(cli: Cli, args: &[OsString]) -> Result<Cli, i32> {
         eprintln!("error: {e}");
         2
     })?;
-    command.try_get_matches_from(args).and_then(|m| Cli::from_arg_matches(&m)).map_err(|e| {
+    let cli = command.try_get_matches_from(args).and_then(|m| Cli::from_arg_matches(&m)).map_err(|e| {
         let _ = e.print();
         e.exit_code()
-    })
+    })?;
+    Ok((cli, Some(project)))
 }
 
 /// When the positional runs are missing from a command line that has `--validate` (an older spelling gave

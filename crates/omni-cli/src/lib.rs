@@ -23,4 +23,5 @@ pub mod project_file;
 pub mod report;
 pub mod robot_config;
 pub mod robot_file;
+pub mod toml_error;
 pub mod units;

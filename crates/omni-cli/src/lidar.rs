@@ -60,7 +60,8 @@ struct PolygonEntry {
 pub fn read_room(path: &Path) -> Result<Room, DatasetError> {
     let text = std::fs::read_to_string(path).map_err(|e| DatasetError::io(path, e))?;
     let file: RoomFile = toml::from_str(&text).map_err(|e| {
-        DatasetError::file(path, format!("not a room file ([[polygon]] tables with vertices_m = [[x, y], …]): {e}"))
+        let at = crate::toml_error::locate(&text, &e);
+        DatasetError::file(path, format!("not a room file ([[polygon]] tables with vertices_m = [[x, y], …]): {at}"))
     })?;
     Room::new(file.polygon.into_iter().map(|p| p.vertices_m).collect())
         .map_err(|e| DatasetError::file(path, format!("{e} (polygon 0 is the outer wall, then the obstacles)")))

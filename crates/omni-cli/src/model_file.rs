@@ -223,7 +223,7 @@ enum ParseFailure {
 }
 
 fn parse(text: &str) -> Result<FittedModel, ParseFailure> {
-    let file: ModelFile = toml::from_str(text).map_err(|e| ParseFailure::Toml(e.to_string().trim().to_string()))?;
+    let file: ModelFile = toml::from_str(text).map_err(|e| ParseFailure::Toml(crate::toml_error::locate(text, &e)))?;
     file.to_fitted().map_err(ParseFailure::Model)
 }
 

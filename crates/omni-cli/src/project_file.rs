@@ -23,6 +23,11 @@ const MAX_FILE_BYTES: u64 = 1 << 20;
 /// Keys whose values are paths: relative ones are relative to the project file's folder.
 const PATH_KEYS: &[&str] = &["robot", "gt"];
 
+/// Whether `key`'s value is a path (relative ones are taken from the project file's folder).
+pub fn is_path_key(key: &str) -> bool {
+    PATH_KEYS.contains(&key)
+}
+
 /// One value of the file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Setting {
@@ -112,8 +117,9 @@ pub fn find(flag: Option<&Path>, cwd: &Path) -> Result<Option<ProjectFile>, Proj
 /// every key against the project keys of [`settings::SETTINGS`] and every table against the commands of [`crate::cli::Cli`].
 pub fn parse(text: &str, path: &Path) -> Result<ProjectFile, ProjectFileError> {
     let file = |message: String| ProjectFileError::File { path: path.to_path_buf(), message };
-    let values: toml::Table = toml::from_str(text).map_err(|e| file(format!("not TOML: {}", e.message())))?;
-    let spans = DeTable::parse(text).map_err(|e| file(format!("not TOML: {}", e.message())))?;
+    let not_toml = |e: toml::de::Error| file(format!("not TOML: {}", crate::toml_error::locate(text, &e)));
+    let values: toml::Table = toml::from_str(text).map_err(not_toml)?;
+    let spans = DeTable::parse(text).map_err(not_toml)?;
     let line_of = |key: &str, table: Option<&str>| {
         let root = spans.get_ref();
         let span = match table {

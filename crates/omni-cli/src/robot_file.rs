@@ -88,12 +88,18 @@ pub enum RobotFileError {
 pub fn parse(text: &str, path: &Path) -> Result<RobotDescription, RobotFileError> {
     let d: RobotDescription = toml::from_str(text).map_err(|e| {
         let span = e.span().unwrap_or(0..0);
-        let field = locate::path_at(text, &span).unwrap_or_else(|| "(file)".into());
-        RobotFileError::At {
-            path: path.to_path_buf(),
-            line: line_of(text, span.start),
-            field,
-            message: e.message().trim_end().to_string(),
+        match locate::path_at(text, &span) {
+            Some(field) => RobotFileError::At {
+                path: path.to_path_buf(),
+                line: line_of(text, span.start),
+                field,
+                message: e.message().trim_end().to_string(),
+            },
+            // A syntax error outside any field: where it is, to the column.
+            None => RobotFileError::File {
+                path: path.to_path_buf(),
+                message: format!("not TOML: {}", crate::toml_error::locate(text, &e)),
+            },
         }
     })?;
     d.validate().map_err(|e| at_field(text, path, &e))?;
@@ -185,21 +191,53 @@ pub fn announce(source: &Source) {
 
 /// Fills what the command line left open from the robot description: the wheel joints (when
 /// `joints_open`; without a description, `wheel_a`, `wheel_b`, `wheel_c`), the topics and the frames.
-pub fn fill_mcap_options(mcap: &mut McapOptions, joints_open: bool, robot: Option<&RobotDescription>) {
+pub fn fill_mcap_options(mcap: &mut McapOptions, joints_open: bool, robot: Option<&RobotFile>) {
     if joints_open {
-        mcap.wheel_joints = robot.map_or_else(|| McapOptions::default().wheel_joints, RobotDescription::joints);
+        mcap.wheel_joints = robot.map_or_else(|| McapOptions::default().wheel_joints, |r| r.description.joints());
     }
-    let Some(r) = robot else { return };
-    let fill = |slot: &mut Option<String>, from: &Option<String>| {
-        if slot.is_none() {
+    let Some(file) = robot else { return };
+    let r = &file.description;
+    // Where a key is, for messages that name the value: `robot.toml, line 31`.
+    let origin = |table: &str, key: &str| {
+        let at = match &file.source {
+            Source::Flag(p) | Source::Discovered(p) => match line_of_field(p, &format!("{table}.{key}")) {
+                Some(line) => format!("{}, line {line}", p.display()),
+                None => p.display().to_string(),
+            },
+            Source::Builtin => file.source.to_string(),
+        };
+        crate::dataset::mcap::Origin::RobotFile { key: format!("[{table}] {key}"), at }
+    };
+    let fill = |slot: &mut Option<String>,
+                from: &Option<String>,
+                slot_origin: &mut crate::dataset::mcap::Origin,
+                table: &str,
+                key: &str| {
+        if slot.is_none() && from.is_some() {
             slot.clone_from(from);
+            *slot_origin = origin(table, key);
         }
     };
-    fill(&mut mcap.joints_topic, &r.topics.joint_states);
-    fill(&mut mcap.truth_topic, &r.topics.ground_truth);
-    fill(&mut mcap.command_topic, &r.topics.command);
-    fill(&mut mcap.truth_parent_frame, &r.frames.ground_truth_parent);
-    fill(&mut mcap.truth_child_frame, &r.frames.ground_truth_child);
+    let o = &mut mcap.origins;
+    fill(&mut mcap.joints_topic, &r.topics.joint_states, &mut o.joints_topic, "topics", "joint_states");
+    fill(&mut mcap.truth_topic, &r.topics.ground_truth, &mut o.truth_topic, "topics", "ground_truth");
+    if mcap.command_topic.is_none() {
+        mcap.command_topic.clone_from(&r.topics.command);
+    }
+    fill(
+        &mut mcap.truth_parent_frame,
+        &r.frames.ground_truth_parent,
+        &mut o.truth_parent_frame,
+        "frames",
+        "ground_truth_parent",
+    );
+    fill(
+        &mut mcap.truth_child_frame,
+        &r.frames.ground_truth_child,
+        &mut o.truth_child_frame,
+        "frames",
+        "ground_truth_child",
+    );
     mcap.wheel_data = r.wheel_data.clone();
 }
 

@@ -162,7 +162,10 @@ fn bad_project_files_name_the_file_line_and_key() {
         ),
         ("# x\n\n[eval]\nseed = 3\n", "error: omnical.toml: line 4: eval.seed: `omnical eval` has no --seed"),
         ("seed = [1]\n", "error: omnical.toml: line 1: seed: expected a string, number or boolean, found array"),
-        ("seed = \n", "error: omnical.toml: not TOML: string values must be quoted, expected literal string"),
+        (
+            "seed = \n",
+            "error: omnical.toml: not TOML: line 1, column 8: string values must be quoted, expected literal string",
+        ),
     ];
     for (text, want) in cases {
         std::fs::write(d.join("omnical.toml"), text).unwrap();
@@ -175,6 +178,48 @@ fn bad_project_files_name_the_file_line_and_key() {
     assert!(omnical(&["--help"], d).status.success());
     let missing = refused(&["--config", "nope.toml", "eval", "x"], d);
     assert!(missing.starts_with("error: nope.toml: No such file"), "{missing}");
+}
+
+/// The error and what follows it (the notes before it left out).
+fn from_error(stderr: &str) -> String {
+    stderr[stderr.find("error:").unwrap_or(0)..].to_string()
+}
+
+#[test]
+fn errors_name_where_a_value_came_from() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    simulate(d);
+    let bag = "sim/train/00-r0.mcap";
+    // A topic from omnical.toml is named as the file's key and line, not as the flag it set; the flag on
+    // the command line is named as the flag.
+    std::fs::write(d.join("omnical.toml"), "seed = 5\n[train]\njoints_topic = \"/js2\"\n").unwrap();
+    let e = from_error(&refused(&["train", bag], d));
+    assert!(
+        e.starts_with(&format!(
+            "error: {bag}: joints_topic = \"/js2\" (omnical.toml, line 3): no such topic; topics: "
+        )),
+        "{e}"
+    );
+    let e = from_error(&refused(&["train", bag, "--joints-topic", "/js3"], d));
+    assert!(e.starts_with(&format!("error: {bag}: --joints-topic /js3: no such topic")), "{e}");
+    // A path from omnical.toml that does not exist: the error names it, and a note the key and line.
+    std::fs::write(d.join("omnical.toml"), "# project\ngt = \"mocap/take.tum\"\n").unwrap();
+    let e = from_error(&refused(&["eval", bag, "--model", "design"], d));
+    assert_eq!(
+        e,
+        "error: mocap/take.tum: No such file or directory (os error 2)\n  note: gt = \"mocap/take.tum\" is set in \
+         omnical.toml, line 2"
+    );
+    std::fs::remove_file(d.join("omnical.toml")).unwrap();
+    // A topic from robot.toml is named as its key, file and line.
+    let robot = std::fs::read_to_string(d.join("sim/train/robot.toml")).unwrap();
+    let line = robot.lines().count() + 3; // after a blank line and the table header
+    std::fs::write(d.join("r.toml"), format!("{robot}\n[topics]\nground_truth = \"/vicon\"\n")).unwrap();
+    let e = from_error(&refused(&["eval", bag, "--model", "design", "--robot", "r.toml"], d));
+    let want =
+        format!("error: {bag}: [topics] ground_truth = \"/vicon\" (r.toml, line {line}): no such topic; topics: ");
+    assert!(e.starts_with(&want), "{e}");
 }
 
 // ---------------------------------------------------------------------------------------------------------

@@ -52,7 +52,8 @@ fn squares_against_arcs_name_the_missing_motions_everywhere() {
     let d = dir.path();
     // A square's parts: straight sides and turns on the spot; held out: arcs both ways.
     simulate(d, "sq", "3", "v_m_s,alpha_deg,omega_rad_s\n0.2,0,0\n0.2,90,0\n0,0,0.5\n0,0,-0.5\n");
-    simulate(d, "arcs", "4", "v_m_s,alpha_deg,omega_rad_s\n0.2,0,0.35\n0.2,0,-0.35\n");
+    // Written as a spreadsheet saves it (a UTF-8 byte-order mark, CRLF), read as the run CSVs are.
+    simulate(d, "arcs", "4", "\u{feff}v_m_s,alpha_deg,omega_rad_s\r\n0.2,0,0.35\r\n0.2,0,-0.35\r\n");
     ok(&omnical(&["train", "sq/train", "--out", "fit.toml"], d));
     let held = ["--model", "fit.toml", "sq/train", "--validate", "arcs/validation"];
     let json: serde_json::Value =

@@ -85,3 +85,60 @@ fn readme_recipe_on_humble_recordings_with_mocap_in_the_bag() {
 fn readme_recipe_on_humble_recordings_with_mocap_in_files() {
     recipe("file", &["--gt", "mocap"]);
 }
+
+/// Runs omnical in `dir` expecting it to succeed, and parses its JSON.
+fn omnical_json(dir: &Path, args: &[&str]) -> Value {
+    serde_json::from_str(&omnical(dir, args).0).unwrap()
+}
+
+/// The role `info --json` gives `topic`, and why.
+fn role<'a>(v: &'a Value, topic: &str) -> (&'a str, &'a str) {
+    let t = v["recordings"][0]["topics"].as_array().unwrap().iter().find(|t| t["topic"] == topic).unwrap();
+    (t["role"].as_str().unwrap(), t["why"].as_str().unwrap())
+}
+
+#[test]
+#[cfg_attr(
+    not(python_bag_tools),
+    ignore = "needs rosbags and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
+)]
+fn info_names_each_topics_role_the_runs_and_the_mocap_clock() {
+    let dir = recordings().join("bag");
+    let robot = dir.join("info-robot.toml");
+    omnical(&dir, &["init", "session_01", "--out", "info-robot.toml", "--force"]);
+    let robot = robot.to_str().unwrap();
+    let v = omnical_json(&dir, &["info", "session_01", "--robot", robot, "--json"]);
+    let rec = &v["recordings"][0];
+    assert_eq!(rec["topics"].as_array().unwrap().len(), 6, "{rec}");
+    for (topic, want) in [
+        ("/joint_states", "wheels"),
+        ("/mocap/pose", "ground_truth"),
+        ("/odom", "recorded_odometry"),
+        ("/cmd_vel", "command"),
+        ("/tf_static", "static_transforms"),
+        ("/robot_description", "urdf"),
+    ] {
+        assert_eq!(role(&v, topic).0, want, "{topic}: {v}");
+    }
+    assert!(role(&v, "/joint_states").1.contains("left_wheel_joint, right_wheel_joint in wheel order"), "{v}");
+    let joints = &rec["topics"].as_array().unwrap().iter().find(|t| t["topic"] == "/joint_states").unwrap();
+    assert_eq!(joints["joint_names"][0], "caster_swivel_joint");
+    assert_eq!(joints["messages"], 1251);
+    let read = &rec["read"];
+    assert_eq!(read["ok"], true, "{read}");
+    let run = &read["runs"][0];
+    assert_eq!(run["wheel_samples"], 1251);
+    assert!((run["wheel_rate_hz"].as_f64().unwrap() - 50.0).abs() < 1e-6, "{run}");
+    assert!((run["truth_rate_hz"].as_f64().unwrap() - 120.0).abs() < 0.5, "{run}");
+    let offset = read["clocks"][0]["offset_s"].as_f64().unwrap();
+    assert!((offset - 0.8).abs() < 0.005, "mocap clock {offset}");
+
+    // Naming the robot's own odometry as the ground truth: the topic says why it is refused, and the read
+    // fails with the loader's own message (info itself succeeds: it reports).
+    let v = omnical_json(&dir, &["info", "session_01", "--robot", robot, "--gt-topic", "/odom", "--json"]);
+    let (r, why) = role(&v, "/odom");
+    assert_eq!(r, "unused");
+    assert!(why.starts_with("named as the ground truth (--gt-topic), refused:") && why.contains("REP-105"), "{why}");
+    assert_eq!(v["recordings"][0]["read"]["ok"], false);
+    assert!(v["recordings"][0]["read"]["error"].as_str().unwrap().contains("the model under test, never ground truth"));
+}

@@ -98,3 +98,33 @@ fn bad_imu_inputs_are_refused_naming_the_file_and_topic() {
         assert_eq!(error, want, "{args:?}: {err}");
     }
 }
+
+#[test]
+fn info_points_the_imu_to_omnical_imu_and_refuses_what_is_no_recording() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    simulate(d, "sim", "50");
+    let v: Value = serde_json::from_str(&ok(&["info", "sim/train/00-r0.mcap", "--json"], d)).unwrap();
+    let topics = v["recordings"][0]["topics"].as_array().unwrap();
+    let imu = topics.iter().find(|t| t["topic"] == "/imu").unwrap();
+    assert_eq!(imu["role"], "imu");
+    assert_eq!(imu["why"], "omnical imu --topic /imu fits the wheel matrix's rotation row");
+    assert!((imu["rate_hz"].as_f64().unwrap() - 50.0).abs() < 0.1, "{imu}");
+    let run = &v["recordings"][0]["read"]["runs"][0];
+    assert_eq!(run["name"], "00-r0");
+    // 6 s of motion between rests, sampled at 100 Hz: the duration is the samples' span.
+    let samples = run["wheel_samples"].as_u64().unwrap();
+    assert!(samples > 600, "{run}");
+    assert!((run["duration_s"].as_f64().unwrap() - (samples - 1) as f64 * 0.01).abs() < 1e-9, "{run}");
+    assert!((run["wheel_rate_hz"].as_f64().unwrap() - 100.0).abs() < 1e-6, "{run}");
+    // Text: the same verdicts, one topic per line.
+    let text = ok(&["info", "sim/train/00-r0.mcap"], d);
+    assert!(text.contains("    /imu (sensor_msgs/msg/Imu, "), "{text}");
+    assert!(text.contains("      IMU: omnical imu --topic /imu fits the wheel matrix's rotation row"), "{text}");
+    assert!(text.contains("  omnical reads 1 run:\n    00-r0: "), "{text}");
+    ok(&["simulate", "--out", "csv", "--format", "csv", "--runs-per-command", "1", "--duration", "2", "-q"], d);
+    let out = omnical(&["info", "csv/train/00-r0.csv"], d);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(err.trim(), "error: csv/train/00-r0.csv: not a ROS recording (.mcap, .db3, .bag or a rosbag2 folder)");
+}

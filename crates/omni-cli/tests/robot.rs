@@ -287,4 +287,17 @@ fn bad_robot_files_name_the_file_line_and_field() {
         "{}",
         stderr(&out)
     );
+    // A syntax error outside any field, in a robot file and in a model file: line and column.
+    let syntax = good.replacen("[[wheels]]", "[[wheels]\n", 1);
+    let line = good.lines().position(|l| l == "[[wheels]]").unwrap() + 1;
+    std::fs::write(d.join("sim/train/robot.toml"), syntax).unwrap();
+    let out = omnical(&["eval", "sim/train"], d);
+    let want =
+        format!("error: sim/train/robot.toml: not TOML: line {line}, column 10: unclosed array table, expected `]`");
+    assert!(stderr(&out).starts_with(&want), "{}", stderr(&out));
+    std::fs::write(d.join("sim/train/robot.toml"), &good).unwrap();
+    std::fs::write(d.join("model.toml"), "schema = 1\nparams = [1.0,\n").unwrap();
+    let out = omnical(&["eval", "sim/train", "--model", "model.toml"], d);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("model.toml: line 2, column 15: unclosed array"), "{}", stderr(&out));
 }

@@ -263,7 +263,7 @@ pub fn _model_from_toml(text: &str, effects: Vec<Bound<'_, PyAny>>) -> PyResult<
 /// A model from model file text (`name` for messages) with the Python effects it names by id.
 fn model_from_text(text: &str, name: &str, effects: &[Bound<'_, PyAny>]) -> PyResult<PyModel> {
     let invalid = |message: String| PyModelFileError::new_err(format!("{name}: {message}"));
-    let file: ModelFile = toml::from_str(text).map_err(|e| invalid(e.to_string().trim().to_string()))?;
+    let file: ModelFile = toml::from_str(text).map_err(|e| invalid(omni_cli::toml_error::locate(text, &e)))?;
     // Python effects by id; the file's other effects must be built-ins.
     let mut custom: BTreeMap<String, (EffectKind, Arc<PyEffect>)> = BTreeMap::new();
     let n_wheels = file.wheel_names.len();

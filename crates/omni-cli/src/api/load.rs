@@ -84,7 +84,7 @@ impl DataOptions {
     pub fn wheel_joints(&self, ds: &Dataset) -> Vec<String> {
         let mut mcap =
             dataset::mcap::McapOptions { wheel_joints: self.joints.clone().unwrap_or_default(), ..Default::default() };
-        robot_file::fill_mcap_options(&mut mcap, self.joints.is_none(), ds.robot_file.as_ref().map(|r| &r.description));
+        robot_file::fill_mcap_options(&mut mcap, self.joints.is_none(), ds.robot_file.as_ref());
         mcap.wheel_joints
     }
 }
@@ -147,25 +147,10 @@ impl LoadRequest {
     pub fn read_for_robot(&self, robot: Option<robot_file::RobotFile>) -> anyhow::Result<Dataset> {
         let data = &self.data;
         let recorded_odometry = self.recorded_odometry;
-        let mut mcap = dataset::mcap::McapOptions {
-            wheel_joints: data.joints.clone().unwrap_or_default(),
-            joints_topic: data.joints_topic.clone(),
-            truth_topic: data.gt_topic.clone(),
-            truth_parent_frame: data.gt_parent_frame.clone(),
-            truth_child_frame: data.gt_child_frame.clone(),
-            split: data.split_s,
-            skip_invalid: data.skip_invalid,
-            recorded_odometry,
-            ..Default::default()
-        };
-        robot_file::fill_mcap_options(&mut mcap, data.joints.is_none(), robot.as_ref().map(|r| &r.description));
+        let mcap = self.mcap_options(robot.as_ref())?;
         let scans = scans_topic(data)?;
         let end_poses = end_pose_file(data)?;
-        mcap.wheels_only = self.wheels_only || end_poses.is_some() || scans.is_some();
         let ground_truth = if mcap.wheels_only { None } else { ground_truth_options(data, robot.as_ref())? };
-        if ground_truth.is_none() {
-            mcap.truth_time_offset_s = data.gt_time_offset_s;
-        }
         let opts = LoadOptions {
             skip_invalid: data.skip_invalid,
             ticks_per_rev: data.ticks_per_rev,
@@ -196,6 +181,42 @@ impl LoadRequest {
         move_to_base(&mut ds, data)?;
         cut_into_windows(&mut ds, data)?;
         Ok(ds)
+    }
+
+    /// How the ROS recordings are read for the robot `robot`: the data options over the robot description's
+    /// joints, topics and wheel units.
+    pub fn mcap_options(&self, robot: Option<&robot_file::RobotFile>) -> anyhow::Result<dataset::mcap::McapOptions> {
+        let data = &self.data;
+        let mut mcap = dataset::mcap::McapOptions {
+            wheel_joints: data.joints.clone().unwrap_or_default(),
+            joints_topic: data.joints_topic.clone(),
+            truth_topic: data.gt_topic.clone(),
+            truth_parent_frame: data.gt_parent_frame.clone(),
+            truth_child_frame: data.gt_child_frame.clone(),
+            split: data.split_s,
+            skip_invalid: data.skip_invalid,
+            recorded_odometry: self.recorded_odometry,
+            ..Default::default()
+        };
+        robot_file::fill_mcap_options(&mut mcap, data.joints.is_none(), robot);
+        mcap.wheels_only = self.wheels_only || scans_topic(data)?.is_some() || end_pose_file(data)?.is_some();
+        if mcap.wheels_only || ground_truth_options(data, robot)?.is_none() {
+            mcap.truth_time_offset_s = data.gt_time_offset_s;
+        }
+        Ok(mcap)
+    }
+
+    /// Where the ground truth comes from when it is not a topic of the recordings (a `--gt` file, the
+    /// robot description's ground-truth file, `--gt-scans`, measured end poses), in words; `None`: a topic.
+    pub fn truth_elsewhere(&self, robot: Option<&robot_file::RobotFile>) -> anyhow::Result<Option<String>> {
+        let data = &self.data;
+        if let Some(topic) = scans_topic(data)? {
+            return Ok(Some(format!("the lidar's path from scan matching (--gt-scans {topic})")));
+        }
+        if let Some(file) = end_pose_file(data)? {
+            return Ok(Some(format!("the measured end poses in {}", file.display())));
+        }
+        Ok(ground_truth_options(data, robot)?.map(|g| format!("the file {}", g.path.display())))
     }
 }
 

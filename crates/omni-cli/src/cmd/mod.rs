@@ -7,6 +7,7 @@ pub mod eval;
 pub mod explore;
 pub mod export;
 pub mod imu;
+pub mod info;
 pub mod init;
 pub mod plan;
 pub mod report;

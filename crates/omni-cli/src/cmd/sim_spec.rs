@@ -190,7 +190,7 @@ fn deviate_base(
 /// a row with `repetitions` k is listed k times) and checks that the base `design` can drive each (a
 /// differential drive cannot move sideways). Errors name the file, line and field.
 pub fn read_commands(path: &Path, design: &RobotGeometry) -> anyhow::Result<Vec<Command>> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("reading --commands {}", path.display()))?;
+    let text = crate::dataset::read_text(path).context("reading --commands")?;
     let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
     let header: Vec<&str> = match lines.next() {
         Some((_, h)) => h.split(',').map(str::trim).collect(),

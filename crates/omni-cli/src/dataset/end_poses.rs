@@ -24,8 +24,7 @@ const LENGTHS: [(&str, f64); 3] = [("_m", 1.0), ("_cm", 0.01), ("_mm", 0.001)];
 
 /// Reads an end-pose table; errors name the file, the line and the column.
 pub fn read(path: &Path) -> Result<Vec<EndPose>, DatasetError> {
-    let text = std::fs::read_to_string(path).map_err(|e| DatasetError::io(path, e))?;
-    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+    let text = super::read_text(path)?;
     let mut rows = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
     let Some((header_no, header)) = rows.next() else {
         return Err(DatasetError::file(path, "is empty: expected a header run,x_m,y_m,yaw_deg and one row per run"));

@@ -316,7 +316,7 @@ fn folder_files(dir: &Path) -> Vec<PathBuf> {
 
 /// Reads a ground-truth file (TUM or CSV, by extension).
 pub fn read(path: &Path, csv: &CsvColumns) -> Result<Vec<TruthSample>, DatasetError> {
-    let text = std::fs::read_to_string(path).map_err(|e| DatasetError::io(path, e))?;
+    let text = super::read_text(path)?;
     let mut uprights = Vec::new();
     let (mut samples, hint) = match path.extension().and_then(|e| e.to_str()) {
         Some("csv") => (read_csv(path, &text, csv, &mut uprights)?, "--gt-units length=mm (or cm)"),

@@ -340,6 +340,39 @@ pub fn inspect(path: &Path, max_file_bytes: u64) -> Result<Inspected, DatasetErr
     Ok(Inspected { recording: first.path().to_path_buf(), inventory, recordings: recordings.len() })
 }
 
+/// One ROS recording at `path` looked at for `omnical info`: its topics, and the role each would play in a
+/// read with `opts` ([`mcap::TopicReview`]); `truth_elsewhere` says where the ground truth comes from when
+/// it is not a topic.
+pub fn review(
+    path: &Path,
+    max_file_bytes: u64,
+    opts: &mcap::McapOptions,
+    truth_elsewhere: Option<&str>,
+) -> Result<(mcap::Inventory, Vec<mcap::TopicReview>), DatasetError> {
+    let inventory = feed_ros(path, max_file_bytes, |zstd| {
+        let mut sink = mcap::InventorySink::new(path);
+        sink.zstd_messages = zstd;
+        sink
+    })?
+    .finish()?;
+    let rec = feed_ros(path, max_file_bytes, |zstd| {
+        let mut rec = mcap::read::Recording::new(&opts.wheel_joints);
+        rec.zstd_messages = zstd;
+        rec
+    })?;
+    Ok((inventory, mcap::review::review(path, rec, opts, truth_elsewhere)))
+}
+
+/// The text of a file a user writes by hand or a spreadsheet exports (a table, a ground-truth file, a
+/// plan), without the UTF-8 byte-order mark Excel and Notepad put in front, as the run CSV reader takes it.
+pub fn read_text(path: &Path) -> Result<String, DatasetError> {
+    let text = std::fs::read_to_string(path).map_err(|e| DatasetError::io(path, e))?;
+    Ok(match text.strip_prefix('\u{feff}') {
+        Some(rest) => rest.to_string(),
+        None => text,
+    })
+}
+
 /// One thing to read: it gives runs on its own.
 #[derive(Clone, Debug)]
 enum Input {

@@ -66,6 +66,7 @@ mod odometry;
 mod pose_stamped;
 mod poses;
 pub(crate) mod read;
+pub(crate) mod review;
 pub mod split;
 mod statics;
 mod tf;
@@ -83,6 +84,7 @@ pub(crate) use inspect::InventorySink;
 pub use inspect::{Inventory, ROBOT_DESCRIPTION_TOPIC, TopicSummary, inspect, inspect_bytes};
 pub use laser_scan::ScanRead;
 pub(crate) use laser_scan::ScanSink;
+pub use review::{Role, TopicReview};
 pub use write::{COMMAND_TOPIC, IMU_TOPIC, JOINTS_TOPIC, LASER_FRAME, SCAN_TOPIC, TF_STATIC_TOPIC, TRUTH_TOPIC};
 
 /// ROS time of the simulator's t = 0 in MCAP output (2023-11-14T22:13:20Z). s.
@@ -126,6 +128,57 @@ pub struct McapOptions {
     /// first wheel sample and the same pose at the last, for measured end poses to replace
     /// (`--gt-kind end-pose`). Default false.
     pub wheels_only: bool,
+    /// Where the topics and frames above were set, for messages. Default: their flags.
+    pub origins: Origins,
+}
+
+/// Where an option was set, for messages that name it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Origin {
+    /// A command-line flag (`--joints-topic`); omnical.toml sets the flags' defaults.
+    Flag(&'static str),
+    /// A key of a robot description: the key (`[topics] joint_states`) and where it is (`robot.toml, line 31`).
+    RobotFile {
+        /// `[topics] joint_states`.
+        key: String,
+        /// `robot.toml, line 31`.
+        at: String,
+    },
+}
+
+impl Origin {
+    /// The option with its value, as a message names it: `--joints-topic /x`, or
+    /// `[topics] joint_states = "/x" (robot.toml, line 31)`.
+    pub fn naming(&self, value: &str) -> String {
+        match self {
+            Self::Flag(flag) => format!("{flag} {value}"),
+            Self::RobotFile { key, at } => format!("{key} = {value:?} ({at})"),
+        }
+    }
+}
+
+/// Where [`McapOptions`]'s topics and frames were set.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Origins {
+    /// Of [`McapOptions::joints_topic`].
+    pub joints_topic: Origin,
+    /// Of [`McapOptions::truth_topic`].
+    pub truth_topic: Origin,
+    /// Of [`McapOptions::truth_parent_frame`].
+    pub truth_parent_frame: Origin,
+    /// Of [`McapOptions::truth_child_frame`].
+    pub truth_child_frame: Origin,
+}
+
+impl Default for Origins {
+    fn default() -> Self {
+        Self {
+            joints_topic: Origin::Flag("--joints-topic"),
+            truth_topic: Origin::Flag("--gt-topic"),
+            truth_parent_frame: Origin::Flag("--gt-parent-frame"),
+            truth_child_frame: Origin::Flag("--gt-child-frame"),
+        }
+    }
 }
 
 impl Default for McapOptions {
@@ -143,6 +196,7 @@ impl Default for McapOptions {
             recorded_odometry: true,
             truth_time_offset_s: None,
             wheel_data: Default::default(),
+            origins: Origins::default(),
         }
     }
 }

@@ -13,7 +13,7 @@ use super::poses::{PoseSeries, start_heading_in_half_turn};
 use super::statics::StaticTree;
 use super::tf::{self, TfMessage, TfPairs};
 use super::twist::{self, Commands, TwistStamped};
-use super::{McapOptions, McapRead, split};
+use super::{McapOptions, McapRead, Origin, split};
 use crate::dataset::DatasetError;
 use crate::dataset::ground_truth::{ExternalTruth, GtClock, TruthSample};
 use mcap::sans_io::LinearReaderOptions;
@@ -27,7 +27,7 @@ const SCHEMA_ENCODINGS: [&str; 2] = ["ros2msg", "ros2idl"];
 /// The only message encoding this reader decodes.
 const MESSAGE_ENCODING: &str = "cdr";
 /// Frames that are the robot's own (REP-105): a pose in them is not a ground truth.
-const ROBOT_FRAMES: [&str; 3] = [ODOM_FRAME, "base_link", "base_footprint"];
+pub(super) const ROBOT_FRAMES: [&str; 3] = [ODOM_FRAME, "base_link", "base_footprint"];
 /// The smallest and largest cap on one record's length (the cap is 64 × the file size between them).
 pub(super) const MIN_RECORD_LIMIT: usize = 64 << 20;
 pub(super) const MAX_RECORD_LIMIT: usize = 4 << 30;
@@ -37,7 +37,7 @@ const TRUTH_TYPES: &str = "geometry_msgs/msg/PoseStamped, geometry_msgs/msg/Pose
 
 /// The message types this reader decodes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum MsgType {
+pub(super) enum MsgType {
     JointState,
     PoseStamped,
     PoseWithCovarianceStamped,
@@ -65,7 +65,7 @@ impl MsgType {
 
 /// What a channel has gathered.
 #[derive(Debug)]
-enum Content {
+pub(super) enum Content {
     Joints(JointSeries),
     Poses(PoseSeries),
     Tf(TfPairs),
@@ -75,17 +75,17 @@ enum Content {
 
 /// One topic of the file.
 #[derive(Debug)]
-struct Channel {
-    topic: String,
+pub(super) struct Channel {
+    pub(super) topic: String,
     /// Schema name, `""` without a schema.
-    schema: String,
-    msg_type: MsgType,
+    pub(super) schema: String,
+    pub(super) msg_type: MsgType,
     /// Messages seen.
-    messages: usize,
-    content: Content,
+    pub(super) messages: usize,
+    pub(super) content: Content,
     /// The first problem: the message index (`None` for the channel as a whole) and what is wrong. The
     /// channel takes nothing after it.
-    problem: Option<(Option<usize>, String)>,
+    pub(super) problem: Option<(Option<usize>, String)>,
 }
 
 impl Channel {
@@ -158,7 +158,7 @@ impl Channel {
     }
 
     /// The frame of the first pose, for pose channels.
-    fn frame(&self) -> Option<&str> {
+    pub(super) fn frame(&self) -> Option<&str> {
         match &self.content {
             Content::Poses(s) => s.frame.as_deref(),
             _ => None,
@@ -166,7 +166,7 @@ impl Channel {
     }
 
     /// Whether this is the robot's own wheel odometry (REP-105: Odometry in frame `odom`).
-    fn is_wheel_odometry(&self) -> bool {
+    pub(super) fn is_wheel_odometry(&self) -> bool {
         self.msg_type == MsgType::Odometry && self.frame() == Some(ODOM_FRAME)
     }
 
@@ -196,7 +196,7 @@ impl Channel {
 
 /// Where the ground truth comes from.
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum Truth {
+pub(super) enum Truth {
     /// A pose channel.
     Poses(usize),
     /// A channel's TF pair.
@@ -204,9 +204,9 @@ enum Truth {
 }
 
 /// The file being read and its channels, for choosing topics and building errors.
-struct Bag<'a> {
-    path: &'a Path,
-    channels: Vec<Channel>,
+pub(super) struct Bag<'a> {
+    pub(super) path: &'a Path,
+    pub(super) channels: Vec<Channel>,
 }
 
 /// `topic "/x"`.
@@ -223,10 +223,11 @@ impl Bag<'_> {
         if list.is_empty() { "none".into() } else { list.join(", ") }
     }
 
-    /// The channel of an explicitly chosen topic.
-    fn find(&self, topic: &str, flag: &str) -> Result<usize, DatasetError> {
+    /// The channel of an explicitly chosen topic, set at `origin`.
+    fn find(&self, topic: &str, origin: &Origin) -> Result<usize, DatasetError> {
         self.channels.iter().position(|c| c.topic == topic).ok_or_else(|| {
-            DatasetError::file(self.path, format!("{flag} {topic}: no such topic; topics: {}", self.listing()))
+            let named = origin.naming(topic);
+            DatasetError::file(self.path, format!("{named}: no such topic; topics: {}", self.listing()))
         })
     }
 
@@ -242,9 +243,9 @@ impl Bag<'_> {
         }
     }
 
-    fn joints(&self, opts: &McapOptions) -> Result<usize, DatasetError> {
+    pub(super) fn joints(&self, opts: &McapOptions) -> Result<usize, DatasetError> {
         if let Some(topic) = &opts.joints_topic {
-            let i = self.find(topic, "--joints-topic")?;
+            let i = self.find(topic, &opts.origins.joints_topic)?;
             let c = &self.channels[i];
             if c.msg_type != MsgType::JointState {
                 return Err(DatasetError::at(
@@ -287,7 +288,7 @@ impl Bag<'_> {
     }
 
     /// Why channel `i` cannot be the ground truth under `opts`, if it cannot.
-    fn truth_mismatch(&self, i: usize, opts: &McapOptions) -> Option<String> {
+    pub(super) fn truth_mismatch(&self, i: usize, opts: &McapOptions) -> Option<String> {
         let c = &self.channels[i];
         let Content::Poses(s) = &c.content else { return None };
         let frame = s.frame.as_deref()?;
@@ -300,23 +301,23 @@ impl Bag<'_> {
         if let Some(p) = &opts.truth_parent_frame
             && p != frame
         {
-            return Some(format!("has frame {frame:?}, but --gt-parent-frame is {p:?}"));
+            return Some(format!("has frame {frame:?}, but {}", opts.origins.truth_parent_frame.naming(p)));
         }
         if let (Some(want), Some(child)) = (&opts.truth_child_frame, &s.child)
             && want != child
         {
-            return Some(format!("has child frame {child:?}, but --gt-child-frame is {want:?}"));
+            return Some(format!("has child frame {child:?}, but {}", opts.origins.truth_child_frame.naming(want)));
         }
         None
     }
 
     /// long: the ground-truth channel, named (`--gt-topic`) or found, with errors that list every
     /// transform or pose topic seen; kept together so the messages can name them.
-    fn truth(&self, opts: &McapOptions) -> Result<Truth, DatasetError> {
+    pub(super) fn truth(&self, opts: &McapOptions) -> Result<Truth, DatasetError> {
         let (parent, child) = (opts.truth_parent_frame.as_deref(), opts.truth_child_frame.as_deref());
         let statics = self.statics();
         if let Some(topic) = &opts.truth_topic {
-            let i = self.find(topic, "--gt-topic")?;
+            let i = self.find(topic, &opts.origins.truth_topic)?;
             let c = &self.channels[i];
             return match (&c.content, c.msg_type) {
                 (Content::Tf(pairs), _) => {
@@ -440,12 +441,12 @@ impl Bag<'_> {
     }
 
     /// The robot's recorded wheel odometry: `/odom` if it is one, else the only one.
-    fn recorded_odometry(&self, notes: &mut Vec<String>) -> Option<usize> {
+    pub(super) fn recorded_odometry(&self, notes: &mut Vec<String>) -> Option<usize> {
         self.optional(Channel::is_wheel_odometry, "/odom", "recorded odometry", notes)
     }
 
     /// The command topic: `preferred` (default `/cmd_vel`) if it is one, else the only one.
-    fn commands(&self, preferred: Option<&str>, notes: &mut Vec<String>) -> Option<usize> {
+    pub(super) fn commands(&self, preferred: Option<&str>, notes: &mut Vec<String>) -> Option<usize> {
         let is_cmd = |c: &Channel| matches!(c.msg_type, MsgType::Twist | MsgType::TwistStamped);
         let chosen = self.optional(is_cmd, preferred.unwrap_or("/cmd_vel"), "the command", notes)?;
         if self.channels[chosen].msg_type == MsgType::Twist {
@@ -499,9 +500,8 @@ impl Bag<'_> {
         }
     }
 
-    /// Moves a channel's content out.
     /// The static transforms of every TF topic.
-    fn statics(&self) -> StaticTree {
+    pub(super) fn statics(&self) -> StaticTree {
         let mut tree = StaticTree::default();
         for c in &self.channels {
             if let Content::Tf(pairs) = &c.content {
@@ -511,6 +511,7 @@ impl Bag<'_> {
         tree
     }
 
+    /// Moves a channel's content out.
     fn take(&mut self, i: usize) -> Content {
         std::mem::replace(&mut self.channels[i].content, Content::Nothing)
     }
@@ -684,7 +685,7 @@ pub(crate) trait MessageSink {
 /// matched by name, so the split files of a recording feed the same channels.
 pub(crate) struct Recording {
     wheel_joints: Vec<String>,
-    channels: Vec<Channel>,
+    pub(super) channels: Vec<Channel>,
     /// Every message payload is zstd-compressed on its own (rosbag2's `compression_mode: MESSAGE`).
     pub(crate) zstd_messages: bool,
 }
@@ -862,7 +863,7 @@ fn external_truth(
 const LOCALIZATION_WORDS: [&str; 8] = ["amcl", "locali", "slam", "cartographer", "ekf", "ukf", "filtered", "fused"];
 
 /// Whether `topic` names a localization ([`LOCALIZATION_WORDS`], case-insensitive).
-fn is_localization(topic: &str) -> bool {
+pub(super) fn is_localization(topic: &str) -> bool {
     let t = topic.to_ascii_lowercase();
     LOCALIZATION_WORDS.iter().any(|w| t.contains(w))
 }
