@@ -1,5 +1,5 @@
-//! The step kernel: a group's eight runs at once in SIMD lanes (one AVX-512 vector, two AVX2 ones or
-//! plain arrays: [`SimdPath`], the same bits on each). Each step's body displacement is `M u` (3 × N
+//! The step kernel: a group's eight runs at once in SIMD lanes (one AVX-512 vector, two passes of one
+//! AVX2 vector, or plain arrays: [`SimdPath`], the same bits on each). Each step's body displacement is `M u` (3 × N
 //! multiply-adds on the wheel-angle increments), the arc factors and the heading's rotation come from
 //! short polynomials in the step angle (exact to < 1e-16 for `|a| ≤ 0.1` rad), and the heading's cosine
 //! and sine are re-taken from the summed heading every [`RESYNC_STEPS`] steps of a lane's own steps (not
@@ -96,54 +96,75 @@ pub(super) fn walk<const N: usize, const ARC: bool>(
     sensor: Pose2,
     on_query: &mut dyn FnMut(usize, PoseError),
 ) -> [PoseError; LANES] {
+    let mut ends = [PoseError::default(); LANES];
+    let out = &mut ends;
     #[cfg(target_arch = "x86_64")]
     if path == SimdPath::Avx512
         && let Some(simd) = pulp::x86::V4::try_new()
     {
-        return simd.vectorize(|| kernel::<_, N, ARC>(simd, g, inc, m, sensor, on_query));
+        simd.vectorize(|| kernel::<_, N, ARC, 0>(simd, g, inc, (m, sensor), on_query, out));
+        return ends;
     }
     #[cfg(target_arch = "x86_64")]
     if path >= SimdPath::Avx2
         && let Some(simd) = pulp::x86::V3::try_new()
     {
-        let wide = pulp::x86::V3_512b(simd);
-        return simd.vectorize(|| kernel::<_, N, ARC>(wide, g, inc, m, sensor, on_query));
+        // Two passes of four lanes, one `vectorize` each (a closure holding both kernels is not inlined
+        // into the AVX2 context: 50x slower).
+        simd.vectorize(|| kernel::<_, N, ARC, 0>(simd, g, inc, (m, sensor), on_query, &mut *out));
+        simd.vectorize(|| kernel::<_, N, ARC, 4>(simd, g, inc, (m, sensor), on_query, out));
+        return ends;
     }
     let _ = path;
-    kernel::<_, N, ARC>(Fused, g, inc, m, sensor, on_query)
+    kernel::<_, N, ARC, 0>(Fused, g, inc, (m, sensor), on_query, out);
+    ends
 }
 
+// The AVX2 path's two passes of four lanes and the AVX-512 path's one of eight cover a group.
+const _: () = assert!(LANES == 8);
+
 /// The heading's cosine and sine `(c, s)` after step `k`, re-taken from the summed heading `th` in the
-/// lanes that walked step `k` (`k < lane_steps[lane]`), kept in the others (past their last step).
+/// lanes that walked step `k` (`k < lane_steps[lane]`), kept in the others (past their last step); the
+/// values hold lanes `BASE..BASE + O::WIDTH`.
 #[inline(never)]
-fn resync<O: LaneOps>(o: O, k: usize, lane_steps: &[usize; LANES], th: O::V, c: O::V, s: O::V) -> (O::V, O::V) {
-    let (t, mut c, mut s) = (o.store(th), o.store(c), o.store(s));
-    for l in 0..LANES {
+fn resync<O: LaneOps, const BASE: usize>(o: O, k: usize, lane_steps: &[usize; LANES], v: [O::V; 3]) -> (O::V, O::V) {
+    let [t, mut c, mut s] = v.map(|v| {
+        let mut lanes = [0.0; LANES];
+        o.store(v, &mut lanes[BASE..]);
+        lanes
+    });
+    for l in BASE..BASE + O::WIDTH {
         if k < lane_steps[l] {
             (s[l], c[l]) = t[l].sin_cos();
         }
     }
-    (o.load(c), o.load(s))
+    (o.load(&c[BASE..]), o.load(&s[BASE..]))
 }
 
-/// The lane states of a group, unpacked.
+/// The lane states of a group, unpacked (lanes `BASE..BASE + O::WIDTH`; the others zero).
 #[inline(always)]
-fn unpack<O: LaneOps>(o: O, v: &[O::V; 5]) -> [LaneState; LANES] {
-    let [x, y, th, c, s] = v.map(|v| o.store(v));
+fn unpack<O: LaneOps, const BASE: usize>(o: O, v: &[O::V; 5]) -> [LaneState; LANES] {
+    let [x, y, th, c, s] = v.map(|v| {
+        let mut lanes = [0.0; LANES];
+        o.store(v, &mut lanes[BASE..]);
+        lanes
+    });
     std::array::from_fn(|l| LaneState { x: x[l], y: y[l], th: th[l], c: c[l], s: s[l] })
 }
 
 /// long: the hot step loop stays one function so that the lanes' state lives in registers across the
-/// loop (inlined, const generics per wheel count); splitting it measurably slows every evaluation.
+/// loop (inlined, const generics per wheel count); splitting it measurably slows every evaluation. Walks
+/// lanes `BASE..BASE + O::WIDTH` of the group and writes their end-pose errors to `ends`.
 #[inline(always)]
-fn kernel<O: LaneOps, const N: usize, const ARC: bool>(
+fn kernel<O: LaneOps, const N: usize, const ARC: bool, const BASE: usize>(
     o: O,
     g: &Group,
     inc: &Increments<'_>,
-    m: &[f64],
-    sensor: Pose2,
+    (m, sensor): (&[f64], Pose2),
     on_query: &mut dyn FnMut(usize, PoseError),
-) -> [PoseError; LANES] {
+    ends: &mut [PoseError; LANES],
+) {
+    let pass = BASE..BASE + O::WIDTH;
     let (u, query_u) = (inc.u, inc.query_u);
     let inv = sensor.inverse();
     let mut init = [[0.0; LANES]; 5];
@@ -154,7 +175,7 @@ fn kernel<O: LaneOps, const N: usize, const ARC: bool>(
             v[l] = value;
         }
     }
-    let [mut x, mut y, mut th, mut c, mut s] = init.map(|v| o.load(v));
+    let [mut x, mut y, mut th, mut c, mut s] = init.map(|v| o.load(&v[BASE..]));
     let mx: [O::V; N] = std::array::from_fn(|j| o.splat(m[j]));
     let my: [O::V; N] = std::array::from_fn(|j| o.splat(m[N + j]));
     let ma: [O::V; N] = std::array::from_fn(|j| o.splat(m[2 * N + j]));
@@ -165,11 +186,13 @@ fn kernel<O: LaneOps, const N: usize, const ARC: bool>(
     let mut qi = 0;
     let mut next_query = g.queries.first().map_or(usize::MAX, |q| q.step);
     let mut answer = |qi: &mut usize, next_query: &mut usize, v: &[O::V; 5]| {
-        let lanes = unpack(o, v);
+        let lanes = unpack::<O, BASE>(o, v);
         while *qi < g.queries.len() && g.queries[*qi].step == *next_query {
             let q = &g.queries[*qi];
-            let (dx, dy, a) = displacement::<N>(m, &query_u[*qi * N..(*qi + 1) * N]);
-            on_query(q.slot, measured_error(step_lane::<ARC>(lanes[q.lane], dx, dy, a), sensor, &q.truth));
+            if pass.contains(&q.lane) {
+                let (dx, dy, a) = displacement::<N>(m, &query_u[*qi * N..(*qi + 1) * N]);
+                on_query(q.slot, measured_error(step_lane::<ARC>(lanes[q.lane], dx, dy, a), sensor, &q.truth));
+            }
             *qi += 1;
         }
         *next_query = g.queries.get(*qi).map_or(usize::MAX, |q| q.step);
@@ -178,7 +201,7 @@ fn kernel<O: LaneOps, const N: usize, const ARC: bool>(
         if k == next_query {
             answer(&mut qi, &mut next_query, &[x, y, th, c, s]);
         }
-        let u: [O::V; N] = std::array::from_fn(|j| o.load(uk[j]));
+        let u: [O::V; N] = std::array::from_fn(|j| o.load(&uk[j][BASE..]));
         let mut dx = o.mul(mx[0], u[0]);
         let mut dy = o.mul(my[0], u[0]);
         let mut a = o.mul(ma[0], u[0]);
@@ -210,13 +233,15 @@ fn kernel<O: LaneOps, const N: usize, const ARC: bool>(
         c = c_next;
         th = o.add(th, a);
         if k % RESYNC_STEPS == RESYNC_STEPS - 1 {
-            (c, s) = resync(o, k, &lane_steps, th, c, s);
+            (c, s) = resync::<O, BASE>(o, k, &lane_steps, [th, c, s]);
         }
     }
     let v = [x, y, th, c, s];
     if qi < g.queries.len() {
         answer(&mut qi, &mut next_query, &v);
     }
-    let lanes = unpack(o, &v);
-    std::array::from_fn(|l| measured_error(lanes[l], sensor, &g.end[l]))
+    let lanes = unpack::<O, BASE>(o, &v);
+    for l in pass {
+        ends[l] = measured_error(lanes[l], sensor, &g.end[l]);
+    }
 }

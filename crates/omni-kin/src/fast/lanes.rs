@@ -1,7 +1,8 @@
 //! Lane-wise arithmetic on a group's eight runs, and the SIMD path that does it, chosen at run time:
 //!
 //! - [`SimdPath::Avx512`]: one 512-bit vector of 8 f64 per quantity (AVX-512F + FMA, `pulp`'s `x86::V4`);
-//! - [`SimdPath::Avx2`]: two 256-bit vectors per quantity (AVX2 + FMA, `pulp`'s `x86::V3_512b`);
+//! - [`SimdPath::Avx2`]: one 256-bit vector of 4 f64 per quantity (AVX2 + FMA, `pulp`'s `x86::V3`), a
+//!   group walked in two passes;
 //! - [`SimdPath::Portable`]: plain arrays with [`f64::mul_add`] (a fused multiply-add, in hardware where
 //!   the CPU has one).
 //!
@@ -20,7 +21,7 @@ use std::sync::atomic::{AtomicU8, Ordering};
 pub enum SimdPath {
     /// Plain arrays, fused multiply-adds by [`f64::mul_add`].
     Portable,
-    /// Two 4-lane AVX2 + FMA vectors (x86-64-v3).
+    /// 4-lane AVX2 + FMA vectors, two passes per group (x86-64-v3).
     Avx2,
     /// One 8-lane AVX-512 vector (x86-64-v4).
     Avx512,
@@ -78,12 +79,16 @@ impl SimdPath {
     }
 }
 
-/// Lane-wise arithmetic on a group's runs.
+/// Lane-wise arithmetic on [`Self::WIDTH`] of a group's runs.
 pub(super) trait LaneOps: Copy {
+    /// Lanes per value.
+    const WIDTH: usize;
     type V: Copy;
     fn splat(self, v: f64) -> Self::V;
-    fn load(self, a: Lanes) -> Self::V;
-    fn store(self, v: Self::V) -> Lanes;
+    /// The first [`Self::WIDTH`] values of `a`.
+    fn load(self, a: &[f64]) -> Self::V;
+    /// Writes the lanes of `v` to the first [`Self::WIDTH`] values of `out`.
+    fn store(self, v: Self::V, out: &mut [f64]);
     fn add(self, a: Self::V, b: Self::V) -> Self::V;
     fn mul(self, a: Self::V, b: Self::V) -> Self::V;
     /// `a b + c` (fused where the type says so).
@@ -104,18 +109,19 @@ pub(super) struct Fused;
 macro_rules! array_lane_ops {
     ($t:ty, $fma:expr) => {
         impl LaneOps for $t {
+            const WIDTH: usize = LANES;
             type V = Lanes;
             #[inline(always)]
             fn splat(self, v: f64) -> Lanes {
                 [v; LANES]
             }
             #[inline(always)]
-            fn load(self, a: Lanes) -> Lanes {
-                a
+            fn load(self, a: &[f64]) -> Lanes {
+                std::array::from_fn(|l| a[l])
             }
             #[inline(always)]
-            fn store(self, v: Lanes) -> Lanes {
-                v
+            fn store(self, v: Lanes, out: &mut [f64]) {
+                out[..LANES].copy_from_slice(&v);
             }
             #[inline(always)]
             fn add(self, a: Lanes, b: Lanes) -> Lanes {
@@ -142,23 +148,27 @@ macro_rules! array_lane_ops {
 array_lane_ops!(Portable, |a, b, c| a * b + c);
 array_lane_ops!(Fused, f64::mul_add);
 
-/// The lane-wise operations of a `pulp` SIMD type whose `f64s` are eight lanes (`pulp::f64x8`).
+/// The lane-wise operations of a `pulp` SIMD type of `$width` lanes, its vector `$v` built from and read
+/// to lanes by `$from` and `$to`.
 macro_rules! pulp_lane_ops {
-    ($t:ty) => {
+    ($t:ty, $width:expr, $v:ty, $from:expr, $to:expr) => {
         #[cfg(target_arch = "x86_64")]
         impl LaneOps for $t {
-            type V = pulp::f64x8;
+            const WIDTH: usize = $width;
+            type V = $v;
             #[inline(always)]
             fn splat(self, v: f64) -> Self::V {
                 pulp::Simd::splat_f64s(self, v)
             }
             #[inline(always)]
-            fn load(self, a: Lanes) -> Self::V {
-                pulp::cast(a)
+            fn load(self, a: &[f64]) -> Self::V {
+                let from: fn(&[f64]) -> $v = $from;
+                from(&a[..$width])
             }
             #[inline(always)]
-            fn store(self, v: Self::V) -> Lanes {
-                pulp::cast(v)
+            fn store(self, v: Self::V, out: &mut [f64]) {
+                let to: fn($v) -> [f64; $width] = $to;
+                out[..$width].copy_from_slice(&to(v));
             }
             #[inline(always)]
             fn add(self, a: Self::V, b: Self::V) -> Self::V {
@@ -180,5 +190,10 @@ macro_rules! pulp_lane_ops {
     };
 }
 
-pulp_lane_ops!(pulp::x86::V3_512b);
-pulp_lane_ops!(pulp::x86::V4);
+// AVX2 + FMA: four lanes per vector, a group walked in two passes (eight lanes as two vectors each would
+// not leave the state and the constants in the 16 vector registers).
+pulp_lane_ops!(pulp::x86::V3, 4, pulp::f64x4, |a| pulp::f64x4(a[0], a[1], a[2], a[3]), |v| [v.0, v.1, v.2, v.3]);
+// AVX-512: a group's eight lanes in one vector.
+pulp_lane_ops!(pulp::x86::V4, 8, pulp::f64x8, |a| pulp::f64x8(a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7]), |v| [
+    v.0, v.1, v.2, v.3, v.4, v.5, v.6, v.7
+]);

@@ -12,8 +12,8 @@
 //!   lag takes lane groups prepared for it (the last 4 lags are kept).
 //! - `features.rs`: the parts of an affine wheel-stage effect (each parameter's change of the speeds),
 //!   taken once; an evaluation adds them to the increments instead of running the effect.
-//! - `lanes.rs`: the eight lanes' arithmetic and its [`SimdPath`]: one AVX-512 vector, two AVX2 + FMA
-//!   vectors, or plain arrays with fused multiply-adds, the widest the CPU has (checked at run time through
+//! - `lanes.rs`: the eight lanes' arithmetic and its [`SimdPath`]: one AVX-512 vector, two passes of one
+//!   AVX2 + FMA vector, or plain arrays with fused multiply-adds, the widest the CPU has (checked at run time through
 //!   `pulp`, no `-C target-cpu` needed) under a ceiling ([`limit_simd_path`], `OMNICAL_SIMD` on the command
 //!   line). Every path gives the same bits.
 //! - `kernel.rs`: the step loop; the heading's cosine and sine advance by polynomial rotations.

@@ -212,7 +212,7 @@ pub(super) fn walk<const N: usize, const ARC: bool>(
     for (k, uk) in inc.u[..g.steps * N].chunks_exact(N).enumerate() {
         let mut d: LaneTwistState = [[0.0; LANES]; 3];
         for j in 0..N {
-            let u = o.load(uk[j]);
+            let u = o.load(&uk[j]);
             d[0] = o.mul_add(o.splat(m[j]), u, d[0]);
             d[1] = o.mul_add(o.splat(m[N + j]), u, d[1]);
             d[2] = o.mul_add(o.splat(m[2 * N + j]), u, d[2]);
