@@ -210,9 +210,7 @@ impl Group {
         u.reserve(self.steps * n);
         // Whole steps: f = 1, and (1 · h) · w = h · w exactly; every lane at once while all have steps.
         let common = w.iter().map(|s| s.len()).min().unwrap_or(0);
-        for i in 0..common {
-            u.push(std::array::from_fn(|l| h[l] * w[l][i]));
-        }
+        u.extend((0..common).map(|i| -> Lanes { std::array::from_fn(|l| h[l] * w[l][i]) }));
         for i in common..self.steps * n {
             u.push(std::array::from_fn(|l| w[l].get(i).map_or(0.0, |v| h[l] * v)));
         }
