@@ -828,3 +828,25 @@ fn a_runs_numbers_do_not_depend_on_the_runs_in_its_group() {
         assert_eq!(first_query, all.at_queries.len());
     }
 }
+
+/// The same on the twist-stage walk (a built-in twist-stage effect and a sensor offset): a run's end-pose
+/// error is the same bits alone and in a group of longer and shorter runs.
+#[test]
+fn a_runs_numbers_on_the_twist_walk_do_not_depend_on_its_group() {
+    let runs = mixed_length_runs();
+    let model = Model::ik(spread_ik(3))
+        .with_integration(Integration::DEFAULT)
+        .with_effect(EffectKind::from_id("sensor_offset", 3).unwrap())
+        .with_effect(EffectKind::from_id("world_drift", 3).unwrap());
+    let mut p = spread_ik(3).entries().to_vec();
+    p.extend([0.05, -0.03, 0.004, -0.003]);
+    let res = model.resolve(&p).unwrap();
+    assert!(!res.twist_effects.is_empty());
+    let pose_bits = |e: &PoseError| [e.dx_m, e.dy_m, e.dtheta_rad].map(f64::to_bits);
+    let all = PreparedRuns::new(&runs, None, Selection::End).end_pose_errors(&res, &runs).unwrap();
+    for (i, run) in runs.iter().enumerate() {
+        let one = std::slice::from_ref(run);
+        let alone = PreparedRuns::new(one, None, Selection::End).end_pose_errors(&res, one).unwrap();
+        assert_eq!(pose_bits(&alone[0]), pose_bits(&all[i]), "run {i}");
+    }
+}
