@@ -142,3 +142,43 @@ fn info_names_each_topics_role_the_runs_and_the_mocap_clock() {
     assert_eq!(v["recordings"][0]["read"]["ok"], false);
     assert!(v["recordings"][0]["read"]["error"].as_str().unwrap().contains("the model under test, never ground truth"));
 }
+
+/// Copies the folder `from` to `to`, recursively.
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let target = to.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_dir(&e.path(), &target);
+        } else {
+            std::fs::copy(e.path(), target).unwrap();
+        }
+    }
+}
+
+#[test]
+#[cfg_attr(
+    not(python_bag_tools),
+    ignore = "needs rosbags and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
+)]
+fn one_mocap_take_with_gaps_serves_every_recording_it_covers() {
+    // One motion-capture take across the three sessions (on the mocap PC's clock, 0.8 s behind), the
+    // marker lost for 1.5 s of every 5 s: each recording finds its stretch of the take, on one clock.
+    let rec = recordings();
+    let dir = rec.join("take");
+    let _ = std::fs::remove_dir_all(&dir);
+    for s in ["session_01", "session_02", "session_03"] {
+        copy_dir(&rec.join("file").join(s), &dir.join(s));
+    }
+    let mut take = String::new();
+    for s in ["session_01", "session_02", "session_03"] {
+        let text = std::fs::read_to_string(rec.join("file/mocap").join(format!("{s}.tum"))).unwrap();
+        for line in text.lines().enumerate().filter(|(i, _)| i % 600 < 420).map(|(_, l)| l) {
+            take.push_str(line);
+            take.push('\n');
+        }
+    }
+    std::fs::write(dir.join("take.tum"), take).unwrap();
+    recipe("take", &["--gt", "take.tum"]);
+}

@@ -312,8 +312,8 @@ fn a_recording_too_sparse_to_align_takes_the_clock_of_the_others() {
     assert!(
         err.contains("mocap/sparse.tum: cannot align its clock with recording \"sparse\": ")
             && err.contains(&format!(
-                "; the ground truth is read at {found:+.4} s, the median offset of the 1 recording(s) aligned with \
-                 the same --gt (one clock)"
+                "; the ground truth is read at {found:+.4} s, the median offset of the 1 recording(s) aligned \
+                 clearly with the same --gt (one clock)"
             )),
         "{err}"
     );

@@ -33,6 +33,11 @@
 //!    neighbouring intervals are correlated (they share poses), so it is a lower bound of the true
 //!    uncertainty rather than an exact one.
 //!
+//! **Gaps.** Where the ground truth has none for more than [`GAP_MEDIAN_INTERVALS`] times its median interval
+//! (a marker lost, a take spanning several recordings with nothing between them), nothing is compared: its
+//! linear interpolation there is no measurement, and a constant velocity across a long gap would match wheel
+//! speeds by chance. Both stages leave such intervals out.
+//!
 //! A ground truth that matches the wheels at no offset (explained share below [`MIN_R_SQUARED`]) is an
 //! error, as is one too short to overlap, or a robot that does not move.
 
@@ -53,6 +58,8 @@ pub const MIN_OVERLAP_S: f64 = 2.0;
 pub const FINE_BLOCK_S: f64 = 0.05;
 /// The best offset must explain at least this share of the ground truth's motion.
 pub const MIN_R_SQUARED: f64 = 0.5;
+/// Consecutive ground-truth poses farther apart than this many median intervals bound a gap.
+pub const GAP_MEDIAN_INTERVALS: f64 = 4.0;
 
 /// An estimated clock offset.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -125,7 +132,7 @@ pub fn explained_at(
         return None;
     }
     let wheels = WheelAngles::new(wheel_t_s, wheel_rad_s, n_wheels);
-    let fine = Fine::new(&wheels, &Poses(truth), offset_s, offset_s)?;
+    let fine = Fine::new(&wheels, &Poses::new(truth), offset_s, offset_s)?;
     let fit = fine.fit(offset_s)?;
     Some(1.0 - fit.normalised_rss / fit.channels as f64)
 }
@@ -147,7 +154,7 @@ pub fn align_clocks(
         return Err(ClockError::TooFew { what: "ground truth", count: truth.len() });
     }
     let wheels = WheelAngles::new(wheel_t_s, wheel_rad_s, n_wheels);
-    let poses = Poses(truth);
+    let poses = Poses::new(truth);
     let coarse = coarse(&wheels, &poses)?;
     let h = coarse.step_s;
     let fine =
@@ -203,17 +210,42 @@ impl<'a> WheelAngles<'a> {
     }
 }
 
-/// The ground truth, interpolated linearly (heading unwrapped).
-struct Poses<'a>(&'a [StampedPose]);
+/// The ground truth, interpolated linearly (heading unwrapped), with its gaps.
+struct Poses<'a> {
+    poses: &'a [StampedPose],
+    /// `(start, end)` of every gap, in time order (see the module docs). s.
+    gaps: Vec<(f64, f64)>,
+    /// The median interval between poses. s.
+    median_dt_s: f64,
+}
 
-impl Poses<'_> {
+impl<'a> Poses<'a> {
+    /// At least two poses with increasing times.
+    fn new(poses: &'a [StampedPose]) -> Self {
+        let mut dt: Vec<f64> = poses.windows(2).map(|w| w[1].t_s - w[0].t_s).collect();
+        dt.sort_by(f64::total_cmp);
+        let median_dt_s = dt[dt.len() / 2];
+        let gaps = poses
+            .windows(2)
+            .filter(|w| w[1].t_s - w[0].t_s > GAP_MEDIAN_INTERVALS * median_dt_s)
+            .map(|w| (w[0].t_s, w[1].t_s))
+            .collect();
+        Self { poses, gaps, median_dt_s }
+    }
+
+    /// Whether `[a, b]` lies clear of every gap (touching one's ends is fine).
+    fn measured(&self, a: f64, b: f64) -> bool {
+        let first_ending_after_a = self.gaps.partition_point(|g| g.1 <= a);
+        self.gaps.get(first_ending_after_a).is_none_or(|g| g.0 >= b)
+    }
+
     fn span(&self) -> (f64, f64) {
-        (self.0[0].t_s, self.0[self.0.len() - 1].t_s)
+        (self.poses[0].t_s, self.poses[self.poses.len() - 1].t_s)
     }
 
     /// `(x, y, θ)` at `t` (inside the span).
     fn at(&self, t: f64) -> [f64; 3] {
-        let p = self.0;
+        let p = self.poses;
         let i = p.partition_point(|q| q.t_s <= t).clamp(1, p.len() - 1) - 1;
         let (a, b) = (&p[i], &p[i + 1]);
         let f = ((t - a.t_s) / (b.t_s - a.t_s)).clamp(0.0, 1.0);
@@ -256,28 +288,20 @@ fn coarse(wheels: &WheelAngles<'_>, poses: &Poses<'_>) -> Result<Coarse, ClockEr
         let a = w0 + i as f64 * h;
         wheels.mean_rates(a, a + h, &mut u[i * n..(i + 1) * n]);
     }
-    let y: Vec<[f64; 3]> = (0..ng).map(|j| poses.mean_twist(g0 + j as f64 * h, g0 + (j + 1) as f64 * h)).collect();
-    // Prefix sums: Σ u uᵀ over wheel intervals and Σ y_c² over truth intervals.
-    let mut uu = vec![0.0; (nw + 1) * n * n];
-    for i in 0..nw {
-        for r in 0..n {
-            for c in 0..n {
-                uu[(i + 1) * n * n + r * n + c] = uu[i * n * n + r * n + c] + u[i * n + r] * u[i * n + c];
-            }
-        }
-    }
-    let mut yy = vec![[0.0; 3]; ng + 1];
-    for j in 0..ng {
-        for c in 0..3 {
-            yy[j + 1][c] = yy[j][c] + y[j][c] * y[j][c];
-        }
-    }
-    let min_pairs = ((nw.min(ng)) / 2).max((MIN_OVERLAP_S / h).ceil() as usize).max(n + 1);
-    if nw.min(ng) < min_pairs {
+    // Truth intervals inside a gap are no measurement: `None`, left out of every lag's sums.
+    let y: Vec<Option<[f64; 3]>> = (0..ng)
+        .map(|j| {
+            let (a, b) = (g0 + j as f64 * h, g0 + (j + 1) as f64 * h);
+            poses.measured(a, b).then(|| poses.mean_twist(a, b))
+        })
+        .collect();
+    let measured = y.iter().filter(|v| v.is_some()).count();
+    let min_pairs = ((nw.min(measured)) / 2).max((MIN_OVERLAP_S / h).ceil() as usize).max(n + 1);
+    if nw.min(measured) < min_pairs {
         return Err(ClockError::NoOverlap { wheel_s: w1 - w0, truth_s: g1 - g0 });
     }
     let mut best: Option<(f64, i64)> = None;
-    let mut b = vec![[0.0; 3]; n];
+    let (mut b, mut gram) = (vec![[0.0; 3]; n], DMatrix::zeros(n, n));
     // Lag L pairs wheel interval i with truth interval j = i − L.
     for lag in -(ng as i64 - 1)..(nw as i64) {
         let i0 = lag.max(0) as usize;
@@ -285,24 +309,31 @@ fn coarse(wheels: &WheelAngles<'_>, poses: &Poses<'_>) -> Result<Coarse, ClockEr
         if i1 < i0 + min_pairs {
             continue;
         }
-        for v in b.iter_mut() {
-            *v = [0.0; 3];
-        }
+        b.iter_mut().for_each(|v| *v = [0.0; 3]);
+        gram.fill(0.0);
+        let (mut tss, mut pairs) = ([0.0; 3], 0usize);
         for i in i0..i1 {
-            let yj = &y[(i as i64 - lag) as usize];
+            let Some(yj) = &y[(i as i64 - lag) as usize] else { continue };
+            pairs += 1;
+            let ui = &u[i * n..(i + 1) * n];
             for (r, br) in b.iter_mut().enumerate() {
-                let ui = u[i * n + r];
                 for c in 0..3 {
-                    br[c] += ui * yj[c];
+                    br[c] += ui[r] * yj[c];
+                }
+                for c in 0..n {
+                    gram[(r, c)] += ui[r] * ui[c];
                 }
             }
+            for c in 0..3 {
+                tss[c] += yj[c] * yj[c];
+            }
         }
-        let gram = DMatrix::from_fn(n, n, |r, c| uu[i1 * n * n + r * n + c] - uu[i0 * n * n + r * n + c]);
-        let Some(chol) = gram.cholesky() else { continue };
-        let (j0, j1) = ((i0 as i64 - lag) as usize, (i1 as i64 - lag) as usize);
+        if pairs < min_pairs {
+            continue;
+        }
+        let Some(chol) = gram.clone().cholesky() else { continue };
         let mut score = 0.0;
-        for c in 0..3 {
-            let tss = yy[j1][c] - yy[j0][c];
+        for (c, &tss) in tss.iter().enumerate() {
             if tss > 0.0 {
                 let bc = DVector::from_fn(n, |r, _| b[r][c]);
                 score += bc.dot(&chol.solve(&bc)) / tss;
@@ -351,14 +382,13 @@ impl<'a> Fine<'a> {
     fn new(wheels: &'a WheelAngles<'a>, poses: &Poses<'_>, lo: f64, hi: f64) -> Option<Self> {
         let t = wheels.t_s;
         let (w0, w1) = (t[0], t[t.len() - 1]);
-        let p = poses.0;
+        let p = poses.poses;
         // Blocks of consecutive truth samples spanning about FINE_BLOCK_S: the truth's noise, differenced,
-        // shrinks with the block's length while the motion stays resolved.
-        let mean_dt = (p[p.len() - 1].t_s - p[0].t_s) / (p.len() - 1) as f64;
-        let m = ((FINE_BLOCK_S / mean_dt).round() as usize).max(1);
+        // shrinks with the block's length while the motion stays resolved. None across a gap.
+        let m = ((FINE_BLOCK_S / poses.median_dt_s).round() as usize).max(1);
         let intervals: Vec<(f64, f64)> = (0..(p.len() - 1) / m)
             .map(|j| (p[j * m].t_s, p[(j + 1) * m].t_s))
-            .filter(|&(a, b)| a + lo >= w0 && b + hi <= w1)
+            .filter(|&(a, b)| a + lo >= w0 && b + hi <= w1 && poses.measured(a, b))
             .collect();
         if intervals.len() <= 3 * wheels.n {
             return None;
@@ -505,6 +535,26 @@ mod tests {
             assert!(a.std_error_s > 0.0 && a.std_error_s < 1e-3, "{a:?}");
             assert!(a.r_squared > 0.999, "{a:?}");
         }
+    }
+
+    #[test]
+    fn gaps_in_the_truth_are_left_out() {
+        // The marker lost for 1.5 s of every 5 s, and a stretch 100 s later that no wheel data covers (a
+        // take spanning several recordings): before gaps were left out, the interpolation across the long
+        // one matched the wheels better than the motion did, and the estimate failed.
+        let offset = 0.8;
+        let (t, rates, truth) = recording(offset);
+        let mut gappy: Vec<StampedPose> = truth.iter().copied().filter(|p| (p.t_s + offset) % 5.0 < 3.5).collect();
+        // Later, the robot parked where it stopped (the next recording not yet started).
+        let last = truth[truth.len() - 1];
+        let later = (0..3000).map(|k| StampedPose { t_s: last.t_s + 100.0 + k as f64 * 0.008, pose: last.pose });
+        gappy.extend(later);
+        let a = align_clocks(&t, &rates, 3, &gappy).unwrap();
+        assert!((a.offset_s - offset).abs() < 2e-4, "{a:?}");
+        assert!(a.r_squared > 0.999, "{a:?}");
+        let poses = Poses::new(&gappy);
+        assert!(poses.gaps.len() >= 6, "{:?}", poses.gaps);
+        assert!(!poses.measured(40.0, 40.1) && poses.measured(0.5, 0.6));
     }
 
     #[test]

@@ -206,7 +206,6 @@ pub fn load(paths: &[PathBuf], opts: &LoadOptions) -> Result<Dataset, DatasetErr
     for p in paths {
         expand(p, &mut inputs);
     }
-    check_one_truth_file(&inputs, opts)?;
     // The inputs are read in parallel (one file or recording per task) and merged in their order, so the
     // dataset, its notes and the first error are those of a serial load whatever the thread count.
     let mut reads: Vec<_> = inputs.par_iter().map(|i| i.as_ref().ok().map(|i| read_input(i, opts))).collect();
@@ -237,40 +236,56 @@ pub fn load(paths: &[PathBuf], opts: &LoadOptions) -> Result<Dataset, DatasetErr
 /// The reads of [`load`], one per input.
 type Reads = Vec<Option<Result<Result<Loaded, DatasetError>, DatasetError>>>;
 
-/// Recordings read with one `--gt` source share its clock: a recording whose own alignment failed (a short,
-/// still or sparsely tracked one) is read again with the median offset the others were aligned at, and a
-/// note per such recording says so. Nothing changes when the offset is forced or no recording aligned.
+/// Recordings read with one `--gt` source (a file covering them all, or a folder of takes) share its clock:
+/// a recording whose own alignment failed (a short, still or sparsely tracked one), is weak (standard error
+/// above [`mcap::read::TOPIC_CLOCK_MAX_STD_ERROR_S`] or explaining less than
+/// [`mcap::read::TOPIC_CLOCK_MIN_R_SQUARED`] of the motion), or lands more than
+/// [`mcap::read::SAME_CLOCK_MAX_OFFSET_S`] from the others (another stretch of a long take matched) is read
+/// again at the median offset of the clear estimates, and a note per such recording says so. A few
+/// milliseconds of drift between clear estimates is kept: each recording keeps its own. Nothing changes when
+/// the offset is forced or no estimate is clear.
 fn shared_clock_retry(inputs: &[Result<Input, DatasetError>], reads: &mut Reads, opts: &LoadOptions) -> Vec<String> {
     let Some(gt) = opts.ground_truth.as_ref().filter(|g| g.time_offset_s.is_none()) else { return vec![] };
-    let failed = |r: &Option<Result<Result<Loaded, DatasetError>, DatasetError>>| {
-        matches!(r, Some(Ok(Err(DatasetError::Clock { .. }))))
+    let estimate = |r: &Option<Result<Result<Loaded, DatasetError>, DatasetError>>| {
+        r.as_ref()?.as_ref().ok()?.as_ref().ok()?.clock.as_ref()?.estimate
     };
-    let mut offsets: Vec<f64> = reads
-        .iter()
-        .filter_map(|r| r.as_ref()?.as_ref().ok()?.as_ref().ok())
-        .flat_map(|l| l.clock.iter().filter(|c| c.estimate.is_some()).map(|c| c.offset_s))
-        .collect();
-    if offsets.is_empty() || !reads.iter().any(failed) {
+    let clear = |a: &omni_kin::clock::ClockAlignment| {
+        a.std_error_s <= mcap::read::TOPIC_CLOCK_MAX_STD_ERROR_S && a.r_squared >= mcap::read::TOPIC_CLOCK_MIN_R_SQUARED
+    };
+    let mut offsets: Vec<f64> = reads.iter().filter_map(estimate).filter(clear).map(|a| a.offset_s).collect();
+    if offsets.is_empty() {
         return vec![];
     }
     offsets.sort_by(f64::total_cmp);
     let median = offsets[offsets.len() / 2];
+    // Why a read is taken again at the median, if it is.
+    let retry = |r: &Option<Result<Result<Loaded, DatasetError>, DatasetError>>| -> Option<String> {
+        if let Some(Ok(Err(e @ DatasetError::Clock { .. }))) = r {
+            return Some(e.to_string());
+        }
+        let a = estimate(r)?;
+        let own = format!("its own alignment gives {:+.4} s ± {:.1} ms", a.offset_s, a.std_error_s * 1e3);
+        if !clear(&a) {
+            return Some(format!("{own}, explaining {:.0} % of the motion: not clear", a.r_squared * 100.0));
+        }
+        let off = a.offset_s - median;
+        (off.abs() > mcap::read::SAME_CLOCK_MAX_OFFSET_S && offsets.len() >= 2)
+            .then(|| format!("{own}, {off:+.3} s from the other recordings' (another stretch of the take matched)"))
+    };
     let forced = LoadOptions {
         ground_truth: Some(ground_truth::GroundTruthOptions { time_offset_s: Some(median), ..gt.clone() }),
         ..opts.clone()
     };
     let mut notes = Vec::new();
     for (input, read) in inputs.iter().zip(reads.iter_mut()) {
-        if let (Ok(input), true) = (input, failed(read)) {
-            let Some(Ok(Err(e))) = read.take() else { unreachable!("checked above") };
-            notes.push(format!(
-                "{}: {e}; the ground truth is read at {median:+.4} s, the median offset of the {} recording(s) \
-                 aligned with the same --gt (one clock)",
-                input.path().display(),
-                offsets.len()
-            ));
-            *read = Some(read_input(input, &forced));
-        }
+        let (Ok(input), Some(why)) = (input, retry(read)) else { continue };
+        notes.push(format!(
+            "{}: {why}; the ground truth is read at {median:+.4} s, the median offset of the {} recording(s) aligned \
+             clearly with the same --gt (one clock)",
+            input.path().display(),
+            offsets.len()
+        ));
+        *read = Some(read_input(input, &forced));
     }
     notes
 }
@@ -410,25 +425,6 @@ struct Loaded {
     /// The Unix second a recording's run times count from (`None`: CSV and OptiOdom runs, whose times are
     /// their own).
     origin_s: Option<i64>,
-}
-
-/// `--gt FILE` is one recording's ground truth: it cannot serve several.
-fn check_one_truth_file(inputs: &[Result<Input, DatasetError>], opts: &LoadOptions) -> Result<(), DatasetError> {
-    let Some(gt) = &opts.ground_truth else { return Ok(()) };
-    let recordings = inputs
-        .iter()
-        .filter(|i| matches!(i, Ok(Input::Mcap(_) | Input::Db3(_) | Input::Recording(_) | Input::Ros1(_))))
-        .count();
-    if recordings > 1 && !gt.path.is_dir() {
-        return Err(DatasetError::file(
-            &gt.path,
-            format!(
-                "--gt names one ground-truth file but {recordings} recordings were given; give a folder of files \
-                 named after the recordings (<recording>.tum or <recording>.csv)"
-            ),
-        ));
-    }
-    Ok(())
 }
 
 /// The recording's name, for matching ground-truth files: a folder's name, a file's stem.
