@@ -239,6 +239,13 @@ pub fn fill_mcap_options(mcap: &mut McapOptions, joints_open: bool, robot: Optio
         "ground_truth_child",
     );
     mcap.wheel_data = r.wheel_data.clone();
+    // The design's forward kinematics, for a recording whose wheels come from its own odometry (its rows
+    // are the description's wheels, so only when they are the wheels read).
+    mcap.wheels_from_twist = r
+        .wheels_from_twist()
+        .ok()
+        .filter(|_| mcap.wheel_joints == r.joints())
+        .map(|m| m.row_iter().map(|row| [row[0], row[1], row[2]]).collect());
 }
 
 /// Where a command's design comes from.

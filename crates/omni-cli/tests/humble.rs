@@ -35,8 +35,9 @@ fn param(v: &Value, name: &str) -> f64 {
     v["params"].as_array().unwrap().iter().find(|p| p["name"] == name).unwrap()["value"].as_f64().unwrap()
 }
 
-/// `init` on the first session, then `train` on all three; the fitted radii and the clocks found.
-fn recipe(variant: &str, extra: &[&str]) {
+/// `init` on the first session, then `train` on all three; the fitted radii and the clocks found. Returns
+/// train's stderr.
+fn recipe(variant: &str, extra: &[&str]) -> String {
     let rec = recordings();
     let expected: Value = serde_json::from_str(&std::fs::read_to_string(rec.join("expected.json")).unwrap()).unwrap();
     let dir = rec.join(variant);
@@ -66,6 +67,7 @@ fn recipe(variant: &str, extra: &[&str]) {
     }
     // The joint state broadcaster's caster joint and the controller's /odom are not wheels or truth.
     assert!(!err.contains("caster"), "{err}");
+    err
 }
 
 #[test]
@@ -181,4 +183,44 @@ fn one_mocap_take_with_gaps_serves_every_recording_it_covers() {
     }
     std::fs::write(dir.join("take.tum"), take).unwrap();
     recipe("take", &["--gt", "take.tum"]);
+}
+
+#[test]
+#[cfg_attr(
+    not(python_bag_tools),
+    ignore = "needs rosbags and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
+)]
+fn odometry_only_recordings_calibrate_the_controllers_parameters() {
+    // The same sessions without /joint_states: diff_drive_controller's /odom (25 Hz, integrated through the
+    // design radii) is the only wheel record. The wheel speeds recovered through the design give the true
+    // radii and separation within 0.2 % (the recipe's assertions), with a note that says where they came from.
+    let err = recipe("odom", &[]);
+    assert!(
+        err.contains(
+            "session_01: no sensor_msgs/msg/JointState topic: the wheel speeds are recovered from topic \"/odom\" \
+             (the robot's own odometry, 626 poses) through the design"
+        ) && err.contains("every parameter of the model is within a fit's reach"),
+        "{err}"
+    );
+    let v = omnical_json(&recordings().join("odom"), &["info", "session_01", "--json"]);
+    let (r, why) = role(&v, "/odom");
+    assert_eq!(r, "wheels", "{v}");
+    assert!(why.starts_with("the robot's own odometry stands in for the missing JointState"), "{why}");
+
+    // Without the robot's design there is no way from the odometry to the wheels: refused, with the way on.
+    let bare = recordings().join("odom-bare");
+    let _ = std::fs::remove_dir_all(&bare);
+    copy_dir(&recordings().join("odom/session_01"), &bare.join("session_01"));
+    let out =
+        Command::new(env!("CARGO_BIN_EXE_omnical")).args(["train", "session_01"]).current_dir(&bare).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(
+            "session_01: no sensor_msgs/msg/JointState topic for the wheel speeds; /odom is the robot's own odometry: \
+             wheel speeds can come from it only through the robot's design; describe the robot (omnical init \
+             RECORDING writes robot.toml from its URDF, or --robot FILE)"
+        ),
+        "{err}"
+    );
 }

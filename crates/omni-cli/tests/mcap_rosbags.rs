@@ -409,7 +409,7 @@ fn ground_truth_from_tf_pose_with_covariance_and_odometry() {
 fn errors_name_file_topic_message_and_field() {
     let (dir, _) = fixtures_or_skip!();
     let d = McapOptions::default();
-    let cases: [(&str, McapOptions, &str); 12] = [
+    let cases: [(&str, McapOptions, &str); 13] = [
         ("not_mcap", d.clone(), "not an MCAP file (it does not start with the MCAP magic bytes)"),
         (
             "no_truth",
@@ -436,7 +436,14 @@ fn errors_name_file_topic_message_and_field() {
         (
             "no_truth",
             McapOptions { joints_topic: Some("/chatter".into()), ..d.clone() },
-            "topic \"/chatter\": type std_msgs/msg/String is not sensor_msgs/msg/JointState (wheel speeds)",
+            "topic \"/chatter\": type std_msgs/msg/String is not sensor_msgs/msg/JointState (wheel speeds) or \
+             nav_msgs/msg/Odometry (the robot's own odometry)",
+        ),
+        (
+            "no_truth",
+            McapOptions { joints_topic: Some("/odom".into()), ..d.clone() },
+            "topic \"/odom\": is nav_msgs/msg/Odometry: wheel speeds can come from it only through the robot's \
+             design; describe the robot (omnical init RECORDING writes robot.toml from its URDF, or --robot FILE)",
         ),
         (
             "no_truth",

@@ -9,11 +9,12 @@ storage (Humble's default):
     bag/session_0N/         joint_state_broadcaster's /joint_states (50 Hz; the two wheels and a caster
                             swivel, positions and velocities), /robot_description (the URDF, design radii
                             0.050 m, separation 0.300 m), /tf_static (base_footprint -> base_link,
-                            base_link -> laser), diff_drive_controller's /odom, a header-less /cmd_vel, and
+                            base_link -> laser), diff_drive_controller's /odom (25 Hz, from the design), a header-less /cmd_vel, and
                             the motion capture's /mocap/pose (PoseStamped, 120 Hz, frame `world`) stamped by
                             its own clock: wheel time = mocap time + 0.8 s
     file/session_0N/        the same without /mocap/pose; file/mocap/session_0N.tum holds it (TUM, same
                             clock as the topic)
+    odom/session_0N/        bag/ without /joint_states: the controller's /odom is the only wheel record
     robot.urdf              the URDF as a file
 
 The true robot's right wheel is 2 % larger than the design (0.051 m against 0.050 m); its left wheel and
@@ -116,6 +117,26 @@ def simulate(session):
     return t, integrate(left), integrate(right), x, y, theta
 
 
+def diff_drive_odometry(left, right, dt):
+    """diff_drive_controller's odometry (x, y, yaw, v, w per wheel sample) from wheel angles (rad) through the
+    design radius and separation: each update integrates the wheel increments along an exact arc."""
+    x = y = th = 0.0
+    out = [(0.0, 0.0, 0.0, 0.0, 0.0)]
+    for k in range(1, len(left)):
+        dl, dr = DESIGN_R * (left[k] - left[k - 1]), DESIGN_R * (right[k] - right[k - 1])
+        ds, dth = (dl + dr) / 2, (dr - dl) / DESIGN_B
+        if abs(dth) < 1e-6:
+            x += ds * math.cos(th + dth / 2)
+            y += ds * math.sin(th + dth / 2)
+        else:
+            r = ds / dth
+            x += r * (math.sin(th + dth) - math.sin(th))
+            y -= r * (math.cos(th + dth) - math.cos(th))
+        th += dth
+        out.append((x, y, th, ds / dt, dth / dt))
+    return out
+
+
 def write(path, msgs):
     shutil.rmtree(path, ignore_errors=True)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -141,6 +162,7 @@ def session_messages(session):
     tj = (js_ns - t0) * 1e-9
     pos = [np.interp(tj, t_fine, a) for a in (left, right)]
     prev = [np.interp(tj - JS_DT_NS * 1e-9, t_fine, a) for a in (left, right)]
+    odom = diff_drive_odometry(pos[0], pos[1], JS_DT_NS * 1e-9)
     for k, ns in enumerate(js_ns):
         vel = [(p[k] - q[k]) / (JS_DT_NS * 1e-9) for p, q in zip(pos, prev)]
         m = T['sensor_msgs/msg/JointState'](
@@ -149,13 +171,15 @@ def session_messages(session):
             velocity=np.array([0.0, vel[0], vel[1]]), effort=np.zeros(0))
         msgs.append((int(ns) + 400_000, '/joint_states', 'sensor_msgs/msg/JointState', m))
         if k % 2 == 0:
-            # diff_drive_controller's odometry from the design radii (never ground truth).
+            # diff_drive_controller's odometry from the design radii (never ground truth), published at
+            # 25 Hz from its 50 Hz updates.
+            ox, oy, oth, ov, ow = odom[k]
             od = T['nav_msgs/msg/Odometry'](
                 header=header(ns, 'odom'), child_frame_id='base_link',
-                pose=T['geometry_msgs/msg/PoseWithCovariance'](pose=pose(0, 0, 0), covariance=np.zeros(36)),
+                pose=T['geometry_msgs/msg/PoseWithCovariance'](pose=pose(ox, oy, oth), covariance=np.zeros(36)),
                 twist=T['geometry_msgs/msg/TwistWithCovariance'](
-                    twist=T['geometry_msgs/msg/Twist'](linear=T['geometry_msgs/msg/Vector3'](x=0.0, y=0.0, z=0.0),
-                                                       angular=T['geometry_msgs/msg/Vector3'](x=0.0, y=0.0, z=0.0)),
+                    twist=T['geometry_msgs/msg/Twist'](linear=T['geometry_msgs/msg/Vector3'](x=ov, y=0.0, z=0.0),
+                                                       angular=T['geometry_msgs/msg/Vector3'](x=0.0, y=0.0, z=ow)),
                     covariance=np.zeros(36)))
             msgs.append((int(ns) + 600_000, '/odom', 'nav_msgs/msg/Odometry', od))
     v3 = T['geometry_msgs/msg/Vector3']
@@ -187,6 +211,7 @@ def main(out):
         msgs, mocap, tum = session_messages(s)
         write(out / 'bag' / f'session_0{s}', msgs + mocap)
         write(out / 'file' / f'session_0{s}', msgs)
+        write(out / 'odom' / f'session_0{s}', [m for m in msgs if m[1] != '/joint_states'] + mocap)
         (out / 'file' / 'mocap' / f'session_0{s}.tum').write_text('\n'.join(tum) + '\n')
     expected = {'r_left_m': R_LEFT, 'r_right_m': R_RIGHT, 'separation_m': SEPARATION,
                 'mocap_offset_s': MOCAP_OFFSET_S}

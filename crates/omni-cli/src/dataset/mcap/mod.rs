@@ -6,7 +6,7 @@
 //!
 //! | role | types | default topic choice |
 //! |---|---|---|
-//! | wheel speeds | `sensor_msgs/msg/JointState` | the only JointState topic, else the only one carrying all the wheel joints |
+//! | wheel speeds | `sensor_msgs/msg/JointState` | the only JointState topic, else the only one carrying all the wheel joints; without JointState, the robot's own odometry through the design ([`McapOptions::wheels_from_twist`], [`odom_wheels`]) |
 //! | ground truth | `geometry_msgs/msg/PoseStamped`, `PoseWithCovarianceStamped`, `nav_msgs/msg/Odometry`, or one parent → child pair of `tf2_msgs/msg/TFMessage` | the only source outside the robot's frames (see below) |
 //! | recorded odometry | `nav_msgs/msg/Odometry` in frame `odom` | `/odom`, else the only one |
 //! | command | `geometry_msgs/msg/Twist`, `TwistStamped` | `/cmd_vel`, else the only one |
@@ -62,6 +62,7 @@ mod imu;
 mod inspect;
 mod joint_state;
 mod laser_scan;
+mod odom_wheels;
 mod odometry;
 mod pose_stamped;
 mod poses;
@@ -128,6 +129,11 @@ pub struct McapOptions {
     /// first wheel sample and the same pose at the last, for measured end poses to replace
     /// (`--gt-kind end-pose`). Default false.
     pub wheels_only: bool,
+    /// The design's forward kinematics, a row per wheel (in wheel order): wheel speed (rad/s) per body vx,
+    /// vy (m/s) and ω (rad/s). With it, a recording without JointState takes its wheel speeds from the
+    /// robot's own odometry (`/odom`) through the design ([`odom_wheels`]); so does a `joints_topic` that
+    /// names an Odometry topic. Set from the robot description. Default: none (JointState is needed).
+    pub wheels_from_twist: Option<Vec<[f64; 3]>>,
     /// Where the topics and frames above were set, for messages. Default: their flags.
     pub origins: Origins,
 }
@@ -192,6 +198,7 @@ impl Default for McapOptions {
             command_topic: None,
             split: None,
             wheels_only: false,
+            wheels_from_twist: None,
             skip_invalid: false,
             recorded_odometry: true,
             truth_time_offset_s: None,

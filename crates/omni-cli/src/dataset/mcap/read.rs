@@ -6,7 +6,7 @@
 //! does not stop the read.
 
 use super::common::{NS_PER_S, decode, seconds_since};
-use super::joint_state::{self, JointSeries, JointState};
+use super::joint_state::{self, JointSeries, JointState, Wheels};
 use super::odometry::{self, ODOM_FRAME, Odometry};
 use super::pose_stamped::{self, PoseStamped, PoseWithCovarianceStamped};
 use super::poses::{PoseSeries, start_heading_in_half_turn};
@@ -194,6 +194,28 @@ impl Channel {
     }
 }
 
+/// Where the wheel speeds come from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum WheelSource {
+    /// A JointState channel.
+    Joints(usize),
+    /// The robot's own odometry channel, through the design (see [`super::odom_wheels`]).
+    Odometry(usize),
+}
+
+impl WheelSource {
+    /// The channel.
+    pub(super) fn channel(self) -> usize {
+        match self {
+            Self::Joints(i) | Self::Odometry(i) => i,
+        }
+    }
+}
+
+/// What an odometry topic needs to stand in for the wheels.
+const NEED_DESIGN: &str = "wheel speeds can come from it only through the robot's design; describe the robot \
+                           (omnical init RECORDING writes robot.toml from its URDF, or --robot FILE)";
+
 /// Where the ground truth comes from.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) enum Truth {
@@ -243,29 +265,55 @@ impl Bag<'_> {
         }
     }
 
-    pub(super) fn joints(&self, opts: &McapOptions) -> Result<usize, DatasetError> {
+    /// Where the wheel speeds come from: the JointState topic named (`--joints-topic`, robot.toml) or the
+    /// only one (else the only one carrying the wheel joints); without JointState, the robot's own odometry
+    /// through the design ([`McapOptions::wheels_from_twist`]).
+    pub(super) fn joints(&self, opts: &McapOptions) -> Result<WheelSource, DatasetError> {
         if let Some(topic) = &opts.joints_topic {
             let i = self.find(topic, &opts.origins.joints_topic)?;
             let c = &self.channels[i];
-            if c.msg_type != MsgType::JointState {
-                return Err(DatasetError::at(
+            return match (c.msg_type, &opts.wheels_from_twist) {
+                (MsgType::JointState, _) => Ok(WheelSource::Joints(i)),
+                (MsgType::Odometry, Some(_)) => Ok(WheelSource::Odometry(i)),
+                (MsgType::Odometry, None) => Err(DatasetError::at(
                     self.path,
                     topic_location(topic),
-                    format!("type {} is not {} (wheel speeds)", schema_or_none(&c.schema), joint_state::NAME),
-                ));
-            }
-            return Ok(i);
+                    format!("is {}: {NEED_DESIGN}", odometry::NAME),
+                )),
+                _ => Err(DatasetError::at(
+                    self.path,
+                    topic_location(topic),
+                    format!(
+                        "type {} is not {} (wheel speeds) or {} (the robot's own odometry)",
+                        schema_or_none(&c.schema),
+                        joint_state::NAME,
+                        odometry::NAME
+                    ),
+                )),
+            };
         }
         let candidates: Vec<usize> =
             (0..self.channels.len()).filter(|&i| self.channels[i].msg_type == MsgType::JointState).collect();
         if let [i] = candidates[..] {
-            return Ok(i);
+            return Ok(WheelSource::Joints(i));
         }
         if candidates.is_empty() {
-            return Err(DatasetError::file(
-                self.path,
-                format!("no {} topic for the wheel speeds; topics: {}", joint_state::NAME, self.listing()),
-            ));
+            let odometry = self.optional(Channel::is_wheel_odometry, "/odom", "wheel odometry", &mut Vec::new());
+            return match (odometry, &opts.wheels_from_twist) {
+                (Some(i), Some(_)) => Ok(WheelSource::Odometry(i)),
+                (Some(i), None) => Err(DatasetError::file(
+                    self.path,
+                    format!(
+                        "no {} topic for the wheel speeds; {} is the robot's own odometry: {NEED_DESIGN}",
+                        joint_state::NAME,
+                        self.channels[i].topic
+                    ),
+                )),
+                (None, _) => Err(DatasetError::file(
+                    self.path,
+                    format!("no {} topic for the wheel speeds; topics: {}", joint_state::NAME, self.listing()),
+                )),
+            };
         }
         let with_wheels: Vec<usize> = candidates
             .iter()
@@ -273,7 +321,7 @@ impl Bag<'_> {
             .filter(|&i| matches!(&self.channels[i].content, Content::Joints(s) if s.len() > 0))
             .collect();
         if let [i] = with_wheels[..] {
-            return Ok(i);
+            return Ok(WheelSource::Joints(i));
         }
         let list: Vec<String> = candidates.iter().map(|&i| self.channels[i].describe()).collect();
         Err(DatasetError::file(
@@ -948,6 +996,72 @@ fn topic_clock(
     Some(clock(a.offset_s, Some(a)))
 }
 
+/// The wheels of JointState content `joints` from `topic`, with notes on what was done to them.
+fn joint_wheels(
+    path: &Path,
+    joints: Content,
+    topic: &str,
+    opts: &McapOptions,
+    notes: &mut Vec<String>,
+) -> Result<Wheels, DatasetError> {
+    let Content::Joints(series) = joints else { unreachable!("joints() returns JointState channels") };
+    if let Some((k, missing)) = series.no_wheel_message() {
+        return Err(DatasetError::at(path, format!("topic {topic:?}, message {k}"), missing.clone()));
+    }
+    let Some(&first_ns) = series.t_ns.first() else {
+        return Err(DatasetError::at(path, topic_location(topic), "has no messages (empty run)"));
+    };
+    let origin_s = first_ns.div_euclid(NS_PER_S);
+    let t_s: Vec<f64> = series.t_ns.iter().map(|&t| seconds_since(t, origin_s)).collect();
+    let wheels = series
+        .finish(&opts.wheel_joints, &t_s, &opts.wheel_data)
+        .map_err(|(k, what)| DatasetError::at(path, format!("topic {topic:?}, message {k}"), what))?;
+    notes.extend(wheels.notes.iter().map(|n| format!("{}: topic {topic:?}: {n}", path.display())));
+    if let Some(without) = wheels.differentiated {
+        notes.push(format!(
+            "{}: topic {topic:?}: {without} of {} messages have no velocity: wheel speeds are differences \
+             of position over header.stamp",
+            path.display(),
+            t_s.len()
+        ));
+    }
+    Ok(wheels)
+}
+
+/// The wheels recovered from the robot's own odometry `odometry` on `topic` through the design
+/// ([`super::odom_wheels`]), with a note saying so and what a fit can reach from them.
+fn odometry_wheels(
+    path: &Path,
+    odometry: &Content,
+    topic: &str,
+    opts: &McapOptions,
+    notes: &mut Vec<String>,
+) -> Result<Wheels, DatasetError> {
+    let (Content::Poses(series), Some(rows)) = (odometry, &opts.wheels_from_twist) else {
+        unreachable!("joints() returns an odometry channel only with the design's forward kinematics")
+    };
+    let wheels = super::odom_wheels::wheels_from_odometry(series, rows)
+        .map_err(|(k, what)| DatasetError::at(path, format!("topic {topic:?}, message {k}"), what))?;
+    let reach = if rows.len() <= 3 {
+        "every parameter of the model is within a fit's reach (as many wheels as the motion has degrees of freedom)"
+            .to_string()
+    } else {
+        format!(
+            "with {} wheels and 3 degrees of freedom a fit reaches a 3 × 3 correction of the design, not one \
+             wheel's own radius",
+            rows.len()
+        )
+    };
+    notes.push(format!(
+        "{}: no {} topic: the wheel speeds are recovered from topic {topic:?} (the robot's own odometry, {} \
+         poses) through the design, as its controller computed them; {reach}",
+        path.display(),
+        joint_state::NAME,
+        series.t_ns.len()
+    ));
+    Ok(wheels)
+}
+
 /// The runs of a recording whose messages are all in `rec`; `path` names it in messages, `stem` names its
 /// runs (`stem`, or `stem#1`, `stem#2`, … when split). See the module docs of [`super`].
 ///
@@ -963,7 +1077,8 @@ pub(crate) fn runs(
     let mut bag = Bag { path, channels: rec.channels };
     let mut notes = Vec::new();
 
-    let j = bag.joints(opts)?;
+    let source = bag.joints(opts)?;
+    let j = source.channel();
     bag.check(j)?;
     let truth_src = match external {
         Some(_) => None,
@@ -983,27 +1098,12 @@ pub(crate) fn runs(
 
     // Wheels.
     let joints_topic = bag.channels[j].topic.clone();
-    let Content::Joints(series) = bag.take(j) else { unreachable!("joints() returns JointState channels") };
-    if let Some((k, missing)) = series.no_wheel_message() {
-        return Err(DatasetError::at(path, format!("topic {joints_topic:?}, message {k}"), missing.clone()));
-    }
-    let Some(&first_ns) = series.t_ns.first() else {
-        return Err(DatasetError::at(path, topic_location(&joints_topic), "has no messages (empty run)"));
+    let wheels = match source {
+        WheelSource::Joints(_) => joint_wheels(path, bag.take(j), &joints_topic, opts, &mut notes)?,
+        WheelSource::Odometry(_) => odometry_wheels(path, &bag.channels[j].content, &joints_topic, opts, &mut notes)?,
     };
-    let origin_s = first_ns.div_euclid(NS_PER_S);
-    let t_s: Vec<f64> = series.t_ns.iter().map(|&t| seconds_since(t, origin_s)).collect();
-    let wheels = series
-        .finish(&opts.wheel_joints, &t_s, &opts.wheel_data)
-        .map_err(|(k, what)| DatasetError::at(path, format!("topic {joints_topic:?}, message {k}"), what))?;
-    notes.extend(wheels.notes.iter().map(|n| format!("{}: topic {joints_topic:?}: {n}", path.display())));
-    if let Some(without) = wheels.differentiated {
-        notes.push(format!(
-            "{}: topic {joints_topic:?}: {without} of {} messages have no velocity: wheel speeds are differences \
-             of position over header.stamp",
-            path.display(),
-            t_s.len()
-        ));
-    }
+    let origin_s = wheels.t_ns[0].div_euclid(NS_PER_S);
+    let t_s: Vec<f64> = wheels.t_ns.iter().map(|&t| seconds_since(t, origin_s)).collect();
 
     // Ground truth, trimmed to the wheel data's span.
     let n_wheels = opts.wheel_joints.len();

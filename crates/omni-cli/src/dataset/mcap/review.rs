@@ -4,7 +4,7 @@
 //! topic choice as the read ([`Bag::joints`], [`Bag::truth`], …), so `info` cannot say one thing and
 //! `train` do another.
 
-use super::read::{self, Bag, Channel, Content, MsgType, Recording, Truth};
+use super::read::{self, Bag, Channel, Content, MsgType, Recording, Truth, WheelSource};
 use super::{McapOptions, imu, inspect::ROBOT_DESCRIPTION_TOPIC, laser_scan, tf};
 use crate::dataset::DatasetError;
 use std::path::Path;
@@ -58,7 +58,7 @@ fn message(e: &DatasetError) -> String {
 
 /// The choices a read makes on a recording.
 struct Choices {
-    joints: Result<usize, DatasetError>,
+    joints: Result<WheelSource, DatasetError>,
     /// `None`: the ground truth comes from elsewhere (a `--gt` file, another reference).
     truth: Option<Result<Truth, DatasetError>>,
     odometry: Option<usize>,
@@ -117,6 +117,18 @@ fn topic_role(
             {
                 return (Role::Unused, format!("named as the ground truth (--gt-topic), refused: {}", message(e)));
             }
+            if let Ok(WheelSource::Odometry(o)) = choices.joints
+                && o == i
+            {
+                return (
+                    Role::Wheels,
+                    format!(
+                        "the robot's own odometry stands in for the missing JointState: wheel speeds ({}) recovered \
+                         from its poses through the design",
+                        opts.wheel_joints.join(", ")
+                    ),
+                );
+            }
             if choices.odometry == Some(i) {
                 return (
                     Role::RecordedOdometry,
@@ -138,10 +150,10 @@ fn topic_role(
     }
 }
 
-fn joints_role(bag: &Bag, i: usize, joints: &Result<usize, DatasetError>, opts: &McapOptions) -> (Role, String) {
+fn joints_role(bag: &Bag, i: usize, joints: &Result<WheelSource, DatasetError>, opts: &McapOptions) -> (Role, String) {
     let units = &opts.wheel_data;
     match joints {
-        Ok(j) if *j == i => (
+        Ok(WheelSource::Joints(j)) if *j == i => (
             Role::Wheels,
             format!(
                 "joints {} in wheel order (position in {}, velocity in {})",
@@ -150,7 +162,7 @@ fn joints_role(bag: &Bag, i: usize, joints: &Result<usize, DatasetError>, opts: 
                 units.velocity.name()
             ),
         ),
-        Ok(j) => (Role::Unused, format!("the wheels come from {}", bag.channels[*j].topic)),
+        Ok(source) => (Role::Unused, format!("the wheels come from {}", bag.channels[source.channel()].topic)),
         Err(e) => (Role::Unused, format!("no wheels read: {}", message(e))),
     }
 }
