@@ -88,35 +88,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     let spec = a.model.to_string();
     let mut doc = serde_json::json!({ "model": spec, "runs": ds.runs.len() });
     if let Some(out) = tum_dir {
-        let dir = out.target().to_path_buf();
-        let mut files = Vec::new();
-        for run in &ds.runs {
-            files.extend(
-                write_tum(
-                    out.path(),
-                    run,
-                    designs.for_run(run)?,
-                    models.for_run(run)?,
-                    &spec,
-                    ds.time_origins_s.get(run.name()).copied(),
-                )?
-                .iter()
-                .map(|f| out.shown(f)),
-            );
-        }
-        out.commit()?;
-        doc["tum"] = serde_json::json!({ "dir": dir, "files": files });
-        if !a.output.json {
-            println!(
-                "wrote {} × 3 TUM files (ground truth, design, calibrated) to {}; e.g. evo_ape tum {}",
-                crate::units::count(ds.runs.len(), "run"),
-                dir.display(),
-                ds.runs.first().map_or_else(String::new, |r| {
-                    let s = tum::file_stem(r.name());
-                    format!("{0}/{s}.gt.tum {0}/{s}.calibrated.tum", dir.display())
-                })
-            );
-        }
+        doc["tum"] = export_tum(out, &ds, (&designs, &models), &spec, a.output.json)?;
     }
     if let Some(out) = mcap_dir {
         let files: Vec<PathBuf> = write_mcaps(out.path(), &data, &ds, &models)?.iter().map(|f| out.shown(f)).collect();
@@ -156,6 +128,37 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         return super::print_json("export", doc);
     }
     Ok(())
+}
+
+/// `--tum`: three TUM files per run (ground truth, each run's design, the calibrated `models`) in `out`,
+/// committed; their JSON (folder and files), and a line on stdout unless `json`.
+fn export_tum(
+    out: OutDir,
+    ds: &crate::dataset::Dataset,
+    (designs, models): (&RunModels, &RunModels),
+    spec: &str,
+    json: bool,
+) -> anyhow::Result<serde_json::Value> {
+    let dir = out.target().to_path_buf();
+    let mut files = Vec::new();
+    for run in &ds.runs {
+        let origin_s = ds.time_origins_s.get(run.name()).copied();
+        let written = write_tum(out.path(), run, designs.for_run(run)?, models.for_run(run)?, spec, origin_s)?;
+        files.extend(written.iter().map(|f| out.shown(f)));
+    }
+    out.commit()?;
+    if !json {
+        println!(
+            "wrote {} × 3 TUM files (ground truth, design, calibrated) to {}; e.g. evo_ape tum {}",
+            crate::units::count(ds.runs.len(), "run"),
+            dir.display(),
+            ds.runs.first().map_or_else(String::new, |r| {
+                let s = tum::file_stem(r.name());
+                format!("{0}/{s}.gt.tum {0}/{s}.calibrated.tum", dir.display())
+            })
+        );
+    }
+    Ok(serde_json::json!({ "dir": dir, "files": files }))
 }
 
 /// One MCAP bag per run in `dir`, with the calibrated odometry; returns the paths.

@@ -225,6 +225,15 @@ pub(super) enum Truth {
     Tf(usize, usize),
 }
 
+impl Truth {
+    /// The channel.
+    pub(super) fn channel(self) -> usize {
+        match self {
+            Self::Poses(i) | Self::Tf(i, _) => i,
+        }
+    }
+}
+
 /// The file being read and its channels, for choosing topics and building errors.
 pub(super) struct Bag<'a> {
     pub(super) path: &'a Path,
@@ -1062,6 +1071,141 @@ fn odometry_wheels(
     Ok(wheels)
 }
 
+/// The ground-truth poses `all` within the wheel data's span `t_s` (a note counts those dropped); none is an
+/// error naming the wheels' topic and where the ground truth came from (`names`: the wheels' topic, the
+/// ground truth's place and label).
+fn within_wheels(
+    path: &Path,
+    all: &[StampedPose],
+    t_s: &[f64],
+    names: (&str, &str, &str),
+    notes: &mut Vec<String>,
+) -> Result<Vec<StampedPose>, DatasetError> {
+    let (joints_topic, truth_where, truth_label) = names;
+    let (w0, w1) = (t_s[0], t_s[t_s.len() - 1]);
+    let truth: Vec<StampedPose> = all.iter().copied().filter(|p| (w0..=w1).contains(&p.t_s)).collect();
+    if truth.is_empty() {
+        let span = match (all.first(), all.last()) {
+            (Some(a), Some(b)) => format!("spans {}..{} s", a.t_s, b.t_s),
+            _ => "has no poses".to_string(),
+        };
+        return Err(DatasetError::file(
+            path,
+            format!(
+                "wheel data on {joints_topic:?} spans {w0}..{w1} s but the ground truth {truth_where} {span}: \
+                 no ground-truth pose lies within the wheel data"
+            ),
+        ));
+    }
+    let dropped = all.len() - truth.len();
+    if dropped > 0 {
+        notes.push(format!(
+            "{}: {truth_label}: dropped {dropped} ground-truth poses outside the wheel data's time span \
+             ({w0}..{w1} s)",
+            path.display()
+        ));
+    }
+    Ok(truth)
+}
+
+/// A recording's streams on one time line (s since its origin), ready to be cut into runs.
+struct Streams {
+    t_s: Vec<f64>,
+    wheels: Wheels,
+    truth: Vec<StampedPose>,
+    odometry: Vec<StampedPose>,
+    commands: Option<Commands>,
+    joints_topic: String,
+}
+
+impl Streams {
+    /// The runs: the whole recording as one named `stem`, or with [`McapOptions::split`] its pieces between
+    /// standstills named `stem#1`, `stem#2`, …; each with its name, or the error that refuses it.
+    fn runs(&self, path: &Path, stem: &str, opts: &McapOptions) -> Vec<(String, Result<Run, DatasetError>)> {
+        let (t_s, n_wheels) = (&self.t_s, opts.wheel_joints.len());
+        let pieces = match opts.split {
+            Some(min_s) => split::pieces(t_s, &self.wheels.rad_s, n_wheels, &self.truth, min_s),
+            None => vec![(0, t_s.len() - 1)],
+        };
+        let last_piece = pieces.len() - 1;
+        let mut out = Vec::with_capacity(pieces.len());
+        for (p, &(lo, hi)) in pieces.iter().enumerate() {
+            let name = if opts.split.is_some() { format!("{stem}#{}", p + 1) } else { stem.to_string() };
+            let span = t_s[lo]..=t_s[hi];
+            let within = |poses: &[StampedPose]| {
+                let mut v: Vec<StampedPose> = poses.iter().copied().filter(|q| span.contains(&q.t_s)).collect();
+                start_heading_in_half_turn(&mut v);
+                v
+            };
+            // Commands tile the whole time line: the first run also takes those before it, the last those after.
+            let from_ns = if p == 0 { i64::MIN } else { self.wheels.t_ns[lo] };
+            let to_ns = if p == last_piece { i64::MAX } else { self.wheels.t_ns[hi] };
+            let data = RunData {
+                name: name.clone(),
+                wheel_t_s: t_s[lo..=hi].to_vec(),
+                wheel_rad_s: self.wheels.rad_s[lo * n_wheels..(hi + 1) * n_wheels].to_vec(),
+                n_wheels,
+                truth: within(&self.truth),
+                command: self.commands.as_ref().and_then(|c| c.first_in(from_ns, to_ns)),
+                repetition: None,
+                recorded_odometry: within(&self.odometry),
+                wheel_start_rad: self
+                    .wheels
+                    .position
+                    .as_ref()
+                    .map(|pos| pos[lo * n_wheels..(lo + 1) * n_wheels].to_vec())
+                    .unwrap_or_default(),
+            };
+            out.push((name, Run::new(data).map_err(|e| self.run_error(path, lo, e))));
+        }
+        out
+    }
+
+    /// A run's validation error, for the run starting at wheel sample `lo`: a bad wheel sample is named as
+    /// the wheel topic's message of the same index.
+    fn run_error(&self, path: &Path, lo: usize, source: KinError) -> DatasetError {
+        let joints_topic = &self.joints_topic;
+        match &source {
+            KinError::NonFinite { what: "wheel sample", index, .. }
+            | KinError::NotIncreasing { what: "wheel sample", index, .. } => {
+                DatasetError::at(path, format!("topic {joints_topic:?}, message {}", lo + index), source.to_string())
+            }
+            // No wheel turns at 10⁴ rad/s: the joints are in another unit.
+            KinError::Implausible { what: "wheel sample", index, .. } => DatasetError::at(
+                path,
+                format!("topic {joints_topic:?}, message {}", lo + index),
+                format!(
+                    "{source}: are the joints in encoder counts, rpm or degrees? Declare their units in \
+                     robot.toml's [wheel_data] (docs/formats.md)"
+                ),
+            ),
+            _ => DatasetError::Run { path: path.to_path_buf(), error: source },
+        }
+    }
+}
+
+/// The file of a `--gt` folder that covers most of the wheel data's span `t_s` (s since `origin_s`), for a
+/// recording no file is named after, with a note saying which and how much it covers.
+fn overlapping_file(
+    path: &Path,
+    folder: &ExternalTruth,
+    origin_s: i64,
+    t_s: &[f64],
+    notes: &mut Vec<String>,
+) -> Result<ExternalTruth, DatasetError> {
+    let at = |t: f64| origin_s * NS_PER_S + (t * 1e9).round() as i64;
+    let (ext, share) = folder
+        .overlapping(at(t_s[0]), at(t_s[t_s.len() - 1]))
+        .map_err(|e| DatasetError::file(path, format!("--gt folder {}: {e}", folder.path.display())))?;
+    notes.push(format!(
+        "{}: no file of the --gt folder is named after it: {} covers {:.0} % of its span and is its ground truth",
+        path.display(),
+        ext.path.display(),
+        100.0 * share
+    ));
+    Ok(ext)
+}
+
 /// The runs of a recording whose messages are all in `rec`; `path` names it in messages, `stem` names its
 /// runs (`stem`, or `stem#1`, `stem#2`, … when split). See the module docs of [`super`].
 ///
@@ -1085,9 +1229,7 @@ pub(crate) fn runs(
         None if opts.wheels_only => None,
         None => Some(bag.truth(opts)?),
     };
-    let truth_ch = truth_src.map(|t| match t {
-        Truth::Poses(i) | Truth::Tf(i, _) => i,
-    });
+    let truth_ch = truth_src.map(Truth::channel);
     if let Some(i) = truth_ch {
         bag.check(i)?;
         notes.extend(localization_note(path, &bag.channels[i].topic));
@@ -1115,16 +1257,7 @@ pub(crate) fn runs(
             (poses, format!("on {truth_topic:?}"), format!("topic {truth_topic:?}"), clock)
         }
         (_, _, Some(ext)) if !ext.by_time.is_empty() => {
-            let at = |t: f64| origin_s * NS_PER_S + (t * 1e9).round() as i64;
-            let (ext, share) = ext
-                .overlapping(at(t_s[0]), at(t_s[t_s.len() - 1]))
-                .map_err(|e| DatasetError::file(path, format!("--gt folder {}: {e}", ext.path.display())))?;
-            notes.push(format!(
-                "{}: no file of the --gt folder is named after it: {} covers {:.0} % of its span and is its ground truth",
-                path.display(),
-                ext.path.display(),
-                100.0 * share
-            ));
+            let ext = overlapping_file(path, ext, origin_s, &t_s, &mut notes)?;
             external_file(&ext, stem, origin_s, &t_s, &wheels.rad_s, n_wheels)?
         }
         (_, _, Some(ext)) => external_file(ext, stem, origin_s, &t_s, &wheels.rad_s, n_wheels)?,
@@ -1135,29 +1268,7 @@ pub(crate) fn runs(
         }
         _ => unreachable!("the ground truth comes from a topic or a file"),
     };
-    let (w0, w1) = (t_s[0], t_s[t_s.len() - 1]);
-    let truth: Vec<StampedPose> = all_truth.iter().copied().filter(|p| (w0..=w1).contains(&p.t_s)).collect();
-    if truth.is_empty() {
-        let span = match (all_truth.first(), all_truth.last()) {
-            (Some(a), Some(b)) => format!("spans {}..{} s", a.t_s, b.t_s),
-            _ => "has no poses".to_string(),
-        };
-        return Err(DatasetError::file(
-            path,
-            format!(
-                "wheel data on {joints_topic:?} spans {w0}..{w1} s but the ground truth {truth_where} {span}: \
-                 no ground-truth pose lies within the wheel data"
-            ),
-        ));
-    }
-    let dropped = all_truth.len() - truth.len();
-    if dropped > 0 {
-        notes.push(format!(
-            "{}: {truth_label}: dropped {dropped} ground-truth poses outside the wheel data's time span \
-             ({w0}..{w1} s)",
-            path.display()
-        ));
-    }
+    let truth = within_wheels(path, &all_truth, &t_s, (&joints_topic, &truth_where, &truth_label), &mut notes)?;
     let odometry: Vec<StampedPose> = match odom.map(|i| bag.take(i)) {
         Some(Content::Poses(p)) => p.stamped(origin_s),
         _ => Vec::new(),
@@ -1168,65 +1279,13 @@ pub(crate) fn runs(
     };
 
     // Runs.
-    let pieces = match opts.split {
-        Some(min_s) => split::pieces(&t_s, &wheels.rad_s, n_wheels, &truth, min_s),
-        None => vec![(0, t_s.len() - 1)],
-    };
+    let streams = Streams { t_s, wheels, truth, odometry, commands, joints_topic };
     let mut out = McapRead { runs: Vec::new(), notes, skipped: Vec::new(), origin_s, ground_truth_clock: clock };
-    let last_piece = pieces.len() - 1;
-    for (p, &(lo, hi)) in pieces.iter().enumerate() {
-        let name = if opts.split.is_some() { format!("{stem}#{}", p + 1) } else { stem.to_string() };
-        let span = t_s[lo]..=t_s[hi];
-        let within = |poses: &[StampedPose]| {
-            let mut v: Vec<StampedPose> = poses.iter().copied().filter(|q| span.contains(&q.t_s)).collect();
-            start_heading_in_half_turn(&mut v);
-            v
-        };
-        // Commands tile the whole time line: the first run also takes those before it, the last those after.
-        let from_ns = if p == 0 { i64::MIN } else { wheels.t_ns[lo] };
-        let to_ns = if p == last_piece { i64::MAX } else { wheels.t_ns[hi] };
-        let data = RunData {
-            name: name.clone(),
-            wheel_t_s: t_s[lo..=hi].to_vec(),
-            wheel_rad_s: wheels.rad_s[lo * n_wheels..(hi + 1) * n_wheels].to_vec(),
-            n_wheels,
-            truth: within(&truth),
-            command: commands.as_ref().and_then(|c| c.first_in(from_ns, to_ns)),
-            repetition: None,
-            recorded_odometry: within(&odometry),
-            wheel_start_rad: wheels
-                .position
-                .as_ref()
-                .map(|pos| pos[lo * n_wheels..(lo + 1) * n_wheels].to_vec())
-                .unwrap_or_default(),
-        };
-        match Run::new(data) {
+    for (name, run) in streams.runs(path, stem, opts) {
+        match run {
             Ok(run) => out.runs.push(run),
-            Err(source) => {
-                let e = match &source {
-                    // A bad wheel sample is the JointState message of the same index.
-                    KinError::NonFinite { what: "wheel sample", index, .. }
-                    | KinError::NotIncreasing { what: "wheel sample", index, .. } => DatasetError::at(
-                        path,
-                        format!("topic {joints_topic:?}, message {}", lo + index),
-                        source.to_string(),
-                    ),
-                    // No wheel turns at 10⁴ rad/s: the joints are in another unit.
-                    KinError::Implausible { what: "wheel sample", index, .. } => DatasetError::at(
-                        path,
-                        format!("topic {joints_topic:?}, message {}", lo + index),
-                        format!(
-                            "{source}: are the joints in encoder counts, rpm or degrees? Declare their units in \
-                             robot.toml's [wheel_data] (docs/formats.md)"
-                        ),
-                    ),
-                    _ => DatasetError::Run { path: path.to_path_buf(), error: source },
-                };
-                if !opts.skip_invalid {
-                    return Err(e);
-                }
-                out.skipped.push((name, e.to_string()));
-            }
+            Err(e) if opts.skip_invalid => out.skipped.push((name, e.to_string())),
+            Err(e) => return Err(e),
         }
     }
     Ok(out)
