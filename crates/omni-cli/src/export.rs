@@ -2,6 +2,7 @@
 //! MCAP bags with a model's odometry on `/omnical/odometry` for Foxglove.
 
 use crate::atomic;
+use crate::dataset::mcap::copy::CopiedTopic;
 use crate::dataset::mcap::{WriteOptions, write_run};
 use crate::report::tum;
 use anyhow::Context;
@@ -37,30 +38,63 @@ pub fn joint_names(model: &FittedModel, joints: &[String]) -> Vec<String> {
 /// Writes one run's MCAP bag `DIR/<run>.mcap` (`--mcap`): its wheel data (joints `wheel_joints`), ground
 /// truth, recorded odometry if any, and `model`'s odometry on /omnical/odometry, stamped in the recording's
 /// time base (`recording_origin_s`, the Unix second its times count from); a run without one whose clock
-/// starts before 0 s (a simulated one) is put at the simulator's epoch. Returns the path.
+/// starts before 0 s (a simulated one) is put at the simulator's epoch. `recorded` are the recording's own
+/// topics (transforms, URDF, commands: `crate::dataset::recorded_topics`), of which the run's span is
+/// carried over as recorded. Returns the path.
 pub fn write_mcap(
     dir: &Path,
     run: &Run,
     model: &FittedModel,
     wheel_joints: &[String],
     recording_origin_s: Option<i64>,
+    recorded: &[CopiedTopic],
 ) -> anyhow::Result<PathBuf> {
+    let origin_s = match recording_origin_s {
+        Some(o) => o,
+        // Simulated clocks start before 0 s (as `simulate` does): its epoch.
+        None if run.wheel_t_s().first().is_some_and(|&t| t < 0.0) => crate::dataset::mcap::SIM_EPOCH_S,
+        None => 0,
+    };
+    let log_ns = |t_s: f64| u64::try_from(origin_s * 1_000_000_000 + (t_s * 1e9).round() as i64).unwrap_or(0);
+    let t = run.wheel_t_s();
+    let span = (log_ns(t[0]), log_ns(t[t.len() - 1]));
     let opts = WriteOptions {
         wheel_joints: wheel_joints.to_vec(),
         design_odometry: (!run.recorded_odometry().is_empty()).then(|| run.recorded_odometry().to_vec()),
         calibrated_odometry: Some(odometry_poses(model, run)?),
-        // The recording's time base; simulated clocks start before 0 s (as `simulate` does): its epoch.
-        origin_s: match recording_origin_s {
-            Some(o) => o,
-            None if run.wheel_t_s().first().is_some_and(|&t| t < 0.0) => crate::dataset::mcap::SIM_EPOCH_S,
-            None => 0,
-        },
+        origin_s,
         lidar: None,
         imu: None,
+        copied: crate::dataset::mcap::copy::within(recorded, span.0, span.1),
     };
     let path = dir.join(format!("{}.mcap", tum::file_stem(run.name())));
     write_run(&path, run, &opts)?;
     Ok(path)
+}
+
+/// The recorded topics each run's MCAP export carries over, read from the run's recording
+/// (`Dataset::recordings`) once for all the runs of that recording in a row.
+pub struct RecordedTopics<'a> {
+    recordings: &'a std::collections::BTreeMap<String, PathBuf>,
+    max_file_bytes: u64,
+    last: Option<(PathBuf, Vec<CopiedTopic>)>,
+}
+
+impl<'a> RecordedTopics<'a> {
+    /// For runs read from `recordings` (by run name), files of at most `max_file_bytes`.
+    pub fn new(recordings: &'a std::collections::BTreeMap<String, PathBuf>, max_file_bytes: u64) -> Self {
+        Self { recordings, max_file_bytes, last: None }
+    }
+
+    /// The topics of `run`'s recording (none for a run not read from a ROS recording).
+    pub fn for_run(&mut self, run: &Run) -> anyhow::Result<&[CopiedTopic]> {
+        let Some(path) = self.recordings.get(run.name()) else { return Ok(&[]) };
+        if self.last.as_ref().is_none_or(|(p, _)| p != path) {
+            let topics = crate::dataset::recorded_topics(path, self.max_file_bytes)?;
+            self.last = Some((path.clone(), topics));
+        }
+        Ok(self.last.as_ref().map_or(&[], |(_, t)| t.as_slice()))
+    }
 }
 
 /// Writes one run's TUM files (`--tum`): `DIR/<run>.gt.tum`, `.design.tum` and `.calibrated.tum`, the

@@ -224,3 +224,36 @@ fn odometry_only_recordings_calibrate_the_controllers_parameters() {
         "{err}"
     );
 }
+
+#[test]
+#[cfg_attr(
+    not(python_bag_tools),
+    ignore = "needs rosbags and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
+)]
+fn exported_bags_carry_the_recordings_transforms_urdf_and_commands() {
+    // `export --mcap` of a Humble session: the recording's /tf_static, /robot_description and /cmd_vel come
+    // along as recorded (the command as its Twist, replacing the written one), stamped in the recording's
+    // Unix time, and the bag reads back with its ground truth named.
+    let dir = recordings().join("bag");
+    omnical(&dir, &["init", "session_01", "--out", "export-robot.toml", "--force"]);
+    let out = dir.join("exported");
+    let _ = std::fs::remove_dir_all(&out);
+    let out_s = out.to_str().unwrap();
+    omnical(&dir, &["export", "session_01", "--robot", "export-robot.toml", "--model", "design", "--mcap", out_s]);
+    let bag = out.join("session_01.mcap");
+    let args = ["info", bag.to_str().unwrap(), "--robot", "export-robot.toml", "--gt-topic", "/ground_truth/pose"];
+    let v = omnical_json(&dir, &[&args[..], &["--json"]].concat());
+    let rec = &v["recordings"][0];
+    assert_eq!(rec["start_unix_s"].as_f64().unwrap(), 1_717_000_100.0, "{rec}");
+    let topic = |name: &str| rec["topics"].as_array().unwrap().iter().find(|t| t["topic"] == name).unwrap().clone();
+    for (name, role, kind) in [
+        ("/tf_static", "static_transforms", "tf2_msgs/msg/TFMessage"),
+        ("/robot_description", "urdf", "std_msgs/msg/String"),
+        ("/cmd_vel", "command", "geometry_msgs/msg/Twist"),
+    ] {
+        let t = topic(name);
+        assert_eq!((t["role"].as_str(), t["type"].as_str(), t["messages"].as_u64()), (Some(role), Some(kind), Some(1)));
+    }
+    assert!(role(&v, "/tf_static").1.contains("base_footprint → base_link, base_link → laser"), "{v}");
+    assert_eq!(rec["read"]["ok"], true, "{rec}");
+}

@@ -5,7 +5,7 @@ use crate::errors::{OmnicalError, value_error};
 use crate::robot::{check_order, designs_for, model_spec, per_run};
 use crate::run::{origin_of, runs_from};
 use omni_cli::api::load::DataOptions;
-use omni_cli::export::{write_mcap, write_tum};
+use omni_cli::export::{RecordedTopics, write_mcap, write_tum};
 use omni_cli::out_path::OutDir;
 use pyo3::exceptions::{PyFileExistsError, PyFileNotFoundError, PyOSError};
 use pyo3::prelude::*;
@@ -81,9 +81,11 @@ pub fn export(
             out.commit()?;
         }
         if let Some(out) = mcap {
+            let mut recorded = RecordedTopics::new(&origin.recordings, omni_cli::dataset::DEFAULT_MAX_FILE_BYTES);
             for run in &runs {
                 let origin_s = origin.time_origins_s.get(run.name()).copied();
-                written.push(out.shown(&write_mcap(out.path(), run, models.for_run(run)?, &joints, origin_s)?));
+                let topics = recorded.for_run(run)?;
+                written.push(out.shown(&write_mcap(out.path(), run, models.for_run(run)?, &joints, origin_s, topics)?));
             }
             out.commit()?;
         }

@@ -393,6 +393,8 @@ pub fn load(
         ground_truth_clocks: ds.ground_truth_clocks,
         reference: ds.reference,
         mount: ds.mount,
+        time_origins_s: ds.time_origins_s,
+        recordings: ds.recordings,
         ..Default::default()
     };
     Ok(PyDataset {
@@ -462,6 +464,8 @@ pub fn origin_of(obj: &Bound<'_, PyAny>) -> omni_cli::dataset::Dataset {
                 robot_file: o.robot_file.clone(),
                 reference: o.reference,
                 mount: o.mount,
+                time_origins_s: o.time_origins_s.clone(),
+                recordings: o.recordings.clone(),
                 ..Default::default()
             }
         }

@@ -361,6 +361,9 @@ fn cut_into_windows(ds: &mut Dataset, data: &DataOptions) -> anyhow::Result<()> 
         if let Some(origin) = ds.time_origins_s.remove(run) {
             ds.time_origins_s.extend(names.iter().map(|n| (n.clone(), origin)));
         }
+        if let Some(recording) = ds.recordings.remove(run) {
+            ds.recordings.extend(names.iter().map(|n| (n.clone(), recording.clone())));
+        }
     }
     ds.notes.push(format!(
         "relative reference: {} runs cut into {} windows of at most {window_s} s ({still} where the reference stands \

@@ -5,7 +5,7 @@ use super::{DataArgs, OutputArgs};
 use crate::api::ModelSpec;
 use crate::api::load::{DataOptions, LoadRequest};
 use crate::design::{design_for, designs_for};
-use crate::export::{joint_names, write_mcap, write_tum};
+use crate::export::{RecordedTopics, joint_names, write_mcap, write_tum};
 use crate::out_path::{self, OutDir};
 use crate::report::tum;
 use crate::robot_config;
@@ -97,7 +97,8 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         doc["mcap"] = serde_json::json!({ "dir": dir, "files": files });
         if !a.output.json {
             println!(
-                "wrote {} to {} (topics /joint_states, /ground_truth/pose, /omnical/odometry, …)",
+                "wrote {} to {} (topics /joint_states, /ground_truth/pose, /omnical/odometry, and the recording's \
+                 /tf, /tf_static, /robot_description, /cmd_vel where it has them)",
                 crate::units::count(ds.runs.len(), "MCAP file"),
                 dir.display()
             );
@@ -161,7 +162,8 @@ fn export_tum(
     Ok(serde_json::json!({ "dir": dir, "files": files }))
 }
 
-/// One MCAP bag per run in `dir`, with the calibrated odometry; returns the paths.
+/// One MCAP bag per run in `dir`, with the calibrated odometry and the recording's transforms, URDF and
+/// commands; returns the paths.
 fn write_mcaps(
     dir: &Path,
     data: &DataOptions,
@@ -169,9 +171,11 @@ fn write_mcaps(
     models: &RunModels,
 ) -> anyhow::Result<Vec<PathBuf>> {
     let mut files = Vec::with_capacity(ds.runs.len());
+    let mut recorded = RecordedTopics::new(&ds.recordings, data.max_file_mb.saturating_mul(1 << 20));
     for run in &ds.runs {
         let origin_s = ds.time_origins_s.get(run.name()).copied();
-        files.push(write_mcap(dir, run, models.for_run(run)?, &data.wheel_joints(ds), origin_s)?);
+        let topics = recorded.for_run(run)?;
+        files.push(write_mcap(dir, run, models.for_run(run)?, &data.wheel_joints(ds), origin_s, topics)?);
     }
     Ok(files)
 }

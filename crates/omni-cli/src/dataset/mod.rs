@@ -40,6 +40,9 @@ pub struct Dataset {
     /// The Unix second each recording's run times count from, by run name (ROS recordings: exports write
     /// absolute stamps with it, so they line up with the recording).
     pub time_origins_s: std::collections::BTreeMap<String, i64>,
+    /// The ROS recording each run was read from, by run name (exports carry its other topics over:
+    /// [`recorded_topics`]).
+    pub recordings: std::collections::BTreeMap<String, PathBuf>,
     /// What the ground truth measures: a relative reference's runs are its windows
     /// ([`omni_kin::reference::windows`]), and a fit adds the sensor's mount.
     pub reference: omni_kin::reference::ReferenceKind,
@@ -378,6 +381,13 @@ pub fn review(
     Ok((inventory, mcap::review::review(path, rec, opts, truth_elsewhere)))
 }
 
+/// The topics of the ROS recording at `path` that an export carries over as recorded (transforms, the
+/// URDF, the commands: [`mcap::copy`]).
+pub fn recorded_topics(path: &Path, max_file_bytes: u64) -> Result<Vec<mcap::copy::CopiedTopic>, DatasetError> {
+    let sink = feed_ros(path, max_file_bytes, mcap::copy::CopySink::new)?;
+    Ok(sink.finish())
+}
+
 /// The text of a file a user writes by hand or a spreadsheet exports (a table, a ground-truth file, a
 /// plan), without the UTF-8 byte-order mark Excel and Notepad put in front, as the run CSV reader takes it.
 pub fn read_text(path: &Path) -> Result<String, DatasetError> {
@@ -659,6 +669,7 @@ fn merge(
             }
             if let Some(origin_s) = l.origin_s {
                 ds.time_origins_s.extend(l.runs.iter().map(|r| (r.name().to_string(), origin_s)));
+                ds.recordings.extend(l.runs.iter().map(|r| (r.name().to_string(), source.to_path_buf())));
             }
             ds.runs.extend(l.runs);
             ds.skipped.extend(l.skipped);

@@ -6,7 +6,7 @@
 //!
 //! | role | types | default topic choice |
 //! |---|---|---|
-//! | wheel speeds | `sensor_msgs/msg/JointState` | the only JointState topic, else the only one carrying all the wheel joints; without JointState, the robot's own odometry through the design ([`McapOptions::wheels_from_twist`], [`odom_wheels`]) |
+//! | wheel speeds | `sensor_msgs/msg/JointState` | the only JointState topic, else the only one carrying all the wheel joints; without JointState, the robot's own odometry through the design ([`McapOptions::wheels_from_twist`]) |
 //! | ground truth | `geometry_msgs/msg/PoseStamped`, `PoseWithCovarianceStamped`, `nav_msgs/msg/Odometry`, or one parent → child pair of `tf2_msgs/msg/TFMessage` | the only source outside the robot's frames (see below) |
 //! | recorded odometry | `nav_msgs/msg/Odometry` in frame `odom` | `/odom`, else the only one |
 //! | command | `geometry_msgs/msg/Twist`, `TwistStamped` | `/cmd_vel`, else the only one |
@@ -46,7 +46,8 @@
 //! angle integrated from [`Run::wheel_start_rad`] or 0), `/ground_truth/pose` (PoseStamped in frame
 //! `map`), `/cmd_vel` (Twist, body frame, when the run has a command: the command at the first wheel
 //! sample and a zero twist at the last) and `/odom` (Odometry, frame `odom`, child `base_link`, from
-//! [`WriteOptions::design_odometry`], twist from pose differences in the body frame). Stamps are
+//! [`WriteOptions::design_odometry`], twist from pose differences in the body frame), and the recording's
+//! own transforms, URDF and commands as recorded ([`WriteOptions::copied`], [`copy`]). Stamps are
 //! [`WriteOptions::origin_s`] + `t_s`, rounded to the nanosecond; log time = stamp. The file is written to a
 //! temporary name beside the target and renamed, so a reader never sees half a bag.
 //!
@@ -58,6 +59,7 @@
 //! release mode on one core of a 2-core machine (`tests/mcap_speed.rs`).
 
 mod common;
+pub mod copy;
 mod imu;
 mod inspect;
 mod joint_state;
@@ -131,7 +133,7 @@ pub struct McapOptions {
     pub wheels_only: bool,
     /// The design's forward kinematics, a row per wheel (in wheel order): wheel speed (rad/s) per body vx,
     /// vy (m/s) and ω (rad/s). With it, a recording without JointState takes its wheel speeds from the
-    /// robot's own odometry (`/odom`) through the design ([`odom_wheels`]); so does a `joints_topic` that
+    /// robot's own odometry (`/odom`) through the design (module `odom_wheels`); so does a `joints_topic` that
     /// names an Odometry topic. Set from the robot description. Default: none (JointState is needed).
     pub wheels_from_twist: Option<Vec<[f64; 3]>>,
     /// Where the topics and frames above were set, for messages. Default: their flags.
@@ -243,6 +245,10 @@ pub struct WriteOptions {
     /// An IMU's yaw rates (on the run's clock), on `/imu` (`sensor_msgs/msg/Imu`, frame `imu_link`). Default
     /// none.
     pub imu: Option<Vec<omni_kin::gyro::GyroSample>>,
+    /// The recording's own topics carried over as recorded ([`copy`]: transforms, the URDF, the commands),
+    /// each on its own topic; a recorded command topic replaces the run's written one. A topic whose name
+    /// the file already writes otherwise is left out. Default none.
+    pub copied: Vec<copy::CopiedTopic>,
 }
 
 /// A lidar to write into a bag: its scans (stamps on the run's clock) and where it sits on the robot.
@@ -263,6 +269,7 @@ impl Default for WriteOptions {
             origin_s: 0,
             lidar: None,
             imu: None,
+            copied: Vec::new(),
         }
     }
 }

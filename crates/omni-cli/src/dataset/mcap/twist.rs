@@ -23,6 +23,11 @@ pub(super) struct TwistStamped {
     pub twist: Twist,
 }
 
+/// The Twist schema text, as rosbag2 writes it.
+pub(super) fn schema() -> String {
+    schema_text("geometry_msgs/Vector3 linear\ngeometry_msgs/Vector3 angular\n", &[&VECTOR3_DEF])
+}
+
 /// The TwistStamped schema text, as rosbag2 writes it.
 pub(super) fn stamped_schema() -> String {
     schema_text(

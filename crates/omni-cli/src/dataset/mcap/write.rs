@@ -104,8 +104,30 @@ fn body_twists(poses: &[StampedPose]) -> Vec<Twist> {
     out
 }
 
+/// The channel slots written from the run: joints, truth, command, odometry, calibrated odometry, scans,
+/// static transforms, IMU. The recording's copied topics follow.
+const FIXED_SLOTS: usize = 8;
+
+/// The topics the written slots use, in slot order.
+const FIXED_TOPICS: [&str; FIXED_SLOTS] =
+    [JOINTS_TOPIC, TRUTH_TOPIC, COMMAND_TOPIC, ODOM_TOPIC, CALIBRATED_TOPIC, SCAN_TOPIC, TF_STATIC_TOPIC, IMU_TOPIC];
+
+/// Whether the recording's own command topic is carried over (it replaces the run's written command).
+fn recorded_command(w: &WriteOptions) -> bool {
+    w.copied.iter().any(|c| c.topic == COMMAND_TOPIC)
+}
+
+/// The copied topics the file carries: all but those on a topic written from the run (the command
+/// excepted, see [`recorded_command`]).
+fn carried(w: &WriteOptions) -> Vec<&super::copy::CopiedTopic> {
+    let lidar_tf = w.lidar.as_ref().is_some_and(|l| l.base_from_sensor.is_some());
+    let written =
+        |topic: &str| topic != COMMAND_TOPIC && FIXED_TOPICS.contains(&topic) && (topic != TF_STATIC_TOPIC || lidar_tf);
+    w.copied.iter().filter(|c| !written(&c.topic)).collect()
+}
+
 /// Writes the file's messages. Channel slots: 0 joints, 1 truth, 2 command, 3 odometry, 4 calibrated
-/// odometry, 5 scans, 6 static transforms.
+/// odometry, 5 scans, 6 static transforms, 7 IMU, then the copied topics ([`carried`]).
 fn messages(path: &Path, run: &Run, w: &WriteOptions) -> Result<Vec<Pending>, DatasetError> {
     let n = run.n_wheels();
     let mut m = Messages { path, origin_s: w.origin_s, out: Vec::new() };
@@ -131,7 +153,7 @@ fn messages(path: &Path, run: &Run, w: &WriteOptions) -> Result<Vec<Pending>, Da
         let msg = PoseStamped { header: header(m.stamp(p.t_s)?, TRUTH_FRAME), pose: planar(p) };
         m.push(msg.header.stamp, 1, &msg)?;
     }
-    if let Some(c) = run.command() {
+    if let Some(c) = run.command().filter(|_| !recorded_command(w)) {
         for (k, twist) in [(0, twist_of(&c)), (t.len() - 1, Twist::default())] {
             let msg = TwistStamped { header: header(m.stamp(t[k])?, BASE_FRAME), twist };
             m.push(msg.header.stamp, 2, &msg)?;
@@ -164,6 +186,9 @@ fn messages(path: &Path, run: &Run, w: &WriteOptions) -> Result<Vec<Pending>, Da
             linear_acceleration_covariance: [0.0; 9],
         };
         m.push(msg.header.stamp, 7, &msg)?;
+    }
+    for (k, c) in carried(w).into_iter().enumerate() {
+        m.out.extend(c.messages.iter().map(|(t, bytes)| (*t, FIXED_SLOTS + k, bytes.clone())));
     }
     // Time order; at equal times, channel order (joints first), and message order within a channel.
     m.out.sort_by_key(|&(t, slot, _)| (t, slot));
@@ -253,7 +278,7 @@ fn write_file(tmp: &Path, run: &Run, w: &WriteOptions, pending: &[Pending]) -> R
     for (name, text, topic, used) in [
         (joint_state::NAME, joint_state::schema(), JOINTS_TOPIC, true),
         (pose_stamped::NAME, pose_stamped::schema(), TRUTH_TOPIC, true),
-        (twist::STAMPED_NAME, twist::stamped_schema(), COMMAND_TOPIC, run.command().is_some()),
+        (twist::STAMPED_NAME, twist::stamped_schema(), COMMAND_TOPIC, run.command().is_some() && !recorded_command(w)),
         (odometry::NAME, odometry::schema(), ODOM_TOPIC, w.design_odometry.is_some()),
         (odometry::NAME, odometry::schema(), CALIBRATED_TOPIC, w.calibrated_odometry.is_some()),
         (laser_scan::NAME, laser_scan::schema(), SCAN_TOPIC, w.lidar.is_some()),
@@ -267,6 +292,10 @@ fn write_file(tmp: &Path, run: &Run, w: &WriteOptions, pending: &[Pending]) -> R
             0
         };
         channel_ids.push(id);
+    }
+    for c in carried(w) {
+        let schema = out.add_schema(&c.schema_name, "ros2msg", c.schema_text.as_bytes()).map_err(mcap_err)?;
+        channel_ids.push(out.add_channel(schema, &c.topic, "cdr", &qos).map_err(mcap_err)?);
     }
     let mut sequence = vec![0u32; channel_ids.len()];
     for (log_time, slot, bytes) in pending {
