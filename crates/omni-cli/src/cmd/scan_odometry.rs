@@ -55,6 +55,13 @@ fn summary_text(topic: &str, frame: &str, scans: usize, path: &SensorPath) -> Ve
         if path.segments.len() == 1 { "" } else { "s" },
         length
     )];
+    if path.deskewed > 0 {
+        lines.push(format!(
+            "{} scans de-skewed: their beams are measured over the sweep (LaserScan time_increment), so each was \
+             moved to its stamp by the sensor's motion before matching",
+            path.deskewed
+        ));
+    }
     if !path.qualities.is_empty() {
         let rms = Stats::of(path.qualities.iter().map(|q| q.rms_m));
         let share = Stats::of(path.qualities.iter().map(|q| q.inlier_share));
@@ -152,6 +159,7 @@ fn json_doc(a: &Args, read: &lidar::ScanRead, path: &SensorPath, written: &[Path
         "matched": path.matched,
         "rejected": path.rejected,
         "rejected_why": path.rejected_why,
+        "deskewed": path.deskewed,
         "quality": {
             "rms_m": stats(path.qualities.iter().map(|q| q.rms_m).collect()),
             "inlier_share": stats(path.qualities.iter().map(|q| q.inlier_share).collect()),

@@ -108,6 +108,13 @@ fn notes(path: &Path, topic: &str, read: &lidar::ScanRead, sensor: &lidar::Senso
         ),
     };
     let mut out = vec![format!("{}: lidar {topic:?} matched scan to scan as the reference; {mount}", path.display())];
+    if sensor.deskewed > 0 {
+        out.push(format!(
+            "{}: lidar {topic:?}: {} scans de-skewed (beams measured over the sweep: LaserScan time_increment)",
+            path.display(),
+            sensor.deskewed
+        ));
+    }
     if sensor.rejected > 0 {
         let rms = {
             let mut r: Vec<f64> = sensor.qualities.iter().map(|q| q.rms_m).collect();

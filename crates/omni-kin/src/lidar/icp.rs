@@ -167,11 +167,16 @@ pub struct Reference {
 impl Reference {
     /// The lines of `scan`'s returns (see the module docs) and their k-d tree.
     pub fn new(scan: &Scan, s: &MatchSettings) -> Self {
-        let pts = scan.points();
+        Self::from_points(&scan.points(), s)
+    }
+
+    /// The lines of a scan's returns `pts` (as [`Scan::points`] gives them, or de-skewed) and their k-d
+    /// tree.
+    pub fn from_points(pts: &ScanPoints, s: &MatchSettings) -> Self {
         let mut anchors = Vec::with_capacity(pts.xy_m.len());
         let mut lines = Vec::with_capacity(pts.xy_m.len());
         for k in 0..pts.xy_m.len() {
-            if let Some(line) = fit_line(&pts, k, s) {
+            if let Some(line) = fit_line(pts, k, s) {
                 anchors.push(pts.xy_m[k]);
                 lines.push(line);
             }
@@ -308,7 +313,12 @@ fn condition(rows: &[[f64; 3]], length_m: f64) -> f64 {
 /// Matches `current` against `reference`, starting from `guess` (the current sensor pose in the reference
 /// frame: the previous motion, or the identity). See the module docs.
 pub fn match_scans(reference: &Reference, current: &Scan, guess: Pose2, s: &MatchSettings) -> ScanMatch {
-    let points = current.points().xy_m;
+    match_points(reference, &current.points().xy_m, guess, s)
+}
+
+/// [`match_scans`] for a scan's returns `points` (sensor frame, m) as [`Scan::points`] gives them, or
+/// de-skewed.
+pub fn match_points(reference: &Reference, points: &[[f64; 2]], guess: Pose2, s: &MatchSettings) -> ScanMatch {
     let mut t = guess;
     let mut quality = MatchQuality::default();
     let Some(tree) = &reference.tree else {
@@ -316,7 +326,7 @@ pub fn match_scans(reference: &Reference, current: &Scan, guess: Pose2, s: &Matc
         return ScanMatch { reference_from_current: t, quality, rejected };
     };
     let mut converged = false;
-    let mut sys = build_system(reference, tree, &points, &t, s);
+    let mut sys = build_system(reference, tree, points, &t, s);
     // Every estimate so far: pairs flipping between two lines can make the steps cycle (δ₁, δ₂, …, back to
     // an estimate seen before); the fixed point then lies at the cycle's mean.
     let mut visited = vec![t];
@@ -330,7 +340,7 @@ pub fn match_scans(reference: &Reference, current: &Scan, guess: Pose2, s: &Matc
             t = mean_pose(&visited[j..]);
             converged = true;
         }
-        sys = build_system(reference, tree, &points, &t, s);
+        sys = build_system(reference, tree, points, &t, s);
         if converged {
             break;
         }
@@ -412,6 +422,7 @@ mod tests {
         let s = MatchSettings::default();
         let empty = Scan {
             t_s: 0.0,
+            time_increment_s: 0.0,
             angle_min_rad: 0.0,
             angle_increment_rad: 0.01,
             range_min_m: 0.1,

@@ -10,18 +10,23 @@ pub mod icp;
 pub mod path;
 pub mod room;
 
-pub use icp::{MatchQuality, MatchSettings, Rejection, ScanMatch, match_scans};
+use crate::pose::Pose2;
+pub use icp::{MatchQuality, MatchSettings, Rejection, ScanMatch, match_points, match_scans};
 pub use path::{SensorPath, sensor_path};
-pub use room::{CLEARANCE_M, Room, ScanSettings, first_collision, simulate_scan, simulate_scans};
+pub use room::{CLEARANCE_M, Room, ScanSettings, first_collision, simulate_scan, simulate_scans, simulate_sweep};
 
 /// One scan, as `sensor_msgs/msg/LaserScan` carries it: beam `i` points at `angle_min_rad + i ·
 /// angle_increment_rad` in the sensor frame and measured `ranges_m[i]`. A range that is not finite or lies
 /// outside [`range_min_m`, `range_max_m`) is no return (REP-117: +inf nothing in range, NaN an erroneous
-/// reading). The scan is taken as instantaneous at `t_s` (no motion during the sweep).
+/// reading). Beam `i` is measured `i · time_increment_s` after `t_s` (REP-117 / LaserScan: the stamp is
+/// the first beam's time); 0 is a scan taken at one instant. A robot that moves during the sweep bends the
+/// scan; [`path::sensor_path`] undoes that ([`ScanPoints::deskewed`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scan {
-    /// When the scan was taken (`header.stamp`). s (since the reader's origin).
+    /// When the first beam was measured (`header.stamp`). s (since the reader's origin).
     pub t_s: f64,
+    /// Time between beams (`time_increment`); 0: every beam at `t_s`. s.
+    pub time_increment_s: f64,
     /// Angle of the first beam. rad.
     pub angle_min_rad: f64,
     /// Angle between beams (counter-clockwise when positive). rad.
@@ -70,6 +75,26 @@ pub struct ScanPoints {
     pub beam: Vec<usize>,
 }
 
+impl ScanPoints {
+    /// The points as the sensor would have seen them all at the scan's stamp, for a sensor moving at the
+    /// constant body twist `per_s` (vx, vy m/s and ω rad/s as a [`Pose2`] per second) while beam `i` is
+    /// measured `i · time_increment_s` after it: each point is moved by the sensor's motion from the stamp
+    /// to its beam's time (first order in the sweep's duration, a tenth of a second).
+    pub fn deskewed(&self, time_increment_s: f64, per_s: Pose2) -> Self {
+        let xy_m = self
+            .xy_m
+            .iter()
+            .zip(&self.beam)
+            .map(|(p, &i)| {
+                let tau = i as f64 * time_increment_s;
+                let (s, c) = (per_s.theta_rad * tau).sin_cos();
+                [c * p[0] - s * p[1] + per_s.x_m * tau, s * p[0] + c * p[1] + per_s.y_m * tau]
+            })
+            .collect();
+        Self { xy_m, beam: self.beam.clone() }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -78,6 +103,7 @@ mod tests {
     fn points_skip_every_kind_of_no_return() {
         let scan = Scan {
             t_s: 0.0,
+            time_increment_s: 0.0,
             angle_min_rad: 0.0,
             angle_increment_rad: std::f64::consts::FRAC_PI_2,
             range_min_m: 0.1,

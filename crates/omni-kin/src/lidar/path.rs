@@ -17,12 +17,19 @@
 //! keyframe to keyframe. A rejected keyframe match keeps the chain's motion (counted in
 //! [`SensorPath::keyframe_fallbacks`]).
 //!
+//! **De-skew.** A spinning lidar measures its beams one after another ([`Scan::time_increment_s`]), so a
+//! robot that turns while it scans bends every scan, and matching bent scans reads the turn short (1.9 % at
+//! 1.2 rad/s with a 10 Hz lidar: a bias a fit would take as the robot's rotation). When the scans carry
+//! beam times, the chain above gives each scan's sensor twist (the mean of the motions before and after it),
+//! every scan's points are moved to its stamp by that twist ([`super::ScanPoints::deskewed`]), and the
+//! whole chain is matched again; [`SensorPath::deskewed`] counts them.
+//!
 //! The consecutive matches (scan `k` against `k − 1`, from the identity) are independent and run in
 //! parallel (rayon, collected in order), and so do the keyframe groups; only the re-matches after a
 //! rejection run one after another. The result is the same whatever the thread count.
 
-use super::Scan;
-use super::icp::{MatchQuality, MatchSettings, Reference, ScanMatch, match_scans};
+use super::icp::{MatchQuality, MatchSettings, Reference, ScanMatch, match_points};
+use super::{Scan, ScanPoints};
 use crate::error::KinError;
 use crate::pose::{Pose2, StampedPose};
 use rayon::prelude::*;
@@ -44,6 +51,9 @@ pub struct SensorPath {
     pub keyframe_fallbacks: usize,
     /// The quality of every keyframe match that placed a pose, in time order.
     pub qualities: Vec<MatchQuality>,
+    /// Scans de-skewed before matching (their beams measured over time, [`Scan::time_increment_s`]); 0 for
+    /// instantaneous scans.
+    pub deskewed: usize,
 }
 
 impl SensorPath {
@@ -64,10 +74,10 @@ type Chain = Vec<(usize, Pose2)>;
 
 /// The scan-to-scan chain (consecutive matches in parallel, re-matches after a rejection in order),
 /// cut into segments; counts go into `out`.
-fn scan_to_scan(scans: &[Scan], s: &MatchSettings, out: &mut SensorPath) -> Vec<Chain> {
+fn scan_to_scan(scans: &[Scan], points: &[ScanPoints], s: &MatchSettings, out: &mut SensorPath) -> Vec<Chain> {
     let consecutive: Vec<ScanMatch> = (1..scans.len())
         .into_par_iter()
-        .map(|k| match_scans(&Reference::new(&scans[k - 1], s), &scans[k], Pose2::IDENTITY, s))
+        .map(|k| match_points(&Reference::from_points(&points[k - 1], s), &points[k].xy_m, Pose2::IDENTITY, s))
         .collect();
     let mut chains = Vec::new();
     let mut chain = vec![(0, Pose2::IDENTITY)];
@@ -79,7 +89,7 @@ fn scan_to_scan(scans: &[Scan], s: &MatchSettings, out: &mut SensorPath) -> Vec<
             consecutive[k - 1]
         } else {
             let guess = extrapolate(motion.0, motion.1, dt_s);
-            match_scans(&Reference::new(&scans[last], s), &scans[k], guess, s)
+            match_points(&Reference::from_points(&points[last], s), &points[k].xy_m, guess, s)
         };
         match m.rejected {
             None => {
@@ -133,17 +143,20 @@ fn keyframe_groups(chain: &Chain, s: &MatchSettings) -> Vec<KeyframeGroup> {
 
 /// Each chain's poses refined by matching every scan against its keyframe (the chain's motion as the
 /// guess; a rejected keyframe match keeps it). Keyframe groups run in parallel, in order.
-fn refine(scans: &[Scan], chains: &[Chain], s: &MatchSettings, out: &mut SensorPath) {
+fn refine(scans: &[Scan], points: &[ScanPoints], chains: &[Chain], s: &MatchSettings, out: &mut SensorPath) {
     for chain in chains {
         let groups = keyframe_groups(chain, s);
         let matched: Vec<Vec<ScanMatch>> = groups
             .par_iter()
             .map(|g| {
                 let (kf, kf_pose) = chain[g.keyframe];
-                let reference = Reference::new(&scans[kf], s);
+                let reference = Reference::from_points(&points[kf], s);
                 g.members
                     .iter()
-                    .map(|&j| match_scans(&reference, &scans[chain[j].0], kf_pose.inverse().compose(&chain[j].1), s))
+                    .map(|&j| {
+                        let guess = kf_pose.inverse().compose(&chain[j].1);
+                        match_points(&reference, &points[chain[j].0].xy_m, guess, s)
+                    })
                     .collect()
             })
             .collect();
@@ -186,23 +199,69 @@ pub fn sensor_path(scans: &[Scan], s: &MatchSettings) -> Result<SensorPath, KinE
             why: format!("its stamp {} s does not follow the previous scan's {} s", scans[k].t_s, scans[k - 1].t_s),
         });
     }
-    let mut out = SensorPath {
+    let fresh = || SensorPath {
         segments: Vec::new(),
         matched: 0,
         rejected: 0,
         rejected_why: BTreeMap::new(),
         keyframe_fallbacks: 0,
         qualities: Vec::new(),
+        deskewed: 0,
     };
-    let chains = scan_to_scan(scans, s, &mut out);
-    refine(scans, &chains, s, &mut out);
+    let raw: Vec<ScanPoints> = scans.par_iter().map(Scan::points).collect();
+    let mut out = fresh();
+    let chains = scan_to_scan(scans, &raw, s, &mut out);
+    if scans.iter().all(|scan| scan.time_increment_s == 0.0) {
+        refine(scans, &raw, &chains, s, &mut out);
+        return Ok(out);
+    }
+    // Beams measured over the sweep: each scan's points moved to its stamp by the sensor's twist around it
+    // (from the first chain, whose scan-to-scan motions the sweep barely biases: consecutive scans are bent
+    // alike), then matched again.
+    let twists = chain_twists(scans, &chains);
+    let points: Vec<ScanPoints> = (0..scans.len())
+        .map(|k| match twists[k] {
+            Some(per_s) if scans[k].time_increment_s != 0.0 => raw[k].deskewed(scans[k].time_increment_s, per_s),
+            _ => raw[k].clone(),
+        })
+        .collect();
+    let mut out = fresh();
+    out.deskewed = (0..scans.len()).filter(|&k| twists[k].is_some() && scans[k].time_increment_s != 0.0).count();
+    let chains = scan_to_scan(scans, &points, s, &mut out);
+    refine(scans, &points, &chains, s, &mut out);
     Ok(out)
+}
+
+/// Each scan's sensor twist (a [`Pose2`] per second, sensor frame) from the chains: the mean of the motions
+/// over the intervals before and after it (the one there is at a chain's ends); `None` for a scan in no
+/// chain.
+fn chain_twists(scans: &[Scan], chains: &[Chain]) -> Vec<Option<Pose2>> {
+    let mut sum = vec![(Pose2::IDENTITY, 0usize); scans.len()];
+    for chain in chains {
+        for w in chain.windows(2) {
+            let ((a, pa), (b, pb)) = (w[0], w[1]);
+            let dt = scans[b].t_s - scans[a].t_s;
+            let m = pa.inverse().compose(&pb);
+            let per_s = Pose2::new(m.x_m / dt, m.y_m / dt, m.theta_rad / dt);
+            for k in [a, b] {
+                let (acc, n) = &mut sum[k];
+                *acc = Pose2::new(acc.x_m + per_s.x_m, acc.y_m + per_s.y_m, acc.theta_rad + per_s.theta_rad);
+                *n += 1;
+            }
+        }
+    }
+    sum.into_iter()
+        .map(|(acc, n)| {
+            let n = n as f64;
+            (n > 0.0).then(|| Pose2::new(acc.x_m / n, acc.y_m / n, acc.theta_rad / n))
+        })
+        .collect()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lidar::room::{Room, ScanSettings, simulate_scan};
+    use crate::lidar::room::{Room, ScanSettings, simulate_scan, simulate_sweep};
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
@@ -225,6 +284,41 @@ mod tests {
             .map(|(k, p)| simulate_scan(&room, p, k as f64 * 0.1, &settings, &mut rng))
             .collect();
         (scans, poses)
+    }
+
+    #[test]
+    fn scans_bent_by_the_sweep_are_straightened_before_matching() {
+        // A spinning 10 Hz lidar on a robot turning at 1.2 rad/s and driving 0.3 m/s: each scan's last beam
+        // is taken 0.1 s (7°) after its first. Matched as if instantaneous, the path turns too little; with
+        // the beams' times it follows the true arc.
+        let room = Room::builtin("room").unwrap();
+        let settings = ScanSettings { sweeping: true, ..ScanSettings::default() };
+        let (v, w) = (0.3, 1.2);
+        let start = Pose2::new(-0.8, -0.6, 0.2);
+        let at = |t: f64| start.compose(&Pose2::new(v / w * (w * t).sin(), v / w * (1.0 - (w * t).cos()), w * t));
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let scans: Vec<Scan> = (0..40)
+            .map(|k| {
+                let t = k as f64 * 0.1;
+                simulate_sweep(&room, |tau| at(t + tau), t, settings.time_increment_s(), &settings, &mut rng)
+            })
+            .collect();
+        let true_end = at(0.0).inverse().compose(&at(3.9));
+        let end_error = |scans: &[Scan]| {
+            let path = sensor_path(scans, &MatchSettings::default()).unwrap();
+            assert_eq!(path.segments.len(), 1);
+            (path.segments[0].last().unwrap().pose.error_to(&true_end), path.deskewed)
+        };
+        let (e, deskewed) = end_error(&scans);
+        assert_eq!(deskewed, 40);
+        assert!(e.dx_m.hypot(e.dy_m) < 0.005 && e.dtheta_rad.abs().to_degrees() < 0.05, "{e:?}");
+        let instantaneous: Vec<Scan> = scans.iter().map(|s| Scan { time_increment_s: 0.0, ..s.clone() }).collect();
+        let (bent, deskewed) = end_error(&instantaneous);
+        assert_eq!(deskewed, 0);
+        // Measured: bent 21.7 mm and −5.0° (the turn read 1.9 % short: the sweep's share of the scan
+        // period, a rotation-row bias a fit would take as the robot's), straightened 2.4 mm and 0.013°.
+        assert!(bent.dtheta_rad.abs().to_degrees() > 3.0, "bent {bent:?}, straightened {e:?}");
+        assert!(bent.dx_m.hypot(bent.dy_m) > 3.0 * e.dx_m.hypot(e.dy_m), "bent {bent:?}, straightened {e:?}");
     }
 
     #[test]

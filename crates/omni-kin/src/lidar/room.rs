@@ -148,11 +148,23 @@ pub struct ScanSettings {
     pub range_noise_m: f64,
     /// Share of beams that return nothing (NaN), at random. Default 0.01.
     pub dropout: f64,
+    /// The beams are measured one after another over the scan period (1 / `rate_hz`), as a spinning lidar
+    /// measures them, so a moving robot bends its scans; false: each scan at one instant. Default false.
+    #[serde(default)]
+    pub sweeping: bool,
 }
 
 impl Default for ScanSettings {
     fn default() -> Self {
-        Self { rate_hz: 10.0, beams: 720, range_min_m: 0.05, range_max_m: 12.0, range_noise_m: 0.01, dropout: 0.01 }
+        Self {
+            rate_hz: 10.0,
+            beams: 720,
+            range_min_m: 0.05,
+            range_max_m: 12.0,
+            range_noise_m: 0.01,
+            dropout: 0.01,
+            sweeping: false,
+        }
     }
 }
 
@@ -182,6 +194,11 @@ impl ScanSettings {
     pub fn angle_increment_rad(&self) -> f64 {
         2.0 * PI / self.beams as f64
     }
+
+    /// Time between beams: the scan period over the beams when sweeping, else 0. s.
+    pub fn time_increment_s(&self) -> f64 {
+        if self.sweeping { 1.0 / (self.rate_hz * self.beams as f64) } else { 0.0 }
+    }
 }
 
 /// One scan at `t_s` from a sensor at `room_from_sensor` in `room`: each beam's exact range plus Gaussian
@@ -194,15 +211,28 @@ pub fn simulate_scan(
     settings: &ScanSettings,
     rng: &mut ChaCha8Rng,
 ) -> Scan {
+    simulate_sweep(room, |_| *room_from_sensor, t_s, 0.0, settings, rng)
+}
+
+/// [`simulate_scan`] for beams measured one after another: beam `i` from the sensor pose
+/// `room_from_sensor_at(i · time_increment_s)` (s after `t_s`).
+pub fn simulate_sweep(
+    room: &Room,
+    room_from_sensor_at: impl Fn(f64) -> Pose2,
+    t_s: f64,
+    time_increment_s: f64,
+    settings: &ScanSettings,
+    rng: &mut ChaCha8Rng,
+) -> Scan {
     let angle_min_rad = -PI;
     let inc = settings.angle_increment_rad();
-    let origin = [room_from_sensor.x_m, room_from_sensor.y_m];
     let ranges_m = (0..settings.beams)
         .map(|i| {
             let beam = angle_min_rad + i as f64 * inc;
             let noise: f64 = StandardNormal.sample(rng);
             let dropped = rng.random_range(0.0..1.0) < settings.dropout;
-            let exact = room.ray_range(origin, room_from_sensor.theta_rad + beam);
+            let sensor = room_from_sensor_at(i as f64 * time_increment_s);
+            let exact = room.ray_range([sensor.x_m, sensor.y_m], sensor.theta_rad + beam);
             match exact.map(|r| r + settings.range_noise_m * noise) {
                 _ if dropped => f32::NAN,
                 Some(r) if r < settings.range_max_m => r.max(0.0) as f32,
@@ -212,6 +242,7 @@ pub fn simulate_scan(
         .collect();
     Scan {
         t_s,
+        time_increment_s,
         angle_min_rad,
         angle_increment_rad: inc,
         range_min_m: settings.range_min_m,
@@ -238,7 +269,25 @@ pub fn simulate_scans(
 ) -> Vec<Scan> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ LIDAR_SEED_SALT);
     rng.set_stream(stream);
-    base.iter().map(|b| simulate_scan(room, &b.pose.compose(base_from_sensor), b.t_s, settings, &mut rng)).collect()
+    let tau = settings.time_increment_s();
+    (0..base.len())
+        .map(|k| {
+            // While sweeping, the base between this scan's pose and the next's (linear; the last extrapolates).
+            let (a, b) = if k + 1 < base.len() { (base[k], base[k + 1]) } else { (base[k.max(1) - 1], base[k]) };
+            let dt = b.t_s - a.t_s;
+            let at = |offset_s: f64| {
+                if offset_s == 0.0 {
+                    return base[k].pose.compose(base_from_sensor);
+                }
+                let f = if dt > 0.0 { (base[k].t_s + offset_s - a.t_s) / dt } else { 0.0 };
+                let lerp = |x: f64, y: f64| x + f * (y - x);
+                let (p, q) = (a.pose, b.pose);
+                Pose2::new(lerp(p.x_m, q.x_m), lerp(p.y_m, q.y_m), lerp(p.theta_rad, q.theta_rad))
+                    .compose(base_from_sensor)
+            };
+            simulate_sweep(room, at, base[k].t_s, tau, settings, &mut rng)
+        })
+        .collect()
 }
 
 /// The first base pose (room frame) closer than `clearance_m` to a wall or obstacle, or outside the room.

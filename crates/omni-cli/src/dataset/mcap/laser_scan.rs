@@ -179,8 +179,11 @@ impl ScanSink {
             ));
         }
         self.frame_id.get_or_insert_with(|| m.header.frame_id.frame().to_string());
+        // The time between beams; a value that is not finite says nothing (beams taken at once).
+        let time_increment_s = Some(f64::from(m.time_increment)).filter(|t| t.is_finite()).unwrap_or(0.0);
         let scan = Scan {
             t_s: 0.0,
+            time_increment_s,
             angle_min_rad: f64::from(m.angle_min),
             angle_increment_rad: f64::from(m.angle_increment),
             range_min_m: f64::from(m.range_min),

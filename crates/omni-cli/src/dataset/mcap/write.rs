@@ -215,8 +215,7 @@ fn lidar_messages(m: &mut Messages<'_>, lidar: &super::LidarTrack, first_t_s: f6
             angle_min: scan.angle_min_rad as f32,
             angle_max: (scan.angle_min_rad + n.saturating_sub(1) as f64 * scan.angle_increment_rad) as f32,
             angle_increment: scan.angle_increment_rad as f32,
-            // The simulated scan is instantaneous.
-            time_increment: 0.0,
+            time_increment: scan.time_increment_s as f32,
             scan_time: scan_time as f32,
             range_min: scan.range_min_m as f32,
             range_max: scan.range_max_m as f32,
