@@ -2,7 +2,7 @@
 //! (6000 scans) in the simulated `room`, the robot on a Lissajous loop (up to 0.36 m/s, turning as it
 //! goes), the lidar mounted at (0.2 m, 0, 5°). Target: ≤ 10 s on 2 cores. Run with
 //! `cargo bench --bench scan_matching`; prints scans/s on the machine's threads (rayon's default pool)
-//! and on 1 thread. Figures go to benches/README.md.
+//! and on 1 thread, and for the same recording with sweeping beams (de-skewed, matched twice). Figures go to benches/README.md.
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use omnical::kin::lidar::{MatchSettings, Room, Scan, ScanSettings, sensor_path, simulate_scans};
 use omnical::kin::{Pose2, StampedPose};
@@ -26,10 +26,11 @@ fn loop_poses() -> Vec<StampedPose> {
         .collect()
 }
 
-fn recording() -> Vec<Scan> {
+/// The recording; `sweeping`: each scan's beams measured over its 0.1 s (de-skewed before matching).
+fn recording(sweeping: bool) -> Vec<Scan> {
     let Some(room) = Room::builtin("room") else { return Vec::new() };
     let mount = Pose2::new(0.2, 0.0, 5f64.to_radians());
-    simulate_scans(&room, &loop_poses(), &mount, &ScanSettings::default(), 1, 0)
+    simulate_scans(&room, &loop_poses(), &mount, &ScanSettings { sweeping, ..ScanSettings::default() }, 1, 0)
 }
 
 /// Matches the recording once and prints the figure.
@@ -41,19 +42,22 @@ fn report(scans: &[Scan], threads: usize) {
     if let Ok(p) = path {
         println!(
             "scan matching, {threads} thread(s): {} scans in {s:.2} s = {:.0} scans/s ({} accepted, {} rejected, {} \
-             segment(s), {} keyframe fallbacks)",
+             segment(s), {} keyframe fallbacks, {} de-skewed)",
             scans.len(),
             scans.len() as f64 / s,
             p.matched,
             p.rejected,
             p.segments.len(),
-            p.keyframe_fallbacks
+            p.keyframe_fallbacks,
+            p.deskewed
         );
     }
 }
 
 fn benches(c: &mut Criterion) {
-    let scans = recording();
+    let sweeping = recording(true);
+    report(&sweeping, rayon::current_num_threads());
+    let scans = recording(false);
     report(&scans, rayon::current_num_threads());
     report(&scans, 1);
     let mut g = c.benchmark_group("scan matching");

@@ -20,9 +20,10 @@
 //! **De-skew.** A spinning lidar measures its beams one after another ([`Scan::time_increment_s`]), so a
 //! robot that turns while it scans bends every scan, and matching bent scans reads the turn short (1.9 % at
 //! 1.2 rad/s with a 10 Hz lidar: a bias a fit would take as the robot's rotation). When the scans carry
-//! beam times, the chain above gives each scan's sensor twist (the mean of the motions before and after it),
-//! every scan's points are moved to its stamp by that twist ([`super::ScanPoints::deskewed`]), and the
-//! whole chain is matched again; [`SensorPath::deskewed`] counts them.
+//! beam times, the scan-to-scan chain gives each scan's sensor twist (the mean of the motions before and
+//! after it), every scan's points are moved to its stamp by that twist ([`super::ScanPoints::deskewed`]),
+//! and the keyframe matches that place the poses use the straightened points; [`SensorPath::deskewed`]
+//! counts them.
 //!
 //! The consecutive matches (scan `k` against `k − 1`, from the identity) are independent and run in
 //! parallel (rayon, collected in order), and so do the keyframe groups; only the re-matches after a
@@ -216,8 +217,8 @@ pub fn sensor_path(scans: &[Scan], s: &MatchSettings) -> Result<SensorPath, KinE
         return Ok(out);
     }
     // Beams measured over the sweep: each scan's points moved to its stamp by the sensor's twist around it
-    // (from the first chain, whose scan-to-scan motions the sweep barely biases: consecutive scans are bent
-    // alike), then matched again.
+    // (from the chain, whose scan-to-scan motions the sweep biases little: consecutive scans are bent
+    // alike); the keyframe matches that place the poses then use the straightened points.
     let twists = chain_twists(scans, &chains);
     let points: Vec<ScanPoints> = (0..scans.len())
         .map(|k| match twists[k] {
@@ -225,9 +226,7 @@ pub fn sensor_path(scans: &[Scan], s: &MatchSettings) -> Result<SensorPath, KinE
             _ => raw[k].clone(),
         })
         .collect();
-    let mut out = fresh();
     out.deskewed = (0..scans.len()).filter(|&k| twists[k].is_some() && scans[k].time_increment_s != 0.0).count();
-    let chains = scan_to_scan(scans, &points, s, &mut out);
     refine(scans, &points, &chains, s, &mut out);
     Ok(out)
 }
@@ -316,7 +315,7 @@ mod tests {
         let (bent, deskewed) = end_error(&instantaneous);
         assert_eq!(deskewed, 0);
         // Measured: bent 21.7 mm and −5.0° (the turn read 1.9 % short: the sweep's share of the scan
-        // period, a rotation-row bias a fit would take as the robot's), straightened 2.4 mm and 0.013°.
+        // period, a rotation-row bias a fit would take as the robot's), straightened 2.4 mm and 0.015°.
         assert!(bent.dtheta_rad.abs().to_degrees() > 3.0, "bent {bent:?}, straightened {e:?}");
         assert!(bent.dx_m.hypot(bent.dy_m) > 3.0 * e.dx_m.hypot(e.dy_m), "bent {bent:?}, straightened {e:?}");
     }

@@ -282,8 +282,9 @@ pub fn simulate_scans(
                 let f = if dt > 0.0 { (base[k].t_s + offset_s - a.t_s) / dt } else { 0.0 };
                 let lerp = |x: f64, y: f64| x + f * (y - x);
                 let (p, q) = (a.pose, b.pose);
-                Pose2::new(lerp(p.x_m, q.x_m), lerp(p.y_m, q.y_m), lerp(p.theta_rad, q.theta_rad))
-                    .compose(base_from_sensor)
+                // The heading the short way round (poses may be wrapped to (−π, π]).
+                let theta = p.theta_rad + f * crate::pose::wrap_angle(q.theta_rad - p.theta_rad);
+                Pose2::new(lerp(p.x_m, q.x_m), lerp(p.y_m, q.y_m), theta).compose(base_from_sensor)
             };
             simulate_sweep(room, at, base[k].t_s, tau, settings, &mut rng)
         })
