@@ -1,6 +1,12 @@
-//! Shared helpers: small simulated datasets.
+//! Shared helpers: small simulated datasets, the paper's design, and the path cost.
+use omnical::kin::cost::{CostKind, cost};
 use omnical::kin::simulate::{SimConfig, flower_commands, simulate};
 use omnical::kin::{FittedModel, IkMatrix, Model, Run};
+
+/// The paper's design matrix (Eq. 7), as a model.
+pub fn paper_design() -> FittedModel {
+    FittedModel::nominal(Model::ik(IkMatrix::paper_design()))
+}
 
 /// The paper's calibrated matrix (Eq. 9) as the true robot.
 pub fn paper_truth() -> FittedModel {
@@ -24,4 +30,9 @@ pub fn dataset(truth: &FittedModel, cfg: &SimConfig) -> (Vec<Run>, Vec<Run>) {
     let val =
         simulate(&SimConfig { seed: cfg.seed + 1, ..cfg.clone() }, truth, "validation/").expect("simulate validation");
     (train, val)
+}
+
+/// The path cost (`CostKind::PATH`) of `m` on `runs`.
+pub fn path_cost(m: &FittedModel, runs: &[Run]) -> f64 {
+    cost(&m.model, &m.params, runs, CostKind::PATH).unwrap()
 }

@@ -3,11 +3,11 @@
 //! anything: the runs are cut into segments for the cluster standard errors, and a direction with a small
 //! standard error is never held — so the default fit recovers a 2 % wheel-radius difference and does as
 //! well on held-out runs as the parametric `diff` model.
+use crate::common::path_cost;
 use omnical::ga::calibrate::{Calibration, Plan, Preset, calibrate};
 use omnical::ga::identify::CovarianceKind;
 use omnical::ga::observe::NoopObserver;
 use omnical::ga::science::text;
-use omnical::kin::cost::{CostKind, cost};
 use omnical::kin::simulate::{Leg, SimConfig, figure_eight_legs, simulate_legs, square_legs};
 use omnical::kin::{Command, FittedModel, KinematicsKind, Model, RobotGeometry, Run};
 
@@ -50,10 +50,6 @@ fn train(kind: KinematicsKind, runs: &[Run]) -> Calibration {
     calibrate(&start, runs, &plan, &mut NoopObserver).unwrap()
 }
 
-fn path(m: &FittedModel, runs: &[Run]) -> f64 {
-    cost(&m.model, &m.params, runs, CostKind::PATH).unwrap()
-}
-
 #[test]
 fn three_long_runs_recover_a_radius_difference_with_the_default_model() {
     let train_runs = runs(11, 1.0, "train/");
@@ -87,7 +83,7 @@ fn three_long_runs_recover_a_radius_difference_with_the_default_model() {
     assert!(se > 0.0 && se < 0.002, "radius difference {difference} ± {se}");
     assert!((difference - 0.02).abs() <= 3.0 * se, "radius difference {difference} ± {se}, truth 0.02");
     // Held out (the other way round): as good as the parametric diff model.
-    let (held_ik, held_diff) = (path(&ik.fitted, &held), path(&diff.fitted, &held));
+    let (held_ik, held_diff) = (path_cost(&ik.fitted, &held), path_cost(&diff.fitted, &held));
     assert!(held_ik <= 1.2 * held_diff, "held-out path: default {held_ik} m, --model diff {held_diff} m");
-    assert!(held_ik < 0.1 * path(&ik.start, &held));
+    assert!(held_ik < 0.1 * path_cost(&ik.start, &held));
 }

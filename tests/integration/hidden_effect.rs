@@ -1,14 +1,14 @@
 //! Data with a hidden effect: diagnose must name it, the refit must reach the oracle, and the recovered
 //! parameters must match the injected ones. Also: no effect → no false positive; two effects → `auto`
 //! finds both; an effect outside the catalogue → nothing claimed, error well above the noise floor.
-use crate::common::{dataset, paper_truth, small_config};
+use crate::common::{dataset, paper_design, paper_truth, small_config};
 use omnical::ga::calibrate::{Plan, Preset, calibrate};
 use omnical::ga::diagnose::{DiagnoseOptions, diagnose, refit};
 use omnical::ga::observe::NoopObserver;
 use omnical::kin::cost::{CostKind, cost};
 use omnical::kin::effect::{Effect, ParamSpec, Stage, WheelContext};
 use omnical::kin::simulate::SimConfig;
-use omnical::kin::{EffectKind, FittedModel, IkMatrix, Model, RobotGeometry, Run};
+use omnical::kin::{EffectKind, FittedModel, Model, RobotGeometry, Run};
 use std::sync::Arc;
 
 fn truth_with(effects: &[(&str, &[f64])]) -> FittedModel {
@@ -26,14 +26,10 @@ fn config() -> SimConfig {
 }
 
 fn fit_matrix(train: &[Run]) -> FittedModel {
-    let start = FittedModel::nominal(Model::ik(IkMatrix::paper_design()));
+    let start = paper_design();
     let mut plan = Plan::preset(Preset::Default, 9);
     plan.stages.retain(|s| s.name() != "ga");
     calibrate(&start, train, &plan, &mut NoopObserver).expect("calibrate").fitted
-}
-
-fn design() -> FittedModel {
-    FittedModel::nominal(Model::ik(IkMatrix::paper_design()))
 }
 
 /// Inject one effect, fit the matrix alone, diagnose, refit with the effect.
@@ -47,7 +43,7 @@ fn check(id: &str, values: &[f64], tolerance: &[f64]) {
     };
     let (train, val) = dataset(&truth, &cfg);
     let fitted = fit_matrix(&train);
-    let d = diagnose(&fitted, &design(), &train, Some(&val), &DiagnoseOptions::default()).expect("diagnose");
+    let d = diagnose(&fitted, &paper_design(), &train, Some(&val), &DiagnoseOptions::default()).expect("diagnose");
     let ranked: Vec<(&str, f64)> = d.ranking.iter().map(|c| (c.effect.as_str(), c.held_out_gain)).collect();
     assert_eq!(d.verdict.as_deref(), Some(id), "{id}: ranking {ranked:?}");
     let with = refit(&fitted, Some(&EffectKind::from_id(id, 3).expect("e")), &train, 1).expect("refit").fitted;
@@ -107,7 +103,7 @@ fn sensor_offset_is_absorbed_by_ik_and_found_with_geometry() {
     let truth = truth_with(&[("sensor_offset", &[0.1, 0.05])]);
     let (train, val) = dataset(&truth, &config());
     let fitted = fit_matrix(&train);
-    let d = diagnose(&fitted, &design(), &train, Some(&val), &DiagnoseOptions::default()).expect("diagnose");
+    let d = diagnose(&fitted, &paper_design(), &train, Some(&val), &DiagnoseOptions::default()).expect("diagnose");
     let c = d.ranking.iter().find(|c| c.effect == "sensor_offset").expect("candidate");
     assert!(c.absorbed, "separability {}", c.separability);
     assert!((c.implied[0].value - 0.1).abs() < 0.02 && (c.implied[1].value - 0.05).abs() < 0.02, "{:?}", c.implied);
@@ -136,7 +132,7 @@ fn sensor_offset_is_absorbed_by_ik_and_found_with_geometry() {
 fn no_effect_no_false_positive() {
     let (train, val) = dataset(&truth_with(&[]), &config());
     let fitted = fit_matrix(&train);
-    let d = diagnose(&fitted, &design(), &train, Some(&val), &DiagnoseOptions::default()).expect("diagnose");
+    let d = diagnose(&fitted, &paper_design(), &train, Some(&val), &DiagnoseOptions::default()).expect("diagnose");
     assert_eq!(d.verdict, None, "{:?}", d.ranking.iter().map(|c| (&c.effect, c.held_out_gain)).collect::<Vec<_>>());
     assert!(!d.unexplained, "{}", d.verdict_text);
     assert!(d.verdict_text.contains("no systematic error remains, decided by the repeats"), "{}", d.verdict_text);
@@ -148,7 +144,7 @@ fn two_effects_auto_finds_both_and_stops() {
     let (train, val) = dataset(&truth, &config());
     let fitted = fit_matrix(&train);
     let opts = DiagnoseOptions { auto: true, ..DiagnoseOptions::default() };
-    let d = diagnose(&fitted, &design(), &train, Some(&val), &opts).expect("diagnose");
+    let d = diagnose(&fitted, &paper_design(), &train, Some(&val), &opts).expect("diagnose");
     let added: Vec<&str> = d.ladder.iter().skip(2).map(|r| r.label.trim_start_matches("+ ")).collect();
     let mut sorted = added.clone();
     sorted.sort();
@@ -192,7 +188,7 @@ fn unknown_effect_is_not_claimed_and_error_stays_above_noise() {
     truth.params[n - 1] = 0.15;
     let (train, val) = dataset(&truth, &config());
     let fitted = fit_matrix(&train);
-    let d = diagnose(&fitted, &design(), &train, Some(&val), &DiagnoseOptions::default()).expect("diagnose");
+    let d = diagnose(&fitted, &paper_design(), &train, Some(&val), &DiagnoseOptions::default()).expect("diagnose");
     let ranked: Vec<_> = d.ranking.iter().map(|c| (&c.effect, c.held_out_gain, c.excess_closed)).collect();
     assert_eq!(d.verdict, None, "{ranked:?}");
     assert!(d.unexplained, "{}", d.verdict_text);

@@ -1,15 +1,10 @@
 //! Identifiability: unexcited directions are named and held at the design; standard errors match the
 //! spread of fits over repeated datasets.
-use crate::common::{paper_truth, small_config};
+use crate::common::{paper_design, paper_truth, small_config};
 use omnical::ga::calibrate::{Plan, Preset, Unexcited, calibrate};
 use omnical::ga::observe::NoopObserver;
 use omnical::kin::cost::{CostKind, cost};
 use omnical::kin::simulate::{SimConfig, flower_commands, simulate};
-use omnical::kin::{FittedModel, IkMatrix, Model};
-
-fn design() -> FittedModel {
-    FittedModel::nominal(Model::ik(IkMatrix::paper_design()))
-}
 
 /// Train on translations only (ω = 0): the matrix's response to the rotation wheel pattern is not
 /// excited. The warning must say so, and the fit must not be worse than the design on runs that rotate.
@@ -23,7 +18,7 @@ fn no_rotation_is_named_and_held_at_the_design() {
     let held_out = simulate(&SimConfig { commands: turning, seed: 22, ..base }, &truth, "turning/").unwrap();
 
     let plan = Plan::preset(Preset::Default, 9).seed(4);
-    let c = calibrate(&design(), &train, &plan, &mut NoopObserver).unwrap();
+    let c = calibrate(&paper_design(), &train, &plan, &mut NoopObserver).unwrap();
     let warnings = c.identifiability.warnings();
     assert!(!c.held.is_empty(), "nothing held; warnings {warnings:?}");
     assert_eq!(c.held.len(), 3, "one direction per matrix row: {warnings:?}");
@@ -37,13 +32,13 @@ fn no_rotation_is_named_and_held_at_the_design() {
     assert!(warnings.iter().all(|w| w.contains("m3") || w.contains("m1") || w.contains("m2")));
 
     let path = CostKind::PATH;
-    let design_cost = cost(&design().model, &design().params, &held_out, path).unwrap();
+    let design_cost = cost(&paper_design().model, &paper_design().params, &held_out, path).unwrap();
     let held_cost = cost(&c.fitted.model, &c.fitted.params, &held_out, path).unwrap();
     assert!(held_cost <= design_cost, "held-out (turning) path {held_cost} vs design {design_cost}");
 
     // Moving freely along the unexcited directions is what the hold prevents.
     let free = Plan { unexcited: Unexcited::Move, ..plan };
-    let f = calibrate(&design(), &train, &free, &mut NoopObserver).unwrap();
+    let f = calibrate(&paper_design(), &train, &free, &mut NoopObserver).unwrap();
     let free_cost = cost(&f.fitted.model, &f.fitted.params, &held_out, path).unwrap();
     eprintln!("turning runs, path RMS: design {design_cost:.4}, hold {held_cost:.4}, move {free_cost:.4}");
     assert!(held_cost < free_cost, "hold {held_cost} vs move {free_cost}");
@@ -60,7 +55,7 @@ fn standard_errors_match_the_spread_of_repeated_fits() {
     let mut se_iid: Vec<Vec<f64>> = Vec::new();
     for seed in 0..datasets {
         let train = simulate(&small_config(100 + seed, 3, 2, 6.0), &truth, "train/").unwrap();
-        let c = calibrate(&design(), &train, &plan, &mut NoopObserver).unwrap();
+        let c = calibrate(&paper_design(), &train, &plan, &mut NoopObserver).unwrap();
         assert!(c.held.is_empty(), "the flower subset excites every direction: {:?}", c.identifiability.warnings());
         fits.push(c.fitted.params.clone());
         se.push(c.identifiability.params.iter().map(|p| p.std_error.unwrap()).collect());
@@ -98,7 +93,7 @@ fn diagnose_refuses_effects_the_runs_do_not_excite() {
     assert!(gap.contains("turns one way only"), "{gap}");
     let opts =
         DiagnoseOptions { candidates: vec!["wheel_asymmetry".into(), "time_offset".into()], ..Default::default() };
-    let d = diagnose(&design(), &design(), &train, None, &opts).unwrap();
+    let d = diagnose(&paper_design(), &paper_design(), &train, None, &opts).unwrap();
     let c = d.ranking.iter().find(|c| c.effect == "wheel_asymmetry").unwrap();
     assert!(c.not_excited.as_deref().is_some_and(|w| w.contains("turns one way only")), "{:?}", c.not_excited);
     assert_ne!(d.verdict.as_deref(), Some("wheel_asymmetry"));
@@ -121,9 +116,9 @@ fn a_real_effect_helps_on_left_out_kinds_of_path() {
     truth.params[n - 1] = 0.06;
     let (train, val) = crate::common::dataset(&truth, &small_config(9, 3, 2, 6.0));
     let plan = Plan::preset(Preset::Default, 9).seed(1);
-    let fitted = calibrate(&design(), &train, &plan, &mut NoopObserver).unwrap().fitted;
+    let fitted = calibrate(&paper_design(), &train, &plan, &mut NoopObserver).unwrap().fitted;
     let opts = DiagnoseOptions { candidates: vec!["time_offset".into(), "rotation_slip".into()], ..Default::default() };
-    let d = diagnose(&fitted, &design(), &train, Some(&val), &opts).unwrap();
+    let d = diagnose(&fitted, &paper_design(), &train, Some(&val), &opts).unwrap();
     assert_eq!(d.verdict.as_deref(), Some("time_offset"), "{}", d.verdict_text);
     let k = d.kind_out.expect("straight and turning runs");
     assert_eq!(k.folds.len(), 3, "{:?}", k.folds);

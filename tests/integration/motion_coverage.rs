@@ -3,11 +3,11 @@
 //! turns on the spot) never translate and rotate at once, so no fit on them can see it: diagnose must say
 //! which motions the training runs lack and what to record. With arcs among the training runs the effect
 //! is found, and one model serves squares and circles.
+use crate::common::path_cost;
 use omnical::ga::calibrate::{Calibration, Plan, Preset, calibrate};
 use omnical::ga::coverage::MotionKind;
 use omnical::ga::diagnose::{DiagnoseOptions, Finding, diagnose};
 use omnical::ga::observe::NoopObserver;
-use omnical::kin::cost::{CostKind, cost};
 use omnical::kin::simulate::{SimConfig, simulate, simulate_legs, square_legs};
 use omnical::kin::{Command, EffectKind, FittedModel, Model, RobotGeometry, Run};
 
@@ -62,20 +62,16 @@ fn fit(train: &[Run], effects: &[&str]) -> Calibration {
     calibrate(&start, train, &plan, &mut NoopObserver).unwrap()
 }
 
-fn path(m: &FittedModel, runs: &[Run]) -> f64 {
-    cost(&m.model, &m.params, runs, CostKind::PATH).unwrap()
-}
-
 #[test]
 fn squares_lack_arcs_and_arcs_find_the_turn_gain() {
     let train_squares = squares(1, 6, "train/square-");
     let held_circles = circles(2, 3, "held/circle-");
     let held_squares = squares(3, 4, "held/square-");
-    let oracle = path(&truth(), &held_circles);
+    let oracle = path_cost(&truth(), &held_circles);
 
     // Trained on squares: fine on squares, 9× the oracle on circles, and diagnose says why.
     let on_squares = fit(&train_squares, &[]).fitted;
-    assert!(path(&on_squares, &held_circles) > 5.0 * oracle);
+    assert!(path_cost(&on_squares, &held_circles) > 5.0 * oracle);
     let d = diagnose(&on_squares, &design(), &train_squares, Some(&held_circles), &DiagnoseOptions::default()).unwrap();
     let c = d.coverage.as_ref().unwrap();
     assert!(matches!(d.facts.first(), Some(Finding::MissingMotions(_))), "{:?}", d.findings);
@@ -121,8 +117,8 @@ fn squares_lack_arcs_and_arcs_find_the_turn_gain() {
     let k = with.identifiability.params.last().unwrap();
     let se = k.std_error.unwrap();
     assert!((k.value - K_S_M).abs() <= 3.0 * se && se < 0.01, "k_s_m = {} ± {se}, truth {K_S_M}", k.value);
-    let (circles_plain, circles_with) = (path(&plain, &held_circles), path(&with.fitted, &held_circles));
-    let (squares_with, squares_oracle) = (path(&with.fitted, &held_squares), path(&truth(), &held_squares));
+    let (circles_plain, circles_with) = (path_cost(&plain, &held_circles), path_cost(&with.fitted, &held_circles));
+    let (squares_with, squares_oracle) = (path_cost(&with.fitted, &held_squares), path_cost(&truth(), &held_squares));
     assert!(circles_plain > 3.0 * oracle, "circles without the effect {circles_plain} m, oracle {oracle} m");
     assert!(circles_with <= 1.5 * oracle, "circles {circles_with} m, oracle {oracle} m");
     assert!(squares_with <= 1.5 * squares_oracle, "squares {squares_with} m, oracle {squares_oracle} m");

@@ -6,32 +6,20 @@
 //! (CI); `OMNICAL_SHARED_DATA` points elsewhere.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use serde_json::Value;
 use std::path::Path;
-use std::process::Command;
+use support::{json, shared_set, succeeded};
 
-fn omnical(args: &[&str], dir: &Path) -> Value {
-    let out = Command::new(env!("CARGO_BIN_EXE_omnical"))
-        .args(["-q"])
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run omnical");
-    assert!(out.status.success(), "omnical {args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    serde_json::from_slice(&out.stdout).unwrap_or(Value::Null)
-}
-
-/// A set folder of the real OptiOdom logs of robot `kind`, found by build.rs (the tests that use them are
-/// ignored when they are not here).
-fn shared(kind: &str, set: &str) -> String {
-    // Set with cfg(shared_data), which every caller needs.
-    let data = option_env!("OMNICAL_SHARED_DATA").unwrap_or("");
-    Path::new(data).join(format!("optiodom-{kind}-square")).join(set).to_str().unwrap().to_string()
+/// `omnical -q ARGS` in `dir`, which must succeed and print JSON (`--json`).
+fn quiet_json(args: &[&str], dir: &Path) -> Value {
+    json(&[&["-q"], args].concat(), dir)
 }
 
 /// Held-out path RMS of a model on `runs` (m).
 fn path_cost(model: &str, runs: &str, dir: &Path) -> f64 {
-    omnical(&["eval", "--model", model, runs, "--json"], dir)["path_cost"].as_f64().unwrap()
+    quiet_json(&["eval", "--model", model, runs, "--json"], dir)["path_cost"].as_f64().unwrap()
 }
 
 /// The values of the parameters named `names` in `train --json`'s `params`.
@@ -64,11 +52,11 @@ fn assert_close(a: &[f64], b: &[f64], rel: f64, what: &str) {
 #[test]
 #[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn omni4_explore_and_diagnose_advice_is_what_train_delivers() {
-    let (fit, held) = (shared("omni4", "231220200521"), shared("omni4", "080920201715"));
+    let (fit, held) = (shared_set("omni4", "231220200521"), shared_set("omni4", "080920201715"));
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    omnical(&["train", &fit, "--out", "o4.toml", "--json"], d);
-    let e = omnical(&["explore", "--model", "o4.toml", &fit, "--validate", &held, "--json"], d);
+    quiet_json(&["train", &fit, "--out", "o4.toml", "--json"], d);
+    let e = quiet_json(&["explore", "--model", "o4.toml", &fit, "--validate", &held, "--json"], d);
     let families = e["families"].as_array().unwrap();
     assert_eq!(families.len(), 5);
     for f in families {
@@ -82,7 +70,7 @@ fn omni4_explore_and_diagnose_advice_is_what_train_delivers() {
     let best = families.iter().find(|f| f["status"] == "fitted").expect("a fitted family");
     let (family, predicted) = (best["family"].as_str().unwrap(), best["held_out_gain"].as_f64().unwrap());
     let effect = format!("learned:{family}");
-    let t = omnical(&["train", &fit, "--effect", &effect, "--out", "ob.toml", "--json"], d);
+    let t = quiet_json(&["train", &fit, "--effect", &effect, "--out", "ob.toml", "--json"], d);
     let names: Vec<&str> = best["terms"].as_array().unwrap().iter().map(|t| t["name"].as_str().unwrap()).collect();
     let explored: Vec<f64> = best["terms"].as_array().unwrap().iter().map(|t| t["value"].as_f64().unwrap()).collect();
     assert_close(&explored, &trained(&t, &names), 1e-6, &effect);
@@ -94,7 +82,7 @@ fn omni4_explore_and_diagnose_advice_is_what_train_delivers() {
 
     // Diagnose's time_offset (the candidate it refits here; wheel_eccentricity, whose values diagnose and
     // train disagreed on at 03a283f, is now reported not excited: every wheel runs at one speed).
-    let dg = omnical(
+    let dg = quiet_json(
         &[
             "diagnose",
             "--model",
@@ -111,7 +99,7 @@ fn omni4_explore_and_diagnose_advice_is_what_train_delivers() {
     let c = dg["ranking"].as_array().unwrap().iter().find(|c| c["effect"] == "time_offset").unwrap();
     let reported = c["params"][0]["value"].as_f64().expect("tau_s");
     let gain = c["held_out_gain"].as_f64().unwrap();
-    let t = omnical(&["train", &fit, "--effect", "time_offset", "--out", "ot.toml", "--json"], d);
+    let t = quiet_json(&["train", &fit, "--effect", "time_offset", "--out", "ot.toml", "--json"], d);
     assert_close(&[reported], &trained(&t, &["tau_s"]), 1e-6, "time_offset");
     let delivered = 1.0 - path_cost("ot.toml", &held, d) / path_cost("o4.toml", &held, d);
     assert!((delivered - gain).abs() < 1e-6, "time_offset: diagnose {gain}, train delivers {delivered}");
@@ -124,18 +112,18 @@ fn omni4_explore_and_diagnose_advice_is_what_train_delivers() {
 #[test]
 #[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn diff_diagnosed_clock_offset_is_trains() {
-    let (fit, held) = (shared("diff", "230620202042"), shared("diff", "230620202144"));
+    let (fit, held) = (shared_set("diff", "230620202042"), shared_set("diff", "230620202144"));
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    omnical(&["train", &fit, "--out", "diff.toml"], d);
-    let dg = omnical(
+    succeeded(&["-q", "train", &fit, "--out", "diff.toml"], d);
+    let dg = quiet_json(
         &["diagnose", "--model", "diff.toml", &fit, "--validate", &held, "--candidates", "time_offset", "--json"],
         d,
     );
     let c = &dg["ranking"][0];
     assert_eq!(c["effect"], "time_offset", "{dg:#}");
     let reported = c["params"][0]["value"].as_f64().expect("tau_s");
-    let t = omnical(&["train", &fit, "--effect", "time_offset", "--json"], d);
+    let t = quiet_json(&["train", &fit, "--effect", "time_offset", "--json"], d);
     // The same fit to the LM's stopping tolerance (2.8e-6 of τ with the diff model, 1.4e-8 s).
     assert_close(&[reported], &trained(&t, &["tau_s"]), 1e-5, "time_offset");
     // Held by the truncated update in both, or fitted in both: diagnose says which.

@@ -4,11 +4,13 @@
 //! (`fuzz/seeds/`) through the readers in-process, so `cargo test` is the fuzz smoke run of CI.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test code: a failed unwrap is a failed test
 
+mod support;
+
 use omni_cli::dataset::{csv, mcap};
 use serde::Deserialize;
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use support::{omnical_command, stderr};
 
 #[derive(Deserialize)]
 struct Expected {
@@ -48,10 +50,10 @@ fn corpus_files() -> Vec<PathBuf> {
     files
 }
 
-fn omnical(cmd: &str, file: &Path, args: &[String]) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_omnical"))
-        .arg(cmd)
-        .arg(file)
+/// `omnical CMD FILE ARGS --robot apr02` (and `--quiet` for `train`) in the package's folder, without
+/// backtraces: the exit status and stderr.
+fn exit_code_and_stderr(cmd: &str, file: &Path, args: &[String]) -> (i32, String) {
+    let out = omnical_command([std::ffi::OsStr::new(cmd), file.as_os_str()], Path::new(env!("CARGO_MANIFEST_DIR")))
         .args(args)
         // The design is the paper's robot (runs without a robot description are refused).
         .args(["--robot", "apr02"])
@@ -59,7 +61,7 @@ fn omnical(cmd: &str, file: &Path, args: &[String]) -> (i32, String) {
         .env("RUST_BACKTRACE", "0")
         .output()
         .unwrap();
-    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stderr).into_owned())
+    (out.status.code().unwrap_or(-1), stderr(&out))
 }
 
 #[test]
@@ -74,7 +76,7 @@ fn every_bad_file_gives_a_clear_error() {
         covered.insert(file.clone());
         let commands: &[&str] = if case.ok.is_some() { &["eval"] } else { &["eval", "train"] };
         for cmd in commands {
-            let (code, stderr) = omnical(cmd, &file, &case.args);
+            let (code, stderr) = exit_code_and_stderr(cmd, &file, &case.args);
             let mut problems = Vec::new();
             if stderr.contains("panicked") || code == 101 {
                 problems.push("panicked".to_string());

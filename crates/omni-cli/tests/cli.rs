@@ -1,19 +1,9 @@
 //! The `omnical` binary end to end, in a temporary folder: exit codes, messages, files.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::path::Path;
-use std::process::{Command, Output};
+mod support;
 
-fn omnical(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir).output().expect("run omnical")
-}
-
-/// The real omni3 logs, found by build.rs (the tests that use them are ignored when they are not here).
-fn shared_data() -> std::path::PathBuf {
-    // Set with cfg(shared_data), which every caller needs (the tests are ignored without it).
-    let data = option_env!("OMNICAL_SHARED_DATA").unwrap_or("");
-    Path::new(data).join("optiodom-omni3-square")
-}
+use support::{omnical, omnical_command, shared_data};
 
 #[test]
 fn simulate_train_eval_round_trip() {
@@ -94,7 +84,7 @@ fn bad_input_names_file_and_line() {
 #[test]
 #[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn design_model_on_real_optiodom_runs() {
-    let data = shared_data();
+    let data = shared_data("omni3");
     let dir = tempfile::tempdir().unwrap();
     let set = data.join("221220201934");
     let out = omnical(&["eval", "--model", "design", set.to_str().unwrap(), "--json"], dir.path());
@@ -151,7 +141,7 @@ fn plan_proposes_runs_that_excite_every_parameter() {
 #[test]
 #[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn square_runs_warn_under_the_end_pose_objective() {
-    let data = shared_data();
+    let data = shared_data("omni3");
     let dir = tempfile::tempdir().unwrap();
     let train = data.join("221220201934");
     let train = train.to_str().unwrap();
@@ -193,9 +183,7 @@ fn a_closed_stdout_pipe_ends_quietly() {
     let sim = ["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "2", "--seed", "5", "-q"];
     assert!(omnical(&sim, dir.path()).status.success());
     for args in [&["eval", "--model", "design", "sim/validation"][..], &["eval", "--model", "design", "sim/train"]] {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_omnical"))
-            .args(args)
-            .current_dir(dir.path())
+        let mut child = omnical_command(args, dir.path())
             .stdout(std::process::Stdio::piped())
             .stderr(std::process::Stdio::piped())
             .spawn()

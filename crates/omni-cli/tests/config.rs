@@ -3,25 +3,10 @@
 //! bad keys and values refused with the file, line and key (exit 2).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn omnical(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir).output().expect("run omnical")
-}
-
-fn ok(args: &[&str], dir: &Path) -> String {
-    let out = omnical(args, dir);
-    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout).unwrap()
-}
-
-/// The error line of a command that must fail with exit status 2.
-fn refused(args: &[&str], dir: &Path) -> String {
-    let out = omnical(args, dir);
-    assert_eq!(out.status.code(), Some(2), "{args:?}");
-    String::from_utf8(out.stderr).unwrap().trim_end().to_string()
-}
+use support::{json, ok, omnical, refused};
 
 /// `omnical config`'s rows as (key, value, source), split at runs of two or more spaces.
 fn rows(text: &str) -> Vec<(String, String, String)> {
@@ -80,7 +65,7 @@ fn config_shows_where_each_value_came_from() {
     assert_eq!(row(&r, "gt_topic"), ("/mocap", format!("robot.toml:{line}").as_str()));
     assert_eq!(row(&r, "robot"), ("robot.toml", "command line"));
     // The same rows as JSON.
-    let v: serde_json::Value = serde_json::from_str(&ok(&["config", "--robot", "robot.toml", "--json"], d)).unwrap();
+    let v: serde_json::Value = json(&["config", "--robot", "robot.toml", "--json"], d);
     assert_eq!((v["command"].as_str(), v["schema_version"].as_u64()), (Some("config"), Some(1)));
     assert_eq!(v["project_file"], "omnical.toml");
     let gt = v["settings"].as_array().unwrap().iter().find(|s| s["key"] == "gt_topic").unwrap();
@@ -97,7 +82,7 @@ fn the_project_file_sets_defaults_and_flags_win() {
     simulate(d);
     let seed_of = |args: &[&str]| -> u64 {
         let base = ["train", "sim/train", "--json", "-q", "--preset", "paper"];
-        let v: serde_json::Value = serde_json::from_str(&ok(&[&base[..], args].concat(), d)).unwrap();
+        let v: serde_json::Value = json(&[&base[..], args].concat(), d);
         v["seed"].as_u64().unwrap()
     };
     assert_eq!(seed_of(&[]), 0);
@@ -126,8 +111,7 @@ fn the_project_file_sets_evals_rpe_window() {
     let d = tmp.path();
     simulate(d);
     let window = |args: &[&str]| -> (f64, String) {
-        let v: serde_json::Value =
-            serde_json::from_str(&ok(&[&["eval", "sim/validation", "--json"][..], args].concat(), d)).unwrap();
+        let v: serde_json::Value = json(&[&["eval", "sim/validation", "--json"][..], args].concat(), d);
         (v["rpe"]["delta"].as_f64().unwrap(), v["rpe"]["delta_unit"].as_str().unwrap().to_string())
     };
     assert_eq!(window(&[]), (1.0, "m".into()));
@@ -180,9 +164,9 @@ fn bad_project_files_name_the_file_line_and_key() {
     assert!(missing.starts_with("error: nope.toml: No such file"), "{missing}");
 }
 
-/// The error and what follows it (the notes before it left out).
+/// The error and what follows it (the notes before it and the final newline left out).
 fn from_error(stderr: &str) -> String {
-    stderr[stderr.find("error:").unwrap_or(0)..].to_string()
+    stderr[stderr.find("error:").unwrap_or(0)..].trim_end().to_string()
 }
 
 #[test]

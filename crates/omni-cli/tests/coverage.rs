@@ -4,19 +4,17 @@
 //! translate and rotate at once.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use omni_cli::dataset::{self, LoadOptions};
 use omni_ga::coverage::motion_coverage;
 use omni_kin::{FittedModel, Model};
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use support::shared_data;
 
-fn omnical(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_omnical")).args(["-q"]).args(args).current_dir(dir).output().expect("run")
-}
-
-fn ok(out: &Output) -> String {
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout.clone()).unwrap()
+/// `omnical -q ARGS` in `dir`, which must succeed: its stdout.
+fn quiet(args: &[&str], dir: &Path) -> String {
+    support::ok(&[&["-q"], args].concat(), dir)
 }
 
 /// The paper's robot with a hidden `turn_scrub` (k = −0.13 s/m: 2.6 % less turn at 0.2 m/s), driving the
@@ -24,7 +22,7 @@ fn ok(out: &Output) -> String {
 fn simulate(d: &Path, out: &str, seed: &str, csv: &str) {
     std::fs::write(d.join(format!("{out}.csv")), csv).unwrap();
     let commands = format!("{out}.csv");
-    ok(&omnical(
+    quiet(
         &[
             "simulate",
             "--out",
@@ -43,7 +41,7 @@ fn simulate(d: &Path, out: &str, seed: &str, csv: &str) {
             "4",
         ],
         d,
-    ));
+    );
 }
 
 #[test]
@@ -54,10 +52,10 @@ fn squares_against_arcs_name_the_missing_motions_everywhere() {
     simulate(d, "sq", "3", "v_m_s,alpha_deg,omega_rad_s\n0.2,0,0\n0.2,90,0\n0,0,0.5\n0,0,-0.5\n");
     // Written as a spreadsheet saves it (a UTF-8 byte-order mark, CRLF), read as the run CSVs are.
     simulate(d, "arcs", "4", "\u{feff}v_m_s,alpha_deg,omega_rad_s\r\n0.2,0,0.35\r\n0.2,0,-0.35\r\n");
-    ok(&omnical(&["train", "sq/train", "--out", "fit.toml"], d));
+    quiet(&["train", "sq/train", "--out", "fit.toml"], d);
     let held = ["--model", "fit.toml", "sq/train", "--validate", "arcs/validation"];
     let json: serde_json::Value =
-        serde_json::from_str(&ok(&omnical(&[&["diagnose", "--json"][..], &held].concat(), d))).unwrap();
+        serde_json::from_str(&quiet(&[&["diagnose", "--json"][..], &held].concat(), d)).unwrap();
     let c = &json["coverage"];
     assert!(c["train"]["translating_while_rotating"].as_f64().unwrap() < 0.05, "{c:#}");
     assert!(c["held_out"]["translating_while_rotating"].as_f64().unwrap() > 0.95, "{c:#}");
@@ -79,20 +77,20 @@ fn squares_against_arcs_name_the_missing_motions_everywhere() {
     );
     assert!(finding.contains("record v 0.20 m/s α 0° ω "), "{finding}");
     // The same finding in the text, the report and explore.
-    assert!(ok(&omnical(&[&["diagnose"][..], &held].concat(), d)).contains(finding));
-    ok(&omnical(&[&["report", "--out", "r.html"][..], &held].concat(), d));
+    assert!(quiet(&[&["diagnose"][..], &held].concat(), d).contains(finding));
+    quiet(&[&["report", "--out", "r.html"][..], &held].concat(), d);
     let html = std::fs::read_to_string(d.join("r.html")).unwrap();
     assert!(html.contains("the training runs lack motions the held-out runs contain"), "report");
-    let text = ok(&omnical(&[&["explore"][..], &held].concat(), d));
+    let text = quiet(&[&["explore"][..], &held].concat(), d);
     assert!(text.contains("motions: the training runs lack motions the held-out runs contain"), "{text}");
     let explored: serde_json::Value =
-        serde_json::from_str(&ok(&omnical(&[&["explore", "--json"][..], &held].concat(), d))).unwrap();
+        serde_json::from_str(&quiet(&[&["explore", "--json"][..], &held].concat(), d)).unwrap();
     assert_eq!(explored["coverage"]["gaps"][0]["kind"], "translating_while_rotating");
     // What the finding advises: `plan --effect turn_scrub` picks arcs (v and ω at once).
-    let plan: serde_json::Value = serde_json::from_str(&ok(&omnical(
+    let plan: serde_json::Value = serde_json::from_str(&quiet(
         &["plan", "--robot", "apr02", "--effect", "turn_scrub", "--runs", "6", "--json"],
         d,
-    )))
+    ))
     .unwrap();
     let arcs = plan["plan"]["runs"]
         .as_array()
@@ -105,14 +103,6 @@ fn squares_against_arcs_name_the_missing_motions_everywhere() {
     assert!(arcs >= 2, "{:#}", plan["plan"]["runs"]);
 }
 
-/// The real OptiOdom logs of a robot type, found by build.rs (the tests that use them are ignored when they
-/// are not here).
-fn shared(kind: &str) -> PathBuf {
-    // Set with cfg(shared_data), which every caller needs.
-    let data = option_env!("OMNICAL_SHARED_DATA").unwrap_or("");
-    Path::new(data).join(format!("optiodom-{kind}-square"))
-}
-
 /// Real squares against real squares: covered (no false alarm). Measured: the omni4 squares translate while
 /// rotating in 0.1 % of their moving samples (set 080920201715: 69 % translating, 30 % rotating).
 #[test]
@@ -123,7 +113,7 @@ fn real_squares_cover_real_squares_and_omni4_never_turns_while_driving() {
         ("omni3", "221220201934", "221220201953"),
         ("diff", "230620202042", "230620202144"),
     ] {
-        let data = shared(kind);
+        let data = shared_data(kind);
         let load = |set: &str| dataset::load(&[data.join(set)], &LoadOptions::default()).unwrap();
         let (train, held) = (load(a), load(b));
         let design = omni_cli::design::geometry(&train).unwrap();

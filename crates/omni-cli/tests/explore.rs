@@ -4,20 +4,14 @@
 //! passing family `--out` refuses.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use std::path::Path;
-use std::process::{Command, Output};
+use support::{json, omnical, succeeded};
 
-fn omnical(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir).output().expect("run omnical")
-}
-
-fn ok(out: &Output) -> serde_json::Value {
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    serde_json::from_slice(&out.stdout).unwrap_or(serde_json::Value::Null)
-}
-
+/// Path RMS of `model` on `runs` (`eval --json`'s `path_cost`).
 fn path_rms(model: &str, runs: &str, dir: &Path) -> f64 {
-    let e = ok(&omnical(&["eval", "--model", model, runs, "--json"], dir));
+    let e = json(&["eval", "--model", model, runs, "--json"], dir);
     e["path_cost"].as_f64().unwrap_or_else(|| panic!("eval --json: {e}"))
 }
 
@@ -27,12 +21,11 @@ fn explore_names_a_world_drift_and_writes_the_learned_model() {
     let d = dir.path();
     let sim = ["--runs-per-command", "1", "--duration", "4", "--truth", "design"];
     let drift = "learned:world=0.0039,-0.0021,0,0";
-    ok(&omnical(&[&["simulate", "--out", "sim", "--seed", "5", "--effect", drift][..], &sim].concat(), d));
-    let out = omnical(
+    succeeded(&[&["simulate", "--out", "sim", "--seed", "5", "--effect", drift][..], &sim].concat(), d);
+    let j = json(
         &["explore", "--model", "design", "sim/train", "--validate", "sim/validation", "--json", "--out", "w.toml"],
         d,
     );
-    let j = ok(&out);
     assert_eq!(j["schema_version"], 1);
     assert_eq!(j["unexplained"], false);
     let families = j["families"].as_array().unwrap();
@@ -58,16 +51,15 @@ fn explore_names_a_world_drift_and_writes_the_learned_model() {
     let design = path_rms("design", "sim/validation", d);
     let learned = path_rms("w.toml", "sim/validation", d);
     assert!(learned <= 1.1 * truth && design > 2.0 * truth, "learned {learned}, truth {truth}, design {design}");
-    ok(&omnical(&["train", "sim/train", "--effect", "learned:world", "--out", "t.toml"], d));
+    succeeded(&["train", "sim/train", "--effect", "learned:world", "--out", "t.toml"], d);
     let trained = path_rms("t.toml", "sim/validation", d);
     assert!(trained <= 1.1 * truth, "trained {trained}, truth {truth}");
 
     // The report's explorer section: the ranking and the best family's residual against its strongest term.
-    let out = omnical(
+    succeeded(
         &["report", "--model", "design", "sim/train", "--validate", "sim/validation", "--explore", "--no-diagnose"],
         d,
     );
-    ok(&out);
     let page = std::fs::read_to_string(d.join("report.html")).unwrap();
     assert!(page.contains("<h2 id=\"explore\">Beyond the catalogue (explore)</h2>"));
     assert!(page.contains("<figcaption>Training residual against drift_x"), "the world family's strongest term");
@@ -79,9 +71,8 @@ fn explore_names_a_world_drift_and_writes_the_learned_model() {
     );
 
     // Clean data: nothing passes, and --out refuses, saying why, and writes nothing.
-    ok(&omnical(&[&["simulate", "--out", "clean", "--seed", "6"][..], &sim].concat(), d));
-    let out = omnical(&["explore", "--model", "design", "clean/train", "--validate", "clean/validation", "--json"], d);
-    let j = ok(&out);
+    succeeded(&[&["simulate", "--out", "clean", "--seed", "6"][..], &sim].concat(), d);
+    let j = json(&["explore", "--model", "design", "clean/train", "--validate", "clean/validation", "--json"], d);
     assert_eq!(j["best"], serde_json::Value::Null, "{j:#}");
     assert_eq!(j["unexplained"], false, "{j:#}");
     let out = omnical(
@@ -103,7 +94,7 @@ fn diagnose_auto_explores_what_the_catalogue_leaves_unexplained() {
     let d = dir.path();
     let sim = ["--runs-per-command", "3", "--duration", "6", "--truth", "design"];
     let drift = "learned:world=0.0039,-0.0021,0,0";
-    ok(&omnical(&[&["simulate", "--out", "sim", "--seed", "5", "--effect", drift][..], &sim].concat(), d));
+    succeeded(&[&["simulate", "--out", "sim", "--seed", "5", "--effect", drift][..], &sim].concat(), d);
     let diag = [
         "diagnose",
         "--model",
@@ -115,7 +106,7 @@ fn diagnose_auto_explores_what_the_catalogue_leaves_unexplained() {
         "--candidates",
         "time_offset,backlash,rotation_slip",
     ];
-    let j = ok(&omnical(&[&diag[..], &["--json"]].concat(), d));
+    let j = json(&[&diag[..], &["--json"]].concat(), d);
     assert_eq!(j["unexplained"], true, "{:#}", j["unexplained_evidence"]);
     let e = &j["explore"];
     assert_eq!(e["schema_version"], 1);

@@ -3,43 +3,17 @@
 //! OptiOdom file, a diff robot's matrix units, one run in the singular, and the report's worst run.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn omnical(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_omnical"))
-        .args(args)
-        .current_dir(dir)
-        .env_remove("RUST_LOG")
-        .output()
-        .expect("run omnical")
-}
-
-/// Stdout and stderr of a command that must succeed.
-fn ok(args: &[&str], dir: &Path) -> (String, String) {
-    let out = omnical(args, dir);
-    let (o, e) = (String::from_utf8_lossy(&out.stdout).into_owned(), String::from_utf8_lossy(&out.stderr).into_owned());
-    assert!(out.status.success(), "omnical {args:?} failed:\n{e}");
-    (o, e)
-}
-
-/// Stderr of a command that must fail with exit status 2.
-fn fails(args: &[&str], dir: &Path) -> String {
-    let out = omnical(args, dir);
-    assert_eq!(out.status.code(), Some(2), "omnical {args:?}: {}", String::from_utf8_lossy(&out.stdout));
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
-
-fn entries(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> =
-        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    v.sort();
-    v
-}
+use support::{entries, ok_with_stderr, omnical, refused, succeeded, test_data};
 
 /// A small simulated set in `dir/sim`: `repeats` × 36 runs of 2 s per split.
 fn simulate(dir: &Path, repeats: &str, extra: &[&str]) -> (String, String) {
-    ok(&[&["simulate", "--out", "sim", "--runs-per-command", repeats, "--duration", "2"], extra].concat(), dir)
+    ok_with_stderr(
+        &[&["simulate", "--out", "sim", "--runs-per-command", repeats, "--duration", "2"], extra].concat(),
+        dir,
+    )
 }
 
 /// A second simulation into a folder that holds runs is refused, the folder untouched; `--force` replaces
@@ -50,7 +24,7 @@ fn simulate_refuses_a_folder_with_runs_and_force_replaces_it_whole() {
     let d = tmp.path();
     simulate(d, "3", &[]);
     assert_eq!(entries(&d.join("sim/train")).len(), 108 + 1);
-    let err = fails(&["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "2"], d);
+    let err = refused(&["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "2"], d);
     assert_eq!(
         err,
         "error: --out sim: the folder already holds files (train, truth.json, truth_model.toml, …); give --force to \
@@ -61,11 +35,11 @@ fn simulate_refuses_a_folder_with_runs_and_force_replaces_it_whole() {
     assert!(out.starts_with("train: 36 runs, design cost"), "{out}");
     assert_eq!(entries(&d.join("sim/train")).len(), 36 + 1);
     assert_eq!(entries(d), ["sim"], "no staging or old folder left beside it");
-    let (_, err) = ok(&["-v", "eval", "--model", "design", "sim/train"], d);
+    let (_, err) = ok_with_stderr(&["-v", "eval", "--model", "design", "sim/train"], d);
     assert!(err.contains("info: read 36 runs from sim/train"), "{err}");
     // An empty folder is new enough.
     std::fs::create_dir(d.join("empty")).unwrap();
-    ok(&["simulate", "--out", "empty", "--runs-per-command", "1", "--duration", "1", "--format", "csv"], d);
+    succeeded(&["simulate", "--out", "empty", "--runs-per-command", "1", "--duration", "1", "--format", "csv"], d);
     assert_eq!(entries(&d.join("empty")), ["train", "truth.json", "truth_model.toml", "validation"]);
 }
 
@@ -90,17 +64,17 @@ fn demo_and_export_refuse_folders_with_files() {
         [&["export", "--model", "design", "sim/validation"], extra].concat()
     }
     assert_eq!(
-        fails(&export(&["--tum", "t", "--mcap", "t/"]), d),
+        refused(&export(&["--tum", "t", "--mcap", "t/"]), d),
         "error: --tum and --mcap name the same folder t: give each its own\n"
     );
-    ok(&export(&["--tum", "tum"]), d);
+    succeeded(&export(&["--tum", "tum"]), d);
     std::fs::write(d.join("tum/other_run.gt.tum"), "# a run of another export\n").unwrap();
     assert_eq!(
-        fails(&export(&["--tum", "tum"]), d),
+        refused(&export(&["--tum", "tum"]), d),
         "error: --tum tum: the folder already holds files (other_run.gt.tum, validation_00-r0.calibrated.tum, \
          validation_00-r0.design.tum, …); give --force to replace it whole, or another --tum\n"
     );
-    ok(&export(&["--tum", "tum", "--force"]), d);
+    succeeded(&export(&["--tum", "tum", "--force"]), d);
     let files = entries(&d.join("tum"));
     assert_eq!(files.len(), 3 * 36);
     assert!(!files.contains(&"other_run.gt.tum".to_string()), "replaced whole");
@@ -116,7 +90,7 @@ fn report_png_keeps_other_files_and_drops_stale_figures() {
     std::fs::create_dir(d.join("figs")).unwrap();
     std::fs::write(d.join("figs/ranking.png"), "an earlier report's ranking").unwrap();
     std::fs::write(d.join("figs/notes.txt"), "mine").unwrap();
-    ok(&["report", "--model", "design", "sim/train", "--no-diagnose", "--out", "r.html", "--png", "figs"], d);
+    succeeded(&["report", "--model", "design", "sim/train", "--no-diagnose", "--out", "r.html", "--png", "figs"], d);
     let figs = entries(&d.join("figs"));
     assert_eq!(
         figs,
@@ -141,19 +115,19 @@ fn result_files_are_checked_first_and_train_says_when_nothing_is_written() {
     simulate(d, "1", &["--format", "csv"]);
     let missing =
         "error: --out nowhere/m.toml: the folder nowhere does not exist (create it first: mkdir -p nowhere)\n";
-    assert_eq!(fails(&["train", "sim/train", "--out", "nowhere/m.toml"], d), missing);
-    assert_eq!(fails(&["diagnose", "--model", "design", "sim/train", "--out", "nowhere/m.toml"], d), missing);
+    assert_eq!(refused(&["train", "sim/train", "--out", "nowhere/m.toml"], d), missing);
+    assert_eq!(refused(&["diagnose", "--model", "design", "sim/train", "--out", "nowhere/m.toml"], d), missing);
     assert_eq!(
-        fails(&["report", "--model", "design", "sim/train", "--out", "nowhere/r.html"], d),
+        refused(&["report", "--model", "design", "sim/train", "--out", "nowhere/r.html"], d),
         "error: --out nowhere/r.html: the folder nowhere does not exist (create it first: mkdir -p nowhere)\n"
     );
-    assert_eq!(fails(&["plan", "--out", "sim"], d), "error: --out sim: this is a folder; give a file name in it\n");
-    let (out, err) = ok(&["train", "sim/train"], d);
+    assert_eq!(refused(&["plan", "--out", "sim"], d), "error: --out sim: this is a folder; give a file name in it\n");
+    let (out, err) = ok_with_stderr(&["train", "sim/train"], d);
     assert!(out.starts_with("preset default: 36 training runs, objective path\n"), "{out}");
     assert!(err.ends_with("note: the fitted model was not written (no --out FILE)\n"), "{err}");
-    let (_, err) = ok(&["train", "sim/train", "--out", "m.toml"], d);
+    let (_, err) = ok_with_stderr(&["train", "sim/train", "--out", "m.toml"], d);
     assert!(!err.contains("not written"), "{err}");
-    let (_, err) = ok(&["-q", "train", "sim/train"], d);
+    let (_, err) = ok_with_stderr(&["-q", "train", "sim/train"], d);
     assert_eq!(err, "", "-q keeps notes off stderr");
 }
 
@@ -184,12 +158,12 @@ fn a_headerless_optiodom_run_says_it_needs_its_metadata() {
     std::fs::write(d.join("set/221220201934_run-01.csv"), rows).unwrap();
     std::fs::write(d.join("plain.csv"), rows).unwrap();
     assert_eq!(
-        fails(&["eval", "--model", "design", "set", "--robot", "apr02"], d),
+        refused(&["eval", "--model", "design", "set", "--robot", "apr02"], d),
         "error: set/221220201934_run-01.csv: line 1: missing column t_s (columns: 0,0,0,0,-0,-0,-0); the first line \
          holds numbers: this looks like an OptiOdom run file, which is read from its set's folder with the set's \
          metadata file (221220201934_metadata.csv) beside it (docs/formats.md)\n"
     );
-    let err = fails(&["eval", "--model", "design", "plain.csv", "--robot", "apr02"], d);
+    let err = refused(&["eval", "--model", "design", "plain.csv", "--robot", "apr02"], d);
     assert!(
         err.ends_with(
             "; the first line holds numbers: an omnical CSV file starts with a header line (docs/formats.md)\n"
@@ -204,17 +178,17 @@ fn a_headerless_optiodom_run_says_it_needs_its_metadata() {
 fn a_diff_matrix_keeps_its_units_and_one_run_is_singular() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
-    let robot = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/diff_robot.toml");
+    let robot = test_data("diff_robot.toml");
     simulate(d, "1", &["--robot", robot.to_str().unwrap(), "--format", "csv"]);
-    let (out, _) = ok(&["train", "sim/train", "--model", "ik"], d);
+    let (out, _) = ok_with_stderr(&["train", "sim/train", "--model", "ik"], d);
     assert!(!out.contains('°'), "{out}");
     assert!(out.lines().any(|l| l.contains("m31 ±") && l.contains(" rad")), "{out}");
     assert!(!out.lines().any(|l| l.trim_start().starts_with("m31 ")), "the matrix shows its entries: {out}");
     let one = entries(&d.join("sim/train")).into_iter().find(|f| f.ends_with(".csv")).unwrap();
     let one = format!("sim/train/{one}");
-    let (out, _) = ok(&["train", &one, "--model", "ik"], d);
+    let (out, _) = ok_with_stderr(&["train", &one, "--model", "ik"], d);
     assert!(out.starts_with("preset default: 1 training run, objective path\n"), "{out}");
-    let (out, _) = ok(&["eval", "--model", "design", &one], d);
+    let (out, _) = ok_with_stderr(&["eval", "--model", "design", &one], d);
     assert!(out.starts_with("model design: 1 run\n"), "{out}");
 }
 
@@ -225,8 +199,8 @@ fn the_report_names_one_worst_run() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
     simulate(d, "1", &["--format", "csv", "--effect", "time_offset=0.06"]);
-    ok(&["train", "sim/train", "--out", "m.toml"], d);
-    ok(&["report", "--model", "m.toml", "sim/train", "--out", "r.html"], d);
+    succeeded(&["train", "sim/train", "--out", "m.toml"], d);
+    succeeded(&["report", "--model", "m.toml", "sim/train", "--out", "r.html"], d);
     let html = std::fs::read_to_string(d.join("r.html")).unwrap();
     let finding = html.split("worst training run ").nth(1).unwrap_or_else(|| panic!("no finding in the report"));
     let finding_run = finding.split_whitespace().next().unwrap();
@@ -242,15 +216,15 @@ fn the_report_names_one_worst_run() {
 fn a_clock_offset_that_changes_nothing_is_refused() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
-    ok(&["simulate", "--out", "csv", "--runs-per-command", "1", "--duration", "2", "--format", "csv"], d);
-    let err = fails(&["eval", "csv/train", "--gt-time-offset", "0.1"], d);
+    succeeded(&["simulate", "--out", "csv", "--runs-per-command", "1", "--duration", "2", "--format", "csv"], d);
+    let err = refused(&["eval", "csv/train", "--gt-time-offset", "0.1"], d);
     assert_eq!(
         err.lines().last().unwrap(),
         "error: --gt-time-offset 0.1 changes nothing here: it applies to a --gt file or to a ground-truth topic of a \
          recording (MCAP, rosbag2), and these runs have neither"
     );
     simulate(d, "1", &[]);
-    let (out, _) = ok(&["eval", "sim/train", "--gt-time-offset", "0", "--json"], d);
+    let (out, _) = ok_with_stderr(&["eval", "sim/train", "--gt-time-offset", "0", "--json"], d);
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["ground_truth_clock"].as_array().map(Vec::len), Some(36), "{v}");
     assert_eq!(v["ground_truth_clock"][0]["estimated"], false);
@@ -267,7 +241,7 @@ fn wheels_in_another_unit_than_declared_are_refused() {
     let robot = std::fs::read_to_string(d.join("sim/train/robot.toml")).unwrap();
     // The simulated joints are rad/s; declared rpm, they go 2π/60 as far as the ground truth.
     std::fs::write(d.join("rpm.toml"), format!("{robot}\n[wheel_data]\nvelocity = \"rpm\"\n")).unwrap();
-    let err = fails(&["eval", "sim/train", "--robot", "rpm.toml"], d);
+    let err = refused(&["eval", "sim/train", "--robot", "rpm.toml"], d);
     let last = err.lines().last().unwrap();
     assert!(last.starts_with("error: through the design of rpm.toml, the wheels of these 36 runs travel "), "{err}");
     assert!(
@@ -282,9 +256,9 @@ fn wheels_in_another_unit_than_declared_are_refused() {
     let big = robot.replace("radius_m = 0.148", &format!("radius_m = {}", 0.148 * 60.0 / std::f64::consts::TAU));
     assert_ne!(big, robot);
     std::fs::write(d.join("big.toml"), big).unwrap();
-    let err = fails(&["eval", "sim/train", "--robot", "big.toml"], d);
+    let err = refused(&["eval", "sim/train", "--robot", "big.toml"], d);
     // 9.55 times the simulated robot's wheels, which go 9.6 % further than the design's.
     assert!(err.contains(": 8.72 times, beyond what a calibration corrects."), "{err}");
     assert!(err.contains("(docs/formats.md) (8.72 is near 9.549, the factor of velocity = \"rpm\")"), "{err}");
-    ok(&["eval", "sim/train"], d);
+    succeeded(&["eval", "sim/train"], d);
 }

@@ -6,18 +6,14 @@
 //! Wall-clock fields (`seconds`) are removed from JSON before comparing; nothing else is normalised.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod support;
 
-fn omnical(args: &[&str], dir: &Path) -> Vec<u8> {
-    let out = Command::new(env!("CARGO_BIN_EXE_omnical"))
-        .args(["--threads", "2", "-q"])
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run omnical");
-    assert!(out.status.success(), "omnical {args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    out.stdout
+use std::path::{Path, PathBuf};
+use support::{omnical_command, succeeded_on_two_threads};
+
+/// `omnical --threads 2 -q ARGS` in `dir`, which must succeed: its stdout.
+fn stdout_of(args: &[&str], dir: &Path) -> Vec<u8> {
+    succeeded_on_two_threads(args, dir).stdout
 }
 
 /// JSON with the wall-clock fields removed, pretty-printed.
@@ -75,10 +71,10 @@ fn outputs_are_byte_identical_to_the_golden_files() {
     let d = tmp.path();
     let mut failures = Vec::new();
     let sim = ["simulate", "--runs-per-command", "1", "--duration", "4", "--seed", "3"];
-    omnical(&[&sim[..], &["--out", "sim", "--effect", "time_offset=0.04"]].concat(), d);
+    stdout_of(&[&sim[..], &["--out", "sim", "--effect", "time_offset=0.04"]].concat(), d);
     check("truth.json", &read(d, "sim/truth.json"), &mut failures);
     check("truth_model.toml", &read(d, "sim/truth_model.toml"), &mut failures);
-    omnical(
+    stdout_of(
         &[&sim[..], &["--out", "csv", "--format", "csv", "--effect", "wheel_asymmetry=0.02,-0.02,0.0"]].concat(),
         d,
     );
@@ -92,35 +88,35 @@ fn outputs_are_byte_identical_to_the_golden_files() {
     ];
     for (name, extra) in trainings {
         let model = format!("{name}.toml");
-        let json = omnical(&[&["train", "sim/train", "--json", "--out", &model], extra].concat(), d);
+        let json = stdout_of(&[&["train", "sim/train", "--json", "--out", &model], extra].concat(), d);
         check(&format!("train_{name}.json"), &json_without_timing(&json), &mut failures);
         check(&model, &read(d, &model), &mut failures);
     }
-    let json = omnical(&["train", "csv/train", "--json", "--effect", "wheel_asymmetry"], d);
+    let json = stdout_of(&["train", "csv/train", "--json", "--effect", "wheel_asymmetry"], d);
     check("train_csv_wheel_asymmetry.json", &json_without_timing(&json), &mut failures);
 
     for (name, model) in [("design", "design"), ("fit", "fit.toml"), ("geometry_tau", "geometry_tau.toml")] {
-        let json = omnical(&["eval", "--model", model, "sim/validation", "--json"], d);
+        let json = stdout_of(&["eval", "--model", model, "sim/validation", "--json"], d);
         check(&format!("eval_{name}.json"), &json_without_timing(&json), &mut failures);
-        let text = omnical(&["eval", "--model", model, "sim/validation", "--per-run"], d);
+        let text = stdout_of(&["eval", "--model", model, "sim/validation", "--per-run"], d);
         check(&format!("eval_{name}.txt"), &String::from_utf8_lossy(&text), &mut failures);
     }
     let diag = ["diagnose", "--model", "fit.toml", "sim/train", "--validate", "sim/validation"];
-    let json = omnical(&[&diag[..], &["--json"]].concat(), d);
+    let json = stdout_of(&[&diag[..], &["--json"]].concat(), d);
     check("diagnose.json", &json_without_timing(&json), &mut failures);
-    let json = omnical(&[&diag[..], &["--json", "--auto", "--out", "auto.toml"]].concat(), d);
+    let json = stdout_of(&[&diag[..], &["--json", "--auto", "--out", "auto.toml"]].concat(), d);
     check("diagnose_auto.json", &json_without_timing(&json), &mut failures);
     check("diagnose_auto.toml", &read(d, "auto.toml"), &mut failures);
-    let text = omnical(&diag, d);
+    let text = stdout_of(&diag, d);
     check("diagnose.txt", &String::from_utf8_lossy(&text), &mut failures);
 
-    let json = omnical(&["plan", "--robot", "apr02", "--json", "--effect", "time_offset"], d);
+    let json = stdout_of(&["plan", "--robot", "apr02", "--json", "--effect", "time_offset"], d);
     check("plan.json", &json_without_timing(&json), &mut failures);
 
-    omnical(&["report", "--model", "fit.toml", "sim/train", "--validate", "sim/validation", "--out", "r.html"], d);
+    stdout_of(&["report", "--model", "fit.toml", "sim/train", "--validate", "sim/validation", "--out", "r.html"], d);
     check("report.html", &read(d, "r.html"), &mut failures);
 
-    omnical(&["export", "--model", "fit.toml", "sim/validation", "--tum", "tum"], d);
+    stdout_of(&["export", "--model", "fit.toml", "sim/validation", "--tum", "tum"], d);
     for kind in ["gt", "design", "calibrated"] {
         let file = format!("tum/00-r0.{kind}.tum");
         check(&format!("export_00-r0.{kind}.tum"), &read(d, &file), &mut failures);
@@ -135,18 +131,15 @@ fn training_is_the_same_bits_on_every_simd_path() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
     let sim = ["simulate", "--runs-per-command", "1", "--duration", "4", "--seed", "3"];
-    omnical(&[&sim[..], &["--out", "sim", "--effect", "time_offset=0.04"]].concat(), d);
+    stdout_of(&[&sim[..], &["--out", "sim", "--effect", "time_offset=0.04"]].concat(), d);
     let mut failures = Vec::new();
     for path in ["portable", "avx2", "avx512"] {
         for (name, extra) in [("paper", &["--preset", "paper"][..]), ("geometry_tau", &["--model", "geometry"])] {
             let model = format!("{name}.toml");
             let args = [&["train", "sim/train", "--json", "--out", &model][..], extra].concat();
             let args = if name == "geometry_tau" { [&args[..], &["--effect", "time_offset"]].concat() } else { args };
-            let out = Command::new(env!("CARGO_BIN_EXE_omnical"))
+            let out = omnical_command([&["--threads", "2", "-q"][..], &args].concat(), d)
                 .env("OMNICAL_SIMD", path)
-                .args(["--threads", "2", "-q"])
-                .args(&args)
-                .current_dir(d)
                 .output()
                 .unwrap();
             assert!(out.status.success(), "{path}: {}", String::from_utf8_lossy(&out.stderr));
@@ -157,12 +150,7 @@ fn training_is_the_same_bits_on_every_simd_path() {
         }
     }
     assert!(failures.is_empty(), "outputs changed:\n{}", failures.join("\n"));
-    let out = Command::new(env!("CARGO_BIN_EXE_omnical"))
-        .env("OMNICAL_SIMD", "sse9")
-        .args(["train", "sim/train"])
-        .current_dir(d)
-        .output()
-        .unwrap();
+    let out = omnical_command(["train", "sim/train"], d).env("OMNICAL_SIMD", "sse9").output().unwrap();
     assert_eq!(out.status.code(), Some(2));
     assert_eq!(String::from_utf8_lossy(&out.stderr), "error: OMNICAL_SIMD=sse9: expected avx512, avx2 or portable\n");
 }

@@ -2,17 +2,19 @@
 //! (issue 19): the real binary.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::process::{Command, Output};
+mod support;
 
-fn omnical(args: &[&str]) -> Output {
-    let dir = tempfile::tempdir().unwrap();
-    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir.path()).output().expect("run omnical")
+use std::process::Output;
+use support::{ok, omnical, omnical_command};
+
+/// `omnical ARGS` in a fresh empty folder; its output, whatever its exit status.
+fn in_empty_dir(args: &[&str]) -> Output {
+    omnical(args, tempfile::tempdir().unwrap().path())
 }
 
+/// `omnical ARGS` in a fresh empty folder, which must succeed: its stdout (the help text).
 fn help(args: &[&str]) -> String {
-    let out = omnical(args);
-    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout).unwrap()
+    ok(args, tempfile::tempdir().unwrap().path())
 }
 
 const SUBCOMMANDS: [&str; 9] = ["simulate", "eval", "train", "diagnose", "report", "export", "plan", "init", "demo"];
@@ -96,14 +98,14 @@ fn validate_takes_one_path_and_repeats() {
         assert!(text.contains("--validate A --validate B"), "{text}");
     }
     // The natural spelling works: the path after --validate is held out, the next one is the training runs.
-    let out = omnical(&["diagnose", "--model", "design", "--validate", "missing-val", "missing-train"]);
+    let out = in_empty_dir(&["diagnose", "--model", "design", "--validate", "missing-val", "missing-train"]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("missing-train"), "the training runs are read first: {err}");
     assert!(!err.contains("required arguments"), "{err}");
     // Runs missing after --validate: clap's error, then the spelling that works.
     for cmd in ["diagnose", "report"] {
-        let out = omnical(&[cmd, "--model", "fit.toml", "--validate", "sim/validation"]);
+        let out = in_empty_dir(&[cmd, "--model", "fit.toml", "--validate", "sim/validation"]);
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{err}");
         assert!(err.contains("the following required arguments were not provided"), "{err}");
@@ -114,7 +116,7 @@ fn validate_takes_one_path_and_repeats() {
         assert!(err.contains(&tip), "{err}");
     }
     // Without --validate the error has no tip.
-    let out = omnical(&["diagnose", "--model", "fit.toml"]);
+    let out = in_empty_dir(&["diagnose", "--model", "fit.toml"]);
     assert!(!String::from_utf8_lossy(&out.stderr).contains("tip: --validate"));
 }
 
@@ -137,7 +139,7 @@ fn fleet_is_the_python_wheels_and_the_native_binary_says_so() {
     let top = help(&["--help"]);
     assert!(top.contains("  fleet ") && top.contains("omnical[fleet]"), "{top}");
     for args in [&["fleet", "robots/", "--out", "out"][..], &["simulate", "--fleet", "3", "--out", "out"][..]] {
-        let out = omnical(args);
+        let out = in_empty_dir(args);
         assert_eq!(out.status.code(), Some(2), "{args:?}");
         let err = String::from_utf8_lossy(&out.stderr);
         let what = if args[0] == "fleet" { "omnical fleet" } else { "omnical simulate --fleet" };
@@ -171,7 +173,7 @@ fn completions_know_every_subcommand() {
         // Options of a subcommand and the global -v are completed too.
         assert!(script.contains("validate") && script.contains("verbose") && script.contains("gt-topic"), "{shell}");
     }
-    let out = omnical(&["completions", "tcsh"]);
+    let out = in_empty_dir(&["completions", "tcsh"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("[possible values: bash, elvish, fish, powershell, zsh]"));
 }
@@ -186,8 +188,7 @@ fn man_pages_cover_every_subcommand() {
         assert!(listed.contains(&format!("omnical\\-{}", name.replace('-', "\\-"))), "{name} not listed:\n{listed}");
     }
     let dir = tempfile::tempdir().unwrap();
-    let out =
-        Command::new(env!("CARGO_BIN_EXE_omnical")).args(["man", "--out", "pages"]).current_dir(dir.path()).output();
+    let out = omnical_command(["man", "--out", "pages"], dir.path()).output();
     assert!(out.unwrap().status.success());
     let mut files: Vec<String> = std::fs::read_dir(dir.path().join("pages"))
         .unwrap()
@@ -241,12 +242,12 @@ fn plan_robot_from_takes_one_path_and_repeats() {
     assert!(text.contains("--robot-from <RUNS>"), "{text}");
     assert!(text.contains("--robot-from A --robot-from B"), "{text}");
     // One path per flag: both flags' paths are read (the first missing one is named).
-    let out = omnical(&["plan", "--robot-from", "missing-a", "--robot-from", "missing-b"]);
+    let out = in_empty_dir(&["plan", "--robot-from", "missing-a", "--robot-from", "missing-b"]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("missing-a"), "{err}");
     // The old spelling, several paths after one flag: clap names the stray path, then the spelling that works.
-    let out = omnical(&["plan", "--robot-from", "runs-a", "runs-b"]);
+    let out = in_empty_dir(&["plan", "--robot-from", "runs-a", "runs-b"]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("unexpected argument 'runs-b' found"), "{err}");
@@ -257,7 +258,7 @@ fn plan_robot_from_takes_one_path_and_repeats() {
         "{err}"
     );
     // Other stray arguments get no such tip.
-    let out = omnical(&["plan", "stray"]);
+    let out = in_empty_dir(&["plan", "stray"]);
     assert!(!String::from_utf8_lossy(&out.stderr).contains("tip: --robot-from"));
 }
 
@@ -267,9 +268,7 @@ fn plan_robot_from_takes_one_path_and_repeats() {
 #[test]
 fn validate_old_spelling_is_caught() {
     let dir = tempfile::tempdir().unwrap();
-    let run = |args: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir.path()).output().expect("run omnical")
-    };
+    let run = |args: &[&str]| omnical(args, dir.path());
     let sim = ["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "2", "--seed", "5", "-q"];
     assert!(run(&sim).status.success());
     // A second copy of the validation set, as a user with two held-out folders would have.
@@ -333,7 +332,7 @@ fn export_controller_lists_each_choice() {
         let Command::Export(e) = cli.command else { panic!("export") };
         assert_eq!(e.controller, Some(want), "{given}");
     }
-    let out = omnical(&["export", "--model", "m", "r", "--controller", "ackermann"]);
+    let out = in_empty_dir(&["export", "--model", "m", "r", "--controller", "ackermann"]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(

@@ -6,33 +6,21 @@
 //! within 5 ms, with the motion capture in the bag or in TUM files beside it.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::sync::OnceLock;
+use support::{copy_dir, made_by_python, ok_with_stderr, param};
 
 fn recordings() -> &'static PathBuf {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| {
-        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("humble");
-        let python = std::env::var("OMNICAL_PYTHON").unwrap_or_else(|_| "python3".into());
-        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/rosbag2/make_humble.py");
-        let out = Command::new(python).arg(script).arg(&dir).output().unwrap();
-        assert!(out.status.success(), "make_humble.py failed: {}", String::from_utf8_lossy(&out.stderr));
-        dir
-    })
+    DIR.get_or_init(|| made_by_python("rosbag2/make_humble.py", Path::new(env!("CARGO_TARGET_TMPDIR")).join("humble")))
 }
 
 /// Runs omnical in `dir`; stdout, stderr, after checking it succeeded.
 fn omnical(dir: &Path, args: &[&str]) -> (String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir).output().unwrap();
-    let (o, e) = (String::from_utf8_lossy(&out.stdout).into_owned(), String::from_utf8_lossy(&out.stderr).into_owned());
-    assert!(out.status.success(), "omnical {args:?} failed:\n{e}");
-    (o, e)
-}
-
-fn param(v: &Value, name: &str) -> f64 {
-    v["params"].as_array().unwrap().iter().find(|p| p["name"] == name).unwrap()["value"].as_f64().unwrap()
+    ok_with_stderr(args, dir)
 }
 
 /// `init` on the first session, then `train` on all three; the fitted radii and the clocks found. Returns
@@ -143,20 +131,6 @@ fn info_names_each_topics_role_the_runs_and_the_mocap_clock() {
     assert!(why.starts_with("named as the ground truth (--gt-topic), refused:") && why.contains("REP-105"), "{why}");
     assert_eq!(v["recordings"][0]["read"]["ok"], false);
     assert!(v["recordings"][0]["read"]["error"].as_str().unwrap().contains("the model under test, never ground truth"));
-}
-
-/// Copies the folder `from` to `to`, recursively.
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let e = e.unwrap();
-        let target = to.join(e.file_name());
-        if e.file_type().unwrap().is_dir() {
-            copy_dir(&e.path(), &target);
-        } else {
-            std::fs::copy(e.path(), target).unwrap();
-        }
-    }
 }
 
 #[test]

@@ -4,19 +4,11 @@
 //! refused naming the file and topic.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn omnical(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir).output().expect("run omnical")
-}
-
-fn ok(args: &[&str], dir: &Path) -> String {
-    let out = omnical(args, dir);
-    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout).unwrap()
-}
+use support::{json, ok, omnical};
 
 /// Simulated MCAP runs with an IMU at `rate` Hz, bias 0.005 rad/s.
 fn simulate(dir: &Path, out: &str, rate: &str) {
@@ -45,9 +37,9 @@ fn the_rotation_row_comes_back_at_any_gyro_rate_and_the_translation_is_not_reach
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
     simulate(d, "sim", "100");
-    let fit: Value = serde_json::from_str(&ok(&["train", "sim/train", "--json"], d)).unwrap();
+    let fit: Value = json(&["train", "sim/train", "--json"], d);
     let mocap: Vec<f64> = fit["matrix"][2].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
-    let imu: Value = serde_json::from_str(&ok(&["imu", "sim/train", "--json"], d)).unwrap();
+    let imu: Value = json(&["imu", "sim/train", "--json"], d);
     let row: Vec<f64> = imu["fit"]["row"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
     for (i, (r, m)) in row.iter().zip(&mocap).enumerate() {
         eprintln!("wheel {i}: IMU {r:.6}, motion capture {m:.6} ({:+.3} %)", 100.0 * (r / m - 1.0));
@@ -57,7 +49,7 @@ fn the_rotation_row_comes_back_at_any_gyro_rate_and_the_translation_is_not_reach
     assert!((bias - 0.005).abs() < (4.0 * se).max(2e-4), "bias {bias} ± {se}");
     // Another gyro rate (37 Hz, not a multiple of the wheels' 100 Hz) gives the same row.
     simulate(d, "slow", "37");
-    let slow: Value = serde_json::from_str(&ok(&["imu", "slow/train", "--json"], d)).unwrap();
+    let slow: Value = json(&["imu", "slow/train", "--json"], d);
     for (a, b) in slow["fit"]["row"].as_array().unwrap().iter().zip(&row) {
         assert!((a.as_f64().unwrap() / b - 1.0).abs() < 0.003, "37 Hz {a} vs 100 Hz {b}");
     }
@@ -104,7 +96,7 @@ fn info_points_the_imu_to_omnical_imu_and_refuses_what_is_no_recording() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
     simulate(d, "sim", "50");
-    let v: Value = serde_json::from_str(&ok(&["info", "sim/train/00-r0.mcap", "--json"], d)).unwrap();
+    let v: Value = json(&["info", "sim/train/00-r0.mcap", "--json"], d);
     let topics = v["recordings"][0]["topics"].as_array().unwrap();
     let imu = topics.iter().find(|t| t["topic"] == "/imu").unwrap();
     assert_eq!(imu["role"], "imu");

@@ -3,37 +3,18 @@
 //! joints absent from the recording are refused with exit 2, naming the file.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use omni_cli::robot_file;
 use omni_kin::IkMatrix;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::Path;
-use std::process::{Command, Output};
+use support::{apr02_wheel_urdf, omnical, stderr};
 
-fn omnical(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir).output().expect("run omnical")
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
-
-/// A three-wheel omni base like APR-02: wheels at 60°, 180°, 300°, 0.195 m out, r = 0.148 m. Each joint
-/// frame is yawed to the wheel's angle and turns about −x (the axle points inwards), so positive speed
-/// pushes along the counter-clockwise tangent. Listed c, a, b: the recording's order must win.
+/// A three-wheel omni base like APR-02: wheels at 60°, 180°, 300°, 0.195 m out, r = 0.148 m
+/// ([`apr02_wheel_urdf`]). Listed c, a, b: the recording's order must win.
 fn omni3_urdf() -> String {
-    let wheel = |name: &str, deg: f64| {
-        let a = deg.to_radians();
-        format!(
-            r#"<link name="{name}_link"><collision><origin xyz="0 0 0" rpy="0 1.5707963267948966 0"/>
-  <geometry><cylinder radius="0.148" length="0.04"/></geometry></collision></link>
-<joint name="{name}" type="continuous"><parent link="base_link"/><child link="{name}_link"/>
-  <origin xyz="{} {} 0.0" rpy="0 0 {a}"/><axis xyz="-1 0 0"/></joint>
-"#,
-            0.195 * a.cos(),
-            0.195 * a.sin()
-        )
-    };
     format!(
         r#"<?xml version="1.0"?>
 <robot name="omni3">
@@ -43,9 +24,9 @@ fn omni3_urdf() -> String {
   <origin xyz="0 0 0.148"/></joint>
 {}{}{}</robot>
 "#,
-        wheel("wheel_c", 300.0),
-        wheel("wheel_a", 60.0),
-        wheel("wheel_b", 180.0)
+        apr02_wheel_urdf("wheel_c", 300.0),
+        apr02_wheel_urdf("wheel_a", 60.0),
+        apr02_wheel_urdf("wheel_b", 180.0)
     )
 }
 

@@ -4,41 +4,29 @@
 //! text output prints.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use clap::CommandFactory;
 use omni_cli::cli::Cli;
 use omni_cli::cmd::WITHOUT_RESULTS;
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output};
+use support::{apr02_wheel_urdf, stdout, succeeded_on_two_threads};
 
-fn omnical(args: &[&str], dir: &Path) -> Output {
-    let out = Command::new(env!("CARGO_BIN_EXE_omnical"))
-        .args(["--threads", "2", "-q"])
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run omnical");
-    assert!(out.status.success(), "omnical {args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    out
-}
-
+/// `omnical --threads 2 -q ARGS` in `dir`, which must succeed: its stdout.
 fn text(args: &[&str], dir: &Path) -> String {
-    String::from_utf8(omnical(args, dir).stdout).unwrap()
+    stdout(&succeeded_on_two_threads(args, dir))
 }
 
 /// The command's `--json` output: the whole of stdout is one JSON object with `schema_version` 1 and
 /// `command` = the subcommand's name.
 fn json(args: &[&str], dir: &Path) -> Value {
-    let out = omnical(&[args, &["--json"]].concat(), dir);
+    let out = succeeded_on_two_threads(&[args, &["--json"]].concat(), dir);
     let v: Value = serde_json::from_slice(&out.stdout)
         .unwrap_or_else(|e| panic!("{args:?} --json: stdout is not one JSON document ({e}):\n{}", stdout(&out)));
     assert_eq!(v["schema_version"], 1, "{args:?}");
     assert_eq!(v["command"], args[0], "{args:?}");
     v
-}
-
-fn stdout(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
 /// The number after `key` in `text` (the first occurrence).
@@ -86,23 +74,11 @@ fn every_command_with_results_takes_json_and_no_other_does() {
 
 /// A three-wheel omni base like APR-02 with the simulator's joint names (for `init`).
 fn omni3_urdf() -> String {
-    let wheel = |name: &str, deg: f64| {
-        let a = f64::to_radians(deg);
-        format!(
-            r#"<link name="{name}_link"><collision><origin xyz="0 0 0" rpy="0 1.5707963267948966 0"/>
-  <geometry><cylinder radius="0.148" length="0.04"/></geometry></collision></link>
-<joint name="{name}" type="continuous"><parent link="base_link"/><child link="{name}_link"/>
-  <origin xyz="{} {} 0.0" rpy="0 0 {a}"/><axis xyz="-1 0 0"/></joint>
-"#,
-            0.195 * a.cos(),
-            0.195 * a.sin()
-        )
-    };
     format!(
         "<?xml version=\"1.0\"?>\n<robot name=\"omni3\">\n<link name=\"base_link\"/>\n{}{}{}</robot>\n",
-        wheel("wheel_a", 60.0),
-        wheel("wheel_b", 180.0),
-        wheel("wheel_c", 300.0)
+        apr02_wheel_urdf("wheel_a", 60.0),
+        apr02_wheel_urdf("wheel_b", 180.0),
+        apr02_wheel_urdf("wheel_c", 300.0)
     )
 }
 

@@ -3,29 +3,13 @@
 //! a room the robot leaves, a bad room file) through the real binary.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use omni_cli::dataset::mcap::{LidarTrack, SIM_EPOCH_S, WriteOptions, write_run};
 use omni_cli::lidar::{self, MatchSettings, Room, ScanSettings};
 use omni_kin::simulate::{SimConfig, flower_commands, simulate_sampled};
 use omni_kin::{FittedModel, IkMatrix, Model, Pose2, StampedPose};
-use std::path::Path;
-use std::process::{Command, Output};
-
-fn omnical(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir).output().expect("run omnical")
-}
-
-fn ok(args: &[&str], dir: &Path) -> String {
-    let out = omnical(args, dir);
-    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout).unwrap()
-}
-
-/// The error text of a command that must fail with exit status 2.
-fn fails(args: &[&str], dir: &Path) -> String {
-    let out = omnical(args, dir);
-    assert_eq!(out.status.code(), Some(2), "{args:?}: {}", String::from_utf8_lossy(&out.stdout));
-    String::from_utf8(out.stderr).unwrap()
-}
+use support::{json, ok, refused};
 
 /// Drift of a chained sensor path against the true one: end position error per metre travelled (m/m) and
 /// end heading error per metre (rad/m); and the path length (m).
@@ -118,8 +102,7 @@ fn simulate_writes_the_lidar_and_scan_odometry_follows_it_whatever_the_threads()
     let truth: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join("one/truth.json")).unwrap()).unwrap();
     assert_eq!(truth["lidar"]["room"], "room");
     assert_eq!(truth["lidar"]["base_from_sensor"]["x_m"], 0.2);
-    let j: serde_json::Value =
-        serde_json::from_str(&ok(&["scan-odometry", "one/train/12-r0.mcap", "--tum", "s.tum", "--json"], d)).unwrap();
+    let j: serde_json::Value = json(&["scan-odometry", "one/train/12-r0.mcap", "--tum", "s.tum", "--json"], d);
     // 4 s of motion between two rests of 0.4 s: scans at 0, 0.1, …, 4.8 s.
     assert_eq!((j["scans"].as_u64(), j["matched"].as_u64(), j["rejected"].as_u64()), (Some(49), Some(48), Some(0)));
     assert_eq!(j["segments"].as_array().unwrap().len(), 1);
@@ -141,7 +124,7 @@ fn simulate_writes_the_lidar_and_scan_odometry_follows_it_whatever_the_threads()
         "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: mcap\n  relative_file_paths: [rec_0.mcap]\n",
     )
     .unwrap();
-    let r: serde_json::Value = serde_json::from_str(&ok(&["scan-odometry", "rec", "--json"], d)).unwrap();
+    let r: serde_json::Value = json(&["scan-odometry", "rec", "--json"], d);
     for key in ["scans", "matched", "rejected", "segments", "quality", "base_from_sensor"] {
         assert_eq!(r[key], j[key], "{key}");
     }
@@ -152,7 +135,7 @@ fn a_recording_without_the_scan_topic_names_the_file_and_the_topic() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
     ok(&["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "1", "-q"], d);
-    let err = fails(&["scan-odometry", "sim/train/00-r0.mcap"], d);
+    let err = refused(&["scan-odometry", "sim/train/00-r0.mcap"], d);
     assert_eq!(
         err.trim(),
         "error: sim/train/00-r0.mcap: no topic \"/scan\" in the recording (its topics: /cmd_vel \
@@ -160,7 +143,7 @@ fn a_recording_without_the_scan_topic_names_the_file_and_the_topic() {
          (sensor_msgs/msg/JointState), /odom (nav_msgs/msg/Odometry)); no topic holds sensor_msgs/msg/LaserScan: \
          record the lidar's scans"
     );
-    let err = fails(&["scan-odometry", "sim/train/00-r0.mcap", "--topic", "/odom"], d);
+    let err = refused(&["scan-odometry", "sim/train/00-r0.mcap", "--topic", "/odom"], d);
     assert_eq!(
         err.trim(),
         "error: sim/train/00-r0.mcap: topic \"/odom\": is a nav_msgs/msg/Odometry, not a sensor_msgs/msg/LaserScan"
@@ -172,7 +155,7 @@ fn a_corridor_leaves_motion_along_it_unconstrained_and_every_match_is_rejected()
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
     ok(&["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "2", "--lidar", "corridor", "-q"], d);
-    let err = fails(&["scan-odometry", "sim/train/00-r0.mcap"], d);
+    let err = refused(&["scan-odometry", "sim/train/00-r0.mcap"], d);
     assert_eq!(
         err.trim(),
         "error: sim/train/00-r0.mcap: topic \"/scan\": none of the 28 scan matches was accepted (ill_conditioned \
@@ -191,7 +174,7 @@ fn rooms_the_robot_leaves_and_bad_room_files_are_refused() {
         "[[polygon]]\nvertices_m = [[-1.5, -1.5], [1.5, -1.5], [1.5, 1.5], [-1.5, 1.5]]\n",
     )
     .unwrap();
-    let err = fails(&["simulate", "--out", "sim", "--runs-per-command", "1", "--lidar", "small.toml", "-q"], d);
+    let err = refused(&["simulate", "--out", "sim", "--runs-per-command", "1", "--lidar", "small.toml", "-q"], d);
     assert!(
         err.starts_with(
             "error: --lidar small.toml: run train/00-r0 leaves the room: at t = 9.5 s its base is at (0.12, -1.25) m"
@@ -199,13 +182,13 @@ fn rooms_the_robot_leaves_and_bad_room_files_are_refused() {
         "{err}"
     );
     std::fs::write(d.join("flat.toml"), "[[polygon]]\nvertices_m = [[0, 0], [1, 0]]\n").unwrap();
-    let err = fails(&["simulate", "--out", "sim", "--lidar", "flat.toml", "-q"], d);
+    let err = refused(&["simulate", "--out", "sim", "--lidar", "flat.toml", "-q"], d);
     assert_eq!(
         err.trim(),
         "error: --lidar: flat.toml: room polygon 0: needs at least 3 vertices (polygon 0 is the outer wall, then the \
          obstacles)"
     );
-    let err = fails(&["simulate", "--out", "sim", "--lidar", "nowhere", "-q"], d);
+    let err = refused(&["simulate", "--out", "sim", "--lidar", "nowhere", "-q"], d);
     assert_eq!(err.trim(), "error: --lidar: nowhere: no such room file, and not a built-in room (room, corridor)");
     assert!(!d.join("sim").exists());
 }

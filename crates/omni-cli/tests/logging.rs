@@ -3,32 +3,23 @@
 //! held-out runs together); omnical's own simulated bags raise no note.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
+use support::{omnical, omnical_command, stderr, succeeded, test_data};
 
-fn omnical_env(args: &[&str], dir: &Path, rust_log: Option<&str>) -> Output {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_omnical"));
-    c.args(args).current_dir(dir).env_remove("RUST_LOG");
-    if let Some(v) = rust_log {
-        c.env("RUST_LOG", v);
-    }
-    let out = c.output().expect("run omnical");
-    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+/// `omnical ARGS` in `dir` with `RUST_LOG=filter`, which must succeed.
+fn with_rust_log(args: &[&str], dir: &Path, filter: &str) -> Output {
+    let out = omnical_command(args, dir).env("RUST_LOG", filter).output().unwrap();
+    assert!(out.status.success(), "{args:?}: {}", stderr(&out));
     out
-}
-
-fn omnical(args: &[&str], dir: &Path) -> Output {
-    omnical_env(args, dir, None)
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8(out.stderr.clone()).unwrap()
 }
 
 /// `train/r1..r4.mcap` and `held/h1..h3.mcap`: copies of the committed rosbags bag, whose `/cmd_vel` is a
 /// header-less Twist (one note per file).
 fn twist_bags(dir: &Path) {
-    let bag = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/tiny_rosbags.mcap");
+    let bag = test_data("tiny_rosbags.mcap");
     for (sub, names) in [("train", &["r1", "r2", "r3", "r4"][..]), ("held", &["h1", "h2", "h3"])] {
         std::fs::create_dir_all(dir.join(sub)).unwrap();
         for n in names {
@@ -45,7 +36,7 @@ fn a_note_from_many_files_is_one_line_per_command() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
     twist_bags(d);
-    let eval = omnical(&["eval", "--robot", "apr02", "--model", "design", "train"], d);
+    let eval = succeeded(&["eval", "--robot", "apr02", "--model", "design", "train"], d);
     let lines: Vec<String> = stderr(&eval).lines().filter(|l| l.contains("has no header")).map(String::from).collect();
     assert_eq!(lines, [format!("{TWIST_NOTE} (and 3 more files)")]);
     // Training and held-out runs are read by one command: one line counting all seven files.
@@ -56,7 +47,7 @@ fn a_note_from_many_files_is_one_line_per_command() {
         }
         // The held-out bags are copies of the training ones, which the held-out check refuses (exit 2)
         // after loading: the notes of the load are printed all the same.
-        let out = Command::new(env!("CARGO_BIN_EXE_omnical")).args(&args).current_dir(d).output().unwrap();
+        let out = omnical(&args, d);
         assert_eq!(out.status.code(), Some(2), "{cmd}");
         assert!(stderr(&out).contains("is the same recording as training run"), "{cmd}: {}", stderr(&out));
         let lines: Vec<&str> = std::str::from_utf8(&out.stderr).unwrap().lines().collect();
@@ -65,7 +56,7 @@ fn a_note_from_many_files_is_one_line_per_command() {
         assert!(!String::from_utf8_lossy(&out.stdout).contains("note:"), "{cmd}: notes go to stderr only");
     }
     // Two files: "1 more file".
-    let two = omnical(&["eval", "--robot", "apr02", "--model", "design", "train/r1.mcap", "train/r2.mcap"], d);
+    let two = succeeded(&["eval", "--robot", "apr02", "--model", "design", "train/r1.mcap", "train/r2.mcap"], d);
     assert!(stderr(&two).contains(&format!("{TWIST_NOTE} (and 1 more file)\n")), "{}", stderr(&two));
 }
 
@@ -81,10 +72,10 @@ fn verbosity_changes_stderr_only() {
         }
         a
     };
-    let normal = omnical(&args(""), d);
-    let quiet = omnical(&args("-q"), d);
-    let verbose = omnical(&args("-v"), d);
-    let debug = omnical(&args("-vv"), d);
+    let normal = succeeded(&args(""), d);
+    let quiet = succeeded(&args("-q"), d);
+    let verbose = succeeded(&args("-v"), d);
+    let debug = succeeded(&args("-vv"), d);
     for (name, out) in [("-q", &quiet), ("-v", &verbose), ("-vv", &debug)] {
         assert_eq!(out.stdout, normal.stdout, "{name}: stdout differs");
     }
@@ -107,9 +98,9 @@ fn verbosity_changes_stderr_only() {
     assert!(vv.contains("debug: run r1: 101 wheel samples over 1.000 s, 21 ground-truth poses\n"), "{vv}");
     assert!(vv.contains("info: read train/r1.mcap: 1 run\n"), "{vv}");
     // RUST_LOG replaces the flags' level; a bad one is said and the flags' level kept.
-    let env = omnical_env(&args(""), d, Some("debug"));
+    let env = with_rust_log(&args(""), d, "debug");
     assert!(stderr(&env).contains("debug: run r2: 101 wheel samples"), "{}", stderr(&env));
-    let bad = omnical_env(&args("-q"), d, Some("=[{"));
+    let bad = with_rust_log(&args("-q"), d, "=[{");
     assert!(stderr(&bad).starts_with("warning: RUST_LOG=\"=[{\" is not a filter"), "{}", stderr(&bad));
     assert_eq!(bad.stdout, normal.stdout);
 }
@@ -117,11 +108,7 @@ fn verbosity_changes_stderr_only() {
 #[test]
 fn quiet_and_verbose_conflict() {
     let tmp = tempfile::tempdir().unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_omnical"))
-        .args(["-q", "-v", "eval", "x"])
-        .current_dir(tmp.path())
-        .output()
-        .unwrap();
+    let out = omnical(&["-q", "-v", "eval", "x"], tmp.path());
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("the argument '--quiet' cannot be used with '--verbose...'"));
 }
@@ -130,8 +117,8 @@ fn quiet_and_verbose_conflict() {
 fn simulated_bags_need_no_note() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
-    omnical(&["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "2", "-q"], d);
-    let out = omnical(&["diagnose", "--model", "design", "sim/train", "--validate", "sim/validation"], d);
+    succeeded(&["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "2", "-q"], d);
+    let out = succeeded(&["diagnose", "--model", "design", "sim/train", "--validate", "sim/validation"], d);
     let e = stderr(&out);
     assert!(!e.contains("note:"), "{e}");
     // The robot.toml beside each set is said once per file, never twice in one command.

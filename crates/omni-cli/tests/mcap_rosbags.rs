@@ -8,6 +8,7 @@
 
 #[path = "mcap/helpers.rs"]
 mod helpers;
+mod support;
 
 use helpers::{check_run, close, design_odometry, floats, simulated_run};
 use omni_cli::dataset::mcap::{McapOptions, McapRead, WriteOptions, read_file, write_run};
@@ -16,11 +17,9 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
+use support::{expected_json, made_by_python, python};
 
-fn python() -> String {
-    std::env::var("OMNICAL_PYTHON").unwrap_or_else(|_| "python3".into())
-}
-
+/// The script that writes the fixture bags and checks ours.
 fn script() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/mcap/make_bags.py")
 }
@@ -32,9 +31,8 @@ fn fixtures() -> &'static (PathBuf, Value) {
     FIXTURES.get_or_init(|| {
         let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("mcap_rosbags");
         let _ = std::fs::remove_dir_all(&dir);
-        let out = Command::new(python()).arg(script()).arg(&dir).output().unwrap();
-        assert!(out.status.success(), "make_bags.py failed: {}", String::from_utf8_lossy(&out.stderr));
-        let expected = serde_json::from_str(&std::fs::read_to_string(dir.join("expected.json")).unwrap()).unwrap();
+        let dir = made_by_python("mcap/make_bags.py", dir);
+        let expected = expected_json(&dir);
         (dir, expected)
     })
 }

@@ -4,22 +4,20 @@
 
 #[path = "mcap/helpers.rs"]
 mod helpers;
+mod support;
 
 use helpers::{check_run, close, design_odometry, simulated_run};
 use omni_cli::dataset::mcap::{McapOptions, WriteOptions, read_file, write_run};
 use omni_kin::{Pose2, Run, RunData, StampedPose};
-use std::path::{Path, PathBuf};
-
-fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name)
-}
+use std::path::PathBuf;
+use support::test_data;
 
 #[test]
 fn committed_rosbags_bag_gives_the_values_written() {
-    let path = data("tiny_rosbags.mcap");
+    let path = test_data("tiny_rosbags.mcap");
     assert!(std::fs::metadata(&path).unwrap().len() < 50_000);
     let expected: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(data("tiny_rosbags.json")).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(test_data("tiny_rosbags.json")).unwrap()).unwrap();
     let r = read_file(&path, &McapOptions::default()).unwrap();
     assert_eq!(r.origin_s, 1_700_000_000);
     assert_eq!(r.runs.len(), 1);

@@ -4,13 +4,15 @@
 //! to rounding; and bad metadata or rows are refused naming the file, the line and the field.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use omni_cli::dataset::{self, LoadOptions};
 use omni_kin::cost::{self, CostKind};
 use omni_kin::{FittedModel, Model};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 use std::path::Path;
-use std::process::Command;
+use support::{json, omnical, param, shared_data};
 
 /// A synthetic OptiOdom set: robot type and metadata values, and the robot that made it.
 struct Set {
@@ -159,10 +161,6 @@ impl Set {
     }
 }
 
-fn omnical(args: &[&str], dir: &Path) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir).output().expect("run omnical")
-}
-
 /// The design model of a synthetic set follows its ground truth to rounding: the metadata's geometry is
 /// OptiOdom's nominal model, whatever the robot type, with unequal wheel diameters.
 #[test]
@@ -209,9 +207,7 @@ fn eval_reads_omni4_and_diff_folders() {
 
 /// Refusals: exit 2, `error: <file>: line N, <field>: …`.
 fn refused(dir: &Path, id: &str) -> String {
-    let out = omnical(&["eval", id], dir);
-    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stdout));
-    String::from_utf8_lossy(&out.stderr).trim().to_string()
+    support::refused(&["eval", id], dir).trim().to_string()
 }
 
 #[test]
@@ -280,16 +276,9 @@ fn bad_metadata_and_rows_name_file_line_and_field() {
     );
 }
 
-/// `omnical train … --json` in `dir`: the summary.
+/// `omnical train --json -q ARGS` in `dir`, which must succeed: the summary.
 fn train(dir: &Path, args: &[&str]) -> serde_json::Value {
-    let out = omnical(&[&["train", "--json", "-q"], args].concat(), dir);
-    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    serde_json::from_slice(&out.stdout).unwrap()
-}
-
-fn param(s: &serde_json::Value, name: &str) -> f64 {
-    let p = s["params"].as_array().unwrap().iter().find(|p| p["name"] == name);
-    p.unwrap_or_else(|| panic!("no {name} in {}", s["params"]))["value"].as_f64().unwrap()
+    json(&[&["train", "--json", "-q"], args].concat(), dir)
 }
 
 /// A differential drive whose wheels roll 3 % more and 2 % less than declared and whose wheels sit 4 %
@@ -377,20 +366,11 @@ fn omni4_mecanum_model_finds_radii_and_lx_plus_ly() {
     assert!(text.starts_with("lx and ly trade off") || text.starts_with("ly and lx trade off"), "{text}");
 }
 
-/// The real OptiOdom logs of a robot type, found by build.rs (the tests that use them are ignored when they
-/// are not here).
-fn shared(kind: &str) -> std::path::PathBuf {
-    // Set with cfg(shared_data), which every caller needs (the tests are ignored without it).
-    let data = option_env!("OMNICAL_SHARED_DATA").unwrap_or("");
-    Path::new(data).join(format!("optiodom-{kind}-square"))
-}
-
+/// Eq. 6 and path RMS of `model` on the set folders `sets` (`eval --json`).
 fn eval_cost(dir: &Path, model: &str, sets: &[&Path]) -> (f64, f64) {
     let mut args = vec!["eval", "--model", model, "--json"];
     args.extend(sets.iter().map(|p| p.to_str().unwrap()));
-    let out = omnical(&args, dir);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let e: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let e = json(&args, dir);
     (e["cost"].as_f64().unwrap(), e["path_cost"].as_f64().unwrap())
 }
 
@@ -403,7 +383,7 @@ fn eval_cost(dir: &Path, model: &str, sets: &[&Path]) -> (f64, f64) {
 #[test]
 #[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn real_omni4_runs_hold_the_fighting_pattern() {
-    let data = shared("omni4");
+    let data = shared_data("omni4");
     let dir = tempfile::tempdir().unwrap();
     let (train_set, other) = (data.join("080920201715"), data.join("231220200521"));
     let s = train(dir.path(), &[train_set.to_str().unwrap(), "--model", "ik", "--out", "ik.toml"]);
@@ -435,7 +415,7 @@ fn real_omni4_runs_hold_the_fighting_pattern() {
 #[test]
 #[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn real_diff_runs_fit_the_axle() {
-    let data = shared("diff");
+    let data = shared_data("diff");
     let dir = tempfile::tempdir().unwrap();
     let sets: Vec<std::path::PathBuf> =
         ["230620202042", "230620202144", "231220200029", "231220200040"].iter().map(|s| data.join(s)).collect();
@@ -451,13 +431,6 @@ fn real_diff_runs_fit_the_axle() {
         let (design, _) = eval_cost(dir.path(), "design", &[other]);
         assert!(fitted < 0.7 * design, "{}: fitted {fitted} vs design {design}", other.display());
     }
-}
-
-/// `omnical ARGS --json` in `dir`: the document (exit 0 required).
-fn json_of(dir: &Path, args: &[&str]) -> serde_json::Value {
-    let out = omnical(args, dir);
-    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    serde_json::from_slice(&out.stdout).unwrap()
 }
 
 /// Two omni4 sets of one robot that declare different geometries (Li 0.2, 0.2 and 0.205, 0.215, as the
@@ -487,9 +460,9 @@ fn each_set_is_evaluated_with_its_own_design() {
     let a_with_b = cost::cost(&b_design, &b_design.nominal(), &a.runs, CostKind::EndPose).unwrap();
     assert!((a_with_b - ca).abs() > 0.05 * ca, "a's runs: own design {ca}, b's {a_with_b}");
     // Diagnose: the design costs on the training runs are eval's pooled figures, held out c's own.
-    let d = json_of(
-        dir.path(),
+    let d = json(
         &["diagnose", "--model", "design", "a", "b", "--validate", "c", "--candidates", "time_offset", "--json"],
+        dir.path(),
     );
     let (cc, pc) = eval_cost(dir.path(), "design", &[Path::new("c")]);
     let costs = &d["design_costs"];
@@ -592,8 +565,8 @@ fn paper_preset_on_other_sampling_is_refused_unless_forced() {
 #[test]
 #[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn real_sets_are_each_evaluated_with_their_own_design() {
-    let omni4 = shared("omni4");
-    let diff = shared("diff");
+    let omni4 = shared_data("omni4");
+    let diff = shared_data("diff");
     let dir = tempfile::tempdir().unwrap();
     let (a, b) = (omni4.join("080920201715"), omni4.join("231220200521"));
     let (ca, pa) = eval_cost(dir.path(), "design", &[&a]);
@@ -619,8 +592,7 @@ fn real_sets_are_each_evaluated_with_their_own_design() {
     assert_eq!(one_for_all(&[&a, &b], &b), [0.87913, 0.42578]);
     assert_eq!(one_for_all(&[&b, &a], &a), [0.49577, 0.24558]);
     assert_eq!(one_for_all(&[&b], &a)[0], 0.56378);
-    let d = json_of(
-        dir.path(),
+    let d = json(
         &[
             "diagnose",
             "--model",
@@ -632,6 +604,7 @@ fn real_sets_are_each_evaluated_with_their_own_design() {
             "time_offset",
             "--json",
         ],
+        dir.path(),
     );
     let got = ["train_end_pose", "train_path", "held_out_end_pose", "held_out_path"]
         .map(|k| d["design_costs"][k].as_f64().unwrap());
@@ -651,8 +624,7 @@ fn real_sets_are_each_evaluated_with_their_own_design() {
     let before = [CostKind::EndPose, CostKind::PATH]
         .map(|k| (cost::cost(&m, &m.nominal(), &runs, k).unwrap() * 1e5).round() / 1e5);
     assert_eq!(before, [0.07874, 0.0608], "one design for all, the last folder's");
-    let d = json_of(
-        dir.path(),
+    let d = json(
         &[
             "diagnose",
             "--model",
@@ -667,6 +639,7 @@ fn real_sets_are_each_evaluated_with_their_own_design() {
             "time_offset",
             "--json",
         ],
+        dir.path(),
     );
     let (train, held) = (
         eval_cost(dir.path(), "design", &[&sets[0], &sets[1]]),
@@ -686,8 +659,8 @@ fn real_sets_are_each_evaluated_with_their_own_design() {
 #[test]
 #[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn real_paper_preset_is_refused_on_40_and_50_ms_runs() {
-    let omni3 = shared("omni3");
-    let diff = shared("diff");
+    let omni3 = shared_data("omni3");
+    let diff = shared_data("diff");
     let dir = tempfile::tempdir().unwrap();
     for (set, ms, fitted, design) in
         [(omni3.join("221220201934"), 40, 2.17061, 0.18560), (diff.join("230620202042"), 50, 1.26201, 0.04623)]

@@ -9,8 +9,11 @@
 //!   run in crates/omni-py/tests/test_readme.py against the installed wheel.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use support::{copy_dir, entries, made_by_python};
 
 /// A fenced code block of the README.
 #[derive(Debug)]
@@ -156,13 +159,6 @@ fn fresh_clone() -> (tempfile::TempDir, PathBuf, PathBuf) {
     (tmp, root, home)
 }
 
-fn entries(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> =
-        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    v.sort();
-    v
-}
-
 /// The Set up block (the demo) and the Quick example on a fresh clone: each command succeeds; the demo and
 /// the diagnosis name the hidden clock lag; everything is written under two git-ignored folders and nothing
 /// else lands in the root; the completion script and the man pages are where the lines put them.
@@ -202,20 +198,7 @@ fn set_up_and_quick_example_run_as_written() {
 
 /// Recordings made by Python rosbags (crates/omni-cli/tests/rosbag2/make_recordings.py), as a user's own.
 fn recordings() -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("readme_recordings");
-    let python = std::env::var("OMNICAL_PYTHON").unwrap_or_else(|_| "python3".into());
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/rosbag2/make_recordings.py");
-    let out = Command::new(python).arg(script).arg(&dir).output().unwrap();
-    assert!(out.status.success(), "make_recordings.py failed: {}", String::from_utf8_lossy(&out.stderr));
-    dir
-}
-
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let e = e.unwrap();
-        std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
-    }
+    made_by_python("rosbag2/make_recordings.py", Path::new(env!("CARGO_TARGET_TMPDIR")).join("readme_recordings"))
 }
 
 /// The block for one's own robot, on a three-wheel robot's recordings: a bare MCAP bag and its URDF, a

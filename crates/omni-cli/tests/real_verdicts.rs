@@ -4,33 +4,20 @@
 //! because runs without command ids all fell into one "group of repeats").
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::Command;
-
-/// The real OptiOdom logs `optiodom-<robot>-square`, found by build.rs (the tests that use them are ignored
-/// when they are not here).
-fn shared(robot: &str) -> PathBuf {
-    // Set with cfg(shared_data), which every caller needs.
-    let data = option_env!("OMNICAL_SHARED_DATA").unwrap_or("");
-    Path::new(data).join(format!("optiodom-{robot}-square"))
-}
-
-fn omnical(args: &[&str]) -> Value {
-    let out = Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).output().expect("runs");
-    assert!(out.status.success(), "omnical {args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    serde_json::from_slice(&out.stdout).expect("JSON on stdout")
-}
+use support::{json, shared_data};
 
 /// Train on `train`, then diagnose (catalogue `candidates`) and explore with `held` held out: the two
 /// JSON documents.
 fn verdicts(robot: &str, train: &str, held: &[&str], candidates: &str) -> (Value, Value) {
-    let data = shared(robot);
+    let data = shared_data(robot);
     let dir = tempfile::tempdir().unwrap();
     let model = dir.path().join("fit.toml");
     let (train, model) = (data.join(train), model.to_str().unwrap().to_string());
     let train = train.to_str().unwrap();
-    omnical(&["train", train, "--out", &model, "--json"]);
+    json(&["train", train, "--out", &model, "--json"], dir.path());
     let mut validate = Vec::new();
     for h in held {
         validate.push("--validate".to_string());
@@ -41,7 +28,7 @@ fn verdicts(robot: &str, train: &str, held: &[&str], candidates: &str) -> (Value
     diagnose.extend(&v);
     let mut explore = vec!["explore", "--model", &model, train, "--json"];
     explore.extend(&v);
-    (omnical(&diagnose), omnical(&explore))
+    (json(&diagnose, dir.path()), json(&explore, dir.path()))
 }
 
 /// What every real robot's verdict must satisfy.

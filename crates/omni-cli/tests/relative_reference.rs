@@ -5,30 +5,26 @@
 //! mount says so and takes a given mount instead; bad options are refused naming the option.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output};
+use support::{ok_with_stderr, omnical, shared_set, succeeded, test_data};
 
-fn omnical(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir).output().expect("run omnical")
-}
-
+/// `omnical ARGS --json` in `dir`, which must succeed: the document, and stderr.
 fn json(args: &[&str], dir: &Path) -> (Value, String) {
-    let out = omnical(&[args, &["--json"]].concat(), dir);
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(out.status.success(), "{args:?}: {stderr}");
-    (serde_json::from_slice(&out.stdout).unwrap(), stderr)
+    let (stdout, stderr) = ok_with_stderr(&[args, &["--json"]].concat(), dir);
+    (serde_json::from_str(&stdout).unwrap(), stderr)
 }
 
 /// `omnical simulate --robot ROBOT ARGS… -q` in `dir`, which must succeed.
 fn simulate_with(dir: &Path, robot: &str, args: &[&str]) {
-    let out = omnical(&[&["simulate", "--robot", robot], args, &["-q"]].concat(), dir);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    succeeded(&[&["simulate", "--robot", robot], args, &["-q"]].concat(), dir);
 }
 
 /// The test robot.toml of a differential drive.
 fn diff_robot() -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/diff_robot.toml").to_str().unwrap().to_string()
+    test_data("diff_robot.toml").to_str().unwrap().to_string()
 }
 
 /// Simulated runs of `robot` (a robot.toml path, or `apr02`) with the sensor mounted at 0.2 m, 0, 5°.
@@ -246,13 +242,6 @@ fn plan_umbmark_writes_the_table_to_fill_in() {
     assert!(err.ends_with("ends.csv: line 2, column x_mm: \"\" is not a finite number"), "{err}");
 }
 
-/// The real OptiOdom logs `optiodom-<robot>-square`, found by build.rs (the tests that use them are ignored
-/// when they are not here).
-fn shared(robot: &str, set: &str) -> String {
-    let data = option_env!("OMNICAL_SHARED_DATA").unwrap_or("");
-    Path::new(data).join(format!("optiodom-{robot}-square")).join(set).to_str().unwrap().to_string()
-}
-
 /// Eq. 6 of `model` on `held` (motion capture, whole runs).
 fn held_out_cost(model: &str, held: &[String], dir: &Path) -> f64 {
     let args: Vec<&str> = ["eval", "--model", model].into_iter().chain(held.iter().map(String::as_str)).collect();
@@ -267,8 +256,8 @@ fn held_out_cost(model: &str, held: &[String], dir: &Path) -> f64 {
 fn real_diff_drive_from_windows_agrees_with_motion_capture() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
-    let train = shared("diff", "230620202042");
-    let held: Vec<String> = ["230620202144", "231220200029", "231220200040"].map(|s| shared("diff", s)).to_vec();
+    let train = shared_set("diff", "230620202042");
+    let held: Vec<String> = ["230620202144", "231220200029", "231220200040"].map(|s| shared_set("diff", s)).to_vec();
     let (whole, _) = json(&["train", &train, "--effect", "sensor_offset_yaw", "--out", "whole.toml"], d);
     let (windows, stderr) = json(&["train", &train, "--gt-kind", "relative", "--out", "windows.toml"], d);
     assert!(stderr.contains("relative reference: 6 runs cut into 138 windows"), "{stderr}");

@@ -5,31 +5,25 @@
 //! requirements-dev.txt); without it that test is reported as ignored, with the reason (build.rs).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use omni_cli::dataset::{self, LoadOptions};
 use omni_kin::odometry::{self, Selection};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 use std::sync::OnceLock;
-
-fn omnical(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir).output().expect("run omnical")
-}
-
-fn ok(out: &Output) -> String {
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout.clone()).unwrap()
-}
+use support::{ok, omnical, shared_data, stderr, stdout, succeeded};
 
 /// A small simulated robot with a 60 ms wheel-clock lag, and the matrix fitted to it (shared by the tests).
 fn fitted() -> &'static (tempfile::TempDir, PathBuf) {
     static DATA: OnceLock<(tempfile::TempDir, PathBuf)> = OnceLock::new();
     DATA.get_or_init(|| {
         let dir = tempfile::tempdir().unwrap();
-        ok(&omnical(
+        ok(
             &["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "6", "--effect", "time_offset=0.06"],
             dir.path(),
-        ));
-        ok(&omnical(&["train", "sim/train", "--out", "fit.toml", "-q"], dir.path()));
+        );
+        ok(&["train", "sim/train", "--out", "fit.toml", "-q"], dir.path());
         let root = dir.path().to_path_buf();
         (dir, root)
     })
@@ -46,7 +40,7 @@ fn report_shows_every_figure_and_the_error_falling_with_the_hidden_effect() {
     let (_keep, root) = fitted();
     // The page's folder must exist (checked before the work); the PNG folder is made.
     std::fs::create_dir_all(root.join("out")).unwrap();
-    let out = omnical(
+    let stdout = ok(
         &[
             "report",
             "--model",
@@ -61,7 +55,6 @@ fn report_shows_every_figure_and_the_error_falling_with_the_hidden_effect() {
         ],
         root,
     );
-    let stdout = ok(&out);
     let design = held_out_path(&stdout, "design");
     let matrix = held_out_path(&stdout, "fitted matrix");
     let with_effect = held_out_path(&stdout, "fitted matrix + time_offset");
@@ -102,8 +95,7 @@ fn report_shows_every_figure_and_the_error_falling_with_the_hidden_effect() {
 #[test]
 fn diagnose_ranking_shows_numbers_or_a_reason_never_nan() {
     let (_keep, root) = fitted();
-    let out = omnical(&["diagnose", "--model", "fit.toml", "sim/train", "--validate", "sim/validation"], root);
-    let stdout = ok(&out);
+    let stdout = ok(&["diagnose", "--model", "fit.toml", "sim/train", "--validate", "sim/validation"], root);
     let row = stdout.lines().find(|l| l.trim_start().starts_with("sample_timing ")).unwrap();
     assert_eq!(row.split_whitespace().take(5).collect::<Vec<_>>(), ["sample_timing", "-", "-", "-", "not"], "{row}");
     assert!(row.ends_with("(not identifiable on these runs)"), "{row}");
@@ -115,14 +107,11 @@ fn diagnose_ranking_shows_numbers_or_a_reason_never_nan() {
 #[test]
 #[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn report_without_diagnosis_or_commands_leaves_those_figures_out_and_says_so() {
-    let data = shared_data();
+    let data = shared_data("omni3");
     let dir = tempfile::tempdir().unwrap();
     let set = data.join("221220201934");
-    let out = omnical(
-        &["report", "--model", "design", set.to_str().unwrap(), "--no-diagnose", "--out", "r.html"],
-        dir.path(),
-    );
-    let stdout = ok(&out);
+    let stdout =
+        ok(&["report", "--model", "design", set.to_str().unwrap(), "--no-diagnose", "--out", "r.html"], dir.path());
     assert!(stdout.contains("(4 figures: ladder, overlay-worst, overlay-typical, growth)"), "{stdout}");
     let html = std::fs::read_to_string(dir.path().join("r.html")).unwrap();
     assert!(html.contains("carry no (v, α, ω) command"), "note on missing commands");
@@ -133,18 +122,10 @@ fn report_without_diagnosis_or_commands_leaves_those_figures_out_and_says_so() {
     assert!(stdout.lines().any(|l| l.starts_with("design") && l.trim_end().ends_with("0.18560")), "{stdout}");
 }
 
-/// The real omni3 logs, found by build.rs (the tests that use them are ignored when they are not here).
-fn shared_data() -> PathBuf {
-    // Set with cfg(shared_data), which every caller needs (the tests are ignored without it).
-    let data = option_env!("OMNICAL_SHARED_DATA").unwrap_or("");
-    Path::new(data).join("optiodom-omni3-square")
-}
-
 /// The TUM files of the run `03-r0` in the folder `tum` (one per test: the tests share the fitted model),
 /// and our own position RMS of the calibrated odometry against its ground truth, from the library.
 fn tum_export_and_our_rms(root: &Path, tum: &str) -> f64 {
-    let out = omnical(&["export", "--model", "fit.toml", "sim/validation/03-r0.mcap", "--tum", tum], root);
-    ok(&out);
+    succeeded(&["export", "--model", "fit.toml", "sim/validation/03-r0.mcap", "--tum", tum], root);
     for kind in ["gt", "design", "calibrated"] {
         let text = std::fs::read_to_string(root.join(format!("{tum}/03-r0.{kind}.tum"))).unwrap();
         let rows: Vec<&str> = text.lines().filter(|l| !l.starts_with('#')).collect();
@@ -181,7 +162,8 @@ fn tum_export_agrees_with_evo_ape() {
         .env("MPLBACKEND", "Agg")
         .output()
         .unwrap();
-    let text = ok(&out);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&out);
     let rmse: f64 = text
         .lines()
         .find_map(|l| l.trim().strip_prefix("rmse"))
@@ -196,7 +178,7 @@ fn tum_export_agrees_with_evo_ape() {
 #[test]
 fn mcap_export_adds_the_calibrated_odometry_topic() {
     let (_keep, root) = fitted();
-    ok(&omnical(&["export", "--model", "fit.toml", "sim/validation/07-r0.mcap", "--mcap", "bags"], root));
+    ok(&["export", "--model", "fit.toml", "sim/validation/07-r0.mcap", "--mcap", "bags"], root);
     let bytes = std::fs::read(root.join("bags/07-r0.mcap")).unwrap();
     let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
     let topics: Vec<(&str, &str)> = summary

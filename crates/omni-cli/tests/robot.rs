@@ -3,25 +3,14 @@
 //! without one, and bad files (exit 2, naming the file, line and field).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn omnical(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir).output().expect("run omnical")
-}
-
-fn ok(out: Output) -> Output {
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    out
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
+use support::{omnical, stderr, succeeded};
 
 fn simulate(dir: &Path, out: &str, extra: &[&str]) {
     let base = ["simulate", "--out", out, "--runs-per-command", "1", "--duration", "2", "--seed", "4", "-q"];
-    ok(omnical(&[&base[..], extra].concat(), dir));
+    succeeded(&[&base[..], extra].concat(), dir);
 }
 
 const OMNI4: &str = r#"kind = "omni"
@@ -55,14 +44,14 @@ fn simulated_runs_carry_their_robot_and_it_is_announced() {
     let text = std::fs::read_to_string(d.join("sim/validation/robot.toml")).unwrap();
     assert!(text.starts_with("# The robot these simulated runs were made with"), "{text}");
     assert!(text.contains("angle_deg = 300.0"), "{text}");
-    let found = ok(omnical(&["eval", "sim/validation", "--json"], d));
+    let found = succeeded(&["eval", "sim/validation", "--json"], d);
     assert!(stderr(&found).contains("robot: sim/validation/robot.toml (found beside the data)"), "{}", stderr(&found));
     // The same numbers as naming the paper's robot.
-    let named = ok(omnical(&["eval", "sim/validation", "--json", "--robot", "apr02"], d));
+    let named = succeeded(&["eval", "sim/validation", "--json", "--robot", "apr02"], d);
     assert_eq!(found.stdout, named.stdout);
     assert!(!stderr(&named).contains("robot: "), "a named robot is not announced: {}", stderr(&named));
     // A file given by path.
-    let given = ok(omnical(&["eval", "sim/validation", "--json", "--robot", "sim/train/robot.toml"], d));
+    let given = succeeded(&["eval", "sim/validation", "--json", "--robot", "sim/train/robot.toml"], d);
     assert_eq!(found.stdout, given.stdout);
 }
 
@@ -86,11 +75,11 @@ fn no_robot_no_design() {
         assert!(e.contains("robot.toml") && e.contains("omnical init"), "{e}");
     }
     // A model file carries its design: no robot needed.
-    ok(omnical(&["train", "sim/train", "-q", "--robot", "apr02", "--out", "fit.toml"], d));
-    ok(omnical(&["eval", "--model", "fit.toml", "sim/train"], d));
+    succeeded(&["train", "sim/train", "-q", "--robot", "apr02", "--out", "fit.toml"], d);
+    succeeded(&["eval", "--model", "fit.toml", "sim/train"], d);
     // A robot.toml in the working directory is found.
     std::fs::copy(d.join("sim/validation/robot.toml"), d.join("robot.toml")).unwrap();
-    let out = ok(omnical(&["eval", "sim/train"], d));
+    let out = succeeded(&["eval", "sim/train"], d);
     assert!(stderr(&out).contains("robot: robot.toml (found beside the data)"), "{}", stderr(&out));
 }
 
@@ -102,7 +91,7 @@ fn joint_names_and_a_four_wheel_design_come_from_the_file() {
     simulate(d, "sim4", &["--robot", "omni4.toml", "--truth", "design", "--noise-free"]);
     // The runs were written with the file's joints; eval reads them through the robot.toml beside them and
     // the design (a 3 × 4 matrix from the file) reproduces the noise-free motion.
-    let out = ok(omnical(&["eval", "sim4/validation", "--json"], d));
+    let out = succeeded(&["eval", "sim4/validation", "--json"], d);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let cost = v["cost"].as_f64().unwrap();
     assert!(cost < 2e-3, "Eq. 6 of the design on its own noise-free runs: {cost}");
@@ -128,13 +117,13 @@ fn joint_names_go_into_the_model_file_and_the_exported_config() {
     // Trained around the robot found beside the runs: the matrix model and the geometry model both name
     // their columns after the robot's joints.
     for (kind, file) in [("ik", "fit.toml"), ("geometry", "geo.toml")] {
-        ok(omnical(&["train", "sim4/train", "-q", "--model", kind, "--out", file], d));
+        succeeded(&["train", "sim4/train", "-q", "--model", kind, "--out", file], d);
         let text = std::fs::read_to_string(d.join(file)).unwrap();
         assert!(text.contains(names), "{kind}: {text}");
     }
     // Exported without the robot description (CSV runs, no robot.toml): the wheel order is the model's.
     std::fs::remove_file(d.join("sim4/validation/robot.toml")).unwrap();
-    ok(omnical(&["export", "--model", "fit.toml", "--robot-config", "rc", "sim4/validation", "-q"], d));
+    succeeded(&["export", "--model", "fit.toml", "--robot-config", "rc", "sim4/validation", "-q"], d);
     let yaml = std::fs::read_to_string(d.join("rc/omnical_odometry.yaml")).unwrap();
     assert!(yaml.contains(r#"wheel_names: ["fl", "rl", "rr", "fr"]"#), "{yaml}");
     let header = std::fs::read_to_string(d.join("rc/omnical_odometry.h")).unwrap();
@@ -148,7 +137,7 @@ fn csv_wheel_columns_follow_the_robots_joints() {
     std::fs::write(d.join("omni4.toml"), OMNI4).unwrap();
     simulate(d, "sim4", &["--robot", "omni4.toml", "--truth", "design", "--format", "csv"]);
     let cost = |robot: &str| {
-        let out = ok(omnical(&["eval", "sim4/validation", "--json", "--robot", robot], d));
+        let out = succeeded(&["eval", "sim4/validation", "--json", "--robot", robot], d);
         serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()["path_cost"].as_f64().unwrap()
     };
     let as_written = cost("omni4.toml");
@@ -187,7 +176,7 @@ fn priors_bound_the_parametric_search_and_are_reported() {
     let priors = "[priors]\nradius_std_m = 0.0001\nseparation_std_m = 0.003\n";
     std::fs::write(d.join("sim/train/robot.toml"), format!("{DIFF}{priors}")).unwrap();
     let fit = |extra: &[&str]| {
-        let out = ok(omnical(&[&["train", "sim/train", "-q", "--json"][..], extra].concat(), d));
+        let out = succeeded(&[&["train", "sim/train", "-q", "--json"][..], extra].concat(), d);
         (serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap(), stderr(&out))
     };
     let (v, _) = fit(&["--model", "diff"]);
@@ -202,7 +191,7 @@ fn priors_bound_the_parametric_search_and_are_reported() {
     assert!((fitted - 0.034).abs() < 2e-5, "fitted r_left {fitted}");
     assert!((left["sigmas"].as_f64().unwrap() - 10.0).abs() < 0.2, "{left}");
     assert_eq!(v["outside_box"], serde_json::json!(["r_left"]));
-    let text = ok(omnical(&["train", "sim/train", "-q", "--model", "diff"], d));
+    let text = succeeded(&["train", "sim/train", "-q", "--model", "diff"], d);
     let line =
         String::from_utf8_lossy(&text.stdout).lines().find(|l| l.starts_with("prior r_left")).unwrap().to_string();
     assert!(line.starts_with("prior r_left: design 0.033 ± 0.0001 m (GA box ±3 σ), fitted 0.0340"), "{line}");

@@ -4,26 +4,20 @@
 //! within a stated tolerance for the paper's calibrated APR-02 (Eq. 9).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use omni_cli::dataset::{self, LoadOptions};
 use omni_kin::{FittedModel, IkMatrix, Model, RobotGeometry, Run, RunData, Scheme, StampedPose, Wheel};
 use std::path::Path;
 use std::process::Command;
+use support::{omnical, stderr, stdout, succeeded_on_two_threads};
 use yaml_rust2::{Yaml, YamlLoader};
 
-fn omnical(args: &[&str], dir: &Path) -> String {
-    omnical_with_stderr(args, dir).0
-}
-
-/// Stdout (the results) and stderr (warnings: `-q` keeps them).
+/// `omnical --threads 2 -q ARGS` in `dir`, which must succeed: stdout (the results) and stderr (warnings: `-q`
+/// keeps them).
 fn omnical_with_stderr(args: &[&str], dir: &Path) -> (String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_omnical"))
-        .args(["--threads", "2", "-q"])
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run omnical");
-    assert!(out.status.success(), "omnical {args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    (String::from_utf8(out.stdout).unwrap(), String::from_utf8(out.stderr).unwrap())
+    let out = succeeded_on_two_threads(args, dir);
+    (stdout(&out), stderr(&out))
 }
 
 fn yaml(path: &Path) -> Yaml {
@@ -95,7 +89,7 @@ fn omni_controller_twist(r: f64, big_r: f64, offset: f64, w: [f64; 3]) -> [f64; 
 }
 
 fn simulate_apr02(dir: &Path) {
-    omnical(
+    succeeded_on_two_threads(
         &["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "3", "--format", "csv", "--noise-free"],
         dir,
     );
@@ -134,7 +128,7 @@ fn calibrated_apr02_matrix_header_and_nearest_controller() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
     simulate_apr02(dir);
-    let out = omnical(&["export", "--model", "paper", "--robot-config", "rc", "sim/validation"], dir);
+    let out = omnical_with_stderr(&["export", "--model", "paper", "--robot-config", "rc", "sim/validation"], dir).0;
     let rc = dir.join("rc");
     let eq9 = IkMatrix::paper_calibrated();
     let written = written_matrix(&rc);
@@ -336,7 +330,7 @@ fn mecanum_controller_reproduces_a_mecanum_base_with_its_own_joint_order() {
     let fitted = FittedModel::nominal(Model::geometry(g));
     write_runs(&dir.join("runs"), &fitted, &names);
     write_model(&dir.join("mecanum.toml"), &fitted);
-    let out = omnical(&["export", "--model", "mecanum.toml", "--robot-config", "rc", "runs"], dir);
+    let out = omnical_with_stderr(&["export", "--model", "mecanum.toml", "--robot-config", "rc", "runs"], dir).0;
     let rc = dir.join("rc");
     assert_close(written_matrix(&rc).entries(), fitted.ik().unwrap().entries(), 1e-15, "matrix");
     let y = yaml(&rc.join("ros2_controllers.yaml"));
@@ -355,11 +349,10 @@ fn a_controller_that_cannot_drive_the_base_is_refused() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
     simulate_apr02(dir);
-    let out = Command::new(env!("CARGO_BIN_EXE_omnical"))
-        .args(["export", "--model", "paper", "--robot-config", "rc", "--controller", "mecanum", "sim/validation"])
-        .current_dir(dir)
-        .output()
-        .unwrap();
+    let out = omnical(
+        &["export", "--model", "paper", "--robot-config", "rc", "--controller", "mecanum", "sim/validation"],
+        dir,
+    );
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("mecanum_drive_controller") && err.contains("cannot drive a base with 3 wheels"), "{err}");

@@ -10,29 +10,11 @@
 //! 75 % of the design's.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn omnical(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir).output().expect("run omnical")
-}
-
-fn ok(args: &[&str], dir: &Path) -> Output {
-    let out = omnical(args, dir);
-    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    out
-}
-
-fn json(args: &[&str], dir: &Path) -> Value {
-    serde_json::from_slice(&ok(args, dir).stdout).unwrap()
-}
-
-fn param(s: &Value, name: &str) -> f64 {
-    s["params"].as_array().unwrap().iter().find(|p| p["name"] == name).unwrap_or_else(|| panic!("{name}: {s}"))["value"]
-        .as_f64()
-        .unwrap()
-}
+use support::{json, omnical, param, succeeded};
 
 /// Relative error of `got` against `want`.
 fn rel(got: f64, want: f64) -> f64 {
@@ -74,7 +56,7 @@ fn simulate(dir: &Path, robot: &str, reps: &str, deviations: &[&str]) -> Value {
     for d in deviations.iter().copied().chain([lag.as_str()]) {
         args.extend(["--effect", d]);
     }
-    ok(&args, dir);
+    succeeded(&args, dir);
     // The runs carry their robot: no --robot from here on.
     assert!(dir.join("sim/train/robot.toml").exists() && dir.join("sim/validation/robot.toml").exists());
     serde_json::from_str(&std::fs::read_to_string(dir.join("sim/truth.json")).unwrap()).unwrap()
@@ -122,7 +104,7 @@ fn matrix_fit_recovers_the_truth(dir: &Path, truth: &Value, forward: &[[f64; 3]]
 
 /// `diagnose` of the matrix fitted without the lag finds the hidden time_offset and its size.
 fn diagnose_finds_the_hidden_lag(dir: &Path) {
-    ok(&["train", "sim/train", "--out", "bare.toml", "-q"], dir);
+    succeeded(&["train", "sim/train", "--out", "bare.toml", "-q"], dir);
     let d = json(&["diagnose", "--model", "bare.toml", "sim/train", "--validate", "sim/validation", "--json"], dir);
     assert_eq!(d["verdict"], "time_offset", "{}", d["verdict_text"]);
     let top = &d["ranking"][0];
@@ -137,7 +119,10 @@ fn plan_and_report(dir: &Path, n_wheels: usize) -> Value {
     assert!(!plan["plan"]["runs"].as_array().unwrap().is_empty(), "{plan}");
     let m = plan["plan"]["expected"]["params"].as_array().unwrap().len();
     assert_eq!(m, if n_wheels == 2 { 4 } else { 3 * n_wheels }, "{plan}");
-    ok(&["report", "--model", "ik.toml", "sim/train", "--validate", "sim/validation", "--out", "r.html", "-q"], dir);
+    succeeded(
+        &["report", "--model", "ik.toml", "sim/train", "--validate", "sim/validation", "--out", "r.html", "-q"],
+        dir,
+    );
     let html = std::fs::read_to_string(dir.join("r.html")).unwrap();
     assert!(html.contains("<svg") && html.contains("time_offset"), "report");
     plan
@@ -276,7 +261,7 @@ fn demo_runs_on_a_robot_file() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
     std::fs::write(d.join("diff.toml"), DIFF).unwrap();
-    let out = ok(&["demo", "--robot", "diff.toml", "--out", "demo", "--runs-per-command", "1", "-q"], d);
+    let out = succeeded(&["demo", "--robot", "diff.toml", "--out", "demo", "--runs-per-command", "1", "-q"], d);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
         text.contains(
@@ -328,7 +313,10 @@ fn what_a_robot_cannot_do_is_refused() {
     assert!(!d.join("x").exists(), "nothing written");
     // A planned command list that the base can drive is simulated, each row its repetitions times.
     std::fs::write(d.join("plan.csv"), "v_m_s,alpha_deg,omega_rad_s,repetitions\n0.2,0,0.35,1\n0.2,180,0,2\n").unwrap();
-    ok(&[&base[..], &["--commands", "plan.csv", "--runs-per-command", "1", "--duration", "2", "-q"]].concat(), d);
+    succeeded(
+        &[&base[..], &["--commands", "plan.csv", "--runs-per-command", "1", "--duration", "2", "-q"]].concat(),
+        d,
+    );
     let truth: Value = serde_json::from_str(&std::fs::read_to_string(d.join("x/truth.json")).unwrap()).unwrap();
     assert_eq!(truth["splits"]["train"]["runs"], 3);
 }

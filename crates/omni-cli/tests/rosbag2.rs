@@ -8,23 +8,22 @@
 //! are reported as ignored with the reason (build.rs). `bash scripts/test.sh` installs them.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test code: a failed unwrap is a failed test
 
+mod support;
+
 use omni_cli::dataset::mcap::{McapOptions, McapRead, read_file};
 use omni_cli::dataset::{self, LoadOptions, rosbag2};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::sync::OnceLock;
+use support::{expected_json, made_by_python, omnical_command, stderr, stdout};
 
 /// The recordings and their expected values.
 fn fixtures() -> &'static (PathBuf, Value) {
     static FIXTURES: OnceLock<(PathBuf, Value)> = OnceLock::new();
     FIXTURES.get_or_init(|| {
         let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("rosbag2_recordings");
-        let python = std::env::var("OMNICAL_PYTHON").unwrap_or_else(|_| "python3".into());
-        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/rosbag2/make_recordings.py");
-        let out = Command::new(python).arg(script).arg(&dir).output().unwrap();
-        assert!(out.status.success(), "make_recordings.py failed: {}", String::from_utf8_lossy(&out.stderr));
-        let expected = serde_json::from_str(&std::fs::read_to_string(dir.join("expected.json")).unwrap()).unwrap();
+        let dir = made_by_python("rosbag2/make_recordings.py", dir);
+        let expected = expected_json(&dir);
         (dir, expected)
     })
 }
@@ -87,13 +86,11 @@ fn a_folder_of_recordings_reads_each_in_name_order() {
     assert_eq!(ds.runs[0].wheel_rad_s(), reference(dir, &split(None)).runs[0].wheel_rad_s());
 }
 
-fn omnical(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).env("RUST_BACKTRACE", "0").output().unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+/// `omnical ARGS` in the package's folder (as `cargo test` runs it), without backtraces: exit status, stdout,
+/// stderr.
+fn exit_code_and_output(args: &[&str]) -> (i32, String, String) {
+    let out = omnical_command(args, Path::new(env!("CARGO_MANIFEST_DIR"))).env("RUST_BACKTRACE", "0").output().unwrap();
+    (out.status.code().unwrap_or(-1), stdout(&out), stderr(&out))
 }
 
 #[test]
@@ -104,7 +101,7 @@ fn omnical(args: &[&str]) -> (i32, String, String) {
 fn eval_gives_the_same_costs_from_mcap_and_db3() {
     let (dir, _) = fixtures();
     let eval = |input: &Path| {
-        let (code, out, err) = omnical(&[
+        let (code, out, err) = exit_code_and_output(&[
             "eval",
             input.to_str().unwrap(),
             "--robot",
@@ -128,7 +125,8 @@ fn eval_gives_the_same_costs_from_mcap_and_db3() {
 
 /// The error of `omnical eval INPUT`: exit status 2 and the message.
 fn error(input: &Path) -> String {
-    let (code, _, err) = omnical(&["eval", input.to_str().unwrap(), "--robot", "apr02", "--model", "paper"]);
+    let (code, _, err) =
+        exit_code_and_output(&["eval", input.to_str().unwrap(), "--robot", "apr02", "--model", "paper"]);
     assert_eq!(code, 2, "{err}");
     assert!(!err.contains("panicked"), "{err}");
     err.trim_end().to_string()
@@ -180,7 +178,7 @@ fn eval_json(dir: &Path, args: &[&str]) -> Value {
     let input = dir.join("nogt/rec");
     let mut all = vec!["eval", input.to_str().unwrap(), "--robot", "apr02", "--model", "paper", "--json"];
     all.extend_from_slice(args);
-    let (code, out, err) = omnical(&all);
+    let (code, out, err) = exit_code_and_output(&all);
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("clock offset"), "{err}");
     serde_json::from_str(&out).unwrap()
@@ -233,7 +231,7 @@ fn exports_keep_the_recordings_time_base() {
     let work = tempfile::tempdir().unwrap();
     let w = work.path();
     let rec = dir.join("db3/rec");
-    let (code, _, err) = omnical(&[
+    let (code, _, err) = exit_code_and_output(&[
         "export",
         rec.to_str().unwrap(),
         "--robot",
@@ -299,7 +297,7 @@ fn a_recording_too_sparse_to_align_takes_the_clock_of_the_others() {
             .map(String::from)
             .to_vec()
     };
-    let out = Command::new(env!("CARGO_BIN_EXE_omnical")).args(args("mocap")).current_dir(w).output().unwrap();
+    let out = omnical_command(args("mocap"), w).output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(0), "{err}");
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
@@ -326,8 +324,15 @@ fn a_recording_too_sparse_to_align_takes_the_clock_of_the_others() {
 )]
 fn bag_and_tum_give_the_costs_of_the_bag_with_its_topic() {
     let (dir, _) = fixtures();
-    let (code, out, err) =
-        omnical(&["eval", dir.join("db3/rec").to_str().unwrap(), "--robot", "apr02", "--model", "paper", "--json"]);
+    let (code, out, err) = exit_code_and_output(&[
+        "eval",
+        dir.join("db3/rec").to_str().unwrap(),
+        "--robot",
+        "apr02",
+        "--model",
+        "paper",
+        "--json",
+    ]);
     assert_eq!(code, 0, "{err}");
     let want: Value = serde_json::from_str(&out).unwrap();
     // The same clock, forced: exactly the poses of the topic (TUM stamps are read as exact decimals).
@@ -369,7 +374,7 @@ fn bag_and_tum_give_the_costs_of_the_bag_with_its_topic() {
     std::fs::remove_file(takes.join("take_001.tum")).unwrap();
     let input = dir.join("nogt/rec");
     let (code, _, err) =
-        omnical(&["eval", input.to_str().unwrap(), "--robot", "apr02", "--gt", takes.to_str().unwrap()]);
+        exit_code_and_output(&["eval", input.to_str().unwrap(), "--robot", "apr02", "--gt", takes.to_str().unwrap()]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("none covers half of its span"), "{err}");
     assert!(err.contains("(files: take_002.tum "), "{err}");
@@ -390,7 +395,7 @@ fn bad_ground_truth_files_exit_2_naming_the_file_and_row() {
         let mut args = vec!["eval", rec.to_str().unwrap(), "--robot", "apr02", "--model", "paper", "--gt"];
         args.push(gt.to_str().unwrap());
         args.extend_from_slice(extra);
-        let (code, _, err) = omnical(&args);
+        let (code, _, err) = exit_code_and_output(&args);
         assert_eq!(code, 2, "{err}");
         err.trim_end().replace(&format!("{}/", bad.display()), "")
     };
@@ -411,7 +416,7 @@ fn bad_ground_truth_files_exit_2_naming_the_file_and_row() {
     );
     assert!(e.ends_with("no ground-truth pose lies within the wheel data"), "{e}");
     // A recording without a ground-truth topic and no --gt names what is missing.
-    let (code, _, err) = omnical(&["eval", rec.to_str().unwrap(), "--robot", "apr02", "--model", "paper"]);
+    let (code, _, err) = exit_code_and_output(&["eval", rec.to_str().unwrap(), "--robot", "apr02", "--model", "paper"]);
     assert_eq!(code, 2);
     assert!(err.contains("no ground truth"), "{err}");
 }
@@ -461,7 +466,7 @@ fn parallel_loading_gives_the_serial_order_and_results() {
 fn init(input: &Path, out: &Path, extra: &[&str]) -> (i32, String, String) {
     let mut args = vec!["init", input.to_str().unwrap(), "--out", out.to_str().unwrap(), "--force"];
     args.extend_from_slice(extra);
-    omnical(&args)
+    exit_code_and_output(&args)
 }
 
 #[test]

@@ -4,21 +4,15 @@
 //! measured and a trained model's is lower.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
+use support::{ok, omnical, shared_data};
 
-fn omnical(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_omnical")).args(args).current_dir(dir).output().expect("run omnical")
-}
-
-fn ok(args: &[&str], dir: &Path) -> String {
-    let out = omnical(args, dir);
-    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout).unwrap()
-}
-
+/// `omnical ARGS --json` in `dir`, which must succeed: the document.
 fn json(args: &[&str], dir: &Path) -> serde_json::Value {
-    serde_json::from_str(&ok(&[args, &["--json"]].concat(), dir)).unwrap()
+    support::json(&[args, &["--json"]].concat(), dir)
 }
 
 fn simulate(dir: &Path, duration_s: &str) {
@@ -149,7 +143,7 @@ print(len(rpe.error), repr(out[0]), repr(out[1]))
 #[test]
 #[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
 fn real_square_runs_drift_less_after_training() {
-    let data = Path::new(option_env!("OMNICAL_SHARED_DATA").unwrap_or("")).join("optiodom-omni3-square");
+    let data = shared_data("omni3");
     let (train, held_out) = (data.join("221220201934"), data.join("221220201953"));
     let (train, held_out) = (train.to_str().unwrap(), held_out.to_str().unwrap());
     let tmp = tempfile::tempdir().unwrap();

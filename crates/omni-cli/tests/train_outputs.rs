@@ -2,20 +2,16 @@
 //! and Ctrl-C (SIGINT) that stops early, prints the best model so far, writes it whole and exits 130.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod support;
+
 use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-
-fn omnical(dir: &Path, args: &[&str]) -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_omnical"));
-    c.args(args).current_dir(dir);
-    c
-}
+use support::{entries, omnical_command, succeeded};
 
 fn simulate(dir: &Path, runs_per_command: &str, duration_s: &str) {
-    let out = omnical(
-        dir,
+    succeeded(
         &[
             "simulate",
             "--out",
@@ -27,18 +23,8 @@ fn simulate(dir: &Path, runs_per_command: &str, duration_s: &str) {
             "--duration",
             duration_s,
         ],
-    )
-    .output()
-    .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-}
-
-/// The files of a folder, sorted.
-fn listing(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> =
-        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    v.sort();
-    v
+        dir,
+    );
 }
 
 #[test]
@@ -46,7 +32,7 @@ fn same_seed_same_model_file_bytes_across_threads_and_runs() {
     let dir = tempfile::tempdir().unwrap();
     simulate(dir.path(), "1", "3");
     let train = |threads: &str, out: &str| {
-        let o = omnical(dir.path(), &["train", "sim/train", "--seed", "11", "--quiet", "--out", out])
+        let o = omnical_command(["train", "sim/train", "--seed", "11", "--quiet", "--out", out], dir.path())
             .env("RAYON_NUM_THREADS", threads)
             .output()
             .unwrap();
@@ -60,7 +46,7 @@ fn same_seed_same_model_file_bytes_across_threads_and_runs() {
     assert!(one == two, "1 and 2 threads give different model files");
     assert!(two == again, "two runs with 2 threads give different model files");
     // A different seed is a different search (so the comparison above can fail).
-    let other = omnical(dir.path(), &["train", "sim/train", "--seed", "12", "--quiet", "--out", "other.toml"])
+    let other = omnical_command(["train", "sim/train", "--seed", "12", "--quiet", "--out", "other.toml"], dir.path())
         .output()
         .unwrap();
     assert!(other.status.success());
@@ -74,9 +60,9 @@ fn ctrl_c_stops_training_and_keeps_the_best_model() {
     // minute here: the interrupt always lands inside the GA.
     simulate(dir.path(), "1", "10");
     let started = Instant::now();
-    let mut child = omnical(
+    let mut child = omnical_command(
+        ["train", "sim/train", "--preset", "paper", "--effect", "time_offset", "--out", "model.toml"],
         dir.path(),
-        &["train", "sim/train", "--preset", "paper", "--effect", "time_offset", "--out", "model.toml"],
     )
     .stdout(Stdio::piped())
     .stderr(Stdio::piped())
@@ -107,7 +93,7 @@ fn ctrl_c_stops_training_and_keeps_the_best_model() {
     // The model file is whole (it reads back and says it was interrupted), and no temporary file is left.
     let text = std::fs::read_to_string(dir.path().join("model.toml")).unwrap();
     assert!(text.contains("interrupted = true"), "{text}");
-    let eval = omnical(dir.path(), &["eval", "--model", "model.toml", "sim/train"]).output().unwrap();
+    let eval = omnical_command(["eval", "--model", "model.toml", "sim/train"], dir.path()).output().unwrap();
     assert!(eval.status.success(), "{}", String::from_utf8_lossy(&eval.stderr));
-    assert_eq!(listing(dir.path()), ["model.toml", "sim"]);
+    assert_eq!(entries(dir.path()), ["model.toml", "sim"]);
 }

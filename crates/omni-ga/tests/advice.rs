@@ -11,10 +11,9 @@ use omni_ga::diagnose::{DiagnoseOptions, diagnose};
 use omni_ga::explore::{ExploreOptions, FamilyStatus, explore};
 use omni_ga::observe::NoopObserver;
 use omni_kin::effect::{Family, Learned};
-use omni_kin::simulate::{SimConfig, flower_commands, simulate};
-use omni_kin::{CostKind, EffectKind, FittedModel, IkMatrix, Model, Run};
+use omni_kin::{EffectKind, FittedModel, IkMatrix, Model, Run};
 use std::sync::Arc;
-use support::{HeadingDrift, design};
+use support::{HeadingDrift, design, flower_train_and_held_out, held_out_cost};
 
 /// The paper's calibrated matrix with `effect` at `params`.
 fn truth_with(effect: EffectKind, params: &[f64]) -> FittedModel {
@@ -25,27 +24,10 @@ fn truth_with(effect: EffectKind, params: &[f64]) -> FittedModel {
     FittedModel::new(m, p).unwrap()
 }
 
-/// Training (seed 1) and held-out (seed 2) runs of `truth`: half the flower, 6 s per command.
-fn data(truth: &FittedModel) -> (Vec<Run>, Vec<Run>) {
-    let commands: Vec<_> = flower_commands().into_iter().step_by(2).collect();
-    let cfg = |seed| SimConfig {
-        commands: commands.clone(),
-        runs_per_command: 1,
-        duration_s: 6.0,
-        seed,
-        ..SimConfig::default()
-    };
-    (simulate(&cfg(1), truth, "train/").unwrap(), simulate(&cfg(2), truth, "val/").unwrap())
-}
-
 /// `omnical train RUNS [--effect E]…` from the design: the default preset, seed 0.
 fn train(effects: &[EffectKind], runs: &[Run]) -> Calibration {
     let plan = Plan::preset(Preset::Default, 9).seed(0);
     calibrate_with_effects(&design(), effects, runs, &plan, &mut NoopObserver).unwrap()
-}
-
-fn held_out_cost(m: &FittedModel, runs: &[Run]) -> f64 {
-    omni_kin::cost::cost(&m.model, &m.params, runs, CostKind::PATH).unwrap()
 }
 
 /// `a` and `b` equal to `rel` of the larger (exactly, when both are 0).
@@ -58,7 +40,7 @@ fn assert_close(a: &[f64], b: &[f64], rel: f64, what: &str) {
 
 #[test]
 fn following_explores_advice_with_train_delivers_the_predicted_gain() {
-    let (train_runs, val) = data(&truth_with(EffectKind::Custom(Arc::new(HeadingDrift)), &[0.02]));
+    let (train_runs, val) = flower_train_and_held_out(&truth_with(EffectKind::Custom(Arc::new(HeadingDrift)), &[0.02]));
     let base = train(&[], &train_runs).fitted;
     let e = explore(&base, &train_runs, &val, &ExploreOptions::default()).unwrap();
     let summary = omni_ga::science::text::exploration(&e);
@@ -92,7 +74,8 @@ fn following_explores_advice_with_train_delivers_the_predicted_gain() {
 
 #[test]
 fn diagnose_reports_the_effect_values_train_fits() {
-    let (train_runs, val) = data(&truth_with(EffectKind::from_id("time_offset", 3).unwrap(), &[0.04]));
+    let (train_runs, val) =
+        flower_train_and_held_out(&truth_with(EffectKind::from_id("time_offset", 3).unwrap(), &[0.04]));
     let base = train(&[], &train_runs).fitted;
     let opts = DiagnoseOptions {
         candidates: vec!["time_offset".into(), "wheel_asymmetry".into()],

@@ -7,10 +7,9 @@
 mod support;
 use omni_ga::explore::{Exploration, ExploreOptions, explore};
 use omni_kin::effect::{Effect, Family, ParamSpec, Stage, TwistAt, WheelContext, learned::moving};
-use omni_kin::simulate::{SimConfig, flower_commands, simulate};
-use omni_kin::{CostKind, EffectKind, FittedModel, Run, Twist2};
+use omni_kin::{EffectKind, FittedModel, Twist2};
 use std::sync::Arc;
-use support::{HeadingDrift, design};
+use support::{HeadingDrift, design, flower_train_and_held_out, held_out_cost};
 
 /// A constant world-frame velocity while moving (a tilted floor). m/s.
 #[derive(Debug)]
@@ -69,19 +68,6 @@ impl Effect for OvalWheel {
     }
 }
 
-/// Training (seed 1) and held-out (seed 2) runs of `truth`: half the flower, 6 s per command.
-fn data(truth: &FittedModel) -> (Vec<Run>, Vec<Run>) {
-    let commands: Vec<_> = flower_commands().into_iter().step_by(2).collect();
-    let cfg = |seed| SimConfig {
-        commands: commands.clone(),
-        runs_per_command: 1,
-        duration_s: 6.0,
-        seed,
-        ..SimConfig::default()
-    };
-    (simulate(&cfg(1), truth, "train/").unwrap(), simulate(&cfg(2), truth, "val/").unwrap())
-}
-
 /// The design base with a custom effect at `params`.
 fn truth_with(effect: Arc<dyn Effect>, params: &[f64]) -> FittedModel {
     let m = design().model.with_effect(EffectKind::Custom(effect));
@@ -91,14 +77,10 @@ fn truth_with(effect: Arc<dyn Effect>, params: &[f64]) -> FittedModel {
     FittedModel::new(m, p).unwrap()
 }
 
-fn held_out_cost(m: &FittedModel, runs: &[Run]) -> f64 {
-    omni_kin::cost::cost(&m.model, &m.params, runs, CostKind::PATH).unwrap()
-}
-
 /// Explores, checks that `family` is the best and passes, and that its fitted model's held-out cost is
 /// within 10 % of the true model's.
 fn found(truth: &FittedModel, family: Family) -> Exploration {
-    let (train, val) = data(truth);
+    let (train, val) = flower_train_and_held_out(truth);
     let e = explore(&design(), &train, &val, &ExploreOptions::default()).unwrap();
     let summary: Vec<String> = omni_ga::science::text::exploration(&e);
     let best = e.best().unwrap_or_else(|| panic!("no family passes: {summary:#?}"));
@@ -167,7 +149,7 @@ fn a_heading_drift_growing_with_speed_is_found_by_the_body_family() {
 
 #[test]
 fn on_clean_data_no_family_passes() {
-    let (train, val) = data(&design());
+    let (train, val) = flower_train_and_held_out(&design());
     let e = explore(&design(), &train, &val, &ExploreOptions::default()).unwrap();
     let summary = omni_ga::science::text::exploration(&e);
     assert!(e.best().is_none(), "{summary:#?}");

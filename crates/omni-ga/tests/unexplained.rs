@@ -4,35 +4,13 @@
 //! noise-floor ratio decides, and says so).
 #![allow(clippy::unwrap_used)] // test code: a failed unwrap is a failed test
 
+mod support;
+
 use omni_ga::diagnose::{DecidedBy, DiagnoseOptions, Diagnosis, diagnose};
-use omni_kin::effect::{Effect, ParamSpec, Stage};
-use omni_kin::pose::Twist2;
 use omni_kin::simulate::{SimConfig, flower_commands, simulate};
 use omni_kin::{EffectKind, FittedModel, IkMatrix, Model, Run};
 use std::sync::Arc;
-
-/// Outside the catalogue: the heading drifts in proportion to the travel speed, `ω' = ω + k |v|` (a
-/// steering bias of the floor or the chassis). `k` in rad/m.
-#[derive(Debug)]
-struct HeadingDriftWithSpeed;
-
-impl Effect for HeadingDriftWithSpeed {
-    fn id(&self) -> &str {
-        "heading_drift_with_speed"
-    }
-    fn describe(&self) -> String {
-        "the heading drifts in proportion to the travel speed".into()
-    }
-    fn stage(&self) -> Stage {
-        Stage::Twist
-    }
-    fn params(&self) -> Vec<ParamSpec> {
-        vec![ParamSpec::new("k_rad_m", "rad/m", 0.0, -1.0, 1.0)]
-    }
-    fn twist(&self, p: &[f64], t: Twist2, _w: &[f64]) -> Twist2 {
-        Twist2 { omega_rad_s: t.omega_rad_s + p[0] * t.vx_m_s.hypot(t.vy_m_s), ..t }
-    }
-}
+use support::HeadingDrift;
 
 /// The true base (the paper's calibrated APR-02), the model diagnosed.
 fn base() -> FittedModel {
@@ -78,7 +56,7 @@ fn clean_data_leaves_nothing_unexplained() {
 fn an_uncatalogued_effect_below_three_times_the_noise_floor_is_found_by_the_repeats() {
     // 0.1 rad of heading per metre travelled: wheel_asymmetry takes part of it (the verdict), the rest
     // stays 2× the noise floor, where a ratio test (3×) would call it noise.
-    let truth = truth_with(EffectKind::Custom(Arc::new(HeadingDriftWithSpeed)), &[0.1]);
+    let truth = truth_with(EffectKind::Custom(Arc::new(HeadingDrift)), &[0.1]);
     for seed in [7, 8] {
         let d = diagnosis(&runs(&truth, 4, seed), omni_kin::effect::CATALOGUE);
         let e = &d.unexplained_evidence;
