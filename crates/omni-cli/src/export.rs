@@ -55,7 +55,11 @@ pub fn write_mcap(
         None if run.wheel_t_s().first().is_some_and(|&t| t < 0.0) => crate::dataset::mcap::SIM_EPOCH_S,
         None => 0,
     };
-    let log_ns = |t_s: f64| u64::try_from(origin_s * 1_000_000_000 + (t_s * 1e9).round() as i64).unwrap_or(0);
+    // The run's span in log time (ns), saturating: stamps the bag cannot hold are refused by the writer.
+    let log_ns = |t_s: f64| {
+        let ns = origin_s.saturating_mul(1_000_000_000).saturating_add((t_s * 1e9).round() as i64);
+        u64::try_from(ns).unwrap_or(0)
+    };
     let t = run.wheel_t_s();
     let span = (log_ns(t[0]), log_ns(t[t.len() - 1]));
     let opts = WriteOptions {
