@@ -194,6 +194,27 @@ fn odometry_only_recordings_calibrate_the_controllers_parameters() {
         ),
         "{err}"
     );
+
+    // With the JointState there, the odometry is taken when named: the same radii within 0.2 %.
+    let named = recordings().join("bag-odom");
+    let _ = std::fs::remove_dir_all(&named);
+    for s in ["session_01", "session_02", "session_03"] {
+        copy_dir(&recordings().join("bag").join(s), &named.join(s));
+    }
+    let err = recipe("bag-odom", &["--joints-topic", "/odom"]);
+    assert!(err.contains("the wheel speeds are recovered from topic \"/odom\""), "{err}");
+    // A JointState topic without the described wheels points at the odometry.
+    let robot = std::fs::read_to_string(named.join("robot.toml")).unwrap().replace("left_wheel_joint", "lw");
+    std::fs::write(named.join("renamed.toml"), robot).unwrap();
+    let err = refused(&["train", "session_01", "--robot", "renamed.toml"], &named);
+    assert!(
+        err.contains(
+            "wheel joint \"lw\" is missing (names: caster_swivel_joint, left_wheel_joint, right_wheel_joint); if no \
+             JointState topic carries the wheels, the robot's own odometry /odom can stand in through the robot's \
+             design: --joints-topic /odom ([topics] joint_states in robot.toml)"
+        ),
+        "{err}"
+    );
 }
 
 #[test]

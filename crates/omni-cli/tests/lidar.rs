@@ -131,6 +131,22 @@ fn simulate_writes_the_lidar_and_scan_odometry_follows_it_whatever_the_threads()
 }
 
 #[test]
+fn a_sweeping_lidar_writes_its_beam_times_and_its_scans_are_de_skewed() {
+    // --lidar-sweep: each 0.1 s scan's 720 beams are measured one after another (time_increment 1/7200 s);
+    // scan-odometry de-skews every scan it places, and the straight run still travels its 0.8 m.
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let sim = ["simulate", "--runs-per-command", "1", "--duration", "4", "--seed", "3", "-q", "--out", "sim"];
+    ok(&[&sim[..], &["--lidar", "room", "--lidar-mount", "0.2,0,5", "--lidar-sweep"]].concat(), d);
+    let j: serde_json::Value = json(&["scan-odometry", "sim/train/12-r0.mcap", "--json"], d);
+    assert_eq!((j["scans"].as_u64(), j["matched"].as_u64(), j["deskewed"].as_u64()), (Some(49), Some(48), Some(49)));
+    let length = j["segments"][0]["travelled_m"].as_f64().unwrap();
+    assert!((0.7..0.85).contains(&length), "{length}");
+    let text = ok(&["scan-odometry", "sim/train/12-r0.mcap"], d);
+    assert!(text.contains("49 scans de-skewed: their beams are measured over the sweep"), "{text}");
+}
+
+#[test]
 fn a_recording_without_the_scan_topic_names_the_file_and_the_topic() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();

@@ -482,10 +482,13 @@ fn errors_name_file_topic_message_and_field() {
     );
     let r = read(dir, "ambiguous", &McapOptions { truth_topic: Some("/mocap/pose".into()), ..d.clone() }).unwrap();
     assert_eq!(r.runs[0].truth().len(), 21);
-    // The arm's JointState topic has no wheel joints; it fails only when chosen.
+    // The arm's JointState topic has no wheel joints; it fails only when chosen, and points at the robot's
+    // own odometry the bag also holds.
     assert_eq!(
         error(dir, "normal", &McapOptions { joints_topic: Some("/arm/joint_states".into()), ..d.clone() }),
-        "topic \"/arm/joint_states\", message 0: wheel joint \"wheel_a\" is missing (names: shoulder, elbow)"
+        "topic \"/arm/joint_states\", message 0: wheel joint \"wheel_a\" is missing (names: shoulder, elbow); if no \
+         JointState topic carries the wheels, the robot's own odometry /odom can stand in through the robot's \
+         design: --joints-topic /odom ([topics] joint_states in robot.toml)"
     );
 }
 

@@ -131,6 +131,11 @@ pub struct LidarArgs {
     /// Share of beams that return nothing (NaN), at random.
     #[arg(long, value_name = "SHARE", default_value_t = ScanSettings::default().dropout, requires = "lidar")]
     pub lidar_dropout: f64,
+    /// Measure each scan's beams one after another over its period, as a spinning lidar does
+    /// (LaserScan time_increment = 1 / (rate × beams)): a turning robot bends its scans, and readers
+    /// de-skew them. Default: each scan at one instant.
+    #[arg(long, requires = "lidar")]
+    pub lidar_sweep: bool,
 }
 
 /// The simulated IMU (`--imu`): an upright gyro on the base.
@@ -218,6 +223,7 @@ impl LidarArgs {
             range_max_m: self.lidar_max_range,
             range_noise_m: self.lidar_noise,
             dropout: self.lidar_dropout,
+            sweeping: self.lidar_sweep,
             ..ScanSettings::default()
         };
         settings.check().context("--lidar settings")?;

@@ -282,6 +282,14 @@ fn describe_units(units: &WheelData) -> String {
     s
 }
 
+/// How the problem of a message without one of the wheel joints begins.
+const MISSING_WHEEL: &str = "wheel joint ";
+
+/// Whether a JointState topic's problem `what` is a message without one of the wheel joints.
+pub(super) fn is_missing_wheel(what: &str) -> bool {
+    what.starts_with(MISSING_WHEEL)
+}
+
 /// Where each of `wheel_joints` is in `names`, or which is missing.
 fn wheel_index(names: &[RosString], wheel_joints: &[String]) -> Result<Vec<usize>, String> {
     wheel_joints
@@ -289,7 +297,7 @@ fn wheel_index(names: &[RosString], wheel_joints: &[String]) -> Result<Vec<usize
         .map(|joint| {
             names.iter().position(|name| name.0 == *joint).ok_or_else(|| {
                 let names: Vec<&str> = names.iter().map(|s| s.0.as_str()).collect();
-                format!("wheel joint {joint:?} is missing (names: {})", names.join(", "))
+                format!("{MISSING_WHEEL}{joint:?} is missing (names: {})", names.join(", "))
             })
         })
         .collect()

@@ -497,6 +497,30 @@ impl Bag<'_> {
         Ok((topic, poses.stamped(origin_s)))
     }
 
+    /// [`Self::check`] for the wheels' channel `i`: a JointState message without a wheel joint also says
+    /// what else could give the wheels ([`Self::odometry_hint`]).
+    fn check_wheels(&self, i: usize) -> Result<(), DatasetError> {
+        match (&self.channels[i].problem, self.odometry_hint()) {
+            (Some((Some(k), what)), Some(hint)) if joint_state::is_missing_wheel(what) => Err(DatasetError::at(
+                self.path,
+                format!("topic {:?}, message {k}", self.channels[i].topic),
+                format!("{what}; {hint}"),
+            )),
+            _ => self.check(i),
+        }
+    }
+
+    /// What to try when the JointState topic does not carry the wheels and the robot's own odometry is
+    /// recorded: name it as the wheel source.
+    fn odometry_hint(&self) -> Option<String> {
+        let i = self.optional(Channel::is_wheel_odometry, "/odom", "wheel odometry", &mut Vec::new())?;
+        let topic = &self.channels[i].topic;
+        Some(format!(
+            "if no JointState topic carries the wheels, the robot's own odometry {topic} can stand in through the \
+             robot's design: --joints-topic {topic} ([topics] joint_states in robot.toml)"
+        ))
+    }
+
     /// The robot's recorded wheel odometry: `/odom` if it is one, else the only one.
     pub(super) fn recorded_odometry(&self, notes: &mut Vec<String>) -> Option<usize> {
         self.optional(Channel::is_wheel_odometry, "/odom", "recorded odometry", notes)
@@ -1005,17 +1029,19 @@ fn topic_clock(
     Some(clock(a.offset_s, Some(a)))
 }
 
-/// The wheels of JointState content `joints` from `topic`, with notes on what was done to them.
+/// The wheels of JointState content `joints` from `topic`, with notes on what was done to them; `hint`
+/// (another wheel source, [`Bag::odometry_hint`]) is added to the error of a topic without the wheel joints.
 fn joint_wheels(
     path: &Path,
     joints: Content,
     topic: &str,
-    opts: &McapOptions,
+    (opts, hint): (&McapOptions, Option<&str>),
     notes: &mut Vec<String>,
 ) -> Result<Wheels, DatasetError> {
     let Content::Joints(series) = joints else { unreachable!("joints() returns JointState channels") };
     if let Some((k, missing)) = series.no_wheel_message() {
-        return Err(DatasetError::at(path, format!("topic {topic:?}, message {k}"), missing.clone()));
+        let message = hint.map_or_else(|| missing.clone(), |h| format!("{missing}; {h}"));
+        return Err(DatasetError::at(path, format!("topic {topic:?}, message {k}"), message));
     }
     let Some(&first_ns) = series.t_ns.first() else {
         return Err(DatasetError::at(path, topic_location(topic), "has no messages (empty run)"));
@@ -1223,7 +1249,7 @@ pub(crate) fn runs(
 
     let source = bag.joints(opts)?;
     let j = source.channel();
-    bag.check(j)?;
+    bag.check_wheels(j)?;
     let truth_src = match external {
         Some(_) => None,
         None if opts.wheels_only => None,
@@ -1241,7 +1267,10 @@ pub(crate) fn runs(
     // Wheels.
     let joints_topic = bag.channels[j].topic.clone();
     let wheels = match source {
-        WheelSource::Joints(_) => joint_wheels(path, bag.take(j), &joints_topic, opts, &mut notes)?,
+        WheelSource::Joints(_) => {
+            let hint = bag.odometry_hint();
+            joint_wheels(path, bag.take(j), &joints_topic, (opts, hint.as_deref()), &mut notes)?
+        }
         WheelSource::Odometry(_) => odometry_wheels(path, &bag.channels[j].content, &joints_topic, opts, &mut notes)?,
     };
     let origin_s = wheels.t_ns[0].div_euclid(NS_PER_S);
