@@ -1029,22 +1029,17 @@ fn topic_clock(
     Some(clock(a.offset_s, Some(a)))
 }
 
-/// The wheels of JointState content `joints` from `topic`, with notes on what was done to them; `hint`
-/// (another wheel source, [`Bag::odometry_hint`]) is added to the error of a topic without the wheel joints.
-fn joint_wheels(
-    path: &Path,
-    joints: Content,
-    topic: &str,
-    (opts, hint): (&McapOptions, Option<&str>),
-    notes: &mut Vec<String>,
-) -> Result<Wheels, DatasetError> {
-    let Content::Joints(series) = joints else { unreachable!("joints() returns JointState channels") };
+/// The wheels of `bag`'s JointState channel `j` (its content taken), with notes on what was done to them;
+/// a topic without the wheel joints says what else could give them ([`Bag::odometry_hint`]).
+fn joint_wheels(bag: &mut Bag, j: usize, opts: &McapOptions, notes: &mut Vec<String>) -> Result<Wheels, DatasetError> {
+    let (path, topic, hint) = (bag.path, bag.channels[j].topic.clone(), bag.odometry_hint());
+    let Content::Joints(series) = bag.take(j) else { unreachable!("joints() returns JointState channels") };
     if let Some((k, missing)) = series.no_wheel_message() {
         let message = hint.map_or_else(|| missing.clone(), |h| format!("{missing}; {h}"));
         return Err(DatasetError::at(path, format!("topic {topic:?}, message {k}"), message));
     }
     let Some(&first_ns) = series.t_ns.first() else {
-        return Err(DatasetError::at(path, topic_location(topic), "has no messages (empty run)"));
+        return Err(DatasetError::at(path, topic_location(&topic), "has no messages (empty run)"));
     };
     let origin_s = first_ns.div_euclid(NS_PER_S);
     let t_s: Vec<f64> = series.t_ns.iter().map(|&t| seconds_since(t, origin_s)).collect();
@@ -1267,10 +1262,7 @@ pub(crate) fn runs(
     // Wheels.
     let joints_topic = bag.channels[j].topic.clone();
     let wheels = match source {
-        WheelSource::Joints(_) => {
-            let hint = bag.odometry_hint();
-            joint_wheels(path, bag.take(j), &joints_topic, (opts, hint.as_deref()), &mut notes)?
-        }
+        WheelSource::Joints(_) => joint_wheels(&mut bag, j, opts, &mut notes)?,
         WheelSource::Odometry(_) => odometry_wheels(path, &bag.channels[j].content, &joints_topic, opts, &mut notes)?,
     };
     let origin_s = wheels.t_ns[0].div_euclid(NS_PER_S);
