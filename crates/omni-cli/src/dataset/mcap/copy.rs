@@ -44,15 +44,16 @@ pub struct CopiedTopic {
 /// Collects the topics to carry over from a recording (any storage, see [`MessageSink`]).
 #[derive(Debug, Default)]
 pub(crate) struct CopySink {
-    /// Per channel: the topic being collected, `None` for channels not copied.
-    channels: Vec<Option<CopiedTopic>>,
+    /// Per channel: its topic, and what is collected of it (`None` for channels not copied).
+    channels: Vec<(String, Option<CopiedTopic>)>,
     /// Each message is zstd-compressed (rosbag2's per-message mode).
     zstd_messages: bool,
 }
 
 impl MessageSink for CopySink {
     fn channel(&mut self, topic: &str, schema: &str, schema_encoding: &str, message_encoding: &str) -> usize {
-        if let Some(i) = self.channels.iter().position(|c| c.as_ref().is_some_and(|c| c.topic == topic)) {
+        // A topic declared again (in another split file) keeps its first channel, copied or not.
+        if let Some(i) = self.channels.iter().position(|(t, _)| t == topic) {
             return i;
         }
         let ros2 = matches!(schema_encoding, "ros2msg" | "ros2idl") && message_encoding == "cdr";
@@ -62,12 +63,12 @@ impl MessageSink for CopySink {
             schema_text: text,
             messages: Vec::new(),
         });
-        self.channels.push(copied);
+        self.channels.push((topic.to_string(), copied));
         self.channels.len() - 1
     }
 
     fn message(&mut self, i: usize, data: &[u8], log_time_ns: u64) {
-        let Some(Some(c)) = self.channels.get_mut(i) else { return };
+        let Some((_, Some(c))) = self.channels.get_mut(i) else { return };
         let bytes = if self.zstd_messages {
             // A message that does not decompress is left out: the copy is for viewing, not for the fit.
             match zstd::stream::decode_all(data) {
@@ -90,7 +91,7 @@ impl CopySink {
     /// The topics collected, with at least one message each.
     pub(crate) fn finish(self) -> Vec<CopiedTopic> {
         let mut out: Vec<CopiedTopic> =
-            self.channels.into_iter().flatten().filter(|c| !c.messages.is_empty()).collect();
+            self.channels.into_iter().filter_map(|(_, c)| c).filter(|c| !c.messages.is_empty()).collect();
         for c in &mut out {
             c.messages.sort_by_key(|&(t, _)| t);
         }
@@ -131,6 +132,11 @@ mod tests {
         let st = sink.channel("/tf_static", super::super::tf::NAME, "ros2msg", "cdr");
         let js = sink.channel("/joint_states", "sensor_msgs/msg/JointState", "ros2msg", "cdr");
         let ros1 = sink.channel("/cmd_vel", "geometry_msgs/Twist", "ros2msg", "cdr");
+        // Declared again by another split file: the same channels, copied or not.
+        assert_eq!(
+            (sink.channel("/tf", super::super::tf::NAME, "ros2msg", "cdr"), sink.channel("/joint_states", "x", "", "")),
+            (tf, js)
+        );
         for (i, t) in [(st, 5), (tf, 10), (tf, 20), (tf, 30), (js, 20), (ros1, 20)] {
             sink.message(i, &[t as u8], t);
         }

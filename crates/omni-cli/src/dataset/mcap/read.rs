@@ -307,7 +307,7 @@ impl Bag<'_> {
             return Ok(WheelSource::Joints(i));
         }
         if candidates.is_empty() {
-            let odometry = self.optional(Channel::is_wheel_odometry, "/odom", "wheel odometry", &mut Vec::new());
+            let odometry = self.recorded_odometry(&mut Vec::new());
             return match (odometry, &opts.wheels_from_twist) {
                 (Some(i), Some(_)) => Ok(WheelSource::Odometry(i)),
                 (Some(i), None) => Err(DatasetError::file(
@@ -513,7 +513,7 @@ impl Bag<'_> {
     /// What to try when the JointState topic does not carry the wheels and the robot's own odometry is
     /// recorded: name it as the wheel source.
     fn odometry_hint(&self) -> Option<String> {
-        let i = self.optional(Channel::is_wheel_odometry, "/odom", "wheel odometry", &mut Vec::new())?;
+        let i = self.recorded_odometry(&mut Vec::new())?;
         let topic = &self.channels[i].topic;
         Some(format!(
             "if no JointState topic carries the wheels, the robot's own odometry {topic} can stand in through the \
