@@ -46,7 +46,7 @@ pub fn robot_model(kind: KinematicsKind, f: &RobotFile) -> anyhow::Result<Model>
 pub fn default_kind(ds: &Dataset) -> KinematicsKind {
     let two_wheels = match robot_file::design(ds) {
         Some(Design::File(f)) => f.description.kind == omni_kin::BaseKind::Diff,
-        Some(Design::Data(g)) => g.n_wheels() == 2,
+        Some(Design::Data(g)) => !g.is_omnidirectional(),
         None => false,
     };
     if two_wheels { KinematicsKind::Diff } else { KinematicsKind::Ik }
@@ -72,8 +72,7 @@ pub fn geometry(ds: &Dataset) -> anyhow::Result<RobotGeometry> {
 pub fn declared(ds: &Dataset) -> anyhow::Result<Option<FittedModel>> {
     let model = match robot_file::design(ds) {
         Some(Design::File(_)) => model_of(KinematicsKind::Ik, ds)?,
-        Some(Design::Data(g)) if g.n_wheels() == 2 => Some(Model::design(KinematicsKind::Diff, Some(g))?),
-        Some(Design::Data(g)) => Some(Model::geometry(g.clone())),
+        Some(Design::Data(g)) => Some(declared_model(g)?),
         None => None,
     };
     Ok(model.map(FittedModel::nominal))
@@ -153,10 +152,10 @@ pub fn declared_each(sets: &[&Dataset]) -> anyhow::Result<Option<RunModels>> {
     each_run(sets, declared_model, |f| robot_model(KinematicsKind::Ik, f))
 }
 
-/// The design model a declared geometry stands for: a geometry model (a two-wheel base, OptiOdom's diff,
-/// as a diff model: it has no omnidirectional geometry model).
+/// The design model a declared geometry stands for: a geometry model (a base that cannot move sideways,
+/// OptiOdom's diff, as a diff model: it has no omnidirectional geometry model).
 fn declared_model(g: &RobotGeometry) -> anyhow::Result<Model> {
-    Ok(if g.n_wheels() == 2 { Model::design(KinematicsKind::Diff, Some(g))? } else { Model::geometry(g.clone()) })
+    Ok(if g.is_omnidirectional() { Model::geometry(g.clone()) } else { Model::design(KinematicsKind::Diff, Some(g))? })
 }
 
 /// The designs to compare `model` with on the runs of `sets`: each run's own design in `model`'s kinematics

@@ -199,6 +199,13 @@ impl RobotGeometry {
         self.wheels_from_twist().rank(RANK_TOLERANCE)
     }
 
+    /// Whether the wheels drive every planar twist ([`Self::rank`] 3: omni, mecanum); a base that is not
+    /// (a differential drive, two wheels on one axle) cannot move sideways. The kinematics decide, not the
+    /// number of wheels.
+    pub fn is_omnidirectional(&self) -> bool {
+        self.rank() == PLANAR_TWIST_DIMENSIONS
+    }
+
     /// Checks every wheel, the names and that the wheels drive at least `needed` independent twist
     /// directions ([`Self::rank`]); a base type states what it needs (3: every planar twist).
     pub fn validate_for(&self, needed: usize) -> Result<(), KinError> {

@@ -62,15 +62,17 @@ pub fn diff_commands() -> Vec<Command> {
 }
 
 /// The benchmark commands for a robot: the paper's 36 [`flower_commands`] for a base that drives every
-/// planar twist (omni, mecanum), [`diff_commands`] for a two-wheel base (which cannot move sideways).
+/// planar twist (omni, mecanum, [`RobotGeometry::is_omnidirectional`]), [`diff_commands`] for a base that
+/// cannot move sideways (a differential drive).
 pub fn benchmark_commands(design: &RobotGeometry) -> Vec<Command> {
-    if design.n_wheels() == 2 { diff_commands() } else { flower_commands() }
+    if design.is_omnidirectional() { flower_commands() } else { diff_commands() }
 }
 
-/// The twist rank a base of `n_wheels` wheels needs: 2 for two wheels on one axle (a differential
-/// drive drives forward and turns), 3 (every planar twist) otherwise.
+/// The twist rank a simulated base of `n_wheels` wheels needs: 2 for two wheels (they drive at most
+/// forward and turning, as a differential drive does), 3 (every planar twist) for more: a base of three or
+/// more wheels that drives fewer directions is a singular layout (wheels rolling the same way), refused.
 pub fn needed_rank(n_wheels: usize) -> usize {
-    if n_wheels == 2 { 2 } else { crate::geometry::PLANAR_TWIST_DIMENSIONS }
+    if n_wheels <= 2 { 2 } else { crate::geometry::PLANAR_TWIST_DIMENSIONS }
 }
 
 /// The part of each command's twist that the base `design` cannot produce, as a twist error (vx m/s, vy

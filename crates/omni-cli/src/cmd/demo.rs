@@ -16,7 +16,7 @@ use anyhow::Context;
 use omni_ga::calibrate::{Plan, Preset, calibrate};
 use omni_ga::diagnose::{DiagnoseOptions, Diagnosis, diagnose};
 use omni_kin::simulate::{SimConfig, simulate};
-use omni_kin::{FittedModel, IkMatrix, Model, Run};
+use omni_kin::{BaseKind, FittedModel, IkMatrix, Model, Run};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
@@ -85,12 +85,13 @@ fn paper_setup(runs_per_command: usize) -> Setup {
     }
 }
 
-/// How the demo's true robot on a `--robot` deviates from its design: wheel a 1.5 % larger, the last
-/// wheel 1 % smaller, and a two-wheel base's axle 2 % longer (the `simulate --effect` specs).
-pub fn demo_deviations(n_wheels: usize) -> Vec<String> {
+/// How the demo's true robot on a `--robot` of kind `kind` with `n_wheels` wheels deviates from its design:
+/// wheel a 1.5 % larger, the last wheel 1 % smaller, and a differential drive's axle 2 % longer (the
+/// `simulate --effect` specs).
+pub fn demo_deviations(kind: BaseKind, n_wheels: usize) -> Vec<String> {
     let last = char::from(b'a' + ((n_wheels.max(1) - 1) % 26) as u8);
     let mut v = vec!["wheel_radius:a=0.015".to_string(), format!("wheel_radius:{last}=-0.01")];
-    if n_wheels == 2 {
+    if kind == BaseKind::Diff {
         v.push("wheel_separation=0.02".into());
     }
     v
@@ -105,11 +106,12 @@ fn robot_setup(arg: &str, runs_per_command: usize) -> anyhow::Result<Setup> {
     let wheels = robot.description.joints();
     let mut truth = start.clone();
     let mut config = SimConfig { runs_per_command, seed: DEFAULT_SEED, ..SimConfig::for_robot(geometry) };
-    let deviations = demo_deviations(wheels.len());
+    let deviations = demo_deviations(robot.description.kind, wheels.len());
     for spec in &deviations {
         apply_effect_spec(spec, &mut truth, &mut config, &wheels)?;
     }
-    let commands = if wheels.len() == 2 { "12 forward/backward arcs and turns" } else { "36 flower commands" };
+    let commands =
+        if config.design.is_omnidirectional() { "36 flower commands" } else { "12 forward/backward arcs and turns" };
     let mut simulate_args = vec!["--robot".to_string(), arg.to_string(), "--truth".into(), "design".into()];
     simulate_args.extend(deviations.iter().flat_map(|d| ["--effect".to_string(), d.clone()]));
     Ok(Setup {

@@ -114,7 +114,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         let out = a.out.as_ref().map(|p| p.display().to_string());
         return super::print_json("plan", serde_json::json!({"plan": plan, "flower": flower, "out": out}));
     }
-    print_plan(&plan, flower.as_ref(), req, benchmark_name(model.model.n_wheels()));
+    print_plan(&plan, flower.as_ref(), req, benchmark_name(&sim.design));
     if let Some(out) = &a.out {
         println!("plan written to {}", out.display());
     }
@@ -218,13 +218,13 @@ fn worst_relative_se(plan: &RunPlan) -> Option<f64> {
     plan.expected.params.iter().map(|p| p.std_error.map(|s| s / p.scale)).try_fold(0.0f64, |m, s| s.map(|s| m.max(s)))
 }
 
-/// What `--set flower` is on a robot of `n_wheels` wheels: the paper's flower, or a differential drive's
-/// own benchmark (it cannot drive the flower's sideways petals).
-fn benchmark_name(n_wheels: usize) -> &'static str {
-    if n_wheels == 2 {
-        "the diff benchmark set (forward/backward arcs, turns on the spot)"
-    } else {
+/// What `--set flower` is on the robot `design` ([`benchmark_commands`]): the paper's flower, or, for a base
+/// that cannot move sideways, a differential drive's own benchmark (it cannot drive the flower's petals).
+fn benchmark_name(design: &RobotGeometry) -> &'static str {
+    if design.is_omnidirectional() {
         "the paper's flower set"
+    } else {
+        "the diff benchmark set (forward/backward arcs, turns on the spot)"
     }
 }
 
