@@ -241,9 +241,9 @@ type Reads = Vec<Option<Result<Result<Loaded, DatasetError>, DatasetError>>>;
 
 /// Recordings read with one `--gt` source (a file covering them all, or a folder of takes) share its clock:
 /// a recording whose own alignment failed (a short, still or sparsely tracked one), is weak (standard error
-/// above [`mcap::read::TOPIC_CLOCK_MAX_STD_ERROR_S`] or explaining less than
-/// [`mcap::read::TOPIC_CLOCK_MIN_R_SQUARED`] of the motion), or lands more than
-/// [`mcap::read::SAME_CLOCK_MAX_OFFSET_S`] from the others (another stretch of a long take matched) is read
+/// above [`mcap::selection::TOPIC_CLOCK_MAX_STD_ERROR_S`] or explaining less than
+/// [`mcap::selection::TOPIC_CLOCK_MIN_R_SQUARED`] of the motion), or lands more than
+/// [`mcap::selection::SAME_CLOCK_MAX_OFFSET_S`] from the others (another stretch of a long take matched) is read
 /// again at the median offset of the clear estimates, and a note per such recording says so. A few
 /// milliseconds of drift between clear estimates is kept: each recording keeps its own. Nothing changes when
 /// the offset is forced or no estimate is clear.
@@ -253,7 +253,8 @@ fn shared_clock_retry(inputs: &[Result<Input, DatasetError>], reads: &mut Reads,
         r.as_ref()?.as_ref().ok()?.as_ref().ok()?.clock.as_ref()?.estimate
     };
     let clear = |a: &omni_kin::clock::ClockAlignment| {
-        a.std_error_s <= mcap::read::TOPIC_CLOCK_MAX_STD_ERROR_S && a.r_squared >= mcap::read::TOPIC_CLOCK_MIN_R_SQUARED
+        a.std_error_s <= mcap::selection::TOPIC_CLOCK_MAX_STD_ERROR_S
+            && a.r_squared >= mcap::selection::TOPIC_CLOCK_MIN_R_SQUARED
     };
     let mut offsets: Vec<f64> = reads.iter().filter_map(estimate).filter(clear).map(|a| a.offset_s).collect();
     if offsets.is_empty() {
@@ -272,7 +273,7 @@ fn shared_clock_retry(inputs: &[Result<Input, DatasetError>], reads: &mut Reads,
             return Some(format!("{own}, explaining {:.0} % of the motion: not clear", a.r_squared * 100.0));
         }
         let off = a.offset_s - median;
-        (off.abs() > mcap::read::SAME_CLOCK_MAX_OFFSET_S && offsets.len() >= 2)
+        (off.abs() > mcap::selection::SAME_CLOCK_MAX_OFFSET_S && offsets.len() >= 2)
             .then(|| format!("{own}, {off:+.3} s from the other recordings' (another stretch of the take matched)"))
     };
     let forced = LoadOptions {
@@ -374,7 +375,7 @@ pub fn review(
     })?
     .finish()?;
     let rec = feed_ros(path, max_file_bytes, |zstd| {
-        let mut rec = mcap::read::Recording::new(&opts.wheel_joints);
+        let mut rec = mcap::recording::Recording::new(&opts.wheel_joints);
         rec.zstd_messages = zstd;
         rec
     })?;
@@ -503,7 +504,7 @@ fn expand(p: &Path, out: &mut Vec<Result<Input, DatasetError>>) {
 /// Feeds every message of the one ROS recording at `path` (a `.mcap`, `.db3` or `.bag` file, or a rosbag2
 /// recording folder; each storage file at most `max_file_bytes` long) into the sink `make(zstd_messages)`
 /// makes (`zstd_messages`: rosbag2's per-message compression, which the sink undoes).
-pub(crate) fn feed_ros<S: mcap::read::MessageSink>(
+pub(crate) fn feed_ros<S: mcap::recording::MessageSink>(
     path: &Path,
     max_file_bytes: u64,
     make: impl FnOnce(bool) -> S,
@@ -527,7 +528,7 @@ pub(crate) fn feed_ros<S: mcap::read::MessageSink>(
             check_size(&p, max_file_bytes)?;
             let buf = std::fs::read(&p).map_err(|e| DatasetError::io(&p, e))?;
             let mut sink = make(false);
-            mcap::read::feed_mcap(&p, &buf, &mut sink)?;
+            mcap::framing::feed_mcap(&p, &buf, &mut sink)?;
             Ok(sink)
         }
         Input::Db3(p) => {

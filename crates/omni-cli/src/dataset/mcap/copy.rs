@@ -6,7 +6,7 @@
 //! `/robot_description`, latched, usually logged before the motion) are copied whole into every run of the
 //! recording, logged at the run's start when they were logged before it; the others within the run's span.
 
-use super::read::MessageSink;
+use super::recording::MessageSink;
 use super::{laser_scan, twist};
 
 /// `std_msgs/msg/String`.

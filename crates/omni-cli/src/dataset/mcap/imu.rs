@@ -5,7 +5,7 @@ use super::common::{
     HEADER_DEF, Header, NS_PER_S, QUATERNION_DEF, Quaternion, TIME_DEF, VECTOR3_DEF, Vector3, decode, schema_text,
     seconds_since,
 };
-use super::read::MessageSink;
+use super::recording::MessageSink;
 use crate::dataset::DatasetError;
 use omni_kin::gyro::GyroSample;
 use serde::{Deserialize, Serialize};

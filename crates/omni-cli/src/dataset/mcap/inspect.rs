@@ -7,8 +7,9 @@
 //! [`crate::dataset::rosbag2`], any of them under a folder in [`crate::dataset::inspect`].
 
 use super::common::{RosString, decode};
+use super::framing;
 use super::joint_state::{self, JointState};
-use super::read::{self, MessageSink};
+use super::recording::MessageSink;
 use crate::dataset::DatasetError;
 use std::path::{Path, PathBuf};
 /// The topic `robot_state_publisher` publishes the URDF on.
@@ -64,7 +65,7 @@ pub fn inspect(path: &Path, max_bytes: u64) -> Result<Inventory, DatasetError> {
 /// [`inspect`] on a file held in memory; `path` names it in errors.
 pub fn inspect_bytes(path: &Path, buf: &[u8]) -> Result<Inventory, DatasetError> {
     let mut inv = InventorySink::new(path);
-    read::feed_mcap(path, buf, &mut inv)?;
+    framing::feed_mcap(path, buf, &mut inv)?;
     inv.finish()
 }
 

@@ -6,7 +6,7 @@ use super::common::{
     HEADER_DEF, Header, MsgDef, NS_PER_S, QUATERNION_DEF, RosString, TIME_DEF, VECTOR3_DEF, decode, schema_text,
     seconds_since,
 };
-use super::read::MessageSink;
+use super::recording::MessageSink;
 use super::statics::StaticTree;
 use super::tf::{self, TfMessage, Transform, TransformStamped};
 use crate::dataset::DatasetError;

@@ -58,8 +58,10 @@
 //! Reading 180 bags of 1050 JointState + 40 PoseStamped messages each (11.6 MB, zstd) takes 0.17–0.19 s in
 //! release mode on one core of a 2-core machine (`tests/mcap_speed.rs`).
 
+pub(crate) mod assembly;
 mod common;
 pub mod copy;
+pub(crate) mod framing;
 mod imu;
 mod inspect;
 mod joint_state;
@@ -68,8 +70,9 @@ mod odom_wheels;
 mod odometry;
 mod pose_stamped;
 mod poses;
-pub(crate) mod read;
+pub(crate) mod recording;
 pub(crate) mod review;
+pub(crate) mod selection;
 pub mod split;
 mod statics;
 mod tf;
@@ -286,7 +289,7 @@ impl Default for WriteOptions {
 /// # Ok::<(), omni_cli::dataset::DatasetError>(())
 /// ```
 pub fn read_file(path: &Path, opts: &McapOptions) -> Result<McapRead, DatasetError> {
-    read::read_file(path, opts, None)
+    assembly::read_file(path, opts, None)
 }
 
 /// [`read_file`] with the ground truth from a separate file (`--gt`) instead of a topic: its clock offset is
@@ -296,13 +299,13 @@ pub fn read_file_with_truth(
     opts: &McapOptions,
     truth: Option<&ExternalTruth>,
 ) -> Result<McapRead, DatasetError> {
-    read::read_file(path, opts, truth)
+    assembly::read_file(path, opts, truth)
 }
 
 /// Reads the runs of one ROS 2 MCAP bag held in memory: as [`read_file`], with `path` only naming the bag
 /// in messages and runs (the file stem is the run name).
 pub fn read_bytes(path: &Path, bytes: &[u8], opts: &McapOptions) -> Result<McapRead, DatasetError> {
-    read::read_bytes(path, bytes, opts, None)
+    assembly::read_bytes(path, bytes, opts, None)
 }
 
 /// Writes one run as a ROS 2 MCAP bag, atomically (temporary file, then rename).

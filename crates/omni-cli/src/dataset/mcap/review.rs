@@ -4,7 +4,8 @@
 //! topic choice as the read ([`Bag::joints`], [`Bag::truth`], …), so `info` cannot say one thing and
 //! `train` do another.
 
-use super::read::{self, Bag, Channel, Content, MsgType, Recording, Truth, WheelSource};
+use super::recording::{Channel, Content, MsgType, Recording};
+use super::selection::{self, Bag, Truth, WheelSource};
 use super::{McapOptions, imu, inspect::ROBOT_DESCRIPTION_TOPIC, laser_scan, tf};
 use crate::dataset::DatasetError;
 use std::path::Path;
@@ -176,11 +177,11 @@ fn pose_role(
     truth_elsewhere: Option<&str>,
 ) -> (Role, String) {
     let c = &bag.channels[i];
-    let robot_frame = c.frame().filter(|f| read::ROBOT_FRAMES.contains(f));
+    let robot_frame = c.frame().filter(|f| selection::ROBOT_FRAMES.contains(f));
     match &choices.truth {
         Some(Ok(Truth::Poses(t))) if *t == i => {
             let mut why = format!("{} poses{}", c.messages, frame_words(c));
-            if read::is_localization(&c.topic) {
+            if selection::is_localization(&c.topic) {
                 why.push_str(", as named: it looks like a localization, which may fuse the wheel odometry");
             }
             return (Role::GroundTruth, why);
@@ -194,7 +195,7 @@ fn pose_role(
                 format!("in the robot's own frame {:?}: not a ground truth", robot_frame.unwrap_or("")),
             );
         }
-        _ if read::is_localization(&c.topic) => {
+        _ if selection::is_localization(&c.topic) => {
             return (
                 Role::Unused,
                 "a localization: it may fuse the wheel odometry being calibrated, so it is ground truth only when \

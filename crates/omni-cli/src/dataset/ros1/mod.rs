@@ -9,7 +9,8 @@ mod transcode;
 
 use crate::dataset::DatasetError;
 use crate::dataset::ground_truth::ExternalTruth;
-use crate::dataset::mcap::read::{self, MessageSink, Recording};
+use crate::dataset::mcap::assembly;
+use crate::dataset::mcap::recording::{MessageSink, Recording};
 use crate::dataset::mcap::{Inventory, InventorySink};
 use crate::dataset::mcap::{McapOptions, McapRead};
 use rosbag::{ChunkRecord, MessageRecord, RosBag};
@@ -22,7 +23,7 @@ pub fn read_bag(path: &Path, opts: &McapOptions, truth: Option<&ExternalTruth>) 
     let mut rec = Recording::new(&opts.wheel_joints);
     feed(path, &mut rec)?;
     let stem = path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned());
-    read::runs(path, &stem, rec, opts, truth)
+    assembly::runs(path, &stem, rec, opts, truth)
 }
 
 /// What `omnical init` needs of the bag at `path`: its topics, joints and ground-truth candidates.

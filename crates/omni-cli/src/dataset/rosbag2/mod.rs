@@ -29,8 +29,9 @@ use crate::dataset::DatasetError;
 use crate::dataset::ground_truth::ExternalTruth;
 use crate::dataset::mcap::McapOptions;
 use crate::dataset::mcap::McapRead;
-use crate::dataset::mcap::read::{self, MessageSink, Recording};
+use crate::dataset::mcap::recording::{MessageSink, Recording};
 use crate::dataset::mcap::{Inventory, InventorySink};
+use crate::dataset::mcap::{assembly, framing};
 use metadata::{Compression, Storage};
 use std::io::Read;
 use std::path::Path;
@@ -70,7 +71,7 @@ pub fn read_recording(
         rec.channel(&t.name, &t.msg_type, "ros2msg", &t.serialization_format);
     }
     let name = dir.file_name().map_or_else(|| dir.display().to_string(), |s| s.to_string_lossy().into_owned());
-    let mut out = read::runs(dir, &name, rec, opts, truth)?;
+    let mut out = assembly::runs(dir, &name, rec, opts, truth)?;
     out.notes.splice(0..0, notes);
     Ok(out)
 }
@@ -97,7 +98,7 @@ fn feed_files(
         match meta.storage {
             Storage::Mcap => {
                 let buf = read_file(file, file_zstd, max_file_bytes)?;
-                read::feed_mcap(file, &buf, sink)?;
+                framing::feed_mcap(file, &buf, sink)?;
             }
             Storage::Sqlite3 if file_zstd => {
                 let image = read_file(file, true, max_file_bytes)?;
@@ -160,7 +161,7 @@ pub fn read_db3(
     let mut rec = Recording::new(&opts.wheel_joints);
     sqlite::feed(path, None, &mut rec)?;
     let stem = path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned());
-    read::runs(path, &stem, rec, opts, truth)
+    assembly::runs(path, &stem, rec, opts, truth)
 }
 
 fn check_size(path: &Path, max_file_bytes: u64) -> Result<(), DatasetError> {

@@ -4,7 +4,7 @@
 //! message pipeline as MCAP ([`MessageSink`]).
 
 use crate::dataset::DatasetError;
-use crate::dataset::mcap::read::MessageSink;
+use crate::dataset::mcap::recording::MessageSink;
 use rusqlite::{Connection, OpenFlags, types::ValueRef};
 use std::io::Read;
 use std::path::Path;

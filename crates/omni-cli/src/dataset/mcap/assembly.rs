@@ -1,0 +1,382 @@
+//! Building a recording's runs from its channels: the wheels (from JointState, or from the robot's own
+//! odometry through the design), the ground truth on the wheel clock (from a topic, or from a `--gt` file
+//! whose clock is aligned to the wheels') trimmed to the wheel data's span, the recorded odometry and the
+//! command, cut into runs ([`McapOptions::split`]); and reading one MCAP bag into them.
+
+use super::common::{NS_PER_S, seconds_since};
+use super::framing::feed_mcap;
+use super::joint_state::{self, Wheels};
+use super::poses::start_heading_in_half_turn;
+use super::recording::{Content, Recording};
+use super::selection::{Bag, Truth, WheelSource, localization_note, topic_clock, topic_location};
+use super::twist::Commands;
+use super::{McapOptions, McapRead, split};
+use crate::dataset::DatasetError;
+use crate::dataset::ground_truth::{ExternalTruth, GtClock, TruthSample};
+use omni_kin::clock::ClockAlignment;
+use omni_kin::{KinError, Pose2, Run, RunData, StampedPose};
+use std::path::Path;
+
+/// The wheels of `bag`'s JointState channel `j` (its content taken), with notes on what was done to them;
+/// a topic without the wheel joints says what else could give them ([`Bag::odometry_hint`]).
+fn joint_wheels(bag: &mut Bag, j: usize, opts: &McapOptions, notes: &mut Vec<String>) -> Result<Wheels, DatasetError> {
+    let (path, topic, hint) = (bag.path, bag.channels[j].topic.clone(), bag.odometry_hint());
+    let Content::Joints(series) = bag.take(j) else { unreachable!("joints() returns JointState channels") };
+    if let Some((k, missing)) = series.no_wheel_message() {
+        let message = hint.map_or_else(|| missing.clone(), |h| format!("{missing}; {h}"));
+        return Err(DatasetError::at(path, format!("topic {topic:?}, message {k}"), message));
+    }
+    let Some(&first_ns) = series.t_ns.first() else {
+        return Err(DatasetError::at(path, topic_location(&topic), "has no messages (empty run)"));
+    };
+    let origin_s = first_ns.div_euclid(NS_PER_S);
+    let t_s: Vec<f64> = series.t_ns.iter().map(|&t| seconds_since(t, origin_s)).collect();
+    let wheels = series
+        .finish(&opts.wheel_joints, &t_s, &opts.wheel_data)
+        .map_err(|(k, what)| DatasetError::at(path, format!("topic {topic:?}, message {k}"), what))?;
+    notes.extend(wheels.notes.iter().map(|n| format!("{}: topic {topic:?}: {n}", path.display())));
+    if let Some(without) = wheels.differentiated {
+        notes.push(format!(
+            "{}: topic {topic:?}: {without} of {} messages have no velocity: wheel speeds are differences \
+             of position over header.stamp",
+            path.display(),
+            t_s.len()
+        ));
+    }
+    Ok(wheels)
+}
+
+/// The wheels recovered from the robot's own odometry `odometry` on `topic` through the design
+/// ([`super::odom_wheels`]), with a note saying so and what a fit can reach from them.
+fn odometry_wheels(
+    path: &Path,
+    odometry: &Content,
+    topic: &str,
+    opts: &McapOptions,
+    notes: &mut Vec<String>,
+) -> Result<Wheels, DatasetError> {
+    let (Content::Poses(series), Some(rows)) = (odometry, &opts.wheels_from_twist) else {
+        unreachable!("joints() returns an odometry channel only with the design's forward kinematics")
+    };
+    let wheels = super::odom_wheels::wheels_from_odometry(series, rows)
+        .map_err(|(k, what)| DatasetError::at(path, format!("topic {topic:?}, message {k}"), what))?;
+    let reach = if rows.len() <= 3 {
+        "every parameter of the model is within a fit's reach (as many wheels as the motion has degrees of freedom)"
+            .to_string()
+    } else {
+        format!(
+            "with {} wheels and 3 degrees of freedom a fit reaches a 3 × 3 correction of the design, not one \
+             wheel's own radius",
+            rows.len()
+        )
+    };
+    notes.push(format!(
+        "{}: no {} topic: the wheel speeds are recovered from topic {topic:?} (the robot's own odometry, {} \
+         poses) through the design, as its controller computed them; {reach}",
+        path.display(),
+        joint_state::NAME,
+        series.t_ns.len()
+    ));
+    Ok(wheels)
+}
+
+/// The ground-truth poses `all` within the wheel data's span `t_s` (a note counts those dropped); none is an
+/// error naming the wheels' topic and where the ground truth came from (`names`: the wheels' topic, the
+/// ground truth's place and label).
+fn within_wheels(
+    path: &Path,
+    all: &[StampedPose],
+    t_s: &[f64],
+    names: (&str, &str, &str),
+    notes: &mut Vec<String>,
+) -> Result<Vec<StampedPose>, DatasetError> {
+    let (joints_topic, truth_where, truth_label) = names;
+    let (w0, w1) = (t_s[0], t_s[t_s.len() - 1]);
+    let truth: Vec<StampedPose> = all.iter().copied().filter(|p| (w0..=w1).contains(&p.t_s)).collect();
+    if truth.is_empty() {
+        let span = match (all.first(), all.last()) {
+            (Some(a), Some(b)) => format!("spans {}..{} s", a.t_s, b.t_s),
+            _ => "has no poses".to_string(),
+        };
+        return Err(DatasetError::file(
+            path,
+            format!(
+                "wheel data on {joints_topic:?} spans {w0}..{w1} s but the ground truth {truth_where} {span}: \
+                 no ground-truth pose lies within the wheel data"
+            ),
+        ));
+    }
+    let dropped = all.len() - truth.len();
+    if dropped > 0 {
+        notes.push(format!(
+            "{}: {truth_label}: dropped {dropped} ground-truth poses outside the wheel data's time span \
+             ({w0}..{w1} s)",
+            path.display()
+        ));
+    }
+    Ok(truth)
+}
+
+/// A recording's streams on one time line (s since its origin), ready to be cut into runs.
+struct Streams {
+    t_s: Vec<f64>,
+    wheels: Wheels,
+    truth: Vec<StampedPose>,
+    odometry: Vec<StampedPose>,
+    commands: Option<Commands>,
+    joints_topic: String,
+}
+
+impl Streams {
+    /// The runs: the whole recording as one named `stem`, or with [`McapOptions::split`] its pieces between
+    /// standstills named `stem#1`, `stem#2`, …; each with its name, or the error that refuses it.
+    fn runs(&self, path: &Path, stem: &str, opts: &McapOptions) -> Vec<(String, Result<Run, DatasetError>)> {
+        let (t_s, n_wheels) = (&self.t_s, opts.wheel_joints.len());
+        let pieces = match opts.split {
+            Some(min_s) => split::pieces(t_s, &self.wheels.rad_s, n_wheels, &self.truth, min_s),
+            None => vec![(0, t_s.len() - 1)],
+        };
+        let last_piece = pieces.len() - 1;
+        let mut out = Vec::with_capacity(pieces.len());
+        for (p, &(lo, hi)) in pieces.iter().enumerate() {
+            let name = if opts.split.is_some() { format!("{stem}#{}", p + 1) } else { stem.to_string() };
+            let span = t_s[lo]..=t_s[hi];
+            let within = |poses: &[StampedPose]| {
+                let mut v: Vec<StampedPose> = poses.iter().copied().filter(|q| span.contains(&q.t_s)).collect();
+                start_heading_in_half_turn(&mut v);
+                v
+            };
+            // Commands tile the whole time line: the first run also takes those before it, the last those after.
+            let from_ns = if p == 0 { i64::MIN } else { self.wheels.t_ns[lo] };
+            let to_ns = if p == last_piece { i64::MAX } else { self.wheels.t_ns[hi] };
+            let data = RunData {
+                name: name.clone(),
+                wheel_t_s: t_s[lo..=hi].to_vec(),
+                wheel_rad_s: self.wheels.rad_s[lo * n_wheels..(hi + 1) * n_wheels].to_vec(),
+                n_wheels,
+                truth: within(&self.truth),
+                command: self.commands.as_ref().and_then(|c| c.first_in(from_ns, to_ns)),
+                repetition: None,
+                recorded_odometry: within(&self.odometry),
+                wheel_start_rad: self
+                    .wheels
+                    .position
+                    .as_ref()
+                    .map(|pos| pos[lo * n_wheels..(lo + 1) * n_wheels].to_vec())
+                    .unwrap_or_default(),
+            };
+            out.push((name, Run::new(data).map_err(|e| self.run_error(path, lo, e))));
+        }
+        out
+    }
+
+    /// A run's validation error, for the run starting at wheel sample `lo`: a bad wheel sample is named as
+    /// the wheel topic's message of the same index.
+    fn run_error(&self, path: &Path, lo: usize, source: KinError) -> DatasetError {
+        let joints_topic = &self.joints_topic;
+        match &source {
+            KinError::NonFinite { what: "wheel sample", index, .. }
+            | KinError::NotIncreasing { what: "wheel sample", index, .. } => {
+                DatasetError::at(path, format!("topic {joints_topic:?}, message {}", lo + index), source.to_string())
+            }
+            // No wheel turns at 10⁴ rad/s: the joints are in another unit.
+            KinError::Implausible { what: "wheel sample", index, .. } => DatasetError::at(
+                path,
+                format!("topic {joints_topic:?}, message {}", lo + index),
+                format!(
+                    "{source}: are the joints in encoder counts, rpm or degrees? Declare their units in \
+                     robot.toml's [wheel_data] (docs/formats.md)"
+                ),
+            ),
+            _ => DatasetError::Run { path: path.to_path_buf(), error: source },
+        }
+    }
+}
+
+/// The file of a `--gt` folder that covers most of the wheel data's span `t_s` (s since `origin_s`), for a
+/// recording no file is named after, with a note saying which and how much it covers.
+fn overlapping_file(
+    path: &Path,
+    folder: &ExternalTruth,
+    origin_s: i64,
+    t_s: &[f64],
+    notes: &mut Vec<String>,
+) -> Result<ExternalTruth, DatasetError> {
+    let at = |t: f64| origin_s * NS_PER_S + (t * 1e9).round() as i64;
+    let (ext, share) = folder
+        .overlapping(at(t_s[0]), at(t_s[t_s.len() - 1]))
+        .map_err(|e| DatasetError::file(path, format!("--gt folder {}: {e}", folder.path.display())))?;
+    notes.push(format!(
+        "{}: no file of the --gt folder is named after it: {} covers {:.0} % of its span and is its ground truth",
+        path.display(),
+        ext.path.display(),
+        100.0 * share
+    ));
+    Ok(ext)
+}
+
+/// The runs of a recording whose messages are all in `rec`; `path` names it in messages, `stem` names its
+/// runs (`stem`, or `stem#1`, `stem#2`, … when split). See the module docs of [`super`].
+///
+/// With `external`, the ground truth comes from that file (its clock aligned to the wheels', see
+/// [`external_truth`]) and the recording needs no ground-truth topic.
+pub(crate) fn runs(
+    path: &Path,
+    stem: &str,
+    rec: Recording,
+    opts: &McapOptions,
+    external: Option<&ExternalTruth>,
+) -> Result<McapRead, DatasetError> {
+    let mut bag = Bag { path, channels: rec.channels };
+    let mut notes = Vec::new();
+
+    let source = bag.joints(opts)?;
+    let j = source.channel();
+    bag.check_wheels(j)?;
+    let truth_src = match external {
+        Some(_) => None,
+        None if opts.wheels_only => None,
+        None => Some(bag.truth(opts)?),
+    };
+    let truth_ch = truth_src.map(Truth::channel);
+    if let Some(i) = truth_ch {
+        bag.check(i)?;
+        notes.extend(localization_note(path, &bag.channels[i].topic));
+    }
+    let odom = if opts.recorded_odometry { bag.recorded_odometry(&mut notes) } else { None };
+    let odom = odom.filter(|&i| Some(i) != truth_ch);
+    let cmd = bag.commands(opts.command_topic.as_deref(), &mut notes);
+
+    // Wheels.
+    let joints_topic = bag.channels[j].topic.clone();
+    let wheels = match source {
+        WheelSource::Joints(_) => joint_wheels(&mut bag, j, opts, &mut notes)?,
+        WheelSource::Odometry(_) => odometry_wheels(path, &bag.channels[j].content, &joints_topic, opts, &mut notes)?,
+    };
+    let origin_s = wheels.t_ns[0].div_euclid(NS_PER_S);
+    let t_s: Vec<f64> = wheels.t_ns.iter().map(|&t| seconds_since(t, origin_s)).collect();
+
+    // Ground truth, trimmed to the wheel data's span.
+    let n_wheels = opts.wheel_joints.len();
+    let (all_truth, truth_where, truth_label, clock) = match (truth_src, truth_ch, external) {
+        (Some(src), Some(ch), _) => {
+            let (truth_topic, mut poses) = bag.truth_poses(src, ch, origin_s, opts, &mut notes)?;
+            let forced = opts.truth_time_offset_s;
+            let clock = topic_clock(path, stem, &truth_topic, forced, &mut poses, &t_s, &wheels.rad_s, n_wheels);
+            (poses, format!("on {truth_topic:?}"), format!("topic {truth_topic:?}"), clock)
+        }
+        (_, _, Some(ext)) if !ext.by_time.is_empty() => {
+            let ext = overlapping_file(path, ext, origin_s, &t_s, &mut notes)?;
+            external_file(&ext, stem, origin_s, &t_s, &wheels.rad_s, n_wheels)?
+        }
+        (_, _, Some(ext)) => external_file(ext, stem, origin_s, &t_s, &wheels.rad_s, n_wheels)?,
+        _ if opts.wheels_only => {
+            let at = |t_s: f64| StampedPose { t_s, pose: omni_kin::Pose2::IDENTITY };
+            let placeholder = vec![at(t_s[0]), at(t_s[t_s.len() - 1])];
+            (placeholder, "measured at the end".to_string(), "the measured end pose".to_string(), None)
+        }
+        _ => unreachable!("the ground truth comes from a topic or a file"),
+    };
+    let truth = within_wheels(path, &all_truth, &t_s, (&joints_topic, &truth_where, &truth_label), &mut notes)?;
+    let odometry: Vec<StampedPose> = match odom.map(|i| bag.take(i)) {
+        Some(Content::Poses(p)) => p.stamped(origin_s),
+        _ => Vec::new(),
+    };
+    let commands = match cmd.map(|i| bag.take(i)) {
+        Some(Content::Commands(c)) => Some(c),
+        _ => None,
+    };
+
+    // Runs.
+    let streams = Streams { t_s, wheels, truth, odometry, commands, joints_topic };
+    let mut out = McapRead { runs: Vec::new(), notes, skipped: Vec::new(), origin_s, ground_truth_clock: clock };
+    for (name, run) in streams.runs(path, stem, opts) {
+        match run {
+            Ok(run) => out.runs.push(run),
+            Err(e) if opts.skip_invalid => out.skipped.push((name, e.to_string())),
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(out)
+}
+
+/// Reads one bag. See the module docs of [`super`].
+pub(super) fn read_file(
+    path: &Path,
+    opts: &McapOptions,
+    external: Option<&ExternalTruth>,
+) -> Result<McapRead, DatasetError> {
+    let buf = std::fs::read(path).map_err(|e| DatasetError::io(path, e))?;
+    read_bytes(path, &buf, opts, external)
+}
+
+/// Reads one bag from its bytes; `path` only names it in messages and runs.
+pub(super) fn read_bytes(
+    path: &Path,
+    buf: &[u8],
+    opts: &McapOptions,
+    external: Option<&ExternalTruth>,
+) -> Result<McapRead, DatasetError> {
+    let mut rec = Recording::new(&opts.wheel_joints);
+    feed_mcap(path, buf, &mut rec)?;
+    let stem = path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned());
+    runs(path, &stem, rec, opts, external)
+}
+
+/// The poses of a ground-truth file on the wheel clock (seconds since `origin_s`), with the clock offset:
+/// the forced one, or one estimated from the wheel data (`omni_kin::clock`). Errors name the file.
+/// A `--gt` file's poses for a run on the wheel clock, its place for messages (`in FILE (+0.1 s clock
+/// offset)`), its label (`ground truth FILE`) and its clock.
+fn external_file(
+    ext: &ExternalTruth,
+    stem: &str,
+    origin_s: i64,
+    t_s: &[f64],
+    rad_s: &[f64],
+    n_wheels: usize,
+) -> Result<(Vec<StampedPose>, String, String, Option<GtClock>), DatasetError> {
+    let (poses, clock) = external_truth(ext, stem, origin_s, t_s, rad_s, n_wheels)?;
+    let file = ext.path.display();
+    Ok((
+        poses,
+        format!("in {file} ({:+.4} s clock offset)", clock.offset_s),
+        format!("ground truth {file}"),
+        Some(clock),
+    ))
+}
+
+fn external_truth(
+    ext: &ExternalTruth,
+    recording: &str,
+    origin_s: i64,
+    t_s: &[f64],
+    rad_s: &[f64],
+    n_wheels: usize,
+) -> Result<(Vec<StampedPose>, GtClock), DatasetError> {
+    let pose =
+        |s: &TruthSample, t_s: f64| StampedPose { t_s, pose: Pose2 { x_m: s.x_m, y_m: s.y_m, theta_rad: s.yaw_rad } };
+    let clock = |offset_s: f64, estimate: Option<ClockAlignment>| GtClock {
+        recording: recording.to_string(),
+        file: ext.path.clone(),
+        offset_s,
+        estimate,
+    };
+    if let Some(offset_s) = ext.time_offset_s {
+        let poses = ext.samples.iter().map(|s| pose(s, seconds_since(s.t_ns, origin_s) + offset_s)).collect();
+        return Ok((poses, clock(offset_s, None)));
+    }
+    // The truth's times relative to its own first whole second (small numbers for the estimate).
+    let truth_origin_s = ext.samples.first().map_or(0, |s| s.t_ns.div_euclid(NS_PER_S));
+    let own: Vec<StampedPose> = ext.samples.iter().map(|s| pose(s, seconds_since(s.t_ns, truth_origin_s))).collect();
+    let a = omni_kin::clock::align_clocks(t_s, rad_s, n_wheels, &own).map_err(|e| DatasetError::Clock {
+        path: ext.path.clone(),
+        message: format!("cannot align its clock with recording {recording:?}: {e}"),
+    })?;
+    // own + a.offset_s is on the wheel clock since origin_s.
+    let poses = own.iter().map(|p| StampedPose { t_s: p.t_s + a.offset_s, ..*p }).collect();
+    // t_wheel = t_truth + offset in absolute time: the relative offset less the origins' difference.
+    let origins_s = (origin_s - truth_origin_s) as f64;
+    let offset_s = a.offset_s + origins_s;
+    let estimate = ClockAlignment { offset_s, coarse_offset_s: a.coarse_offset_s + origins_s, ..a };
+    Ok((poses, clock(offset_s, Some(estimate))))
+}

@@ -1,0 +1,549 @@
+//! Choosing a recording's topics: where the wheel speeds come from (JointState, or the robot's own
+//! odometry through the design), the ground truth (a pose topic or a TF pair, never a localization unless
+//! named, moved to the base frame along static transforms, and the clock its topic runs on), the recorded
+//! odometry and the command; every error lists the candidates and the flag that chooses.
+
+use super::joint_state;
+use super::odometry::{self, ODOM_FRAME};
+use super::recording::{Channel, Content, MsgType};
+use super::statics::StaticTree;
+use super::{McapOptions, Origin, tf, twist};
+use crate::dataset::DatasetError;
+use crate::dataset::ground_truth::GtClock;
+use omni_kin::{Pose2, StampedPose};
+use std::path::{Path, PathBuf};
+
+/// Frames that are the robot's own (REP-105): a pose in them is not a ground truth.
+pub(super) const ROBOT_FRAMES: [&str; 3] = [ODOM_FRAME, "base_link", "base_footprint"];
+/// The types a ground truth can come from.
+const TRUTH_TYPES: &str = "geometry_msgs/msg/PoseStamped, geometry_msgs/msg/PoseWithCovarianceStamped, \
+                           nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage";
+
+/// Where the wheel speeds come from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum WheelSource {
+    /// A JointState channel.
+    Joints(usize),
+    /// The robot's own odometry channel, through the design (see [`super::odom_wheels`]).
+    Odometry(usize),
+}
+
+impl WheelSource {
+    /// The channel.
+    pub(super) fn channel(self) -> usize {
+        match self {
+            Self::Joints(i) | Self::Odometry(i) => i,
+        }
+    }
+}
+
+/// What an odometry topic needs to stand in for the wheels.
+const NEED_DESIGN: &str = "wheel speeds can come from it only through the robot's design; describe the robot \
+                           (omnical init RECORDING writes robot.toml from its URDF, or --robot FILE)";
+
+/// Where the ground truth comes from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Truth {
+    /// A pose channel.
+    Poses(usize),
+    /// A channel's TF pair.
+    Tf(usize, usize),
+}
+
+impl Truth {
+    /// The channel.
+    pub(super) fn channel(self) -> usize {
+        match self {
+            Self::Poses(i) | Self::Tf(i, _) => i,
+        }
+    }
+}
+
+/// The file being read and its channels, for choosing topics and building errors.
+pub(super) struct Bag<'a> {
+    pub(super) path: &'a Path,
+    pub(super) channels: Vec<Channel>,
+}
+
+/// `topic "/x"`.
+pub(super) fn topic_location(topic: &str) -> String {
+    format!("topic {topic:?}")
+}
+
+impl Bag<'_> {
+    /// Every topic, sorted, with type and count.
+    fn listing(&self) -> String {
+        let mut all: Vec<&Channel> = self.channels.iter().collect();
+        all.sort_by(|a, b| a.topic.cmp(&b.topic));
+        let list: Vec<String> = all.iter().map(|c| c.describe()).collect();
+        if list.is_empty() { "none".into() } else { list.join(", ") }
+    }
+
+    /// The channel of an explicitly chosen topic, set at `origin`.
+    fn find(&self, topic: &str, origin: &Origin) -> Result<usize, DatasetError> {
+        self.channels.iter().position(|c| c.topic == topic).ok_or_else(|| {
+            let named = origin.naming(topic);
+            DatasetError::file(self.path, format!("{named}: no such topic; topics: {}", self.listing()))
+        })
+    }
+
+    /// The channel's problem as an error, if it has one.
+    pub(super) fn check(&self, i: usize) -> Result<(), DatasetError> {
+        let c = &self.channels[i];
+        match &c.problem {
+            None => Ok(()),
+            Some((None, what)) => Err(DatasetError::at(self.path, topic_location(&c.topic), what.clone())),
+            Some((Some(k), what)) => {
+                Err(DatasetError::at(self.path, format!("topic {:?}, message {k}", c.topic), what.clone()))
+            }
+        }
+    }
+
+    /// Where the wheel speeds come from: the JointState topic named (`--joints-topic`, robot.toml) or the
+    /// only one (else the only one carrying the wheel joints); without JointState, the robot's own odometry
+    /// through the design ([`McapOptions::wheels_from_twist`]).
+    pub(super) fn joints(&self, opts: &McapOptions) -> Result<WheelSource, DatasetError> {
+        if let Some(topic) = &opts.joints_topic {
+            let i = self.find(topic, &opts.origins.joints_topic)?;
+            let c = &self.channels[i];
+            return match (c.msg_type, &opts.wheels_from_twist) {
+                (MsgType::JointState, _) => Ok(WheelSource::Joints(i)),
+                (MsgType::Odometry, Some(_)) => Ok(WheelSource::Odometry(i)),
+                (MsgType::Odometry, None) => Err(DatasetError::at(
+                    self.path,
+                    topic_location(topic),
+                    format!("is {}: {NEED_DESIGN}", odometry::NAME),
+                )),
+                _ => Err(DatasetError::at(
+                    self.path,
+                    topic_location(topic),
+                    format!(
+                        "type {} is not {} (wheel speeds) or {} (the robot's own odometry)",
+                        schema_or_none(&c.schema),
+                        joint_state::NAME,
+                        odometry::NAME
+                    ),
+                )),
+            };
+        }
+        let candidates: Vec<usize> =
+            (0..self.channels.len()).filter(|&i| self.channels[i].msg_type == MsgType::JointState).collect();
+        if let [i] = candidates[..] {
+            return Ok(WheelSource::Joints(i));
+        }
+        if candidates.is_empty() {
+            let odometry = self.recorded_odometry(&mut Vec::new());
+            return match (odometry, &opts.wheels_from_twist) {
+                (Some(i), Some(_)) => Ok(WheelSource::Odometry(i)),
+                (Some(i), None) => Err(DatasetError::file(
+                    self.path,
+                    format!(
+                        "no {} topic for the wheel speeds; {} is the robot's own odometry: {NEED_DESIGN}",
+                        joint_state::NAME,
+                        self.channels[i].topic
+                    ),
+                )),
+                (None, _) => Err(DatasetError::file(
+                    self.path,
+                    format!("no {} topic for the wheel speeds; topics: {}", joint_state::NAME, self.listing()),
+                )),
+            };
+        }
+        let with_wheels: Vec<usize> = candidates
+            .iter()
+            .copied()
+            .filter(|&i| matches!(&self.channels[i].content, Content::Joints(s) if s.len() > 0))
+            .collect();
+        if let [i] = with_wheels[..] {
+            return Ok(WheelSource::Joints(i));
+        }
+        let list: Vec<String> = candidates.iter().map(|&i| self.channels[i].describe()).collect();
+        Err(DatasetError::file(
+            self.path,
+            format!(
+                "cannot tell which {} topic has the wheel joints ({}): {}; choose one with --joints-topic",
+                joint_state::NAME,
+                opts.wheel_joints.join(", "),
+                list.join(", ")
+            ),
+        ))
+    }
+
+    /// Why channel `i` cannot be the ground truth under `opts`, if it cannot.
+    pub(super) fn truth_mismatch(&self, i: usize, opts: &McapOptions) -> Option<String> {
+        let c = &self.channels[i];
+        let Content::Poses(s) = &c.content else { return None };
+        let frame = s.frame.as_deref()?;
+        if c.is_wheel_odometry() {
+            return Some(format!(
+                "is the robot's own wheel odometry (frame {ODOM_FRAME:?}, REP-105): the model under test, never \
+                 ground truth; choose a map, world or motion-capture source"
+            ));
+        }
+        if let Some(p) = &opts.truth_parent_frame
+            && p != frame
+        {
+            return Some(format!("has frame {frame:?}, but {}", opts.origins.truth_parent_frame.naming(p)));
+        }
+        if let (Some(want), Some(child)) = (&opts.truth_child_frame, &s.child)
+            && want != child
+        {
+            return Some(format!("has child frame {child:?}, but {}", opts.origins.truth_child_frame.naming(want)));
+        }
+        None
+    }
+
+    /// long: the ground-truth channel, named (`--gt-topic`) or found, with errors that list every
+    /// transform or pose topic seen; kept together so the messages can name them.
+    pub(super) fn truth(&self, opts: &McapOptions) -> Result<Truth, DatasetError> {
+        let (parent, child) = (opts.truth_parent_frame.as_deref(), opts.truth_child_frame.as_deref());
+        let statics = self.statics();
+        if let Some(topic) = &opts.truth_topic {
+            let i = self.find(topic, &opts.origins.truth_topic)?;
+            let c = &self.channels[i];
+            return match (&c.content, c.msg_type) {
+                (Content::Tf(pairs), _) => {
+                    self.check(i)?;
+                    let found = pairs.candidates(parent, child, &statics);
+                    match found[..] {
+                        [k] => Ok(Truth::Tf(i, k)),
+                        _ => {
+                            let all: Vec<String> = pairs
+                                .pairs
+                                .iter()
+                                .map(|p| format!("{} → {} ({} poses)", p.parent, p.child, p.poses.t_ns.len()))
+                                .collect();
+                            let what = if found.is_empty() { "no transform" } else { "several transforms" };
+                            Err(DatasetError::at(
+                                self.path,
+                                topic_location(topic),
+                                format!(
+                                    "{what} could be the ground truth (transforms: {}); choose one with \
+                                     --gt-parent-frame and --gt-child-frame",
+                                    if all.is_empty() { "none".into() } else { all.join(", ") }
+                                ),
+                            ))
+                        }
+                    }
+                }
+                (Content::Poses(_), _) => match self.truth_mismatch(i, opts) {
+                    Some(why) => Err(DatasetError::at(self.path, topic_location(topic), why)),
+                    None => Ok(Truth::Poses(i)),
+                },
+                _ => Err(DatasetError::at(
+                    self.path,
+                    topic_location(topic),
+                    format!("type {} cannot be ground truth (supported: {TRUTH_TYPES})", schema_or_none(&c.schema)),
+                )),
+            };
+        }
+        let mut found: Vec<(Truth, String)> = Vec::new();
+        let mut localizations: Vec<&str> = Vec::new();
+        for (i, c) in self.channels.iter().enumerate() {
+            if c.messages == 0 {
+                continue;
+            }
+            match &c.content {
+                Content::Poses(_) if is_localization(&c.topic) => localizations.push(&c.topic),
+                Content::Poses(_) => {
+                    let robot_frame = c.frame().is_some_and(|f| ROBOT_FRAMES.contains(&f));
+                    if !robot_frame && self.truth_mismatch(i, opts).is_none() {
+                        found.push((Truth::Poses(i), c.candidate()));
+                    }
+                }
+                Content::Tf(_) if tf::is_static_topic(&c.topic) => {}
+                Content::Tf(pairs) => {
+                    for k in pairs.candidates(parent, child, &statics) {
+                        let p = &pairs.pairs[k];
+                        found.push((Truth::Tf(i, k), format!("{} ({} → {})", c.topic, p.parent, p.child)));
+                    }
+                }
+                _ => {}
+            }
+        }
+        match &found[..] {
+            [(t, _)] => Ok(*t),
+            [] => Err(DatasetError::file(
+                self.path,
+                format!(
+                    "no ground truth: no {TRUTH_TYPES} source outside the robot's frames ({}){}; topics: {}",
+                    ROBOT_FRAMES.join(", "),
+                    match (parent, child) {
+                        (None, None) => String::new(),
+                        _ => format!(
+                            " matching --gt-parent-frame {:?} --gt-child-frame {:?}",
+                            parent.unwrap_or("(any)"),
+                            child.unwrap_or("(any)")
+                        ),
+                    },
+                    self.listing()
+                ) + &localization_hint(&localizations),
+            )),
+            _ => {
+                let list: Vec<&str> = found.iter().map(|(_, d)| d.as_str()).collect();
+                Err(DatasetError::file(
+                    self.path,
+                    format!(
+                        "several ground-truth sources: {}; choose one with --gt-topic (for a TF topic, also \
+                         --gt-parent-frame and --gt-child-frame)",
+                        list.join(", ")
+                    ),
+                ))
+            }
+        }
+    }
+
+    /// The ground truth `src` on channel `ch` (taken out of the bag): its topic and its poses in seconds
+    /// since `origin_s`; a TF pair's problem is an error naming the message.
+    pub(super) fn truth_poses(
+        &mut self,
+        src: Truth,
+        ch: usize,
+        origin_s: i64,
+        opts: &McapOptions,
+        notes: &mut Vec<String>,
+    ) -> Result<(String, Vec<StampedPose>), DatasetError> {
+        let topic = self.channels[ch].topic.clone();
+        let statics = self.statics();
+        let poses = match (src, self.take(ch)) {
+            (Truth::Tf(_, k), Content::Tf(mut pairs)) => {
+                let mut pair = pairs.pairs.swap_remove(k);
+                if let Some((m, what)) = pair.problem {
+                    return Err(DatasetError::at(self.path, format!("topic {topic:?}, message {m}"), what));
+                }
+                if let Some(note) = to_base_frame(&mut pair, &statics, opts.truth_child_frame.as_deref()) {
+                    notes.push(format!("{}: topic {topic:?}: {note}", self.path.display()));
+                }
+                pair.poses
+            }
+            (_, Content::Poses(p)) => p,
+            _ => unreachable!("truth() returns pose channels or TF pairs"),
+        };
+        Ok((topic, poses.stamped(origin_s)))
+    }
+
+    /// [`Self::check`] for the wheels' channel `i`: a JointState message without a wheel joint also says
+    /// what else could give the wheels ([`Self::odometry_hint`]).
+    pub(super) fn check_wheels(&self, i: usize) -> Result<(), DatasetError> {
+        match (&self.channels[i].problem, self.odometry_hint()) {
+            (Some((Some(k), what)), Some(hint)) if joint_state::is_missing_wheel(what) => Err(DatasetError::at(
+                self.path,
+                format!("topic {:?}, message {k}", self.channels[i].topic),
+                format!("{what}; {hint}"),
+            )),
+            _ => self.check(i),
+        }
+    }
+
+    /// What to try when the JointState topic does not carry the wheels and the robot's own odometry is
+    /// recorded: name it as the wheel source.
+    pub(super) fn odometry_hint(&self) -> Option<String> {
+        let i = self.recorded_odometry(&mut Vec::new())?;
+        let topic = &self.channels[i].topic;
+        Some(format!(
+            "if no JointState topic carries the wheels, the robot's own odometry {topic} can stand in through the \
+             robot's design: --joints-topic {topic} ([topics] joint_states in robot.toml)"
+        ))
+    }
+
+    /// The robot's recorded wheel odometry: `/odom` if it is one, else the only one.
+    pub(super) fn recorded_odometry(&self, notes: &mut Vec<String>) -> Option<usize> {
+        self.optional(Channel::is_wheel_odometry, "/odom", "recorded odometry", notes)
+    }
+
+    /// The command topic: `preferred` (default `/cmd_vel`) if it is one, else the only one.
+    pub(super) fn commands(&self, preferred: Option<&str>, notes: &mut Vec<String>) -> Option<usize> {
+        let is_cmd = |c: &Channel| matches!(c.msg_type, MsgType::Twist | MsgType::TwistStamped);
+        let chosen = self.optional(is_cmd, preferred.unwrap_or("/cmd_vel"), "the command", notes)?;
+        if self.channels[chosen].msg_type == MsgType::Twist {
+            notes.push(format!(
+                "{}: topic {:?} ({}) has no header: command times are log times",
+                self.path.display(),
+                self.channels[chosen].topic,
+                twist::NAME
+            ));
+        }
+        Some(chosen)
+    }
+
+    /// An optional source (`what`) among the channels that are `wanted`: the one named `preferred`, else the
+    /// only one. Several without the preferred one, or a problem on the chosen one, leave it out with a note.
+    fn optional(
+        &self,
+        wanted: impl Fn(&Channel) -> bool,
+        preferred: &str,
+        what: &str,
+        notes: &mut Vec<String>,
+    ) -> Option<usize> {
+        let all: Vec<usize> = (0..self.channels.len()).filter(|&i| wanted(&self.channels[i])).collect();
+        let chosen = match all[..] {
+            [] => return None,
+            [i] => i,
+            _ => match all.iter().find(|&&i| self.channels[i].topic == preferred) {
+                Some(&i) => i,
+                None => {
+                    let list: Vec<&str> = all.iter().map(|&i| self.channels[i].topic.as_str()).collect();
+                    notes.push(format!(
+                        "{}: {what} could come from several topics ({}), none of them {preferred}: {what} is left out",
+                        self.path.display(),
+                        list.join(", ")
+                    ));
+                    return None;
+                }
+            },
+        };
+        self.usable(chosen, what, notes)
+    }
+
+    /// `Some(i)` if channel `i` has no problem; otherwise a note that `what` is left out.
+    fn usable(&self, i: usize, what: &str, notes: &mut Vec<String>) -> Option<usize> {
+        match self.check(i) {
+            Ok(()) => Some(i),
+            Err(e) => {
+                notes.push(format!("{e} ({what} is left out)"));
+                None
+            }
+        }
+    }
+
+    /// The static transforms of every TF topic.
+    pub(super) fn statics(&self) -> StaticTree {
+        let mut tree = StaticTree::default();
+        for c in &self.channels {
+            if let Content::Tf(pairs) = &c.content {
+                pairs.add_statics(tf::is_static_topic(&c.topic), &mut tree);
+            }
+        }
+        tree
+    }
+
+    /// Moves a channel's content out.
+    pub(super) fn take(&mut self, i: usize) -> Content {
+        std::mem::replace(&mut self.channels[i].content, Content::Nothing)
+    }
+}
+
+/// The robot frames a tracked frame is moved to by default, the first that static transforms reach.
+const BASE_FRAMES: [&str; 2] = ["base_link", "base_footprint"];
+
+/// Moves a TF pair's poses from its child frame (a motion-capture marker) along static transforms to
+/// `target` (`--gt-child-frame`), or by default to the first of [`BASE_FRAMES`] they reach; says so.
+fn to_base_frame(pair: &mut tf::Pair, statics: &StaticTree, target: Option<&str>) -> Option<String> {
+    let (to, (offset, frames)) = match target {
+        Some(t) => (t, statics.offset(&pair.child, t)?),
+        None if BASE_FRAMES.contains(&pair.child.as_str()) => return None,
+        None => BASE_FRAMES.iter().find_map(|&t| statics.offset(&pair.child, t).map(|o| (t, o)))?,
+    };
+    for p in &mut pair.poses.xy_yaw {
+        let moved = Pose2::new(p[0], p[1], p[2]).compose(&offset);
+        *p = [moved.x_m, moved.y_m, omni_kin::pose::wrap_angle(moved.theta_rad)];
+    }
+    Some(format!(
+        "the ground truth tracks {:?}; it is moved to {to:?} through static transforms ({} → {}: x {:.4} m, \
+         y {:.4} m, yaw {:.2}°)",
+        pair.child,
+        pair.child,
+        frames.join(" → "),
+        offset.x_m,
+        offset.y_m,
+        offset.theta_rad.to_degrees()
+    ))
+}
+
+fn schema_or_none(schema: &str) -> &str {
+    if schema.is_empty() { "(no schema)" } else { schema }
+}
+
+/// Words in a topic's name that mark a localization (AMCL, slam_toolbox, cartographer, robot_localization's
+/// EKF/UKF `odometry/filtered`, …): its poses may fuse the very wheel odometry being calibrated, so it is
+/// never taken as ground truth unless named.
+const LOCALIZATION_WORDS: [&str; 8] = ["amcl", "locali", "slam", "cartographer", "ekf", "ukf", "filtered", "fused"];
+
+/// Whether `topic` names a localization ([`LOCALIZATION_WORDS`], case-insensitive).
+pub(super) fn is_localization(topic: &str) -> bool {
+    let t = topic.to_ascii_lowercase();
+    LOCALIZATION_WORDS.iter().any(|w| t.contains(w))
+}
+
+/// The note for a ground-truth topic named although it looks like a localization.
+pub(super) fn localization_note(path: &Path, topic: &str) -> Option<String> {
+    is_localization(topic).then(|| {
+        format!(
+            "{}: topic {topic:?} is taken as ground truth as named, but it looks like a localization: if it fuses \
+             the wheel odometry being calibrated, the fit measures the wheels against themselves",
+            path.display()
+        )
+    })
+}
+
+/// The end of the "no ground truth" message when localizations were passed over.
+fn localization_hint(localizations: &[&str]) -> String {
+    if localizations.is_empty() {
+        return String::new();
+    }
+    format!(
+        "; {} looks like a localization, which may fuse the wheel odometry being calibrated, so it is not taken \
+         as ground truth unless named with --gt-topic",
+        localizations.join(", ")
+    )
+}
+
+/// Largest clock offset between the wheel data and a ground-truth topic of the same recording taken as
+/// recorded: a lag up to this is physics the `time_offset` effect models (its range) and diagnose names;
+/// beyond it the topic runs on another clock (a motion-capture bridge stamping with its own). s.
+pub(crate) const SAME_CLOCK_MAX_OFFSET_S: f64 = 0.5;
+
+/// How clear an estimate must be for a topic's stamps to be moved: its standard error (s) and the share
+/// of the ground truth's motion the wheels explain at it. A topic whose motion hardly follows the wheels
+/// keeps its stamps (whatever is wrong with it, moving it would hide it).
+pub(crate) const TOPIC_CLOCK_MAX_STD_ERROR_S: f64 = 0.02;
+pub(crate) const TOPIC_CLOCK_MIN_R_SQUARED: f64 = 0.9;
+/// The share of the ground truth's motion the wheels must explain at offset 0 for its clock to be taken as
+/// the wheels' without a search.
+const TOPIC_CLOCK_SEARCH_BELOW_R2: f64 = 0.98;
+
+/// The clock of a ground-truth topic: `forced_s` when given (`--gt-time-offset`), else checked against the
+/// wheels' ([`omni_kin::clock::align_clocks`]): when the
+/// estimated offset is clear and beyond [`SAME_CLOCK_MAX_OFFSET_S`] and three standard errors, the poses
+/// are moved onto the wheel clock and the offset returned (a note); otherwise, or when no estimate is
+/// possible (too little motion), the stamps stay as recorded.
+#[allow(clippy::too_many_arguments)] // the topic's names, its poses and the wheel data they are checked against
+pub(super) fn topic_clock(
+    path: &Path,
+    recording: &str,
+    topic: &str,
+    forced_s: Option<f64>,
+    poses: &mut [StampedPose],
+    t_s: &[f64],
+    rad_s: &[f64],
+    n_wheels: usize,
+) -> Option<GtClock> {
+    let clock = |offset_s: f64, estimate| GtClock {
+        recording: recording.to_string(),
+        file: PathBuf::from(format!("{}, topic {topic:?}", path.display())),
+        offset_s,
+        estimate,
+    };
+    if let Some(offset_s) = forced_s {
+        poses.iter_mut().for_each(|p| p.t_s += offset_s);
+        return Some(clock(offset_s, None));
+    }
+    // On the wheels' clock, or off it by a small lag (nearly always): the wheels explain nearly all the
+    // truth's motion at offset 0, and no search is needed. (Half of it is not enough: slow, smooth motion
+    // 0.8 s off is still 60 % explained.)
+    if omni_kin::clock::explained_at(t_s, rad_s, n_wheels, poses, 0.0)
+        .is_none_or(|r2| r2 >= TOPIC_CLOCK_SEARCH_BELOW_R2)
+    {
+        return None;
+    }
+    let a = omni_kin::clock::align_clocks(t_s, rad_s, n_wheels, poses).ok()?;
+    let clear = a.std_error_s <= TOPIC_CLOCK_MAX_STD_ERROR_S && a.r_squared >= TOPIC_CLOCK_MIN_R_SQUARED;
+    if !clear || a.offset_s.abs() <= SAME_CLOCK_MAX_OFFSET_S.max(3.0 * a.std_error_s) {
+        return None;
+    }
+    poses.iter_mut().for_each(|p| p.t_s += a.offset_s);
+    Some(clock(a.offset_s, Some(a)))
+}
+
+#[cfg(test)]
+mod tests;
