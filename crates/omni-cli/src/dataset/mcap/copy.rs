@@ -6,7 +6,7 @@
 //! `/robot_description`, latched, usually logged before the motion) are copied whole into every run of the
 //! recording, logged at the run's start when they were logged before it; the others within the run's span.
 
-use super::recording::MessageSink;
+use super::recording::{MessageSink, payload};
 use super::{laser_scan, twist};
 
 /// `std_msgs/msg/String`.
@@ -69,16 +69,9 @@ impl MessageSink for CopySink {
 
     fn message(&mut self, i: usize, data: &[u8], log_time_ns: u64) {
         let Some((_, Some(c))) = self.channels.get_mut(i) else { return };
-        let bytes = if self.zstd_messages {
-            // A message that does not decompress is left out: the copy is for viewing, not for the fit.
-            match zstd::stream::decode_all(data) {
-                Ok(plain) => plain,
-                Err(_) => return,
-            }
-        } else {
-            data.to_vec()
-        };
-        c.messages.push((log_time_ns, bytes));
+        // A message that does not decompress is left out: the copy is for viewing, not for the fit.
+        let Ok(bytes) = payload(self.zstd_messages, data) else { return };
+        c.messages.push((log_time_ns, bytes.into_owned()));
     }
 }
 

@@ -5,7 +5,7 @@ use super::common::{
     HEADER_DEF, Header, NS_PER_S, QUATERNION_DEF, Quaternion, TIME_DEF, VECTOR3_DEF, Vector3, decode, schema_text,
     seconds_since,
 };
-use super::recording::MessageSink;
+use super::recording::{MessageSink, payload};
 use crate::dataset::DatasetError;
 use omni_kin::gyro::GyroSample;
 use serde::{Deserialize, Serialize};
@@ -144,15 +144,12 @@ impl MessageSink for ImuSink {
         if !(c.0 == self.topic && c.1 == NAME && c.2) || self.problem.is_some() {
             return;
         }
-        let plain = match self.zstd_messages {
-            true => match zstd::stream::decode_all(data) {
-                Ok(p) => p,
-                Err(e) => {
-                    self.problem = Some((k, format!("the zstd-compressed message does not decompress: {e}")));
-                    return;
-                }
-            },
-            false => data.to_vec(),
+        let plain = match payload(self.zstd_messages, data) {
+            Ok(p) => p,
+            Err(e) => {
+                self.problem = Some((k, e));
+                return;
+            }
         };
         if let Err(e) = self.take(k, &plain) {
             self.problem = Some((k, e));

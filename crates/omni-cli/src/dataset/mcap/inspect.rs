@@ -9,7 +9,7 @@
 use super::common::{RosString, decode};
 use super::framing;
 use super::joint_state::{self, JointState};
-use super::recording::MessageSink;
+use super::recording::{MessageSink, payload};
 use crate::dataset::DatasetError;
 use std::path::{Path, PathBuf};
 /// The topic `robot_state_publisher` publishes the URDF on.
@@ -106,14 +106,7 @@ impl InventorySink {
         if t.msg_type != joint_state::NAME && !is_urdf {
             return Ok(());
         }
-        let plain;
-        let data = if self.zstd_messages {
-            plain = zstd::stream::decode_all(data)
-                .map_err(|e| format!("the zstd-compressed message does not decompress: {e}"))?;
-            &plain[..]
-        } else {
-            data
-        };
+        let data = &payload(self.zstd_messages, data)?[..];
         if is_urdf {
             let text: RosString = decode(data)?;
             self.inv.robot_description = Some(text.0);

@@ -6,7 +6,7 @@ use super::common::{
     HEADER_DEF, Header, MsgDef, NS_PER_S, QUATERNION_DEF, RosString, TIME_DEF, VECTOR3_DEF, decode, schema_text,
     seconds_since,
 };
-use super::recording::MessageSink;
+use super::recording::{MessageSink, payload};
 use super::statics::StaticTree;
 use super::tf::{self, TfMessage, Transform, TransformStamped};
 use crate::dataset::DatasetError;
@@ -268,27 +268,19 @@ impl MessageSink for ScanSink {
         if !(is_scan && self.problem.is_none() || is_static) {
             return;
         }
-        let plain;
-        let data = if self.zstd_messages {
-            match zstd::stream::decode_all(data) {
-                Ok(p) => {
-                    plain = p;
-                    &plain[..]
-                }
-                Err(e) if is_scan => {
-                    self.problem = Some((k, format!("the zstd-compressed message does not decompress: {e}")));
-                    return;
-                }
-                Err(_) => return,
+        let data = match payload(self.zstd_messages, data) {
+            Ok(plain) => plain,
+            Err(e) if is_scan => {
+                self.problem = Some((k, e));
+                return;
             }
-        } else {
-            data
+            Err(_) => return,
         };
         if is_scan {
-            if let Err(e) = self.take_scan(k, data) {
+            if let Err(e) = self.take_scan(k, &data) {
                 self.problem = Some((k, e));
             }
-        } else if let Ok(m) = decode::<TfMessage>(data) {
+        } else if let Ok(m) = decode::<TfMessage>(&data) {
             for t in &m.transforms {
                 let (p, q) = (&t.transform.translation, &t.transform.rotation);
                 if p.x.is_finite() && p.y.is_finite() && q.yaw_rad().is_finite() {

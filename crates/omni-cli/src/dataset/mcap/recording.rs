@@ -181,6 +181,19 @@ impl Channel {
 
 /// Where the storage readers (MCAP files, rosbag2 sqlite3 files) put a recording's topics and messages:
 /// [`Recording`] (the runs) or an inventory of the topics (`omnical init`, [`super::inspect`]).
+/// A message's payload as its decoder needs it: as recorded, or, for rosbag2's per-message compression
+/// (`zstd_messages`), zstd-decompressed; the error says why it does not decompress. Every sink reads
+/// payloads through it, and only those of the topics it reads (decompressing a camera's images for nothing
+/// would cost more than the whole read).
+pub(crate) fn payload(zstd_messages: bool, data: &[u8]) -> Result<std::borrow::Cow<'_, [u8]>, String> {
+    if !zstd_messages {
+        return Ok(std::borrow::Cow::Borrowed(data));
+    }
+    zstd::stream::decode_all(data)
+        .map(std::borrow::Cow::Owned)
+        .map_err(|e| format!("the zstd-compressed message does not decompress: {e}"))
+}
+
 pub(crate) trait MessageSink {
     /// The channel of `topic`, declared on its first sight (a later declaration of the same topic, in another
     /// split file, keeps the first one's type).
@@ -226,11 +239,10 @@ impl MessageSink for Recording {
     fn message(&mut self, i: usize, data: &[u8], log_time_ns: u64) {
         let c = &mut self.channels[i];
         if self.zstd_messages && c.msg_type != MsgType::Other && c.problem.is_none() {
-            match zstd::stream::decode_all(data) {
+            match payload(true, data) {
                 Ok(plain) => return c.take(&plain, log_time_ns, &self.wheel_joints),
                 Err(e) => {
-                    c.problem =
-                        Some((Some(c.messages), format!("the zstd-compressed message does not decompress: {e}")));
+                    c.problem = Some((Some(c.messages), e));
                     c.messages += 1;
                     return;
                 }
