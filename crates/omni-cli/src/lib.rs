@@ -8,6 +8,7 @@ pub mod api;
 pub mod atomic;
 pub mod cli;
 pub mod cmd;
+pub mod controller;
 pub mod dataset;
 pub mod design;
 pub mod entry;

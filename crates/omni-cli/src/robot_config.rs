@@ -7,14 +7,14 @@
 //! - [`ODOMETRY_HEADER`]: the same as a C header (`static const double`, a twist function and one
 //!   integration step identical to omnical's), for a custom odometry node or firmware;
 //! - [`CONTROLLER_YAML`]: the parameters of the ros2_controllers drive controller that matches the base,
-//!   from the nearest parametric fit ([`omni_kin::controller`]), with the accuracy its simpler model gives up
+//!   from the nearest parametric fit ([`crate::controller`]), with the accuracy its simpler model gives up
 //!   on the runs given.
 //!
 //! Numbers are written in shortest round-trip form with a decimal point or exponent (`1.0`, not `1`), so
 //! the matrix reads back bit for bit and ROS 2 types every value as a double.
 
+use crate::controller::{self, ControllerFit, ControllerKind, ControllerParams, FitOptions};
 use anyhow::Context;
-use omni_kin::controller::{self, ControllerFit, ControllerKind, ControllerParams, FitOptions};
 use omni_kin::cost::{self, CostKind};
 use omni_kin::effect::Effect;
 use omni_kin::{FittedModel, IkMatrix, Integration, Model, Run, RunModels, Scheme, StepMode};

@@ -322,7 +322,7 @@ fn export_controller_lists_each_choice() {
     }
     use clap::Parser;
     use omni_cli::cli::{Cli, Command};
-    use omni_kin::controller::ControllerKind;
+    use omni_cli::controller::ControllerKind;
     for (given, want) in [
         ("omni_wheel_drive_controller", ControllerKind::OmniWheelDrive),
         ("mecanum", ControllerKind::MecanumDrive),

@@ -11,7 +11,6 @@
 
 pub mod choice;
 pub mod clock;
-pub mod controller;
 pub mod cost;
 pub mod effect;
 pub mod error;

@@ -40,8 +40,8 @@ pub struct Args {
     #[arg(long, value_name = "DIR")]
     pub robot_config: Option<PathBuf>,
     /// Drive controller for --robot-config (default: the one that matches the base).
-    #[arg(long, value_name = "NAME", value_parser = crate::cli::choice::<omni_kin::controller::ControllerKind>())]
-    pub controller: Option<omni_kin::controller::ControllerKind>,
+    #[arg(long, value_name = "NAME", value_parser = crate::cli::choice::<crate::controller::ControllerKind>())]
+    pub controller: Option<crate::controller::ControllerKind>,
     /// Output options (JSON: the files written).
     #[command(flatten)]
     pub output: OutputArgs,
@@ -183,7 +183,7 @@ fn write_mcaps(
 /// `--robot-config` in JSON: the files, the controller and its parameters (SI units, unit-suffixed keys),
 /// and the accuracy of each model on the runs (Eq. 6; path RMS, m).
 fn robot_config_json(c: &robot_config::RobotConfig, dir: &Path) -> serde_json::Value {
-    use omni_kin::controller::ControllerParams as P;
+    use crate::controller::ControllerParams as P;
     let params = match c.fit.model.params {
         P::DiffDrive { wheel_separation_m, left_wheel_radius_m, right_wheel_radius_m } => serde_json::json!({
             "wheel_separation_m": wheel_separation_m, "left_wheel_radius_m": left_wheel_radius_m,
