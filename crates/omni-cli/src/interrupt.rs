@@ -33,8 +33,8 @@ pub fn requested() -> bool {
 pub struct StopOnInterrupt<'a>(pub &'a mut dyn Observer);
 
 impl Observer for StopOnInterrupt<'_> {
-    fn on_start(&mut self, optimizer: &str, dim: usize) {
-        self.0.on_start(optimizer, dim);
+    fn on_start(&mut self, optimizer: &str, dim: usize, max_iterations: Option<usize>) {
+        self.0.on_start(optimizer, dim, max_iterations);
     }
 
     fn on_iteration(&mut self, it: &Iteration) -> Control {

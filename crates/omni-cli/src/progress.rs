@@ -23,23 +23,22 @@ pub fn spinner(message: impl Into<String>, quiet: bool) -> ProgressBar {
     pb
 }
 
-/// An [`Observer`] that draws the optimizers' iterations: the GA's generations against its limit, then
-/// the polish.
+/// An [`Observer`] that draws the optimizers' iterations: against the budget each optimizer states (the
+/// GA's generations), or growing with them (the polish).
 pub struct ProgressObserver {
     bar: ProgressBar,
-    max_generations: u64,
 }
 
 impl ProgressObserver {
-    /// A bar for a GA of at most `max_generations` generations.
-    pub fn new(max_generations: usize, quiet: bool) -> Self {
-        let bar = ProgressBar::with_draw_target(Some(max_generations as u64), target(quiet));
+    /// A bar, hidden with `quiet`.
+    pub fn new(quiet: bool) -> Self {
+        let bar = ProgressBar::with_draw_target(Some(0), target(quiet));
         bar.set_style(
             ProgressStyle::with_template("{prefix:>6} [{bar:30}] {pos}/{len} {msg} [{elapsed}]")
                 .unwrap_or_else(|_| ProgressStyle::default_bar())
                 .progress_chars("=> "),
         );
-        Self { bar, max_generations: max_generations as u64 }
+        Self { bar }
     }
 
     /// Removes the bar from the terminal.
@@ -49,13 +48,9 @@ impl ProgressObserver {
 }
 
 impl Observer for ProgressObserver {
-    fn on_start(&mut self, optimizer: &str, _dim: usize) {
+    fn on_start(&mut self, optimizer: &str, _dim: usize, max_iterations: Option<usize>) {
         self.bar.set_prefix(optimizer.to_string());
-        if optimizer == "ga" {
-            self.bar.set_length(self.max_generations);
-        } else {
-            self.bar.set_length(0);
-        }
+        self.bar.set_length(max_iterations.unwrap_or(0) as u64);
         self.bar.set_position(0);
     }
 

@@ -2,6 +2,25 @@
 
 use thiserror::Error;
 
+/// What a run's value belongs to, in [`KinError`]'s messages: readers map a bad one back to its line or
+/// message by it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sample {
+    /// A wheel sample (time and one speed per wheel).
+    Wheel,
+    /// A ground-truth pose.
+    Truth,
+}
+
+impl std::fmt::Display for Sample {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Wheel => "wheel sample",
+            Self::Truth => "ground-truth pose",
+        })
+    }
+}
+
 /// What can be wrong with a robot description, a model or a run.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum KinError {
@@ -54,8 +73,8 @@ pub enum KinError {
     NonFinite {
         /// Run name.
         run: String,
-        /// `wheel sample` or `ground-truth pose`.
-        what: &'static str,
+        /// A wheel sample or a ground-truth pose.
+        what: Sample,
         /// Index of the sample or pose (0-based).
         index: usize,
         /// Field, e.g. `t_s` or `wheel_rad_s[2]`.
@@ -68,8 +87,8 @@ pub enum KinError {
     Implausible {
         /// Run name.
         run: String,
-        /// `wheel sample` or `ground-truth pose`.
-        what: &'static str,
+        /// A wheel sample or a ground-truth pose.
+        what: Sample,
         /// Index of the sample or pose (0-based).
         index: usize,
         /// Field, e.g. `t_s` or `wheel_rad_s[2]`.
@@ -86,8 +105,8 @@ pub enum KinError {
     NotIncreasing {
         /// Run name.
         run: String,
-        /// `wheel sample` or `ground-truth pose`.
-        what: &'static str,
+        /// A wheel sample or a ground-truth pose.
+        what: Sample,
         /// Index (0-based).
         index: usize,
         /// Its time. s.

@@ -6,7 +6,7 @@
 //! (a corrupted or misscaled field would otherwise give a silently wrong fit): magnitudes above
 //! [`MAX_T_S`], [`MAX_WHEEL_RAD_S`], [`MAX_POSITION_M`] and [`MAX_HEADING_RAD`].
 
-use crate::error::KinError;
+use crate::error::{KinError, Sample};
 use crate::pose::{Pose2, StampedPose};
 use serde::{Deserialize, Serialize};
 
@@ -82,7 +82,7 @@ pub const MAX_HEADING_RAD: f64 = 1.0e6;
 
 fn implausible(
     run: &str,
-    what: &'static str,
+    what: Sample,
     index: usize,
     field: impl Into<String>,
     value: f64,
@@ -94,7 +94,7 @@ fn implausible(
     Ok(())
 }
 
-fn check_stamps(run: &str, what: &'static str, t: impl Iterator<Item = f64>) -> Result<(), KinError> {
+fn check_stamps(run: &str, what: Sample, t: impl Iterator<Item = f64>) -> Result<(), KinError> {
     let mut prev = f64::NEG_INFINITY;
     for (i, t) in t.enumerate() {
         if !t.is_finite() {
@@ -131,11 +131,11 @@ impl Run {
         if d.truth.len() < 2 {
             return Err(KinError::TooShort { run: run.into(), what: "ground-truth poses", got: d.truth.len(), min: 2 });
         }
-        check_stamps(run, "wheel sample", d.wheel_t_s.iter().copied())?;
+        check_stamps(run, Sample::Wheel, d.wheel_t_s.iter().copied())?;
         if let Some(i) = d.wheel_rad_s.iter().position(|v| !v.is_finite()) {
             return Err(KinError::NonFinite {
                 run: run.into(),
-                what: "wheel sample",
+                what: Sample::Wheel,
                 index: i / d.n_wheels,
                 field: format!("wheel_rad_s[{}]", i % d.n_wheels),
                 value: d.wheel_rad_s[i],
@@ -143,9 +143,9 @@ impl Run {
         }
         for (i, v) in d.wheel_rad_s.iter().enumerate() {
             let field = format!("wheel_rad_s[{}]", i % d.n_wheels);
-            implausible(run, "wheel sample", i / d.n_wheels, field, *v, MAX_WHEEL_RAD_S)?;
+            implausible(run, Sample::Wheel, i / d.n_wheels, field, *v, MAX_WHEEL_RAD_S)?;
         }
-        check_stamps(run, "ground-truth pose", d.truth.iter().map(|p| p.t_s))?;
+        check_stamps(run, Sample::Truth, d.truth.iter().map(|p| p.t_s))?;
         for (i, p) in d.truth.iter().enumerate() {
             for (field, value, limit) in [
                 ("x_m", p.pose.x_m, MAX_POSITION_M),
@@ -155,13 +155,13 @@ impl Run {
                 if !value.is_finite() {
                     return Err(KinError::NonFinite {
                         run: run.into(),
-                        what: "ground-truth pose",
+                        what: Sample::Truth,
                         index: i,
                         field: field.into(),
                         value,
                     });
                 }
-                implausible(run, "ground-truth pose", i, field, value, limit)?;
+                implausible(run, Sample::Truth, i, field, value, limit)?;
             }
         }
         let (w0, w1) = (d.wheel_t_s[0], d.wheel_t_s[d.wheel_t_s.len() - 1]);

@@ -256,7 +256,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     }
     let preset = Preset::Default;
     let plan = Plan::preset(preset, n_base).seed(0);
-    let mut bar = progress::ProgressObserver::new(plan.ga().map_or(0, |g| g.max_generations), quiet);
+    let mut bar = progress::ProgressObserver::new(quiet);
     let fit = calibrate(&setup.start, &train, &plan, &mut bar)?;
     bar.finish();
     if text {

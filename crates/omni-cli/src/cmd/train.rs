@@ -131,7 +131,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     if let Some(w) = check_step(&plan, &ds.runs, a.force)? {
         tracing::warn!("{w}");
     }
-    let mut bar = progress::ProgressObserver::new(plan.ga().map_or(0, |g| g.max_generations), quiet);
+    let mut bar = progress::ProgressObserver::new(quiet);
     crate::note!(
         "training on {}: preset {preset_name}, seed {} (Ctrl-C stops early and keeps the best so far)",
         count(ds.runs.len(), "run"),

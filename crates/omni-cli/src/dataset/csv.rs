@@ -18,6 +18,7 @@
 
 use super::DatasetError;
 use crate::atomic;
+use omni_kin::error::Sample;
 pub use omni_kin::pose::unwrap_headings;
 use omni_kin::run::MAX_HEADING_RAD;
 use omni_kin::{Command, KinError, Pose2, Run, RunData, StampedPose};
@@ -329,9 +330,8 @@ pub fn parse_run_for(
             KinError::NonFinite { what, index, .. }
             | KinError::NotIncreasing { what, index, .. }
             | KinError::Implausible { what, index, .. } => match *what {
-                "wheel sample" => wheel_lines.get(*index),
-                "ground-truth pose" => truth_lines.get(*index),
-                _ => None,
+                Sample::Wheel => wheel_lines.get(*index),
+                Sample::Truth => truth_lines.get(*index),
             },
             _ => None,
         };

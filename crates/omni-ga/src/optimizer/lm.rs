@@ -308,7 +308,7 @@ impl<P: LeastSquares + ?Sized> Optimizer<P> for LevenbergMarquardt {
     fn minimize(&mut self, problem: &P, start: &[f64], observer: &mut dyn Observer) -> Result<Solution, OptimizeError> {
         check_start(start, problem.bounds().len())?;
         let t0 = Instant::now();
-        observer.on_start("lm", start.len());
+        observer.on_start("lm", start.len(), None);
         let start_cost = problem.cost(start);
         let Ended { x, evaluations, out_of_budget } =
             if problem.residual_count(start) > self.config.normal_equations_above {

@@ -34,8 +34,10 @@ pub enum Control {
 
 /// Receives progress; every method has a do-nothing default.
 pub trait Observer {
-    /// Called once before the first iteration.
-    fn on_start(&mut self, _optimizer: &str, _dim: usize) {}
+    /// Called once before the first iteration: the optimizer's name (`ga`, `lm`), the number of parameters,
+    /// and its iteration budget when it has one (the GA's generations; `None` for a solver that stops on
+    /// convergence, such as Levenberg–Marquardt), so that a progress display needs no knowledge of optimizers.
+    fn on_start(&mut self, _optimizer: &str, _dim: usize, _max_iterations: Option<usize>) {}
     /// Called after each iteration; `Control::Stop` ends the run.
     fn on_iteration(&mut self, _it: &Iteration) -> Control {
         Control::Continue

@@ -284,25 +284,13 @@ impl Effect for EffectKind {
     fn wheel_rates_affine(&self) -> bool {
         self.inner().wheel_rates_affine()
     }
+    // Every stage goes through `inner`, whose match is exhaustive: an effect added to the enum is dispatched
+    // (an effect of another stage keeps the trait's defaults, the twist unchanged).
     fn twist(&self, p: &[f64], twist: Twist2, w: &[f64]) -> Twist2 {
-        match self {
-            Self::RotationSlip(e) => e.twist(p, twist, w),
-            Self::TurnScrub(e) => e.twist(p, twist, w),
-            Self::WorldDrift(e) => e.twist(p, twist, w),
-            Self::Learned(e) => e.twist(p, twist, w),
-            Self::Custom(e) => e.twist(p, twist, w),
-            _ => twist,
-        }
+        self.inner().twist(p, twist, w)
     }
     fn twist_at(&self, p: &[f64], twist: Twist2, w: &[f64], at: &TwistAt) -> Twist2 {
-        match self {
-            Self::RotationSlip(e) => e.twist(p, twist, w),
-            Self::TurnScrub(e) => e.twist(p, twist, w),
-            Self::WorldDrift(e) => e.twist_at(p, twist, w, at),
-            Self::Learned(e) => e.twist_at(p, twist, w, at),
-            Self::Custom(e) => e.twist_at(p, twist, w, at),
-            _ => twist,
-        }
+        self.inner().twist_at(p, twist, w, at)
     }
     fn clock_lag_s(&self, p: &[f64]) -> f64 {
         self.inner().clock_lag_s(p)

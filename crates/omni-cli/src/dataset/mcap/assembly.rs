@@ -14,6 +14,7 @@ use super::{McapOptions, McapRead, split};
 use crate::dataset::DatasetError;
 use crate::dataset::ground_truth::{ExternalTruth, GtClock, TruthSample};
 use omni_kin::clock::ClockAlignment;
+use omni_kin::error::Sample;
 use omni_kin::{KinError, Pose2, Run, RunData, StampedPose};
 use std::path::Path;
 
@@ -175,12 +176,12 @@ impl Streams {
     fn run_error(&self, path: &Path, lo: usize, source: KinError) -> DatasetError {
         let joints_topic = &self.joints_topic;
         match &source {
-            KinError::NonFinite { what: "wheel sample", index, .. }
-            | KinError::NotIncreasing { what: "wheel sample", index, .. } => {
+            KinError::NonFinite { what: Sample::Wheel, index, .. }
+            | KinError::NotIncreasing { what: Sample::Wheel, index, .. } => {
                 DatasetError::at(path, format!("topic {joints_topic:?}, message {}", lo + index), source.to_string())
             }
             // No wheel turns at 10⁴ rad/s: the joints are in another unit.
-            KinError::Implausible { what: "wheel sample", index, .. } => DatasetError::at(
+            KinError::Implausible { what: Sample::Wheel, index, .. } => DatasetError::at(
                 path,
                 format!("topic {joints_topic:?}, message {}", lo + index),
                 format!(

@@ -320,7 +320,7 @@ impl<P: Problem + ?Sized> Optimizer<P> for Ga {
         check_start(start, dim)?;
         let t0 = Instant::now();
         let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
-        observer.on_start("ga", dim);
+        observer.on_start("ga", dim, Some(cfg.max_generations));
         let x0 = b.clamp(start);
         // Scales: box widths (or a size from the start value where the box is unbounded).
         let width: Vec<f64> =
