@@ -309,9 +309,7 @@ impl<'a> Evaluator<'a> {
             r.clear();
             r.extend(rows.errors.iter().flat_map(|e| [e.dx_m * k[0], e.dy_m * k[1], e.dtheta_rad * k[2]]));
             let (run, jacobian) = (rows.run, rows.jacobian);
-            for (i, mut row) in jacobian.row_iter_mut().enumerate() {
-                row *= k[i % 3];
-            }
+            scale_rows(jacobian, &k);
             visit(IkBlock { run, residuals: &r, jacobian, wheel_columns: rows.wheel_columns });
         })
     }
@@ -361,9 +359,7 @@ impl<'a> Evaluator<'a> {
                 let k = residual_weights(n_runs, rows.errors.len(), w);
                 r.clear();
                 r.extend(rows.errors.iter().flat_map(|e| [e.dx_m * k[0], e.dy_m * k[1], e.dtheta_rad * k[2]]));
-                for (i, mut row) in rows.jacobian.row_iter_mut().enumerate() {
-                    row *= k[i % 3];
-                }
+                scale_rows(&mut rows.jacobian, &k);
                 visit(ModelBlock { run, residuals: &r, jacobian: &rows.jacobian, covered: &fm.covered });
             }
         }
@@ -423,4 +419,14 @@ fn walk_errors(res: &Resolved<'_>, runs: &[Run], selection: Selection) -> RunErr
         out.offsets.push(out.errors.len());
     }
     out
+}
+
+/// Scales row `i` of a Jacobian by `k[i % 3]` (the residual weights of a pose's x, y and heading rows),
+/// walking it column by column: the storage's order (a row is strided).
+fn scale_rows(jacobian: &mut DMatrix<f64>, k: &[f64; 3]) {
+    for mut column in jacobian.column_iter_mut() {
+        for (i, v) in column.iter_mut().enumerate() {
+            *v *= k[i % 3];
+        }
+    }
 }

@@ -30,6 +30,11 @@ mod simulate;
 
 use pyo3::prelude::*;
 
+/// The allocator of the `omnical` binary (see `omni_cli`'s main.rs): the science's per-run Jacobian blocks
+/// are allocated and freed without the system allocator's map, unmap and zeroing each time.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 #[pymodule]
 mod _omnical {
     #[pymodule_export]
