@@ -4,6 +4,7 @@
 # wall seconds (CPU seconds, user + system), and the wall time as a multiple of `train`'s.
 #
 #   bash benches/science.sh [BIN] [WORK_DIR]    (defaults: target/release/omnical, built here; target/bench-science)
+#   ONLY_SIM=1 bash benches/science.sh …         (the simulated sets only)
 #
 # Sets: the shared OptiOdom omni4 squares (train on 231220200521, validate on 080920201715, and the reverse);
 # a simulated 108-run omni4 set (3 runs of each of the 36 flower commands, 4 wheels at the corners of a
@@ -90,7 +91,7 @@ bench() {
 all=(diagnose diagnose-auto explore report effect:time_offset effect:wheel_eccentricity effect:learned:body)
 echo "| set | command | wall (CPU) | × train |"
 echo "|---|---|---|---|"
-bench omni4-A "$omni4/231220200521" "$omni4/080920201715" "${all[@]}"
-bench omni4-B "$omni4/080920201715" "$omni4/231220200521" "${all[@]}"
+[ -n "${ONLY_SIM:-}" ] || bench omni4-A "$omni4/231220200521" "$omni4/080920201715" "${all[@]}"
+[ -n "${ONLY_SIM:-}" ] || bench omni4-B "$omni4/080920201715" "$omni4/231220200521" "${all[@]}"
 bench sim4-108 "$work/sim4/train" "$work/sim4/validation" "${all[@]}"
 bench sim-180 "$work/sim180/train" "$work/sim180/validation" report
