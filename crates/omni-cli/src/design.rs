@@ -40,16 +40,16 @@ pub fn robot_model(kind: KinematicsKind, f: &RobotFile) -> anyhow::Result<Model>
     Ok(Model::design(kind, Some(&g))?)
 }
 
-/// The base model `train` fits when none is named: `diff` for a two-wheel base (three physical parameters:
-/// a 3 × 2 matrix has a fourth direction, weakly determined, that trades the radii's ratio against the
-/// turning), else `ik`, the paper's matrix.
+/// The base model `train` fits when none is named: `diff` for a differential drive, a base that cannot move
+/// sideways (three physical parameters: a 3 × 2 matrix has a fourth direction, weakly determined, that
+/// trades the radii's ratio against the turning), else `ik`, the paper's matrix.
 pub fn default_kind(ds: &Dataset) -> KinematicsKind {
-    let two_wheels = match robot_file::design(ds) {
+    let differential = match robot_file::design(ds) {
         Some(Design::File(f)) => f.description.kind == omni_kin::BaseKind::Diff,
         Some(Design::Data(g)) => !g.is_omnidirectional(),
         None => false,
     };
-    if two_wheels { KinematicsKind::Diff } else { KinematicsKind::Ik }
+    if differential { KinematicsKind::Diff } else { KinematicsKind::Ik }
 }
 
 /// [`model_of`], where no robot is an error saying how to describe it.
