@@ -5,17 +5,22 @@
 
 pub mod csv;
 pub mod end_poses;
+mod error;
 pub mod ground_truth;
 mod lidar_reference;
 pub mod mcap;
 pub mod optiodom;
+mod ros;
 pub mod ros1;
 pub mod rosbag2;
 
-use omni_kin::{KinError, RobotGeometry, Run};
+pub use error::{DatasetError, Skipped};
+pub(crate) use error::{check_size, too_large};
+use omni_kin::{RobotGeometry, Run};
 use rayon::prelude::*;
+pub use ros::{Inspected, inspect, recorded_topics, review};
+pub(crate) use ros::{feed_ros, ros_recordings};
 use std::path::{Path, PathBuf};
-use thiserror::Error;
 
 /// A set of runs, with what was skipped and what was noticed while loading.
 #[derive(Debug, Default)]
@@ -319,76 +324,6 @@ fn designs_note(ds: &Dataset) -> Option<String> {
     ))
 }
 
-/// What `omnical init` inspected: one ROS recording and what it holds.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Inspected {
-    /// The recording inspected: the first under the path given, in the order [`load`] reads them.
-    pub recording: PathBuf,
-    /// Its topics, joint names and URDF.
-    pub inventory: mcap::Inventory,
-    /// How many ROS recordings the path holds (1 for a file or a recording folder).
-    pub recordings: usize,
-}
-
-/// Inspects the first ROS recording under `path` (a `.mcap` or `.db3` file, a rosbag2 recording folder, or
-/// a folder of them: whatever [`load`] reads as recordings), reading it whole; each file at most
-/// `max_file_bytes` long.
-pub fn inspect(path: &Path, max_file_bytes: u64) -> Result<Inspected, DatasetError> {
-    let mut inputs = Vec::new();
-    expand(path, &mut inputs);
-    let mut recordings = Vec::new();
-    for input in inputs {
-        match input? {
-            i @ (Input::Mcap(_) | Input::Db3(_) | Input::Recording(_) | Input::Ros1(_)) => recordings.push(i),
-            Input::Csv(_) | Input::OptiOdom(_) => {}
-        }
-    }
-    let Some(first) = recordings.first() else {
-        return Err(DatasetError::file(
-            path,
-            "no ROS 2 recording here (init reads .mcap and .db3 files and rosbag2 recording folders with a \
-             metadata.yaml)",
-        ));
-    };
-    let inventory = match first {
-        Input::Db3(p) => rosbag2::inspect_db3(p, max_file_bytes)?,
-        Input::Recording(p) => rosbag2::inspect_recording(p, max_file_bytes)?,
-        Input::Ros1(p) => ros1::inspect(p)?,
-        mcap => mcap::inspect(mcap.path(), max_file_bytes)?,
-    };
-    Ok(Inspected { recording: first.path().to_path_buf(), inventory, recordings: recordings.len() })
-}
-
-/// One ROS recording at `path` looked at for `omnical info`: its topics, and the role each would play in a
-/// read with `opts` ([`mcap::TopicReview`]); `truth_elsewhere` says where the ground truth comes from when
-/// it is not a topic.
-pub fn review(
-    path: &Path,
-    max_file_bytes: u64,
-    opts: &mcap::McapOptions,
-    truth_elsewhere: Option<&str>,
-) -> Result<(mcap::Inventory, Vec<mcap::TopicReview>), DatasetError> {
-    let inventory = feed_ros(path, max_file_bytes, |zstd| {
-        let mut sink = mcap::InventorySink::new(path);
-        sink.zstd_messages = zstd;
-        sink
-    })?
-    .finish()?;
-    let rec = feed_ros(path, max_file_bytes, |zstd| {
-        let mut rec = mcap::recording::Recording::new(&opts.wheel_joints);
-        rec.zstd_messages = zstd;
-        rec
-    })?;
-    Ok((inventory, mcap::review::review(path, rec, opts, truth_elsewhere)))
-}
-
-/// The topics of the ROS recording at `path` that an export carries over as recorded (transforms, the
-/// URDF, the commands: [`mcap::copy`]).
-pub fn recorded_topics(path: &Path, max_file_bytes: u64) -> Result<Vec<mcap::copy::CopiedTopic>, DatasetError> {
-    let sink = feed_ros(path, max_file_bytes, mcap::copy::CopySink::new)?;
-    Ok(sink.finish())
-}
-
 /// The text of a file a user writes by hand or a spreadsheet exports (a table, a ground-truth file, a
 /// plan), without the UTF-8 byte-order mark Excel and Notepad put in front, as the run CSV reader takes it.
 pub fn read_text(path: &Path) -> Result<String, DatasetError> {
@@ -446,24 +381,6 @@ fn recording_name(p: &Path, folder: bool) -> String {
 
 /// The inputs under `p`, in order: a folder's entries sorted by name, recursively; a recording folder or an
 /// OptiOdom set is one input. A path that is no input is an error in its place.
-/// The ROS recordings at `paths` (files, rosbag2 folders, folders of them), in the order `load` reads them;
-/// anything else is an error naming it.
-pub(crate) fn ros_recordings(paths: &[PathBuf]) -> Result<Vec<PathBuf>, DatasetError> {
-    let mut inputs = Vec::new();
-    for p in paths {
-        expand(p, &mut inputs);
-    }
-    inputs
-        .into_iter()
-        .map(|i| match i? {
-            Input::Csv(p) | Input::OptiOdom(p) => {
-                Err(DatasetError::file(&p, "not a ROS recording (.mcap, .db3, .bag or a rosbag2 folder)"))
-            }
-            i => Ok(i.path().to_path_buf()),
-        })
-        .collect()
-}
-
 fn expand(p: &Path, out: &mut Vec<Result<Input, DatasetError>>) {
     let meta = match std::fs::metadata(p) {
         Ok(m) => m,
@@ -499,52 +416,6 @@ fn expand(p: &Path, out: &mut Vec<Result<Input, DatasetError>>) {
         Some("bag") => Ok(Input::Ros1(p.to_path_buf())),
         _ => Err(DatasetError::file(p, format!("unsupported input (expected {SUPPORTED})"))),
     });
-}
-
-/// Feeds every message of the one ROS recording at `path` (a `.mcap`, `.db3` or `.bag` file, or a rosbag2
-/// recording folder; each storage file at most `max_file_bytes` long) into the sink `make(zstd_messages)`
-/// makes (`zstd_messages`: rosbag2's per-message compression, which the sink undoes).
-pub(crate) fn feed_ros<S: mcap::recording::MessageSink>(
-    path: &Path,
-    max_file_bytes: u64,
-    make: impl FnOnce(bool) -> S,
-) -> Result<S, DatasetError> {
-    let mut inputs = Vec::new();
-    expand(path, &mut inputs);
-    let not_one = |found: String| {
-        DatasetError::file(
-            path,
-            format!("expected one ROS recording (a .mcap, .db3 or .bag file, or a rosbag2 folder), found {found}"),
-        )
-    };
-    let input = match inputs.len() {
-        1 => inputs.pop().ok_or_else(|| not_one("none".into()))??,
-        0 => return Err(not_one("none".into())),
-        n => return Err(not_one(format!("{n} inputs"))),
-    };
-    match input {
-        Input::Recording(dir) => rosbag2::feed_recording(&dir, max_file_bytes, make),
-        Input::Mcap(p) => {
-            check_size(&p, max_file_bytes)?;
-            let buf = std::fs::read(&p).map_err(|e| DatasetError::io(&p, e))?;
-            let mut sink = make(false);
-            mcap::framing::feed_mcap(&p, &buf, &mut sink)?;
-            Ok(sink)
-        }
-        Input::Db3(p) => {
-            let mut sink = make(false);
-            rosbag2::feed_db3(&p, max_file_bytes, &mut sink)?;
-            Ok(sink)
-        }
-        Input::Ros1(p) => {
-            let mut sink = make(false);
-            ros1::feed(&p, &mut sink)?;
-            Ok(sink)
-        }
-        Input::Csv(p) | Input::OptiOdom(p) => {
-            Err(DatasetError::file(&p, "not a ROS recording: it holds no lidar scans"))
-        }
-    }
 }
 
 /// Reads one input. The outer error always stops the load (a file above the size cap); the inner one is
@@ -684,99 +555,5 @@ fn merge(
             Ok(())
         }
         Err(e) => Err(e),
-    }
-}
-
-/// A file above the size cap is refused before it is read.
-fn check_size(p: &Path, max_file_bytes: u64) -> Result<(), DatasetError> {
-    let len = std::fs::metadata(p).map_err(|e| DatasetError::io(p, e))?.len();
-    if len > max_file_bytes { Err(too_large(p, len, max_file_bytes)) } else { Ok(()) }
-}
-
-/// The error for a file of `len` bytes above the cap `max_file_bytes` (`--max-file-mb`).
-pub(crate) fn too_large(p: &Path, len: u64, max_file_bytes: u64) -> DatasetError {
-    DatasetError::file(
-        p,
-        format!(
-            "the file is {:.1} MiB, above the limit of {:.1} MiB per input file (files are read into memory \
-             whole); raise the limit with --max-file-mb if the machine has the memory",
-            len as f64 / MIB,
-            max_file_bytes as f64 / MIB
-        ),
-    )
-}
-
-const MIB: f64 = (1u64 << 20) as f64;
-
-/// An input that was skipped, and why.
-#[derive(Debug, Clone)]
-pub struct Skipped {
-    /// File (and run within it).
-    pub source: String,
-    /// The full error message.
-    pub reason: String,
-}
-
-/// What went wrong reading or writing a dataset. Every variant names the file.
-#[derive(Debug, Error)]
-pub enum DatasetError {
-    /// The file could not be read or written.
-    #[error("{path}: {error}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The OS error (its text is in this message, so it is not chained again).
-        error: std::io::Error,
-    },
-    /// A problem at a place in a file: a CSV line, an MCAP topic and message, a metadata key.
-    #[error("{path}: {location}: {message}")]
-    At {
-        /// The file.
-        path: PathBuf,
-        /// Where in it: `line 12, column x_m`, `topic "/joint_states", message 88`.
-        location: String,
-        /// What is wrong.
-        message: String,
-    },
-    /// A problem with the file as a whole.
-    #[error("{path}: {message}")]
-    File {
-        /// The file.
-        path: PathBuf,
-        /// What is wrong.
-        message: String,
-    },
-    /// A `--gt` file's clock could not be aligned with a recording's wheels from their motion (too short,
-    /// too little motion, too sparse): [`load`] then uses the offset found on the other recordings read
-    /// with the same ground truth, when there are any.
-    #[error("{path}: {message}")]
-    Clock {
-        /// The ground-truth file.
-        path: PathBuf,
-        /// What failed.
-        message: String,
-    },
-    /// The data parsed but does not form a valid run.
-    #[error("{path}: {error}")]
-    Run {
-        /// The file.
-        path: PathBuf,
-        /// The validation error (names run, sample and field).
-        error: KinError,
-    },
-}
-
-impl DatasetError {
-    /// An error at a place in a file.
-    pub fn at(path: &Path, location: impl Into<String>, message: impl Into<String>) -> Self {
-        Self::At { path: path.to_path_buf(), location: location.into(), message: message.into() }
-    }
-    /// An error about a whole file.
-    pub fn file(path: &Path, message: impl Into<String>) -> Self {
-        Self::File { path: path.to_path_buf(), message: message.into() }
-    }
-    /// An I/O error on a file.
-    pub fn io(path: &Path, source: std::io::Error) -> Self {
-        Self::Io { path: path.to_path_buf(), error: source }
     }
 }

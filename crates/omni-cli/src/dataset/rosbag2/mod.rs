@@ -25,13 +25,13 @@
 pub mod metadata;
 mod sqlite;
 
-use crate::dataset::DatasetError;
 use crate::dataset::ground_truth::ExternalTruth;
 use crate::dataset::mcap::McapOptions;
 use crate::dataset::mcap::McapRead;
 use crate::dataset::mcap::recording::{MessageSink, Recording};
 use crate::dataset::mcap::{Inventory, InventorySink};
 use crate::dataset::mcap::{assembly, framing};
+use crate::dataset::{DatasetError, check_size};
 use metadata::{Compression, Storage};
 use std::io::Read;
 use std::path::Path;
@@ -162,14 +162,6 @@ pub fn read_db3(
     sqlite::feed(path, None, &mut rec)?;
     let stem = path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned());
     assembly::runs(path, &stem, rec, opts, truth)
-}
-
-fn check_size(path: &Path, max_file_bytes: u64) -> Result<(), DatasetError> {
-    let len = std::fs::metadata(path).map_err(|e| DatasetError::io(path, e))?.len();
-    if len > max_file_bytes {
-        return Err(crate::dataset::too_large(path, len, max_file_bytes));
-    }
-    Ok(())
 }
 
 /// The bytes of a storage file, zstd-decompressed when `zstd` (at most `max_file_bytes` either way).
