@@ -370,6 +370,7 @@ def calibrate_fleet(
             _run_tasks(c, tasks, rows, "calibrating", show, on_row)
             if diagnose == "auto":
                 _diagnose_off_sessions(c, tasks, rows, show, on_row)
+            _wait_for_stragglers(c)
         except KeyboardInterrupt:
             interrupted = True
     if not interrupted:
@@ -382,6 +383,19 @@ def calibrate_fleet(
         print(f"omnical fleet: interrupted (Ctrl-C): {len(rows)} finished robot-sessions written to {files[0]}", file=sys.stderr)
         raise KeyboardInterrupt
     return result
+
+
+def _wait_for_stragglers(client: Any, timeout_s: float = 60.0) -> None:
+    """Waits (at most ``timeout_s``) until no task this process submitted still runs on a worker: a result
+    lost with a killed worker before its release reached the scheduler is computed again, and that task
+    writes its model file (the same bytes) while the fleet would already be clearing temporaries."""
+    mark = f"-{os.getpid()}-"
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        running = [k for keys in client.processing().values() for k in keys if str(k).startswith("omnical-") and mark in str(k)]
+        if not running:
+            return
+        time.sleep(0.05)
 
 
 def _remove_stale_temporaries(out: Path, sessions: Sequence[Session]) -> None:
@@ -464,6 +478,10 @@ def _run_tasks(
             t = futures[fut]
             try:
                 row = fut.result()
+                # Its row is here: the scheduler may forget it. Held, a result lost with a worker that dies
+                # later would be computed again, and that task would write its model file again after the
+                # fleet's end (and its temporary file after they were cleared).
+                fut.release()
             except Exception as e:  # KilledWorker, a lost connection: the session's row says so
                 why = f"{type(e).__name__}: {e}"
                 row = {"robot": t["robot"], "session": t["session"]}
