@@ -2,7 +2,8 @@
 //! publishes rad and rad/s, but many drivers outside it publish encoder counts or motor rpm, often on the
 //! motor's side of a gearbox. The factors here turn those values into the wheel's rad and rad/s.
 
-use super::{RobotError, RobotProblem, err, positive};
+use super::error::{err, positive};
+use super::{RobotError, RobotProblem};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::TAU;
 
