@@ -121,9 +121,10 @@ pub fn calibrate(
     let objective_start = problem.cost(&start.params);
     let names: Vec<String> = model.params().into_iter().map(|p| p.name).collect();
     let from = Start { x: &start.params, objective: objective_start, hold_at: &start.params };
-    let fit = pipeline::run(&problem, plan, from, &names, observer)?;
+    let mut fit = pipeline::run(&problem, plan, from, &names, observer)?;
     let start_as_given = objective_as_given(start, train, plan, objective_start)?;
-    Outcome { fit, identifiability: None, start_as_given }.report(
+    let identifiability = fit.identifiability.take();
+    Outcome { fit, identifiability, start_as_given }.report(
         &problem,
         &plan.identify,
         &start.params,
@@ -166,10 +167,11 @@ pub fn refine(
     let refining = Plan { stages: plan.stages.iter().filter(|s| s.refines_held()).cloned().collect(), ..plan.clone() };
     let objective = problem.cost(&nudged);
     let from = Start { x: &nudged, objective, hold_at: &start.params };
-    let fit = pipeline::run(&problem, &refining, from, &names, observer)?;
+    let mut fit = pipeline::run(&problem, &refining, from, &names, observer)?;
     let objective_start = problem.cost(&start.params);
     // The model keeps its own integration: the start as given is the start fitted from.
-    let outcome = Outcome { fit, identifiability: None, start_as_given: objective_start };
+    let identifiability = fit.identifiability.take();
+    let outcome = Outcome { fit, identifiability, start_as_given: objective_start };
     outcome.report(&problem, &plan.identify, &start.params, objective_start, t0)
 }
 
@@ -210,6 +212,7 @@ pub fn calibrate_with_effects(
         at_bound: base.at_bound,
         stages: base.stages,
         held: base.held,
+        identifiability: None,
     };
     let mut current = base.fitted;
     let mut identifiability = None;

@@ -10,7 +10,7 @@
 //!   fit, where the residuals measure noise rather than the start's misfit; it is reset to the start, and
 //!   the refining stages run again within the constrained subspace.
 //! - Scouting (a plan of refining stages only, as diagnose, explore and `train --effect` refine with): the
-//!   stages run first with a third of their budget ([`Stage::scout`]). Converged within it, that is the fit
+//!   stages run first with a sixth of their budget ([`Stage::scout`]). Converged within it, that is the fit
 //!   (the same iterates). Still going at its end, they are crawling: when the runs leave directions
 //!   unconstrained at that point, the truncated update runs from there, instead of after a whole budget
 //!   spent along the unconstrained valley (the fit diagnose judged a hardly determined effect with, 2–3×
@@ -52,6 +52,9 @@ pub(crate) struct Fitted {
     pub stages: Vec<StageOutcome>,
     /// Directions held at the start by the truncated update.
     pub held: Vec<WeakDirection>,
+    /// The identifiability analysis at `x`, when the truncated update already made it there (it found
+    /// nothing to hold): the report takes it instead of building the same normal equations again.
+    pub identifiability: Option<Identifiability>,
 }
 
 /// Where the pipeline starts.
@@ -68,7 +71,14 @@ pub(crate) struct Start<'a> {
 impl Fitted {
     /// Nothing run yet, at `x`.
     fn at(x: &[f64]) -> Self {
-        Self { x: x.to_vec(), evaluations: 0, at_bound: Vec::new(), stages: Vec::new(), held: Vec::new() }
+        Self {
+            x: x.to_vec(),
+            evaluations: 0,
+            at_bound: Vec::new(),
+            stages: Vec::new(),
+            held: Vec::new(),
+            identifiability: None,
+        }
     }
 }
 
@@ -153,6 +163,7 @@ fn hold(
 ) -> Result<(), Error> {
     let id = problem.identifiability(&fit.x, &plan.identify);
     if id.weak.is_empty() {
+        fit.identifiability = Some(id);
         return Ok(());
     }
     hold_and_refine(problem, plan, start, id, fit, observer)

@@ -42,7 +42,7 @@ impl Stage {
         matches!(self, Stage::Lm(_))
     }
 
-    /// The same stage with a third of its evaluation budget on a problem of `n_params` parameters and
+    /// The same stage with a sixth of its evaluation budget on a problem of `n_params` parameters and
     /// `n_residuals` residuals, to scout with: a local method that has not converged within it is crawling
     /// (the fit pipeline's scouting, [`crate::fit::refine`]). `None` for a stage without such a budget, or
     /// when the cut leaves the budget as it is ([`LmConfig::scout`]).
