@@ -117,7 +117,8 @@ impl<'a> CalibrationProblem<'a> {
         let dm = self.ik_from_base(x)?;
         let (nb, n) = (self.model.n_base(), x.len());
         let mut effects: Option<(Vec<usize>, Vec<Vec<f64>>)> = None;
-        // Every column of a block is written below: one buffer serves every run.
+        // Every column of a block is written below: one buffer serves every run, reshaped to each run's rows
+        // without keeping its content (a resize that kept it would move every column of the last run's).
         let mut j = DMatrix::zeros(0, n);
         // One run's block: the IK columns (chained to the base parameters), the carried effect columns
         // (`covered`, after the IK entries in `jac`) and the rest by differences, computed once.
@@ -125,7 +126,11 @@ impl<'a> CalibrationProblem<'a> {
             let row_offset = self.row_offsets[run];
             let rows = residuals.len();
             let nik = jac.ncols() - covered.len();
-            j.resize_mut(rows, n, 0.0);
+            if j.nrows() != rows {
+                let mut buffer: Vec<f64> = std::mem::replace(&mut j, DMatrix::zeros(0, n)).data.into();
+                buffer.resize(rows * n, 0.0);
+                j = DMatrix::from_vec(rows, n, buffer);
+            }
             match &dm {
                 None => j.columns_mut(0, nb).copy_from(&jac.columns(0, nik)),
                 Some(dm) => j.columns_mut(0, nb).copy_from(&(jac.columns(0, nik) * dm)),
