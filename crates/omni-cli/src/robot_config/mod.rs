@@ -24,11 +24,58 @@ pub use odometry::{num, odometry_header, odometry_yaml, wrap};
 pub use ros2_controllers::{accuracy_lines, controller_yaml, params_text, summary, warning_lines};
 
 use crate::controller::{self, ControllerFit, ControllerKind, FitOptions};
-use anyhow::Context;
 use omni_kin::cost::{self, CostKind};
 use omni_kin::effect::Effect;
-use omni_kin::{FittedModel, IkMatrix, Integration, Model, Run, RunModels};
-use std::path::Path;
+use omni_kin::{FittedModel, IkMatrix, Integration, KinError, Model, Run, RunModels};
+use std::path::{Path, PathBuf};
+
+/// Why the robot configuration could not be computed or written.
+#[derive(Debug, thiserror::Error)]
+pub enum RobotConfigError {
+    /// The joint names do not match the model's wheels.
+    #[error("{names} wheel names for a model with {wheels} wheels")]
+    WheelNames {
+        /// Joint names given.
+        names: usize,
+        /// The model's wheels.
+        wheels: usize,
+    },
+    /// No ros2_controllers drive controller matches the base.
+    #[error("no ros2_controllers drive controller fits a base with {wheels} wheel(s)")]
+    NoController {
+        /// The base's wheels.
+        wheels: usize,
+    },
+    /// The controller's parameters could not be fitted to the model's matrix.
+    #[error("fitting {kind} to the matrix of {spec}")]
+    Fit {
+        /// The controller.
+        kind: ControllerKind,
+        /// How the model was named.
+        spec: String,
+        /// Why.
+        source: KinError,
+    },
+    /// The model or the runs are not usable (runs, matrix, accuracy).
+    #[error(transparent)]
+    Kin(#[from] KinError),
+    /// The folder could not be created.
+    #[error("creating {}", dir.display())]
+    CreateDir {
+        /// The folder.
+        dir: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// A file could not be written.
+    #[error("writing {}", path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+}
 
 /// The matrix as a ROS 2 parameter file.
 pub const ODOMETRY_YAML: &str = "omnical_odometry.yaml";
@@ -132,12 +179,12 @@ fn roller_angles(design: &FittedModel) -> Option<Vec<f64>> {
     Some(g.wheels.iter().map(|w| w.roller_angle_rad).collect())
 }
 
-fn accuracy(fm: &FittedModel, runs: &[Run]) -> anyhow::Result<Accuracy> {
+fn accuracy(fm: &FittedModel, runs: &[Run]) -> Result<Accuracy, KinError> {
     accuracy_each(&RunModels::from(fm), runs)
 }
 
 /// [`accuracy`] with each run under its own model.
-fn accuracy_each(models: &RunModels, runs: &[Run]) -> anyhow::Result<Accuracy> {
+fn accuracy_each(models: &RunModels, runs: &[Run]) -> Result<Accuracy, KinError> {
     let errors = models.errors(runs, CostKind::PATH.selection())?;
     Ok(Accuracy { end_pose: errors.end_pose_cost(), path_rms: errors.path_cost(CostKind::PATH.heading_weight()) })
 }
@@ -155,21 +202,26 @@ fn effects_of(fm: &FittedModel) -> Vec<EffectSummary> {
 }
 
 /// Fit the controller and measure every model on the runs.
-pub fn build(req: &Request<'_>) -> anyhow::Result<RobotConfig> {
+pub fn build(req: &Request<'_>) -> Result<RobotConfig, RobotConfigError> {
     let model = req.model;
     let n = model.model.n_wheels();
-    anyhow::ensure!(req.wheel_names.len() == n, "{} wheel names for a model with {n} wheels", req.wheel_names.len());
+    if req.wheel_names.len() != n {
+        return Err(RobotConfigError::WheelNames { names: req.wheel_names.len(), wheels: n });
+    }
     cost::check_runs(&model.model, req.runs)?;
     let matrix = model.ik()?;
     let kind = match req.controller {
         Some(k) => k,
         None => ControllerKind::for_base(n, roller_angles(req.design).as_deref())
-            .with_context(|| format!("no ros2_controllers drive controller fits a base with {n} wheel(s)"))?,
+            .ok_or(RobotConfigError::NoController { wheels: n })?,
     };
     let s = controller::wheel_second_moment(req.runs)?;
     let opts = FitOptions::default();
-    let fit = controller::fit(kind, &matrix, &s, &opts)
-        .with_context(|| format!("fitting {kind} to the matrix of {}", req.spec))?;
+    let fit = controller::fit(kind, &matrix, &s, &opts).map_err(|source| RobotConfigError::Fit {
+        kind,
+        spec: req.spec.to_string(),
+        source,
+    })?;
     let design_fit = req.design.ik().ok().and_then(|d| controller::fit(kind, &d, &s, &opts).ok());
     let integration = model.model.integration;
     let plain = |m: &IkMatrix| FittedModel::nominal(Model::ik(m.clone()).with_integration(integration));
@@ -191,8 +243,8 @@ pub fn build(req: &Request<'_>) -> anyhow::Result<RobotConfig> {
 }
 
 /// Write the three files into `dir` (created if needed).
-pub fn write(dir: &Path, c: &RobotConfig) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+pub fn write(dir: &Path, c: &RobotConfig) -> Result<(), RobotConfigError> {
+    std::fs::create_dir_all(dir).map_err(|source| RobotConfigError::CreateDir { dir: dir.to_path_buf(), source })?;
     let files = [
         (ODOMETRY_YAML, odometry_yaml(c)),
         (ODOMETRY_HEADER, odometry_header(c)),
@@ -200,7 +252,8 @@ pub fn write(dir: &Path, c: &RobotConfig) -> anyhow::Result<()> {
     ];
     for (name, text) in files {
         let path = dir.join(name);
-        crate::atomic::write_atomic(&path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))?;
+        crate::atomic::write_atomic(&path, text.as_bytes())
+            .map_err(|source| RobotConfigError::Write { path: path.clone(), source })?;
     }
     Ok(())
 }
