@@ -14,13 +14,50 @@
 //! runs declare ([`crate::dataset::Dataset::declared_start`]).
 
 use crate::dataset::{Dataset, Declared, group_designs};
-use crate::robot_file::{self, Design, RobotFile, Source};
-use anyhow::Context;
-use omni_kin::{FittedModel, IkMatrix, KinematicsKind, Model, RobotGeometry, RunModels};
+use crate::robot_file::{self, Design, NoDesign, RobotFile, Source};
+use omni_kin::robot::GeometryError;
+use omni_kin::{FittedModel, IkMatrix, KinError, KinematicsKind, Model, RobotGeometry, RunModels};
+use std::path::PathBuf;
+
+/// Why a design model could not be built.
+#[derive(Debug, thiserror::Error)]
+pub enum DesignError {
+    /// The data names no robot, where one is needed.
+    #[error(transparent)]
+    NoDesign(#[from] NoDesign),
+    /// A robot description's design is not a valid geometry or matrix.
+    #[error("robot {robot}")]
+    Robot {
+        /// Where the description came from.
+        robot: Source,
+        /// What is wrong with it.
+        source: GeometryError,
+    },
+    /// The geometry an input declares makes no design model.
+    #[error("the design {} declares", input.display())]
+    Declared {
+        /// The input that declares it (empty for none).
+        input: PathBuf,
+        /// What is wrong with it.
+        source: Box<DesignError>,
+    },
+    /// Runs without a design of their own, beside inputs that declare theirs, and no robot description.
+    #[error(
+        "run {run} declares no design and no robot description is given, while other inputs declare theirs: \
+         give --robot FILE, or read these runs in a command of their own"
+    )]
+    Undeclared {
+        /// The first such run.
+        run: String,
+    },
+    /// The model refused the design (wheel names, kinematics).
+    #[error(transparent)]
+    Kin(#[from] KinError),
+}
 
 /// The design model of `kind` for a dataset's robot, or `None` when the dataset names no robot. A robot
 /// description's `ik` design is its design matrix (the paper's Eq. 7 for APR-02; the closed form for diff).
-pub fn model_of(kind: KinematicsKind, ds: &Dataset) -> anyhow::Result<Option<Model>> {
+pub fn model_of(kind: KinematicsKind, ds: &Dataset) -> Result<Option<Model>, DesignError> {
     Ok(Some(match robot_file::design(ds) {
         Some(Design::File(f)) => robot_model(kind, f)?,
         Some(Design::Data(g)) => Model::design(kind, Some(g))?,
@@ -30,13 +67,13 @@ pub fn model_of(kind: KinematicsKind, ds: &Dataset) -> anyhow::Result<Option<Mod
 
 /// The design model of `kind` for a robot description, its wheels named after the description's joints
 /// (model files carry them): `ik` around its design matrix, the other kinds around its geometry.
-pub fn robot_model(kind: KinematicsKind, f: &RobotFile) -> anyhow::Result<Model> {
-    let context = || format!("robot {}", f.source);
+pub fn robot_model(kind: KinematicsKind, f: &RobotFile) -> Result<Model, DesignError> {
+    let robot = |source| DesignError::Robot { robot: f.source.clone(), source };
     if kind == KinematicsKind::Ik {
-        let ik = f.description.design_ik().with_context(context)?;
+        let ik = f.description.design_ik().map_err(robot)?;
         return Ok(Model::ik(ik).with_wheel_names(&f.description.joints())?);
     }
-    let g = f.description.to_geometry().with_context(context)?;
+    let g = f.description.to_geometry().map_err(robot)?;
     Ok(Model::design(kind, Some(&g))?)
 }
 
@@ -53,23 +90,25 @@ pub fn default_kind(ds: &Dataset) -> KinematicsKind {
 }
 
 /// [`model_of`], where no robot is an error saying how to describe it.
-pub fn model(kind: KinematicsKind, ds: &Dataset) -> anyhow::Result<Model> {
-    model_of(kind, ds)?.ok_or_else(|| robot_file::no_design("the design model"))
+pub fn model(kind: KinematicsKind, ds: &Dataset) -> Result<Model, DesignError> {
+    model_of(kind, ds)?.ok_or_else(|| robot_file::no_design("the design model").into())
 }
 
 /// The design geometry of a dataset's robot; no robot is an error saying how to describe it.
-pub fn geometry(ds: &Dataset) -> anyhow::Result<RobotGeometry> {
+pub fn geometry(ds: &Dataset) -> Result<RobotGeometry, DesignError> {
     match robot_file::design(ds) {
-        Some(Design::File(f)) => f.description.to_geometry().with_context(|| format!("robot {}", f.source)),
+        Some(Design::File(f)) => {
+            f.description.to_geometry().map_err(|source| DesignError::Robot { robot: f.source.clone(), source })
+        }
         Some(Design::Data(g)) => Ok(g.clone()),
-        None => Err(robot_file::no_design("the design geometry")),
+        None => Err(robot_file::no_design("the design geometry").into()),
     }
 }
 
 /// The design model the dataset's robot declares (`--model design`), nominal, or `None` when it names no
 /// robot: a robot description's design matrix; the data's geometry as a geometry model (a two-wheel base,
 /// OptiOdom's diff, as a diff model: it has no omnidirectional geometry model).
-pub fn declared(ds: &Dataset) -> anyhow::Result<Option<FittedModel>> {
+pub fn declared(ds: &Dataset) -> Result<Option<FittedModel>, DesignError> {
     let model = match robot_file::design(ds) {
         Some(Design::File(_)) => model_of(KinematicsKind::Ik, ds)?,
         Some(Design::Data(g)) => Some(declared_model(g)?),
@@ -99,9 +138,9 @@ pub fn paper_calibrated() -> FittedModel {
 /// the most runs comes first. `None` when the data names no robot.
 fn each_run(
     sets: &[&Dataset],
-    from_geometry: impl Fn(&RobotGeometry) -> anyhow::Result<Model>,
-    from_file: impl Fn(&RobotFile) -> anyhow::Result<Model>,
-) -> anyhow::Result<Option<RunModels>> {
+    from_geometry: impl Fn(&RobotGeometry) -> Result<Model, DesignError>,
+    from_file: impl Fn(&RobotFile) -> Result<Model, DesignError>,
+) -> Result<Option<RunModels>, DesignError> {
     let file = sets.iter().find_map(|ds| ds.robot_file.as_ref());
     let named = file.filter(|f| !matches!(f.source, Source::Discovered(_)));
     let declared: Vec<&Declared> = sets.iter().flat_map(|ds| &ds.declared).collect();
@@ -112,8 +151,9 @@ fn each_run(
     let mut models = Vec::with_capacity(groups.len() + 1);
     for g in &groups {
         let names: Vec<String> = g.inputs.iter().flat_map(|d| d.runs.iter().cloned()).collect();
-        let source = g.inputs.first().map_or_else(String::new, |d| d.source.display().to_string());
-        let model = from_geometry(g.geometry).with_context(|| format!("the design {source} declares"))?;
+        let input = g.inputs.first().map_or_else(PathBuf::new, |d| d.source.clone());
+        let model =
+            from_geometry(g.geometry).map_err(|source| DesignError::Declared { input, source: Box::new(source) })?;
         models.push((FittedModel::nominal(model), names));
     }
     let covered: std::collections::BTreeSet<&str> =
@@ -129,10 +169,7 @@ fn each_run(
         // No input declares a design and no robot description is found: the data names no robot.
         (Some(_), None) if declared.is_empty() => return Ok(None),
         (Some(_), Some(f)) => models.push((FittedModel::nominal(from_file(f)?), rest)),
-        (Some(run), None) => anyhow::bail!(
-            "run {run} declares no design and no robot description is given, while other inputs declare theirs: \
-             give --robot FILE, or read these runs in a command of their own"
-        ),
+        (Some(run), None) => return Err(DesignError::Undeclared { run: run.clone() }),
     }
     if models.is_empty() {
         return Ok(None);
@@ -142,19 +179,19 @@ fn each_run(
 
 /// The design model of `kind` of each run of `sets` (see `each_run`), or `None` when the data names no
 /// robot.
-pub fn designs(kind: KinematicsKind, sets: &[&Dataset]) -> anyhow::Result<Option<RunModels>> {
+pub fn designs(kind: KinematicsKind, sets: &[&Dataset]) -> Result<Option<RunModels>, DesignError> {
     each_run(sets, |g| Ok(Model::design(kind, Some(g))?), |f| robot_model(kind, f))
 }
 
 /// The design model each run's robot declares, as [`declared`] builds it (`--model design`, run by run), or
 /// `None` when the data names no robot.
-pub fn declared_each(sets: &[&Dataset]) -> anyhow::Result<Option<RunModels>> {
+pub fn declared_each(sets: &[&Dataset]) -> Result<Option<RunModels>, DesignError> {
     each_run(sets, declared_model, |f| robot_model(KinematicsKind::Ik, f))
 }
 
 /// The design model a declared geometry stands for: a geometry model (a base that cannot move sideways,
 /// OptiOdom's diff, as a diff model: it has no omnidirectional geometry model).
-fn declared_model(g: &RobotGeometry) -> anyhow::Result<Model> {
+fn declared_model(g: &RobotGeometry) -> Result<Model, DesignError> {
     Ok(if g.is_omnidirectional() { Model::geometry(g.clone()) } else { Model::design(KinematicsKind::Diff, Some(g))? })
 }
 

@@ -2,18 +2,45 @@
 //! MCAP bags with a model's odometry on `/omnical/odometry` for Foxglove.
 
 use crate::atomic;
+use crate::dataset::DatasetError;
 use crate::dataset::mcap::copy::CopiedTopic;
 use crate::dataset::mcap::{WriteOptions, write_run};
 use crate::report::tum;
-use anyhow::Context;
 use omni_kin::odometry::{self, Selection};
-use omni_kin::{FittedModel, Run, StampedPose};
+use omni_kin::{FittedModel, KinError, Run, StampedPose};
 use std::path::{Path, PathBuf};
+
+/// Why a run's trajectories could not be exported.
+#[derive(Debug, thiserror::Error)]
+pub enum ExportError {
+    /// The model's parameters do not resolve for the run.
+    #[error("run {run}")]
+    Model {
+        /// The run.
+        run: String,
+        /// Why.
+        source: KinError,
+    },
+    /// A bag could not be written, or a recording's topics read.
+    #[error(transparent)]
+    Dataset(#[from] DatasetError),
+    /// A TUM file could not be written.
+    #[error("writing {}", path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+}
 
 /// The odometry of the measured point: every wheel-sample step plus the exact predictions at the
 /// ground-truth stamps (so tools that match poses by time find an exact match), in time order.
-pub fn odometry_poses(model: &FittedModel, run: &Run) -> anyhow::Result<Vec<StampedPose>> {
-    let res = model.model.resolve(&model.params).with_context(|| format!("run {}", run.name()))?;
+pub fn odometry_poses(model: &FittedModel, run: &Run) -> Result<Vec<StampedPose>, ExportError> {
+    let res = model
+        .model
+        .resolve(&model.params)
+        .map_err(|source| ExportError::Model { run: run.name().to_string(), source })?;
     let dense = odometry::integrate(&res, run);
     let mut poses: Vec<StampedPose> =
         dense.t_s.iter().zip(&dense.poses).map(|(&t_s, &pose)| StampedPose { t_s, pose }).collect();
@@ -48,7 +75,7 @@ pub fn write_mcap(
     wheel_joints: &[String],
     recording_origin_s: Option<i64>,
     recorded: &[CopiedTopic],
-) -> anyhow::Result<PathBuf> {
+) -> Result<PathBuf, ExportError> {
     let origin_s = match recording_origin_s {
         Some(o) => o,
         // Simulated clocks start before 0 s (as `simulate` does): its epoch.
@@ -91,7 +118,7 @@ impl<'a> RecordedTopics<'a> {
     }
 
     /// The topics of `run`'s recording (none for a run not read from a ROS recording).
-    pub fn for_run(&mut self, run: &Run) -> anyhow::Result<&[CopiedTopic]> {
+    pub fn for_run(&mut self, run: &Run) -> Result<&[CopiedTopic], DatasetError> {
         let Some(path) = self.recordings.get(run.name()) else { return Ok(&[]) };
         if self.last.as_ref().is_none_or(|(p, _)| p != path) {
             let topics = crate::dataset::recorded_topics(path, self.max_file_bytes)?;
@@ -111,7 +138,7 @@ pub fn write_tum(
     model: &FittedModel,
     spec: &str,
     recording_origin_s: Option<i64>,
-) -> anyhow::Result<Vec<PathBuf>> {
+) -> Result<Vec<PathBuf>, ExportError> {
     let stem = tum::file_stem(run.name());
     let files = [
         ("gt", format!("run {}: ground truth", run.name()), run.truth().to_vec()),
@@ -123,7 +150,8 @@ pub fn write_tum(
         let path = dir.join(format!("{stem}.{kind}.tum"));
         let header = format!("{comment}\ntimestamp tx ty tz qx qy qz qw (s, m, unit quaternion)");
         let text = tum::to_tum_at(&header, &poses, recording_origin_s.unwrap_or(0));
-        atomic::write_atomic(&path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))?;
+        atomic::write_atomic(&path, text.as_bytes())
+            .map_err(|source| ExportError::Write { path: path.clone(), source })?;
         written.push(path);
     }
     Ok(written)

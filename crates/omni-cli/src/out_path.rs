@@ -8,8 +8,159 @@
 //! files (`report --png`, `export --robot-config`, `man --out`) are [`prepared`](prepare_dir) instead: the
 //! command writes its own file names and leaves the rest alone.
 
-use anyhow::{Context, bail};
 use std::path::{Path, PathBuf};
+
+/// What is wrong with a place for results. Every variant names the option (`flag`: `--out`, `out=`) and
+/// the path it gave; an OS error is chained as the source.
+#[derive(Debug, thiserror::Error)]
+pub enum OutPathError {
+    /// A result file named a folder.
+    #[error("{flag} {}: this is a folder; give a file name in it", path.display())]
+    IsFolder {
+        /// The option.
+        flag: String,
+        /// The path given.
+        path: PathBuf,
+    },
+    /// A result file's folder does not exist.
+    #[error(
+        "{flag} {}: the folder {} does not exist (create it first: mkdir -p {})",
+        path.display(),
+        folder.display(),
+        folder.display()
+    )]
+    NoFolder {
+        /// The option.
+        flag: String,
+        /// The path given.
+        path: PathBuf,
+        /// Its folder.
+        folder: PathBuf,
+    },
+    /// A result folder named a file.
+    #[error("{flag} {}: this is a file, not a folder", dir.display())]
+    IsFile {
+        /// The option.
+        flag: String,
+        /// The path given.
+        dir: PathBuf,
+    },
+    /// No file can be created in `folder`, where the result `path` goes.
+    #[error("{flag} {}: cannot write in {}", path.display(), folder.display())]
+    CannotWriteIn {
+        /// The option.
+        flag: String,
+        /// The path given.
+        path: PathBuf,
+        /// The folder that takes no files.
+        folder: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// No file can be created in the result folder `dir` itself.
+    #[error("{flag} {}: cannot write in it", dir.display())]
+    CannotWrite {
+        /// The option.
+        flag: String,
+        /// The folder.
+        dir: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// A folder could not be created.
+    #[error("{flag}: creating {}", dir.display())]
+    Create {
+        /// The option.
+        flag: String,
+        /// The folder.
+        dir: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// A result folder's entries could not be listed.
+    #[error("{flag}: reading {}", dir.display())]
+    Read {
+        /// The option.
+        flag: String,
+        /// The folder.
+        dir: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// A result folder already holds files, claimed without `--force`.
+    #[error(
+        "{flag} {}: the folder already holds files ({entries}); give --force to replace it whole, or another {flag}",
+        dir.display()
+    )]
+    NotEmpty {
+        /// The option.
+        flag: String,
+        /// The folder.
+        dir: PathBuf,
+        /// Some of its entries, for the message.
+        entries: String,
+    },
+    /// A folder to replace could not be resolved to its canonical path.
+    #[error("{flag} {}", dir.display())]
+    Canonicalize {
+        /// The option.
+        flag: String,
+        /// The folder.
+        dir: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// `--force` on a folder that holds the working directory.
+    #[error("{flag} {}: --force will not replace a folder that holds the working directory", dir.display())]
+    HoldsWorkingDirectory {
+        /// The option.
+        flag: String,
+        /// The folder.
+        dir: PathBuf,
+    },
+    /// `--force` on the home folder.
+    #[error("{flag} {}: --force will not replace the home folder", dir.display())]
+    Home {
+        /// The option.
+        flag: String,
+        /// The folder.
+        dir: PathBuf,
+    },
+    /// A staging folder left by an earlier process with the same id could not be removed.
+    #[error("removing {}", staging.display())]
+    RemoveStaging {
+        /// The staging folder.
+        staging: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The new folder could not be renamed to the target.
+    #[error("moving the results into {}", target.display())]
+    MoveIn {
+        /// The result folder.
+        target: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The old folder could not be moved aside.
+    #[error("moving the old {} aside", target.display())]
+    MoveAside {
+        /// The result folder.
+        target: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The old folder, moved aside, could not be removed.
+    #[error("removing the old {} ({})", target.display(), old.display())]
+    RemoveOld {
+        /// The result folder.
+        target: PathBuf,
+        /// Where the old one was moved.
+        old: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+}
 
 /// The folder a path's file goes into (`.` for a bare file name).
 fn folder_of(path: &Path) -> &Path {
@@ -28,30 +179,44 @@ fn check_writable(folder: &Path) -> std::io::Result<()> {
 
 /// Checks, before the work, that the result file `path` (given with `flag`, e.g. `--out`) can be written:
 /// it is not a folder, its folder exists and takes files. The file itself is written later, atomically.
-pub fn check_file(path: &Path, flag: &str) -> anyhow::Result<()> {
+pub fn check_file(path: &Path, flag: &str) -> Result<(), OutPathError> {
+    let (flag, path_buf) = (flag.to_string(), path.to_path_buf());
     if path.is_dir() {
-        bail!("{flag} {}: this is a folder; give a file name in it", path.display());
+        return Err(OutPathError::IsFolder { flag, path: path_buf });
     }
-    let folder = folder_of(path);
+    let folder = folder_of(path).to_path_buf();
     if !folder.is_dir() {
-        bail!(
-            "{flag} {}: the folder {} does not exist (create it first: mkdir -p {})",
-            path.display(),
-            folder.display(),
-            folder.display()
-        );
+        return Err(OutPathError::NoFolder { flag, path: path_buf, folder });
     }
-    check_writable(folder).with_context(|| format!("{flag} {}: cannot write in {}", path.display(), folder.display()))
+    check_writable(&folder).map_err(|source| OutPathError::CannotWriteIn { flag, path: path_buf, folder, source })
 }
 
 /// Makes the folder `dir` (given with `flag`) for results of fixed file names, and checks that it takes
 /// files, before the work: a missing folder is created (with its parents), files already in it stay.
-pub fn prepare_dir(dir: &Path, flag: &str) -> anyhow::Result<()> {
+pub fn prepare_dir(dir: &Path, flag: &str) -> Result<(), OutPathError> {
     if dir.exists() && !dir.is_dir() {
-        bail!("{flag} {}: this is a file, not a folder", dir.display());
+        return Err(OutPathError::IsFile { flag: flag.into(), dir: dir.to_path_buf() });
     }
-    std::fs::create_dir_all(dir).with_context(|| format!("{flag}: creating {}", dir.display()))?;
-    check_writable(dir).with_context(|| format!("{flag} {}: cannot write in it", dir.display()))
+    create_dir_all(dir, flag)?;
+    check_writable_dir(dir, flag)
+}
+
+/// `dir` and its missing parents created, for the option `flag`.
+fn create_dir_all(dir: &Path, flag: &str) -> Result<(), OutPathError> {
+    std::fs::create_dir_all(dir).map_err(|source| OutPathError::Create {
+        flag: flag.into(),
+        dir: dir.to_path_buf(),
+        source,
+    })
+}
+
+/// [`check_writable`] on the result folder `dir` itself, for the option `flag`.
+fn check_writable_dir(dir: &Path, flag: &str) -> Result<(), OutPathError> {
+    check_writable(dir).map_err(|source| OutPathError::CannotWrite {
+        flag: flag.into(),
+        dir: dir.to_path_buf(),
+        source,
+    })
 }
 
 /// Up to three entries of a folder, for messages: `train, validation, truth.json, …`.
@@ -67,31 +232,20 @@ fn some_entries(dir: &Path) -> std::io::Result<Option<String>> {
     Ok(Some(format!("{}{more}", names[..names.len().min(3)].join(", "))))
 }
 
-/// A result folder that already holds files, claimed without `--force`.
-#[derive(Debug, thiserror::Error)]
-#[error(
-    "{flag} {}: the folder already holds files ({entries}); give --force to replace it whole, or another {flag}",
-    dir.display()
-)]
-pub struct NotEmpty {
-    /// The option that named it (`--out`).
-    pub flag: String,
-    /// The folder.
-    pub dir: PathBuf,
-    /// Some of its entries, for the message.
-    pub entries: String,
-}
-
 /// Refuses to `--force` away a folder that holds the working directory or is the home folder.
-fn check_replaceable(dir: &Path, flag: &str) -> anyhow::Result<()> {
-    let canonical = dir.canonicalize().with_context(|| format!("{flag} {}", dir.display()))?;
+fn check_replaceable(dir: &Path, flag: &str) -> Result<(), OutPathError> {
+    let (flag, dir) = (flag.to_string(), dir.to_path_buf());
+    let canonical = match dir.canonicalize() {
+        Ok(c) => c,
+        Err(source) => return Err(OutPathError::Canonicalize { flag, dir, source }),
+    };
     let cwd = std::env::current_dir().and_then(|d| d.canonicalize()).unwrap_or_default();
     if cwd.starts_with(&canonical) {
-        bail!("{flag} {}: --force will not replace a folder that holds the working directory", dir.display());
+        return Err(OutPathError::HoldsWorkingDirectory { flag, dir });
     }
     let home = std::env::var_os("HOME").map(PathBuf::from).and_then(|h| h.canonicalize().ok());
     if home.is_some_and(|h| h == canonical) {
-        bail!("{flag} {}: --force will not replace the home folder", dir.display());
+        return Err(OutPathError::Home { flag, dir });
     }
     Ok(())
 }
@@ -112,15 +266,19 @@ impl OutDir {
     /// Claims `target` (given with `flag`, e.g. `--out`): a folder that already holds files is refused
     /// unless `force` (then it is replaced whole at the commit); missing parent folders are created; the
     /// staging folder is made now, so a folder that takes no files fails before the work.
-    pub fn claim(target: &Path, flag: &str, force: bool) -> anyhow::Result<Self> {
+    pub fn claim(target: &Path, flag: &str, force: bool) -> Result<Self, OutPathError> {
         if target.exists() && !target.is_dir() {
-            bail!("{flag} {}: this is a file, not a folder", target.display());
+            return Err(OutPathError::IsFile { flag: flag.into(), dir: target.to_path_buf() });
         }
         if target.is_dir() {
-            let held = some_entries(target).with_context(|| format!("{flag}: reading {}", target.display()))?;
+            let held = some_entries(target).map_err(|source| OutPathError::Read {
+                flag: flag.into(),
+                dir: target.to_path_buf(),
+                source,
+            })?;
             match held {
                 Some(entries) if !force => {
-                    return Err(NotEmpty { flag: flag.into(), dir: target.to_path_buf(), entries }.into());
+                    return Err(OutPathError::NotEmpty { flag: flag.into(), dir: target.to_path_buf(), entries });
                 }
                 Some(_) => check_replaceable(target, flag)?,
                 None => {}
@@ -128,18 +286,23 @@ impl OutDir {
         }
         let name = target.file_name().filter(|_| !is_working_directory(target));
         let Some(name) = name else {
-            std::fs::create_dir_all(target).with_context(|| format!("{flag}: creating {}", target.display()))?;
-            check_writable(target).with_context(|| format!("{flag} {}: cannot write in it", target.display()))?;
+            create_dir_all(target, flag)?;
+            check_writable_dir(target, flag)?;
             return Ok(Self { target: target.to_path_buf(), staging: None });
         };
         let parent = folder_of(target);
-        std::fs::create_dir_all(parent).with_context(|| format!("{flag}: creating {}", parent.display()))?;
+        create_dir_all(parent, flag)?;
         let staging = parent.join(format!(".{}.omnical-tmp-{}", name.to_string_lossy(), std::process::id()));
         if staging.exists() {
-            std::fs::remove_dir_all(&staging).with_context(|| format!("removing {}", staging.display()))?;
+            std::fs::remove_dir_all(&staging)
+                .map_err(|source| OutPathError::RemoveStaging { staging: staging.clone(), source })?;
         }
-        std::fs::create_dir(&staging)
-            .with_context(|| format!("{flag} {}: cannot write in {}", target.display(), parent.display()))?;
+        std::fs::create_dir(&staging).map_err(|source| OutPathError::CannotWriteIn {
+            flag: flag.into(),
+            path: target.to_path_buf(),
+            folder: parent.to_path_buf(),
+            source,
+        })?;
         Ok(Self { target: target.to_path_buf(), staging: Some(staging) })
     }
 
@@ -163,7 +326,7 @@ impl OutDir {
 
     /// Puts the folder in place: the old one (if any) is moved aside, the new one renamed to the target,
     /// and the old one removed.
-    pub fn commit(mut self) -> anyhow::Result<()> {
+    pub fn commit(mut self) -> Result<(), OutPathError> {
         let Some(staging) = self.staging.take() else { return Ok(()) };
         let result = swap_in(&staging, &self.target);
         if result.is_err() {
@@ -189,19 +352,23 @@ fn is_working_directory(p: &Path) -> bool {
 
 /// Renames `staging` to `target`, replacing an existing `target` folder (moved aside first, then removed;
 /// moved back if the rename fails).
-fn swap_in(staging: &Path, target: &Path) -> anyhow::Result<()> {
+fn swap_in(staging: &Path, target: &Path) -> Result<(), OutPathError> {
+    let move_in = |source| OutPathError::MoveIn { target: target.to_path_buf(), source };
     if !target.exists() {
-        return std::fs::rename(staging, target)
-            .with_context(|| format!("moving the results into {}", target.display()));
+        return std::fs::rename(staging, target).map_err(move_in);
     }
     let name = target.file_name().map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
     let old = folder_of(target).join(format!(".{name}.omnical-old-{}", std::process::id()));
-    std::fs::rename(target, &old).with_context(|| format!("moving the old {} aside", target.display()))?;
+    std::fs::rename(target, &old).map_err(|source| OutPathError::MoveAside { target: target.to_path_buf(), source })?;
     if let Err(e) = std::fs::rename(staging, target) {
         let _ = std::fs::rename(&old, target);
-        return Err(e).with_context(|| format!("moving the results into {}", target.display()));
+        return Err(move_in(e));
     }
-    std::fs::remove_dir_all(&old).with_context(|| format!("removing the old {} ({})", target.display(), old.display()))
+    std::fs::remove_dir_all(&old).map_err(|source| OutPathError::RemoveOld {
+        target: target.to_path_buf(),
+        old,
+        source,
+    })
 }
 
 #[cfg(test)]

@@ -269,9 +269,18 @@ pub fn design(ds: &Dataset) -> Option<Design<'_>> {
     }
 }
 
+/// A command that needs the robot's design found none; the message says how to give one, in the command
+/// line's spelling ([`no_design_text`]).
+#[derive(Debug, Error)]
+#[error("{}", no_design_text(what, &Spelling::COMMAND_LINE))]
+pub struct NoDesign {
+    /// What needs the design (`--model design`, `plan`).
+    pub what: String,
+}
+
 /// The error of a command that needs the robot's design and has none: how to give one.
-pub fn no_design(what: &str) -> anyhow::Error {
-    anyhow::anyhow!(no_design_text(what, &Spelling::COMMAND_LINE))
+pub fn no_design(what: &str) -> NoDesign {
+    NoDesign { what: what.to_string() }
 }
 
 /// How a caller names the robot: the command line's `--robot`, Python's `robot=`.

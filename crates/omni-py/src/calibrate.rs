@@ -481,7 +481,8 @@ fn start_model(
     }
     let kind = model.extract::<String>().ok().and_then(|s| s.parse::<KinematicsKind>().ok());
     if let Some(kind) = kind {
-        let m = omni_cli::design::model_of(kind, origin).map_err(|e| value_error(format!("robot: {e:#}")))?;
+        let m = omni_cli::design::model_of(kind, origin)
+            .map_err(|e| value_error(format!("robot: {}", crate::errors::chain_text(&e))))?;
         return match m {
             Some(m) => Ok((FittedModel::nominal(m), Vec::new(), true)),
             None => Err(crate::robot::no_design("omnical.train")),

@@ -8,8 +8,10 @@
 //! | `DatasetError` (a file that does not parse or does not make runs) | `omnical.DatasetError` |
 //! | `ModelFileError` (parse / invalid contents) | `omnical.ModelFileError` |
 //! | `OptimizeError` (an optimizer refused its inputs); a refused fit (`train`: a fixed step that misses the runs' sampling, a fit worse than its start) | `omnical.CalibrationError` |
+//! | a report or export that fails ([`file_error`]: the first `io::Error` among the error's sources) | `FileNotFoundError`, `OSError`, else `omnical.OmnicalError`; an export folder that already holds files: `FileExistsError` |
 //!
-//! All omnical-specific exceptions derive from `omnical.OmnicalError`.
+//! All omnical-specific exceptions derive from `omnical.OmnicalError`. A message made of an error and its
+//! sources is [`chain_text`]: the CLI's `error: …` text.
 
 use omni_cli::dataset::DatasetError as RsDatasetError;
 use omni_cli::model_file::ModelFileError as RsModelFileError;
@@ -127,6 +129,35 @@ impl ToPyErr for RsModelFileError {
             RsModelFileError::Io { error, .. } => io_error(message, error),
             _ => ModelFileError::new_err(message),
         }
+    }
+}
+
+/// An error and its sources, each joined to the one before by `: `: the text the command line prints after
+/// `error: `, so that Python and the CLI say the same.
+pub fn chain_text(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut text = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        text.push_str(": ");
+        text.push_str(&c.to_string());
+        cause = c.source();
+    }
+    text
+}
+
+/// The first OS error among `e` and its sources, if any.
+fn io_cause<'e>(e: &'e (dyn std::error::Error + 'static)) -> Option<&'e std::io::Error> {
+    std::iter::successors(Some(e), |c| c.source()).find_map(|c| c.downcast_ref::<std::io::Error>())
+}
+
+/// `e` as `FileNotFoundError` when an OS error among its sources is "not found", `OSError` for another OS
+/// error, else `omnical.OmnicalError`; the message is [`chain_text`].
+pub fn file_error(e: &(dyn std::error::Error + 'static)) -> PyErr {
+    let message = chain_text(e);
+    match io_cause(e) {
+        Some(io) if io.kind() == std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
+        Some(_) => PyOSError::new_err(message),
+        None => OmnicalError::new_err(message),
     }
 }
 

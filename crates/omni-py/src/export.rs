@@ -1,13 +1,13 @@
 //! `export`: trajectories for other tools, as `omnical export` writes them (its own functions): TUM files
 //! for evo, MCAP bags with the model's odometry on /omnical/odometry for Foxglove.
 
-use crate::errors::{OmnicalError, value_error};
+use crate::errors::{chain_text, file_error, value_error};
 use crate::robot::{check_order, designs_for, model_spec, per_run};
 use crate::run::{origin_of, runs_from};
 use omni_cli::api::load::DataOptions;
 use omni_cli::export::{RecordedTopics, write_mcap, write_tum};
-use omni_cli::out_path::OutDir;
-use pyo3::exceptions::{PyFileExistsError, PyFileNotFoundError, PyOSError};
+use omni_cli::out_path::{OutDir, OutPathError};
+use pyo3::exceptions::PyFileExistsError;
 use pyo3::prelude::*;
 use std::path::PathBuf;
 
@@ -59,52 +59,49 @@ pub fn export(
         Some(_) => DataOptions::default().wheel_joints(&origin),
         None => fm.model.kinematics.wheel_names(),
     };
-    let written = py.detach(|| -> anyhow::Result<Vec<PathBuf>> {
-        let claim = |dir: &Option<PathBuf>, flag| dir.as_deref().map(|d| OutDir::claim(d, flag, force)).transpose();
+    // Each failure becomes the Python exception of its cause here, with the CLI's message.
+    let written = py.detach(|| -> PyResult<Vec<PathBuf>> {
+        let claim = |dir: &Option<PathBuf>, flag| {
+            dir.as_deref().map(|d| OutDir::claim(d, flag, force)).transpose().map_err(out_error)
+        };
         let (tum, mcap) = (claim(&tum, "tum=")?, claim(&mcap, "mcap=")?);
         let mut written = Vec::new();
         if let Some(out) = tum {
             for run in &runs {
-                written.extend(
-                    write_tum(
-                        out.path(),
-                        run,
-                        designs.for_run(run)?,
-                        models.for_run(run)?,
-                        &spec,
-                        origin.time_origins_s.get(run.name()).copied(),
-                    )?
-                    .iter()
-                    .map(|f| out.shown(f)),
-                );
+                let (design, model) = (designs.for_run(run).map_err(cause)?, models.for_run(run).map_err(cause)?);
+                let origin_s = origin.time_origins_s.get(run.name()).copied();
+                let files = write_tum(out.path(), run, design, model, &spec, origin_s).map_err(cause)?;
+                written.extend(files.iter().map(|f| out.shown(f)));
             }
-            out.commit()?;
+            out.commit().map_err(out_error)?;
         }
         if let Some(out) = mcap {
             let mut recorded = RecordedTopics::new(&origin.recordings, omni_cli::dataset::DEFAULT_MAX_FILE_BYTES);
             for run in &runs {
                 let origin_s = origin.time_origins_s.get(run.name()).copied();
-                let topics = recorded.for_run(run)?;
-                written.push(out.shown(&write_mcap(out.path(), run, models.for_run(run)?, &joints, origin_s, topics)?));
+                let topics = recorded.for_run(run).map_err(cause)?;
+                let model = models.for_run(run).map_err(cause)?;
+                written.push(out.shown(&write_mcap(out.path(), run, model, &joints, origin_s, topics).map_err(cause)?));
             }
-            out.commit()?;
+            out.commit().map_err(out_error)?;
         }
         Ok(written)
     });
-    let written = errors.check(written)?.map_err(export_error)?;
+    let written = errors.check(written)??;
     Ok(written.iter().map(|p| p.display().to_string()).collect())
+}
+
+/// A result folder refused or not written: `FileExistsError` for one that already holds files (without
+/// `force`), else as [`cause`].
+fn out_error(e: OutPathError) -> PyErr {
+    match e {
+        OutPathError::NotEmpty { .. } => PyFileExistsError::new_err(chain_text(&e)),
+        e => cause(e),
+    }
 }
 
 /// An export failure as the Python exception of its cause (`FileNotFoundError`, `OSError`, else
 /// `OmnicalError`), with the CLI's message.
-fn export_error(e: anyhow::Error) -> PyErr {
-    let message = format!("{e:#}");
-    if e.downcast_ref::<omni_cli::out_path::NotEmpty>().is_some() {
-        return PyFileExistsError::new_err(message);
-    }
-    match e.chain().find_map(|c| c.downcast_ref::<std::io::Error>()) {
-        Some(io) if io.kind() == std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
-        Some(_) => PyOSError::new_err(message),
-        None => OmnicalError::new_err(message),
-    }
+fn cause(e: impl std::error::Error + 'static) -> PyErr {
+    file_error(&e)
 }

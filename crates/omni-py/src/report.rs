@@ -1,12 +1,12 @@
 //! `report`: the HTML report of a model on runs, as `omnical report` writes it.
 
 use crate::effect::EffectErrors;
-use crate::errors::{OmnicalError, PyResultExt, value_error};
+use crate::errors::{PyResultExt, chain_text, file_error, value_error};
 use crate::robot::{check_order, designs_for, model_spec};
 use crate::run::{origin_of, runs_from};
 use omni_cli::report::{self as rs_report, ReportInput};
 use omni_ga::diagnose::DiagnoseOptions;
-use pyo3::exceptions::{PyFileNotFoundError, PyOSError};
+use pyo3::exceptions::PyFileNotFoundError;
 use pyo3::prelude::*;
 use std::path::PathBuf;
 
@@ -42,7 +42,7 @@ pub fn report(
     // Where the results go is checked before the diagnosis, as `omnical report` does.
     let outputs = omni_cli::out_path::check_file(&out, "out=")
         .and_then(|()| png.as_deref().map_or(Ok(()), |d| omni_cli::out_path::prepare_dir(d, "png=")));
-    outputs.map_err(|e| PyFileNotFoundError::new_err(format!("omnical.report: {e:#}")))?;
+    outputs.map_err(|e| PyFileNotFoundError::new_err(format!("omnical.report: {}", chain_text(&e))))?;
     let mut origins = vec![origin_of(runs)];
     origins.extend(validate.map(origin_of));
     let (train, declared) = runs_from(runs, "runs")?;
@@ -84,16 +84,5 @@ pub fn report(
         sources: Vec::new(),
     };
     let written = py.detach(|| rs_report::write_with(&input, &out, png.as_deref(), &extra));
-    match written {
-        Ok(w) => Ok(w.figures),
-        Err(e) => {
-            let message = format!("{e:#}");
-            let io = e.chain().find_map(|c| c.downcast_ref::<std::io::Error>());
-            Err(match io {
-                Some(io) if io.kind() == std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
-                Some(_) => PyOSError::new_err(message),
-                None => OmnicalError::new_err(message),
-            })
-        }
-    }
+    written.map(|w| w.figures).map_err(|e| file_error(&e))
 }

@@ -4,7 +4,7 @@
 //! one: there is no silent default robot.
 
 use crate::effect::PyEffect;
-use crate::errors::{io_error, value_error};
+use crate::errors::{chain_text, io_error, value_error};
 use crate::model::model_arg;
 use omni_cli::api::ModelSpec;
 use omni_cli::robot_file::{self, RobotFile, RobotFileError, Spelling};
@@ -34,7 +34,7 @@ pub fn robot_arg(robot: Option<&PathBuf>) -> PyResult<Option<RobotFile>> {
 
 /// The design model of `kind` for a robot description, at its design values, wheels named after its joints.
 pub fn robot_design(robot: &RobotFile, kind: KinematicsKind) -> PyResult<FittedModel> {
-    omni_cli::design::robot_model(kind, robot).map(FittedModel::nominal).map_err(|e| value_error(format!("{e:#}")))
+    omni_cli::design::robot_model(kind, robot).map(FittedModel::nominal).map_err(|e| value_error(chain_text(&e)))
 }
 
 /// The `ValueError` of `what` (`"omnical.train"`) when no design is known.
@@ -153,7 +153,7 @@ pub fn per_run(
     if ModelSpec::from_path(std::path::Path::new(spelled)) != ModelSpec::Design || robot.is_some() {
         return Ok(RunModels::from(model));
     }
-    match omni_cli::design::declared_each(&[origin]).map_err(|e| value_error(format!("{e:#}")))? {
+    match omni_cli::design::declared_each(&[origin]).map_err(|e| value_error(chain_text(&e)))? {
         Some(each) if each.single().is_none() => Ok(each),
         _ => Ok(RunModels::from(model)),
     }

@@ -2,13 +2,12 @@
 //! `omni_kin::Run::new` either way.
 
 use crate::arrays::{matrix, matrix_to_poses, poses_to_matrix, shape_text, to_matrix, to_vector, vector};
-use crate::errors::{PyResultExt, ToPyErr, value_error};
+use crate::errors::{PyResultExt, ToPyErr, chain_text, value_error};
 use crate::model::PyModel;
 use crate::robot::robot_error;
 use numpy::{PyArray1, PyArray2};
-use omni_cli::api::load::{DataOptions, LoadRequest};
-use omni_cli::dataset;
-use omni_cli::robot_file::{self, RobotFileError};
+use omni_cli::api::load::{DataOptions, LoadError, LoadRequest};
+use omni_cli::robot_file;
 use omni_kin::{Command, FittedModel, Run, RunData};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
@@ -380,7 +379,7 @@ pub fn load(
     // The CLI's lookup: robot=, else a robot.toml beside the data or in the working directory.
     let robot = request.robot().map_err(robot_error)?;
     let ds = py.detach(|| request.read_for_robot(robot)).map_err(load_error)?;
-    let design = omni_cli::design::declared(&ds).map_err(|e| value_error(format!("{e:#}")))?;
+    let design = omni_cli::design::declared(&ds).map_err(|e| value_error(chain_text(&e)))?;
     let source = ds.robot_file.as_ref().map(|f| f.source.clone());
     let mut notes = ds.notes;
     if let Some(s @ robot_file::Source::Discovered(_)) = &source {
@@ -414,14 +413,11 @@ fn key_values(map: Option<std::collections::BTreeMap<String, String>>) -> Vec<St
 
 /// An error of the CLI's loading as the Python exception of its cause (`DatasetError`, `FileNotFoundError`,
 /// `ValueError` for a robot description or a bad option).
-fn load_error(e: anyhow::Error) -> PyErr {
-    let e = match e.downcast::<dataset::DatasetError>() {
-        Ok(d) => return d.to_py_err(),
-        Err(e) => e,
-    };
-    match e.downcast::<RobotFileError>() {
-        Ok(r) => robot_error(r),
-        Err(e) => value_error(format!("{e:#}")),
+fn load_error(e: LoadError) -> PyErr {
+    match e {
+        LoadError::Dataset(d) => d.to_py_err(),
+        LoadError::Robot(r) => robot_error(r),
+        e => value_error(chain_text(&e)),
     }
 }
 

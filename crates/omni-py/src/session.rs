@@ -3,7 +3,7 @@
 //! file it writes is byte-identical to `omnical train … --out FILE`; nothing is printed and no Ctrl-C
 //! handler is installed (the host process keeps its own).
 
-use crate::errors::{OmnicalError, value_error};
+use crate::errors::{OmnicalError, chain_text, value_error};
 use omni_cli::api::diagnose::diagnose_quietly;
 use omni_cli::api::session::{ArgvError, diagnose_request, fleet_request, train_request};
 use omni_cli::api::train::{Trained, train_quietly};
@@ -28,7 +28,7 @@ use serde_json::json;
 #[pyfunction]
 pub fn train_files<'py>(py: Python<'py>, args: Vec<String>) -> PyResult<Bound<'py, PyAny>> {
     let request = train_request(&args).map_err(|e| argv_error("train_files", e))?;
-    let t = py.detach(|| train_quietly(&request)).map_err(|e| OmnicalError::new_err(format!("{e:#}")))?;
+    let t = py.detach(|| train_quietly(&request)).map_err(|e| OmnicalError::new_err(chain_text(&e)))?;
     let text = serde_json::to_string(&session_json(&t)).map_err(|e| value_error(e.to_string()))?;
     py.import("json")?.call_method1("loads", (text,))
 }
@@ -48,7 +48,7 @@ pub fn train_files<'py>(py: Python<'py>, args: Vec<String>) -> PyResult<Bound<'p
 #[pyfunction]
 pub fn diagnose_files<'py>(py: Python<'py>, args: Vec<String>) -> PyResult<Bound<'py, PyAny>> {
     let request = diagnose_request(&args).map_err(|e| argv_error("diagnose_files", e))?;
-    let d = py.detach(|| diagnose_quietly(&request)).map_err(|e| OmnicalError::new_err(format!("{e:#}")))?;
+    let d = py.detach(|| diagnose_quietly(&request)).map_err(|e| OmnicalError::new_err(chain_text(&e)))?;
     let text = serde_json::to_string(&d).map_err(|e| value_error(e.to_string()))?;
     py.import("json")?.call_method1("loads", (text,))
 }

@@ -1,14 +1,46 @@
 //! `omnical diagnose` as a request ([`DiagnoseRequest`]): loading, the model, the diagnosis and the model
 //! file `--out` writes. The command prints around it; [`diagnose_quietly`] runs it without a terminal.
 
-use crate::api::ModelSpec;
-use crate::api::load::{DataOptions, load_with_held_out};
+use crate::api::held_out::SameRecording;
+use crate::api::load::{DataOptions, LoadError, load_with_held_out};
+use crate::api::{ModelSpec, ResolveError};
 use crate::design::designs_for;
+use crate::out_path::OutPathError;
 use crate::{atomic, model_file};
-use anyhow::Context;
 use omni_ga::diagnose::{DiagnoseOptions, Diagnosis, diagnose};
 use omni_kin::{FittedModel, Run};
 use std::path::PathBuf;
+
+/// Why `omnical diagnose` (its loading, the diagnosis or the model file) failed.
+#[derive(Debug, thiserror::Error)]
+pub enum DiagnoseError {
+    /// `--out` cannot take the model file.
+    #[error(transparent)]
+    Out(#[from] OutPathError),
+    /// The runs could not be read.
+    #[error(transparent)]
+    Load(#[from] LoadError),
+    /// `--model` stands for no model.
+    #[error(transparent)]
+    Model(#[from] ResolveError),
+    /// A held-out run is a training run.
+    #[error(transparent)]
+    SameRecording(#[from] SameRecording),
+    /// The diagnosis failed.
+    #[error(transparent)]
+    Diagnose(#[from] omni_ga::Error),
+    /// The final model does not make a model file (the writer's message).
+    #[error("{0}")]
+    ModelText(String),
+    /// The model file could not be written.
+    #[error("writing {}", path.display())]
+    Write {
+        /// The model file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+}
 
 /// What `omnical diagnose` does: the model, the training and held-out runs and how to read them, the
 /// diagnosis options, where the final model goes.
@@ -30,7 +62,7 @@ pub struct DiagnoseRequest {
 
 /// `omnical diagnose` without printing (the Python wheel's fleet workers): loads, diagnoses and writes
 /// `--out` as the command does, and returns the diagnosis.
-pub fn diagnose_quietly(a: &DiagnoseRequest) -> anyhow::Result<Diagnosis> {
+pub fn diagnose_quietly(a: &DiagnoseRequest) -> Result<Diagnosis, DiagnoseError> {
     Ok(diagnose_loaded(a)?.0)
 }
 
@@ -45,7 +77,7 @@ pub struct Loaded {
 }
 
 /// Loads, diagnoses and writes `--out`; returns the diagnosis and what it was computed on.
-pub fn diagnose_loaded(a: &DiagnoseRequest) -> anyhow::Result<(Diagnosis, Loaded)> {
+pub fn diagnose_loaded(a: &DiagnoseRequest) -> Result<(Diagnosis, Loaded), DiagnoseError> {
     if let Some(out) = &a.out {
         crate::out_path::check_file(out, "--out")?;
     }
@@ -57,8 +89,9 @@ pub fn diagnose_loaded(a: &DiagnoseRequest) -> anyhow::Result<(Diagnosis, Loaded
     super::held_out::check("diagnose", &a.runs, &ds.runs, val.as_deref().unwrap_or_default())?;
     let d = diagnose(&model, &design, &ds.runs, val.as_deref(), &a.options)?;
     if let (Some(out), Some(fm)) = (&a.out, &d.final_model) {
-        let text = model_file::to_toml(fm, None).map_err(anyhow::Error::msg)?;
-        atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))?;
+        let text = model_file::to_toml(fm, None).map_err(DiagnoseError::ModelText)?;
+        atomic::write_atomic(out, text.as_bytes())
+            .map_err(|source| DiagnoseError::Write { path: out.clone(), source })?;
     }
     Ok((d, Loaded { train: ds.runs, validate: val, model }))
 }

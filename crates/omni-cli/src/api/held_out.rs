@@ -36,20 +36,34 @@ fn content_hash(run: &Run) -> u64 {
 
 /// Fails when a held-out run holds the same recording as a training run, naming both and the spelling
 /// of `command` that keeps them apart.
-pub fn check_disjoint(command: &str, train: &[Run], held_out: &[Run]) -> anyhow::Result<()> {
+pub fn check_disjoint(command: &str, train: &[Run], held_out: &[Run]) -> Result<(), SameRecording> {
     let by_hash: HashMap<u64, &Run> = train.iter().map(|r| (content_hash(r), r)).collect();
     for h in held_out {
         if let Some(t) = by_hash.get(&content_hash(h)) {
-            anyhow::bail!(
-                "held-out run {} is the same recording as training run {}: a model cannot be judged on runs it \
-                 was fitted on. {}",
-                h.name(),
-                t.name(),
-                spelling(command)
-            );
+            return Err(SameRecording {
+                held_out: h.name().to_string(),
+                train: t.name().to_string(),
+                command: command.to_string(),
+            });
         }
     }
     Ok(())
+}
+
+/// A held-out run that holds the same recording as a training run.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "held-out run {held_out} is the same recording as training run {train}: a model cannot be judged on runs it \
+     was fitted on. {}",
+    spelling(command)
+)]
+pub struct SameRecording {
+    /// The held-out run.
+    pub held_out: String,
+    /// The training run with the same content.
+    pub train: String,
+    /// The command (`diagnose`), for the spelling that keeps them apart.
+    pub command: String,
 }
 
 /// Words of a path's last component that name a held-out set.
@@ -77,7 +91,7 @@ pub fn name_warning(command: &str, train_paths: &[PathBuf]) -> Option<String> {
 
 /// Both checks: the name warning as a `tracing` warning (stderr, shown also with `-q`), an error on shared
 /// runs.
-pub fn check(command: &str, train_paths: &[PathBuf], train: &[Run], held_out: &[Run]) -> anyhow::Result<()> {
+pub fn check(command: &str, train_paths: &[PathBuf], train: &[Run], held_out: &[Run]) -> Result<(), SameRecording> {
     if held_out.is_empty() {
         return Ok(());
     }

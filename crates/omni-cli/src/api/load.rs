@@ -1,11 +1,160 @@
 //! Reading runs: which inputs, for which robot, with which data options ([`LoadRequest`]); the notes of
 //! a load said once on stderr.
 
-use crate::dataset::{self, Dataset, LoadOptions};
-use crate::robot_file;
-use anyhow::Context;
+use crate::dataset::{self, Dataset, DatasetError, LoadOptions};
+use crate::robot_file::{self, RobotFileError};
+use omni_kin::KinError;
 use omni_kin::reference::ReferenceKind;
+use omni_kin::travel::Travel;
 use std::path::PathBuf;
+
+/// Why runs could not be read: the robot description, the data, or data options that do not go together
+/// (each message names the flags).
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// The robot description could not be read.
+    #[error(transparent)]
+    Robot(#[from] RobotFileError),
+    /// A data file could not be read as runs.
+    #[error(transparent)]
+    Dataset(#[from] DatasetError),
+    /// A run moved to the base, or given its measured end pose, is no valid run.
+    #[error(transparent)]
+    Run(#[from] KinError),
+    /// A run could not be cut into the windows of a relative reference.
+    #[error("run {run}")]
+    Windows {
+        /// The run.
+        run: String,
+        /// Why.
+        source: KinError,
+    },
+    /// `--gt-time-offset` on runs that have no ground-truth clock to shift.
+    #[error(
+        "--gt-time-offset {offset_s} changes nothing here: it applies to a --gt file or to a ground-truth topic of \
+         a recording (MCAP, rosbag2), and these runs have neither"
+    )]
+    OffsetUnused {
+        /// The offset given. s.
+        offset_s: f64,
+    },
+    /// `--gt-scans` with `--gt-kind end-pose`.
+    #[error("--gt-scans {topic} does not go with --gt-kind end-pose: a lidar's path is a relative reference")]
+    ScansWithEndPose {
+        /// The LaserScan topic.
+        topic: String,
+    },
+    /// `--gt-scans` with another source of ground truth (`flag`).
+    #[error("{flag} does not go with --gt-scans {topic}: the lidar's path is the ground truth")]
+    ScansWith {
+        /// The other option (`--gt`, `--gt-topic`).
+        flag: &'static str,
+        /// The LaserScan topic.
+        topic: String,
+    },
+    /// `--gt-kind end-pose` without the table of measured end poses.
+    #[error(
+        "--gt-kind end-pose needs --gt FILE: the table of measured end poses (a header run,x_m,y_m,yaw_deg and one \
+         row per recording; docs/formats.md, \"Measured end poses\"; `omnical plan --umbmark` writes one to fill in)"
+    )]
+    EndPoseWithoutTable,
+    /// `--gt-kind end-pose` with an option (`flag`) that makes runs of something else than whole recordings.
+    #[error(
+        "{flag} does not go with --gt-kind end-pose: each recording is one run from its start mark to where it \
+         stopped, measured by hand"
+    )]
+    EndPoseWith {
+        /// The option (`--split`, `--gt-topic`).
+        flag: &'static str,
+    },
+    /// A row of the end-pose table names no run read.
+    #[error(
+        "{}: line {line}: run {run:?} is not among the recordings read ({}): name each row after its recording's \
+         file name without extension",
+        file.display(),
+        runs.join(", ")
+    )]
+    EndPoseOfNoRun {
+        /// The end-pose table.
+        file: PathBuf,
+        /// The row's line (1-based).
+        line: usize,
+        /// The run it names.
+        run: String,
+        /// The runs read.
+        runs: Vec<String>,
+    },
+    /// A run read has no row in the end-pose table.
+    #[error(
+        "run {run} has no measured end pose in {}: add its row (run,x_m,y_m,yaw_deg), or leave the recording out",
+        file.display()
+    )]
+    NoEndPose {
+        /// The run.
+        run: String,
+        /// The end-pose table.
+        file: PathBuf,
+    },
+    /// `--gt-window` without a relative reference.
+    #[error(
+        "--gt-window {window_s} changes nothing here: it is the window of a relative reference (--gt-kind \
+         relative: the ground truth is a sensor's own motion, as lidar or visual odometry)"
+    )]
+    WindowUnused {
+        /// The window given. s.
+        window_s: f64,
+    },
+    /// A relative reference that never moves within a window.
+    #[error(
+        "the relative reference of these {runs} runs never moves in a window of {window_s} s: nothing to compare \
+         the wheels with (drive the robot, or check --gt-topic / --gt names the sensor's path)"
+    )]
+    NeverMoves {
+        /// The runs read.
+        runs: usize,
+        /// The window. s.
+        window_s: f64,
+    },
+    /// The wheels, through the robot description's design, travel and turn far more or less than the ground
+    /// truth: wheel data in another unit, or a design far from the robot.
+    #[error(
+        "through the design of {robot}, the wheels of these {runs} runs travel {:.1} m and turn {:.1} rad where \
+         their ground truth travels {:.1} m and turns {:.1} rad: {ratio:.2} times, beyond what a calibration \
+         corrects. Are the joints in another unit (rpm, deg/s, encoder counts)? Declare it in the robot \
+         description's [wheel_data] (docs/formats.md){}; otherwise check its radius_m and distances",
+        travel.wheels_m,
+        travel.wheels_rad,
+        travel.truth_m,
+        travel.truth_rad,
+        unit_hint(*ratio, *near_unit)
+    )]
+    WheelScale {
+        /// The robot description.
+        robot: robot_file::Source,
+        /// The runs read.
+        runs: usize,
+        /// Their travel, by the wheels and by the ground truth.
+        travel: Travel,
+        /// The wheels' distance over the ground truth's.
+        ratio: f64,
+        /// The unit read as rad/s whose factor the ratio is near, with that factor.
+        near_unit: Option<(f64, &'static str)>,
+    },
+    /// A `--gt-columns` / `--gt-units` setting that is not `KEY=VALUE`.
+    #[error("--gt-columns/--gt-units {setting:?}: expected KEY=VALUE")]
+    NotKeyValue {
+        /// The setting as given.
+        setting: String,
+    },
+    /// A ground-truth column or unit the CSV reader refuses (its own message).
+    #[error("{0}")]
+    GroundTruthColumns(String),
+}
+
+/// The note on a unit near the wheel-scale ratio: ` (… is near …, the factor of velocity = "rpm")`.
+fn unit_hint(ratio: f64, near_unit: Option<(f64, &str)>) -> String {
+    near_unit.map_or_else(String::new, |(f, u)| format!(" ({ratio:.2} is near {f:.3}, the factor of velocity = {u:?})"))
+}
 
 /// How runs are read: the robot description and the options that fill or override it (the command
 /// line's "Data options", Python's `load` keywords). `Default` is what no option gives.
@@ -117,14 +266,14 @@ impl LoadRequest {
     }
 
     /// Reads the runs, saying what was skipped or noticed on stderr.
-    pub fn load(&self) -> anyhow::Result<Dataset> {
+    pub fn load(&self) -> Result<Dataset, LoadError> {
         let ds = self.load_silently()?;
         say_load_notes(&[&ds]);
         Ok(ds)
     }
 
     /// Reads the runs as [`LoadRequest::load`] does, notes left in the dataset.
-    fn load_silently(&self) -> anyhow::Result<Dataset> {
+    fn load_silently(&self) -> Result<Dataset, LoadError> {
         let started = std::time::Instant::now();
         let robot = self.robot()?;
         if let Some(r) = &robot {
@@ -144,7 +293,7 @@ impl LoadRequest {
     /// Reads the runs for the robot `robot` (resolved by [`LoadRequest::robot`]: its joints, topics and
     /// ground-truth file fill what the data options leave open), printing nothing: notes, skipped inputs and
     /// ground-truth clocks stay in the dataset. The Python binding's `load`.
-    pub fn read_for_robot(&self, robot: Option<robot_file::RobotFile>) -> anyhow::Result<Dataset> {
+    pub fn read_for_robot(&self, robot: Option<robot_file::RobotFile>) -> Result<Dataset, LoadError> {
         let data = &self.data;
         let recorded_odometry = self.recorded_odometry;
         let mcap = self.mcap_options(robot.as_ref())?;
@@ -167,10 +316,7 @@ impl LoadRequest {
         if let Some(offset_s) = data.gt_time_offset_s
             && ds.ground_truth_clocks.is_empty()
         {
-            anyhow::bail!(
-                "--gt-time-offset {offset_s} changes nothing here: it applies to a --gt file or to a ground-truth \
-                 topic of a recording (MCAP, rosbag2), and these runs have neither"
-            );
+            return Err(LoadError::OffsetUnused { offset_s });
         }
         if let Some(file) = &end_poses {
             set_end_poses(&mut ds, file)?;
@@ -185,7 +331,7 @@ impl LoadRequest {
 
     /// How the ROS recordings are read for the robot `robot`: the data options over the robot description's
     /// joints, topics and wheel units.
-    pub fn mcap_options(&self, robot: Option<&robot_file::RobotFile>) -> anyhow::Result<dataset::mcap::McapOptions> {
+    pub fn mcap_options(&self, robot: Option<&robot_file::RobotFile>) -> Result<dataset::mcap::McapOptions, LoadError> {
         let data = &self.data;
         let mut mcap = dataset::mcap::McapOptions {
             wheel_joints: data.joints.clone().unwrap_or_default(),
@@ -208,7 +354,7 @@ impl LoadRequest {
 
     /// Where the ground truth comes from when it is not a topic of the recordings (a `--gt` file, the
     /// robot description's ground-truth file, `--gt-scans`, measured end poses), in words; `None`: a topic.
-    pub fn truth_elsewhere(&self, robot: Option<&robot_file::RobotFile>) -> anyhow::Result<Option<String>> {
+    pub fn truth_elsewhere(&self, robot: Option<&robot_file::RobotFile>) -> Result<Option<String>, LoadError> {
         let data = &self.data;
         if let Some(topic) = scans_topic(data)? {
             return Ok(Some(format!("the lidar's path from scan matching (--gt-scans {topic})")));
@@ -222,70 +368,58 @@ impl LoadRequest {
 
 /// The LaserScan topic of `--gt-scans`, checked against the other options: a lidar is a relative
 /// reference, and the only ground truth.
-fn scans_topic(data: &DataOptions) -> anyhow::Result<Option<String>> {
+fn scans_topic(data: &DataOptions) -> Result<Option<String>, LoadError> {
     let Some(topic) = &data.gt_scans else { return Ok(None) };
-    anyhow::ensure!(
-        data.gt_kind != ReferenceKind::EndPose,
-        "--gt-scans {topic} does not go with --gt-kind end-pose: a lidar's path is a relative reference"
-    );
+    if data.gt_kind == ReferenceKind::EndPose {
+        return Err(LoadError::ScansWithEndPose { topic: topic.clone() });
+    }
     for (set, flag) in [(data.gt.is_some(), "--gt"), (data.gt_topic.is_some(), "--gt-topic")] {
-        anyhow::ensure!(!set, "{flag} does not go with --gt-scans {topic}: the lidar's path is the ground truth");
+        if set {
+            return Err(LoadError::ScansWith { flag, topic: topic.clone() });
+        }
     }
     Ok(Some(topic.clone()))
 }
 
 /// The measured end-pose table of `--gt-kind end-pose` (its `--gt`), checked against the other options.
-fn end_pose_file(data: &DataOptions) -> anyhow::Result<Option<PathBuf>> {
+fn end_pose_file(data: &DataOptions) -> Result<Option<PathBuf>, LoadError> {
     if data.gt_kind != ReferenceKind::EndPose {
         return Ok(None);
     }
-    let Some(file) = &data.gt else {
-        anyhow::bail!(
-            "--gt-kind end-pose needs --gt FILE: the table of measured end poses (a header run,x_m,y_m,yaw_deg and one \
-             row per recording; docs/formats.md, \"Measured end poses\"; `omnical plan --umbmark` writes one to fill in)"
-        );
-    };
+    let Some(file) = &data.gt else { return Err(LoadError::EndPoseWithoutTable) };
     for (set, flag) in [(data.split_s.is_some(), "--split"), (data.gt_topic.is_some(), "--gt-topic")] {
-        anyhow::ensure!(
-            !set,
-            "{flag} does not go with --gt-kind end-pose: each recording is one run from its start mark to where it \
-             stopped, measured by hand"
-        );
+        if set {
+            return Err(LoadError::EndPoseWith { flag });
+        }
     }
     Ok(Some(file.clone()))
 }
 
 /// Each run's placeholder end replaced by its measured end pose from `file`; a row naming no run read, or a
 /// run without a row, is an error naming both.
-fn set_end_poses(ds: &mut Dataset, file: &std::path::Path) -> anyhow::Result<()> {
+fn set_end_poses(ds: &mut Dataset, file: &std::path::Path) -> Result<(), LoadError> {
     let measured = dataset::end_poses::read(file)?;
     let names: Vec<&str> = ds.runs.iter().map(omni_kin::Run::name).collect();
     if let Some(e) = measured.iter().find(|e| !names.contains(&e.run.as_str())) {
-        anyhow::bail!(
-            "{}: line {}: run {:?} is not among the recordings read ({}): name each row after its recording's file \
-             name without extension",
-            file.display(),
-            e.line,
-            e.run,
-            names.join(", ")
-        );
+        return Err(LoadError::EndPoseOfNoRun {
+            file: file.to_path_buf(),
+            line: e.line,
+            run: e.run.clone(),
+            runs: names.iter().map(|n| n.to_string()).collect(),
+        });
     }
     let runs = std::mem::take(&mut ds.runs);
     ds.runs = runs
         .into_iter()
         .map(|run| {
             let Some(e) = measured.iter().find(|e| e.run == run.name()) else {
-                anyhow::bail!(
-                    "run {} has no measured end pose in {}: add its row (run,x_m,y_m,yaw_deg), or leave the recording out",
-                    run.name(),
-                    file.display()
-                );
+                return Err(LoadError::NoEndPose { run: run.name().to_string(), file: file.to_path_buf() });
             };
             let mut d = run.into_data();
             d.truth[1].pose = e.pose;
             Ok(omni_kin::Run::new(d)?)
         })
-        .collect::<anyhow::Result<_>>()?;
+        .collect::<Result<_, LoadError>>()?;
     ds.notes.push(format!(
         "measured end poses: {} runs from {}, each from rest at the origin at its first wheel sample to its measured \
          pose at its last (the end-pose cost)",
@@ -297,7 +431,7 @@ fn set_end_poses(ds: &mut Dataset, file: &std::path::Path) -> anyhow::Result<()>
 }
 
 /// The ground truth of every run moved from the measured point to the base by `--gt-mount`, with a note.
-fn move_to_base(ds: &mut Dataset, data: &DataOptions) -> anyhow::Result<()> {
+fn move_to_base(ds: &mut Dataset, data: &DataOptions) -> Result<(), LoadError> {
     let Some(mount) = data.gt_mount else { return Ok(()) };
     let to_base = mount.inverse();
     let runs = std::mem::take(&mut ds.runs);
@@ -323,14 +457,11 @@ fn move_to_base(ds: &mut Dataset, data: &DataOptions) -> anyhow::Result<()> {
 
 /// A relative reference's runs replaced by their windows ([`omni_kin::reference::windows`]), with a note;
 /// `--gt-window` without `--gt-kind relative` is an error (it would change nothing).
-fn cut_into_windows(ds: &mut Dataset, data: &DataOptions) -> anyhow::Result<()> {
+fn cut_into_windows(ds: &mut Dataset, data: &DataOptions) -> Result<(), LoadError> {
     use omni_kin::reference::{DEFAULT_WINDOW_S, windows};
     if data.gt_kind != ReferenceKind::Relative && data.gt_scans.is_none() {
-        if let Some(w) = data.gt_window_s {
-            anyhow::bail!(
-                "--gt-window {w} changes nothing here: it is the window of a relative reference (--gt-kind relative: \
-                 the ground truth is a sensor's own motion, as lidar or visual odometry)"
-            );
+        if let Some(window_s) = data.gt_window_s {
+            return Err(LoadError::WindowUnused { window_s });
         }
         return Ok(());
     }
@@ -338,18 +469,15 @@ fn cut_into_windows(ds: &mut Dataset, data: &DataOptions) -> anyhow::Result<()> 
     let (mut runs, mut still, mut gaps) = (Vec::new(), 0, 0);
     let mut renamed: Vec<(String, Vec<String>)> = Vec::new();
     for run in &ds.runs {
-        let w = windows(run, window_s).with_context(|| format!("run {}", run.name()))?;
+        let w = windows(run, window_s).map_err(|source| LoadError::Windows { run: run.name().to_string(), source })?;
         still += w.still;
         gaps += w.gaps;
         renamed.push((run.name().to_string(), w.runs.iter().map(|r| r.name().to_string()).collect()));
         runs.extend(w.runs);
     }
-    anyhow::ensure!(
-        !runs.is_empty(),
-        "the relative reference of these {} runs never moves in a window of {window_s} s: nothing to compare the \
-         wheels with (drive the robot, or check --gt-topic / --gt names the sensor's path)",
-        ds.runs.len()
-    );
+    if runs.is_empty() {
+        return Err(LoadError::NeverMoves { runs: ds.runs.len(), window_s });
+    }
     for d in &mut ds.declared {
         d.runs = d
             .runs
@@ -388,7 +516,7 @@ const SCALE_MAX_FACTOR: f64 = 3.0;
 /// Refuses runs whose wheels, through the robot description's design, travel and turn more than
 /// [`SCALE_MAX_FACTOR`] times more, or less, than their ground truth (both measurable, both off):
 /// joints in rpm, degrees or counts read as rad/s, or a radius in the wrong unit.
-fn check_wheel_scale(ds: &Dataset, robot: &robot_file::RobotFile) -> anyhow::Result<()> {
+fn check_wheel_scale(ds: &Dataset, robot: &robot_file::RobotFile) -> Result<(), LoadError> {
     use std::f64::consts::TAU;
     let Ok(ik) = robot.description.design_ik() else { return Ok(()) };
     let travel = omni_kin::travel::Travel::of(&ds.runs, &ik);
@@ -402,22 +530,8 @@ fn check_wheel_scale(ds: &Dataset, robot: &robot_file::RobotFile) -> anyhow::Res
     }
     // The factor of a unit read as rad/s, within what a calibration corrects besides.
     let units = [(60.0 / TAU, "rpm"), (360.0 / TAU, "deg_s"), (TAU.recip(), "rev_s")];
-    let unit = units
-        .into_iter()
-        .find(|(f, _)| (ratio / f - 1.0).abs() < 0.15)
-        .map_or_else(String::new, |(f, u)| format!(" ({ratio:.2} is near {f:.3}, the factor of velocity = {u:?})"));
-    anyhow::bail!(
-        "through the design of {}, the wheels of these {} runs travel {:.1} m and turn {:.1} rad where their ground \
-         truth travels {:.1} m and turns {:.1} rad: {ratio:.2} times, beyond what a calibration corrects. Are the \
-         joints in another unit (rpm, deg/s, encoder counts)? Declare it in the robot description's [wheel_data] \
-         (docs/formats.md){unit}; otherwise check its radius_m and distances",
-        robot.source,
-        ds.runs.len(),
-        travel.wheels_m,
-        travel.wheels_rad,
-        travel.truth_m,
-        travel.truth_rad,
-    )
+    let near_unit = units.into_iter().find(|(f, _)| (ratio / f - 1.0).abs() < 0.15);
+    Err(LoadError::WheelScale { robot: robot.source.clone(), runs: ds.runs.len(), travel, ratio, near_unit })
 }
 
 /// Training runs and held-out runs (`None` when `held_out` is empty), read as [`LoadRequest::load`] does,
@@ -426,7 +540,7 @@ pub fn load_with_held_out(
     runs: &[PathBuf],
     held_out: &[PathBuf],
     data: &DataOptions,
-) -> anyhow::Result<(Dataset, Option<Dataset>)> {
+) -> Result<(Dataset, Option<Dataset>), LoadError> {
     let train = LoadRequest::new(runs, data).load_silently()?;
     let held = if held_out.is_empty() { None } else { Some(LoadRequest::new(held_out, data).load_silently()?) };
     if let Some(h) = &held {
@@ -475,7 +589,7 @@ fn say_load_notes(sets: &[&Dataset]) {
 fn ground_truth_options(
     data: &DataOptions,
     robot: Option<&robot_file::RobotFile>,
-) -> anyhow::Result<Option<dataset::ground_truth::GroundTruthOptions>> {
+) -> Result<Option<dataset::ground_truth::GroundTruthOptions>, LoadError> {
     let from_robot = robot.and_then(|r| r.description.ground_truth.as_ref().map(|g| (r, g)));
     let path = match (&data.gt, from_robot.and_then(|(r, g)| g.file.as_ref().map(|f| (r, f)))) {
         (Some(p), _) => p.clone(),
@@ -498,16 +612,16 @@ fn ground_truth_options(
         columns.extend(g.columns.iter().map(|(k, v)| (k.clone(), v.clone())));
         units.extend(g.units.iter().map(|(k, v)| (k.clone(), v.clone())));
     }
-    for kv in data.gt_columns.iter().chain(&data.gt_units) {
-        anyhow::ensure!(kv.contains('='), "--gt-columns/--gt-units {kv:?}: expected KEY=VALUE");
+    if let Some(kv) = data.gt_columns.iter().chain(&data.gt_units).find(|kv| !kv.contains('=')) {
+        return Err(LoadError::NotKeyValue { setting: kv.clone() });
     }
     columns.extend(settings(&data.gt_columns));
     units.extend(settings(&data.gt_units));
     for (k, v) in &columns {
-        csv.set_column(k, v).map_err(anyhow::Error::msg)?;
+        csv.set_column(k, v).map_err(LoadError::GroundTruthColumns)?;
     }
     for (k, v) in &units {
-        csv.set_unit(k, v).map_err(anyhow::Error::msg)?;
+        csv.set_unit(k, v).map_err(LoadError::GroundTruthColumns)?;
     }
     let time_offset_s = data.gt_time_offset_s.or(from_robot.and_then(|(_, g)| g.time_offset_s));
     Ok(Some(dataset::ground_truth::GroundTruthOptions { path, time_offset_s, csv }))

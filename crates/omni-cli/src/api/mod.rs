@@ -23,8 +23,9 @@ pub mod settings;
 pub mod train;
 
 use crate::dataset::Dataset;
-use crate::{design, robot_file};
-use anyhow::Context;
+use crate::design::{self, DesignError};
+use crate::model_file::ModelFileError;
+use crate::robot_file::{self, NoDesign};
 use omni_kin::{FittedModel, RunModels};
 use std::path::{Path, PathBuf};
 
@@ -57,23 +58,45 @@ impl ModelSpec {
 
     /// The one model this spec stands for on `ds`'s runs: `design` the one the most runs declare (none is
     /// an error), `paper`, or the model file read.
-    pub fn resolve(&self, ds: &Dataset) -> anyhow::Result<FittedModel> {
+    pub fn resolve(&self, ds: &Dataset) -> Result<FittedModel, ResolveError> {
         match self {
-            Self::Design => design::declared(ds)?.ok_or_else(|| robot_file::no_design("--model design")),
+            Self::Design => Ok(design::declared(ds)?.ok_or_else(|| robot_file::no_design("--model design"))?),
             Self::Paper => Ok(design::paper_calibrated()),
-            Self::File(path) => crate::model_file::read(path).context("reading the model"),
+            Self::File(path) => crate::model_file::read(path).map_err(ResolveError::ModelFile),
         }
     }
 
     /// The model of every run of `sets`: `design` each run's own ([`design::declared_each`]; none is an
     /// error), else [`ModelSpec::resolve`]'s one model for all.
-    pub fn resolve_each(&self, sets: &[&Dataset]) -> anyhow::Result<RunModels> {
+    pub fn resolve_each(&self, sets: &[&Dataset]) -> Result<RunModels, ResolveError> {
         match (self, sets.first()) {
-            (Self::Design, _) => design::declared_each(sets)?.ok_or_else(|| robot_file::no_design("--model design")),
+            (Self::Design, _) => {
+                Ok(design::declared_each(sets)?.ok_or_else(|| robot_file::no_design("--model design"))?)
+            }
             (_, Some(ds)) => Ok(RunModels::from(self.resolve(ds)?)),
-            (_, None) => anyhow::bail!("no runs to resolve {self} for (a bug)"),
+            (_, None) => Err(ResolveError::NoRuns { spec: self.clone() }),
         }
     }
+}
+
+/// Why a [`ModelSpec`] stands for no model.
+#[derive(Debug, thiserror::Error)]
+pub enum ResolveError {
+    /// `design` on data that names no robot.
+    #[error(transparent)]
+    NoDesign(#[from] NoDesign),
+    /// The design could not be built.
+    #[error(transparent)]
+    Design(#[from] DesignError),
+    /// The model file could not be read.
+    #[error("reading the model")]
+    ModelFile(#[source] ModelFileError),
+    /// Nothing to resolve the spec for (a bug in the caller).
+    #[error("no runs to resolve {spec} for (a bug)")]
+    NoRuns {
+        /// The spec.
+        spec: ModelSpec,
+    },
 }
 
 impl std::str::FromStr for ModelSpec {

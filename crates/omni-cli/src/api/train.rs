@@ -1,18 +1,74 @@
 //! `omnical train` as a request ([`TrainRequest`]): loading, the start model, the plan and the fit, and the
 //! model file it writes. The command prints around it; [`train_quietly`] runs it without a terminal.
 
-use crate::api::fit::{FitOptions, PriorUse, check_fit, check_step, robot_priors};
-use crate::api::load::{DataOptions, LoadRequest};
+use crate::api::fit::{FitOptions, FitOptionsError, PriorUse, Refused, check_fit, check_step, robot_priors};
+use crate::api::load::{DataOptions, LoadError, LoadRequest};
 use crate::dataset::Dataset;
+use crate::design::DesignError;
+use crate::model_file::ModelFileError;
+use crate::out_path::OutPathError;
 use crate::{atomic, design, interrupt, model_file, out_path};
-use anyhow::Context;
 use omni_ga::calibrate::{Calibration, Plan, Preset, calibrate_with_effects};
 use omni_kin::cost::CostKind;
 use omni_kin::effect::Effect;
 use omni_kin::robot::PRIOR_BOX_SIGMAS;
-use omni_kin::{EffectKind, FittedModel, KinematicsKind, Model};
+use omni_kin::{EffectKind, FittedModel, KinError, KinematicsKind, Model};
 use serde_json::json;
 use std::path::PathBuf;
+
+/// Why `omnical train` (its preparation, its fit or the model file) failed.
+#[derive(Debug, thiserror::Error)]
+pub enum TrainError {
+    /// `--out` cannot take the model file.
+    #[error(transparent)]
+    Out(#[from] OutPathError),
+    /// The runs could not be read.
+    #[error(transparent)]
+    Load(#[from] LoadError),
+    /// Ctrl-C during loading.
+    #[error(transparent)]
+    Interrupted(#[from] interrupt::Interrupted),
+    /// The `--start` model file could not be read.
+    #[error("reading --start")]
+    Start(#[source] ModelFileError),
+    /// The design model to start from could not be built.
+    #[error(transparent)]
+    Design(#[from] DesignError),
+    /// An `--effect` id is unknown or does not fit the model.
+    #[error("--effect {id}")]
+    Effect {
+        /// The id given.
+        id: String,
+        /// Why it is refused.
+        source: KinError,
+    },
+    /// A fit setting out of its range.
+    #[error(transparent)]
+    FitOptions(#[from] FitOptionsError),
+    /// The fit was refused (`--force` keeps it).
+    #[error(transparent)]
+    Refused(#[from] Refused),
+    /// The fit failed.
+    #[error(transparent)]
+    Calibrate(#[from] omni_ga::Error),
+    /// The model or runs are not usable (wheel names, the fitted matrix, a cost).
+    #[error(transparent)]
+    Kin(#[from] KinError),
+    /// The fit summary does not make a TOML table.
+    #[error("fit summary")]
+    FitSummary(#[source] toml::ser::Error),
+    /// The model does not make a model file (the writer's message).
+    #[error("{0}")]
+    ModelText(String),
+    /// The model file could not be written.
+    #[error("writing {}", path.display())]
+    Write {
+        /// The model file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+}
 
 /// What `omnical train` does: the runs and how to read them, the start, the preset and its overrides, the
 /// effects to add, where the model goes.
@@ -42,7 +98,7 @@ pub struct TrainRequest {
 }
 
 /// The fit summary as JSON (also written into the model file's `[fit]` table).
-pub fn summary(c: &Calibration, preset: &str, seed: u64, runs: usize) -> anyhow::Result<serde_json::Value> {
+pub fn summary(c: &Calibration, preset: &str, seed: u64, runs: usize) -> Result<serde_json::Value, KinError> {
     Ok(json!({
         "preset": preset,
         "seed": seed,
@@ -83,11 +139,11 @@ fn toml_safe(v: serde_json::Value) -> serde_json::Value {
 /// The design model with its columns named: the robot description's joints (already), else `--joints`
 /// (the order the runs were read in); the model file carries them. `--joints` in another order than the
 /// robot description's is warned about: the design's columns follow the description.
-fn named_columns(design: Model, joints: Option<&[String]>) -> anyhow::Result<Model> {
+fn named_columns(design: Model, joints: Option<&[String]>) -> Result<Model, KinError> {
     let Some(joints) = joints.filter(|j| j.len() == design.n_wheels()) else { return Ok(design) };
     let names = design.kinematics.wheel_names();
     if names == omni_kin::geometry::default_wheel_names(names.len()) {
-        return Ok(design.with_wheel_names(joints)?);
+        return design.with_wheel_names(joints);
     }
     if names != joints {
         tracing::warn!(
@@ -117,13 +173,13 @@ pub struct Prepared {
 
 /// Loads the runs and builds the start model, the effects and the plan, as `omnical train` does. A Ctrl-C
 /// (when the handler is installed) during loading ends it with [`interrupt::Interrupted`].
-pub fn prepare(a: &TrainRequest) -> anyhow::Result<Prepared> {
+pub fn prepare(a: &TrainRequest) -> Result<Prepared, TrainError> {
     let ds = LoadRequest::new(&a.runs, &a.data).load()?;
     if interrupt::requested() {
         return Err(interrupt::Interrupted.into());
     }
     let start = match &a.start {
-        Some(p) => model_file::read(p).context("reading --start")?,
+        Some(p) => model_file::read(p).map_err(TrainError::Start)?,
         None => {
             // The paper's method fits the matrix whatever the base.
             let kind = a.model.unwrap_or_else(|| match a.preset {
@@ -137,8 +193,11 @@ pub fn prepare(a: &TrainRequest) -> anyhow::Result<Prepared> {
     let effects = a
         .effects
         .iter()
-        .map(|id| EffectKind::from_id(id, start.model.n_wheels()).with_context(|| format!("--effect {id}")))
-        .collect::<anyhow::Result<Vec<_>>>()?;
+        .map(|id| {
+            EffectKind::from_id(id, start.model.n_wheels())
+                .map_err(|source| TrainError::Effect { id: id.clone(), source })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
     // The parameter count with the effects: the paper preset's GA fits them all at once.
     let n_params = start.model.n_params() + effects.iter().map(|e| e.params().len()).sum::<usize>();
     let mut plan = a.fit.apply(Plan::preset(a.preset, n_params).seed(a.seed))?;
@@ -195,11 +254,11 @@ pub fn mount_warning(c: &Calibration) -> Option<String> {
 
 /// Writes the model file of a fit with its summary `s` as the `[fit]` table, atomically. Everything but the
 /// wall time goes in: the same data, preset and seed give a byte-identical file.
-pub fn write_model(c: &Calibration, s: &serde_json::Value, out: &std::path::Path) -> anyhow::Result<()> {
-    let mut fit: toml::Table = toml::Table::try_from(toml_safe(s.clone())).context("fit summary")?;
+pub fn write_model(c: &Calibration, s: &serde_json::Value, out: &std::path::Path) -> Result<(), TrainError> {
+    let mut fit: toml::Table = toml::Table::try_from(toml_safe(s.clone())).map_err(TrainError::FitSummary)?;
     fit.remove("seconds");
-    let text = model_file::to_toml(&c.fitted, Some(fit)).map_err(anyhow::Error::msg)?;
-    atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))
+    let text = model_file::to_toml(&c.fitted, Some(fit)).map_err(TrainError::ModelText)?;
+    atomic::write_atomic(out, text.as_bytes()).map_err(|source| TrainError::Write { path: out.to_path_buf(), source })
 }
 
 /// What [`train_quietly`] gives back.
@@ -218,7 +277,7 @@ pub struct Trained {
 /// wheel's fleet workers): the same loading, start model, plan and fit as the command, and the same model file
 /// written to `--out` (byte-identical: the same `write_model` either way), but nothing printed, no progress bar
 /// and no Ctrl-C handler installed.
-pub fn train_quietly(a: &TrainRequest) -> anyhow::Result<Trained> {
+pub fn train_quietly(a: &TrainRequest) -> Result<Trained, TrainError> {
     if let Some(out) = &a.out {
         out_path::check_file(out, "--out")?;
     }
@@ -273,7 +332,7 @@ pub fn designs_figure(
     ds: &Dataset,
     plan: &Plan,
     from_design: bool,
-) -> anyhow::Result<Option<DesignsFigure>> {
+) -> Result<Option<DesignsFigure>, KinError> {
     let designs = design::designs_for(&c.start, &[ds]);
     if designs.single().is_some() {
         return Ok(None);

@@ -187,14 +187,14 @@ fn umbmark(side_m: f64, a: &Args) -> anyhow::Result<()> {
 /// them or in the working directory. Plan needs it to turn commands into wheel speeds.
 fn plan_robot(a: &Args) -> anyhow::Result<RobotGeometry> {
     if !a.robot_from.is_empty() {
-        return design::geometry(&a.data.request(&a.robot_from).load()?);
+        return Ok(design::geometry(&a.data.request(&a.robot_from).load()?)?);
     }
     match robot_file::resolve(a.data.robot.robot.as_deref(), &[])? {
         Some(r) => {
             robot_file::announce(&r.source);
             r.description.to_geometry().with_context(|| format!("robot {}", r.source))
         }
-        None => Err(robot_file::no_design("plan")),
+        None => Err(robot_file::no_design("plan").into()),
     }
 }
 

@@ -40,7 +40,10 @@ fn colour(i: usize) -> RGBColor {
 
 type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
 
-fn draw(size: (u32, u32), f: impl FnOnce(&Area<'_>) -> anyhow::Result<()>) -> anyhow::Result<String> {
+/// Why a figure could not be drawn: plotters' error for its SVG backend.
+pub type DrawError = DrawingAreaErrorKind<std::io::Error>;
+
+fn draw(size: (u32, u32), f: impl FnOnce(&Area<'_>) -> Result<(), DrawError>) -> Result<String, DrawError> {
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
@@ -66,7 +69,7 @@ fn span(values: impl IntoIterator<Item = f64>, pad: f64) -> (f64, f64) {
 }
 
 /// Every figure the report's data supports, in reading order, and notes on the ones left out.
-pub fn all(r: &Report, diagnosis: Option<&Diagnosis>) -> anyhow::Result<(Vec<Figure>, Vec<String>)> {
+pub fn all(r: &Report, diagnosis: Option<&Diagnosis>) -> Result<(Vec<Figure>, Vec<String>), DrawError> {
     let mut figs = vec![ladder(r)?];
     let mut notes = Vec::new();
     for o in 0..r.overlays.len() {
@@ -90,7 +93,7 @@ pub fn all(r: &Report, diagnosis: Option<&Diagnosis>) -> anyhow::Result<(Vec<Fig
 }
 
 /// The error ladder: held-out path RMS per rung, with the noise floor.
-pub fn ladder(r: &Report) -> anyhow::Result<Figure> {
+pub fn ladder(r: &Report) -> Result<Figure, DrawError> {
     let n = r.ladder.len();
     let top = r.ladder.iter().map(|x| x.1 * 1000.0).chain(r.noise_floor_m.map(|f| f * 1000.0)).fold(0.0, f64::max);
     let top = if top > 0.0 && top.is_finite() { top * 1.15 } else { 1.0 };
@@ -156,7 +159,7 @@ fn text_centre() -> plotters::style::text_anchor::Pos {
 }
 
 /// Ground truth against each model's odometry for one run, with a zoom on the end point.
-pub fn overlay(r: &Report, which: usize) -> anyhow::Result<Figure> {
+pub fn overlay(r: &Report, which: usize) -> Result<Figure, DrawError> {
     let o = &r.overlays[which];
     let svg = draw((900, 430), |root| {
         let (left, right) = root.split_horizontally(520);
@@ -218,7 +221,7 @@ fn path_panel(
     xr: (f64, f64),
     yr: (f64, f64),
     legend: bool,
-) -> anyhow::Result<()> {
+) -> Result<(), DrawError> {
     let mut chart = ChartBuilder::on(area)
         .caption(title, (FONT, 15))
         .margin(10)
@@ -302,7 +305,7 @@ fn by_command(r: &Report) -> (Vec<f64>, Vec<f64>, Vec<Vec<Vec<f64>>>) {
 /// End-point errors by command: one polar "flower" per ω, radius = mean end position error at angle α.
 ///
 /// long: one plotters drawing (axes, rings, one series per ω, legend) in drawing order.
-pub fn flower(r: &Report) -> anyhow::Result<Figure> {
+pub fn flower(r: &Report) -> Result<Figure, DrawError> {
     let (alphas, omegas, mean) = by_command(r);
     // The design's errors are often ten times the fitted models'; leave it out so theirs stay readable.
     let first_shown = usize::from(r.models.len() > 1);
@@ -396,7 +399,7 @@ pub fn flower(r: &Report) -> anyhow::Result<Figure> {
 const LEGEND_STRIP_PX: u32 = 30;
 
 /// A one-line legend across `area`: `lead`, then a line sample and the label of each entry.
-fn legend_strip(area: &Area<'_>, lead: &str, entries: &[(String, RGBColor)]) -> anyhow::Result<()> {
+fn legend_strip(area: &Area<'_>, lead: &str, entries: &[(String, RGBColor)]) -> Result<(), DrawError> {
     let y = (LEGEND_STRIP_PX / 2) as i32;
     let font = (FONT, 13).into_font().color(&BLACK).pos(left_mid());
     let mut x = 12;
@@ -444,7 +447,7 @@ fn heat(t: f64) -> RGBColor {
 }
 
 /// Mean end position error over α × ω, one panel per model after the design.
-pub fn heat_map(r: &Report) -> anyhow::Result<Figure> {
+pub fn heat_map(r: &Report) -> Result<Figure, DrawError> {
     let (alphas, omegas, mean) = by_command(r);
     let shown: Vec<usize> = if r.models.len() > 1 { (1..r.models.len()).collect() } else { vec![0] };
     let vmax = shown
@@ -538,7 +541,7 @@ fn left_mid() -> plotters::style::text_anchor::Pos {
 }
 
 /// Mean position and heading error against the fraction of run time, per model.
-pub fn growth(r: &Report) -> anyhow::Result<Figure> {
+pub fn growth(r: &Report) -> Result<Figure, DrawError> {
     let g = &r.growth;
     let svg = draw((900, 360), |root| {
         let (left, right) = root.split_horizontally(450);
@@ -590,7 +593,7 @@ pub fn growth(r: &Report) -> anyhow::Result<Figure> {
 }
 
 /// The diagnosis ranking: held-out gain of each candidate effect.
-pub fn ranking(d: &Diagnosis) -> anyhow::Result<Figure> {
+pub fn ranking(d: &Diagnosis) -> Result<Figure, DrawError> {
     let n = d.ranking.len();
     let gains: Vec<f64> = d.ranking.iter().map(|c| 100.0 * c.held_out_gain).collect();
     let (lo, hi) = span(gains.iter().copied().chain([0.0]), 0.1);

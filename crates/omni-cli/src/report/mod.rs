@@ -284,6 +284,36 @@ fn thin(poses: &[Pose2]) -> Vec<(f64, f64)> {
     v
 }
 
+/// Why the report could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    /// The models could not be evaluated on the runs.
+    #[error("evaluating the models for the report")]
+    Evaluate(#[source] KinError),
+    /// A figure could not be drawn.
+    #[error("drawing the figures")]
+    Draw(#[source] figures::DrawError),
+    /// The page's folder could not be created.
+    #[error("creating {}", dir.display())]
+    CreateDir {
+        /// The folder.
+        dir: std::path::PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The page could not be written.
+    #[error("writing {}", path.display())]
+    Write {
+        /// The HTML file.
+        path: std::path::PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The PNG figures could not be written.
+    #[error(transparent)]
+    Png(#[from] png::PngError),
+}
+
 /// What [`write()`] produced.
 #[derive(Clone, Debug)]
 pub struct Written {
@@ -301,7 +331,7 @@ pub fn write(
     input: &ReportInput<'_>,
     html_path: &std::path::Path,
     png_dir: Option<&std::path::Path>,
-) -> anyhow::Result<Written> {
+) -> Result<Written, ReportError> {
     write_with(input, html_path, png_dir, "")
 }
 
@@ -311,10 +341,9 @@ pub fn write_with(
     html_path: &std::path::Path,
     png_dir: Option<&std::path::Path>,
     extra: &str,
-) -> anyhow::Result<Written> {
-    use anyhow::Context;
-    let report = Report::build(input).context("evaluating the models for the report")?;
-    let (figs, notes) = figures::all(&report, input.diagnosis).context("drawing the figures")?;
+) -> Result<Written, ReportError> {
+    let report = Report::build(input).map_err(ReportError::Evaluate)?;
+    let (figs, notes) = figures::all(&report, input.diagnosis).map_err(ReportError::Draw)?;
     let mut page = html::render(&report, &figs, &notes, input.diagnosis);
     if !extra.is_empty()
         && let Some(at) = page.rfind("</body>")
@@ -322,10 +351,10 @@ pub fn write_with(
         page.insert_str(at, extra);
     }
     if let Some(dir) = html_path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        std::fs::create_dir_all(dir).map_err(|source| ReportError::CreateDir { dir: dir.to_path_buf(), source })?;
     }
     crate::atomic::write_atomic(html_path, page.as_bytes())
-        .with_context(|| format!("writing {}", html_path.display()))?;
+        .map_err(|source| ReportError::Write { path: html_path.to_path_buf(), source })?;
     let png = match png_dir {
         Some(dir) => png::write_all(&figs, dir)?,
         None => Vec::new(),

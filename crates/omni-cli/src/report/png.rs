@@ -2,21 +2,80 @@
 
 use super::figures::Figure;
 use crate::atomic;
-use anyhow::Context;
 use resvg::{tiny_skia, usvg};
 use std::path::{Path, PathBuf};
+
+/// Why one figure could not be rendered.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// The SVG does not parse.
+    #[error("parsing the figure's SVG")]
+    Parse(#[source] usvg::Error),
+    /// The scaled size is no image size.
+    #[error("figure size")]
+    Size,
+    /// The image could not be allocated.
+    #[error("allocating the image")]
+    Allocate,
+    /// The PNG encoder failed (its error type, `png::EncodingError`, is not re-exported by resvg).
+    #[error("encoding PNG")]
+    Encode(#[source] Box<dyn std::error::Error + Send + Sync>),
+}
+
+/// Why the PNG figures could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum PngError {
+    /// The folder could not be created.
+    #[error("creating {}", dir.display())]
+    CreateDir {
+        /// The folder.
+        dir: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// A figure id that [`FIGURE_IDS`] does not list (a bug).
+    #[error("figure {id} is missing from png::FIGURE_IDS (a bug)")]
+    UnknownFigure {
+        /// The figure's id.
+        id: String,
+    },
+    /// A figure could not be rendered.
+    #[error("figure {id}")]
+    Render {
+        /// The figure's id.
+        id: String,
+        /// Why.
+        source: RenderError,
+    },
+    /// A PNG file could not be written.
+    #[error("writing {}", path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// An earlier report's figure could not be removed.
+    #[error("removing {} (an earlier report's figure)", path.display())]
+    RemoveStale {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+}
 
 /// Pixels per SVG unit: 2 gives crisp figures on high-density screens and in documents.
 const SCALE: f32 = 2.0;
 
 /// Renders one SVG document to PNG bytes.
-pub fn render(svg: &str, options: &usvg::Options<'_>) -> anyhow::Result<Vec<u8>> {
-    let tree = usvg::Tree::from_str(svg, options).context("parsing the figure's SVG")?;
-    let size = tree.size().to_int_size().scale_by(SCALE).context("figure size")?;
-    let mut pixmap = tiny_skia::Pixmap::new(size.width(), size.height()).context("allocating the image")?;
+pub fn render(svg: &str, options: &usvg::Options<'_>) -> Result<Vec<u8>, RenderError> {
+    let tree = usvg::Tree::from_str(svg, options).map_err(RenderError::Parse)?;
+    let size = tree.size().to_int_size().scale_by(SCALE).ok_or(RenderError::Size)?;
+    let mut pixmap = tiny_skia::Pixmap::new(size.width(), size.height()).ok_or(RenderError::Allocate)?;
     pixmap.fill(tiny_skia::Color::WHITE);
     resvg::render(&tree, tiny_skia::Transform::from_scale(SCALE, SCALE), &mut pixmap.as_mut());
-    pixmap.encode_png().context("encoding PNG")
+    pixmap.encode_png().map_err(|e| RenderError::Encode(Box::new(e)))
 }
 
 /// Rendering options with the system's fonts; the figures' generic `sans-serif` maps to the first sans-serif
@@ -46,22 +105,24 @@ pub const FIGURE_IDS: &[&str] =
 /// Writes `DIR/<figure id>.png` for every figure (atomically) and removes the figures of [`FIGURE_IDS`]
 /// that this report does not draw (an earlier report's, which would pass for this one's); other files in
 /// `DIR` stay. Returns the paths written.
-pub fn write_all(figures: &[Figure], dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+pub fn write_all(figures: &[Figure], dir: &Path) -> Result<Vec<PathBuf>, PngError> {
+    std::fs::create_dir_all(dir).map_err(|source| PngError::CreateDir { dir: dir.to_path_buf(), source })?;
     let options = options();
     let mut written = Vec::with_capacity(figures.len());
     for f in figures {
-        anyhow::ensure!(FIGURE_IDS.contains(&f.id.as_str()), "figure {} is missing from png::FIGURE_IDS (a bug)", f.id);
+        if !FIGURE_IDS.contains(&f.id.as_str()) {
+            return Err(PngError::UnknownFigure { id: f.id.clone() });
+        }
         let path = dir.join(format!("{}.png", f.id));
-        let bytes = render(&f.svg, &options).with_context(|| format!("figure {}", f.id))?;
-        atomic::write_atomic(&path, &bytes).with_context(|| format!("writing {}", path.display()))?;
+        let bytes = render(&f.svg, &options).map_err(|source| PngError::Render { id: f.id.clone(), source })?;
+        atomic::write_atomic(&path, &bytes).map_err(|source| PngError::Write { path: path.clone(), source })?;
         written.push(path);
     }
     for id in FIGURE_IDS.iter().filter(|id| !figures.iter().any(|f| f.id == **id)) {
         let stale = dir.join(format!("{id}.png"));
         match std::fs::remove_file(&stale) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                return Err(e).with_context(|| format!("removing {} (an earlier report's figure)", stale.display()));
+            Err(source) if source.kind() != std::io::ErrorKind::NotFound => {
+                return Err(PngError::RemoveStale { path: stale, source });
             }
             _ => {}
         }
