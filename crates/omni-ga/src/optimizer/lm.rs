@@ -1,7 +1,8 @@
 //! Levenberg–Marquardt polish of [`LeastSquares`] problems, two ways:
 //!
-//! - up to [`LmConfig::normal_equations_above`] residuals, the `levenberg-marquardt` crate (MINPACK's
-//!   algorithm: a pivoted QR of the whole Jacobian each iteration);
+//! - up to [`LmConfig::normal_equations_above`] residuals (fewer with more than [`QR_PARAMS`] parameters:
+//!   [`LmConfig::on_normal_equations`]), the `levenberg-marquardt` crate (MINPACK's algorithm: a pivoted QR
+//!   of the whole Jacobian each iteration);
 //! - beyond, Marquardt's method on the normal equations: `JᵀJ` and `Jᵀr` come from
 //!   [`LeastSquares::normal_equations`] (accumulated block by block by problems with many residuals), and
 //!   each step solves the `n × n` system
@@ -62,6 +63,10 @@ pub struct LmConfig {
 /// there. A third (20) until 2026-11-29.
 pub const SCOUT_SHARE: usize = 6;
 
+/// Parameters at which [`LmConfig::normal_equations_above`] residuals mark where the crate's QR stops
+/// paying ([`LmConfig::on_normal_equations`]): the omni4 base matrix's 12.
+pub const QR_PARAMS: usize = 12;
+
 fn default_normal_equations_above() -> usize {
     50_000
 }
@@ -72,12 +77,24 @@ impl LmConfig {
     /// large `n` leaves nothing to cut); `None` otherwise.
     pub fn scout(&self, n_params: usize, n_residuals: usize) -> Option<LmConfig> {
         let scout = LmConfig { max_evaluations: (self.max_evaluations / SCOUT_SHARE).max(1), ..self.clone() };
-        let smaller = if n_residuals > self.normal_equations_above {
+        let smaller = if self.on_normal_equations(n_params, n_residuals) {
             scout.max_evaluations < self.max_evaluations
         } else {
             scout.crate_patience(n_params) < self.crate_patience(n_params)
         };
         smaller.then_some(scout)
+    }
+
+    /// Whether a problem of `n_params` parameters and `n_residuals` residuals is solved on the normal
+    /// equations: beyond [`Self::normal_equations_above`] residuals, or where the crate's pivoted QR (its
+    /// cost per iteration grows with residuals × parameters², unblocked) would cost more than it does there
+    /// at [`QR_PARAMS`] parameters. Many parameters on a few thousand residuals (the explorer's 48-term
+    /// `wheel` family on a simulated 108-run set: 14k residuals, the QR 32 % of the fit) go to the normal
+    /// equations; at 12 parameters or fewer the rule is the residual count alone.
+    pub fn on_normal_equations(&self, n_params: usize, n_residuals: usize) -> bool {
+        let qr_cost = n_residuals.saturating_mul(n_params.saturating_mul(n_params));
+        n_residuals > self.normal_equations_above
+            || qr_cost > self.normal_equations_above.saturating_mul(QR_PARAMS * QR_PARAMS)
     }
 
     /// The budget as the crate's patience on `n_params` parameters (it counts in units of `n + 1`).
@@ -319,7 +336,7 @@ impl<P: LeastSquares + ?Sized> Optimizer<P> for LevenbergMarquardt {
         observer.on_start("lm", start.len(), None);
         let start_cost = problem.cost(start);
         let Ended { x, evaluations, out_of_budget } =
-            if problem.residual_count(start) > self.config.normal_equations_above {
+            if self.config.on_normal_equations(start.len(), problem.residual_count(start)) {
                 self.solve_normal_equations(problem, start)
             } else {
                 self.solve_with_crate(problem, start)
