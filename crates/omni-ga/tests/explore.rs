@@ -139,6 +139,31 @@ fn an_oval_wheel_is_found_by_the_wheel_family() {
     );
 }
 
+/// A clock lag of every wheel (the catalogue's `time_offset`, kept out of the explorer) is what the
+/// `wheel` family's `accel` terms describe on every wheel at once: the family passes, and its hint names
+/// one clock offset for all wheels (the catalogue's effect), not a per-wheel filter.
+#[test]
+fn a_clock_lag_of_every_wheel_is_named_as_one_offset_by_the_wheel_family() {
+    let truth = design().with_effect(EffectKind::from_id("time_offset", 3).unwrap());
+    let truth = FittedModel::new(truth.model, [&truth.params[..9], &[0.06]].concat()).unwrap();
+    let (train, val) = flower_train_and_held_out(&truth);
+    let opts = ExploreOptions { families: vec![Family::Wheel], ..ExploreOptions::default() };
+    let e = explore(&design(), &train, &val, &opts).unwrap();
+    let summary = omni_ga::science::text::exploration(&e);
+    let wheel = e.best().unwrap_or_else(|| panic!("the wheel family does not pass: {summary:#?}"));
+    assert!(wheel.held_out_gain > 0.3, "{summary:#?}");
+    for w in ["a", "b", "c"] {
+        let (lag, se) = term(&e, &format!("accel_{w}"));
+        assert!((lag - 0.06).abs() < 0.01 && (lag - 0.06).abs() < 4.0 * se, "accel_{w} {lag} ± {se}");
+    }
+    let hint = omni_ga::science::text::explore_hint(wheel);
+    assert!(hint.starts_with("every wheel's encoder reads "), "{hint}");
+    assert!(
+        hint.contains("ms after the wheel moves (accel on all 3 wheels") && hint.contains("`time_offset`"),
+        "{hint}"
+    );
+}
+
 #[test]
 fn a_heading_drift_growing_with_speed_is_found_by_the_body_family() {
     let truth = truth_with(Arc::new(HeadingDrift), &[0.02]);

@@ -118,6 +118,16 @@ pub fn family_status(f: &FamilyResult) -> String {
 fn wheel_hint(f: &FamilyResult, top: &Term) -> String {
     let (kind, wheel) = top.name.split_once('_').unwrap_or((top.name.as_str(), "?"));
     let value = |n: String| term(f, &n).map_or(0.0, |t| t.value);
+    if kind == "accel"
+        && let Some(lag_s) = common_lag(f)
+    {
+        return format!(
+            "every wheel's encoder reads {:.1} ms {} the wheel moves (accel on all {} wheels, equal within their standard errors): one clock offset for all wheels, the catalogue's `time_offset`",
+            1e3 * lag_s.abs(),
+            if lag_s > 0.0 { "after" } else { "before" },
+            f.terms.iter().filter(|t| t.name.starts_with("accel_")).count()
+        );
+    }
     match kind {
         "cos1" | "sin1" | "cos2" | "sin2" | "cos3" | "sin3" => {
             let n = &kind[3..];
@@ -149,6 +159,16 @@ fn wheel_hint(f: &FamilyResult, top: &Term) -> String {
             top.value
         ),
     }
+}
+
+/// The `wheel` family's `accel` terms as one clock offset (s): their mean, when there are two or more, none
+/// held, each at least 2 standard errors from 0 and within 2 of the mean (a lag common to every wheel is
+/// the catalogue's `time_offset`, not a per-wheel filter).
+fn common_lag(f: &FamilyResult) -> Option<f64> {
+    let accel: Vec<&Term> = f.terms.iter().filter(|t| t.name.starts_with("accel_")).collect();
+    let mean = accel.iter().map(|t| t.value).sum::<f64>() / accel.len().max(1) as f64;
+    let agree = |t: &&Term| !t.held && t.z() >= 2.0 && (t.value - mean).abs() <= 2.0 * t.std_error;
+    (accel.len() >= 2 && accel.iter().all(agree)).then_some(mean)
 }
 
 /// The `body` family's hint from its strongest term.
