@@ -62,6 +62,17 @@ pub enum ModelFileError {
     },
 }
 
+/// Why a fitted model does not make model file text.
+#[derive(Debug, Error)]
+pub enum ModelTextError {
+    /// The model's base kinematics cannot be written as the file's keys.
+    #[error(transparent)]
+    Record(#[from] omni_kin::KinError),
+    /// The TOML serializer refused the file.
+    #[error(transparent)]
+    Serialize(#[from] toml::ser::Error),
+}
+
 /// One effect in a model file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -199,9 +210,9 @@ impl ModelFile {
         }
     }
 
-    /// TOML text.
-    pub fn to_toml(&self) -> Result<String, String> {
-        let body = toml::to_string(self).map_err(|e| e.to_string())?;
+    /// TOML text. Fails only with [`ModelTextError::Serialize`].
+    pub fn to_toml(&self) -> Result<String, ModelTextError> {
+        let body = toml::to_string(self)?;
         Ok(format!("# omnical model file: see docs/formats.md\n{body}"))
     }
 }
@@ -228,8 +239,8 @@ fn parse(text: &str) -> Result<FittedModel, ParseFailure> {
 }
 
 /// The TOML text of a fitted model, with optional fit metadata.
-pub fn to_toml(f: &FittedModel, fit: Option<toml::Table>) -> Result<String, String> {
-    ModelFile::from_fitted(f, fit).map_err(|e| e.to_string())?.to_toml()
+pub fn to_toml(f: &FittedModel, fit: Option<toml::Table>) -> Result<String, ModelTextError> {
+    ModelFile::from_fitted(f, fit)?.to_toml()
 }
 
 #[cfg(test)]

@@ -207,7 +207,7 @@ impl PyModel {
 
     /// The model file text (TOML, as ``omnical train --out`` writes).
     fn to_toml(&self) -> PyResult<String> {
-        model_file::to_toml(&self.inner, None).map_err(value_error)
+        model_file::to_toml(&self.inner, None).map_err(|e| value_error(e.to_string()))
     }
 
     /// Write the model file (TOML); ``load_model`` and ``omnical eval --model FILE`` read it back exactly.

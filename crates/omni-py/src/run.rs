@@ -225,7 +225,7 @@ impl PyDataset {
         let rebuild = py.import("omnical._omnical")?.getattr("_dataset_from_state")?;
         let runs = self.runs.iter().map(|r| PyBytes::new(py, &crate::pickle::run_to_bytes(r))).collect();
         let design = match &self.design {
-            Some(d) => omni_cli::model_file::to_toml(d, None).map_err(value_error)?,
+            Some(d) => omni_cli::model_file::to_toml(d, None).map_err(|e| value_error(e.to_string()))?,
             None => String::new(),
         };
         let declared =

@@ -5,6 +5,7 @@ use crate::api::held_out::SameRecording;
 use crate::api::load::{DataOptions, LoadError, load_with_held_out};
 use crate::api::{ModelSpec, ResolveError};
 use crate::design::designs_for;
+use crate::model_file::ModelTextError;
 use crate::out_path::OutPathError;
 use crate::{atomic, model_file};
 use omni_ga::diagnose::{DiagnoseOptions, Diagnosis, diagnose};
@@ -29,9 +30,9 @@ pub enum DiagnoseError {
     /// The diagnosis failed.
     #[error(transparent)]
     Diagnose(#[from] omni_ga::Error),
-    /// The final model does not make a model file (the writer's message).
-    #[error("{0}")]
-    ModelText(String),
+    /// The final model does not make model file text.
+    #[error(transparent)]
+    ModelText(#[from] ModelTextError),
     /// The model file could not be written.
     #[error("writing {}", path.display())]
     Write {
@@ -89,7 +90,7 @@ pub fn diagnose_loaded(a: &DiagnoseRequest) -> Result<(Diagnosis, Loaded), Diagn
     super::held_out::check("diagnose", &a.runs, &ds.runs, val.as_deref().unwrap_or_default())?;
     let d = diagnose(&model, &design, &ds.runs, val.as_deref(), &a.options)?;
     if let (Some(out), Some(fm)) = (&a.out, &d.final_model) {
-        let text = model_file::to_toml(fm, None).map_err(DiagnoseError::ModelText)?;
+        let text = model_file::to_toml(fm, None)?;
         atomic::write_atomic(out, text.as_bytes())
             .map_err(|source| DiagnoseError::Write { path: out.clone(), source })?;
     }

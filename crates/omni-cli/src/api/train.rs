@@ -5,7 +5,7 @@ use crate::api::fit::{FitOptions, FitOptionsError, PriorUse, Refused, check_fit,
 use crate::api::load::{DataOptions, LoadError, LoadRequest};
 use crate::dataset::Dataset;
 use crate::design::DesignError;
-use crate::model_file::ModelFileError;
+use crate::model_file::{ModelFileError, ModelTextError};
 use crate::out_path::OutPathError;
 use crate::{atomic, design, interrupt, model_file, out_path};
 use omni_ga::calibrate::{Calibration, Plan, Preset, calibrate_with_effects};
@@ -57,9 +57,9 @@ pub enum TrainError {
     /// The fit summary does not make a TOML table.
     #[error("fit summary")]
     FitSummary(#[source] toml::ser::Error),
-    /// The model does not make a model file (the writer's message).
-    #[error("{0}")]
-    ModelText(String),
+    /// The model does not make model file text.
+    #[error(transparent)]
+    ModelText(#[from] ModelTextError),
     /// The model file could not be written.
     #[error("writing {}", path.display())]
     Write {
@@ -257,7 +257,7 @@ pub fn mount_warning(c: &Calibration) -> Option<String> {
 pub fn write_model(c: &Calibration, s: &serde_json::Value, out: &std::path::Path) -> Result<(), TrainError> {
     let mut fit: toml::Table = toml::Table::try_from(toml_safe(s.clone())).map_err(TrainError::FitSummary)?;
     fit.remove("seconds");
-    let text = model_file::to_toml(&c.fitted, Some(fit)).map_err(TrainError::ModelText)?;
+    let text = model_file::to_toml(&c.fitted, Some(fit))?;
     atomic::write_atomic(out, text.as_bytes()).map_err(|source| TrainError::Write { path: out.to_path_buf(), source })
 }
 

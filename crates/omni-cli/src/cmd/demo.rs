@@ -213,7 +213,7 @@ fn repeat_commands(a: &Args, setup: &Setup, dir: &Path, with_effects: bool) -> V
 /// Writes the true model, the fitted models and the diagnosis into `dir`.
 fn write_models(dir: &Path, truth: &FittedModel, fitted: &FittedModel, d: &Diagnosis) -> anyhow::Result<()> {
     let write = |name: &str, fm: &FittedModel| -> anyhow::Result<()> {
-        let text = model_file::to_toml(fm, None).map_err(anyhow::Error::msg)?;
+        let text = model_file::to_toml(fm, None)?;
         atomic::write_atomic(&dir.join(name), text.as_bytes()).with_context(|| format!("writing {name}"))
     };
     write(TRUTH_MODEL, truth)?;

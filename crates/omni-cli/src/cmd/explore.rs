@@ -58,7 +58,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
                 out.display()
             );
         };
-        let text = model_file::to_toml(&best.fitted, None).map_err(anyhow::Error::msg)?;
+        let text = model_file::to_toml(&best.fitted, None)?;
         atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))?;
     }
     if a.output.json {

@@ -113,7 +113,7 @@ fn write_model(design: &FittedModel, fit: &RotationFit, out: &Path) -> anyhow::R
     let mut table = toml::Table::new();
     table.insert("reference".into(), "imu: the rotation row fitted, the translation rows the design's".into());
     table.insert("gyro_bias_rad_s".into(), fit.bias_rad_s.into());
-    let text = model_file::to_toml(&model, Some(table)).map_err(anyhow::Error::msg)?;
+    let text = model_file::to_toml(&model, Some(table))?;
     atomic::write_atomic(out, text.as_bytes()).with_context(|| format!("writing {}", out.display()))
 }
 

@@ -491,7 +491,7 @@ fn write_truth(
     config: &SimConfig,
     lidar: Option<&Lidar>,
 ) -> anyhow::Result<()> {
-    let truth_toml = model_file::to_toml(truth, None).map_err(anyhow::Error::msg)?;
+    let truth_toml = model_file::to_toml(truth, None)?;
     atomic::write_atomic(&dir.join("truth_model.toml"), truth_toml.as_bytes())
         .with_context(|| format!("writing {}", a.out.join("truth_model.toml").display()))?;
     let doc = json!({

@@ -21,14 +21,15 @@
 //! [`GroundTruthOptions::time_offset_s`] forces it.
 //!
 //! # Submodules
-//! - `options.rs`: [`GroundTruthOptions`] and [`CsvColumns`]: the file, a forced offset, CSV columns, units.
+//! - `options.rs`: [`GroundTruthOptions`] and [`CsvColumns`]: the file, a forced offset, CSV columns, units;
+//!   [`CsvColumnsError`].
 //! - `formats.rs`: the TUM and CSV readers, row by row, and [`parse_stamp_ns`].
 
 mod formats;
 mod options;
 
 pub use formats::parse_stamp_ns;
-pub use options::{CsvColumns, GroundTruthOptions, TimeUnit};
+pub use options::{CsvColumns, CsvColumnsError, GroundTruthOptions, TimeUnit};
 
 use crate::dataset::DatasetError;
 use formats::{read_csv, read_tum, unwrap_yaw};

@@ -39,6 +39,26 @@ impl TimeUnit {
     }
 }
 
+/// A ground-truth column or unit the CSV reader does not know (`--gt-columns`, `--gt-units`,
+/// `[ground_truth]` in robot.toml).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum CsvColumnsError {
+    /// A column key other than `t`, `x`, `y` or `yaw`.
+    #[error("unknown ground-truth column {key:?} (expected t, x, y or yaw)")]
+    UnknownColumn {
+        /// The key given.
+        key: String,
+    },
+    /// A unit key or unit other than those of [`CsvColumns::set_unit`].
+    #[error("unknown ground-truth unit {key}={unit} (expected time=s|ms|us|ns, length=m|cm|mm, angle=rad|deg)")]
+    UnknownUnit {
+        /// The key given.
+        key: String,
+        /// The unit given.
+        unit: String,
+    },
+}
+
 /// CSV column names and units.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CsvColumns {
@@ -75,20 +95,20 @@ impl Default for CsvColumns {
 
 impl CsvColumns {
     /// Sets a column name: `t`, `x`, `y` or `yaw` (as in `--gt-columns t=stamp_ns`).
-    pub fn set_column(&mut self, key: &str, name: &str) -> Result<(), String> {
+    pub fn set_column(&mut self, key: &str, name: &str) -> Result<(), CsvColumnsError> {
         let slot = match key {
             "t" | "time" => &mut self.t,
             "x" => &mut self.x,
             "y" => &mut self.y,
             "yaw" => &mut self.yaw,
-            _ => return Err(format!("unknown ground-truth column {key:?} (expected t, x, y or yaw)")),
+            _ => return Err(CsvColumnsError::UnknownColumn { key: key.to_string() }),
         };
         *slot = name.to_string();
         Ok(())
     }
 
     /// Sets a unit: `time` (s, ms, us, ns), `length` (m, cm, mm) or `angle` (rad, deg).
-    pub fn set_unit(&mut self, key: &str, unit: &str) -> Result<(), String> {
+    pub fn set_unit(&mut self, key: &str, unit: &str) -> Result<(), CsvColumnsError> {
         match (key, unit) {
             ("time", "s") => self.time_unit = TimeUnit::S,
             ("time", "ms") => self.time_unit = TimeUnit::Ms,
@@ -99,12 +119,27 @@ impl CsvColumns {
             ("length", "mm") => self.m_per_length_unit = 0.001,
             ("angle", "rad") => self.rad_per_angle_unit = 1.0,
             ("angle", "deg") => self.rad_per_angle_unit = std::f64::consts::PI / 180.0,
-            _ => {
-                return Err(format!(
-                    "unknown ground-truth unit {key}={unit} (expected time=s|ms|us|ns, length=m|cm|mm, angle=rad|deg)"
-                ));
-            }
+            _ => return Err(CsvColumnsError::UnknownUnit { key: key.to_string(), unit: unit.to_string() }),
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unknown_columns_and_units_are_refused_with_what_is_expected() {
+        let mut c = CsvColumns::default();
+        assert_eq!(
+            c.set_column("z", "height").unwrap_err().to_string(),
+            "unknown ground-truth column \"z\" (expected t, x, y or yaw)"
+        );
+        assert_eq!(
+            c.set_unit("length", "in").unwrap_err().to_string(),
+            "unknown ground-truth unit length=in (expected time=s|ms|us|ns, length=m|cm|mm, angle=rad|deg)"
+        );
+        assert_eq!(c, CsvColumns::default());
     }
 }

@@ -1,0 +1,156 @@
+//! Why runs could not be read ([`LoadError`]).
+
+use crate::dataset::DatasetError;
+use crate::dataset::ground_truth::CsvColumnsError;
+use crate::robot_file::{self, RobotFileError};
+use omni_kin::KinError;
+use omni_kin::travel::Travel;
+use std::path::PathBuf;
+
+/// Why runs could not be read: the robot description, the data, or data options that do not go together
+/// (each message names the flags).
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// The robot description could not be read.
+    #[error(transparent)]
+    Robot(#[from] RobotFileError),
+    /// A data file could not be read as runs.
+    #[error(transparent)]
+    Dataset(#[from] DatasetError),
+    /// A run moved to the base, or given its measured end pose, is no valid run.
+    #[error(transparent)]
+    Run(#[from] KinError),
+    /// A run could not be cut into the windows of a relative reference.
+    #[error("run {run}")]
+    Windows {
+        /// The run.
+        run: String,
+        /// Why.
+        source: KinError,
+    },
+    /// `--gt-time-offset` on runs that have no ground-truth clock to shift.
+    #[error(
+        "--gt-time-offset {offset_s} changes nothing here: it applies to a --gt file or to a ground-truth topic of \
+         a recording (MCAP, rosbag2), and these runs have neither"
+    )]
+    OffsetUnused {
+        /// The offset given. s.
+        offset_s: f64,
+    },
+    /// `--gt-scans` with `--gt-kind end-pose`.
+    #[error("--gt-scans {topic} does not go with --gt-kind end-pose: a lidar's path is a relative reference")]
+    ScansWithEndPose {
+        /// The LaserScan topic.
+        topic: String,
+    },
+    /// `--gt-scans` with another source of ground truth (`flag`).
+    #[error("{flag} does not go with --gt-scans {topic}: the lidar's path is the ground truth")]
+    ScansWith {
+        /// The other option (`--gt`, `--gt-topic`).
+        flag: &'static str,
+        /// The LaserScan topic.
+        topic: String,
+    },
+    /// `--gt-kind end-pose` without the table of measured end poses.
+    #[error(
+        "--gt-kind end-pose needs --gt FILE: the table of measured end poses (a header run,x_m,y_m,yaw_deg and one \
+         row per recording; docs/formats.md, \"Measured end poses\"; `omnical plan --umbmark` writes one to fill in)"
+    )]
+    EndPoseWithoutTable,
+    /// `--gt-kind end-pose` with an option (`flag`) that makes runs of something else than whole recordings.
+    #[error(
+        "{flag} does not go with --gt-kind end-pose: each recording is one run from its start mark to where it \
+         stopped, measured by hand"
+    )]
+    EndPoseWith {
+        /// The option (`--split`, `--gt-topic`).
+        flag: &'static str,
+    },
+    /// A row of the end-pose table names no run read.
+    #[error(
+        "{}: line {line}: run {run:?} is not among the recordings read ({}): name each row after its recording's \
+         file name without extension",
+        file.display(),
+        runs.join(", ")
+    )]
+    EndPoseOfNoRun {
+        /// The end-pose table.
+        file: PathBuf,
+        /// The row's line (1-based).
+        line: usize,
+        /// The run it names.
+        run: String,
+        /// The runs read.
+        runs: Vec<String>,
+    },
+    /// A run read has no row in the end-pose table.
+    #[error(
+        "run {run} has no measured end pose in {}: add its row (run,x_m,y_m,yaw_deg), or leave the recording out",
+        file.display()
+    )]
+    NoEndPose {
+        /// The run.
+        run: String,
+        /// The end-pose table.
+        file: PathBuf,
+    },
+    /// `--gt-window` without a relative reference.
+    #[error(
+        "--gt-window {window_s} changes nothing here: it is the window of a relative reference (--gt-kind \
+         relative: the ground truth is a sensor's own motion, as lidar or visual odometry)"
+    )]
+    WindowUnused {
+        /// The window given. s.
+        window_s: f64,
+    },
+    /// A relative reference that never moves within a window.
+    #[error(
+        "the relative reference of these {runs} runs never moves in a window of {window_s} s: nothing to compare \
+         the wheels with (drive the robot, or check --gt-topic / --gt names the sensor's path)"
+    )]
+    NeverMoves {
+        /// The runs read.
+        runs: usize,
+        /// The window. s.
+        window_s: f64,
+    },
+    /// The wheels, through the robot description's design, travel and turn far more or less than the ground
+    /// truth: wheel data in another unit, or a design far from the robot.
+    #[error(
+        "through the design of {robot}, the wheels of these {runs} runs travel {:.1} m and turn {:.1} rad where \
+         their ground truth travels {:.1} m and turns {:.1} rad: {ratio:.2} times, beyond what a calibration \
+         corrects. Are the joints in another unit (rpm, deg/s, encoder counts)? Declare it in the robot \
+         description's [wheel_data] (docs/formats.md){}; otherwise check its radius_m and distances",
+        travel.wheels_m,
+        travel.wheels_rad,
+        travel.truth_m,
+        travel.truth_rad,
+        unit_hint(*ratio, *near_unit)
+    )]
+    WheelScale {
+        /// The robot description.
+        robot: robot_file::Source,
+        /// The runs read.
+        runs: usize,
+        /// Their travel, by the wheels and by the ground truth.
+        travel: Travel,
+        /// The wheels' distance over the ground truth's.
+        ratio: f64,
+        /// The unit read as rad/s whose factor the ratio is near, with that factor.
+        near_unit: Option<(f64, &'static str)>,
+    },
+    /// A `--gt-columns` / `--gt-units` setting that is not `KEY=VALUE`.
+    #[error("--gt-columns/--gt-units {setting:?}: expected KEY=VALUE")]
+    NotKeyValue {
+        /// The setting as given.
+        setting: String,
+    },
+    /// A ground-truth column or unit the CSV reader refuses.
+    #[error(transparent)]
+    GroundTruthColumns(#[from] CsvColumnsError),
+}
+
+/// The note on a unit near the wheel-scale ratio: ` (… is near …, the factor of velocity = "rpm")`.
+fn unit_hint(ratio: f64, near_unit: Option<(f64, &str)>) -> String {
+    near_unit.map_or_else(String::new, |(f, u)| format!(" ({ratio:.2} is near {f:.3}, the factor of velocity = {u:?})"))
+}

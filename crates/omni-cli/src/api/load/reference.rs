@@ -1,0 +1,147 @@
+//! The ground truth of the runs read: each run's measured end pose set (`--gt-kind end-pose`), the ground
+//! truth moved to the base (`--gt-mount`), a relative reference's runs cut into windows; and the check that
+//! the wheels travel about as far as the ground truth.
+
+use super::{DataOptions, LoadError};
+use crate::dataset::{self, Dataset};
+use crate::robot_file;
+use omni_kin::reference::ReferenceKind;
+
+/// Each run's placeholder end replaced by its measured end pose from `file`; a row naming no run read, or a
+/// run without a row, is an error naming both.
+pub(super) fn set_end_poses(ds: &mut Dataset, file: &std::path::Path) -> Result<(), LoadError> {
+    let measured = dataset::end_poses::read(file)?;
+    let names: Vec<&str> = ds.runs.iter().map(omni_kin::Run::name).collect();
+    if let Some(e) = measured.iter().find(|e| !names.contains(&e.run.as_str())) {
+        return Err(LoadError::EndPoseOfNoRun {
+            file: file.to_path_buf(),
+            line: e.line,
+            run: e.run.clone(),
+            runs: names.iter().map(|n| n.to_string()).collect(),
+        });
+    }
+    let runs = std::mem::take(&mut ds.runs);
+    ds.runs = runs
+        .into_iter()
+        .map(|run| {
+            let Some(e) = measured.iter().find(|e| e.run == run.name()) else {
+                return Err(LoadError::NoEndPose { run: run.name().to_string(), file: file.to_path_buf() });
+            };
+            let mut d = run.into_data();
+            d.truth[1].pose = e.pose;
+            Ok(omni_kin::Run::new(d)?)
+        })
+        .collect::<Result<_, LoadError>>()?;
+    ds.notes.push(format!(
+        "measured end poses: {} runs from {}, each from rest at the origin at its first wheel sample to its measured \
+         pose at its last (the end-pose cost)",
+        ds.runs.len(),
+        file.display()
+    ));
+    ds.reference = ReferenceKind::EndPose;
+    Ok(())
+}
+
+/// The ground truth of every run moved from the measured point to the base by `--gt-mount`, with a note.
+pub(super) fn move_to_base(ds: &mut Dataset, data: &DataOptions) -> Result<(), LoadError> {
+    let Some(mount) = data.gt_mount else { return Ok(()) };
+    let to_base = mount.inverse();
+    let runs = std::mem::take(&mut ds.runs);
+    ds.runs = runs
+        .into_iter()
+        .map(|run| {
+            let mut d = run.into_data();
+            for p in &mut d.truth {
+                p.pose = p.pose.compose(&to_base);
+            }
+            omni_kin::Run::new(d)
+        })
+        .collect::<Result<_, _>>()?;
+    ds.notes.push(format!(
+        "ground truth moved to the base from the measured point at x {:.4} m, y {:.4} m, yaw {:.3}° (--gt-mount)",
+        mount.x_m,
+        mount.y_m,
+        mount.theta_rad.to_degrees()
+    ));
+    ds.mount = Some(mount);
+    Ok(())
+}
+
+/// A relative reference's runs replaced by their windows ([`omni_kin::reference::windows`]), with a note;
+/// `--gt-window` without `--gt-kind relative` is an error (it would change nothing).
+pub(super) fn cut_into_windows(ds: &mut Dataset, data: &DataOptions) -> Result<(), LoadError> {
+    use omni_kin::reference::{DEFAULT_WINDOW_S, windows};
+    if data.gt_kind != ReferenceKind::Relative && data.gt_scans.is_none() {
+        if let Some(window_s) = data.gt_window_s {
+            return Err(LoadError::WindowUnused { window_s });
+        }
+        return Ok(());
+    }
+    let window_s = data.gt_window_s.unwrap_or(DEFAULT_WINDOW_S);
+    let (mut runs, mut still, mut gaps) = (Vec::new(), 0, 0);
+    let mut renamed: Vec<(String, Vec<String>)> = Vec::new();
+    for run in &ds.runs {
+        let w = windows(run, window_s).map_err(|source| LoadError::Windows { run: run.name().to_string(), source })?;
+        still += w.still;
+        gaps += w.gaps;
+        renamed.push((run.name().to_string(), w.runs.iter().map(|r| r.name().to_string()).collect()));
+        runs.extend(w.runs);
+    }
+    if runs.is_empty() {
+        return Err(LoadError::NeverMoves { runs: ds.runs.len(), window_s });
+    }
+    for d in &mut ds.declared {
+        d.runs = d
+            .runs
+            .iter()
+            .flat_map(|n| renamed.iter().filter(move |(r, _)| r == n).flat_map(|(_, w)| w.clone()))
+            .collect();
+    }
+    for (run, names) in &renamed {
+        if let Some(origin) = ds.time_origins_s.remove(run) {
+            ds.time_origins_s.extend(names.iter().map(|n| (n.clone(), origin)));
+        }
+        if let Some(recording) = ds.recordings.remove(run) {
+            ds.recordings.extend(names.iter().map(|n| (n.clone(), recording.clone())));
+        }
+    }
+    ds.notes.push(format!(
+        "relative reference: {} runs cut into {} windows of at most {window_s} s ({still} where the reference stands \
+         still dropped{}){}",
+        ds.runs.len(),
+        runs.len(),
+        if gaps > 0 { format!(", {gaps} gaps in the reference") } else { String::new() },
+        if ds.mount.is_none() { "; the sensor's mount is fitted with the wheels" } else { "" },
+    ));
+    ds.runs = runs;
+    ds.reference = ReferenceKind::Relative;
+    Ok(())
+}
+
+/// Ground truth must have gone this far (m) or turned this much (rad) to judge the wheels' scale.
+const SCALE_MIN_M: f64 = 1.0;
+const SCALE_MIN_RAD: f64 = std::f64::consts::PI;
+/// A calibration corrects a few per cent; the wheels' distance or turning off by more than this factor
+/// from the ground truth's is wheel data in another unit, or a design far from the robot.
+const SCALE_MAX_FACTOR: f64 = 3.0;
+
+/// Refuses runs whose wheels, through the robot description's design, travel and turn more than
+/// [`SCALE_MAX_FACTOR`] times more, or less, than their ground truth (both measurable, both off):
+/// joints in rpm, degrees or counts read as rad/s, or a radius in the wrong unit.
+pub(super) fn check_wheel_scale(ds: &Dataset, robot: &robot_file::RobotFile) -> Result<(), LoadError> {
+    use std::f64::consts::TAU;
+    let Ok(ik) = robot.description.design_ik() else { return Ok(()) };
+    let travel = omni_kin::travel::Travel::of(&ds.runs, &ik);
+    let (Some(ratio), Some(turning)) = (travel.distance_ratio(SCALE_MIN_M), travel.turning_ratio(SCALE_MIN_RAD)) else {
+        return Ok(());
+    };
+    // A unit scales distance and turning alike; one alone off is the data's or the design's own business.
+    let (lo, hi) = (1.0 / SCALE_MAX_FACTOR, SCALE_MAX_FACTOR);
+    if !(ratio > hi && turning > hi || ratio < lo && turning < lo) {
+        return Ok(());
+    }
+    // The factor of a unit read as rad/s, within what a calibration corrects besides.
+    let units = [(60.0 / TAU, "rpm"), (360.0 / TAU, "deg_s"), (TAU.recip(), "rev_s")];
+    let near_unit = units.into_iter().find(|(f, _)| (ratio / f - 1.0).abs() < 0.15);
+    Err(LoadError::WheelScale { robot: robot.source.clone(), runs: ds.runs.len(), travel, ratio, near_unit })
+}
