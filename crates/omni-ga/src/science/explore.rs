@@ -37,11 +37,11 @@ use crate::optimizer::problem::{Bounds, LeastSquares};
 use crate::optimizer::{LmConfig, Termination};
 use crate::science::coverage::{MotionCoverage, motion_coverage};
 use crate::science::diagnose::{UnexplainedEvidence, remains};
+use crate::science::heaviest_first;
 use crate::science::identify::WEAK_LOADING;
 use omni_kin::effect::{Effect, EffectKind, Family, Learned};
 use omni_kin::evaluate::Evaluator;
 use omni_kin::{CostKind, FittedModel, Run, Selection};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::ops::Range;
 
@@ -224,15 +224,19 @@ pub fn explore(
         return Err(Error::NoRuns);
     }
     let plan = Plan::refit(opts.every);
-    let baseline = refine(model, &[], train, &plan, &mut NoopObserver)?;
+    // The baseline and the families are independent fits: in parallel (the families with the most terms
+    // first), collected in the options' order (the first error in that order is the one returned; the
+    // same results whatever the thread count), each family then judged against the baseline.
+    let weight =
+        |&family: &Family| EffectKind::Learned(Learned { family, n_wheels: model.model.n_wheels() }).params().len();
+    let (baseline, fitted) = rayon::join(
+        || refine(model, &[], train, &plan, &mut NoopObserver),
+        || heaviest_first::map(&opts.families, weight, |&family| fit_family(model, family, train, validate, &plan)),
+    );
+    let baseline = baseline?;
     let (base_cost, base_runs) = held_out(&baseline.fitted, validate)?;
-    // The families are independent fits: in parallel, collected in the options' order (the first error in
-    // that order is the one returned; the same results whatever the thread count).
-    let fitted: Vec<Result<FamilyResult, Error>> = opts
-        .families
-        .par_iter()
-        .map(|&family| fit_family(model, family, train, validate, &plan, (base_cost, &base_runs), opts))
-        .collect();
+    let fitted: Vec<Result<FamilyResult, Error>> =
+        fitted.into_iter().map(|f| f.map(|f| f.judged((base_cost, &base_runs), opts))).collect();
     let mut families = fitted.into_iter().collect::<Result<Vec<_>, _>>()?;
     families.sort_by(|a, b| b.held_out_gain.total_cmp(&a.held_out_gain));
     let (with, held_out_m) = match families.iter().find(|f| f.passes) {
@@ -251,17 +255,38 @@ pub fn explore(
     })
 }
 
-/// Fit one family on `train` (with everything else, as `train --effect` does) and judge it on `validate`
-/// against the baseline's held-out cost and per-run mean squared errors.
+/// A family fitted, with its held-out cost and per-run mean squared errors, before it is judged against
+/// the baseline ([`FamilyFit::judged`]).
+struct FamilyFit {
+    /// The result, its gain and whether it passes still to be set.
+    result: FamilyResult,
+    /// Held-out mean squared error of each run.
+    per_run: Vec<f64>,
+}
+
+impl FamilyFit {
+    /// The family judged against the baseline's held-out cost and per-run mean squared errors.
+    fn judged(self, (base_cost, base_runs): (f64, &[f64]), opts: &ExploreOptions) -> FamilyResult {
+        let mut r = self.result;
+        r.held_out_gain = 1.0 - r.held_out_cost / base_cost;
+        let gains: Vec<f64> = self.per_run.iter().zip(base_runs).map(|(c, b)| 1.0 - (c / b).sqrt()).collect();
+        r.gain_std_error = mean_std_error(&gains);
+        r.passes = r.status == FamilyStatus::Fitted
+            && r.held_out_gain.is_finite()
+            && r.held_out_gain >= opts.min_gain
+            && r.held_out_gain > opts.min_gain_std_errors * r.gain_std_error;
+        r
+    }
+}
+
+/// Fit one family on `train` (with everything else, as `train --effect` does) and measure it on `validate`.
 fn fit_family(
     model: &FittedModel,
     family: Family,
     train: &[Run],
     validate: &[Run],
     plan: &Plan,
-    (base_cost, base_runs): (f64, &[f64]),
-    opts: &ExploreOptions,
-) -> Result<FamilyResult, Error> {
+) -> Result<FamilyFit, Error> {
     let learned = EffectKind::Learned(Learned { family, n_wheels: model.model.n_wheels() });
     let specs = learned.params();
     let c = refine(model, std::slice::from_ref(&learned), train, plan, &mut NoopObserver)?;
@@ -287,25 +312,19 @@ fn fit_family(
         _ => None,
     };
     let (cost, per_run) = held_out(&c.fitted, validate)?;
-    let gain = 1.0 - cost / base_cost;
-    let gains: Vec<f64> = per_run.iter().zip(base_runs).map(|(c, b)| 1.0 - (c / b).sqrt()).collect();
-    let gain_std_error = mean_std_error(&gains);
-    let passes = status == FamilyStatus::Fitted
-        && gain.is_finite()
-        && gain >= opts.min_gain
-        && gain > opts.min_gain_std_errors * gain_std_error;
-    Ok(FamilyResult {
+    let result = FamilyResult {
         family,
         status,
-        held_out_gain: gain,
-        gain_std_error,
-        passes,
+        held_out_gain: f64::NAN,
+        gain_std_error: f64::NAN,
+        passes: false,
         held_out_cost: cost,
         terms,
         held: c.held.iter().map(|w| w.text.clone()).collect(),
         fitted: c.fitted,
         curve,
-    })
+    };
+    Ok(FamilyFit { result, per_run })
 }
 
 /// Largest change of a term, in fractions of its scale (the identifiability analysis's), below which the

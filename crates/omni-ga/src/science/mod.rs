@@ -8,5 +8,6 @@ pub mod coverage;
 pub mod diagnose;
 pub mod excitation;
 pub mod explore;
+pub(crate) mod heaviest_first;
 pub mod identify;
 pub mod text;

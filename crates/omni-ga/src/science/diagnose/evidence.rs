@@ -42,27 +42,46 @@ pub fn refit(
     refine(current, &effects, train, &Plan::refit(every), &mut NoopObserver)
 }
 
-/// Projection residual: ‖(I − Q Qᵀ) v‖ for an orthonormal basis Q.
-fn orth_residual(q: &DMatrix<f64>, v: &DVector<f64>) -> DVector<f64> {
-    if q.ncols() == 0 {
-        return v.clone();
+/// Relative eigenvalue of the unit-column Gram matrix below which a direction counts as not spanned
+/// (singular value 1e-6 of the largest: `JᵀJ` carries rounding at 1e-16 of its largest entry).
+const RANK_TOLERANCE: f64 = 1e-12;
+
+/// `‖P_S w‖²`, the squared norm of `w`'s projection onto the span of the Jacobian columns `cols`, from the
+/// Gram matrix `jtj = JᵀJ` and `v = J_Sᵀw` (one entry per column of `cols`): `vᵀ (J_SᵀJ_S)⁺ v`, without the
+/// tall `J` itself. The pseudo-inverse is taken on the columns scaled to unit norm (the rank decision does
+/// not depend on the parameters' units), dropping eigenvalues below [`RANK_TOLERANCE`] of the largest and
+/// columns with no sensitivity at all.
+fn projected_norm2(jtj: &DMatrix<f64>, cols: &[usize], v: &DVector<f64>) -> f64 {
+    let kept: Vec<(usize, f64)> = cols
+        .iter()
+        .enumerate()
+        .filter_map(|(k, &c)| {
+            let d = jtj[(c, c)];
+            (d > 0.0 && d.is_finite()).then(|| (k, 1.0 / d.sqrt()))
+        })
+        .collect();
+    if kept.is_empty() {
+        return 0.0;
     }
-    v - q * (q.transpose() * v)
+    let unit = DMatrix::from_fn(kept.len(), kept.len(), |a, b| {
+        let ((ka, sa), (kb, sb)) = (kept[a], kept[b]);
+        jtj[(cols[ka], cols[kb])] * sa * sb
+    });
+    let w = DVector::from_fn(kept.len(), |a, _| v[kept[a].0] * kept[a].1);
+    if !unit.iter().chain(w.iter()).all(|x| x.is_finite()) {
+        return 0.0;
+    }
+    let eig = unit.symmetric_eigen();
+    let top = eig.eigenvalues.iter().fold(0.0f64, |m, &l| m.max(l));
+    (0..eig.eigenvalues.len())
+        .filter(|&k| eig.eigenvalues[k] > RANK_TOLERANCE * top)
+        .map(|k| eig.eigenvectors.column(k).dot(&w).powi(2) / eig.eigenvalues[k])
+        .sum()
 }
 
-/// Orthonormal basis of the column space (SVD, relative tolerance 1e-9).
-fn basis(m: &DMatrix<f64>) -> DMatrix<f64> {
-    if m.ncols() == 0 {
-        return DMatrix::zeros(m.nrows(), 0);
-    }
-    if !m.iter().all(|v| v.is_finite()) {
-        return DMatrix::zeros(m.nrows(), 0);
-    }
-    let svd = m.clone().svd(true, false);
-    let Some(u) = svd.u else { return DMatrix::zeros(m.nrows(), 0) };
-    let smax = svd.singular_values.iter().fold(0.0f64, |a, &b| a.max(b));
-    let keep: Vec<usize> = (0..svd.singular_values.len()).filter(|&i| svd.singular_values[i] > 1e-9 * smax).collect();
-    DMatrix::from_fn(m.nrows(), keep.len(), |r, c| u[(r, keep[c])])
+/// The entries `rows` of `v`.
+fn entries(v: &DVector<f64>, rows: &[usize]) -> DVector<f64> {
+    DVector::from_iterator(rows.len(), rows.iter().map(|&i| v[i]))
 }
 
 /// The first-order test of one effect at the current fit.
@@ -85,33 +104,30 @@ fn first_order(
     every: usize,
 ) -> Result<FirstOrder, Error> {
     let ext = current.with_effect(effect.clone());
-    let n = ext.params.len();
-    let nm = current.params.len();
+    let (n, nm) = (ext.params.len(), current.params.len());
     let problem = unbounded(&ext.model, train, every)?;
-    let r = DVector::from_vec(problem.residuals(&ext.params));
-    let j = problem.jacobian(&ext.params);
-    let jm = j.columns(0, nm).into_owned();
-    let je = j.columns(nm, n - nm).into_owned();
-    let qm = basis(&jm);
-    let rm = orth_residual(&qm, &r);
-    let q_all = basis(&j);
-    let r_all = orth_residual(&q_all, &r);
-    let rr = r.norm_squared().max(1e-300);
-    let explained = ((rm.norm_squared() - r_all.norm_squared()) / rr).clamp(0.0, 1.0);
+    // Everything below is a projection onto spans of Jacobian columns: the normal equations hold all it
+    // needs (`JᵀJ`, `Jᵀr`, `rᵀr`), at the cost of one Jacobian pass and no tall matrix.
+    let ne = problem.normal_equations(&ext.params);
+    let (model_cols, all_cols): (Vec<usize>, Vec<usize>) = ((0..nm).collect(), (0..n).collect());
+    let rr = ne.rtr.max(1e-300);
+    let explained_by = |cols: &[usize]| projected_norm2(&ne.jtj, cols, &entries(&ne.jtr, cols));
+    let explained = ((explained_by(&all_cols) - explained_by(&model_cols)) / rr).clamp(0.0, 1.0);
     // Columns with no sensitivity at all (the runs do not excite the effect) say nothing about
     // separability; if every column is such, the effect is unexcited, not absorbed (NaN).
+    let j_norm2 = ne.jtj.trace().max(1e-300);
     let mut separability = f64::INFINITY;
-    for c in 0..je.ncols() {
-        let col = je.column(c).into_owned();
-        let norm = col.norm();
-        if norm > 1e-12 * j.norm().max(1e-300) {
-            separability = separability.min(orth_residual(&qm, &col).norm() / norm);
+    for c in nm..n {
+        let norm2 = ne.jtj[(c, c)];
+        if norm2.sqrt() > 1e-12 * j_norm2.sqrt() {
+            let inside = projected_norm2(&ne.jtj, &model_cols, &DVector::from_fn(nm, |i, _| ne.jtj[(i, c)]));
+            separability = separability.min(((norm2 - inside).max(0.0) / norm2).sqrt());
         }
     }
     if !separability.is_finite() {
         separability = f64::NAN;
     }
-    let implied = implied_values(current, design, effect, &jm, &je);
+    let implied = implied_values(current, design, effect, &ne.jtj);
     Ok(FirstOrder { explained, separability, implied })
 }
 
@@ -131,21 +147,23 @@ fn switched_on_share(current: &FittedModel, effect: &EffectKind, train: &[Run], 
     Ok((1.0 - norm2(&on) / norm2(&off).max(1e-300)).clamp(0.0, 1.0))
 }
 
-/// Implied effect values: min ‖J_e e − J_m Δx‖, Δx = fit − design (same base structure only).
+/// Implied effect values: min ‖J_e e − J_m Δx‖, Δx = fit − design (same base structure only), from the
+/// Gram matrix `jtj` of `[J_m J_e]`: the least-norm solution of `J_eᵀJ_e e = J_eᵀJ_m Δx`.
 fn implied_values(
     current: &FittedModel,
     design: &FittedModel,
     effect: &EffectKind,
-    jm: &DMatrix<f64>,
-    je: &DMatrix<f64>,
+    jtj: &DMatrix<f64>,
 ) -> Vec<ParamValue> {
     let mut implied = Vec::new();
+    let nm = current.params.len();
     if design.params.len() == current.model.n_base() || design.model.n_base() == current.model.n_base() {
         let nb = current.model.n_base();
-        let dx = DVector::from_fn(jm.ncols(), |i, _| if i < nb { current.params[i] - design.params[i] } else { 0.0 });
-        let target = jm * dx;
-        let finite = je.iter().chain(target.iter()).all(|v| v.is_finite());
-        if let Some(Ok(sol)) = finite.then(|| je.clone().svd(true, true).solve(&target, 1e-12)) {
+        let dx = DVector::from_fn(nm, |i, _| if i < nb { current.params[i] - design.params[i] } else { 0.0 });
+        let gee = jtj.view((nm, nm), (jtj.nrows() - nm, jtj.ncols() - nm)).into_owned();
+        let target = jtj.view((nm, 0), (jtj.nrows() - nm, nm)) * dx;
+        let finite = gee.iter().chain(target.iter()).all(|v| v.is_finite());
+        if let Some(Ok(sol)) = finite.then(|| gee.svd(true, true).solve(&target, 1e-24)) {
             for (s, v) in effect.params().iter().zip(sol.iter()) {
                 implied.push(ParamValue { name: s.name.clone(), value: *v, unit: s.unit.clone(), std_error: None });
             }

@@ -5,7 +5,7 @@ use super::compare::{Turn, costs_of, path_kind};
 use super::evidence::{Bench, candidate_effect, refit};
 use super::{Candidate, Costs, DiagnoseOptions, KindOut, Rung, RungKind};
 use crate::error::Error;
-use crate::science::text;
+use crate::science::{heaviest_first, text};
 use omni_kin::cost;
 use omni_kin::effect::Effect;
 use omni_kin::{EffectKind, FittedModel, Run};
@@ -109,15 +109,16 @@ fn rank(
         .filter(|id| !present.iter().any(|p| p == id))
         .filter(|id| eligible.is_none_or(|e| e.contains(id)))
         .collect();
-    // The candidates are independent: assessed in parallel, collected in catalogue order (the first error
-    // in that order is the one returned), so the ranking does not depend on the thread count.
-    let assessed: Vec<Result<Candidate, Error>> = ids
-        .par_iter()
-        .map(|id| {
-            let effect = candidate_effect(id, current.model.n_wheels(), opts)?;
-            bench.assess(id, &effect, current, current_costs)
-        })
-        .collect();
+    // The candidates are independent: assessed in parallel (those with the most parameters, the costliest
+    // refits, first), collected in catalogue order (the first error in that order is the one returned), so
+    // the ranking does not depend on the thread count.
+    let effects: Vec<(&String, Result<EffectKind, omni_kin::KinError>)> =
+        ids.iter().map(|id| (id, candidate_effect(id, current.model.n_wheels(), opts))).collect();
+    let weight = |(_, e): &(&String, Result<EffectKind, _>)| e.as_ref().map_or(0, |e| e.params().len());
+    let assessed = heaviest_first::map(&effects, weight, |(id, effect)| {
+        let effect = effect.as_ref().map_err(|e| Error::from(e.clone()))?;
+        bench.assess(id, effect, current, current_costs)
+    });
     let mut ranking = assessed.into_iter().collect::<Result<Vec<_>, _>>()?;
     ranking.sort_by(|a, b| b.held_out_gain.total_cmp(&a.held_out_gain));
     Ok(ranking)
