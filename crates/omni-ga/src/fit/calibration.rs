@@ -120,7 +120,7 @@ pub fn calibrate(
     let problem = CalibrationProblem::new(&model, train, plan.objective, bounds.clone())?;
     let objective_start = problem.cost(&start.params);
     let names: Vec<String> = model.params().into_iter().map(|p| p.name).collect();
-    let from = Start { x: &start.params, objective: objective_start, hold_at: &start.params };
+    let from = Start { x: &start.params, objective: objective_start, hold_at: &start.params, fitted: 0 };
     let mut fit = pipeline::run(&problem, plan, from, &names, observer)?;
     let start_as_given = objective_as_given(start, train, plan, objective_start)?;
     let identifiability = fit.identifiability.take();
@@ -166,7 +166,7 @@ pub fn refine(
     let names: Vec<String> = start.model.params().into_iter().map(|p| p.name).collect();
     let refining = Plan { stages: plan.stages.iter().filter(|s| s.refines_held()).cloned().collect(), ..plan.clone() };
     let objective = problem.cost(&nudged);
-    let from = Start { x: &nudged, objective, hold_at: &start.params };
+    let from = Start { x: &nudged, objective, hold_at: &start.params, fitted: base.params.len() };
     let mut fit = pipeline::run(&problem, &refining, from, &names, observer)?;
     let objective_start = problem.cost(&start.params);
     // The model keeps its own integration: the start as given is the start fitted from.

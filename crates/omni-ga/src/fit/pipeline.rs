@@ -16,6 +16,9 @@
 //!   spent along the unconstrained valley (the fit diagnose judged a hardly determined effect with, 2–3×
 //!   fewer evaluations on the OptiOdom robots); otherwise the stages run again from the start with their
 //!   whole budget, as unscouted.
+//! - Refits of a base the runs leave partly unconstrained (a fitted base whose own fit held directions,
+//!   with effects added at null): the truncated update at once, with the directions found at the start,
+//!   when one of them lies in the base alone. The scout would crawl along them every time.
 
 use crate::error::Error;
 use crate::fit::plan::{Plan, Unexcited};
@@ -24,7 +27,7 @@ use crate::fit::stage::Stage;
 use crate::optimizer::problem::{Bounds, LeastSquares, Problem};
 use crate::optimizer::subspace::Subspace;
 use crate::optimizer::{Observer, Solution, Termination};
-use crate::science::identify::{Identifiability, WeakDirection};
+use crate::science::identify::{Identifiability, WEAK_LOADING, WeakDirection};
 use nalgebra::{DMatrix, DVector};
 
 /// One stage's result within a calibration.
@@ -66,6 +69,9 @@ pub(crate) struct Start<'a> {
     /// Where the truncated update puts back what the runs do not constrain: `x` itself, or (when `x` was
     /// nudged off a kink, [`crate::fit::refine`]) the model as given.
     pub hold_at: &'a [f64],
+    /// How many leading parameters of `x` are already a fit of these runs, the rest added at their null
+    /// values (a fitted base with effects added, [`crate::fit::refine`]); 0 for a start that is not a fit.
+    pub fitted: usize,
 }
 
 impl Fitted {
@@ -91,6 +97,19 @@ pub(crate) fn run(
     observer: &mut dyn Observer,
 ) -> Result<Fitted, Error> {
     let mut fit = Fitted::at(start.x);
+    if plan.unexcited == Unexcited::Hold && start.fitted > 0 && plan.stages.iter().all(Stage::refines_held) {
+        // A refit of a base the runs leave partly unconstrained: the stages would only crawl along the base's
+        // own unconstrained directions (on the OptiOdom robots, ten accepted steps of ~0.5 % each, half of
+        // every refit), so the truncated update runs at once, with the directions found at the start. Only
+        // when one of them lies in the fitted base alone: a direction that needs the added parameters is
+        // judged where they have been fitted (the scout below), since their misfit at null inflates it.
+        let id = problem.identifiability(start.x, &plan.identify);
+        let in_base = |w: &WeakDirection| w.direction[start.fitted..].iter().all(|v| v.abs() < WEAK_LOADING);
+        if id.weak.iter().any(in_base) {
+            hold_and_refine(problem, plan, start.hold_at, id, &mut fit, observer)?;
+            return Ok(fit);
+        }
+    }
     if plan.unexcited == Unexcited::Hold
         && let (n, m) = (start.x.len(), problem.residual_count(start.x))
         && let Some(scout) = plan.stages.iter().map(|s| s.scout(n, m)).collect::<Option<Vec<_>>>()
