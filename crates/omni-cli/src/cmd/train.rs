@@ -126,11 +126,12 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     if let Some(out) = &a.out {
         out_path::check_file(out, "--out")?;
     }
-    let Prepared { ds, start, effects, plan, priors } = prepare(&a.request())?;
+    let prepared = prepare(&a.request());
     if interrupt::requested() {
-        // Ctrl-C while loading: nothing was fitted.
+        // Ctrl-C while loading: nothing was fitted, whatever the preparation gave.
         return Err(interrupt::Interrupted.into());
     }
+    let Prepared { ds, start, effects, plan, priors } = prepared?;
     let preset_name = a.preset.id();
     if let Some(w) = check_step(&plan, &ds.runs, a.force)? {
         tracing::warn!("{w}");
