@@ -48,24 +48,57 @@ pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
     };
     match run_quiet_on_closed_pipe(cli) {
         Ok(()) => 0,
-        Err(e) => {
+        Err(e) => match Failure::of(&e) {
             // A closed pipe (`omnical eval … | head`) is not a failure.
-            if e.chain().any(|c| {
-                c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
-            }) {
-                return 0;
-            }
-            if e.downcast_ref::<crate::api::fit::Refused>().is_some() {
+            Failure::ClosedPipe => 0,
+            Failure::Refused => {
                 eprintln!("error: {e:#}");
-                return crate::cmd::train::EXIT_REFUSED;
+                crate::cmd::train::EXIT_REFUSED
             }
-            if e.downcast_ref::<crate::interrupt::Interrupted>().is_some() {
+            Failure::Interrupted => {
                 eprintln!("omnical: {e:#}");
-                return crate::interrupt::EXIT_INTERRUPTED;
+                crate::interrupt::EXIT_INTERRUPTED
             }
-            let text = format!("{e:#}");
-            eprintln!("error: {}", project.map_or_else(|| text.clone(), |p| with_project_origins(&text, &p, &args)));
-            2
+            Failure::Error => {
+                let text = format!("{e:#}");
+                eprintln!(
+                    "error: {}",
+                    project.map_or_else(|| text.clone(), |p| with_project_origins(&text, &p, &args))
+                );
+                2
+            }
+        },
+    }
+}
+
+/// How a failed command ends, from the first error among `e`'s sources that has an exit status of its own
+/// (so a `.context(…)` around one keeps its status). A `#[error(transparent)]` wrapper hides its inner error
+/// from `source()`, so the library returns these at the top of its own error, never inside one.
+#[derive(Debug, PartialEq)]
+enum Failure {
+    /// Writing into a closed pipe: exit 0.
+    ClosedPipe,
+    /// A fit refused ([`crate::api::fit::Refused`]): [`crate::cmd::train::EXIT_REFUSED`].
+    Refused,
+    /// Ctrl-C ([`crate::interrupt::Interrupted`]): [`crate::interrupt::EXIT_INTERRUPTED`].
+    Interrupted,
+    /// Any other error: exit 2.
+    Error,
+}
+
+impl Failure {
+    fn of(e: &anyhow::Error) -> Self {
+        let closed_pipe = |c: &(dyn std::error::Error + 'static)| {
+            c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+        };
+        if e.chain().any(closed_pipe) {
+            Self::ClosedPipe
+        } else if e.chain().any(|c| c.is::<crate::api::fit::Refused>()) {
+            Self::Refused
+        } else if e.chain().any(|c| c.is::<crate::interrupt::Interrupted>()) {
+            Self::Interrupted
+        } else {
+            Self::Error
         }
     }
 }
@@ -256,6 +289,19 @@ fn install_closed_pipe_hook() {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn exit_statuses_are_found_among_the_sources() {
+        use crate::api::fit::Refused;
+        use crate::interrupt::Interrupted;
+        let refused = anyhow::Error::from(Refused("worse than its start".into()));
+        assert_eq!(Failure::of(&refused), Failure::Refused);
+        assert_eq!(Failure::of(&refused.context("training")), Failure::Refused);
+        assert_eq!(Failure::of(&anyhow::Error::from(Interrupted).context("loading")), Failure::Interrupted);
+        let pipe = std::io::Error::from(std::io::ErrorKind::BrokenPipe);
+        assert_eq!(Failure::of(&anyhow::Error::from(pipe).context("writing")), Failure::ClosedPipe);
+        assert_eq!(Failure::of(&anyhow::anyhow!("bad input")), Failure::Error);
+    }
 
     #[test]
     fn a_mistyped_flag_gets_the_nearest_one() {

@@ -76,7 +76,7 @@ fn normal_and_zstd_bags_give_the_values_written() {
         assert!((r.runs[0].end().pose.theta_rad - 3.5).abs() < 1e-9);
         let path = dir.join(format!("{name}.mcap"));
         assert_eq!(
-            r.notes,
+            r.notes.iter().map(ToString::to_string).collect::<Vec<_>>(),
             [
                 format!(
                     "{}: topic \"/cmd_vel\" (geometry_msgs/msg/Twist) has no header: command times are log times",
@@ -153,7 +153,7 @@ fn position_only_joint_states_are_differentiated() {
     close(&run.wheel_rad_s()[3..], &floats(&want["wheel_rad_s_true"])[3..], 1e-9, "true speeds");
     close(run.wheel_start_rad(), &floats(&want["wheel_start_rad"]), 0.0, "wheel_start_rad");
     assert_eq!(
-        r.notes,
+        r.notes.iter().map(ToString::to_string).collect::<Vec<_>>(),
         [format!(
             "{}: topic \"/joint_states\": 201 of 201 messages have no velocity: wheel speeds are differences of \
              position over header.stamp",
@@ -177,7 +177,7 @@ fn joint_states_as_real_systems_publish_them_are_read_with_notes() {
         // The speeds the positions were integrated from (after the first sample, which takes the second's).
         close(&run.wheel_rad_s()[3..], &floats(&want["wheel_rad_s_true"])[3..], 1e-9, name);
         let path = dir.join(format!("{name}.mcap")).display().to_string();
-        let notes: Vec<String> = r.notes.iter().map(|n| n.replace(&path, "BAG")).collect();
+        let notes: Vec<String> = r.notes.iter().map(|n| n.to_string().replace(&path, "BAG")).collect();
         let expected_notes: &[&str] = if name == "ros2_control" {
             &[
                 "BAG: topic \"/joint_states\": 51 messages name none of the wheel joints (another publisher on the \
@@ -277,7 +277,7 @@ fn encoder_counts_and_motor_rpm_are_read_with_the_declared_units() {
     let worst = a.wheel_rad_s().iter().zip(b.wheel_rad_s()).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
     assert!(worst < 1e-12, "rpm: {worst}");
     assert!(
-        rpm.notes.iter().any(|n| n.ends_with(
+        rpm.notes.iter().any(|n| n.text.ends_with(
             "joint positions in counts and velocities in rpm (1024 counts per revolution) behind a 30:1 gear are \
          converted to the wheel's rad and rad/s ([wheel_data] in the robot description)"
         )),
@@ -352,7 +352,7 @@ fn ground_truth_from_tf_pose_with_covariance_and_odometry() {
     let r = read_ok(dir, "tf_marker");
     check_run(&r.runs[0], &expected["tf_marker"]);
     assert!(
-        r.notes.iter().any(|n| n.ends_with(
+        r.notes.iter().any(|n| n.text.ends_with(
             "topic \"/tf\": the ground truth tracks \"marker\"; it is moved to \"base_link\" through static \
              transforms (marker → mount → base_link: x -0.1000 m, y 0.0500 m, yaw 30.00°)"
         )),

@@ -158,7 +158,38 @@ pub enum KinError {
         /// The accepted names, comma-separated.
         known: String,
     },
-    /// An invalid setting or value.
+    /// A model parameter's value outside its domain (a radius that is not > 0, a value that is not finite).
+    #[error("parameter {name}: {value} is not {must}")]
+    BadParam {
+        /// The parameter's name, e.g. `r_a`.
+        name: String,
+        /// The value given.
+        value: f64,
+        /// What it must be.
+        must: Domain,
+    },
+    /// A design geometry the model's kinematics cannot describe (a mecanum base off its rectangle, a diff
+    /// drive without a common axle).
+    #[error("the {model} model's geometry: {why}")]
+    Layout {
+        /// The model whose layout it is not.
+        model: crate::KinematicsKind,
+        /// What the model needs of it.
+        why: &'static str,
+    },
+    /// A setting of the simulator or its lidar outside its range.
+    #[error("{of} {field}: {why}")]
+    Setting {
+        /// Whose setting.
+        of: Settings,
+        /// The field, e.g. `duration_s` or `commands[2].alpha_rad`.
+        field: String,
+        /// Why it is rejected.
+        why: String,
+    },
+    /// Anything else that is refused, with what it concerns: the failures that are one of a kind (a run
+    /// without wheel columns, run-to-design maps, the reference's and the gyro's windows, lidar scans and
+    /// rooms, an IK matrix entry, the controller fit). A group of them that grows gets its own variant.
     #[error("{what}: {why}")]
     Invalid {
         /// What was being set.
@@ -166,6 +197,42 @@ pub enum KinError {
         /// Why it is rejected.
         why: String,
     },
+}
+
+/// What a value must be, in [`KinError::BadParam`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Domain {
+    /// Finite (no NaN or infinity).
+    Finite,
+    /// Finite and above zero.
+    Positive,
+}
+
+impl std::fmt::Display for Domain {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Finite => "finite",
+            Self::Positive => "> 0",
+        })
+    }
+}
+
+/// Whose settings a [`KinError::Setting`] names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Settings {
+    /// The simulator's (`SimConfig`, its commands and legs).
+    Simulator,
+    /// The simulated lidar's (`ScanSettings`).
+    Lidar,
+}
+
+impl std::fmt::Display for Settings {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Simulator => "simulator",
+            Self::Lidar => "lidar",
+        })
+    }
 }
 
 /// What a base with forward-kinematics rank `needed` must produce, for [`KinError::Singular`].

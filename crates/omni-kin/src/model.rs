@@ -5,7 +5,7 @@
 //! `<effect id>.<name>` for effects, e.g. `time_offset.tau_s`.
 
 use crate::effect::{Effect, EffectKind, ParamSpec, Stage};
-use crate::error::KinError;
+use crate::error::{Domain, KinError};
 use crate::geometry::RobotGeometry;
 use crate::ik::IkMatrix;
 pub use crate::kinematics::Kinematics;
@@ -176,10 +176,7 @@ impl Model {
         }
         if let Some(i) = params.iter().position(|v| !v.is_finite()) {
             let name = self.params()[i].name.clone();
-            return Err(KinError::Invalid {
-                what: format!("parameter {name}"),
-                why: format!("{} is not finite", params[i]),
-            });
+            return Err(KinError::BadParam { name, value: params[i], must: Domain::Finite });
         }
         let nb = self.n_base();
         let ik = self.kinematics.twist_from_wheels(&params[..nb])?;

@@ -381,7 +381,7 @@ pub fn load(
     let ds = py.detach(|| request.read_for_robot(robot)).map_err(load_error)?;
     let design = omni_cli::design::declared(&ds).map_err(|e| value_error(chain_text(&e)))?;
     let source = ds.robot_file.as_ref().map(|f| f.source.clone());
-    let mut notes = ds.notes;
+    let mut notes: Vec<String> = ds.notes.iter().map(ToString::to_string).collect();
     if let Some(s @ robot_file::Source::Discovered(_)) = &source {
         notes.insert(0, format!("robot: {s}"));
     }

@@ -7,7 +7,7 @@ use crate::dataset::Dataset;
 use crate::design::DesignError;
 use crate::model_file::{ModelFileError, ModelTextError};
 use crate::out_path::OutPathError;
-use crate::{atomic, design, interrupt, model_file, out_path};
+use crate::{atomic, design, model_file, out_path};
 use omni_ga::calibrate::{Calibration, Plan, Preset, calibrate_with_effects};
 use omni_kin::cost::CostKind;
 use omni_kin::effect::Effect;
@@ -25,9 +25,6 @@ pub enum TrainError {
     /// The runs could not be read.
     #[error(transparent)]
     Load(#[from] LoadError),
-    /// Ctrl-C during loading.
-    #[error(transparent)]
-    Interrupted(#[from] interrupt::Interrupted),
     /// The `--start` model file could not be read.
     #[error("reading --start")]
     Start(#[source] ModelFileError),
@@ -171,13 +168,10 @@ pub struct Prepared {
     pub priors: Vec<PriorUse>,
 }
 
-/// Loads the runs and builds the start model, the effects and the plan, as `omnical train` does. A Ctrl-C
-/// (when the handler is installed) during loading ends it with [`interrupt::Interrupted`].
+/// Loads the runs and builds the start model, the effects and the plan, as `omnical train` does. Ctrl-C is
+/// the front end's to handle (the command checks for it after this returns).
 pub fn prepare(a: &TrainRequest) -> Result<Prepared, TrainError> {
     let ds = LoadRequest::new(&a.runs, &a.data).load()?;
-    if interrupt::requested() {
-        return Err(interrupt::Interrupted.into());
-    }
     let start = match &a.start {
         Some(p) => model_file::read(p).map_err(TrainError::Start)?,
         None => {

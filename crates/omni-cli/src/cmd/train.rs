@@ -2,7 +2,7 @@
 
 use super::{DataArgs, OutputArgs};
 use crate::api::fit::{FitOptions, check_fit, check_step};
-use crate::api::train::{Prepared, TrainError, TrainRequest, designs_figure, prepare, summary, write_model};
+use crate::api::train::{Prepared, TrainRequest, designs_figure, prepare, summary, write_model};
 use crate::cli::{choice, effect_help};
 use crate::units::{count, std_error_text, value_text};
 use crate::{interrupt, out_path, progress};
@@ -126,12 +126,12 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     if let Some(out) = &a.out {
         out_path::check_file(out, "--out")?;
     }
-    let Prepared { ds, start, effects, plan, priors } = match prepare(&a.request()) {
-        Ok(p) => p,
-        // The entry point exits with its own status on this one (anyhow finds it only at the top).
-        Err(TrainError::Interrupted(i)) => return Err(i.into()),
-        Err(e) => return Err(e.into()),
-    };
+    let prepared = prepare(&a.request());
+    if interrupt::requested() {
+        // Ctrl-C while loading: nothing was fitted, whatever the preparation gave.
+        return Err(interrupt::Interrupted.into());
+    }
+    let Prepared { ds, start, effects, plan, priors } = prepared?;
     let preset_name = a.preset.id();
     if let Some(w) = check_step(&plan, &ds.runs, a.force)? {
         tracing::warn!("{w}");

@@ -5,7 +5,7 @@
 //! static transforms hold the lidar's pose on the base, the path is moved to the base by it (the fit then
 //! corrects the mount around it); otherwise the mount is fitted from zero.
 
-use super::{DatasetError, Loaded};
+use super::{DatasetError, Loaded, Note};
 use crate::lidar::{self, MatchSettings};
 use omni_kin::{Run, StampedPose};
 use std::path::Path;
@@ -91,7 +91,7 @@ fn rejections(why: &std::collections::BTreeMap<&'static str, usize>) -> String {
 
 /// The notes a lidar reference leaves: where the mount came from (the same words for every recording, so a
 /// load says it once), and the rejected matches and stretches when there were any.
-fn notes(path: &Path, topic: &str, read: &lidar::ScanRead, sensor: &lidar::SensorPath, runs: usize) -> Vec<String> {
+fn notes(path: &Path, topic: &str, read: &lidar::ScanRead, sensor: &lidar::SensorPath, runs: usize) -> Vec<Note> {
     let frame = &read.frame_id;
     let upside_down = if read.mirrored { " (mounted upside down: its scans are read mirrored)" } else { "" };
     let mount = match read.base_from_sensor {
@@ -107,12 +107,14 @@ fn notes(path: &Path, topic: &str, read: &lidar::ScanRead, sensor: &lidar::Senso
              ±0.5 m, ±28.6°; give it with --gt-mount when it is turned further)"
         ),
     };
-    let mut out = vec![format!("{}: lidar {topic:?} matched scan to scan as the reference; {mount}", path.display())];
+    let mut out = vec![Note::about(path, format!("lidar {topic:?} matched scan to scan as the reference; {mount}"))];
     if sensor.deskewed > 0 {
-        out.push(format!(
-            "{}: lidar {topic:?}: {} scans de-skewed (beams measured over the sweep: LaserScan time_increment)",
-            path.display(),
-            sensor.deskewed
+        out.push(Note::about(
+            path,
+            format!(
+                "lidar {topic:?}: {} scans de-skewed (beams measured over the sweep: LaserScan time_increment)",
+                sensor.deskewed
+            ),
         ));
     }
     if sensor.rejected > 0 {
@@ -121,16 +123,18 @@ fn notes(path: &Path, topic: &str, read: &lidar::ScanRead, sensor: &lidar::Senso
             r.sort_by(f64::total_cmp);
             r.get(r.len() / 2).copied().unwrap_or(f64::NAN)
         };
-        out.push(format!(
-            "{}: lidar {topic:?}: {} of {} scan matches rejected ({}), median match RMS {:.1} mm; {} stretch{} of \
-             accepted matches",
-            path.display(),
-            sensor.rejected,
-            sensor.rejected + sensor.matched,
-            rejections(&sensor.rejected_why),
-            rms * 1e3,
-            runs,
-            if runs == 1 { "" } else { "es" },
+        out.push(Note::about(
+            path,
+            format!(
+                "lidar {topic:?}: {} of {} scan matches rejected ({}), median match RMS {:.1} mm; {} stretch{} of \
+                 accepted matches",
+                sensor.rejected,
+                sensor.rejected + sensor.matched,
+                rejections(&sensor.rejected_why),
+                rms * 1e3,
+                runs,
+                if runs == 1 { "" } else { "es" },
+            ),
         ));
     }
     out

@@ -9,6 +9,7 @@ mod error;
 pub mod ground_truth;
 mod lidar_reference;
 pub mod mcap;
+mod note;
 pub mod optiodom;
 mod ros;
 pub mod ros1;
@@ -16,6 +17,7 @@ pub mod rosbag2;
 
 pub use error::{DatasetError, Skipped};
 pub(crate) use error::{check_size, too_large};
+pub use note::Note;
 use omni_kin::{RobotGeometry, Run};
 use rayon::prelude::*;
 pub use ros::{Inspected, inspect, recorded_topics, review};
@@ -29,8 +31,9 @@ pub struct Dataset {
     pub runs: Vec<Run>,
     /// Inputs skipped with `--skip-invalid`, with the reason.
     pub skipped: Vec<Skipped>,
-    /// Things the user should know (e.g. "velocity empty: differentiated position").
-    pub notes: Vec<String>,
+    /// Things the user should know (e.g. "velocity empty: differentiated position"), each with the input it
+    /// concerns.
+    pub notes: Vec<Note>,
     /// The design geometry each input declares (OptiOdom metadata), in input order, with its runs: each run
     /// is evaluated with its own input's design (`crate::design`).
     pub declared: Vec<Declared>,
@@ -252,7 +255,7 @@ type Reads = Vec<Option<Result<Result<Loaded, DatasetError>, DatasetError>>>;
 /// again at the median offset of the clear estimates, and a note per such recording says so. A few
 /// milliseconds of drift between clear estimates is kept: each recording keeps its own. Nothing changes when
 /// the offset is forced or no estimate is clear.
-fn shared_clock_retry(inputs: &[Result<Input, DatasetError>], reads: &mut Reads, opts: &LoadOptions) -> Vec<String> {
+fn shared_clock_retry(inputs: &[Result<Input, DatasetError>], reads: &mut Reads, opts: &LoadOptions) -> Vec<Note> {
     let Some(gt) = opts.ground_truth.as_ref().filter(|g| g.time_offset_s.is_none()) else { return vec![] };
     let estimate = |r: &Option<Result<Result<Loaded, DatasetError>, DatasetError>>| {
         r.as_ref()?.as_ref().ok()?.as_ref().ok()?.clock.as_ref()?.estimate
@@ -288,11 +291,13 @@ fn shared_clock_retry(inputs: &[Result<Input, DatasetError>], reads: &mut Reads,
     let mut notes = Vec::new();
     for (input, read) in inputs.iter().zip(reads.iter_mut()) {
         let (Ok(input), Some(why)) = (input, retry(read)) else { continue };
-        notes.push(format!(
-            "{}: {why}; the ground truth is read at {median:+.4} s, the median offset of the {} recording(s) aligned \
-             clearly with the same --gt (one clock)",
-            input.path().display(),
-            offsets.len()
+        notes.push(Note::about(
+            input.path(),
+            format!(
+                "{why}; the ground truth is read at {median:+.4} s, the median offset of the {} recording(s) aligned \
+                 clearly with the same --gt (one clock)",
+                offsets.len()
+            ),
         ));
         *read = Some(read_input(input, &forced));
     }
@@ -301,7 +306,7 @@ fn shared_clock_retry(inputs: &[Result<Input, DatasetError>], reads: &mut Reads,
 
 /// When the inputs declare different designs, the note that says so: each run is evaluated with its own
 /// input's design, and which one stands for all where one is needed.
-fn designs_note(ds: &Dataset) -> Option<String> {
+fn designs_note(ds: &Dataset) -> Option<Note> {
     let groups = group_designs(&ds.declared);
     if groups.len() < 2 {
         return None;
@@ -315,13 +320,13 @@ fn designs_note(ds: &Dataset) -> Option<String> {
         .map(|g| format!("{} ({} run{})", names(g), g.n_runs(), if g.n_runs() == 1 { "" } else { "s" }))
         .collect();
     let why = if groups[1].n_runs() == groups[0].n_runs() { "the most runs, the first given" } else { "the most runs" };
-    Some(format!(
+    Some(Note::general(format!(
         "the inputs declare {} different designs: {}; each run is evaluated with its own input's design, and \
          where one design is needed (training's start, --model design) it is that of {} ({why})",
         groups.len(),
         list.join(", "),
         names(&groups[0])
-    ))
+    )))
 }
 
 /// The text of a file a user writes by hand or a spreadsheet exports (a table, a ground-truth file, a
@@ -364,7 +369,7 @@ impl Input {
 struct Loaded {
     runs: Vec<Run>,
     skipped: Vec<Skipped>,
-    notes: Vec<String>,
+    notes: Vec<Note>,
     /// The robot type and design geometry the input declares (an OptiOdom set).
     declared: Option<(&'static str, RobotGeometry)>,
     clock: Option<ground_truth::GtClock>,

@@ -15,7 +15,7 @@
 
 use super::{BaseKinematics, BaseRecord, KinematicsKind, RecordError};
 use crate::effect::ParamSpec;
-use crate::error::KinError;
+use crate::error::{Domain, KinError};
 use crate::geometry::{RobotGeometry, Wheel};
 use crate::ik::IkMatrix;
 use nalgebra::DMatrix;
@@ -46,8 +46,8 @@ struct Axle {
 /// Largest |sin| of a wheel's drive direction (and |roller angle|, rad) that still counts as driving along x.
 const ALONG_X: f64 = 1e-9;
 
-fn not_an_axle(why: &str) -> KinError {
-    KinError::Invalid { what: "the diff model's geometry".into(), why: why.into() }
+fn not_an_axle(why: &'static str) -> KinError {
+    KinError::Layout { model: KinematicsKind::Diff, why }
 }
 
 impl Axle {
@@ -95,7 +95,7 @@ impl DiffKinematics {
         }
         for (name, v) in ["r_right", "r_left", "b"].iter().zip(p) {
             if !(v.is_finite() && *v > 0.0) {
-                return Err(KinError::Invalid { what: format!("parameter {name}"), why: format!("{v} is not > 0") });
+                return Err(KinError::BadParam { name: name.to_string(), value: *v, must: Domain::Positive });
             }
         }
         Ok([p[0], p[1], p[2]])

@@ -17,7 +17,7 @@
 use super::diff_model::same_wheels;
 use super::{BaseKinematics, BaseRecord, KinematicsKind, RecordError};
 use crate::effect::ParamSpec;
-use crate::error::KinError;
+use crate::error::{Domain, KinError};
 use crate::geometry::RobotGeometry;
 use crate::ik::IkMatrix;
 use nalgebra::DMatrix;
@@ -52,8 +52,8 @@ impl Corner {
     }
 }
 
-fn not_a_rectangle(why: &str) -> KinError {
-    KinError::Invalid { what: "the mecanum model's geometry".into(), why: why.into() }
+fn not_a_rectangle(why: &'static str) -> KinError {
+    KinError::Layout { model: KinematicsKind::Mecanum, why }
 }
 
 /// Design half-extents and corners of a geometry, checked: four wheels off both axes, one per quadrant.
@@ -105,7 +105,7 @@ impl MecanumKinematics {
         let names = ["r_a", "r_b", "r_c", "r_d", "lx", "ly"];
         for (name, v) in names.iter().zip(p) {
             if !(v.is_finite() && *v > 0.0) {
-                return Err(KinError::Invalid { what: format!("parameter {name}"), why: format!("{v} is not > 0") });
+                return Err(KinError::BadParam { name: name.to_string(), value: *v, must: Domain::Positive });
             }
         }
         Ok((&p[..4], p[4], p[5]))

@@ -8,7 +8,7 @@
 //! simulated noise); a beam that crosses nothing within the maximum range is no return (+inf).
 
 use super::Scan;
-use crate::error::KinError;
+use crate::error::{KinError, Settings};
 use crate::pose::{Pose2, StampedPose};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -171,7 +171,7 @@ impl Default for ScanSettings {
 impl ScanSettings {
     /// Checks the settings; the error names the field.
     pub fn check(&self) -> Result<(), KinError> {
-        let bad = |f: &str, why: &str| Err(KinError::Invalid { what: format!("lidar {f}"), why: why.into() });
+        let bad = |f: &str, why: &str| Err(KinError::Setting { of: Settings::Lidar, field: f.into(), why: why.into() });
         if !(self.rate_hz > 0.0 && self.rate_hz.is_finite()) {
             return bad("rate_hz", "must be finite and > 0");
         }

@@ -2,7 +2,7 @@
 //! base can perform its commands (the sideways speed a differential drive cannot produce), and runs of
 //! several legs (a square, a figure-eight).
 
-use crate::error::KinError;
+use crate::error::{KinError, Settings};
 use crate::geometry::RobotGeometry;
 use crate::run::Command;
 use serde::{Deserialize, Serialize};
@@ -85,8 +85,9 @@ pub fn check_commands(design: &RobotGeometry, commands: &[Command]) -> Result<()
     for (i, c) in commands.iter().enumerate() {
         for (f, v) in [("v_m_s", c.v_m_s), ("alpha_rad", c.alpha_rad), ("omega_rad_s", c.omega_rad_s)] {
             if !v.is_finite() {
-                return Err(KinError::Invalid {
-                    what: format!("simulator commands[{i}].{f}"),
+                return Err(KinError::Setting {
+                    of: Settings::Simulator,
+                    field: format!("commands[{i}].{f}"),
                     why: format!("{v} is not finite"),
                 });
             }
@@ -95,8 +96,9 @@ pub fn check_commands(design: &RobotGeometry, commands: &[Command]) -> Result<()
     let misses = unreachable_twists(design, commands)?;
     match misses.iter().position(|m| m.iter().any(|x| x.abs() > UNREACHABLE_TOL)) {
         None => Ok(()),
-        Some(i) => Err(KinError::Invalid {
-            what: format!("simulator commands[{i}].alpha_rad"),
+        Some(i) => Err(KinError::Setting {
+            of: Settings::Simulator,
+            field: format!("commands[{i}].alpha_rad"),
             why: unreachable_message(design.n_wheels(), &commands[i], &misses[i]),
         }),
     }

@@ -25,7 +25,7 @@ pub use commands::{
 };
 use motion::simulate_motion;
 
-use crate::error::KinError;
+use crate::error::{KinError, Settings};
 use crate::geometry::RobotGeometry;
 use crate::model::FittedModel;
 use crate::pose::StampedPose;
@@ -110,7 +110,9 @@ impl SimConfig {
     }
 
     fn validate(&self) -> Result<(), KinError> {
-        let bad = |what: &str, why: &str| Err(KinError::Invalid { what: format!("simulator {what}"), why: why.into() });
+        let bad = |field: &str, why: &str| {
+            Err(KinError::Setting { of: Settings::Simulator, field: field.into(), why: why.into() })
+        };
         if self.commands.is_empty() || self.runs_per_command == 0 {
             return bad("commands", "at least one command and one repetition are needed");
         }
@@ -176,8 +178,9 @@ pub fn simulate_sampled(
     period_s: f64,
 ) -> Result<Vec<SampledRun>, KinError> {
     if !(period_s > 0.0 && period_s.is_finite()) {
-        return Err(KinError::Invalid {
-            what: "simulator sampling period".into(),
+        return Err(KinError::Setting {
+            of: Settings::Simulator,
+            field: "sampling period".into(),
             why: format!("{period_s} s is not > 0"),
         });
     }
@@ -217,7 +220,7 @@ pub fn simulate_legs(
     stream: u64,
     name: String,
 ) -> Result<Run, KinError> {
-    let bad = |why: &str| KinError::Invalid { what: "simulator legs".into(), why: why.into() };
+    let bad = |why: &str| KinError::Setting { of: Settings::Simulator, field: "legs".into(), why: why.into() };
     if legs.is_empty() {
         return Err(bad("at least one leg is needed"));
     }

@@ -15,7 +15,7 @@ mod reference;
 pub use error::LoadError;
 pub use options::DataOptions;
 
-use crate::dataset::{self, Dataset, LoadOptions};
+use crate::dataset::{self, Dataset, LoadOptions, Note};
 use crate::robot_file;
 use options::{csv_joints, end_pose_file, ground_truth_options, scans_topic};
 use reference::{check_wheel_scale, cut_into_windows, move_to_base, set_end_poses};
@@ -165,19 +165,18 @@ pub fn load_with_held_out(
     Ok((train, held))
 }
 
-/// Says the datasets' notes on stderr, each distinct note once with the count of the files that raised it
-/// (the same note from many files differs only in the file name before its first `: `), then skipped
-/// inputs (shown even with `-q`) and ground-truth clocks.
+/// Says the datasets' notes on stderr, each distinct note once (by its text: the same note from many files
+/// differs only in its source) with the count of the files that raised it, then skipped inputs (shown even
+/// with `-q`) and ground-truth clocks.
 fn say_load_notes(sets: &[&Dataset]) {
-    let mut seen: Vec<(&str, &str, usize)> = Vec::new();
+    let mut seen: Vec<(&Note, usize)> = Vec::new();
     for n in sets.iter().flat_map(|ds| &ds.notes) {
-        let key = n.split_once(": ").map_or(n.as_str(), |(_, rest)| rest);
-        match seen.iter_mut().find(|(k, _, _)| *k == key) {
-            Some(entry) => entry.2 += 1,
-            None => seen.push((key, n, 1)),
+        match seen.iter_mut().find(|(first, _)| first.text == n.text) {
+            Some(entry) => entry.1 += 1,
+            None => seen.push((n, 1)),
         }
     }
-    for (_, first, count) in seen {
+    for (first, count) in seen {
         match count {
             1 => crate::note!("note: {first}"),
             2 => crate::note!("note: {first} (and 1 more file)"),

@@ -3,7 +3,7 @@
 //! the wheels travel about as far as the ground truth.
 
 use super::{DataOptions, LoadError};
-use crate::dataset::{self, Dataset};
+use crate::dataset::{self, Dataset, Note};
 use crate::robot_file;
 use omni_kin::reference::ReferenceKind;
 
@@ -32,12 +32,12 @@ pub(super) fn set_end_poses(ds: &mut Dataset, file: &std::path::Path) -> Result<
             Ok(omni_kin::Run::new(d)?)
         })
         .collect::<Result<_, LoadError>>()?;
-    ds.notes.push(format!(
+    ds.notes.push(Note::general(format!(
         "measured end poses: {} runs from {}, each from rest at the origin at its first wheel sample to its measured \
          pose at its last (the end-pose cost)",
         ds.runs.len(),
         file.display()
-    ));
+    )));
     ds.reference = ReferenceKind::EndPose;
     Ok(())
 }
@@ -57,12 +57,12 @@ pub(super) fn move_to_base(ds: &mut Dataset, data: &DataOptions) -> Result<(), L
             omni_kin::Run::new(d)
         })
         .collect::<Result<_, _>>()?;
-    ds.notes.push(format!(
+    ds.notes.push(Note::general(format!(
         "ground truth moved to the base from the measured point at x {:.4} m, y {:.4} m, yaw {:.3}° (--gt-mount)",
         mount.x_m,
         mount.y_m,
         mount.theta_rad.to_degrees()
-    ));
+    )));
     ds.mount = Some(mount);
     Ok(())
 }
@@ -105,14 +105,14 @@ pub(super) fn cut_into_windows(ds: &mut Dataset, data: &DataOptions) -> Result<(
             ds.recordings.extend(names.iter().map(|n| (n.clone(), recording.clone())));
         }
     }
-    ds.notes.push(format!(
+    ds.notes.push(Note::general(format!(
         "relative reference: {} runs cut into {} windows of at most {window_s} s ({still} where the reference stands \
          still dropped{}){}",
         ds.runs.len(),
         runs.len(),
         if gaps > 0 { format!(", {gaps} gaps in the reference") } else { String::new() },
         if ds.mount.is_none() { "; the sensor's mount is fitted with the wheels" } else { "" },
-    ));
+    )));
     ds.runs = runs;
     ds.reference = ReferenceKind::Relative;
     Ok(())

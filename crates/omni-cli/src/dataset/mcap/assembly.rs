@@ -11,8 +11,8 @@ use super::recording::{Content, Recording};
 use super::selection::{Bag, Truth, WheelSource, localization_note, topic_clock, topic_location};
 use super::twist::Commands;
 use super::{McapOptions, McapRead, split};
-use crate::dataset::DatasetError;
 use crate::dataset::ground_truth::{ExternalTruth, GtClock, TruthSample};
+use crate::dataset::{DatasetError, Note};
 use omni_kin::clock::ClockAlignment;
 use omni_kin::error::Sample;
 use omni_kin::{KinError, Pose2, Run, RunData, StampedPose};
@@ -20,7 +20,7 @@ use std::path::Path;
 
 /// The wheels of `bag`'s JointState channel `j` (its content taken), with notes on what was done to them;
 /// a topic without the wheel joints says what else could give them ([`Bag::odometry_hint`]).
-fn joint_wheels(bag: &mut Bag, j: usize, opts: &McapOptions, notes: &mut Vec<String>) -> Result<Wheels, DatasetError> {
+fn joint_wheels(bag: &mut Bag, j: usize, opts: &McapOptions, notes: &mut Vec<Note>) -> Result<Wheels, DatasetError> {
     let (path, topic, hint) = (bag.path, bag.channels[j].topic.clone(), bag.odometry_hint());
     let Content::Joints(series) = bag.take(j) else { unreachable!("joints() returns JointState channels") };
     if let Some((k, missing)) = series.no_wheel_message() {
@@ -35,13 +35,15 @@ fn joint_wheels(bag: &mut Bag, j: usize, opts: &McapOptions, notes: &mut Vec<Str
     let wheels = series
         .finish(&opts.wheel_joints, &t_s, &opts.wheel_data)
         .map_err(|(k, what)| DatasetError::at(path, format!("topic {topic:?}, message {k}"), what))?;
-    notes.extend(wheels.notes.iter().map(|n| format!("{}: topic {topic:?}: {n}", path.display())));
+    notes.extend(wheels.notes.iter().map(|n| Note::about(path, format!("topic {topic:?}: {n}"))));
     if let Some(without) = wheels.differentiated {
-        notes.push(format!(
-            "{}: topic {topic:?}: {without} of {} messages have no velocity: wheel speeds are differences \
-             of position over header.stamp",
-            path.display(),
-            t_s.len()
+        notes.push(Note::about(
+            path,
+            format!(
+                "topic {topic:?}: {without} of {} messages have no velocity: wheel speeds are differences of \
+                 position over header.stamp",
+                t_s.len()
+            ),
         ));
     }
     Ok(wheels)
@@ -54,7 +56,7 @@ fn odometry_wheels(
     odometry: &Content,
     topic: &str,
     opts: &McapOptions,
-    notes: &mut Vec<String>,
+    notes: &mut Vec<Note>,
 ) -> Result<Wheels, DatasetError> {
     let (Content::Poses(series), Some(rows)) = (odometry, &opts.wheels_from_twist) else {
         unreachable!("joints() returns an odometry channel only with the design's forward kinematics")
@@ -71,12 +73,14 @@ fn odometry_wheels(
             rows.len()
         )
     };
-    notes.push(format!(
-        "{}: no {} topic: the wheel speeds are recovered from topic {topic:?} (the robot's own odometry, {} \
-         poses) through the design, as its controller computed them; {reach}",
-        path.display(),
-        joint_state::NAME,
-        series.t_ns.len()
+    notes.push(Note::about(
+        path,
+        format!(
+            "no {} topic: the wheel speeds are recovered from topic {topic:?} (the robot's own odometry, {} poses) \
+             through the design, as its controller computed them; {reach}",
+            joint_state::NAME,
+            series.t_ns.len()
+        ),
     ));
     Ok(wheels)
 }
@@ -89,7 +93,7 @@ fn within_wheels(
     all: &[StampedPose],
     t_s: &[f64],
     names: (&str, &str, &str),
-    notes: &mut Vec<String>,
+    notes: &mut Vec<Note>,
 ) -> Result<Vec<StampedPose>, DatasetError> {
     let (joints_topic, truth_where, truth_label) = names;
     let (w0, w1) = (t_s[0], t_s[t_s.len() - 1]);
@@ -109,10 +113,11 @@ fn within_wheels(
     }
     let dropped = all.len() - truth.len();
     if dropped > 0 {
-        notes.push(format!(
-            "{}: {truth_label}: dropped {dropped} ground-truth poses outside the wheel data's time span \
-             ({w0}..{w1} s)",
-            path.display()
+        notes.push(Note::about(
+            path,
+            format!(
+                "{truth_label}: dropped {dropped} ground-truth poses outside the wheel data's time span ({w0}..{w1} s)"
+            ),
         ));
     }
     Ok(truth)
@@ -201,17 +206,19 @@ fn overlapping_file(
     folder: &ExternalTruth,
     origin_s: i64,
     t_s: &[f64],
-    notes: &mut Vec<String>,
+    notes: &mut Vec<Note>,
 ) -> Result<ExternalTruth, DatasetError> {
     let at = |t: f64| origin_s * NS_PER_S + (t * 1e9).round() as i64;
     let (ext, share) = folder
         .overlapping(at(t_s[0]), at(t_s[t_s.len() - 1]))
         .map_err(|e| DatasetError::file(path, format!("--gt folder {}: {e}", folder.path.display())))?;
-    notes.push(format!(
-        "{}: no file of the --gt folder is named after it: {} covers {:.0} % of its span and is its ground truth",
-        path.display(),
-        ext.path.display(),
-        100.0 * share
+    notes.push(Note::about(
+        path,
+        format!(
+            "no file of the --gt folder is named after it: {} covers {:.0} % of its span and is its ground truth",
+            ext.path.display(),
+            100.0 * share
+        ),
     ));
     Ok(ext)
 }

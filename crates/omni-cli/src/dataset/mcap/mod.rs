@@ -219,7 +219,7 @@ pub struct McapRead {
     /// The runs, in time order.
     pub runs: Vec<Run>,
     /// Things the user should know, each naming the file (and topic).
-    pub notes: Vec<String>,
+    pub notes: Vec<crate::dataset::Note>,
     /// Runs left out under [`McapOptions::skip_invalid`]: run name and the full error message.
     pub skipped: Vec<(String, String)>,
     /// Run times are seconds since this instant: the whole second (`header.stamp.sec`) of the first wheel

@@ -8,8 +8,8 @@ use super::odometry::{self, ODOM_FRAME};
 use super::recording::{Channel, Content, MsgType};
 use super::statics::StaticTree;
 use super::{McapOptions, Origin, tf, twist};
-use crate::dataset::DatasetError;
 use crate::dataset::ground_truth::GtClock;
+use crate::dataset::{DatasetError, Note};
 use omni_kin::{Pose2, StampedPose};
 use std::path::{Path, PathBuf};
 
@@ -89,14 +89,21 @@ impl Bag<'_> {
 
     /// The channel's problem as an error, if it has one.
     pub(super) fn check(&self, i: usize) -> Result<(), DatasetError> {
-        let c = &self.channels[i];
-        match &c.problem {
+        match self.problem(i) {
             None => Ok(()),
-            Some((None, what)) => Err(DatasetError::at(self.path, topic_location(&c.topic), what.clone())),
-            Some((Some(k), what)) => {
-                Err(DatasetError::at(self.path, format!("topic {:?}, message {k}", c.topic), what.clone()))
-            }
+            Some((location, what)) => Err(DatasetError::at(self.path, location, what)),
         }
+    }
+
+    /// The channel's problem, if it has one: where (topic, and message when one is to blame) and what.
+    fn problem(&self, i: usize) -> Option<(String, String)> {
+        let c = &self.channels[i];
+        let (message, what) = c.problem.as_ref()?;
+        let location = match message {
+            None => topic_location(&c.topic),
+            Some(k) => format!("topic {:?}, message {k}", c.topic),
+        };
+        Some((location, what.clone()))
     }
 
     /// Where the wheel speeds come from: the JointState topic named (`--joints-topic`, robot.toml) or the
@@ -301,7 +308,7 @@ impl Bag<'_> {
         ch: usize,
         origin_s: i64,
         opts: &McapOptions,
-        notes: &mut Vec<String>,
+        notes: &mut Vec<Note>,
     ) -> Result<(String, Vec<StampedPose>), DatasetError> {
         let topic = self.channels[ch].topic.clone();
         let statics = self.statics();
@@ -312,7 +319,7 @@ impl Bag<'_> {
                     return Err(DatasetError::at(self.path, format!("topic {topic:?}, message {m}"), what));
                 }
                 if let Some(note) = to_base_frame(&mut pair, &statics, opts.truth_child_frame.as_deref()) {
-                    notes.push(format!("{}: topic {topic:?}: {note}", self.path.display()));
+                    notes.push(Note::about(self.path, format!("topic {topic:?}: {note}")));
                 }
                 pair.poses
             }
@@ -347,20 +354,22 @@ impl Bag<'_> {
     }
 
     /// The robot's recorded wheel odometry: `/odom` if it is one, else the only one.
-    pub(super) fn recorded_odometry(&self, notes: &mut Vec<String>) -> Option<usize> {
+    pub(super) fn recorded_odometry(&self, notes: &mut Vec<Note>) -> Option<usize> {
         self.optional(Channel::is_wheel_odometry, "/odom", "recorded odometry", notes)
     }
 
     /// The command topic: `preferred` (default `/cmd_vel`) if it is one, else the only one.
-    pub(super) fn commands(&self, preferred: Option<&str>, notes: &mut Vec<String>) -> Option<usize> {
+    pub(super) fn commands(&self, preferred: Option<&str>, notes: &mut Vec<Note>) -> Option<usize> {
         let is_cmd = |c: &Channel| matches!(c.msg_type, MsgType::Twist | MsgType::TwistStamped);
         let chosen = self.optional(is_cmd, preferred.unwrap_or("/cmd_vel"), "the command", notes)?;
         if self.channels[chosen].msg_type == MsgType::Twist {
-            notes.push(format!(
-                "{}: topic {:?} ({}) has no header: command times are log times",
-                self.path.display(),
-                self.channels[chosen].topic,
-                twist::NAME
+            notes.push(Note::about(
+                self.path,
+                format!(
+                    "topic {:?} ({}) has no header: command times are log times",
+                    self.channels[chosen].topic,
+                    twist::NAME
+                ),
             ));
         }
         Some(chosen)
@@ -373,7 +382,7 @@ impl Bag<'_> {
         wanted: impl Fn(&Channel) -> bool,
         preferred: &str,
         what: &str,
-        notes: &mut Vec<String>,
+        notes: &mut Vec<Note>,
     ) -> Option<usize> {
         let all: Vec<usize> = (0..self.channels.len()).filter(|&i| wanted(&self.channels[i])).collect();
         let chosen = match all[..] {
@@ -383,10 +392,12 @@ impl Bag<'_> {
                 Some(&i) => i,
                 None => {
                     let list: Vec<&str> = all.iter().map(|&i| self.channels[i].topic.as_str()).collect();
-                    notes.push(format!(
-                        "{}: {what} could come from several topics ({}), none of them {preferred}: {what} is left out",
-                        self.path.display(),
-                        list.join(", ")
+                    notes.push(Note::about(
+                        self.path,
+                        format!(
+                            "{what} could come from several topics ({}), none of them {preferred}: {what} is left out",
+                            list.join(", ")
+                        ),
                     ));
                     return None;
                 }
@@ -396,11 +407,11 @@ impl Bag<'_> {
     }
 
     /// `Some(i)` if channel `i` has no problem; otherwise a note that `what` is left out.
-    fn usable(&self, i: usize, what: &str, notes: &mut Vec<String>) -> Option<usize> {
-        match self.check(i) {
-            Ok(()) => Some(i),
-            Err(e) => {
-                notes.push(format!("{e} ({what} is left out)"));
+    fn usable(&self, i: usize, what: &str, notes: &mut Vec<Note>) -> Option<usize> {
+        match self.problem(i) {
+            None => Some(i),
+            Some((location, problem)) => {
+                notes.push(Note::about(self.path, format!("{location}: {problem} ({what} is left out)")));
                 None
             }
         }
@@ -466,12 +477,14 @@ pub(super) fn is_localization(topic: &str) -> bool {
 }
 
 /// The note for a ground-truth topic named although it looks like a localization.
-pub(super) fn localization_note(path: &Path, topic: &str) -> Option<String> {
+pub(super) fn localization_note(path: &Path, topic: &str) -> Option<Note> {
     is_localization(topic).then(|| {
-        format!(
-            "{}: topic {topic:?} is taken as ground truth as named, but it looks like a localization: if it fuses \
-             the wheel odometry being calibrated, the fit measures the wheels against themselves",
-            path.display()
+        Note::about(
+            path,
+            format!(
+                "topic {topic:?} is taken as ground truth as named, but it looks like a localization: if it fuses \
+                 the wheel odometry being calibrated, the fit measures the wheels against themselves"
+            ),
         )
     })
 }

@@ -31,7 +31,7 @@ use crate::dataset::mcap::McapRead;
 use crate::dataset::mcap::recording::{MessageSink, Recording};
 use crate::dataset::mcap::{Inventory, InventorySink};
 use crate::dataset::mcap::{assembly, framing};
-use crate::dataset::{DatasetError, check_size};
+use crate::dataset::{DatasetError, Note, check_size};
 use metadata::{Compression, Storage};
 use std::io::Read;
 use std::path::Path;
@@ -60,11 +60,9 @@ pub fn read_recording(
     for t in &meta.topics {
         let held = rec.messages_on(&t.name).unwrap_or(0);
         if held as u64 != t.message_count {
-            notes.push(format!(
-                "{}: topic {:?}: metadata.yaml lists {} messages, the files hold {held}",
-                dir.display(),
-                t.name,
-                t.message_count
+            notes.push(Note::about(
+                dir,
+                format!("topic {:?}: metadata.yaml lists {} messages, the files hold {held}", t.name, t.message_count),
             ));
         }
         // Topics the metadata lists but no file declares are still listed in messages.

@@ -210,12 +210,7 @@ fn kernel_serves_builtin_twist_effects_as_the_walk_does() {
     ];
     for (ids, values) in cases {
         for integration in [Integration::PAPER, Integration::DEFAULT] {
-            let mut model = Model::ik(IkMatrix::paper_design()).with_integration(integration);
-            for id in &ids {
-                model = model.with_effect(EffectKind::from_id(id, 3).unwrap());
-            }
-            let mut p = IkMatrix::paper_calibrated().entries().to_vec();
-            p.extend(&values);
+            let (model, p) = paper_with(&ids, &values, integration);
             for selection in [Selection::End, Selection::Path(1), Selection::Path(7)] {
                 let (gap, count) = max_gap(&model, &p, &runs, selection);
                 assert!(gap < 1e-9, "{ids:?} {integration:?} {selection:?}: gap {gap:e} m");

@@ -52,12 +52,7 @@ fn general_walk_agrees_with_the_literal_walk_for_every_effect() {
     ];
     for (ids, values) in cases {
         for integration in [Integration::PAPER, Integration::DEFAULT] {
-            let mut model = Model::ik(IkMatrix::paper_design()).with_integration(integration);
-            for id in &ids {
-                model = model.with_effect(EffectKind::from_id(id, 3).unwrap());
-            }
-            let mut p = IkMatrix::paper_calibrated().entries().to_vec();
-            p.extend(&values);
+            let (model, p) = paper_with(&ids, &values, integration);
             assert_eq!(p.len(), model.n_params(), "{ids:?}");
             for selection in [Selection::End, Selection::Path(1), Selection::Path(7)] {
                 let (gap, count) = general_gap(&model, &p, &runs, selection);

@@ -23,6 +23,18 @@ mod derivatives;
 mod general_walk;
 mod same_bits;
 
+/// The paper's design IK model with `integration` and the catalogue's effects `ids` (three wheels), and the
+/// parameters: the paper's calibrated matrix, then `values` for the effects.
+fn paper_with(ids: &[&str], values: &[f64], integration: Integration) -> (Model, Vec<f64>) {
+    let mut model = Model::ik(IkMatrix::paper_design()).with_integration(integration);
+    for id in ids {
+        model = model.with_effect(EffectKind::from_id(id, 3).unwrap());
+    }
+    let mut p = IkMatrix::paper_calibrated().entries().to_vec();
+    p.extend(values);
+    (model, p)
+}
+
 fn paper_size() -> Vec<Run> {
     let truth = FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated()));
     simulate(&SimConfig { seed: 3, ..SimConfig::default() }, &truth, "t/").unwrap()

@@ -12,12 +12,7 @@ fn bits(e: &FastErrors) -> Vec<u64> {
 fn redone_increments_give_the_same_bits_as_kept_ones() {
     let runs: Vec<Run> = paper_size().into_iter().take(23).collect();
     for (effect, values) in [(None, vec![]), (Some("speed_scale"), vec![0.01, -0.02, 0.015])] {
-        let mut model = Model::ik(IkMatrix::paper_design()).with_integration(Integration::DEFAULT);
-        if let Some(id) = effect {
-            model = model.with_effect(EffectKind::from_id(id, 3).unwrap());
-        }
-        let mut p = IkMatrix::paper_calibrated().entries().to_vec();
-        p.extend(&values);
+        let (model, p) = paper_with(effect.as_slice(), &values, Integration::DEFAULT);
         let res = model.resolve(&p).unwrap();
         for sel in [Selection::End, Selection::Path(1)] {
             let kept = PreparedRuns::new(&runs, None, sel);
