@@ -133,6 +133,13 @@ impl Lidar {
     }
 }
 
+/// A mount written `X,Y,YAW_DEG` (m, m, degrees; `--lidar-mount 0.2,0,5`) as a pose; `None` unless it
+/// is three finite numbers.
+pub fn mount_from_text(text: &str) -> Option<Pose2> {
+    let v: Vec<f64> = text.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().ok()?;
+    (v.len() == 3 && v.iter().all(|x| x.is_finite())).then(|| Pose2::new(v[0], v[1], v[2].to_radians()))
+}
+
 /// A simulated IMU: an upright gyro on the base measuring the yaw rate.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Imu {

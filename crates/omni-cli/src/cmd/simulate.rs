@@ -1,7 +1,7 @@
 //! `omnical simulate`: write a flower-benchmark dataset from a true robot with optional hidden effects.
 
 use super::{OutputArgs, sim_spec};
-use crate::api::simulate::{Imu, Lidar, simulate_split, write_robot, write_split};
+use crate::api::simulate::{Imu, Lidar, mount_from_text, simulate_split, write_robot, write_split};
 use crate::cli::effect_help;
 use crate::lidar::ScanSettings;
 use crate::out_path::OutDir;
@@ -162,14 +162,8 @@ impl ImuArgs {
 
 /// `X,Y,YAW_DEG` (m, m, degrees) of option `flag` as a pose.
 fn mount_arg(text: &str, flag: &str) -> anyhow::Result<Pose2> {
-    let v: Vec<f64> = text
-        .split(',')
-        .map(|x| x.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .ok()
-        .filter(|v: &Vec<f64>| v.len() == 3 && v.iter().all(|x| x.is_finite()))
-        .with_context(|| format!("{flag} {text:?}: expected X,Y,YAW_DEG (three numbers, e.g. 0.2,0,5)"))?;
-    Ok(Pose2::new(v[0], v[1], v[2].to_radians()))
+    mount_from_text(text)
+        .with_context(|| format!("{flag} {text:?}: expected X,Y,YAW_DEG (three numbers, e.g. 0.2,0,5)"))
 }
 
 impl LidarArgs {
