@@ -72,9 +72,13 @@ pub fn room_from_arg(arg: &str) -> Result<Room, DatasetError> {
     match Room::builtin(arg) {
         Some(room) => Ok(room),
         None if Path::new(arg).is_file() => read_room(Path::new(arg)),
-        None => Err(DatasetError::file(
+        // An I/O error of kind NotFound, so that Python raises FileNotFoundError.
+        None => Err(DatasetError::io(
             Path::new(arg),
-            format!("no such room file, and not a built-in room ({})", BUILTIN_ROOMS.join(", ")),
+            std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                format!("no such room file, and not a built-in room ({})", BUILTIN_ROOMS.join(", ")),
+            ),
         )),
     }
 }

@@ -8,11 +8,13 @@
 //! | `DatasetError` (a file that does not parse or does not make runs) | `omnical.DatasetError` |
 //! | `ModelFileError` (parse / invalid contents) | `omnical.ModelFileError` |
 //! | `OptimizeError` (an optimizer refused its inputs); a refused fit (`train`: a fixed step that misses the runs' sampling, a fit worse than its start) | `omnical.CalibrationError` |
+//! | `SimulateError` (`simulate`'s sensors and files): a room file that does not exist, else as the cause (`DatasetError`, `OSError`); bad sensor settings, a run that leaves the lidar's room | `FileNotFoundError`, `omnical.DatasetError`, `OSError`; `ValueError` |
 //! | a report or export that fails ([`file_error`]: the first `io::Error` among the error's sources) | `FileNotFoundError`, `OSError`, else `omnical.OmnicalError`; an export folder that already holds files: `FileExistsError` |
 //!
 //! All omnical-specific exceptions derive from `omnical.OmnicalError`. A message made of an error and its
 //! sources is [`chain_text`]: the CLI's `error: …` text.
 
+use omni_cli::api::simulate::SimulateError;
 use omni_cli::dataset::DatasetError as RsDatasetError;
 use omni_cli::model_file::ModelFileError as RsModelFileError;
 use omni_ga::{Error as GaError, OptimizeError};
@@ -118,6 +120,19 @@ impl ToPyErr for RsDatasetError {
         match &self {
             RsDatasetError::Io { error, .. } => io_error(message, error),
             _ => DatasetError::new_err(message),
+        }
+    }
+}
+
+impl ToPyErr for SimulateError {
+    fn to_py_err(self) -> PyErr {
+        let message = chain_text(&self);
+        match &self {
+            SimulateError::Room(RsDatasetError::Io { error, .. })
+            | SimulateError::Dataset(RsDatasetError::Io { error, .. }) => io_error(message, error),
+            SimulateError::Room(_) | SimulateError::Dataset(_) => DatasetError::new_err(message),
+            SimulateError::CreateDir { .. } | SimulateError::WriteRobot { .. } => file_error(&self),
+            _ => PyValueError::new_err(message),
         }
     }
 }

@@ -20,6 +20,7 @@ mod errors;
 mod evaluate;
 mod explore;
 mod export;
+mod info;
 mod model;
 mod pickle;
 mod report;
@@ -49,6 +50,8 @@ mod _omnical {
     use crate::explore::{PyExploration, explore};
     #[pymodule_export]
     use crate::export::export;
+    #[pymodule_export]
+    use crate::info::info;
     #[pymodule_export]
     use crate::model::{_model_from_toml, PyModel, effect_catalogue, load_model};
     #[pymodule_export]

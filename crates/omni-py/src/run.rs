@@ -351,30 +351,26 @@ pub fn load(
     if paths.is_empty() {
         return Err(value_error("load() needs at least one path"));
     }
-    let data = DataOptions {
-        robot: robot.map(|r| r.to_string_lossy().into_owned()),
+    let data = data_options(
+        robot,
         joints,
         joints_topic,
         gt_topic,
         gt_parent_frame,
         gt_child_frame,
         gt,
-        gt_time_offset_s: gt_time_offset,
-        gt_columns: key_values(gt_columns),
-        gt_units: key_values(gt_units),
-        gt_kind: gt_kind
-            .map(str::parse)
-            .transpose()
-            .map_err(|e| value_error(format!("gt_kind {e}")))?
-            .unwrap_or_default(),
+        gt_time_offset,
+        gt_columns,
+        gt_units,
+        gt_kind,
         gt_window_s,
-        gt_mount: gt_mount.map(|(x, y, yaw_deg)| omni_kin::Pose2::new(x, y, yaw_deg.to_radians())),
+        gt_mount,
         gt_scans,
         split_s,
         skip_invalid,
         ticks_per_rev,
         max_file_mb,
-    };
+    )?;
     let request = LoadRequest { paths, data, recorded_odometry, wheels_only: false };
     // The CLI's lookup: robot=, else a robot.toml beside the data or in the working directory.
     let robot = request.robot().map_err(robot_error)?;
@@ -406,6 +402,54 @@ pub fn load(
     })
 }
 
+/// The data options of `load`'s (and `info`'s) keywords, as the CLI's data options.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn data_options(
+    robot: Option<PathBuf>,
+    joints: Option<Vec<String>>,
+    joints_topic: Option<String>,
+    gt_topic: Option<String>,
+    gt_parent_frame: Option<String>,
+    gt_child_frame: Option<String>,
+    gt: Option<PathBuf>,
+    gt_time_offset: Option<f64>,
+    gt_columns: Option<std::collections::BTreeMap<String, String>>,
+    gt_units: Option<std::collections::BTreeMap<String, String>>,
+    gt_kind: Option<&str>,
+    gt_window_s: Option<f64>,
+    gt_mount: Option<(f64, f64, f64)>,
+    gt_scans: Option<String>,
+    split_s: Option<f64>,
+    skip_invalid: bool,
+    ticks_per_rev: Option<f64>,
+    max_file_mb: u64,
+) -> PyResult<DataOptions> {
+    Ok(DataOptions {
+        robot: robot.map(|r| r.to_string_lossy().into_owned()),
+        joints,
+        joints_topic,
+        gt_topic,
+        gt_parent_frame,
+        gt_child_frame,
+        gt,
+        gt_time_offset_s: gt_time_offset,
+        gt_columns: key_values(gt_columns),
+        gt_units: key_values(gt_units),
+        gt_kind: gt_kind
+            .map(str::parse)
+            .transpose()
+            .map_err(|e| value_error(format!("gt_kind {e}")))?
+            .unwrap_or_default(),
+        gt_window_s,
+        gt_mount: gt_mount.map(|(x, y, yaw_deg)| omni_kin::Pose2::new(x, y, yaw_deg.to_radians())),
+        gt_scans,
+        split_s,
+        skip_invalid,
+        ticks_per_rev,
+        max_file_mb,
+    })
+}
+
 /// A dict of CSV columns or units as the CLI's `KEY=VALUE` list.
 fn key_values(map: Option<std::collections::BTreeMap<String, String>>) -> Vec<String> {
     map.unwrap_or_default().into_iter().map(|(k, v)| format!("{k}={v}")).collect()
@@ -413,7 +457,7 @@ fn key_values(map: Option<std::collections::BTreeMap<String, String>>) -> Vec<St
 
 /// An error of the CLI's loading as the Python exception of its cause (`DatasetError`, `FileNotFoundError`,
 /// `ValueError` for a robot description or a bad option).
-fn load_error(e: LoadError) -> PyErr {
+pub(crate) fn load_error(e: LoadError) -> PyErr {
     match e {
         LoadError::Dataset(d) => d.to_py_err(),
         LoadError::Robot(r) => robot_error(r),

@@ -1,14 +1,22 @@
 //! `simulate`: the benchmark runs of a robot (the paper's flower by default) on a true robot (any model,
-//! Python effects included).
+//! Python effects included); with `out=`, written as ROS 2 bags with the simulated lidar and IMU
+//! ([`omni_cli::api::simulate`], the CLI's code).
 
-use crate::errors::{PyResultExt, value_error};
+use crate::effect::PyEffect;
+use crate::errors::{PyResultExt, chain_text, file_error, value_error};
 use crate::model::model_arg;
-use crate::robot::{robot_arg, robot_design};
+use crate::robot::{robot_arg, robot_design, robot_error};
 use crate::run::PyRun;
+use omni_cli::api::simulate::{Format, Imu, Lidar, mount_from_text, simulate_split, write_robot, write_split};
+use omni_cli::lidar::ScanSettings;
+use omni_cli::out_path::{OutDir, OutPathError};
+use omni_cli::robot_file::{self, RobotFile};
 use omni_kin::simulate::{SimConfig, benchmark_commands, simulate as rs_simulate};
-use omni_kin::{IkMatrix, KinematicsKind};
+use omni_kin::{FittedModel, IkMatrix, KinematicsKind, Pose2, Run};
+use pyo3::exceptions::PyFileExistsError;
 use pyo3::prelude::*;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Simulate the benchmark (its commands × ``runs_per_command``) on the true robot ``truth``: the runs
 /// ``omnical simulate`` writes into its ``train/`` folder (the same defaults: 5 runs per command of 10 s,
@@ -22,13 +30,41 @@ use std::path::PathBuf;
 /// wheel count. Returns the runs, named ``{prefix}{command:02}-r{repetition}``. Deterministic for a
 /// ``seed``; the GIL is released.
 ///
+/// ``out``: also write the runs as ROS 2 bags into this folder, one ``NN-rK.mcap`` per run with the
+/// ``robot.toml`` beside them, as the CLI's ``OUT/train/`` (``omnical.load(out)`` reads them back). The
+/// folder must be new or empty unless ``force=True``, which replaces it whole. The simulated sensors
+/// are written into these bags, so they need ``out``; their keywords are the CLI's flags:
+///
+/// - ``lidar``: a 2D lidar in a room, ``"room"`` (10 × 8 m with boxes and pillars), ``"corridor"``
+///   (40 × 5 m) or a room file (TOML polygons in m, docs/formats.md): ``/scan`` (LaserScan, frame
+///   ``laser``) and its mount on ``/tf_static``. Every run starts at the room's origin heading +x; a run
+///   that comes within 0.25 m of a wall raises ``ValueError``; a room file that does not exist,
+///   ``FileNotFoundError``. ``lidar_mount``: the lidar's pose on the base ``(x_m, y_m, yaw_deg)`` or the
+///   CLI's ``"X,Y,YAW_DEG"``; ``lidar_tf``: the mount ``/tf_static`` states, the same, or ``"none"``
+///   (default: the true mount); ``lidar_rate`` [Hz]; ``lidar_beams`` over 360°; ``lidar_max_range`` [m];
+///   ``lidar_noise``: Gaussian range noise [m]; ``lidar_dropout``: share of beams with no return;
+///   ``lidar_sweep``: measure each scan's beams over its period, as a spinning lidar.
+/// - ``imu=True``: an upright gyro's yaw rate on ``/imu`` (Imu, frame ``imu_link``): the base's true turn
+///   rate plus ``imu_bias`` [rad/s] and Gaussian noise of ``imu_noise`` [rad/s], ``imu_rate`` [Hz] messages.
+///
 /// >>> runs = omnical.simulate(runs_per_command=1, duration_s=1.0)  # 36 flower commands, 1 s each
 /// >>> len(runs), runs[0].name, runs[0].n_wheels
 /// (36, 'train/00-r0', 3)
+/// >>> import tempfile
+/// >>> out = tempfile.mkdtemp() + "/train"
+/// >>> runs = omnical.simulate(runs_per_command=1, duration_s=2.0, out=out, lidar="room", imu=True)
+/// >>> len(omnical.load(out, gt_scans="/scan")) > 0
+/// True
 #[pyfunction]
-// The defaults are `omnical simulate`'s (SimConfig::default() and its --seed default, 7),
-// spelt out so that help() shows them; tests/test_mirror.py compares them with the CLI's --help.
-#[pyo3(signature = (truth = None, *, robot = None, runs_per_command = 5, duration_s = 10.0, seed = 7, noise_free = false, prefix = "train/", sample_drop_probability = 0.0, sample_jitter_s = 0.0))]
+// The defaults are `omnical simulate`'s (SimConfig::default() and its --seed default, 7; the sensors'
+// ScanSettings::default() and Imu::default()), spelt out so that help() shows them; tests/test_mirror.py
+// and crates/omni-cli/tests/config.rs compare them with the CLI's.
+#[pyo3(signature = (truth = None, *, robot = None, runs_per_command = 5, duration_s = 10.0, seed = 7, noise_free = false, prefix = "train/", sample_drop_probability = 0.0, sample_jitter_s = 0.0, out = None, force = false, lidar = None, lidar_mount = MountArg::text("0,0,0"), lidar_tf = None, lidar_rate = 10.0, lidar_beams = 720, lidar_max_range = 12.0, lidar_noise = 0.01, lidar_dropout = 0.01, lidar_sweep = false, imu = false, imu_rate = 100.0, imu_bias = 0.005, imu_noise = 0.002))]
+// pyo3 shows a default it cannot spell as `...`: the text signature spells lidar_mount's as the CLI's
+// (mypy's stubtest compares it with _omnical.pyi).
+#[pyo3(
+    text_signature = "(truth=None, *, robot=None, runs_per_command=5, duration_s=10.0, seed=7, noise_free=False, prefix=\"train/\", sample_drop_probability=0.0, sample_jitter_s=0.0, out=None, force=False, lidar=None, lidar_mount=\"0,0,0\", lidar_tf=None, lidar_rate=10.0, lidar_beams=720, lidar_max_range=12.0, lidar_noise=0.01, lidar_dropout=0.01, lidar_sweep=False, imu=False, imu_rate=100.0, imu_bias=0.005, imu_noise=0.002)"
+)]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate(
     py: Python<'_>,
@@ -41,6 +77,21 @@ pub fn simulate(
     prefix: &str,
     sample_drop_probability: f64,
     sample_jitter_s: f64,
+    out: Option<PathBuf>,
+    force: bool,
+    lidar: Option<String>,
+    lidar_mount: MountArg,
+    lidar_tf: Option<MountArg>,
+    lidar_rate: f64,
+    lidar_beams: usize,
+    lidar_max_range: f64,
+    lidar_noise: f64,
+    lidar_dropout: f64,
+    lidar_sweep: bool,
+    imu: bool,
+    imu_rate: f64,
+    imu_bias: f64,
+    imu_noise: f64,
 ) -> PyResult<Vec<PyRun>> {
     let mut config = SimConfig {
         runs_per_command,
@@ -51,7 +102,62 @@ pub fn simulate(
         ..SimConfig::default()
     };
     let robot = robot_arg(robot.as_ref())?;
-    let design = match &robot {
+    let (truth, adapters) = true_robot(truth, robot.as_ref(), &mut config)?;
+    if noise_free {
+        config = config.noise_free();
+    }
+    let settings = ScanSettings {
+        rate_hz: lidar_rate,
+        beams: lidar_beams,
+        range_max_m: lidar_max_range,
+        range_noise_m: lidar_noise,
+        dropout: lidar_dropout,
+        sweeping: lidar_sweep,
+        ..ScanSettings::default()
+    };
+    let lidar = lidar.map(|room| lidar_in(&room, &lidar_mount, lidar_tf.as_ref(), settings)).transpose()?;
+    let imu = imu
+        .then(|| Imu { rate_hz: imu_rate, bias_rad_s: imu_bias, noise_rad_s: imu_noise }.checked().py())
+        .transpose()?;
+    let errors = crate::effect::EffectErrors::new(adapters);
+    let runs = match out {
+        None if lidar.is_some() || imu.is_some() => {
+            return Err(value_error(
+                "omnical.simulate: lidar= and imu= write LaserScan and Imu messages into ROS 2 bags: give out=DIR \
+                 too (then omnical.load(DIR) reads the runs, gt_scans=\"/scan\" the lidar as their reference)",
+            ));
+        }
+        None => errors.check(py.detach(|| rs_simulate(&config, &truth, prefix)))?.py()?,
+        Some(out) => {
+            let robot = match robot {
+                Some(r) => r,
+                None => robot_file::from_arg(robot_file::BUILTIN_APR02).map_err(robot_error)?,
+            };
+            let sensors = Sensors { lidar: lidar.as_ref(), imu: imu.as_ref() };
+            errors.check(py.detach(|| write_simulation(&config, &truth, prefix, sensors, &robot, &out, force)))??
+        }
+    };
+    Ok(runs.into_iter().map(|inner| PyRun { inner }).collect())
+}
+
+/// The lidar in `room` on `mount`, `/tf_static` stating `tf` (default: the true mount).
+fn lidar_in(room: &str, mount: &MountArg, tf: Option<&MountArg>, settings: ScanSettings) -> PyResult<Lidar> {
+    let mount = mount.pose("lidar_mount")?.unwrap_or_default();
+    let stated = match tf {
+        None => Some(mount),
+        Some(tf) => tf.pose("lidar_tf")?,
+    };
+    Lidar::new(room, mount, stated, settings).py()
+}
+
+/// The true robot (`truth`, else the paper's calibration on APR-02 and the design itself on any other
+/// robot, as the CLI), checked against `robot`, whose design and benchmark commands go into `config`.
+fn true_robot(
+    truth: Option<&Bound<'_, PyAny>>,
+    robot: Option<&RobotFile>,
+    config: &mut SimConfig,
+) -> PyResult<(FittedModel, Vec<Arc<PyEffect>>)> {
+    let design = match robot {
         Some(r) => {
             let g = r.description.to_geometry().map_err(|e| value_error(format!("robot {}: {e}", r.source)))?;
             config.commands = benchmark_commands(&g);
@@ -62,11 +168,10 @@ pub fn simulate(
     };
     let (truth, adapters) = match (truth, &design) {
         (Some(t), _) => model_arg(t)?,
-        // The paper's calibration on APR-02, the design itself on any other robot (as the CLI).
         (None, Some(d)) if d.ik().py()? != IkMatrix::paper_design() => (d.clone(), Vec::new()),
         (None, _) => (omni_cli::design::paper_calibrated(), Vec::new()),
     };
-    if let Some(r) = &robot
+    if let Some(r) = robot
         && truth.model.n_wheels() != config.design.n_wheels()
     {
         return Err(value_error(format!(
@@ -77,11 +182,75 @@ pub fn simulate(
             config.design.wheel_names.join(", ")
         )));
     }
-    if noise_free {
-        config = config.noise_free();
+    Ok((truth, adapters))
+}
+
+/// The sensors asked for.
+#[derive(Clone, Copy)]
+struct Sensors<'a> {
+    lidar: Option<&'a Lidar>,
+    imu: Option<&'a Imu>,
+}
+
+/// Simulates the runs with their sensors and writes them into the claimed folder `out` (the CLI's
+/// `OUT/train/`: one MCAP bag per run, the robot.toml beside them).
+fn write_simulation(
+    config: &SimConfig,
+    truth: &FittedModel,
+    prefix: &str,
+    sensors: Sensors<'_>,
+    robot: &RobotFile,
+    out: &Path,
+    force: bool,
+) -> PyResult<Vec<Run>> {
+    let dir = OutDir::claim(out, "out=", force).map_err(out_error)?;
+    let (runs, simulated) = simulate_split(config, truth, prefix, sensors.lidar, sensors.imu).py()?;
+    let joints = robot.description.joints();
+    write_split(dir.path(), &runs, Format::Mcap, &joints, simulated.as_sensors()).py()?;
+    write_robot(dir.path(), robot, Format::Mcap).py()?;
+    dir.commit().map_err(out_error)?;
+    Ok(runs)
+}
+
+/// A mount keyword: ``(x_m, y_m, yaw_deg)`` or the CLI's text ``"X,Y,YAW_DEG"`` (m, m, degrees); for
+/// ``lidar_tf`` also ``"none"`` (no ``/tf_static``).
+#[derive(FromPyObject)]
+pub enum MountArg {
+    /// `(x_m, y_m, yaw_deg)`.
+    Pose((f64, f64, f64)),
+    /// `"X,Y,YAW_DEG"` or `"none"`.
+    Text(String),
+}
+
+impl MountArg {
+    /// The CLI's text form (a default spelt as the flag's).
+    pub fn text(t: &str) -> Self {
+        Self::Text(t.to_string())
     }
-    let errors = crate::effect::EffectErrors::new(adapters);
-    let runs = py.detach(|| rs_simulate(&config, &truth, prefix));
-    let runs = errors.check(runs)?.py()?;
-    Ok(runs.into_iter().map(|inner| PyRun { inner }).collect())
+
+    /// The pose (`None` for `"none"`, allowed for `lidar_tf` only); `ValueError` naming `keyword`.
+    fn pose(&self, keyword: &str) -> PyResult<Option<Pose2>> {
+        let parsed = match self {
+            Self::Text(t) if t == "none" && keyword == "lidar_tf" => return Ok(None),
+            Self::Text(t) => mount_from_text(t),
+            Self::Pose((x, y, yaw)) => mount_from_text(&format!("{x},{y},{yaw}")),
+        };
+        let none = if keyword == "lidar_tf" { " or \"none\"" } else { "" };
+        let shown = match self {
+            Self::Text(t) => format!("{t:?}"),
+            Self::Pose(p) => format!("{p:?}"),
+        };
+        parsed.map(Some).ok_or_else(|| {
+            value_error(format!("{keyword} {shown}: expected (x_m, y_m, yaw_deg) or \"X,Y,YAW_DEG\"{none}"))
+        })
+    }
+}
+
+/// An output folder refused or not written: `FileExistsError` for one that already holds files (without
+/// `force`), else as its cause.
+fn out_error(e: OutPathError) -> PyErr {
+    match e {
+        OutPathError::NotEmpty { .. } => PyFileExistsError::new_err(chain_text(&e)),
+        e => file_error(&e),
+    }
 }

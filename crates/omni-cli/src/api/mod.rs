@@ -10,6 +10,8 @@
 //! - [`fit::FitOptions`]: a preset's objective and identifiability overrides, and the refusals of a fit.
 //! - [`train::TrainRequest`], [`diagnose::DiagnoseRequest`]: `omnical train` and `omnical diagnose`
 //!   without a terminal.
+//! - [`info::info`]: what ROS recordings hold and what a read makes of them (`omnical info`).
+//! - [`simulate`]: simulated recordings with their lidar and IMU (`omnical simulate`).
 //! - [`settings`]: every setting's one declaration (its flag, project-file key, `omnical config` row and
 //!   Python keyword).
 
@@ -17,9 +19,11 @@ pub mod diagnose;
 pub mod explore;
 pub mod fit;
 pub mod held_out;
+pub mod info;
 pub mod load;
 pub mod session;
 pub mod settings;
+pub mod simulate;
 pub mod train;
 
 use crate::dataset::Dataset;

@@ -1,5 +1,5 @@
 //! Every setting of `omnical train`, of the data options and of the other commands' options a project may
-//! set (`eval --rpe-delta`), declared once: its command-line option (the
+//! set (`eval --rpe-delta`), and `omnical simulate`'s sensors (Python's `simulate` keywords), declared once: its command-line option (the
 //! clap argument id, the long flag in kebab-case), whether omnical.toml may set it (the project file's
 //! keys are this table's), whether `omnical config` shows it, and its Python keyword. The clap `Args`
 //! structs, the `omnical config` rows and the Python signatures (`#[pyo3(signature)]`, `_omnical.pyi`) are
@@ -62,10 +62,31 @@ const fn setting(
 
 /// Why a data option's Python keyword is `load`'s: the other calls take runs already loaded.
 const LOAD: &str = "load";
+/// Python's `info` (`omnical info`'s): the data options of `load` describe the read it shows.
+const INFO: &str = "info";
 /// Python's training call.
 const TRAIN: &str = "train";
 /// Python's evaluation call (`omnical eval`'s).
 const EVALUATE: &str = "evaluate";
+/// Python's simulation call (`omnical simulate`'s, its sensors the same keywords as the flags).
+const SIMULATE: &str = "simulate";
+/// Why a simulated sensor's setting is no project default.
+const ONE_SIMULATION: Where = No("a simulated sensor is one simulation's setting");
+
+/// An option of `omnical simulate` that is the same keyword of Python's `omnical.simulate`.
+macro_rules! simulate_setting {
+    ($key:literal, $about:literal) => {
+        Setting {
+            key: $key,
+            about: $about,
+            flag: Flag::Of(SIMULATE),
+            project_file: ONE_SIMULATION,
+            config_row: NOT_SHOWN,
+            python: Ok(&[(SIMULATE, $key)]),
+        }
+    };
+}
+
 /// Settings a project file has no key for.
 const NOT_SHOWN: Where = No("`omnical config` shows the settings a user repeats across commands");
 
@@ -77,53 +98,95 @@ pub const SETTINGS: &[Setting] = &[
         "robot description: a robot.toml path or apr02",
         Yes,
         Yes,
-        Ok(&[(LOAD, "robot"), (TRAIN, "robot"), (EVALUATE, "robot")]),
+        Ok(&[(LOAD, "robot"), (INFO, "robot"), (TRAIN, "robot"), (EVALUATE, "robot")]),
     ),
-    setting("joints", "wheel joint names in wheel order", Yes, Yes, Ok(&[(LOAD, "joints")])),
-    setting("joints_topic", "MCAP topic of the wheel JointState", Yes, Yes, Ok(&[(LOAD, "joints_topic")])),
-    setting("gt_topic", "MCAP topic of the ground truth", Yes, Yes, Ok(&[(LOAD, "gt_topic")])),
+    setting("joints", "wheel joint names in wheel order", Yes, Yes, Ok(&[(LOAD, "joints"), (INFO, "joints")])),
+    setting(
+        "joints_topic",
+        "MCAP topic of the wheel JointState",
+        Yes,
+        Yes,
+        Ok(&[(LOAD, "joints_topic"), (INFO, "joints_topic")]),
+    ),
+    setting("gt_topic", "MCAP topic of the ground truth", Yes, Yes, Ok(&[(LOAD, "gt_topic"), (INFO, "gt_topic")])),
     setting(
         "gt_parent_frame",
         "parent frame of the ground truth in a TF topic",
         Yes,
         Yes,
-        Ok(&[(LOAD, "gt_parent_frame")]),
+        Ok(&[(LOAD, "gt_parent_frame"), (INFO, "gt_parent_frame")]),
     ),
     setting(
         "gt_child_frame",
         "child frame of the ground truth in a TF topic",
         Yes,
         Yes,
-        Ok(&[(LOAD, "gt_child_frame")]),
+        Ok(&[(LOAD, "gt_child_frame"), (INFO, "gt_child_frame")]),
     ),
-    setting("gt", "ground truth from a separate file or folder", Yes, Yes, Ok(&[(LOAD, "gt")])),
-    setting("gt_time_offset", "clock offset of the gt file (s)", Yes, Yes, Ok(&[(LOAD, "gt_time_offset")])),
+    setting("gt", "ground truth from a separate file or folder", Yes, Yes, Ok(&[(LOAD, "gt"), (INFO, "gt")])),
+    setting(
+        "gt_time_offset",
+        "clock offset of the gt file (s)",
+        Yes,
+        Yes,
+        Ok(&[(LOAD, "gt_time_offset"), (INFO, "gt_time_offset")]),
+    ),
     setting(
         "gt_kind",
         "what the ground truth measures: absolute (motion capture) or relative (a sensor's own motion)",
         Yes,
         Yes,
-        Ok(&[(LOAD, "gt_kind")]),
+        Ok(&[(LOAD, "gt_kind"), (INFO, "gt_kind")]),
     ),
-    setting("gt_window", "window of a relative reference (s)", Yes, Yes, Ok(&[(LOAD, "gt_window_s")])),
+    setting(
+        "gt_window",
+        "window of a relative reference (s)",
+        Yes,
+        Yes,
+        Ok(&[(LOAD, "gt_window_s"), (INFO, "gt_window_s")]),
+    ),
     setting(
         "gt_mount",
         "the measured point's pose in the base frame: x, y (m), yaw (degrees)",
         Yes,
         Yes,
-        Ok(&[(LOAD, "gt_mount")]),
+        Ok(&[(LOAD, "gt_mount"), (INFO, "gt_mount")]),
     ),
     setting(
         "gt_scans",
         "ground truth from a 2D lidar: its LaserScan topic, matched scan to scan",
         Yes,
         NOT_SHOWN,
-        Ok(&[(LOAD, "gt_scans")]),
+        Ok(&[(LOAD, "gt_scans"), (INFO, "gt_scans")]),
     ),
-    setting("split", "cut recordings at standstills at least this long (s)", Yes, Yes, Ok(&[(LOAD, "split_s")])),
-    setting("skip_invalid", "skip runs that fail to load", Yes, NOT_SHOWN, Ok(&[(LOAD, "skip_invalid")])),
-    setting("ticks_per_rev", "encoder ticks per wheel revolution", Yes, NOT_SHOWN, Ok(&[(LOAD, "ticks_per_rev")])),
-    setting("max_file_mb", "largest input file (MiB)", Yes, NOT_SHOWN, Ok(&[(LOAD, "max_file_mb")])),
+    setting(
+        "split",
+        "cut recordings at standstills at least this long (s)",
+        Yes,
+        Yes,
+        Ok(&[(LOAD, "split_s"), (INFO, "split_s")]),
+    ),
+    setting(
+        "skip_invalid",
+        "skip runs that fail to load",
+        Yes,
+        NOT_SHOWN,
+        Ok(&[(LOAD, "skip_invalid"), (INFO, "skip_invalid")]),
+    ),
+    setting(
+        "ticks_per_rev",
+        "encoder ticks per wheel revolution",
+        Yes,
+        NOT_SHOWN,
+        Ok(&[(LOAD, "ticks_per_rev"), (INFO, "ticks_per_rev")]),
+    ),
+    setting(
+        "max_file_mb",
+        "largest input file (MiB)",
+        Yes,
+        NOT_SHOWN,
+        Ok(&[(LOAD, "max_file_mb"), (INFO, "max_file_mb")]),
+    ),
     setting("preset", "training recipe", Yes, Yes, Ok(&[(TRAIN, "preset")])),
     setting("seed", "seed", Yes, Yes, Ok(&[(TRAIN, "seed")])),
     setting("objective", "training objective", Yes, Yes, Ok(&[(TRAIN, "objective")])),
@@ -149,14 +212,14 @@ pub const SETTINGS: &[Setting] = &[
         "CSV columns of the gt file",
         No("a robot.toml's [ground_truth] columns table holds them for a robot"),
         NOT_SHOWN,
-        Ok(&[(LOAD, "gt_columns")]),
+        Ok(&[(LOAD, "gt_columns"), (INFO, "gt_columns")]),
     ),
     setting(
         "gt_units",
         "units of the gt file's CSV columns",
         No("a robot.toml's [ground_truth] units table holds them for a robot"),
         NOT_SHOWN,
-        Ok(&[(LOAD, "gt_units")]),
+        Ok(&[(LOAD, "gt_units"), (INFO, "gt_units")]),
     ),
     setting(
         "max_std_error",
@@ -205,6 +268,19 @@ pub const SETTINGS: &[Setting] = &[
         config_row: NOT_SHOWN,
         python: Ok(&[(TRAIN, "progress")]),
     },
+    simulate_setting!("lidar", "simulate: a 2D lidar in this room (room, corridor or a room file)"),
+    simulate_setting!("lidar_mount", "simulate: the lidar's pose on the base: x, y (m), yaw (degrees)"),
+    simulate_setting!("lidar_tf", "simulate: the lidar mount /tf_static states (default: the true one), or none"),
+    simulate_setting!("lidar_rate", "simulate: lidar scans per second (Hz)"),
+    simulate_setting!("lidar_beams", "simulate: beams per lidar scan, over 360 degrees"),
+    simulate_setting!("lidar_max_range", "simulate: longest lidar range (m)"),
+    simulate_setting!("lidar_noise", "simulate: Gaussian lidar range noise (m)"),
+    simulate_setting!("lidar_dropout", "simulate: share of lidar beams that return nothing"),
+    simulate_setting!("lidar_sweep", "simulate: measure each scan's beams one after another over its period"),
+    simulate_setting!("imu", "simulate: an IMU's yaw rate beside the wheels"),
+    simulate_setting!("imu_rate", "simulate: IMU messages per second (Hz)"),
+    simulate_setting!("imu_bias", "simulate: the gyro's bias (rad/s)"),
+    simulate_setting!("imu_noise", "simulate: Gaussian noise of each yaw-rate sample (rad/s)"),
 ];
 
 /// Why a setting of one run is not a project default.

@@ -4,9 +4,10 @@
 use super::OutputArgs;
 use super::diagnose::print_diagnosis;
 use super::sim_spec::apply_effect_spec;
-use super::simulate::{self as simulate_cmd, DEFAULT_SEED, Format};
+use super::simulate::DEFAULT_SEED;
 use super::train::print_summary;
 use crate::api::load::{DataOptions, LoadRequest};
+use crate::api::simulate::{Format, Sensors, write_robot, write_split};
 use crate::design::{design_for, paper_calibrated};
 use crate::out_path::OutDir;
 use crate::report::{self, ReportInput};
@@ -143,14 +144,8 @@ fn simulate_and_keep(setup: &Setup, dir: &Path, quiet: bool) -> anyhow::Result<(
     let mut splits = Vec::with_capacity(2);
     for (split, seed) in [(TRAIN, DEFAULT_SEED), (VALIDATION, DEFAULT_SEED + 1)] {
         let runs = simulate(&SimConfig { seed, ..setup.config.clone() }, &setup.truth, &format!("{split}/"))?;
-        simulate_cmd::write_split(
-            &dir.join(split),
-            &runs,
-            Format::Mcap,
-            &setup.wheels,
-            simulate_cmd::Sensors { lidar: None, imu: None },
-        )?;
-        simulate_cmd::write_robot(&dir.join(split), &setup.robot, Format::Mcap)?;
+        write_split(&dir.join(split), &runs, Format::Mcap, &setup.wheels, Sensors::default())?;
+        write_robot(&dir.join(split), &setup.robot, Format::Mcap)?;
         let paths = [dir.join(split)];
         let robot = robot_file::resolve(None, &paths)?;
         splits.push(LoadRequest::new(&paths, &DataOptions::default()).read_for_robot(robot)?.runs);

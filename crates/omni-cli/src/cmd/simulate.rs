@@ -1,34 +1,23 @@
 //! `omnical simulate`: write a flower-benchmark dataset from a true robot with optional hidden effects.
 
 use super::{OutputArgs, sim_spec};
+use crate::api::simulate::{Imu, Lidar, mount_from_text, simulate_split, write_robot, write_split};
 use crate::cli::effect_help;
-use crate::dataset::mcap::LidarTrack;
-use crate::lidar::{self, Room, ScanSettings};
+use crate::lidar::ScanSettings;
 use crate::out_path::OutDir;
 use crate::robot_file::{self, RobotFile};
 use crate::{atomic, dataset, design, model_file};
 use anyhow::{Context, bail};
 use omni_kin::cost::{self, CostKind};
-use omni_kin::gyro::GyroSample;
-use omni_kin::robot::RobotDescription;
-use omni_kin::simulate::{SimConfig, simulate, simulate_sampled};
+use omni_kin::simulate::SimConfig;
 use omni_kin::{FittedModel, IkMatrix, Model, Pose2, RobotGeometry, Run};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
-pub use crate::dataset::mcap::SIM_EPOCH_S;
+pub use crate::api::simulate::{Format, SIM_EPOCH_S};
 
 /// Seed of the training split (validation: seed + 1), here and in `demo`.
 pub const DEFAULT_SEED: u64 = 7;
-
-/// Dataset file format for writing.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Format {
-    /// omnical CSV, one file per run (docs/formats.md).
-    Csv,
-    /// ROS 2 MCAP bag, one file per run.
-    Mcap,
-}
 
 /// Arguments of `omnical simulate`.
 #[derive(Debug, clap::Args)]
@@ -159,48 +148,22 @@ pub struct ImuArgs {
 
 impl ImuArgs {
     /// The checked settings (`None` without `--imu`).
-    fn settings(&self, format: Format) -> anyhow::Result<Option<&Self>> {
+    fn settings(&self, format: Format) -> anyhow::Result<Option<Imu>> {
         if !self.imu {
             return Ok(None);
         }
         if format != Format::Mcap {
             bail!("--imu writes Imu messages into ROS 2 bags: use --format mcap (the default)");
         }
-        let ok = |v: f64| v.is_finite() && v >= 0.0;
-        if !(self.imu_rate.is_finite() && (1.0..=10_000.0).contains(&self.imu_rate)) {
-            bail!("--imu-rate {}: expected 1 to 10000 Hz", self.imu_rate);
-        }
-        if !(self.imu_bias.is_finite() && ok(self.imu_noise)) {
-            bail!(
-                "--imu-bias {} / --imu-noise {}: expected finite values, the noise ≥ 0",
-                self.imu_bias,
-                self.imu_noise
-            );
-        }
-        Ok(Some(self))
+        let imu = Imu { rate_hz: self.imu_rate, bias_rad_s: self.imu_bias, noise_rad_s: self.imu_noise };
+        Ok(Some(imu.checked()?))
     }
-}
-
-/// A configured lidar: the room, its name as given, the mount and the scan settings.
-pub(crate) struct Lidar {
-    room: Room,
-    name: String,
-    base_from_sensor: Pose2,
-    /// The mount /tf_static states (`None`: none written).
-    stated: Option<Pose2>,
-    settings: ScanSettings,
 }
 
 /// `X,Y,YAW_DEG` (m, m, degrees) of option `flag` as a pose.
 fn mount_arg(text: &str, flag: &str) -> anyhow::Result<Pose2> {
-    let v: Vec<f64> = text
-        .split(',')
-        .map(|x| x.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .ok()
-        .filter(|v: &Vec<f64>| v.len() == 3 && v.iter().all(|x| x.is_finite()))
-        .with_context(|| format!("{flag} {text:?}: expected X,Y,YAW_DEG (three numbers, e.g. 0.2,0,5)"))?;
-    Ok(Pose2::new(v[0], v[1], v[2].to_radians()))
+    mount_from_text(text)
+        .with_context(|| format!("{flag} {text:?}: expected X,Y,YAW_DEG (three numbers, e.g. 0.2,0,5)"))
 }
 
 impl LidarArgs {
@@ -210,7 +173,6 @@ impl LidarArgs {
         if format != Format::Mcap {
             bail!("--lidar writes LaserScan messages into ROS 2 bags: use --format mcap (the default)");
         }
-        let room = lidar::room_from_arg(name).context("--lidar")?;
         let base_from_sensor = mount_arg(&self.lidar_mount, "--lidar-mount")?;
         let stated = match self.lidar_tf.as_deref() {
             None => Some(base_from_sensor),
@@ -226,101 +188,8 @@ impl LidarArgs {
             sweeping: self.lidar_sweep,
             ..ScanSettings::default()
         };
-        settings.check().context("--lidar settings")?;
-        Ok(Some(Lidar { room, name: name.clone(), base_from_sensor, stated, settings }))
+        Ok(Some(Lidar::new(name, base_from_sensor, stated, settings)?))
     }
-}
-
-/// Simulates a split's runs, with their lidar tracks when `lidar` is given (each run's scans on its own
-/// random stream of `seed`); refuses a run that leaves the room.
-fn simulate_split(
-    cfg: &SimConfig,
-    truth: &FittedModel,
-    split: &str,
-    lidar: Option<&Lidar>,
-) -> anyhow::Result<(Vec<Run>, Option<Vec<LidarTrack>>)> {
-    let prefix = format!("{split}/");
-    let Some(l) = lidar else { return Ok((simulate(cfg, truth, &prefix)?, None)) };
-    let sampled = simulate_sampled(cfg, truth, &prefix, 1.0 / l.settings.rate_hz)?;
-    let mut tracks = Vec::with_capacity(sampled.len());
-    for (i, s) in sampled.iter().enumerate() {
-        if let Some(hit) = lidar::first_collision(&l.room, &s.base, lidar::CLEARANCE_M) {
-            bail!(
-                "--lidar {}: run {} leaves the room: at t = {:.1} s its base is at ({:.2}, {:.2}) m, less than {} m \
-                 from a wall or obstacle (every run starts at the room's origin heading +x); shorten --duration, \
-                 slow the --commands, or give a larger room",
-                l.name,
-                s.run.name(),
-                hit.t_s,
-                hit.pose.x_m,
-                hit.pose.y_m,
-                lidar::CLEARANCE_M
-            );
-        }
-        let scans = lidar::simulate_scans(&l.room, &s.base, &l.base_from_sensor, &l.settings, cfg.seed, i as u64);
-        tracks.push(LidarTrack { scans, base_from_sensor: l.stated });
-    }
-    Ok((sampled.into_iter().map(|s| s.run).collect(), Some(tracks)))
-}
-
-/// Each run's simulated gyro (`None` without `--imu`): the true base every `1 / imu_rate` s (the same runs
-/// as [`simulate`]'s), each run's noise its own stream of the split's seed.
-fn imu_tracks(
-    cfg: &SimConfig,
-    truth: &FittedModel,
-    split: &str,
-    imu: Option<&ImuArgs>,
-) -> anyhow::Result<Option<Vec<Vec<GyroSample>>>> {
-    let Some(i) = imu else { return Ok(None) };
-    let sampled = simulate_sampled(cfg, truth, &format!("{split}/"), 1.0 / i.imu_rate)?;
-    let gyro = |(k, s): (usize, &omni_kin::simulate::SampledRun)| {
-        omni_kin::gyro::simulate_gyro(&s.base, i.imu_bias, i.imu_noise, cfg.seed, k as u64)
-    };
-    Ok(Some(sampled.iter().enumerate().map(gyro).collect()))
-}
-
-/// The sensors simulated beside a split's runs, one entry per run: a lidar's track, an IMU's yaw rates.
-pub(crate) struct Sensors<'a> {
-    pub lidar: Option<&'a [LidarTrack]>,
-    pub imu: Option<&'a [Vec<GyroSample>]>,
-}
-
-/// Writes each run as one file of `format` into `dir` (created), named after the run; returns the paths.
-pub(crate) fn write_split(
-    dir: &Path,
-    runs: &[Run],
-    format: Format,
-    wheel_names: &[String],
-    sensors: Sensors<'_>,
-) -> anyhow::Result<Vec<PathBuf>> {
-    let Sensors { lidar, imu } = sensors;
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    let mut written = Vec::with_capacity(runs.len());
-    for (i, r) in runs.iter().enumerate() {
-        let stem = r.name().rsplit('/').next().unwrap_or(r.name());
-        let ext = match format {
-            Format::Csv => "csv",
-            Format::Mcap => "mcap",
-        };
-        let path = dir.join(format!("{stem}.{ext}"));
-        match format {
-            Format::Csv => dataset::csv::write_run(&path, r, wheel_names)?,
-            Format::Mcap => {
-                let w = dataset::mcap::WriteOptions {
-                    wheel_joints: wheel_names.to_vec(),
-                    design_odometry: Some(r.recorded_odometry().to_vec()),
-                    // Simulated clocks start at 0 s (wheel data from −0.5 s): put them at a plausible epoch.
-                    origin_s: SIM_EPOCH_S,
-                    lidar: lidar.and_then(|l| l.get(i)).cloned(),
-                    imu: imu.and_then(|g| g.get(i)).cloned(),
-                    ..Default::default()
-                };
-                dataset::mcap::write_run(&path, r, &w)?
-            }
-        }
-        written.push(path);
-    }
-    Ok(written)
 }
 
 /// The simulated robot's design (from `--robot`) and its true model (from `--truth`).
@@ -352,43 +221,6 @@ fn design_and_truth(a: &Args) -> anyhow::Result<(RobotFile, RobotGeometry, Fitte
         );
     }
     Ok((robot, geometry, design, truth))
-}
-
-/// The description with the topics the simulator writes (MCAP): a topic the robot names otherwise (its
-/// real recordings' `/tf`, say) is replaced by the simulator's, and the TF frames are dropped with it, so
-/// that the robot.toml beside the runs reads them. Topics the robot leaves open stay open.
-fn written_topics(d: &RobotDescription, format: Format) -> RobotDescription {
-    let mut d = d.clone();
-    if format != Format::Mcap {
-        return d;
-    }
-    use dataset::mcap::{COMMAND_TOPIC, JOINTS_TOPIC, TRUTH_TOPIC};
-    for (slot, topic) in [
-        (&mut d.topics.joint_states, JOINTS_TOPIC),
-        (&mut d.topics.ground_truth, TRUTH_TOPIC),
-        (&mut d.topics.command, COMMAND_TOPIC),
-    ] {
-        if slot.as_deref().is_some_and(|t| t != topic) {
-            *slot = Some(topic.to_string());
-        }
-    }
-    d.frames = Default::default();
-    d
-}
-
-/// Writes `robot.toml` into a split's folder, so that commands reading the runs find the robot.
-pub(crate) fn write_robot(dir: &Path, robot: &RobotFile, format: Format) -> anyhow::Result<()> {
-    let comments = robot_file::Comments {
-        header: vec![format!(
-            "The robot these simulated runs were made with (omnical simulate --robot {}): its design, joint names \
-             and topics. Commands reading this folder use it.",
-            robot.source
-        )],
-        ..Default::default()
-    };
-    let path = dir.join(robot_file::FILE_NAME);
-    let text = robot_file::to_toml(&written_topics(&robot.description, format), &comments);
-    atomic::write_atomic(&path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))
 }
 
 /// The design's and the true robot's costs on `runs`: `design_end_pose`, `oracle_end_pose`, `design_path`,
@@ -436,10 +268,8 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     for (split, seed) in [("train", a.seed), ("validation", a.seed.wrapping_add(1))] {
         let cfg = SimConfig { seed, ..config.clone() };
         let spinner = crate::progress::spinner(format!("simulating and writing {split} runs"), quiet);
-        let (runs, tracks) = simulate_split(&cfg, &truth, split, lidar.as_ref())?;
-        let gyro = imu_tracks(&cfg, &truth, split, imu)?;
-        let sensors = Sensors { lidar: tracks.as_deref(), imu: gyro.as_deref() };
-        let files = write_split(&out.path().join(split), &runs, a.format, &wheel_names, sensors)?;
+        let (runs, sensors) = simulate_split(&cfg, &truth, &format!("{split}/"), lidar.as_ref(), imu.as_ref())?;
+        let files = write_split(&out.path().join(split), &runs, a.format, &wheel_names, sensors.as_sensors())?;
         write_robot(&out.path().join(split), &robot, a.format)?;
         spinner.finish_and_clear();
         let costs = split_costs(&design, &truth, &runs)?;
@@ -469,10 +299,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     write_truth(a, out.path(), &truth, summary, &config, lidar.as_ref())?;
     out.commit()?;
     if a.output.json {
-        let format = match a.format {
-            Format::Csv => "csv",
-            Format::Mcap => "mcap",
-        };
+        let format = a.format.extension();
         let (truth_json, truth_model) = (a.out.join("truth.json"), a.out.join("truth_model.toml"));
         let doc = json!({ "out": a.out, "format": format, "splits": written, "truth_json": truth_json, "truth_model": truth_model });
         return super::print_json("simulate", doc);

@@ -14,6 +14,10 @@ Every call takes the model first, then the runs, then keyword-only options named
 (``validate=``, ``robot=``, ...); the model as the CLI's ``--model``: a :class:`Model`, ``"design"``,
 ``"paper"`` or a model file path.
 
+Simulated recordings: ``omnical.simulate(out="sim/train", lidar="room", imu=True)`` writes ROS 2 bags with
+a lidar's LaserScan and an IMU's yaw rate beside the wheels (``omnical simulate --lidar room --imu``);
+``omnical.info("sim/train")`` says what they hold (``omnical info --json``).
+
 Real data: ``omnical.load("bags/", robot="robot.toml")`` (a robot.toml beside the data is picked up
 without it, as by the CLI); ``"design"`` is the design of ``robot=``, else of the data's robot, and raises
 ``ValueError`` saying how to describe the robot when none is known.
@@ -53,6 +57,7 @@ from ._omnical import (
     evaluate,
     explore,
     export,
+    info,
     integrate,
     load,
     load_model,
@@ -83,6 +88,7 @@ __all__ = [
     "evaluate",
     "explore",
     "export",
+    "info",
     "integrate",
     "load",
     "load_model",

@@ -41,6 +41,7 @@ __all__ = [
     "evaluate",
     "explore",
     "export",
+    "info",
     "integrate",
     "load",
     "load_model",
@@ -379,6 +380,31 @@ def load(
     """Load runs from .csv, .mcap, folders of them or OptiOdom set folders. ``robot``: a robot.toml or
     ``"apr02"`` (default: a robot.toml beside the data or in the working directory, as the CLI)."""
 
+def info(
+    *paths: _Path,
+    robot: Optional[_Path] = None,
+    joints: Optional[Sequence[str]] = None,
+    joints_topic: Optional[str] = None,
+    gt_topic: Optional[str] = None,
+    gt_parent_frame: Optional[str] = None,
+    gt_child_frame: Optional[str] = None,
+    gt: Optional[_Path] = None,
+    gt_time_offset: Optional[float] = None,
+    gt_columns: Optional[dict[str, str]] = None,
+    gt_units: Optional[dict[str, str]] = None,
+    gt_kind: Optional[str] = None,
+    gt_window_s: Optional[float] = None,
+    gt_mount: Optional[tuple[float, float, float]] = None,
+    gt_scans: Optional[str] = None,
+    split_s: Optional[float] = None,
+    skip_invalid: bool = False,
+    ticks_per_rev: Optional[float] = None,
+    max_file_mb: int = 1024,
+) -> dict[str, Any]:
+    """What ROS recordings hold and what :func:`load` with the same keywords makes of them: ``omnical info
+    --json``'s document, ``{"recordings": [{"path", "start_unix_s", "duration_s", "messages", "topics",
+    "read"}, ...], "schema_version", "command"}`` (seconds, Hz, metres)."""
+
 def load_model(path: _Path, *, effects: Sequence[Any] = ...) -> Model:
     """Read a model file (TOML); ``effects``: Python effects it names."""
 
@@ -394,9 +420,28 @@ def simulate(
     prefix: str = "train/",
     sample_drop_probability: float = 0.0,
     sample_jitter_s: float = 0.0,
+    out: Optional[_Path] = None,
+    force: bool = False,
+    lidar: Optional[str] = None,
+    lidar_mount: Union[tuple[float, float, float], str] = "0,0,0",
+    lidar_tf: Union[tuple[float, float, float], str, None] = None,
+    lidar_rate: float = 10.0,
+    lidar_beams: int = 720,
+    lidar_max_range: float = 12.0,
+    lidar_noise: float = 0.01,
+    lidar_dropout: float = 0.01,
+    lidar_sweep: bool = False,
+    imu: bool = False,
+    imu_rate: float = 100.0,
+    imu_bias: float = 0.005,
+    imu_noise: float = 0.002,
 ) -> list[Run]:
     """The benchmark commands x runs_per_command of ``robot`` (default ``"apr02"``: the flower) on the true
-    robot ``truth`` (default: Eq. 9 on APR-02, else the robot's design)."""
+    robot ``truth`` (default: Eq. 9 on APR-02, else the robot's design). ``out``: also write them as ROS 2
+    bags (one per run, robot.toml beside them; a folder holding files raises ``FileExistsError`` unless
+    ``force=True``), with a simulated 2D lidar in the room ``lidar`` (``"room"``, ``"corridor"`` or a room
+    file; mount ``(x_m, y_m, yaw_deg)``, rate [Hz], max range and noise [m]) and/or an IMU's yaw rate
+    (``imu=True``; rate [Hz], bias and noise [rad/s]); the sensors need ``out``."""
 
 def train(
     model: _ModelArg,
