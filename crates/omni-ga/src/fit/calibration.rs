@@ -159,6 +159,29 @@ pub fn refine(
     plan: &Plan,
     observer: &mut dyn Observer,
 ) -> Result<Calibration, Error> {
+    refine_on(base, effects, train, plan, observer, BaseFit::TheseRuns)
+}
+
+/// Whether the base given to [`refine_on`] is a fit of the runs it is refitted on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BaseFit {
+    /// Fitted on these very runs (`train --effect`, diagnose with a validation set, explore): the
+    /// directions they leave unconstrained in the base are found at its start and held at once.
+    TheseRuns,
+    /// Fitted on other runs (a subset left out for cross-validation, a kind of path left out): those
+    /// directions are judged where the refit has moved, as for any start.
+    OtherRuns,
+}
+
+/// [`refine`], saying whether `base` is a fit of `train` ([`BaseFit`]).
+pub fn refine_on(
+    base: &FittedModel,
+    effects: &[EffectKind],
+    train: &[Run],
+    plan: &Plan,
+    observer: &mut dyn Observer,
+    base_fit: BaseFit,
+) -> Result<Calibration, Error> {
     let t0 = Instant::now();
     let start = effects.iter().fold(base.clone(), |m, e| m.with_effect(e.clone()));
     let nudged = differentiable_start(&start, base.params.len());
@@ -166,7 +189,8 @@ pub fn refine(
     let names: Vec<String> = start.model.params().into_iter().map(|p| p.name).collect();
     let refining = Plan { stages: plan.stages.iter().filter(|s| s.refines_held()).cloned().collect(), ..plan.clone() };
     let objective = problem.cost(&nudged);
-    let from = Start { x: &nudged, objective, hold_at: &start.params, fitted: base.params.len() };
+    let fitted = if base_fit == BaseFit::TheseRuns { base.params.len() } else { 0 };
+    let from = Start { x: &nudged, objective, hold_at: &start.params, fitted };
     let mut fit = pipeline::run(&problem, &refining, from, &names, observer)?;
     let objective_start = problem.cost(&start.params);
     // The model keeps its own integration: the start as given is the start fitted from.

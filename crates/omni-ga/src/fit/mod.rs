@@ -31,7 +31,7 @@ mod stage;
 
 pub use crate::error::Error as CalibrateError;
 pub(crate) use calibration::differentiable_start;
-pub use calibration::{Calibration, WorseThanStart, calibrate, calibrate_with_effects, refine};
+pub use calibration::{BaseFit, Calibration, WorseThanStart, calibrate, calibrate_with_effects, refine, refine_on};
 pub use pipeline::StageOutcome;
 pub use plan::{Plan, Preset, STEP_TOLERANCE, StepMismatch, Unexcited};
 pub use problem::{CalibrationProblem, RunBlock};

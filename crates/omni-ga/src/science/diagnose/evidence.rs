@@ -6,7 +6,7 @@ use super::compare::{costs_of, path_kind};
 use super::noise::wheel_excitation;
 use super::{Candidate, Costs, DiagnoseOptions, NoiseFloor, ParamValue};
 use crate::error::Error;
-use crate::fit::{Calibration, CalibrationProblem, Plan, refine};
+use crate::fit::{BaseFit, Calibration, CalibrationProblem, Plan, refine_on};
 use crate::optimizer::observe::NoopObserver;
 use crate::optimizer::problem::{Bounds, LeastSquares};
 use crate::science::text;
@@ -38,8 +38,19 @@ pub fn refit(
     train: &[Run],
     every: usize,
 ) -> Result<Calibration, Error> {
+    refit_on(current, effect, train, every, BaseFit::TheseRuns)
+}
+
+/// [`refit`], saying whether `current` is a fit of `train` ([`BaseFit`]).
+pub fn refit_on(
+    current: &FittedModel,
+    effect: Option<&EffectKind>,
+    train: &[Run],
+    every: usize,
+    base_fit: BaseFit,
+) -> Result<Calibration, Error> {
     let effects: Vec<EffectKind> = effect.into_iter().cloned().collect();
-    refine(current, &effects, train, &Plan::refit(every), &mut NoopObserver)
+    refine_on(current, &effects, train, &Plan::refit(every), &mut NoopObserver, base_fit)
 }
 
 /// Relative eigenvalue of the unit-column Gram matrix below which a direction counts as not spanned
@@ -196,6 +207,8 @@ pub(super) struct Bench<'a> {
     pub every: usize,
     /// The measurement noise floor, when the data has standstills.
     pub noise: Option<&'a NoiseFloor>,
+    /// Whether the model judged is a fit of `fit_runs` (not when they are a cross-validation subset).
+    pub base_fit: BaseFit,
 }
 
 impl Bench<'_> {
@@ -243,7 +256,7 @@ impl Bench<'_> {
         };
         if !absorbed
             && cand.not_excited.is_none()
-            && let Ok(fit) = refit(current, Some(effect), self.fit_runs, self.every)
+            && let Ok(fit) = refit_on(current, Some(effect), self.fit_runs, self.every, self.base_fit)
         {
             self.judge_refit(&mut cand, effect, &fit, current_costs)?;
         }

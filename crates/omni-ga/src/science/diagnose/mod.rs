@@ -40,13 +40,14 @@ mod unexplained;
 
 pub use compare::{Turn, costs_of, costs_of_each};
 pub(crate) use evidence::unbounded;
-pub use evidence::{differentiable_start, refit};
+pub use evidence::{differentiable_start, refit, refit_on};
 pub use findings::{Conclusion, Finding, Remaining, Verdict};
 pub use kinds::{GroupBasis, MotionKind, Shape};
 pub use noise::{ExcitationGap, GapKind, WheelGap, noise_floor, wheel_excitation, wheel_excitation_gap};
 pub use unexplained::{DecidedBy, UnexplainedEvidence};
 
 use crate::error::Error;
+use crate::fit::BaseFit;
 use crate::science::coverage::{MotionCoverage, motion_coverage};
 use crate::science::identify::{Identifiability, IdentifyOptions};
 use crate::science::text;
@@ -473,7 +474,10 @@ pub fn diagnose(
     let noise = noise_of(train, &held_runs);
     // Each candidate's evidence, ranked; with `auto`, the error ladder.
     let design = designs.first();
-    let bench = Bench { design, fit_runs: &fit_runs, held_runs: &held_runs, every, noise: noise.as_ref() };
+    // With a validation set (or none at all) the model is judged on the runs it was fitted on; a
+    // cross-validation subset is other runs.
+    let base_fit = if protocol == HeldOut::CrossValidation { BaseFit::OtherRuns } else { BaseFit::TheseRuns };
+    let bench = Bench { design, fit_runs: &fit_runs, held_runs: &held_runs, every, noise: noise.as_ref(), base_fit };
     let climb = search::climb(&bench, model, &costs, &design_costs, opts)?;
     let (verdict, kind_check) = recommend(model, &climb.ranking, train, every, opts)?;
     // What the runs constrain in the model as given, and where it fails.

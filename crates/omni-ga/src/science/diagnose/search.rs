@@ -2,9 +2,10 @@
 //! ladder (add the best one, refit, rank again); then check the winner on kinds of path left out of its fit.
 
 use super::compare::{Turn, costs_of, path_kind};
-use super::evidence::{Bench, candidate_effect, refit};
+use super::evidence::{Bench, candidate_effect, refit_on};
 use super::{Candidate, Costs, DiagnoseOptions, KindOut, Rung, RungKind};
 use crate::error::Error;
+use crate::fit::BaseFit;
 use crate::science::{heaviest_first, text};
 use omni_kin::cost;
 use omni_kin::effect::Effect;
@@ -77,7 +78,8 @@ pub(super) fn climb(
                     (Some(fitted), Some(costs)) => (fitted, costs),
                     _ => {
                         let effect = candidate_effect(&b.effect, current.model.n_wheels(), opts)?;
-                        let next = refit(&current, Some(&effect), bench.fit_runs, bench.every)?.fitted;
+                        let next =
+                            refit_on(&current, Some(&effect), bench.fit_runs, bench.every, bench.base_fit)?.fitted;
                         let costs = costs_of(&next, bench.fit_runs, bench.held_runs, bench.every)?;
                         (next, costs)
                     }
@@ -138,14 +140,18 @@ pub(super) fn kind_out(
     if kinds.len() < 2 || runs.iter().any(|r| Turn::of_run(r).is_none()) {
         return Ok(None);
     }
+    // The model was fitted on every kind: on a fold's runs it is a fit of other runs.
+    const OTHER: BaseFit = BaseFit::OtherRuns;
     // The folds (and each fold's two refits) are independent: fitted in parallel, collected in kind order
     // and summed in that order (the same bits whatever the thread count; the first error in that order).
     let folds = kinds
         .par_iter()
         .map(|&kind| {
             let (test, fit): (Vec<Run>, Vec<Run>) = runs.iter().cloned().partition(|r| Turn::of_run(r) == Some(kind));
-            let (base, with) =
-                rayon::join(|| refit(model, None, &fit, every), || refit(model, Some(effect), &fit, every));
+            let (base, with) = rayon::join(
+                || refit_on(model, None, &fit, every, OTHER),
+                || refit_on(model, Some(effect), &fit, every, OTHER),
+            );
             let (base, with) = (base?.fitted, with?.fitted);
             let b = cost::cost(&base.model, &base.params, &test, path_kind(every))?;
             let a = cost::cost(&with.model, &with.params, &test, path_kind(every))?;
