@@ -376,6 +376,7 @@ mod settings_table {
         for (function, file, data_args, command, all) in [
             ("load", "omni-py/src/run.rs", "paths", "train", true),
             ("info", "omni-py/src/info.rs", "paths", "info", true),
+            ("imu", "omni-py/src/imu.rs", "recordings", "imu", true),
             ("train", "omni-py/src/calibrate.rs", "runs", "train", true),
             ("evaluate", "omni-py/src/evaluate.rs", "runs", "eval", true),
             ("simulate", "omni-py/src/simulate.rs", "truth", "simulate", false),

@@ -20,6 +20,7 @@ mod errors;
 mod evaluate;
 mod explore;
 mod export;
+mod imu;
 mod info;
 mod model;
 mod pickle;
@@ -50,6 +51,8 @@ mod _omnical {
     use crate::explore::{PyExploration, explore};
     #[pymodule_export]
     use crate::export::export;
+    #[pymodule_export]
+    use crate::imu::imu;
     #[pymodule_export]
     use crate::info::info;
     #[pymodule_export]

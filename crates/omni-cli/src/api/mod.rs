@@ -11,6 +11,7 @@
 //! - [`train::TrainRequest`], [`diagnose::DiagnoseRequest`]: `omnical train` and `omnical diagnose`
 //!   without a terminal.
 //! - [`info::info`]: what ROS recordings hold and what a read makes of them (`omnical info`).
+//! - [`imu::imu`]: an IMU's yaw rate as a rotation reference (`omnical imu`).
 //! - [`simulate`]: simulated recordings with their lidar and IMU (`omnical simulate`).
 //! - [`settings`]: every setting's one declaration (its flag, project-file key, `omnical config` row and
 //!   Python keyword).
@@ -19,6 +20,7 @@ pub mod diagnose;
 pub mod explore;
 pub mod fit;
 pub mod held_out;
+pub mod imu;
 pub mod info;
 pub mod load;
 pub mod session;

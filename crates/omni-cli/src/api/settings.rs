@@ -1,5 +1,6 @@
 //! Every setting of `omnical train`, of the data options and of the other commands' options a project may
-//! set (`eval --rpe-delta`), and `omnical simulate`'s sensors (Python's `simulate` keywords), declared once: its command-line option (the
+//! set (`eval --rpe-delta`), `omnical simulate`'s sensors (Python's `simulate` keywords) and `omnical imu`'s
+//! options (Python's `imu`), declared once: its command-line option (the
 //! clap argument id, the long flag in kebab-case), whether omnical.toml may set it (the project file's
 //! keys are this table's), whether `omnical config` shows it, and its Python keyword. The clap `Args`
 //! structs, the `omnical config` rows and the Python signatures (`#[pyo3(signature)]`, `_omnical.pyi`) are
@@ -64,6 +65,10 @@ const fn setting(
 const LOAD: &str = "load";
 /// Python's `info` (`omnical info`'s): the data options of `load` describe the read it shows.
 const INFO: &str = "info";
+/// Python's `imu` (`omnical imu`'s): the data options that reach the wheels, and its own options.
+const IMU: &str = "imu";
+/// Why an option of `omnical imu` is no project default.
+const ONE_IMU_FIT: Where = No("it names this IMU fit's input or output");
 /// Python's training call.
 const TRAIN: &str = "train";
 /// Python's evaluation call (`omnical eval`'s).
@@ -98,15 +103,21 @@ pub const SETTINGS: &[Setting] = &[
         "robot description: a robot.toml path or apr02",
         Yes,
         Yes,
-        Ok(&[(LOAD, "robot"), (INFO, "robot"), (TRAIN, "robot"), (EVALUATE, "robot")]),
+        Ok(&[(LOAD, "robot"), (INFO, "robot"), (TRAIN, "robot"), (EVALUATE, "robot"), (IMU, "robot")]),
     ),
-    setting("joints", "wheel joint names in wheel order", Yes, Yes, Ok(&[(LOAD, "joints"), (INFO, "joints")])),
+    setting(
+        "joints",
+        "wheel joint names in wheel order",
+        Yes,
+        Yes,
+        Ok(&[(LOAD, "joints"), (INFO, "joints"), (IMU, "joints")]),
+    ),
     setting(
         "joints_topic",
         "MCAP topic of the wheel JointState",
         Yes,
         Yes,
-        Ok(&[(LOAD, "joints_topic"), (INFO, "joints_topic")]),
+        Ok(&[(LOAD, "joints_topic"), (INFO, "joints_topic"), (IMU, "joints_topic")]),
     ),
     setting("gt_topic", "MCAP topic of the ground truth", Yes, Yes, Ok(&[(LOAD, "gt_topic"), (INFO, "gt_topic")])),
     setting(
@@ -171,7 +182,7 @@ pub const SETTINGS: &[Setting] = &[
         "skip runs that fail to load",
         Yes,
         NOT_SHOWN,
-        Ok(&[(LOAD, "skip_invalid"), (INFO, "skip_invalid")]),
+        Ok(&[(LOAD, "skip_invalid"), (INFO, "skip_invalid"), (IMU, "skip_invalid")]),
     ),
     setting(
         "ticks_per_rev",
@@ -185,7 +196,7 @@ pub const SETTINGS: &[Setting] = &[
         "largest input file (MiB)",
         Yes,
         NOT_SHOWN,
-        Ok(&[(LOAD, "max_file_mb"), (INFO, "max_file_mb")]),
+        Ok(&[(LOAD, "max_file_mb"), (INFO, "max_file_mb"), (IMU, "max_file_mb")]),
     ),
     setting("preset", "training recipe", Yes, Yes, Ok(&[(TRAIN, "preset")])),
     setting("seed", "seed", Yes, Yes, Ok(&[(TRAIN, "seed")])),
@@ -238,7 +249,8 @@ pub const SETTINGS: &[Setting] = &[
     setting("model", "base model to fit", No(PER_RUN), NOT_SHOWN, Ok(&[(TRAIN, "model"), (EVALUATE, "model")])),
     setting("start", "start model file", No(PER_RUN), NOT_SHOWN, Err("an omnical.Model as model= is the start")),
     setting("effects", "effects to add to the fit", No(PER_RUN), NOT_SHOWN, Ok(&[(TRAIN, "effects")])),
-    setting("out", "fitted model file", No(PER_RUN), NOT_SHOWN, Err("train returns the model; Model.save writes it")),
+    // Python's `train` returns the model (Model.save writes it); `imu` writes `omnical imu --out`'s file.
+    setting("out", "fitted model file", No(PER_RUN), NOT_SHOWN, Ok(&[(IMU, "out")])),
     setting("force", "fit and write a refused fit", No(PER_RUN), NOT_SHOWN, Ok(&[(TRAIN, "force")])),
     setting("json", "results as JSON", No(PER_RUN), NOT_SHOWN, Err("results are Python objects")),
     setting("quiet", "fewer notes", No(PER_RUN), NOT_SHOWN, Err(NO_TERMINAL)),
@@ -281,6 +293,22 @@ pub const SETTINGS: &[Setting] = &[
     simulate_setting!("imu_rate", "simulate: IMU messages per second (Hz)"),
     simulate_setting!("imu_bias", "simulate: the gyro's bias (rad/s)"),
     simulate_setting!("imu_noise", "simulate: Gaussian noise of each yaw-rate sample (rad/s)"),
+    Setting {
+        key: "topic",
+        about: "imu: the IMU's sensor_msgs/msg/Imu topic",
+        flag: Flag::Of(IMU),
+        project_file: ONE_IMU_FIT,
+        config_row: NOT_SHOWN,
+        python: Ok(&[(IMU, "topic")]),
+    },
+    Setting {
+        key: "window",
+        about: "imu: window of the rotation row's fit (s)",
+        flag: Flag::Of(IMU),
+        project_file: ONE_IMU_FIT,
+        config_row: NOT_SHOWN,
+        python: Ok(&[(IMU, "window")]),
+    },
 ];
 
 /// Why a setting of one run is not a project default.

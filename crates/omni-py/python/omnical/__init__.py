@@ -16,7 +16,9 @@ Every call takes the model first, then the runs, then keyword-only options named
 
 Simulated recordings: ``omnical.simulate(out="sim/train", lidar="room", imu=True)`` writes ROS 2 bags with
 a lidar's LaserScan and an IMU's yaw rate beside the wheels (``omnical simulate --lidar room --imu``);
-``omnical.info("sim/train")`` says what they hold (``omnical info --json``).
+``omnical.info("sim/train")`` says what they hold (``omnical info --json``), and
+``omnical.imu("sim/train")`` fits the wheel matrix's rotation row and the gyro's bias from the IMU
+(``omnical imu --json``).
 
 Real data: ``omnical.load("bags/", robot="robot.toml")`` (a robot.toml beside the data is picked up
 without it, as by the CLI); ``"design"`` is the design of ``robot=``, else of the data's robot, and raises
@@ -57,6 +59,7 @@ from ._omnical import (
     evaluate,
     explore,
     export,
+    imu,
     info,
     integrate,
     load,
@@ -88,6 +91,7 @@ __all__ = [
     "evaluate",
     "explore",
     "export",
+    "imu",
     "info",
     "integrate",
     "load",

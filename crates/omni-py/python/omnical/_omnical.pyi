@@ -41,6 +41,7 @@ __all__ = [
     "evaluate",
     "explore",
     "export",
+    "imu",
     "info",
     "integrate",
     "load",
@@ -404,6 +405,24 @@ def info(
     """What ROS recordings hold and what :func:`load` with the same keywords makes of them: ``omnical info
     --json``'s document, ``{"recordings": [{"path", "start_unix_s", "duration_s", "messages", "topics",
     "read"}, ...], "schema_version", "command"}`` (seconds, Hz, metres)."""
+
+def imu(
+    *recordings: _Path,
+    topic: str = "/imu",
+    window: float = 1.0,
+    out: Optional[_Path] = None,
+    robot: Optional[_Path] = None,
+    joints: Optional[Sequence[str]] = None,
+    joints_topic: Optional[str] = None,
+    skip_invalid: bool = False,
+    max_file_mb: int = 1024,
+) -> dict[str, Any]:
+    """The wheel matrix's rotation row and the gyro's bias from an IMU's yaw rate (``topic``'s
+    ``angular_velocity.z``) over windows of ``window`` seconds: ``omnical imu --json``'s document,
+    ``{"fit": {"row", "row_std" (rad/s per wheel rad/s), "bias_rad_s", "bias_std_rad_s" (rad/s), "windows",
+    "turned_rad", "residual_rms_rad" (rad)}, "design_row", "wheel_names", "topic", "window_s", "out",
+    "schema_version", "command"}``. ``out`` writes the design's matrix with this row as a model file. A
+    recording without the topic raises ``DatasetError`` naming the file and the topic."""
 
 def load_model(path: _Path, *, effects: Sequence[Any] = ...) -> Model:
     """Read a model file (TOML); ``effects``: Python effects it names."""
