@@ -12,7 +12,7 @@ use std::path::PathBuf;
 ///
 /// ``recordings``: ``.mcap``, ``.db3`` or ``.bag`` files, rosbag2 folders, or folders of them, each with the
 /// wheels' JointState and the IMU's ``sensor_msgs/msg/Imu`` on ``topic`` (its ``angular_velocity.z`` is the
-/// yaw rate, rad/s); each recording is one run. ``window`` [s]: each window's turn as the gyro integrates
+/// yaw rate, rad/s); each recording is one run. ``window_s`` [s]: each window's turn as the gyro integrates
 /// it is fitted against the wheels' angles. ``out``: write the design's matrix with the fitted rotation row
 /// as a model file (the translation rows stay the design's; ``load_model`` reads it). ``robot``,
 /// ``joints``, ``joints_topic``, ``skip_invalid`` and ``max_file_mb`` [MiB] are :func:`load`'s; its
@@ -36,13 +36,13 @@ use std::path::PathBuf;
 /// >>> doc["command"], doc["wheel_names"], doc["fit"]["windows"] > 50
 /// ('imu', ['wheel_a', 'wheel_b', 'wheel_c'], True)
 #[pyfunction]
-#[pyo3(signature = (*recordings, topic = "/imu", window = 1.0, out = None, robot = None, joints = None, joints_topic = None, skip_invalid = false, max_file_mb = 1024))]
+#[pyo3(signature = (*recordings, topic = "/imu", window_s = 1.0, out = None, robot = None, joints = None, joints_topic = None, skip_invalid = false, max_file_mb = 1024))]
 #[allow(clippy::too_many_arguments)]
 pub fn imu(
     py: Python<'_>,
     recordings: Vec<PathBuf>,
     topic: &str,
-    window: f64,
+    window_s: f64,
     out: Option<PathBuf>,
     robot: Option<PathBuf>,
     joints: Option<Vec<String>>,
@@ -61,7 +61,7 @@ pub fn imu(
         max_file_mb,
         ..DataOptions::default()
     };
-    let request = ImuRequest { recordings, topic: topic.to_string(), window_s: window, out, data };
+    let request = ImuRequest { recordings, topic: topic.to_string(), window_s, out, data };
     let text = py.detach(|| api::imu(&request).map(|fit| api::document(&fit).to_string())).py()?;
     Ok(py.import("json")?.call_method1("loads", (text,))?.unbind())
 }

@@ -41,7 +41,7 @@ def test_imu_is_the_clis_json_document(sim: tuple[Path, list[omnical.Run]]) -> N
     assert ours["topic"] == "/imu" and ours["window_s"] == 1.0 and ours["out"] is None
     assert ours["wheel_names"] == ["wheel_a", "wheel_b", "wheel_c"]
     # Another window is the CLI's --window.
-    assert omnical.imu(out / "00-r0.mcap", window=0.5) == cli_imu(str(out / "00-r0.mcap"), "--window", "0.5")
+    assert omnical.imu(out / "00-r0.mcap", window_s=0.5) == cli_imu(str(out / "00-r0.mcap"), "--window", "0.5")
 
 
 def test_the_bias_and_the_rotation_row_come_back(sim: tuple[Path, list[omnical.Run]]) -> None:
@@ -87,7 +87,7 @@ def test_bad_inputs_are_refused_naming_the_file_and_topic(sim: tuple[Path, list[
                                                              'are /imu: name one (--topic)')):
         omnical.imu(out / "00-r0.mcap", topic="/imu2")
     with pytest.raises(ValueError, match=re.escape('topic "/imu": the gyro reference: window 0 s')):
-        omnical.imu(out / "00-r0.mcap", window=0.0)
+        omnical.imu(out / "00-r0.mcap", window_s=0.0)
     with pytest.raises(FileNotFoundError, match="missing.mcap"):
         omnical.imu(tmp_path / "missing.mcap")
     with pytest.raises(ValueError, match="at least one recording"):

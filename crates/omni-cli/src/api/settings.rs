@@ -307,7 +307,7 @@ pub const SETTINGS: &[Setting] = &[
         flag: Flag::Of(IMU),
         project_file: ONE_IMU_FIT,
         config_row: NOT_SHOWN,
-        python: Ok(&[(IMU, "window")]),
+        python: Ok(&[(IMU, "window_s")]),
     },
 ];
 

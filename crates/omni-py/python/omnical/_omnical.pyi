@@ -409,7 +409,7 @@ def info(
 def imu(
     *recordings: _Path,
     topic: str = "/imu",
-    window: float = 1.0,
+    window_s: float = 1.0,
     out: Optional[_Path] = None,
     robot: Optional[_Path] = None,
     joints: Optional[Sequence[str]] = None,
@@ -418,7 +418,7 @@ def imu(
     max_file_mb: int = 1024,
 ) -> dict[str, Any]:
     """The wheel matrix's rotation row and the gyro's bias from an IMU's yaw rate (``topic``'s
-    ``angular_velocity.z``) over windows of ``window`` seconds: ``omnical imu --json``'s document,
+    ``angular_velocity.z``) over windows of ``window_s`` seconds: ``omnical imu --json``'s document,
     ``{"fit": {"row", "row_std" (rad/s per wheel rad/s), "bias_rad_s", "bias_std_rad_s" (rad/s), "windows",
     "turned_rad", "residual_rms_rad" (rad)}, "design_row", "wheel_names", "topic", "window_s", "out",
     "schema_version", "command"}``. ``out`` writes the design's matrix with this row as a model file. A
