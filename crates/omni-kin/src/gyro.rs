@@ -12,8 +12,53 @@
 use crate::error::KinError;
 use crate::pose::StampedPose;
 use crate::run::Run;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, UnitQuaternion, Vector3};
 use serde::Serialize;
+
+/// How an IMU sits on the base: the rotation of the IMU's frame in the base frame (`base_from_imu`, as a
+/// URDF joint or `/tf_static` states it). The base's yaw rate is the base-z component of the IMU's angular
+/// velocity turned into the base frame, so an IMU upside down (roll π) or on its side reads the same yaw rate
+/// as an upright one once its mount is known.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImuMount {
+    /// The IMU frame's rotation in the base frame.
+    pub base_from_imu: UnitQuaternion<f64>,
+}
+
+impl ImuMount {
+    /// Upright, the IMU's axes the base's.
+    pub const UPRIGHT: Self =
+        Self { base_from_imu: UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(1.0, 0.0, 0.0, 0.0)) };
+
+    /// The mount of URDF's `rpy` (radians): roll about x, then pitch about y, then yaw about z, all about the
+    /// base's fixed axes (`R = Rz(yaw)·Ry(pitch)·Rx(roll)`).
+    pub fn from_rpy_rad(roll_rad: f64, pitch_rad: f64, yaw_rad: f64) -> Self {
+        Self { base_from_imu: UnitQuaternion::from_euler_angles(roll_rad, pitch_rad, yaw_rad) }
+    }
+
+    /// Roll, pitch and yaw (URDF's `rpy`, [`Self::from_rpy_rad`]). rad.
+    pub fn rpy_rad(&self) -> [f64; 3] {
+        let (r, p, y) = self.base_from_imu.euler_angles();
+        [r, p, y]
+    }
+
+    /// The base's yaw rate (rad/s) from the IMU's angular velocity `imu_rad_s` (x, y, z in the IMU's frame):
+    /// the base-z component of the vector turned into the base frame.
+    pub fn yaw_rate(&self, imu_rad_s: [f64; 3]) -> f64 {
+        (self.base_from_imu * Vector3::from(imu_rad_s)).z
+    }
+
+    /// The angular velocity in the IMU's frame (x, y, z, rad/s) of a base turning at `yaw_rad_s` about its z.
+    pub fn imu_rates(&self, yaw_rad_s: f64) -> [f64; 3] {
+        let v = self.base_from_imu.inverse() * Vector3::new(0.0, 0.0, yaw_rad_s);
+        [v.x, v.y, v.z]
+    }
+
+    /// How far the IMU's z axis points along the base's: 1 upright, −1 upside down, 0 on its side.
+    pub fn z_up(&self) -> f64 {
+        (self.base_from_imu * Vector3::z()).z
+    }
+}
 
 /// One gyro sample: the yaw rate about the base's z axis. rad/s, at `t_s` on the run's clock (s).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -205,6 +250,28 @@ mod tests {
             assert!((fit.row[0] - 0.1).abs() < tol && (fit.row[1] + 0.12).abs() < tol, "{rate} Hz: {fit:?}");
             assert!((fit.bias_rad_s - 0.01).abs() < tol, "{rate} Hz: {fit:?}");
         }
+    }
+
+    #[test]
+    fn a_mounted_imu_reads_the_base_yaw_rate() {
+        use std::f64::consts::{FRAC_PI_2, PI};
+        let w = 0.7;
+        for (rpy, z_up) in
+            [([0.0, 0.0, 0.3], 1.0), ([PI, 0.0, 0.0], -1.0), ([FRAC_PI_2, 0.0, 0.0], 0.0), ([0.0, -PI / 3.0, 1.0], 0.5)]
+        {
+            let m = ImuMount::from_rpy_rad(rpy[0], rpy[1], rpy[2]);
+            let imu = m.imu_rates(w);
+            assert!((m.yaw_rate(imu) - w).abs() < 1e-12, "{rpy:?}: {imu:?}");
+            assert!((m.z_up() - z_up).abs() < 1e-12, "{rpy:?}");
+            let back = m.rpy_rad();
+            let again = ImuMount::from_rpy_rad(back[0], back[1], back[2]);
+            assert!(again.base_from_imu.angle_to(&m.base_from_imu) < 1e-12, "{rpy:?} → {back:?}");
+        }
+        // Upside down (roll π): the IMU's own z reads −ω. On its side (roll 90°): its y axis points up and reads ω.
+        assert!((ImuMount::from_rpy_rad(PI, 0.0, 0.0).imu_rates(w)[2] + w).abs() < 1e-12);
+        let side = ImuMount::from_rpy_rad(FRAC_PI_2, 0.0, 0.0).imu_rates(w);
+        assert!(side[0].abs() < 1e-12 && (side[1] - w).abs() < 1e-12 && side[2].abs() < 1e-12, "{side:?}");
+        assert_eq!(ImuMount::UPRIGHT.yaw_rate([0.1, 0.2, w]), w);
     }
 
     #[test]
