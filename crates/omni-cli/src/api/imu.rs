@@ -88,6 +88,26 @@ pub enum ImuError {
         /// The fitted row · the design's row.
         dot: f64,
     },
+    /// Read upright for want of a stated mount, the IMU's x or y axis turns more than its z: it is on its side.
+    #[error(
+        "{}: topic {topic:?} (frame {frame_id:?}): the IMU's {axis} axis turns with the base more than its z axis \
+         (RMS x {:.2e}, y {:.2e}, z {:.2e} rad/s): the IMU seems mounted on its side. Publish its mount on \
+         /tf_static (base_link → {frame_id}, as robot_state_publisher does from the URDF) or give it: --mount \
+         {} if its {axis} axis points up ({} if down; ROLL,PITCH,YAW_DEG in degrees; Python: mount=…)",
+        files_text(recordings), rms_rad_s[0], rms_rad_s[1], rms_rad_s[2], side_mount(axis, 1.0), side_mount(axis, -1.0)
+    )]
+    OnItsSide {
+        /// The recordings read upright.
+        recordings: Vec<PathBuf>,
+        /// The Imu topic.
+        topic: String,
+        /// The IMU's frame.
+        frame_id: String,
+        /// `x` or `y`: the axis that turns most.
+        axis: char,
+        /// RMS of the angular velocity's x, y and z over those recordings. rad/s.
+        rms_rad_s: [f64; 3],
+    },
     /// The data's robot has no design model.
     #[error(transparent)]
     Design(#[from] DesignError),
@@ -111,6 +131,35 @@ fn files_text(paths: &[PathBuf]) -> String {
         names.push(format!("and {} more recordings", paths.len() - 3));
     }
     names.join(", ")
+}
+
+/// The `--mount` that turns the IMU's `axis` (`x` or `y`) to the base's z (`sign` 1) or against it (−1).
+fn side_mount(axis: &char, sign: f64) -> String {
+    match axis {
+        'x' => format!("0,{},0", -90.0 * sign),
+        _ => format!("{},0,0", 90.0 * sign),
+    }
+}
+
+/// Sums of the squared angular velocity per axis (x, y, z) and the samples summed. rad²/s², count.
+#[derive(Clone, Copy, Debug, Default)]
+struct AxisPower {
+    sum_sq: [f64; 3],
+    count: usize,
+}
+
+impl AxisPower {
+    fn add(&mut self, read: &GyroRead) {
+        for r in &read.rates {
+            (0..3).for_each(|i| self.sum_sq[i] += r.imu_rad_s[i] * r.imu_rad_s[i]);
+        }
+        self.count += read.rates.len();
+    }
+
+    /// RMS per axis. rad/s.
+    fn rms(&self) -> [f64; 3] {
+        self.sum_sq.map(|s| (s / self.count.max(1) as f64).sqrt())
+    }
 }
 
 /// Where the IMU's mount came from.
@@ -143,7 +192,8 @@ pub struct MountUsed {
 impl MountUsed {
     /// Roll, pitch, yaw. Degrees.
     pub fn rpy_deg(&self) -> [f64; 3] {
-        self.mount.rpy_rad().map(f64::to_degrees)
+        // + 0.0: −0.0 shows as 0.
+        self.mount.rpy_rad().map(|a| a.to_degrees() + 0.0)
     }
 }
 
@@ -178,6 +228,8 @@ struct Recordings {
     mounts: Vec<MountUsed>,
     /// The recordings read upright for want of a stated mount.
     assumed: Vec<PathBuf>,
+    /// Their angular velocity per axis.
+    assumed_power: AxisPower,
 }
 
 /// The mount `read` is taken with: the one given, else the recording's, else upright.
@@ -230,6 +282,7 @@ fn check_overlap(path: &Path, topic: &str, run: &Run, read: &GyroRead) -> Result
 /// Reads each recording's wheels and gyro; the gyro on the run's clock.
 fn read(request: &ImuRequest) -> Result<Recordings, ImuError> {
     let (mut runs, mut gyro, mut mounts, mut assumed) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut assumed_power = AxisPower::default();
     let mut first = None;
     let max_bytes = request.data.max_file_mb.saturating_mul(1 << 20);
     for path in &dataset::ros_recordings(&request.recordings)? {
@@ -240,6 +293,7 @@ fn read(request: &ImuRequest) -> Result<Recordings, ImuError> {
         let used = mount_of(&read, request.mount);
         if used.source == MountSource::Assumed {
             assumed.push(path.clone());
+            assumed_power.add(&read);
         }
         for run in &ds.runs {
             if let Some(&origin) = ds.time_origins_s.get(run.name()) {
@@ -252,7 +306,7 @@ fn read(request: &ImuRequest) -> Result<Recordings, ImuError> {
         tally(&mut mounts, used);
         first.get_or_insert(ds);
     }
-    Ok(Recordings { first: first.ok_or(ImuError::NoRecording)?, runs, gyro, mounts, assumed })
+    Ok(Recordings { first: first.ok_or(ImuError::NoRecording)?, runs, gyro, mounts, assumed, assumed_power })
 }
 
 /// Fits the rotation row and the gyro's bias from the recordings' IMU, beside the design's row; writes the
@@ -263,6 +317,7 @@ pub fn imu(request: &ImuRequest) -> Result<ImuFit, ImuError> {
         out_path::check_file(out, "--out")?;
     }
     let rec = read(request)?;
+    check_upright(&rec, &request.topic)?;
     let fit = fit_rotation_row(&rec.runs, &rec.gyro, request.window_s)
         .map_err(|source| ImuError::Fit { topic: request.topic.clone(), source })?;
     let design = FittedModel::nominal(design::model(KinematicsKind::Ik, &rec.first)?);
@@ -290,6 +345,23 @@ pub fn imu(request: &ImuRequest) -> Result<ImuFit, ImuError> {
         out: request.out.clone(),
         mounts: rec.mounts,
         against_design: dot < 0.0,
+    })
+}
+
+/// Refuses the recordings read upright when their IMU's x or y axis turns more than its z (RMS): the IMU
+/// is on its side (tilted more than 45°), its mount unstated.
+fn check_upright(rec: &Recordings, topic: &str) -> Result<(), ImuError> {
+    let rms = rec.assumed_power.rms();
+    if rec.assumed.is_empty() || rms[0].hypot(rms[1]) <= rms[2] {
+        return Ok(());
+    }
+    let frame_id = rec.mounts.iter().find(|m| m.source == MountSource::Assumed).map(|m| m.frame_id.clone());
+    Err(ImuError::OnItsSide {
+        recordings: rec.assumed.clone(),
+        topic: topic.to_string(),
+        frame_id: frame_id.unwrap_or_default(),
+        axis: if rms[0] > rms[1] { 'x' } else { 'y' },
+        rms_rad_s: rms,
     })
 }
 
