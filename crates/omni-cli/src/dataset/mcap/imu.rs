@@ -239,3 +239,84 @@ impl MessageSink for ImuSink {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::common::{RosString, Time, encode};
+    use super::super::tf::{Transform, TransformStamped};
+    use super::*;
+
+    /// An Imu message of frame `/imu_link` at `sec` s turning at (x, y, z) rad/s.
+    fn message(sec: i32, w: [f64; 3]) -> Vec<u8> {
+        let m = Imu {
+            header: Header { stamp: Time { sec, nanosec: 0 }, frame_id: RosString("/imu_link".into()) },
+            orientation: Quaternion { x: 0.0, y: 0.0, z: 0.0, w: 1.0 },
+            orientation_covariance: [0.0; 9],
+            angular_velocity: Vector3 { x: w[0], y: w[1], z: w[2] },
+            angular_velocity_covariance: [0.0; 9],
+            linear_acceleration: Vector3::default(),
+            linear_acceleration_covariance: [0.0; 9],
+        };
+        encode(&m).unwrap()
+    }
+
+    /// A TF message: `child` in `parent` turned by the quaternion (x, y, z, w).
+    fn tf(parent: &str, child: &str, q: [f64; 4]) -> Vec<u8> {
+        let t = TransformStamped {
+            header: Header { stamp: Time::default(), frame_id: RosString(parent.into()) },
+            child_frame_id: RosString(child.into()),
+            transform: Transform {
+                translation: Vector3::default(),
+                rotation: Quaternion { x: q[0], y: q[1], z: q[2], w: q[3] },
+            },
+        };
+        encode(&TfMessage { transforms: vec![t] }).unwrap()
+    }
+
+    /// An IMU upside down whose mount a ROS 1 bag publishes on /tf, repeated unchanged from base_footprint
+    /// (no base_link), beside odom → base_footprint that moves: the mount is found, the yaw rate is −z.
+    #[test]
+    fn a_mount_repeated_on_tf_from_base_footprint_is_read() {
+        let mut sink = ImuSink::new("/imu", false);
+        let (t, i) = (sink.channel("/tf", tf::NAME, "ros2msg", "cdr"), sink.channel("/imu", NAME, "ros2msg", "cdr"));
+        for k in 0..4 {
+            sink.message(t, &tf("base_footprint", "imu_link", [1.0, 0.0, 0.0, 0.0]), 0);
+            sink.message(t, &tf("odom", "base_footprint", [0.0, 0.0, (0.1 * k as f64).sin(), 1.0]), 0);
+            sink.message(i, &message(10 + k, [0.0, 0.0, -0.5]), 0);
+        }
+        let read = sink.finish(Path::new("rec.bag")).unwrap();
+        assert_eq!((read.frame_id.as_str(), read.origin_s, read.rates.len()), ("imu_link", 10, 4));
+        let stated = read.stated_mount.clone().unwrap();
+        assert_eq!(stated.base_frame, "base_footprint");
+        assert!((stated.mount.z_up() + 1.0).abs() < 1e-12, "{stated:?}");
+        assert!(read.yaw_rates(&stated.mount).iter().all(|g| (g.z_rad_s - 0.5).abs() < 1e-12));
+        assert_eq!(read.yaw_rates(&ImuMount::UPRIGHT)[3], GyroSample { t_s: 3.0, z_rad_s: -0.5 });
+    }
+
+    /// A pair that moves on /tf is no mount; /tf_static's wins over /tf; a bad axis is named.
+    #[test]
+    fn a_moving_pair_is_no_mount_and_a_bad_axis_is_named() {
+        let run = |moving: bool, statics: bool, w: [f64; 3]| {
+            let mut sink = ImuSink::new("/imu", false);
+            let t = sink.channel("/tf", tf::NAME, "ros2msg", "cdr");
+            let s = sink.channel("/tf_static", tf::NAME, "ros2msg", "cdr");
+            let i = sink.channel("/imu", NAME, "ros2msg", "cdr");
+            if statics {
+                sink.message(s, &tf("base_link", "imu_link", [0.0, 0.0, 0.0, 1.0]), 0);
+            }
+            for k in 0..3 {
+                let z = if moving { 0.1 * k as f64 } else { 0.0 };
+                sink.message(t, &tf("base_link", "imu_link", [1.0, 0.0, z, 0.0]), 0);
+                sink.message(i, &message(k, w), 0);
+            }
+            sink.finish(Path::new("rec.mcap"))
+        };
+        assert_eq!(run(true, false, [0.0; 3]).unwrap().stated_mount, None);
+        let upright = run(false, true, [0.0; 3]).unwrap().stated_mount.unwrap();
+        assert_eq!((upright.base_frame.as_str(), upright.mount.z_up()), ("base_link", 1.0));
+        assert_eq!(
+            run(false, false, [f64::NAN, 0.0, 0.1]).unwrap_err().to_string(),
+            "rec.mcap: topic \"/imu\", message 0: field angular_velocity.x is NaN"
+        );
+    }
+}
