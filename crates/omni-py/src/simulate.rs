@@ -70,6 +70,7 @@ use std::sync::Arc;
 #[pyo3(
     text_signature = "(truth=None, *, robot=None, runs_per_command=5, duration_s=10.0, seed=7, noise_free=False, prefix=\"train/\", sample_drop_probability=0.0, sample_jitter_s=0.0, out=None, force=False, lidar=None, lidar_mount=\"0,0,0\", lidar_tf=None, lidar_rate=10.0, lidar_beams=720, lidar_max_range=12.0, lidar_noise=0.01, lidar_dropout=0.01, lidar_sweep=False, imu=False, imu_rate=100.0, imu_bias=0.005, imu_noise=0.002, imu_mount=\"0,0,0\", imu_tf=None)"
 )]
+// long: one parameter per keyword (the CLI's flags, 27 of them), then the settings built by helpers.
 #[allow(clippy::too_many_arguments)]
 pub fn simulate(
     py: Python<'_>,
@@ -123,18 +124,15 @@ pub fn simulate(
         ..ScanSettings::default()
     };
     let lidar = lidar.map(|room| lidar_in(&room, &lidar_mount, lidar_tf.as_ref(), settings)).transpose()?;
-    let imu = match imu {
-        true => {
-            let mount = imu_mount.rpy("imu_mount")?.unwrap_or(ImuMount::UPRIGHT);
-            let stated = match &imu_tf {
-                None => Some(mount),
-                Some(tf) => tf.rpy("imu_tf")?,
-            };
-            let imu = Imu { rate_hz: imu_rate, bias_rad_s: imu_bias, noise_rad_s: imu_noise, mount, stated };
-            Some(imu.checked().py()?)
-        }
-        false => None,
-    };
+    let imu = imu
+        .then(|| {
+            imu_on(
+                Imu { rate_hz: imu_rate, bias_rad_s: imu_bias, noise_rad_s: imu_noise, ..Imu::default() },
+                &imu_mount,
+                imu_tf.as_ref(),
+            )
+        })
+        .transpose()?;
     let errors = crate::effect::EffectErrors::new(adapters);
     let runs = match out {
         None if lidar.is_some() || imu.is_some() => {
@@ -164,6 +162,16 @@ fn lidar_in(room: &str, mount: &MountArg, tf: Option<&MountArg>, settings: ScanS
         Some(tf) => tf.pose("lidar_tf")?,
     };
     Lidar::new(room, mount, stated, settings).py()
+}
+
+/// The IMU of `settings` on `mount`, `/tf_static` stating `tf` (default: the true mount), checked.
+fn imu_on(settings: Imu, mount: &MountArg, tf: Option<&MountArg>) -> PyResult<Imu> {
+    let mount = mount.rpy("imu_mount")?.unwrap_or(ImuMount::UPRIGHT);
+    let stated = match tf {
+        None => Some(mount),
+        Some(tf) => tf.rpy("imu_tf")?,
+    };
+    Imu { mount, stated, ..settings }.checked().py()
 }
 
 /// The true robot (`truth`, else the paper's calibration on APR-02 and the design itself on any other
