@@ -291,7 +291,8 @@ mod tests {
         // The gyro reads 1.5 % high with its bias: gyro = 1.015 · (0.1·w₁ − 0.12·w₂) + 1.015 · 0.01.
         let (run, gyro) = run_and_gyro(100.0);
         let scaled: Vec<GyroSample> = gyro.iter().map(|g| GyroSample { z_rad_s: 1.015 * g.z_rad_s, ..*g }).collect();
-        let fit = fit_gyro_scale(&[run.clone()], &[scaled.clone()], 1.0, &[0.1, -0.12]).unwrap();
+        let fit =
+            fit_gyro_scale(std::slice::from_ref(&run), std::slice::from_ref(&scaled), 1.0, &[0.1, -0.12]).unwrap();
         assert!((fit.scale - 1.015).abs() < 2e-3 && (fit.bias_rad_s - 0.01015).abs() < 2e-3, "{fit:?}");
         // The free row cannot tell the scale from the row: it comes back 1.5 % large.
         let free = fit_rotation_row(&[run.clone()], &[scaled], 1.0).unwrap();
