@@ -295,7 +295,7 @@ mod tests {
             fit_gyro_scale(std::slice::from_ref(&run), std::slice::from_ref(&scaled), 1.0, &[0.1, -0.12]).unwrap();
         assert!((fit.scale - 1.015).abs() < 2e-3 && (fit.bias_rad_s - 0.01015).abs() < 2e-3, "{fit:?}");
         // The free row cannot tell the scale from the row: it comes back 1.5 % large.
-        let free = fit_rotation_row(&[run.clone()], &[scaled], 1.0).unwrap();
+        let free = fit_rotation_row(std::slice::from_ref(&run), &[scaled], 1.0).unwrap();
         assert!((free.row[0] - 0.1015).abs() < 2e-3 && (free.row[1] + 0.1218).abs() < 2e-3, "{free:?}");
         let err = fit_gyro_scale(&[run], &[gyro], 1.0, &[0.1]).unwrap_err().to_string();
         assert_eq!(err, "the gyro reference: a rotation row of 1 entries for 2 wheels");
