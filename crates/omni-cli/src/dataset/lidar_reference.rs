@@ -58,6 +58,7 @@ pub(super) fn with_lidar_path(
     }
     loaded.notes.extend(notes(path, topic, &read, &sensor, runs.len()));
     loaded.runs = runs;
+    loaded.lidar_mount_from_tf = Some(read.base_from_sensor.is_some());
     Ok(loaded)
 }
 
@@ -97,7 +98,7 @@ fn notes(path: &Path, topic: &str, read: &lidar::ScanRead, sensor: &lidar::Senso
     let mount = match read.base_from_sensor {
         Some(m) => format!(
             "its path moved to the base by the static transform to {frame:?}{upside_down} (x {:.3} m, y {:.3} m, \
-             yaw {:.2}°); the fit corrects that mount",
+             yaw {:.2}°); a base model that can tell a mount from the base corrects it (a free matrix keeps it)",
             m.x_m,
             m.y_m,
             m.theta_rad.to_degrees()

@@ -535,8 +535,10 @@ def train_files(args: list[str]) -> dict[str, Any]:
     ``end_s`` [s], ``runs``, ``notes``, ``skipped``, ``warnings``. ``ValueError`` for bad arguments,
     ``OmnicalError`` with the command's message for a failed load or fit."""
 
-def diagnose_files(args: list[str]) -> dict[str, Any]:
-    """``omnical diagnose ARGS...`` inside this process; returns what ``--json`` prints."""
+def diagnose_files(args: list[str], train_args: Optional[list[str]] = None) -> dict[str, Any]:
+    """``omnical diagnose ARGS...`` inside this process; returns what ``--json`` prints. With ``train_args``
+    the runs are read as ``omnical train TRAIN_ARGS...`` reads them (its data options replace those of
+    ``args``)."""
 
 def _fleet_args(args: list[str]) -> tuple[Optional[dict[str, Any]], str, int]:
     """``omnical fleet ARGS...`` parsed by the command line's parser: (options, "", 0), or (None, text,
@@ -551,6 +553,7 @@ def _dataset_from_state(
     design: str,
     robot: Optional[str] = None,
     declared: str = "",
+    reading: str = "",
 ) -> Dataset: ...
 def _model_from_toml(text: str, effects: list[Any] = ...) -> Model: ...
 def _calibration_from_state(state: dict[str, Any]) -> Calibration: ...
