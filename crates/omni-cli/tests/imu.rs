@@ -126,6 +126,17 @@ fn every_data_option_that_changes_nothing_is_refused() {
         args.extend(option);
         assert_eq!(refusal(&args, d), format!("error: {flag} changes nothing for `omnical imu`: {why}"));
     }
+    // A project's ground truth for training (project-wide keys) leaves `omnical imu` alone; set for `imu`
+    // itself, it is refused.
+    simulate(d, "sim", "100");
+    std::fs::write(d.join("omnical.toml"), "gt_topic = \"/mocap\"\nsplit = 2\nticks_per_rev = 4096\n").unwrap();
+    let (row, _) = imu_row(&["imu", "sim/train/00-r0.mcap"], d);
+    assert_eq!(row.len(), 3);
+    std::fs::write(d.join("omnical.toml"), "[imu]\ngt_topic = \"/mocap\"\n").unwrap();
+    assert_eq!(
+        refusal(&["imu", "sim/train/00-r0.mcap"], d),
+        format!("error: --gt-topic changes nothing for `omnical imu`: {GT}")
+    );
 }
 
 /// An IMU upside down (roll 180°) or on its side (roll 90°) with its mount on /tf_static gives the upright

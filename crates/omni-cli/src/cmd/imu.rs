@@ -59,31 +59,63 @@ impl Args {
     }
 
     /// The data options given that `omnical imu` does not read, each with why.
-    fn ignored(&self) -> Vec<(&'static str, &'static str)> {
-        const GT: &str = "it reads no ground truth (the IMU is the reference)";
+    fn ignored(&self) -> Vec<(String, &'static str)> {
         let d = &self.data;
         let given = [
-            (d.gt.is_some(), "--gt", GT),
-            (d.gt_topic.is_some(), "--gt-topic", GT),
-            (d.gt_parent_frame.is_some(), "--gt-parent-frame", GT),
-            (d.gt_child_frame.is_some(), "--gt-child-frame", GT),
-            (!d.gt_columns.is_empty(), "--gt-columns", GT),
-            (!d.gt_units.is_empty(), "--gt-units", GT),
-            (d.gt_scans.is_some(), "--gt-scans", GT),
-            (d.gt_kind.is_some(), "--gt-kind", GT),
-            (d.gt_window.is_some(), "--gt-window", GT),
-            (d.gt_mount.is_some(), "--gt-mount", GT),
-            (d.gt_time_offset.is_some(), "--gt-time-offset", GT),
-            (d.split.is_some(), "--split", "each recording is one run"),
-            (
-                d.ticks_per_rev.is_some(),
-                "--ticks-per-rev",
-                "it reads ROS recordings, whose JointState gives the wheel speeds (ticks per revolution convert CSV \
-                 tick columns)",
-            ),
+            d.gt.is_some(),
+            d.gt_topic.is_some(),
+            d.gt_parent_frame.is_some(),
+            d.gt_child_frame.is_some(),
+            !d.gt_columns.is_empty(),
+            !d.gt_units.is_empty(),
+            d.gt_scans.is_some(),
+            d.gt_kind.is_some(),
+            d.gt_window.is_some(),
+            d.gt_mount.is_some(),
+            d.gt_time_offset.is_some(),
+            d.split.is_some(),
+            d.ticks_per_rev.is_some(),
         ];
-        given.into_iter().filter(|g| g.0).map(|(_, flag, why)| (flag, why)).collect()
+        given
+            .into_iter()
+            .zip(IGNORED)
+            .filter(|g| g.0)
+            .map(|(_, (key, why))| (format!("--{}", key.replace('_', "-")), why))
+            .collect()
     }
+}
+
+/// Why `omnical imu` reads no ground-truth option.
+const GT: &str = "it reads no ground truth (the IMU is the reference)";
+
+/// The data options `omnical imu` does not read (their keys, in [`Args::ignored`]'s order), each with why:
+/// given on the command line or in the project file's `[imu]` table they are refused; a project-wide key
+/// of the project file leaves `omnical imu` alone ([`ignores_project_wide`]).
+const IGNORED: [(&str, &str); 13] = [
+    ("gt", GT),
+    ("gt_topic", GT),
+    ("gt_parent_frame", GT),
+    ("gt_child_frame", GT),
+    ("gt_columns", GT),
+    ("gt_units", GT),
+    ("gt_scans", GT),
+    ("gt_kind", GT),
+    ("gt_window", GT),
+    ("gt_mount", GT),
+    ("gt_time_offset", GT),
+    ("split", "each recording is one run"),
+    (
+        "ticks_per_rev",
+        "it reads ROS recordings, whose JointState gives the wheel speeds (ticks per revolution convert CSV tick \
+         columns)",
+    ),
+];
+
+/// Whether a project-wide key of omnical.toml (`gt_topic = "/mocap"` for training) is left out of
+/// `command`'s defaults: `omnical imu` does not read it, and a project's ground truth is no reason to
+/// refuse the IMU.
+pub fn ignores_project_wide(command: &str, key: &str) -> bool {
+    command == "imu" && IGNORED.iter().any(|(k, _)| *k == key)
 }
 
 /// `ROLL,PITCH,YAW_DEG` (degrees) as an IMU mount.
