@@ -215,3 +215,44 @@ fn info_points_the_imu_to_omnical_imu_and_refuses_what_is_no_recording() {
     let err = String::from_utf8(out.stderr).unwrap();
     assert_eq!(err.trim(), "error: csv/train/00-r0.csv: not a ROS recording (.mcap, .db3, .bag or a rosbag2 folder)");
 }
+
+/// `model`'s matrix with its rotation row scaled by `factor`, as a model file `out` (the TOML's third
+/// `matrix` row).
+fn with_rotation_row_scaled(dir: &Path, model: &str, factor: f64, out: &str) {
+    let text = std::fs::read_to_string(dir.join(model)).unwrap();
+    let mut file: toml::Table = text.parse().unwrap();
+    let matrix = file["matrix"].as_array_mut().unwrap();
+    let row: Vec<toml::Value> =
+        matrix[2].as_array().unwrap().iter().map(|v| toml::Value::Float(v.as_float().unwrap() * factor)).collect();
+    matrix[2] = toml::Value::Array(row);
+    file.remove("fit");
+    std::fs::write(dir.join(out), toml::to_string(&file).unwrap()).unwrap();
+}
+
+#[test]
+fn a_model_of_the_turning_gives_the_gyros_scale_that_the_imu_alone_cannot() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    simulate(d, "sim", "100");
+    // The true robot's row: the simulated gyro has no scale error (its central differences of the true
+    // heading read about 0.1 % high, as the free row does against motion capture), and its bias 0.005 rad/s.
+    let doc: Value = json(&["imu", "sim/train", "--model", "sim/truth_model.toml", "--json"], d);
+    let a = &doc["against_model"];
+    let (scale, se) = (a["gyro_scale"].as_f64().unwrap(), a["gyro_scale_std"].as_f64().unwrap());
+    let bias = a["bias_rad_s"].as_f64().unwrap();
+    eprintln!("against the truth: scale {scale:.5} ± {se:.5}, bias {bias:.5}, {}", a["difference_sigmas"]);
+    assert!((scale - 1.0).abs() < 2e-3 && se < 1e-3, "scale {scale} ± {se}");
+    assert!((bias - 0.005).abs() < 3e-4, "bias {bias}");
+    assert!(a["difference_sigmas"].as_array().unwrap().iter().all(|s| s.as_f64().unwrap().abs() < 4.0), "{a}");
+    // Against a row 2 % low (a model whose turning is off, or a gyro reading 2 % high) the scale is 1/0.98.
+    with_rotation_row_scaled(d, "sim/truth_model.toml", 0.98, "low.toml");
+    let doc: Value = json(&["imu", "sim/train", "--model", "low.toml", "--json"], d);
+    let low = doc["against_model"]["gyro_scale"].as_f64().unwrap();
+    assert!((low - scale / 0.98).abs() < 1e-6, "scale {low} against {scale} / 0.98");
+    let text = ok(&["imu", "sim/train", "--model", "low.toml"], d);
+    assert!(text.contains("against low.toml's rotation row: gyro scale 1.02"), "{text}");
+    assert!(text.contains("they disagree beyond the gyro's scale"), "{text}");
+    // A model of another robot is refused naming the option.
+    let err = refusal(&["imu", "sim/train", "--model", "nowhere.toml"], d);
+    assert!(err.starts_with("error: --model"), "{err}");
+}

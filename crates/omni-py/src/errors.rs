@@ -151,6 +151,7 @@ impl ToPyErr for ImuError {
             ImuError::Design(DesignError::NoDesign(_)) => crate::robot::no_design("omnical.imu"),
             ImuError::Fit { .. } | ImuError::Design(_) => PyValueError::new_err(chain_text(&self)),
             ImuError::OutPath(_) | ImuError::ModelText(_) | ImuError::Write { .. } => file_error(&self),
+            ImuError::Model(_) => ModelFileError::new_err(chain_text(&self)),
         }
     }
 }

@@ -22,10 +22,14 @@ use std::path::PathBuf;
 /// as a model file (the translation rows stay the design's; ``load_model`` reads it). ``robot``,
 /// ``joints``, ``joints_topic``, ``skip_invalid`` and ``max_file_mb`` [MiB] are :func:`load`'s; its
 /// ground-truth keywords are not taken (the IMU is the reference). An IMU senses no translation: the
-/// translation rows need motion capture, a lidar (``load(gt_scans=)``) or measured end poses.
+/// translation rows need motion capture, a lidar (``load(gt_scans=)``) or measured end poses. ``model``: a
+/// model file fitted on such a reference (or ``"design"``, ``"paper"``): its rotation row calibrates the
+/// gyro, which the IMU alone cannot tell from the row (``against_model``: ``{"model", "row", "gyro_scale",
+/// "gyro_scale_std", "bias_rad_s", "bias_std_rad_s", "residual_rms_rad", "difference_sigmas"}``, the last
+/// the IMU's row minus the model's in the IMU fit's standard errors, per wheel; None without ``model``).
 ///
 /// Returns ``{"fit": {...}, "design_row": [...], "wheel_names": [...], "topic", "window_s", "out",
-/// "mounts", "against_design", "schema_version": 1, "command": "imu"}``: ``fit`` has ``row`` and ``row_std`` (ω per wheel speed,
+/// "mounts", "against_design", "against_model", "schema_version": 1, "command": "imu"}``: ``fit`` has ``row`` and ``row_std`` (ω per wheel speed,
 /// rad/s per rad/s, one per wheel, in ``wheel_names``' order), ``bias_rad_s`` and ``bias_std_rad_s``
 /// [rad/s], ``windows``, ``turned_rad`` [rad] and ``residual_rms_rad`` [rad]; ``design_row`` is the
 /// design's rotation row [rad/s per rad/s]; ``out`` the model file written or None; ``mounts`` the IMU
@@ -43,7 +47,7 @@ use std::path::PathBuf;
 /// >>> doc["command"], doc["wheel_names"], doc["fit"]["windows"] > 50
 /// ('imu', ['wheel_a', 'wheel_b', 'wheel_c'], True)
 #[pyfunction]
-#[pyo3(signature = (*recordings, topic = "/imu", window_s = 1.0, out = None, mount = None, robot = None, joints = None, joints_topic = None, skip_invalid = false, max_file_mb = 1024))]
+#[pyo3(signature = (*recordings, topic = "/imu", window_s = 1.0, out = None, mount = None, model = None, robot = None, joints = None, joints_topic = None, skip_invalid = false, max_file_mb = 1024))]
 #[allow(clippy::too_many_arguments)]
 pub fn imu(
     py: Python<'_>,
@@ -52,6 +56,7 @@ pub fn imu(
     window_s: f64,
     out: Option<PathBuf>,
     mount: Option<MountArg>,
+    model: Option<PathBuf>,
     robot: Option<PathBuf>,
     joints: Option<Vec<String>>,
     joints_topic: Option<String>,
@@ -70,7 +75,8 @@ pub fn imu(
         ..DataOptions::default()
     };
     let mount = mount.map(|m| m.rpy("mount")).transpose()?.flatten();
-    let request = ImuRequest { recordings, topic: topic.to_string(), window_s, out, mount, data };
+    let model = model.as_deref().map(omni_cli::api::ModelSpec::from_path);
+    let request = ImuRequest { recordings, topic: topic.to_string(), window_s, out, mount, model, data };
     let text = py.detach(|| api::imu(&request).map(|fit| api::document(&fit).to_string())).py()?;
     Ok(py.import("json")?.call_method1("loads", (text,))?.unbind())
 }

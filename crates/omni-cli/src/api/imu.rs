@@ -42,6 +42,9 @@ pub struct ImuRequest {
     /// The IMU's mount on the base (`--mount ROLL,PITCH,YAW_DEG`), used instead of the recordings' static
     /// transforms. Default: theirs, else upright.
     pub mount: Option<ImuMount>,
+    /// A model fitted on a reference that senses the turning (motion capture, `--gt-scans`, a localization,
+    /// end poses): its rotation row calibrates the gyro (scale and bias, [`AgainstModel`]).
+    pub model: Option<super::ModelSpec>,
     /// How the wheels are read (robot description, joints, file size cap). The ground-truth options and
     /// `split_s` are not read: the IMU is the reference, and each recording one run.
     pub data: DataOptions,
@@ -111,6 +114,9 @@ pub enum ImuError {
     /// The data's robot has no design model.
     #[error(transparent)]
     Design(#[from] DesignError),
+    /// The model to calibrate the gyro against could not be read, or has another wheel count.
+    #[error("--model")]
+    Model(#[source] Box<dyn std::error::Error + Send + Sync>),
     /// The model file's text could not be made.
     #[error(transparent)]
     ModelText(#[from] ModelTextError),
@@ -217,6 +223,23 @@ pub struct ImuFit {
     /// The fitted row points against the design's (their dot product below 0) although every mount was
     /// stated: the mount or the wheels' signs are wrong.
     pub against_design: bool,
+    /// The gyro against the `model`'s rotation row, when one was given.
+    pub against_model: Option<AgainstModel>,
+}
+
+/// The gyro against a model fitted on a reference that senses the turning: the IMU alone cannot tell its
+/// scale from the row; with the model's row known, it can.
+#[derive(Clone, Debug)]
+pub struct AgainstModel {
+    /// The model, as given (`--model`).
+    pub model: String,
+    /// Its rotation row, one entry per wheel. rad/s per rad/s.
+    pub row: Vec<f64>,
+    /// The gyro's scale and bias against that row.
+    pub gyro: omni_kin::gyro::GyroScaleFit,
+    /// The row the IMU fits minus the model's, in the IMU fit's standard errors, per wheel: beyond about 3
+    /// (with the gyro's scale at 1) the model's turning and the gyro's disagree.
+    pub difference_sigmas: Vec<f64>,
 }
 
 /// The wheels of every recording (one run each) and their gyro samples on the run's clock, with the first
@@ -333,6 +356,7 @@ pub fn imu(request: &ImuRequest) -> Result<ImuFit, ImuError> {
             dot,
         });
     }
+    let against_model = request.model.as_ref().map(|m| against_model(m, &rec, &fit, request.window_s)).transpose()?;
     if let Some(out) = &request.out {
         write_model(&design, &fit, out)?;
     }
@@ -345,7 +369,33 @@ pub fn imu(request: &ImuRequest) -> Result<ImuFit, ImuError> {
         out: request.out.clone(),
         mounts: rec.mounts,
         against_design: dot < 0.0,
+        against_model,
     })
+}
+
+/// The gyro's scale and bias against `spec`'s rotation row, and how far the IMU's own row lies from it.
+fn against_model(
+    spec: &super::ModelSpec,
+    rec: &Recordings,
+    fit: &RotationFit,
+    window_s: f64,
+) -> Result<AgainstModel, ImuError> {
+    let model = spec.resolve(&rec.first).map_err(|e| ImuError::Model(Box::new(e)))?;
+    let ik = model.ik().map_err(|e| ImuError::Model(Box::new(e)))?;
+    let n = fit.row.len();
+    if ik.n_wheels() != n {
+        let why = format!("the model has {} wheels, the recordings {n}", ik.n_wheels());
+        return Err(ImuError::Model(why.into()));
+    }
+    let row = ik.row(2).to_vec();
+    let gyro = omni_kin::gyro::fit_gyro_scale(&rec.runs, &rec.gyro, window_s, &row)
+        .map_err(|e| ImuError::Model(Box::new(e)))?;
+    let difference_sigmas = (0..n).map(|i| (fit.row[i] - row[i]) / fit.row_std[i]).collect();
+    let name = match spec {
+        super::ModelSpec::File(p) => p.display().to_string(),
+        other => format!("{other:?}").to_lowercase(),
+    };
+    Ok(AgainstModel { model: name, row, gyro, difference_sigmas })
 }
 
 /// Refuses the recordings read upright when their IMU's x or y axis turns more than its z (RMS): the IMU
@@ -386,6 +436,11 @@ pub fn document(result: &ImuFit) -> serde_json::Value {
         "out": result.out.as_ref().map(|p| p.display().to_string()),
         "mounts": result.mounts.iter().map(mount_json).collect::<Vec<_>>(),
         "against_design": result.against_design,
+        "against_model": result.against_model.as_ref().map(|a| json!({
+            "model": a.model, "row": a.row, "gyro_scale": a.gyro.scale, "gyro_scale_std": a.gyro.scale_std,
+            "bias_rad_s": a.gyro.bias_rad_s, "bias_std_rad_s": a.gyro.bias_std_rad_s,
+            "residual_rms_rad": a.gyro.residual_rms_rad, "difference_sigmas": a.difference_sigmas,
+        })),
     });
     if let serde_json::Value::Object(fields) = &mut doc {
         fields.insert("schema_version".into(), super::JSON_SCHEMA_VERSION.into());

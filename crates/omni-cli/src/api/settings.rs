@@ -246,7 +246,13 @@ pub const SETTINGS: &[Setting] = &[
         NOT_SHOWN,
         Ok(&[(TRAIN, "min_excitation")]),
     ),
-    setting("model", "base model to fit", No(PER_RUN), NOT_SHOWN, Ok(&[(TRAIN, "model"), (EVALUATE, "model")])),
+    setting(
+        "model",
+        "base model to fit",
+        No(PER_RUN),
+        NOT_SHOWN,
+        Ok(&[(TRAIN, "model"), (EVALUATE, "model"), (IMU, "model")]),
+    ),
     setting("start", "start model file", No(PER_RUN), NOT_SHOWN, Err("an omnical.Model as model= is the start")),
     setting("effects", "effects to add to the fit", No(PER_RUN), NOT_SHOWN, Ok(&[(TRAIN, "effects")])),
     // Python's `train` returns the model (Model.save writes it); `imu` writes `omnical imu --out`'s file.

@@ -28,6 +28,11 @@ pub struct Args {
     /// else upright.
     #[arg(long, value_name = "ROLL,PITCH,YAW_DEG", value_parser = parse_mount, allow_hyphen_values = true)]
     pub mount: Option<ImuMount>,
+    /// A model fitted on a reference that senses the turning (motion capture, --gt-scans, a localization,
+    /// end poses; or `design`, `paper`): its rotation row calibrates the gyro (its scale and bias), which the
+    /// IMU alone cannot tell from the row.
+    #[arg(long, value_name = "MODEL")]
+    pub model: Option<PathBuf>,
     /// Write the design's matrix with this rotation row as a model file (the translation rows stay the
     /// design's).
     #[arg(long, value_name = "FILE")]
@@ -54,6 +59,7 @@ impl Args {
             window_s: self.window,
             out: self.out.clone(),
             mount: self.mount,
+            model: self.model.as_deref().map(crate::api::ModelSpec::from_path),
             data: self.data.options(),
         })
     }
@@ -160,11 +166,36 @@ fn print_fit(r: &ImuFit) {
     println!(
         "an IMU senses no translation: the translation rows are not reached (fit them with motion capture, \
          --gt-scans or measured end poses); a gyro scale error would scale this row and cannot be told from it \
-         with the IMU alone"
+         with the IMU alone{}",
+        if r.against_model.is_some() { " (against the model's row below, it can)" } else { "" }
     );
+    if let Some(a) = &r.against_model {
+        print_against_model(a);
+    }
     if let Some(out) = &r.out {
         println!("model written to {} (the design's translation rows, this rotation row)", out.display());
     }
+}
+
+/// The gyro calibrated against a model's rotation row.
+fn print_against_model(a: &crate::api::imu::AgainstModel) {
+    let g = &a.gyro;
+    println!(
+        "against {}'s rotation row: gyro scale {:.5} ± {:.5} ({:+.3} %), bias {:+.5} ± {:.5} rad/s, residual RMS \
+         {:.2e} rad per window",
+        a.model,
+        g.scale,
+        g.scale_std,
+        100.0 * (g.scale - 1.0),
+        g.bias_rad_s,
+        g.bias_std_rad_s,
+        g.residual_rms_rad
+    );
+    let worst = a.difference_sigmas.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+    println!(
+        "  the IMU's row lies {worst:.1} standard errors from the model's at most (with the gyro's scale at 1){}",
+        if worst > 3.0 { ": they disagree beyond the gyro's scale, or the model's turning is off" } else { "" }
+    );
 }
 
 /// Which mount the IMU was read with.

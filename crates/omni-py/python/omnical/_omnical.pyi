@@ -412,6 +412,7 @@ def imu(
     window_s: float = 1.0,
     out: Optional[_Path] = None,
     mount: Union[tuple[float, float, float], str, None] = None,
+    model: Optional[_Path] = None,
     robot: Optional[_Path] = None,
     joints: Optional[Sequence[str]] = None,
     joints_topic: Optional[str] = None,
@@ -423,8 +424,10 @@ def imu(
     else the recording's static transforms, else upright) over windows of ``window_s`` seconds: ``omnical
     imu --json``'s document, ``{"fit": {"row", "row_std" (rad/s per wheel rad/s), "bias_rad_s",
     "bias_std_rad_s" (rad/s), "windows", "turned_rad", "residual_rms_rad" (rad)}, "design_row",
-    "wheel_names", "topic", "window_s", "out", "mounts", "against_design", "schema_version", "command"}``.
-    ``out`` writes the design's matrix with this row as a model file. A recording without the topic, or an
+    "wheel_names", "topic", "window_s", "out", "mounts", "against_design", "against_model", "schema_version",
+    "command"}``. ``out`` writes the design's matrix with this row as a model file. ``model``: a model file
+    fitted on a reference that senses the turning (or ``"design"``, ``"paper"``); its rotation row calibrates
+    the gyro (``against_model``: the gyro's scale and bias, and the IMU's row against the model's). A recording without the topic, or an
     IMU read upright whose row points against the design's (upside down, no mount stated), raises
     ``DatasetError`` naming the files and the topic."""
 
