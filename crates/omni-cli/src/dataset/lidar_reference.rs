@@ -10,11 +10,12 @@ use crate::lidar::{self, MatchSettings};
 use omni_kin::{Run, StampedPose};
 use std::path::Path;
 
-/// The runs of `loaded` (read wheels only from the recording at `path`) with the lidar's path on `topic` as
-/// their ground truth.
+/// The runs of `loaded` (read wheels only from the recording at `path`) with the lidar's path on `topic`
+/// (matched with `settings`) as their ground truth, the mount looked up from `base_frame` (`[frames] base`;
+/// default `base_link`, else `base_footprint`).
 pub(super) fn with_lidar_path(
     path: &Path,
-    (topic, settings): (&str, &MatchSettings),
+    (topic, settings): &(String, MatchSettings),
     base_frame: Option<&str>,
     mut loaded: Loaded,
 ) -> Result<Loaded, DatasetError> {

@@ -441,9 +441,7 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
     };
     // The lidar's path as a ROS recording's ground truth, when --gt-scans is given.
     let lidar = |p: &Path, l: Loaded| match &opts.scans {
-        Some((topic, settings)) => {
-            lidar_reference::with_lidar_path(p, (topic, settings), opts.mcap.base_frame.as_deref(), l)
-        }
+        Some(scans) => lidar_reference::with_lidar_path(p, scans, opts.mcap.base_frame.as_deref(), l),
         None => Ok(l),
     };
     // The ground-truth file of a ROS recording, when --gt is given.
