@@ -167,6 +167,7 @@ fn json_doc(a: &Args, read: &lidar::ScanRead, path: &SensorPath, written: &[Path
         },
         "segments": segments,
         "base_from_sensor": read.base_from_sensor.map(|m| json!({ "x_m": m.x_m, "y_m": m.y_m, "theta_rad": m.theta_rad })),
+        "mount_chain": read.chain,
         "tum": written,
     })
 }
