@@ -198,6 +198,49 @@ mod tests {
         assert_eq!(tree.offset("odom", "marker"), None, "a cycle ends");
     }
 
+    /// The ground truth's reader (TfPairs) and the lidar's (SeenPairs) take the same pairs as static from a
+    /// `/tf` topic: a fixed pair republished with every message (ROS 1), and one published once; never the
+    /// moving pair, nor one that changes by a micrometre once.
+    #[test]
+    fn fixed_pairs_on_tf_are_static_for_both_readers() {
+        use super::super::common::{Header, RosString, Time};
+        use super::super::laser_scan::static_transform;
+        let tf = |k: i32, pairs: &[(&str, &str, f64)]| TfMessage {
+            transforms: pairs
+                .iter()
+                .flat_map(|&(parent, child, x)| {
+                    let header = Header { stamp: Time { sec: k, nanosec: 0 }, frame_id: RosString(parent.into()) };
+                    static_transform(header, child, &Pose2::new(x, 0.0, 0.0)).transforms
+                })
+                .collect(),
+        };
+        let messages: Vec<TfMessage> = (1..=4)
+            .map(|k| {
+                let jitter = if k == 2 { 1e-6 } else { 0.0 };
+                let mut pairs = vec![("/world", "/marker", 0.1 * f64::from(k)), ("/marker", "/base_link", -0.1)];
+                pairs.push(("/base_link", "/laser", 0.2 + jitter));
+                if k == 1 {
+                    pairs.push(("/base_link", "/imu", 0.05));
+                }
+                tf(k, &pairs)
+            })
+            .collect();
+        let (mut pairs, mut seen) = (super::super::tf::TfPairs::default(), SeenPairs::default());
+        for (k, m) in messages.iter().enumerate() {
+            pairs.push(k, m);
+            seen.push(m);
+        }
+        let (mut a, mut b) = (StaticTree::default(), StaticTree::default());
+        pairs.add_statics(false, &mut a);
+        seen.add_statics(false, &mut b);
+        for tree in [&a, &b] {
+            assert_eq!(tree.offset("marker", "base_link").map(|(p, _)| p.x_m), Some(-0.1));
+            assert_eq!(tree.offset("base_link", "imu").map(|(p, _)| p.x_m), Some(0.05));
+            assert_eq!(tree.offset("base_link", "laser"), None, "changed once");
+            assert_eq!(tree.offset("world", "marker"), None, "moves");
+        }
+    }
+
     #[test]
     fn a_frame_under_an_odd_number_of_flips_is_mirrored() {
         let mut tree = StaticTree::default();
