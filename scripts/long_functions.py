@@ -55,9 +55,9 @@ def functions(path):
                     break
                 j += 1
             if started:
-                # Doc comments and attributes just above.
+                # Doc comments, comments and attributes just above.
                 k = i - 1
-                while k >= 0 and (lines[k].strip().startswith("///") or lines[k].strip().startswith("#[")):
+                while k >= 0 and (lines[k].strip().startswith("//") or lines[k].strip().startswith("#[")):
                     k -= 1
                 text = "\n".join(lines[k + 1 : j + 1])
                 why = re.search(r"long:\s*(.*)", text)

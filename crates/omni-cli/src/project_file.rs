@@ -219,7 +219,10 @@ pub fn apply(mut cli: Command, project: &ProjectFile) -> Result<Command, Project
         let Some(sub) = cli.find_subcommand(&name) else { continue };
         let mut fixed = Vec::new();
         for &key in &keys {
-            if let Some(s) = project.get(&name, key).filter(|_| has_arg(sub, key)) {
+            let applies = |s: &&Setting| {
+                has_arg(sub, key) && !(s.command.is_none() && crate::cmd::imu::ignores_project_wide(&name, key))
+            };
+            if let Some(s) = project.get(&name, key).filter(applies) {
                 check(sub, project, s)?;
                 fixed.push(s.clone());
             } else if let Some(s) =

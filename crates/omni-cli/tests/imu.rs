@@ -10,26 +10,34 @@ use serde_json::Value;
 use std::path::Path;
 use support::{json, ok, omnical};
 
-/// Simulated MCAP runs with an IMU at `rate` Hz, bias 0.005 rad/s.
+/// Simulated MCAP runs with an IMU at `rate` Hz, bias 0.005 rad/s, and `more` simulate options.
+fn simulate_with(dir: &Path, out: &str, rate: &str, more: &[&str]) {
+    let mut args =
+        vec!["simulate", "--out", out, "--imu", "--imu-rate", rate, "--imu-bias", "0.005", "--runs-per-command", "1"];
+    args.extend(["--duration", "6", "-q"]);
+    args.extend(more);
+    ok(&args, dir);
+}
+
+/// Simulated MCAP runs with an upright IMU at `rate` Hz, bias 0.005 rad/s.
 fn simulate(dir: &Path, out: &str, rate: &str) {
-    ok(
-        &[
-            "simulate",
-            "--out",
-            out,
-            "--imu",
-            "--imu-rate",
-            rate,
-            "--imu-bias",
-            "0.005",
-            "--runs-per-command",
-            "1",
-            "--duration",
-            "6",
-            "-q",
-        ],
-        dir,
-    );
+    simulate_with(dir, out, rate, &[]);
+}
+
+/// The fitted rotation row of `omnical imu ARGS --json`, and the document.
+fn imu_row(args: &[&str], dir: &Path) -> (Vec<f64>, Value) {
+    let mut args = args.to_vec();
+    args.push("--json");
+    let doc: Value = json(&args, dir);
+    (doc["fit"]["row"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect(), doc)
+}
+
+/// The first `error:` line of `omnical ARGS`, which must exit with status 2.
+fn refusal(args: &[&str], dir: &Path) -> String {
+    let out = omnical(args, dir);
+    assert_eq!(out.status.code(), Some(2), "{args:?}");
+    let err = String::from_utf8(out.stderr).unwrap();
+    err.lines().find(|l| l.starts_with("error:")).unwrap_or_default().to_string()
 }
 
 #[test]
@@ -67,7 +75,7 @@ fn bad_imu_inputs_are_refused_naming_the_file_and_topic() {
     let cases: [(&[&str], &str); 4] = [
         (
             &["imu", "sim/train", "--gt-scans", "/scan"],
-            "error: --gt-scans changes nothing for `omnical imu`: the IMU is the reference, and each recording one run",
+            "error: --gt-scans changes nothing for `omnical imu`: it reads no ground truth (the IMU is the reference)",
         ),
         (
             &["imu", "sim/train/00-r0.mcap", "--topic", "/imu2"],
@@ -83,12 +91,99 @@ fn bad_imu_inputs_are_refused_naming_the_file_and_topic() {
         ),
     ];
     for (args, want) in cases {
-        let out = omnical(args, d);
-        assert_eq!(out.status.code(), Some(2), "{args:?}");
-        let err = String::from_utf8(out.stderr).unwrap();
-        let error = err.lines().find(|l| l.starts_with("error:")).unwrap_or_default();
-        assert_eq!(error, want, "{args:?}: {err}");
+        assert_eq!(refusal(args, d), want, "{args:?}");
     }
+}
+
+/// Every data option `omnical imu` does not read is refused, naming the option and why (issue 28).
+#[test]
+fn every_data_option_that_changes_nothing_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    const GT: &str = "it reads no ground truth (the IMU is the reference)";
+    let cases: [(&[&str], &str, &str); 13] = [
+        (&["--gt", "x.tum"], "--gt", GT),
+        (&["--gt-topic", "/mocap"], "--gt-topic", GT),
+        (&["--gt-parent-frame", "map"], "--gt-parent-frame", GT),
+        (&["--gt-child-frame", "base_link"], "--gt-child-frame", GT),
+        (&["--gt-columns", "t=stamp"], "--gt-columns", GT),
+        (&["--gt-units", "length=mm"], "--gt-units", GT),
+        (&["--gt-scans", "/scan"], "--gt-scans", GT),
+        (&["--gt-kind", "relative"], "--gt-kind", GT),
+        (&["--gt-window", "2"], "--gt-window", GT),
+        (&["--gt-mount", "0,0,0"], "--gt-mount", GT),
+        (&["--gt-time-offset", "0.1"], "--gt-time-offset", GT),
+        (&["--split", "1"], "--split", "each recording is one run"),
+        (
+            &["--ticks-per-rev", "4096"],
+            "--ticks-per-rev",
+            "it reads ROS recordings, whose JointState gives the wheel speeds (ticks per revolution convert CSV tick \
+             columns)",
+        ),
+    ];
+    for (option, flag, why) in cases {
+        let mut args = vec!["imu", "missing.mcap"];
+        args.extend(option);
+        assert_eq!(refusal(&args, d), format!("error: {flag} changes nothing for `omnical imu`: {why}"));
+    }
+    // A project's ground truth for training (project-wide keys) leaves `omnical imu` alone; set for `imu`
+    // itself, it is refused.
+    simulate(d, "sim", "100");
+    std::fs::write(d.join("omnical.toml"), "gt_topic = \"/mocap\"\nsplit = 2\nticks_per_rev = 4096\n").unwrap();
+    let (row, _) = imu_row(&["imu", "sim/train/00-r0.mcap"], d);
+    assert_eq!(row.len(), 3);
+    std::fs::write(d.join("omnical.toml"), "[imu]\ngt_topic = \"/mocap\"\n").unwrap();
+    assert_eq!(
+        refusal(&["imu", "sim/train/00-r0.mcap"], d),
+        format!("error: --gt-topic changes nothing for `omnical imu`: {GT}")
+    );
+}
+
+/// An IMU upside down (roll 180°) or on its side (roll 90°) with its mount on /tf_static gives the upright
+/// IMU's row (the same seed: the same gyro samples, turned into the IMU's frame and back); without the
+/// transform it is refused, naming the files and topic and what to do, and `--mount` reads it right.
+#[test]
+fn a_mounted_imu_gives_the_upright_row_with_its_mount_and_is_refused_without() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    simulate(d, "up", "100");
+    simulate_with(d, "down", "100", &["--imu-mount", "180,0,0"]);
+    simulate_with(d, "side", "100", &["--imu-mount", "90,0,0"]);
+    simulate_with(d, "bare", "100", &["--imu-mount", "180,0,0", "--imu-tf", "none"]);
+    simulate_with(d, "flat", "100", &["--imu-mount", "0,-90,30", "--imu-tf", "none"]);
+    let (up, doc) = imu_row(&["imu", "up/train"], d);
+    assert_eq!(doc["mounts"][0]["source"], "transforms");
+    for (dir, roll) in [("down", 180.0), ("side", 90.0)] {
+        let (row, doc) = imu_row(&["imu", &format!("{dir}/train")], d);
+        let m = &doc["mounts"][0];
+        assert_eq!(
+            (m["source"].as_str(), m["base_frame"].as_str(), m["recordings"].as_u64()),
+            (Some("transforms"), Some("base_link"), Some(36))
+        );
+        assert!((m["roll_deg"].as_f64().unwrap() - roll).abs() < 1e-9, "{m}");
+        for (a, b) in row.iter().zip(&up) {
+            assert!((a / b - 1.0).abs() < 1e-9, "{dir}: {a} vs upright {b}");
+        }
+    }
+    let text = ok(&["imu", "down/train"], d);
+    assert!(text.contains("IMU mount from the static transforms (base_link → imu_link): roll 180.0°, pitch 0.0°, yaw 0.0° (z down), 36 recordings"), "{text}");
+    assert_eq!(
+        refusal(&["imu", "bare/train"], d),
+        "error: bare/train/00-r0.mcap, bare/train/01-r0.mcap, bare/train/02-r0.mcap, and 33 more recordings: topic \
+         \"/imu\" (frame \"imu_link\"): the rotation row fitted with the IMU upright points against the design's \
+         (their dot product is -1.784e-1 < 0): the IMU's z axis seems to point down. Publish its mount on /tf_static \
+         (base_link → imu_link, as robot_state_publisher does from the URDF) or give it: --mount 180,0,0 \
+         (ROLL,PITCH,YAW_DEG in degrees; Python: mount=(180, 0, 0))"
+    );
+    let (given, doc) = imu_row(&["imu", "bare/train", "--mount", "180,0,0"], d);
+    assert_eq!(doc["mounts"][0]["source"], "given");
+    assert!(given.iter().zip(&up).all(|(a, b)| (a / b - 1.0).abs() < 1e-9), "{given:?} vs {up:?}");
+    // Pitch −90°: the IMU's x axis points up; unstated, it is refused as on its side, and the hint reads it.
+    let err = refusal(&["imu", "flat/train/00-r0.mcap"], d);
+    assert!(err.starts_with("error: flat/train/00-r0.mcap: topic \"/imu\" (frame \"imu_link\"): the IMU's x axis turns with the base more than its z axis"), "{err}");
+    assert!(err.contains("give it: --mount 0,-90,0 if its x axis points up (0,90,0 if down"), "{err}");
+    let (flat, _) = imu_row(&["imu", "flat/train", "--mount", "0,-90,30"], d);
+    assert!(flat.iter().zip(&up).all(|(a, b)| (a / b - 1.0).abs() < 1e-9), "{flat:?} vs {up:?}");
 }
 
 #[test]

@@ -209,3 +209,49 @@ fn rooms_the_robot_leaves_and_bad_room_files_are_refused() {
     assert_eq!(err.trim(), "error: --lidar: nowhere: no such room file, and not a built-in room (room, corridor)");
     assert!(!d.join("sim").exists());
 }
+
+/// `file` rewritten without its messages on `topic` (a robot that has no motion capture).
+fn without_topic(file: &std::path::Path, topic: &str) {
+    let bytes = std::fs::read(file).unwrap();
+    let mut out = Vec::new();
+    {
+        let mut w = mcap::WriteOptions::new().profile("ros2").create(std::io::Cursor::new(&mut out)).unwrap();
+        for m in mcap::MessageStream::new(&bytes).unwrap() {
+            let m = m.unwrap();
+            if m.channel.topic != topic {
+                w.write(&m).unwrap();
+            }
+        }
+        w.finish().unwrap();
+    }
+    std::fs::write(file, out).unwrap();
+}
+
+#[test]
+fn a_recording_without_motion_capture_is_told_the_ways_without_it_naming_its_lidar_and_imu() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let sim = ["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "2", "--lidar", "room", "--imu"];
+    ok(&[&sim[..], &["-q"]].concat(), d);
+    without_topic(&d.join("sim/train/00-r0.mcap"), "/ground_truth/pose");
+    let err = refused(&["train", "sim/train/00-r0.mcap"], d);
+    assert!(err.contains("\nerror: sim/train/00-r0.mcap: no ground truth: no geometry_msgs"), "{err}");
+    assert!(
+        err.trim_end().ends_with(
+            ". Without motion capture: its lidar's scans as the reference: --gt-scans /scan; a sensor's or a \
+             localization's own path (--gt-kind relative with --gt-topic or --gt); tape-measured end poses \
+             (--gt-kind end-pose --gt TABLE; omnical plan --umbmark); its IMU for the rotation row alone: omnical \
+             imu RECORDING --topic /imu"
+        ),
+        "{err}"
+    );
+    // The way it names works on the same recording. Its /tf_static places the lidar, and the free matrix
+    // cannot tell a mount from the base: the mount is kept as given (none fitted, no warning).
+    let (summary, stderr) =
+        support::ok_with_stderr(&["train", "sim/train/00-r0.mcap", "--gt-scans", "/scan", "--json"], d);
+    let summary: serde_json::Value = serde_json::from_str(&summary).unwrap();
+    let names: Vec<&str> = summary["params"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["m11", "m12", "m13", "m21", "m22", "m23", "m31", "m32", "m33"], "{stderr}");
+    assert!(stderr.contains("the sensor's mount is the recordings' static transform"), "{stderr}");
+    assert!(!stderr.contains("not determined"), "{stderr}");
+}

@@ -395,7 +395,9 @@ fn ground_truth_from_tf_pose_with_covariance_and_odometry() {
          nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage source outside the robot's frames (odom, base_link, \
          base_footprint) matching --gt-parent-frame \"world\" --gt-child-frame \"(any)\"; topics: /joint_states \
          (sensor_msgs/msg/JointState, 101 messages), /mocap/pose_cov (geometry_msgs/msg/PoseWithCovarianceStamped, \
-         21 messages, frame \"mocap\")"
+         21 messages, frame \"mocap\"). Without motion capture: a lidar's scans (--gt-scans TOPIC); a sensor's or a \
+         localization's own path (--gt-kind relative with --gt-topic or --gt); tape-measured end poses (--gt-kind end-pose --gt TABLE; \
+         omnical plan --umbmark)"
     );
 }
 
@@ -416,7 +418,9 @@ fn errors_name_file_topic_message_and_field() {
              nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage source outside the robot's frames (odom, base_link, \
              base_footprint); topics: /chatter (std_msgs/msg/String, 1 message), /joint_states \
              (sensor_msgs/msg/JointState, 101 messages), /odom (nav_msgs/msg/Odometry, 1 message, frame \"odom\": \
-             the robot's own odometry)",
+             the robot's own odometry). Without motion capture: a lidar's scans (--gt-scans TOPIC); a sensor's or a \
+             localization's own path (--gt-kind relative with --gt-topic or --gt); tape-measured end poses (--gt-kind end-pose --gt TABLE; \
+             omnical plan --umbmark)",
         ),
         (
             "no_truth",

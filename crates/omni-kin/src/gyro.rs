@@ -12,8 +12,53 @@
 use crate::error::KinError;
 use crate::pose::StampedPose;
 use crate::run::Run;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, UnitQuaternion, Vector3};
 use serde::Serialize;
+
+/// How an IMU sits on the base: the rotation of the IMU's frame in the base frame (`base_from_imu`, as a
+/// URDF joint or `/tf_static` states it). The base's yaw rate is the base-z component of the IMU's angular
+/// velocity turned into the base frame, so an IMU upside down (roll π) or on its side reads the same yaw rate
+/// as an upright one once its mount is known.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImuMount {
+    /// The IMU frame's rotation in the base frame.
+    pub base_from_imu: UnitQuaternion<f64>,
+}
+
+impl ImuMount {
+    /// Upright, the IMU's axes the base's.
+    pub const UPRIGHT: Self =
+        Self { base_from_imu: UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(1.0, 0.0, 0.0, 0.0)) };
+
+    /// The mount of URDF's `rpy` (radians): roll about x, then pitch about y, then yaw about z, all about the
+    /// base's fixed axes (`R = Rz(yaw)·Ry(pitch)·Rx(roll)`).
+    pub fn from_rpy_rad(roll_rad: f64, pitch_rad: f64, yaw_rad: f64) -> Self {
+        Self { base_from_imu: UnitQuaternion::from_euler_angles(roll_rad, pitch_rad, yaw_rad) }
+    }
+
+    /// Roll, pitch and yaw (URDF's `rpy`, [`Self::from_rpy_rad`]). rad.
+    pub fn rpy_rad(&self) -> [f64; 3] {
+        let (r, p, y) = self.base_from_imu.euler_angles();
+        [r, p, y]
+    }
+
+    /// The base's yaw rate (rad/s) from the IMU's angular velocity `imu_rad_s` (x, y, z in the IMU's frame):
+    /// the base-z component of the vector turned into the base frame.
+    pub fn yaw_rate(&self, imu_rad_s: [f64; 3]) -> f64 {
+        (self.base_from_imu * Vector3::from(imu_rad_s)).z
+    }
+
+    /// The angular velocity in the IMU's frame (x, y, z, rad/s) of a base turning at `yaw_rad_s` about its z.
+    pub fn imu_rates(&self, yaw_rad_s: f64) -> [f64; 3] {
+        let v = self.base_from_imu.inverse() * Vector3::new(0.0, 0.0, yaw_rad_s);
+        [v.x, v.y, v.z]
+    }
+
+    /// How far the IMU's z axis points along the base's: 1 upright, −1 upside down, 0 on its side.
+    pub fn z_up(&self) -> f64 {
+        (self.base_from_imu * Vector3::z()).z
+    }
+}
 
 /// One gyro sample: the yaw rate about the base's z axis. rad/s, at `t_s` on the run's clock (s).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -82,61 +127,140 @@ fn wheel_turns(run: &Run, a: f64, b: f64) -> Vec<f64> {
     out
 }
 
+/// The windows of `runs` and their gyro samples (`gyro[i]` for `runs[i]`, in time order, on the run's
+/// clock): per window, each wheel's angle turned, the window's length (s), and the gyro's turn (rad).
+struct Windows {
+    wheel_turns: Vec<Vec<f64>>,
+    duration_s: Vec<f64>,
+    gyro_turn_rad: Vec<f64>,
+}
+
+impl Windows {
+    /// Cuts the runs' overlaps with their gyro streams into windows of `window_s`. Errors when the runs
+    /// and streams do not pair up, the window is not positive, or the windows number fewer than `at_least`
+    /// or turn less than [`MIN_TURN_RAD`] in all.
+    fn of(runs: &[Run], gyro: &[Vec<GyroSample>], window_s: f64, at_least: usize) -> Result<Self, KinError> {
+        if runs.len() != gyro.len() || runs.is_empty() {
+            return Err(invalid(format!("{} runs but {} gyro streams", runs.len(), gyro.len())));
+        }
+        if !(window_s.is_finite() && window_s > 0.0) {
+            return Err(invalid(format!("window {window_s} s: it must be longer than 0")));
+        }
+        let mut w = Windows { wheel_turns: Vec::new(), duration_s: Vec::new(), gyro_turn_rad: Vec::new() };
+        for (run, g) in runs.iter().zip(gyro) {
+            if g.len() < 2 {
+                continue;
+            }
+            let t = run.wheel_t_s();
+            let (start, end) = (t[0].max(g[0].t_s), t[t.len() - 1].min(g[g.len() - 1].t_s));
+            let count = ((end - start) / window_s).floor();
+            for k in 0..count.max(0.0) as usize {
+                let (a, b) = (start + k as f64 * window_s, start + (k + 1) as f64 * window_s);
+                w.wheel_turns.push(wheel_turns(run, a, b));
+                w.duration_s.push(b - a);
+                w.gyro_turn_rad.push(gyro_turn(g, a, b));
+            }
+        }
+        let turned_rad = w.turned_rad();
+        if w.duration_s.len() < at_least || turned_rad < MIN_TURN_RAD {
+            return Err(invalid(format!(
+                "{} windows of {window_s} s where the wheels and the gyro overlap, turning {turned_rad:.2} rad in \
+                 all: at least {at_least} windows and {MIN_TURN_RAD} rad are needed (drive turns while both are \
+                 recorded)",
+                w.duration_s.len(),
+            )));
+        }
+        Ok(w)
+    }
+
+    /// Sum of |turn| over the windows, as the gyro saw it. rad.
+    fn turned_rad(&self) -> f64 {
+        self.gyro_turn_rad.iter().map(|y| y.abs()).sum()
+    }
+}
+
+/// The error of the gyro reference.
+fn invalid(why: String) -> KinError {
+    KinError::Invalid { what: "the gyro reference".into(), why }
+}
+
+/// Least squares `y ≈ x β` with iid errors: β, its covariance, and the residual RMS. Errors (with `why`)
+/// when the columns of `x` do not determine β.
+fn least_squares(x: &DMatrix<f64>, y: &DVector<f64>, why: &str) -> Result<(DVector<f64>, DMatrix<f64>, f64), KinError> {
+    let beta = x.clone().svd(true, true).solve(y, 1e-12).map_err(|e| invalid(e.to_string()))?;
+    let resid = y - x * &beta;
+    let dof = (x.nrows() - x.ncols()).max(1) as f64;
+    let sigma2 = resid.norm_squared() / dof;
+    let cov = (x.transpose() * x).try_inverse().ok_or_else(|| invalid(why.into()))? * sigma2;
+    Ok((beta, cov, (resid.norm_squared() / x.nrows() as f64).sqrt()))
+}
+
 /// Fits the rotation row and the gyro's bias from `runs` and their gyro samples (`gyro[i]` for `runs[i]`,
 /// in time order, on the run's clock) over windows of `window_s`. Errors when the runs and gyro streams do
 /// not pair up, overlap too little, or turn less than [`MIN_TURN_RAD`] in all.
 pub fn fit_rotation_row(runs: &[Run], gyro: &[Vec<GyroSample>], window_s: f64) -> Result<RotationFit, KinError> {
-    let invalid = |why: String| KinError::Invalid { what: "the gyro reference".into(), why };
-    if runs.len() != gyro.len() || runs.is_empty() {
-        return Err(invalid(format!("{} runs but {} gyro streams", runs.len(), gyro.len())));
-    }
-    if !(window_s.is_finite() && window_s > 0.0) {
-        return Err(invalid(format!("window {window_s} s: it must be longer than 0")));
-    }
-    let n = runs[0].n_wheels();
-    let (mut rows, mut ys) = (Vec::new(), Vec::new());
-    for (run, g) in runs.iter().zip(gyro) {
-        if g.len() < 2 {
-            continue;
-        }
-        let t = run.wheel_t_s();
-        let (start, end) = (t[0].max(g[0].t_s), t[t.len() - 1].min(g[g.len() - 1].t_s));
-        let count = ((end - start) / window_s).floor();
-        for k in 0..count.max(0.0) as usize {
-            let (a, b) = (start + k as f64 * window_s, start + (k + 1) as f64 * window_s);
-            let mut row = wheel_turns(run, a, b);
-            row.push(b - a);
-            rows.push(row);
-            ys.push(gyro_turn(g, a, b));
-        }
-    }
-    let turned_rad: f64 = ys.iter().map(|y| y.abs()).sum();
-    if rows.len() < n + 2 || turned_rad < MIN_TURN_RAD {
-        return Err(invalid(format!(
-            "{} windows of {window_s} s where the wheels and the gyro overlap, turning {turned_rad:.2} rad in all: \
-             at least {} windows and {MIN_TURN_RAD} rad are needed (drive turns while both are recorded)",
-            rows.len(),
-            n + 2
-        )));
-    }
-    let x = DMatrix::from_fn(rows.len(), n + 1, |r, c| rows[r][c]);
-    let y = DVector::from_vec(ys);
-    let svd = x.clone().svd(true, true);
-    let beta = svd.solve(&y, 1e-12).map_err(|e| invalid(e.to_string()))?;
-    let resid = &y - &x * &beta;
-    let dof = (rows.len() - (n + 1)).max(1) as f64;
-    let sigma2 = resid.norm_squared() / dof;
-    let cov = (x.transpose() * &x).try_inverse().ok_or_else(|| {
-        invalid("the wheels' turns do not determine the row (one wheel pattern only, or none turning)".into())
-    })? * sigma2;
+    let n = runs.first().map_or(0, Run::n_wheels);
+    let w = Windows::of(runs, gyro, window_s, n + 2)?;
+    let m = w.duration_s.len();
+    let x = DMatrix::from_fn(m, n + 1, |r, c| if c < n { w.wheel_turns[r][c] } else { w.duration_s[r] });
+    let y = DVector::from_vec(w.gyro_turn_rad.clone());
+    let why = "the wheels' turns do not determine the row (one wheel pattern only, or none turning)";
+    let (beta, cov, residual_rms_rad) = least_squares(&x, &y, why)?;
     Ok(RotationFit {
         row: beta.iter().take(n).copied().collect(),
         row_std: (0..n).map(|i| cov[(i, i)].sqrt()).collect(),
         bias_rad_s: beta[n],
         bias_std_rad_s: cov[(n, n)].sqrt(),
-        windows: rows.len(),
-        residual_rms_rad: (resid.norm_squared() / rows.len() as f64).sqrt(),
-        turned_rad,
+        windows: m,
+        residual_rms_rad,
+        turned_rad: w.turned_rad(),
+    })
+}
+
+/// The gyro calibrated against a known rotation row (a model fitted on a reference that senses the
+/// turning: motion capture, a lidar, a localization): `gyro = scale · ω + bias`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct GyroScaleFit {
+    /// The gyro's scale: its rate per rad/s of the row's. 1.
+    pub scale: f64,
+    /// Standard error of `scale` (iid windows).
+    pub scale_std: f64,
+    /// The gyro's bias. rad/s.
+    pub bias_rad_s: f64,
+    /// Standard error of the bias. rad/s.
+    pub bias_std_rad_s: f64,
+    /// Windows fitted.
+    pub windows: usize,
+    /// RMS of the windows' turn residuals. rad.
+    pub residual_rms_rad: f64,
+}
+
+/// Fits the gyro's scale and bias against the rotation row `row` (ω per wheel speed, one entry per wheel)
+/// over the windows of [`fit_rotation_row`]: each window's gyro turn against `scale · row · wheel turns +
+/// bias · Δt`. Errors as [`fit_rotation_row`], and when `row` has not one entry per wheel.
+pub fn fit_gyro_scale(
+    runs: &[Run],
+    gyro: &[Vec<GyroSample>],
+    window_s: f64,
+    row: &[f64],
+) -> Result<GyroScaleFit, KinError> {
+    let n = runs.first().map_or(0, Run::n_wheels);
+    if row.len() != n {
+        return Err(invalid(format!("a rotation row of {} entries for {n} wheels", row.len())));
+    }
+    let w = Windows::of(runs, gyro, window_s, 4)?;
+    let m = w.duration_s.len();
+    let turn = |r: usize| w.wheel_turns[r].iter().zip(row).map(|(a, b)| a * b).sum::<f64>();
+    let x = DMatrix::from_fn(m, 2, |r, c| if c == 0 { turn(r) } else { w.duration_s[r] });
+    let y = DVector::from_vec(w.gyro_turn_rad.clone());
+    let (beta, cov, residual_rms_rad) = least_squares(&x, &y, "the row gives the windows no turn")?;
+    Ok(GyroScaleFit {
+        scale: beta[0],
+        scale_std: cov[(0, 0)].sqrt(),
+        bias_rad_s: beta[1],
+        bias_std_rad_s: cov[(1, 1)].sqrt(),
+        windows: m,
+        residual_rms_rad,
     })
 }
 
@@ -205,6 +329,43 @@ mod tests {
             assert!((fit.row[0] - 0.1).abs() < tol && (fit.row[1] + 0.12).abs() < tol, "{rate} Hz: {fit:?}");
             assert!((fit.bias_rad_s - 0.01).abs() < tol, "{rate} Hz: {fit:?}");
         }
+    }
+
+    #[test]
+    fn a_mounted_imu_reads_the_base_yaw_rate() {
+        use std::f64::consts::{FRAC_PI_2, PI};
+        let w = 0.7;
+        for (rpy, z_up) in
+            [([0.0, 0.0, 0.3], 1.0), ([PI, 0.0, 0.0], -1.0), ([FRAC_PI_2, 0.0, 0.0], 0.0), ([0.0, -PI / 3.0, 1.0], 0.5)]
+        {
+            let m = ImuMount::from_rpy_rad(rpy[0], rpy[1], rpy[2]);
+            let imu = m.imu_rates(w);
+            assert!((m.yaw_rate(imu) - w).abs() < 1e-12, "{rpy:?}: {imu:?}");
+            assert!((m.z_up() - z_up).abs() < 1e-12, "{rpy:?}");
+            let back = m.rpy_rad();
+            let again = ImuMount::from_rpy_rad(back[0], back[1], back[2]);
+            assert!(again.base_from_imu.angle_to(&m.base_from_imu) < 1e-12, "{rpy:?} → {back:?}");
+        }
+        // Upside down (roll π): the IMU's own z reads −ω. On its side (roll 90°): its y axis points up and reads ω.
+        assert!((ImuMount::from_rpy_rad(PI, 0.0, 0.0).imu_rates(w)[2] + w).abs() < 1e-12);
+        let side = ImuMount::from_rpy_rad(FRAC_PI_2, 0.0, 0.0).imu_rates(w);
+        assert!(side[0].abs() < 1e-12 && (side[1] - w).abs() < 1e-12 && side[2].abs() < 1e-12, "{side:?}");
+        assert_eq!(ImuMount::UPRIGHT.yaw_rate([0.1, 0.2, w]), w);
+    }
+
+    #[test]
+    fn a_known_row_gives_the_gyros_scale_and_bias() {
+        // The gyro reads 1.5 % high with its bias: gyro = 1.015 · (0.1·w₁ − 0.12·w₂) + 1.015 · 0.01.
+        let (run, gyro) = run_and_gyro(100.0);
+        let scaled: Vec<GyroSample> = gyro.iter().map(|g| GyroSample { z_rad_s: 1.015 * g.z_rad_s, ..*g }).collect();
+        let fit =
+            fit_gyro_scale(std::slice::from_ref(&run), std::slice::from_ref(&scaled), 1.0, &[0.1, -0.12]).unwrap();
+        assert!((fit.scale - 1.015).abs() < 2e-3 && (fit.bias_rad_s - 0.01015).abs() < 2e-3, "{fit:?}");
+        // The free row cannot tell the scale from the row: it comes back 1.5 % large.
+        let free = fit_rotation_row(std::slice::from_ref(&run), &[scaled], 1.0).unwrap();
+        assert!((free.row[0] - 0.1015).abs() < 2e-3 && (free.row[1] + 0.1218).abs() < 2e-3, "{free:?}");
+        let err = fit_gyro_scale(&[run], &[gyro], 1.0, &[0.1]).unwrap_err().to_string();
+        assert_eq!(err, "the gyro reference: a rotation row of 1 entries for 2 wheels");
     }
 
     #[test]

@@ -2,6 +2,7 @@
 //! ([`omni_cli::api::imu`]).
 
 use crate::errors::{PyResultExt, value_error};
+use crate::simulate::MountArg;
 use omni_cli::api::imu::{self as api, ImuRequest};
 use omni_cli::api::load::DataOptions;
 use pyo3::prelude::*;
@@ -11,8 +12,12 @@ use std::path::PathBuf;
 /// the CLI's ``omnical imu --json`` document as a dict.
 ///
 /// ``recordings``: ``.mcap``, ``.db3`` or ``.bag`` files, rosbag2 folders, or folders of them, each with the
-/// wheels' JointState and the IMU's ``sensor_msgs/msg/Imu`` on ``topic`` (its ``angular_velocity.z`` is the
-/// yaw rate, rad/s); each recording is one run. ``window_s`` [s]: each window's turn as the gyro integrates
+/// wheels' JointState and the IMU's ``sensor_msgs/msg/Imu`` on ``topic``; each recording is one run. The
+/// yaw rate [rad/s] is the base-z component of the angular velocity turned by the IMU's mount: ``mount``
+/// ``(roll_deg, pitch_deg, yaw_deg)`` or ``"ROLL,PITCH,YAW_DEG"`` (URDF's rpy: ``(180, 0, 0)`` upside down),
+/// else the recording's static transforms from ``base_link`` (else ``base_footprint``) to the messages'
+/// frame, else upright (a fit that then points against the design's row raises ``DatasetError``: the IMU
+/// seems upside down). ``window_s`` [s]: each window's turn as the gyro integrates
 /// it is fitted against the wheels' angles. ``out``: write the design's matrix with the fitted rotation row
 /// as a model file (the translation rows stay the design's; ``load_model`` reads it). ``robot``,
 /// ``joints``, ``joints_topic``, ``skip_invalid`` and ``max_file_mb`` [MiB] are :func:`load`'s; its
@@ -20,10 +25,12 @@ use std::path::PathBuf;
 /// translation rows need motion capture, a lidar (``load(gt_scans=)``) or measured end poses.
 ///
 /// Returns ``{"fit": {...}, "design_row": [...], "wheel_names": [...], "topic", "window_s", "out",
-/// "schema_version": 1, "command": "imu"}``: ``fit`` has ``row`` and ``row_std`` (ω per wheel speed,
+/// "mounts", "against_design", "schema_version": 1, "command": "imu"}``: ``fit`` has ``row`` and ``row_std`` (ω per wheel speed,
 /// rad/s per rad/s, one per wheel, in ``wheel_names``' order), ``bias_rad_s`` and ``bias_std_rad_s``
 /// [rad/s], ``windows``, ``turned_rad`` [rad] and ``residual_rms_rad`` [rad]; ``design_row`` is the
-/// design's rotation row [rad/s per rad/s]; ``out`` the model file written or None.
+/// design's rotation row [rad/s per rad/s]; ``out`` the model file written or None; ``mounts`` the IMU
+/// mounts used, each ``{"source": "given" | "transforms" | "assumed_upright", "base_frame", "frame_id",
+/// "roll_deg", "pitch_deg", "yaw_deg", "recordings"}``.
 ///
 /// Raises ``DatasetError`` naming the file and the topic when a recording has no such Imu topic (a CSV run
 /// is no recording: ``DatasetError``; a path that does not exist: ``FileNotFoundError``), ``ValueError``
@@ -36,7 +43,7 @@ use std::path::PathBuf;
 /// >>> doc["command"], doc["wheel_names"], doc["fit"]["windows"] > 50
 /// ('imu', ['wheel_a', 'wheel_b', 'wheel_c'], True)
 #[pyfunction]
-#[pyo3(signature = (*recordings, topic = "/imu", window_s = 1.0, out = None, robot = None, joints = None, joints_topic = None, skip_invalid = false, max_file_mb = 1024))]
+#[pyo3(signature = (*recordings, topic = "/imu", window_s = 1.0, out = None, mount = None, robot = None, joints = None, joints_topic = None, skip_invalid = false, max_file_mb = 1024))]
 #[allow(clippy::too_many_arguments)]
 pub fn imu(
     py: Python<'_>,
@@ -44,6 +51,7 @@ pub fn imu(
     topic: &str,
     window_s: f64,
     out: Option<PathBuf>,
+    mount: Option<MountArg>,
     robot: Option<PathBuf>,
     joints: Option<Vec<String>>,
     joints_topic: Option<String>,
@@ -61,7 +69,8 @@ pub fn imu(
         max_file_mb,
         ..DataOptions::default()
     };
-    let request = ImuRequest { recordings, topic: topic.to_string(), window_s, out, data };
+    let mount = mount.map(|m| m.rpy("mount")).transpose()?.flatten();
+    let request = ImuRequest { recordings, topic: topic.to_string(), window_s, out, mount, data };
     let text = py.detach(|| api::imu(&request).map(|fit| api::document(&fit).to_string())).py()?;
     Ok(py.import("json")?.call_method1("loads", (text,))?.unbind())
 }

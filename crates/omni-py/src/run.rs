@@ -220,7 +220,8 @@ impl PyDataset {
         }
         Ok(PyRun { inner: self.runs[i as usize].clone() })
     }
-    /// Pickling: the runs (as `Run` pickles them), notes, skipped inputs and the design's model file text.
+    /// Pickling: the runs (as `Run` pickles them), notes, skipped inputs, the design's model file text, the
+    /// declared designs and what the ground truth measures (with the sensor's mount when given).
     fn __reduce__<'py>(&self, py: Python<'py>) -> crate::pickle::Reduced<'py, DatasetState<'py>> {
         let rebuild = py.import("omnical._omnical")?.getattr("_dataset_from_state")?;
         let runs = self.runs.iter().map(|r| PyBytes::new(py, &crate::pickle::run_to_bytes(r))).collect();
@@ -230,7 +231,9 @@ impl PyDataset {
         };
         let declared =
             serde_json::to_string(&declared_state(&self.origin.declared)).map_err(|e| value_error(e.to_string()))?;
-        Ok((rebuild, (runs, self.notes.clone(), self.skipped.clone(), design, self.robot.clone(), declared)))
+        let reading = reading_state(&self.origin);
+        let state = (runs, self.notes.clone(), self.skipped.clone(), design, self.robot.clone(), declared, reading);
+        Ok((rebuild, state))
     }
     fn __repr__(&self) -> String {
         format!("Dataset({} runs, {} skipped)", self.runs.len(), self.skipped.len())
@@ -239,7 +242,8 @@ impl PyDataset {
 
 /// A pickled `Dataset`: its runs' bytes, notes, skipped inputs, design model file text ("" when none),
 /// robot description, the geometry each input declares (JSON: [`DeclaredState`] items).
-type DatasetState<'py> = (Vec<Bound<'py, PyBytes>>, Vec<String>, Vec<(String, String)>, String, Option<String>, String);
+type DatasetState<'py> =
+    (Vec<Bound<'py, PyBytes>>, Vec<String>, Vec<(String, String)>, String, Option<String>, String, String);
 
 /// One input's declared design, pickled: source, robot type, geometry, run names.
 type DeclaredState = (String, String, omni_kin::RobotGeometry, Vec<String>);
@@ -259,7 +263,7 @@ pub fn _run_from_bytes(data: &[u8]) -> PyResult<PyRun> {
 
 /// Unpickling a `Dataset`.
 #[pyfunction]
-#[pyo3(signature = (runs, notes, skipped, design, robot = None, declared = ""))]
+#[pyo3(signature = (runs, notes, skipped, design, robot = None, declared = "", reading = ""))]
 pub fn _dataset_from_state(
     runs: Vec<Vec<u8>>,
     notes: Vec<String>,
@@ -267,6 +271,7 @@ pub fn _dataset_from_state(
     design: &str,
     robot: Option<String>,
     declared: &str,
+    reading: &str,
 ) -> PyResult<PyDataset> {
     let runs = runs.iter().map(|b| crate::pickle::run_from_bytes(b)).collect::<PyResult<Vec<Run>>>()?;
     let design = if design.is_empty() {
@@ -290,8 +295,41 @@ pub fn _dataset_from_state(
             runs,
         })
         .collect();
-    let origin = omni_cli::dataset::Dataset { declared, ..Default::default() };
+    let origin = omni_cli::dataset::Dataset { declared, ..reading_from_state(reading)? };
     Ok(PyDataset { runs, notes, skipped, design, robot, origin })
+}
+
+/// What a pickled `Dataset` keeps of how its ground truth was read: what it measures (a relative
+/// reference's runs are windows, and a fit adds the sensor's mount) and the mount when it was given
+/// (x m, y m, yaw rad). JSON.
+fn reading_state(ds: &omni_cli::dataset::Dataset) -> String {
+    serde_json::json!({
+        "reference": ds.reference.id(),
+        "mount": ds.mount.map(|m| [m.x_m, m.y_m, m.theta_rad]),
+        "sensor_mount_from_recordings": ds.sensor_mount_from_recordings,
+    })
+    .to_string()
+}
+
+/// [`reading_state`]'s text back as a dataset's origin (empty: a pickle of an earlier version, read as
+/// absolute ground truth).
+fn reading_from_state(text: &str) -> PyResult<omni_cli::dataset::Dataset> {
+    if text.is_empty() {
+        return Ok(Default::default());
+    }
+    let bad = |what: &str| value_error(format!("pickled dataset: reference: {what}"));
+    let v: serde_json::Value = serde_json::from_str(text).map_err(|e| bad(&e.to_string()))?;
+    let reference = v["reference"].as_str().ok_or_else(|| bad("no kind"))?.parse().map_err(|e| bad(&format!("{e}")))?;
+    let mount = match v["mount"].as_array() {
+        Some(m) => {
+            let x: Vec<f64> = m.iter().filter_map(serde_json::Value::as_f64).collect();
+            let [x, y, theta] = x[..] else { return Err(bad("a mount is x, y and yaw")) };
+            Some(omni_kin::Pose2::new(x, y, theta))
+        }
+        None => None,
+    };
+    let sensor_mount_from_recordings = v["sensor_mount_from_recordings"].as_bool().unwrap_or(false);
+    Ok(omni_cli::dataset::Dataset { reference, mount, sensor_mount_from_recordings, ..Default::default() })
 }
 
 /// Load runs from files and folders: omnical CSV (``.csv``), ROS 2 bags (``.mcap``, rosbag2 folders),
@@ -388,6 +426,7 @@ pub fn load(
         ground_truth_clocks: ds.ground_truth_clocks,
         reference: ds.reference,
         mount: ds.mount,
+        sensor_mount_from_recordings: ds.sensor_mount_from_recordings,
         time_origins_s: ds.time_origins_s,
         recordings: ds.recordings,
         ..Default::default()
@@ -504,6 +543,7 @@ pub fn origin_of(obj: &Bound<'_, PyAny>) -> omni_cli::dataset::Dataset {
                 robot_file: o.robot_file.clone(),
                 reference: o.reference,
                 mount: o.mount,
+                sensor_mount_from_recordings: o.sensor_mount_from_recordings,
                 time_origins_s: o.time_origins_s.clone(),
                 recordings: o.recordings.clone(),
                 ..Default::default()

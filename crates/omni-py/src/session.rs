@@ -5,7 +5,7 @@
 
 use crate::errors::{OmnicalError, chain_text, value_error};
 use omni_cli::api::diagnose::diagnose_quietly;
-use omni_cli::api::session::{ArgvError, diagnose_request, fleet_request, train_request};
+use omni_cli::api::session::{ArgvError, diagnose_request, diagnose_request_reading_as, fleet_request, train_request};
 use omni_cli::api::train::{Trained, train_quietly};
 use omni_kin::FittedModel;
 use pyo3::prelude::*;
@@ -35,7 +35,10 @@ pub fn train_files<'py>(py: Python<'py>, args: Vec<String>) -> PyResult<Bound<'p
 
 /// Diagnoses as ``omnical diagnose ARGS...`` would (``args`` without the program and subcommand names, e.g.
 /// ``["--model", "model.toml", "rec/"]``) and returns what ``--json`` prints (``verdict``, ``verdict_text``,
-/// ``ranking``, ``ladder``, ...). Errors as :func:`train_files`. The GIL is released while it runs.
+/// ``ranking``, ``ladder``, ...). With ``train_args`` (``omnical train``'s arguments, e.g. ``["rec/",
+/// "--gt-scans", "/scan"]``) the runs are read as that training read them: its data options replace those
+/// of ``args`` (the fleet diagnoses each session on the reference it was trained on). Errors as
+/// :func:`train_files`. The GIL is released while it runs.
 ///
 /// >>> import tempfile
 /// >>> out = tempfile.mkdtemp()
@@ -46,8 +49,17 @@ pub fn train_files<'py>(py: Python<'py>, args: Vec<String>) -> PyResult<Bound<'p
 /// >>> d["verdict"]
 /// 'time_offset'
 #[pyfunction]
-pub fn diagnose_files<'py>(py: Python<'py>, args: Vec<String>) -> PyResult<Bound<'py, PyAny>> {
-    let request = diagnose_request(&args).map_err(|e| argv_error("diagnose_files", e))?;
+#[pyo3(signature = (args, train_args = None))]
+pub fn diagnose_files<'py>(
+    py: Python<'py>,
+    args: Vec<String>,
+    train_args: Option<Vec<String>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let request = match &train_args {
+        Some(t) => diagnose_request_reading_as(&args, t),
+        None => diagnose_request(&args),
+    }
+    .map_err(|e| argv_error("diagnose_files", e))?;
     let d = py.detach(|| diagnose_quietly(&request)).map_err(|e| OmnicalError::new_err(chain_text(&e)))?;
     let text = serde_json::to_string(&d).map_err(|e| value_error(e.to_string()))?;
     py.import("json")?.call_method1("loads", (text,))

@@ -7,10 +7,12 @@ use crate::errors::{PyResultExt, chain_text, file_error, value_error};
 use crate::model::model_arg;
 use crate::robot::{robot_arg, robot_design, robot_error};
 use crate::run::PyRun;
+use omni_cli::api::imu::mount_from_text as mount_from_text_rpy;
 use omni_cli::api::simulate::{Format, Imu, Lidar, mount_from_text, simulate_split, write_robot, write_split};
 use omni_cli::lidar::ScanSettings;
 use omni_cli::out_path::{OutDir, OutPathError};
 use omni_cli::robot_file::{self, RobotFile};
+use omni_kin::gyro::ImuMount;
 use omni_kin::simulate::{SimConfig, benchmark_commands, simulate as rs_simulate};
 use omni_kin::{FittedModel, IkMatrix, KinematicsKind, Pose2, Run};
 use pyo3::exceptions::PyFileExistsError;
@@ -45,8 +47,11 @@ use std::sync::Arc;
 ///   the lidar's x axis; 360 all round, 270 a Hokuyo's]; ``lidar_max_range`` [m];
 ///   ``lidar_noise``: Gaussian range noise [m]; ``lidar_dropout``: share of beams with no return;
 ///   ``lidar_sweep``: measure each scan's beams over its period, as a spinning lidar.
-/// - ``imu=True``: an upright gyro's yaw rate on ``/imu`` (Imu, frame ``imu_link``): the base's true turn
-///   rate plus ``imu_bias`` [rad/s] and Gaussian noise of ``imu_noise`` [rad/s], ``imu_rate`` [Hz] messages.
+/// - ``imu=True``: a gyro on ``/imu`` (Imu, frame ``imu_link``): the base's true turn rate plus ``imu_bias``
+///   [rad/s] and Gaussian noise of ``imu_noise`` [rad/s], ``imu_rate`` [Hz] messages, as the angular velocity
+///   in the IMU's frame; ``imu_mount``: how the IMU sits on the base, ``(roll_deg, pitch_deg, yaw_deg)`` or
+///   the CLI's ``"ROLL,PITCH,YAW_DEG"`` (URDF's rpy: ``(180, 0, 0)`` upside down); ``imu_tf``: the mount
+///   ``/tf_static`` states (``base_link`` → ``imu_link``), the same, or ``"none"`` (default: the true mount).
 ///
 /// >>> runs = omnical.simulate(runs_per_command=1, duration_s=1.0)  # 36 flower commands, 1 s each
 /// >>> len(runs), runs[0].name, runs[0].n_wheels
@@ -60,12 +65,13 @@ use std::sync::Arc;
 // The defaults are `omnical simulate`'s (SimConfig::default() and its --seed default, 7; the sensors'
 // ScanSettings::default() and Imu::default()), spelt out so that help() shows them; tests/test_mirror.py
 // and crates/omni-cli/tests/config.rs compare them with the CLI's.
-#[pyo3(signature = (truth = None, *, robot = None, runs_per_command = 5, duration_s = 10.0, seed = 7, noise_free = false, prefix = "train/", sample_drop_probability = 0.0, sample_jitter_s = 0.0, out = None, force = false, lidar = None, lidar_mount = MountArg::text("0,0,0"), lidar_tf = None, lidar_rate = 10.0, lidar_beams = 720, lidar_fov = 360.0, lidar_max_range = 12.0, lidar_noise = 0.01, lidar_dropout = 0.01, lidar_sweep = false, imu = false, imu_rate = 100.0, imu_bias = 0.005, imu_noise = 0.002))]
+#[pyo3(signature = (truth = None, *, robot = None, runs_per_command = 5, duration_s = 10.0, seed = 7, noise_free = false, prefix = "train/", sample_drop_probability = 0.0, sample_jitter_s = 0.0, out = None, force = false, lidar = None, lidar_mount = MountArg::text("0,0,0"), lidar_tf = None, lidar_rate = 10.0, lidar_beams = 720, lidar_fov = 360.0, lidar_max_range = 12.0, lidar_noise = 0.01, lidar_dropout = 0.01, lidar_sweep = false, imu = false, imu_rate = 100.0, imu_bias = 0.005, imu_noise = 0.002, imu_mount = MountArg::text("0,0,0"), imu_tf = None))]
 // pyo3 shows a default it cannot spell as `...`: the text signature spells lidar_mount's as the CLI's
 // (mypy's stubtest compares it with _omnical.pyi).
 #[pyo3(
-    text_signature = "(truth=None, *, robot=None, runs_per_command=5, duration_s=10.0, seed=7, noise_free=False, prefix=\"train/\", sample_drop_probability=0.0, sample_jitter_s=0.0, out=None, force=False, lidar=None, lidar_mount=\"0,0,0\", lidar_tf=None, lidar_rate=10.0, lidar_beams=720, lidar_fov=360.0, lidar_max_range=12.0, lidar_noise=0.01, lidar_dropout=0.01, lidar_sweep=False, imu=False, imu_rate=100.0, imu_bias=0.005, imu_noise=0.002)"
+    text_signature = "(truth=None, *, robot=None, runs_per_command=5, duration_s=10.0, seed=7, noise_free=False, prefix=\"train/\", sample_drop_probability=0.0, sample_jitter_s=0.0, out=None, force=False, lidar=None, lidar_mount=\"0,0,0\", lidar_tf=None, lidar_rate=10.0, lidar_beams=720, lidar_fov=360.0, lidar_max_range=12.0, lidar_noise=0.01, lidar_dropout=0.01, lidar_sweep=False, imu=False, imu_rate=100.0, imu_bias=0.005, imu_noise=0.002, imu_mount=\"0,0,0\", imu_tf=None)"
 )]
+// long: one parameter per keyword (the CLI's flags, 27 of them), then the settings built by helpers.
 #[allow(clippy::too_many_arguments)]
 pub fn simulate(
     py: Python<'_>,
@@ -94,6 +100,8 @@ pub fn simulate(
     imu_rate: f64,
     imu_bias: f64,
     imu_noise: f64,
+    imu_mount: MountArg,
+    imu_tf: Option<MountArg>,
 ) -> PyResult<Vec<PyRun>> {
     let mut config = SimConfig {
         runs_per_command,
@@ -120,7 +128,13 @@ pub fn simulate(
     };
     let lidar = lidar.map(|room| lidar_in(&room, &lidar_mount, lidar_tf.as_ref(), settings)).transpose()?;
     let imu = imu
-        .then(|| Imu { rate_hz: imu_rate, bias_rad_s: imu_bias, noise_rad_s: imu_noise }.checked().py())
+        .then(|| {
+            imu_on(
+                Imu { rate_hz: imu_rate, bias_rad_s: imu_bias, noise_rad_s: imu_noise, ..Imu::default() },
+                &imu_mount,
+                imu_tf.as_ref(),
+            )
+        })
         .transpose()?;
     let errors = crate::effect::EffectErrors::new(adapters);
     let runs = match out {
@@ -151,6 +165,16 @@ fn lidar_in(room: &str, mount: &MountArg, tf: Option<&MountArg>, settings: ScanS
         Some(tf) => tf.pose("lidar_tf")?,
     };
     Lidar::new(room, mount, stated, settings).py()
+}
+
+/// The IMU of `settings` on `mount`, `/tf_static` stating `tf` (default: the true mount), checked.
+fn imu_on(settings: Imu, mount: &MountArg, tf: Option<&MountArg>) -> PyResult<Imu> {
+    let mount = mount.rpy("imu_mount")?.unwrap_or(ImuMount::UPRIGHT);
+    let stated = match tf {
+        None => Some(mount),
+        Some(tf) => tf.rpy("imu_tf")?,
+    };
+    Imu { mount, stated, ..settings }.checked().py()
 }
 
 /// The true robot (`truth`, else the paper's calibration on APR-02 and the design itself on any other
@@ -245,6 +269,28 @@ impl MountArg {
         };
         parsed.map(Some).ok_or_else(|| {
             value_error(format!("{keyword} {shown}: expected (x_m, y_m, yaw_deg) or \"X,Y,YAW_DEG\"{none}"))
+        })
+    }
+}
+
+impl MountArg {
+    /// An IMU mount, ``(roll_deg, pitch_deg, yaw_deg)`` or ``"ROLL,PITCH,YAW_DEG"`` (`None` for `"none"`,
+    /// allowed for `imu_tf` only); `ValueError` naming `keyword`.
+    pub fn rpy(&self, keyword: &str) -> PyResult<Option<ImuMount>> {
+        let parsed = match self {
+            Self::Text(t) if t == "none" && keyword == "imu_tf" => return Ok(None),
+            Self::Text(t) => mount_from_text_rpy(t),
+            Self::Pose((r, p, y)) => mount_from_text_rpy(&format!("{r},{p},{y}")),
+        };
+        let none = if keyword == "imu_tf" { " or \"none\"" } else { "" };
+        parsed.map(Some).ok_or_else(|| {
+            let shown = match self {
+                Self::Text(t) => format!("{t:?}"),
+                Self::Pose(p) => format!("{p:?}"),
+            };
+            value_error(format!(
+                "{keyword} {shown}: expected (roll_deg, pitch_deg, yaw_deg) or \"ROLL,PITCH,YAW_DEG\"{none}"
+            ))
         })
     }
 }

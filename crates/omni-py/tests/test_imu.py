@@ -92,5 +92,33 @@ def test_bad_inputs_are_refused_naming_the_file_and_topic(sim: tuple[Path, list[
         omnical.imu(tmp_path / "missing.mcap")
     with pytest.raises(ValueError, match="at least one recording"):
         omnical.imu()
-    with pytest.raises(TypeError):
-        omnical.imu(out, gt_scans="/scan")  # type: ignore[call-arg]  # the IMU is the reference
+    # The ground-truth keywords, split_s and ticks_per_rev are no keywords of imu: the IMU is the reference.
+    for keyword in ("gt_scans", "gt_parent_frame", "gt_child_frame", "gt_columns", "gt_units", "split_s",
+                    "ticks_per_rev"):
+        with pytest.raises(TypeError, match=keyword):
+            omnical.imu(out, **{keyword: "x"})
+
+
+def test_an_upside_down_imu_reads_with_its_mount_and_is_refused_without(sim: tuple[Path, list[omnical.Run]],
+                                                                         tmp_path: Path) -> None:
+    out, _ = sim
+    upright = omnical.imu(out)
+    assert upright["mounts"] == [{"source": "transforms", "base_frame": "base_link", "frame_id": "imu_link",
+                                  "roll_deg": 0.0, "pitch_deg": 0.0, "yaw_deg": 0.0, "recordings": 36}]
+    down, bare = tmp_path / "down", tmp_path / "bare"
+    # The same seed as `sim`: the same gyro samples, written in the IMU's frame upside down.
+    omnical.simulate(runs_per_command=1, duration_s=6.0, out=down, imu=True, imu_bias=BIAS, imu_mount=(180, 0, 0))
+    omnical.simulate(runs_per_command=1, duration_s=6.0, out=bare, imu=True, imu_bias=BIAS, imu_mount="180,0,0",
+                     imu_tf="none")
+    doc = omnical.imu(down)
+    assert doc["mounts"][0]["source"] == "transforms" and doc["mounts"][0]["roll_deg"] == pytest.approx(180.0)
+    np.testing.assert_allclose(doc["fit"]["row"], upright["fit"]["row"], rtol=1e-9)
+    with pytest.raises(omnical.DatasetError, match=re.escape("the IMU's z axis seems to point down. Publish its "
+                                                             "mount on /tf_static")):
+        omnical.imu(bare)
+    given = omnical.imu(bare, mount=(180, 0, 0))
+    assert given["mounts"][0]["source"] == "given"
+    np.testing.assert_allclose(given["fit"]["row"], upright["fit"]["row"], rtol=1e-9)
+    assert given == cli_imu(str(bare), "--mount", "180,0,0")
+    with pytest.raises(ValueError, match=re.escape('mount "up": expected (roll_deg, pitch_deg, yaw_deg)')):
+        omnical.imu(bare, mount="up")

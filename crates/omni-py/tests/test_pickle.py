@@ -97,3 +97,16 @@ def test_dataset_round_trip_is_exact(sim_dir: Path) -> None:
     for a, b in zip(ds, back):
         assert_same_run(a, b)
     assert back.design.to_toml() == ds.design.to_toml()
+
+
+def test_dataset_keeps_what_its_ground_truth_measures(sim_dir: Path) -> None:
+    """A relative reference's dataset (windows; a fit adds the sensor's mount) and a given mount survive
+    pickling (Dask workers train what they are sent): the unpickled data train to the same model."""
+    for kwargs, effects in (({"gt_kind": "relative"}, ["sensor_offset_yaw"]),
+                            ({"gt_kind": "relative", "gt_mount": (0.1, 0.0, 2.0)}, [])):
+        ds = omnical.load(sim_dir / "mcap" / "train", **kwargs)
+        back = round_trip(ds)
+        robot = sim_dir / "mcap" / "train" / "robot.toml"
+        fits = [omnical.train("ik", d, robot=robot, seed=0) for d in (ds, back)]
+        assert fits[0].model.effects == fits[1].model.effects == effects
+        assert fits[0].costs == fits[1].costs

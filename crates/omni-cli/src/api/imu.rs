@@ -3,14 +3,20 @@
 //! design's matrix with that row written as a model file when asked. `omnical imu` prints the result
 //! ([`ImuFit`]) or its JSON ([`document`]); Python's `omnical.imu` returns the JSON as a dict. The
 //! translation rows need a reference that senses translation (motion capture, `--gt-scans`, end poses).
+//!
+//! The IMU's mount: the yaw rate is the base-z component of the IMU's angular velocity turned into the base
+//! frame, by the mount given (`--mount`), else the recording's static transforms from `base_link` (else
+//! `base_footprint`) to the messages' `header.frame_id`, else upright; a fit made upright whose row points
+//! against the design's (their dot product below 0) is refused: the IMU is upside down, its mount unstated.
 
 use super::load::{DataOptions, LoadError, LoadRequest};
+use crate::dataset::mcap::GyroRead;
 use crate::dataset::{self, DatasetError};
 use crate::design::{self, DesignError};
 use crate::model_file::{self, ModelTextError};
 use crate::out_path::{self, OutPathError};
 use crate::{atomic, dataset::Dataset};
-use omni_kin::gyro::{GyroSample, RotationFit, fit_rotation_row};
+use omni_kin::gyro::{GyroSample, ImuMount, RotationFit, fit_rotation_row};
 use omni_kin::{FittedModel, KinError, KinematicsKind, Run};
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -33,6 +39,9 @@ pub struct ImuRequest {
     pub window_s: f64,
     /// Where to write the design's matrix with the fitted rotation row as a model file.
     pub out: Option<PathBuf>,
+    /// The IMU's mount on the base (`--mount ROLL,PITCH,YAW_DEG`), used instead of the recordings' static
+    /// transforms. Default: theirs, else upright.
+    pub mount: Option<ImuMount>,
     /// How the wheels are read (robot description, joints, file size cap). The ground-truth options and
     /// `split_s` are not read: the IMU is the reference, and each recording one run.
     pub data: DataOptions,
@@ -61,6 +70,44 @@ pub enum ImuError {
         /// Why.
         source: KinError,
     },
+    /// The fit, made with the IMU upright for want of a stated mount, points against the design's row.
+    #[error(
+        "{}: topic {topic:?} (frame {frame_id:?}): the rotation row fitted with the IMU upright points against the \
+         design's (their dot product is {dot:.3e} < 0): the IMU's z axis seems to point down. Publish its mount \
+         on /tf_static (base_link → {frame_id}, as robot_state_publisher does from the URDF) or give it: \
+         --mount 180,0,0 (ROLL,PITCH,YAW_DEG in degrees; Python: mount=(180, 0, 0))",
+        files_text(recordings)
+    )]
+    UpsideDown {
+        /// The recordings read upright.
+        recordings: Vec<PathBuf>,
+        /// The Imu topic.
+        topic: String,
+        /// The IMU's frame.
+        frame_id: String,
+        /// The fitted row · the design's row.
+        dot: f64,
+    },
+    /// Read upright for want of a stated mount, the IMU's x or y axis turns more than its z: it is on its side.
+    #[error(
+        "{}: topic {topic:?} (frame {frame_id:?}): the IMU's {axis} axis turns with the base more than its z axis \
+         (RMS x {:.2e}, y {:.2e}, z {:.2e} rad/s): the IMU seems mounted on its side. Publish its mount on \
+         /tf_static (base_link → {frame_id}, as robot_state_publisher does from the URDF) or give it: --mount \
+         {} if its {axis} axis points up ({} if down; ROLL,PITCH,YAW_DEG in degrees; Python: mount=…)",
+        files_text(recordings), rms_rad_s[0], rms_rad_s[1], rms_rad_s[2], side_mount(axis, 1.0), side_mount(axis, -1.0)
+    )]
+    OnItsSide {
+        /// The recordings read upright.
+        recordings: Vec<PathBuf>,
+        /// The Imu topic.
+        topic: String,
+        /// The IMU's frame.
+        frame_id: String,
+        /// `x` or `y`: the axis that turns most.
+        axis: char,
+        /// RMS of the angular velocity's x, y and z over those recordings. rad/s.
+        rms_rad_s: [f64; 3],
+    },
     /// The data's robot has no design model.
     #[error(transparent)]
     Design(#[from] DesignError),
@@ -75,6 +122,79 @@ pub enum ImuError {
         /// Why.
         source: std::io::Error,
     },
+}
+
+/// The first recordings of `paths`, named (three at most, then how many more).
+fn files_text(paths: &[PathBuf]) -> String {
+    let mut names: Vec<String> = paths.iter().take(3).map(|p| p.display().to_string()).collect();
+    if paths.len() > 3 {
+        names.push(format!("and {} more recordings", paths.len() - 3));
+    }
+    names.join(", ")
+}
+
+/// The `--mount` that turns the IMU's `axis` (`x` or `y`) to the base's z (`sign` 1) or against it (−1).
+fn side_mount(axis: &char, sign: f64) -> String {
+    match axis {
+        'x' => format!("0,{},0", -90.0 * sign),
+        _ => format!("{},0,0", 90.0 * sign),
+    }
+}
+
+/// Sums of the squared angular velocity per axis (x, y, z) and the samples summed. rad²/s², count.
+#[derive(Clone, Copy, Debug, Default)]
+struct AxisPower {
+    sum_sq: [f64; 3],
+    count: usize,
+}
+
+impl AxisPower {
+    fn add(&mut self, read: &GyroRead) {
+        for r in &read.rates {
+            (0..3).for_each(|i| self.sum_sq[i] += r.imu_rad_s[i] * r.imu_rad_s[i]);
+        }
+        self.count += read.rates.len();
+    }
+
+    /// RMS per axis. rad/s.
+    fn rms(&self) -> [f64; 3] {
+        self.sum_sq.map(|s| (s / self.count.max(1) as f64).sqrt())
+    }
+}
+
+/// Where the IMU's mount came from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MountSource {
+    /// Given (`--mount`, Python `mount=`).
+    Given,
+    /// The recording's static transforms, from this base frame.
+    Transforms {
+        /// `base_link` or `base_footprint`.
+        base_frame: String,
+    },
+    /// None stated: upright.
+    Assumed,
+}
+
+/// One mount used, and on how many recordings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MountUsed {
+    /// Where it came from.
+    pub source: MountSource,
+    /// The IMU's frame (`header.frame_id`).
+    pub frame_id: String,
+    /// The mount.
+    pub mount: ImuMount,
+    /// Recordings read with it.
+    pub recordings: usize,
+}
+
+impl MountUsed {
+    /// Roll, pitch, yaw. Degrees.
+    pub fn rpy_deg(&self) -> [f64; 3] {
+        // + 0.0: −0.0 shows as 0.
+        self.mount.rpy_rad().map(|a| a.to_degrees() + 0.0)
+    }
 }
 
 /// The fitted rotation row beside the design's.
@@ -92,6 +212,11 @@ pub struct ImuFit {
     pub wheel_names: Vec<String>,
     /// The model file written.
     pub out: Option<PathBuf>,
+    /// The IMU's mounts used (one unless the recordings state different ones).
+    pub mounts: Vec<MountUsed>,
+    /// The fitted row points against the design's (their dot product below 0) although every mount was
+    /// stated: the mount or the wheels' signs are wrong.
+    pub against_design: bool,
 }
 
 /// The wheels of every recording (one run each) and their gyro samples on the run's clock, with the first
@@ -100,11 +225,64 @@ struct Recordings {
     first: Dataset,
     runs: Vec<Run>,
     gyro: Vec<Vec<GyroSample>>,
+    mounts: Vec<MountUsed>,
+    /// The recordings read upright for want of a stated mount.
+    assumed: Vec<PathBuf>,
+    /// Their angular velocity per axis.
+    assumed_power: AxisPower,
+}
+
+/// The mount `read` is taken with: the one given, else the recording's, else upright.
+fn mount_of(read: &GyroRead, given: Option<ImuMount>) -> MountUsed {
+    let (source, mount) = match (given, &read.stated_mount) {
+        (Some(m), _) => (MountSource::Given, m),
+        (None, Some(s)) => (MountSource::Transforms { base_frame: s.base_frame.clone() }, s.mount),
+        (None, None) => (MountSource::Assumed, ImuMount::UPRIGHT),
+    };
+    MountUsed { source, frame_id: read.frame_id.clone(), mount, recordings: 1 }
+}
+
+/// Counts `m` among the mounts used (a mount within 1e-9 rad of one already there is the same).
+fn tally(mounts: &mut Vec<MountUsed>, m: MountUsed) {
+    let same = |u: &&mut MountUsed| {
+        u.source == m.source
+            && u.frame_id == m.frame_id
+            && u.mount.base_from_imu.angle_to(&m.mount.base_from_imu) < 1e-9
+    };
+    match mounts.iter_mut().find(same) {
+        Some(u) => u.recordings += 1,
+        None => mounts.push(m),
+    }
+}
+
+/// Refuses an IMU whose stamps do not overlap the run's wheels (another clock), naming the file and topic.
+fn check_overlap(path: &Path, topic: &str, run: &Run, read: &GyroRead) -> Result<(), DatasetError> {
+    let (t, g) = (run.wheel_t_s(), &read.rates);
+    let (Some(t0), Some(t1), Some(g0), Some(g1)) = (t.first(), t.last(), g.first(), g.last()) else {
+        return Ok(());
+    };
+    if t1.min(g1.t_s) > t0.max(g0.t_s) {
+        return Ok(());
+    }
+    let at = |t_s: f64| read.origin_s as f64 + t_s;
+    Err(DatasetError::at(
+        path,
+        format!("topic {topic:?}"),
+        format!(
+            "its stamps ({:.3} to {:.3} s) do not overlap the wheels' ({:.3} to {:.3} s): the IMU is stamped on \
+             another clock than the wheels' JointState; record both on one clock (both ROS time, or both sim time)",
+            at(g0.t_s),
+            at(g1.t_s),
+            at(*t0),
+            at(*t1)
+        ),
+    ))
 }
 
 /// Reads each recording's wheels and gyro; the gyro on the run's clock.
 fn read(request: &ImuRequest) -> Result<Recordings, ImuError> {
-    let (mut runs, mut gyro) = (Vec::new(), Vec::new());
+    let (mut runs, mut gyro, mut mounts, mut assumed) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut assumed_power = AxisPower::default();
     let mut first = None;
     let max_bytes = request.data.max_file_mb.saturating_mul(1 << 20);
     for path in &dataset::ros_recordings(&request.recordings)? {
@@ -112,16 +290,23 @@ fn read(request: &ImuRequest) -> Result<Recordings, ImuError> {
         let ds = load.read_for_robot(load.robot().map_err(LoadError::from)?)?;
         let sink = dataset::feed_ros(path, max_bytes, |zstd| dataset::mcap::ImuSink::new(&request.topic, zstd))?;
         let mut read = sink.finish(path)?;
+        let used = mount_of(&read, request.mount);
+        if used.source == MountSource::Assumed {
+            assumed.push(path.clone());
+            assumed_power.add(&read);
+        }
         for run in &ds.runs {
             if let Some(&origin) = ds.time_origins_s.get(run.name()) {
                 read.rebase(origin);
             }
+            check_overlap(path, &request.topic, run, &read)?;
             runs.push(run.clone());
-            gyro.push(read.samples.clone());
+            gyro.push(read.yaw_rates(&used.mount));
         }
+        tally(&mut mounts, used);
         first.get_or_insert(ds);
     }
-    Ok(Recordings { first: first.ok_or(ImuError::NoRecording)?, runs, gyro })
+    Ok(Recordings { first: first.ok_or(ImuError::NoRecording)?, runs, gyro, mounts, assumed, assumed_power })
 }
 
 /// Fits the rotation row and the gyro's bias from the recordings' IMU, beside the design's row; writes the
@@ -132,11 +317,22 @@ pub fn imu(request: &ImuRequest) -> Result<ImuFit, ImuError> {
         out_path::check_file(out, "--out")?;
     }
     let rec = read(request)?;
+    check_upright(&rec, &request.topic)?;
     let fit = fit_rotation_row(&rec.runs, &rec.gyro, request.window_s)
         .map_err(|source| ImuError::Fit { topic: request.topic.clone(), source })?;
     let design = FittedModel::nominal(design::model(KinematicsKind::Ik, &rec.first)?);
     let n = design.model.n_wheels();
     let design_row = design.params[2 * n..3 * n].to_vec();
+    let dot: f64 = fit.row.iter().zip(&design_row).map(|(a, b)| a * b).sum();
+    if dot < 0.0 && !rec.assumed.is_empty() {
+        let frame_id = rec.mounts.iter().find(|m| m.source == MountSource::Assumed).map(|m| m.frame_id.clone());
+        return Err(ImuError::UpsideDown {
+            recordings: rec.assumed,
+            topic: request.topic.clone(),
+            frame_id: frame_id.unwrap_or_default(),
+            dot,
+        });
+    }
     if let Some(out) = &request.out {
         write_model(&design, &fit, out)?;
     }
@@ -147,6 +343,25 @@ pub fn imu(request: &ImuRequest) -> Result<ImuFit, ImuError> {
         design_row,
         wheel_names: design.model.kinematics.wheel_names(),
         out: request.out.clone(),
+        mounts: rec.mounts,
+        against_design: dot < 0.0,
+    })
+}
+
+/// Refuses the recordings read upright when their IMU's x or y axis turns more than its z (RMS): the IMU
+/// is on its side (tilted more than 45°), its mount unstated.
+fn check_upright(rec: &Recordings, topic: &str) -> Result<(), ImuError> {
+    let rms = rec.assumed_power.rms();
+    if rec.assumed.is_empty() || rms[0].hypot(rms[1]) <= rms[2] {
+        return Ok(());
+    }
+    let frame_id = rec.mounts.iter().find(|m| m.source == MountSource::Assumed).map(|m| m.frame_id.clone());
+    Err(ImuError::OnItsSide {
+        recordings: rec.assumed.clone(),
+        topic: topic.to_string(),
+        frame_id: frame_id.unwrap_or_default(),
+        axis: if rms[0] > rms[1] { 'x' } else { 'y' },
+        rms_rad_s: rms,
     })
 }
 
@@ -169,10 +384,75 @@ pub fn document(result: &ImuFit) -> serde_json::Value {
         "topic": result.topic, "window_s": result.window_s, "fit": result.fit, "design_row": result.design_row,
         "wheel_names": result.wheel_names,
         "out": result.out.as_ref().map(|p| p.display().to_string()),
+        "mounts": result.mounts.iter().map(mount_json).collect::<Vec<_>>(),
+        "against_design": result.against_design,
     });
     if let serde_json::Value::Object(fields) = &mut doc {
         fields.insert("schema_version".into(), super::JSON_SCHEMA_VERSION.into());
         fields.insert("command".into(), "imu".into());
     }
     doc
+}
+
+/// One mount used, as the JSON document gives it: `source` (`given`, `transforms` or `assumed_upright`),
+/// `base_frame` (with `transforms`), `frame_id`, `roll_deg`, `pitch_deg`, `yaw_deg`, `recordings`.
+fn mount_json(m: &MountUsed) -> serde_json::Value {
+    let [roll, pitch, yaw] = m.rpy_deg();
+    let (source, base) = match &m.source {
+        MountSource::Given => ("given", None),
+        MountSource::Transforms { base_frame } => ("transforms", Some(base_frame.as_str())),
+        MountSource::Assumed => ("assumed_upright", None),
+    };
+    json!({
+        "source": source, "base_frame": base, "frame_id": m.frame_id, "roll_deg": roll, "pitch_deg": pitch,
+        "yaw_deg": yaw, "recordings": m.recordings,
+    })
+}
+
+/// A mount written `ROLL,PITCH,YAW_DEG` (degrees, URDF's `rpy`: `--mount 180,0,0` is upside down); `None`
+/// unless it is three finite numbers.
+pub fn mount_from_text(text: &str) -> Option<ImuMount> {
+    let v: Vec<f64> = text.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().ok()?;
+    (v.len() == 3 && v.iter().all(|x| x.is_finite()))
+        .then(|| ImuMount::from_rpy_rad(v[0].to_radians(), v[1].to_radians(), v[2].to_radians()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dataset::mcap::ImuRate;
+    use omni_kin::run::RunData;
+
+    /// An IMU stamped on the epoch while the wheels run from 0 s is refused naming the file, the topic and
+    /// both spans; one overlapping the wheels passes.
+    #[test]
+    fn an_imu_on_another_clock_is_refused_naming_the_file_and_topic() {
+        let wheel_t_s: Vec<f64> = (0..101).map(|k| k as f64 * 0.1).collect();
+        let truth = [0.0, 10.0].map(|t_s| omni_kin::StampedPose { t_s, pose: omni_kin::Pose2::IDENTITY }).to_vec();
+        let data = RunData {
+            name: "r".into(),
+            wheel_rad_s: vec![0.0; 303],
+            wheel_t_s,
+            n_wheels: 3,
+            truth,
+            ..Default::default()
+        };
+        let run = Run::new(data).unwrap();
+        let read = |origin_s: i64| GyroRead {
+            rates: (0..50).map(|k| ImuRate { t_s: k as f64 * 0.2, imu_rad_s: [0.0; 3] }).collect(),
+            origin_s,
+            frame_id: "imu_link".into(),
+            stated_mount: None,
+        };
+        assert!(check_overlap(Path::new("a.mcap"), "/imu", &run, &read(0)).is_ok());
+        let mut epoch = read(1_700_000_000);
+        epoch.rebase(0);
+        let err = check_overlap(Path::new("a.mcap"), "/imu", &run, &epoch).unwrap_err().to_string();
+        assert_eq!(
+            err,
+            "a.mcap: topic \"/imu\": its stamps (1700000000.000 to 1700000009.800 s) do not overlap the wheels' \
+             (0.000 to 10.000 s): the IMU is stamped on another clock than the wheels' JointState; record both on one \
+             clock (both ROS time, or both sim time)"
+        );
+    }
 }

@@ -44,6 +44,16 @@ pub fn diagnose_request(args: &[String]) -> Result<DiagnoseRequest, ArgvError> {
     }
 }
 
+/// The request of `omnical diagnose ARGS...` reading its runs as `omnical train TRAIN_ARGS...` reads them:
+/// the data options of `train_args` (`--robot`, `--gt-scans`, `--gt-kind`, `--gt-mount`, …) replace
+/// `args`' own. The fleet diagnoses each session so, with the `-- ARGS` its sessions were trained with: a
+/// session trained on its lidar is diagnosed on its lidar.
+pub fn diagnose_request_reading_as(args: &[String], train_args: &[String]) -> Result<DiagnoseRequest, ArgvError> {
+    let mut request = diagnose_request(args)?;
+    request.data = train_request(train_args)?.data;
+    Ok(request)
+}
+
 /// What `omnical fleet` does (the Python wheel's `omnical.fleet.main` runs it on Dask).
 #[derive(Clone, Debug, PartialEq)]
 pub struct FleetRequest {

@@ -294,6 +294,8 @@ pub const SETTINGS: &[Setting] = &[
     simulate_setting!("imu_rate", "simulate: IMU messages per second (Hz)"),
     simulate_setting!("imu_bias", "simulate: the gyro's bias (rad/s)"),
     simulate_setting!("imu_noise", "simulate: Gaussian noise of each yaw-rate sample (rad/s)"),
+    simulate_setting!("imu_mount", "simulate: the IMU's mount on the base: roll, pitch, yaw (degrees)"),
+    simulate_setting!("imu_tf", "simulate: the IMU mount /tf_static states (default: the true one), or none"),
     Setting {
         key: "topic",
         about: "imu: the IMU's sensor_msgs/msg/Imu topic",
@@ -309,6 +311,14 @@ pub const SETTINGS: &[Setting] = &[
         project_file: ONE_IMU_FIT,
         config_row: NOT_SHOWN,
         python: Ok(&[(IMU, "window_s")]),
+    },
+    Setting {
+        key: "mount",
+        about: "imu: the IMU's mount on the base: roll, pitch, yaw (degrees); default from /tf_static",
+        flag: Flag::Of(IMU),
+        project_file: ONE_IMU_FIT,
+        config_row: NOT_SHOWN,
+        python: Ok(&[(IMU, "mount")]),
     },
 ];
 

@@ -6,10 +6,11 @@
 //! [`super::settings`]); the errors name them so.
 
 use crate::atomic;
+use crate::dataset::mcap::ImuTrack;
 use crate::dataset::{self, DatasetError, mcap::LidarTrack};
 use crate::lidar::{self, Room, ScanSettings};
 use crate::robot_file::{self, RobotFile};
-use omni_kin::gyro::GyroSample;
+use omni_kin::gyro::ImuMount;
 use omni_kin::robot::RobotDescription;
 use omni_kin::simulate::{SampledRun, SimConfig, simulate, simulate_sampled};
 use omni_kin::{FittedModel, KinError, Pose2, Run};
@@ -140,7 +141,7 @@ pub fn mount_from_text(text: &str) -> Option<Pose2> {
     (v.len() == 3 && v.iter().all(|x| x.is_finite())).then(|| Pose2::new(v[0], v[1], v[2].to_radians()))
 }
 
-/// A simulated IMU: an upright gyro on the base measuring the yaw rate.
+/// A simulated IMU: a gyro on the base measuring the yaw rate, mounted upright or otherwise.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Imu {
     /// Messages per second. Hz. Default 100.
@@ -149,11 +150,22 @@ pub struct Imu {
     pub bias_rad_s: f64,
     /// Gaussian noise of each yaw-rate sample. rad/s. Default 0.002.
     pub noise_rad_s: f64,
+    /// How the IMU sits on the base (`--imu-mount`): its messages give the angular velocity in its frame.
+    /// Default upright.
+    pub mount: ImuMount,
+    /// The mount the recordings' `/tf_static` states (`--imu-tf`; `None`: none written). Default upright.
+    pub stated: Option<ImuMount>,
 }
 
 impl Default for Imu {
     fn default() -> Self {
-        Self { rate_hz: 100.0, bias_rad_s: 0.005, noise_rad_s: 0.002 }
+        Self {
+            rate_hz: 100.0,
+            bias_rad_s: 0.005,
+            noise_rad_s: 0.002,
+            mount: ImuMount::UPRIGHT,
+            stated: Some(ImuMount::UPRIGHT),
+        }
     }
 }
 
@@ -175,8 +187,8 @@ impl Imu {
 pub struct SplitSensors {
     /// Each run's lidar track (with a lidar).
     pub lidar: Option<Vec<LidarTrack>>,
-    /// Each run's gyro samples (with an IMU).
-    pub imu: Option<Vec<Vec<GyroSample>>>,
+    /// Each run's IMU (with an IMU).
+    pub imu: Option<Vec<ImuTrack>>,
 }
 
 impl SplitSensors {
@@ -210,8 +222,10 @@ pub fn simulate_split(
         None => None,
         Some(i) => {
             let sampled = simulate_sampled(cfg, truth, prefix, 1.0 / i.rate_hz)?;
-            let gyro = |(k, s): (usize, &SampledRun)| {
-                omni_kin::gyro::simulate_gyro(&s.base, i.bias_rad_s, i.noise_rad_s, cfg.seed, k as u64)
+            let gyro = |(k, s): (usize, &SampledRun)| ImuTrack {
+                samples: omni_kin::gyro::simulate_gyro(&s.base, i.bias_rad_s, i.noise_rad_s, cfg.seed, k as u64),
+                mount: i.mount,
+                stated: i.stated,
             };
             Some(sampled.iter().enumerate().map(gyro).collect())
         }
@@ -240,8 +254,8 @@ fn lidar_track(l: &Lidar, s: &SampledRun, seed: u64, stream: u64) -> Result<Lida
 pub struct Sensors<'a> {
     /// Each run's lidar track.
     pub lidar: Option<&'a [LidarTrack]>,
-    /// Each run's gyro samples.
-    pub imu: Option<&'a [Vec<GyroSample>]>,
+    /// Each run's IMU.
+    pub imu: Option<&'a [ImuTrack]>,
 }
 
 /// Writes each run as one file of `format` into `dir` (created), named after the run's last name part

@@ -202,11 +202,15 @@ pub fn prepare(a: &TrainRequest) -> Result<Prepared, TrainError> {
 
 /// `start` with the sensor's mount (`sensor_offset_yaw`, at its null value) when `ds`'s reference is a
 /// sensor's own motion and `start` has no mount yet: the mount is part of what such a reference measures,
-/// so it is fitted with the base from the first stage on. Not when the mount was given (`--gt-mount`).
+/// so it is fitted with the base from the first stage on. Not when the mount was given (`--gt-mount`), nor
+/// when the recordings' static transforms gave it and the base model absorbs any mount (a free matrix or
+/// geometry: see [`mount_warning`]), which keeps it as given.
 pub fn with_sensor_mount(start: FittedModel, ds: &Dataset) -> FittedModel {
     use omni_kin::effect::SensorOffset;
     let has_mount = start.model.effects.iter().any(|e| matches!(e, EffectKind::SensorOffset(_)));
-    if ds.reference != omni_kin::reference::ReferenceKind::Relative || ds.mount.is_some() || has_mount {
+    let absorbs_mount = matches!(start.model.kinematics.kind(), KinematicsKind::Ik | KinematicsKind::Geometry);
+    let kept_as_given = ds.mount.is_some() || ds.sensor_mount_from_recordings && absorbs_mount;
+    if ds.reference != omni_kin::reference::ReferenceKind::Relative || kept_as_given || has_mount {
         return start;
     }
     start.with_effect(EffectKind::SensorOffset(SensorOffset { with_yaw: true }))

@@ -3,7 +3,8 @@
 //! rows need a reference that senses translation (motion capture, `--gt-scans`, measured end poses).
 
 use super::{DataArgs, OutputArgs};
-use crate::api::imu::{self as api, ImuFit, ImuRequest};
+use crate::api::imu::{self as api, ImuFit, ImuRequest, MountSource, MountUsed};
+use omni_kin::gyro::ImuMount;
 use std::path::PathBuf;
 
 pub use crate::api::imu::DEFAULT_IMU_TOPIC;
@@ -21,6 +22,12 @@ pub struct Args {
     /// Window of the fit (s): each window's turn as the gyro integrates it against the wheels' angles.
     #[arg(long, value_name = "SECONDS", default_value_t = api::DEFAULT_WINDOW_S)]
     pub window: f64,
+    /// The IMU's mount on the base, ROLL,PITCH,YAW in degrees (URDF's rpy: 180,0,0 is upside down, 90,0,0 on
+    /// its side), used instead of the recordings' static transforms. Default: the transform from base_link
+    /// (else base_footprint) to the messages' frame_id in /tf_static (or a pair repeated unchanged on /tf),
+    /// else upright.
+    #[arg(long, value_name = "ROLL,PITCH,YAW_DEG", value_parser = parse_mount, allow_hyphen_values = true)]
+    pub mount: Option<ImuMount>,
     /// Write the design's matrix with this rotation row as a model file (the translation rows stay the
     /// design's).
     #[arg(long, value_name = "FILE")]
@@ -34,33 +41,86 @@ pub struct Args {
 }
 
 impl Args {
-    /// The request these arguments make. Ground-truth options and `--split` would change nothing (the gyro
-    /// is the reference, each recording one run): they are refused.
+    /// The request these arguments make. The data options that would change nothing are refused: the
+    /// ground-truth ones (the gyro is the reference), `--split` (each recording is one run) and
+    /// `--ticks-per-rev` (the wheels come from ROS recordings' JointState, not CSV tick columns).
     pub fn request(&self) -> anyhow::Result<ImuRequest> {
-        let d = &self.data;
-        let unused = [
-            (d.gt.is_some(), "--gt"),
-            (d.gt_topic.is_some(), "--gt-topic"),
-            (d.gt_scans.is_some(), "--gt-scans"),
-            (d.gt_kind.is_some(), "--gt-kind"),
-            (d.gt_window.is_some(), "--gt-window"),
-            (d.gt_mount.is_some(), "--gt-mount"),
-            (d.gt_time_offset.is_some(), "--gt-time-offset"),
-            (d.split.is_some(), "--split"),
-        ];
-        if let Some((_, flag)) = unused.iter().find(|(set, _)| *set) {
-            anyhow::bail!(
-                "{flag} changes nothing for `omnical imu`: the IMU is the reference, and each recording one run"
-            );
+        if let Some((flag, why)) = self.ignored().into_iter().next() {
+            anyhow::bail!("{flag} changes nothing for `omnical imu`: {why}");
         }
         Ok(ImuRequest {
             recordings: self.recordings.clone(),
             topic: self.topic.clone(),
             window_s: self.window,
             out: self.out.clone(),
-            data: d.options(),
+            mount: self.mount,
+            data: self.data.options(),
         })
     }
+
+    /// The data options given that `omnical imu` does not read, each with why.
+    fn ignored(&self) -> Vec<(String, &'static str)> {
+        let d = &self.data;
+        let given = [
+            d.gt.is_some(),
+            d.gt_topic.is_some(),
+            d.gt_parent_frame.is_some(),
+            d.gt_child_frame.is_some(),
+            !d.gt_columns.is_empty(),
+            !d.gt_units.is_empty(),
+            d.gt_scans.is_some(),
+            d.gt_kind.is_some(),
+            d.gt_window.is_some(),
+            d.gt_mount.is_some(),
+            d.gt_time_offset.is_some(),
+            d.split.is_some(),
+            d.ticks_per_rev.is_some(),
+        ];
+        given
+            .into_iter()
+            .zip(IGNORED)
+            .filter(|g| g.0)
+            .map(|(_, (key, why))| (format!("--{}", key.replace('_', "-")), why))
+            .collect()
+    }
+}
+
+/// Why `omnical imu` reads no ground-truth option.
+const GT: &str = "it reads no ground truth (the IMU is the reference)";
+
+/// The data options `omnical imu` does not read (their keys, in [`Args::ignored`]'s order), each with why:
+/// given on the command line or in the project file's `[imu]` table they are refused; a project-wide key
+/// of the project file leaves `omnical imu` alone ([`ignores_project_wide`]).
+const IGNORED: [(&str, &str); 13] = [
+    ("gt", GT),
+    ("gt_topic", GT),
+    ("gt_parent_frame", GT),
+    ("gt_child_frame", GT),
+    ("gt_columns", GT),
+    ("gt_units", GT),
+    ("gt_scans", GT),
+    ("gt_kind", GT),
+    ("gt_window", GT),
+    ("gt_mount", GT),
+    ("gt_time_offset", GT),
+    ("split", "each recording is one run"),
+    (
+        "ticks_per_rev",
+        "it reads ROS recordings, whose JointState gives the wheel speeds (ticks per revolution convert CSV tick \
+         columns)",
+    ),
+];
+
+/// Whether a project-wide key of omnical.toml (`gt_topic = "/mocap"` for training) is left out of
+/// `command`'s defaults: `omnical imu` does not read it, and a project's ground truth is no reason to
+/// refuse the IMU.
+pub fn ignores_project_wide(command: &str, key: &str) -> bool {
+    command == "imu" && IGNORED.iter().any(|(k, _)| *k == key)
+}
+
+/// `ROLL,PITCH,YAW_DEG` (degrees) as an IMU mount.
+fn parse_mount(s: &str) -> Result<ImuMount, String> {
+    api::mount_from_text(s).ok_or_else(|| format!("expected ROLL,PITCH,YAW_DEG (three numbers in degrees), got {s:?}"))
 }
 
 /// Runs `omnical imu`.
@@ -81,6 +141,13 @@ fn print_fit(r: &ImuFit) {
         "IMU {:?}: {} windows of {} s, {:.1} rad turned; residual RMS {:.2e} rad per window",
         r.topic, fit.windows, r.window_s, fit.turned_rad, fit.residual_rms_rad
     );
+    r.mounts.iter().for_each(print_mount);
+    if r.against_design {
+        println!(
+            "warning: the fitted row points against the design's although the mount is stated: check the IMU's \
+             mount and the wheels' signs (the robot description's joints)"
+        );
+    }
     println!("rotation row (ω per wheel speed):     fitted          ±        design    change");
     for (i, name) in r.wheel_names.iter().enumerate() {
         let change = 100.0 * (fit.row[i] / r.design_row[i] - 1.0);
@@ -98,4 +165,27 @@ fn print_fit(r: &ImuFit) {
     if let Some(out) = &r.out {
         println!("model written to {} (the design's translation rows, this rotation row)", out.display());
     }
+}
+
+/// Which mount the IMU was read with.
+fn print_mount(m: &MountUsed) {
+    let [roll, pitch, yaw] = m.rpy_deg();
+    let from = match &m.source {
+        MountSource::Given => "given (--mount)".to_string(),
+        MountSource::Transforms { base_frame } => format!("from the static transforms ({base_frame} → {})", m.frame_id),
+        MountSource::Assumed => format!("upright: no static transform places {:?} on the base", m.frame_id),
+    };
+    let z = m.mount.z_up();
+    let pose = if z > 0.5 {
+        "z up"
+    } else if z < -0.5 {
+        "z down"
+    } else {
+        "on its side"
+    };
+    println!(
+        "IMU mount {from}: roll {roll:.1}°, pitch {pitch:.1}°, yaw {yaw:.1}° ({pose}), {} recording{}",
+        m.recordings,
+        if m.recordings == 1 { "" } else { "s" }
+    );
 }

@@ -53,7 +53,8 @@ pub struct FleetArgs {
     /// Which sessions to diagnose (auto: those whose cost is off).
     #[arg(long, value_parser = ["auto", "all", "none"], default_value = "auto")]
     pub diagnose: String,
-    /// Arguments after `--` go to every `omnical train`.
+    /// Arguments after `--` go to every `omnical train`; their data options (`--gt-scans /scan`, …) also
+    /// to every diagnosis, so a session is diagnosed on the reference it was trained on.
     #[arg(last = true, value_name = "TRAIN_ARGS")]
     pub train_args: Vec<String>,
 }

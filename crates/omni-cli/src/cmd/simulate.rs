@@ -131,12 +131,13 @@ pub struct LidarArgs {
     pub lidar_sweep: bool,
 }
 
-/// The simulated IMU (`--imu`): an upright gyro on the base.
+/// The simulated IMU (`--imu`): a gyro on the base, upright unless `--imu-mount` says otherwise.
 #[derive(Debug, clap::Args)]
 #[command(next_help_heading = "Simulated IMU")]
 pub struct ImuArgs {
-    /// Write an IMU's yaw rate (/imu, sensor_msgs/msg/Imu, frame imu_link: the base's true turn rate plus
-    /// the bias and noise below) into every MCAP run.
+    /// Write an IMU's angular velocity (/imu, sensor_msgs/msg/Imu, frame imu_link: the base's true turn
+    /// rate plus the bias and noise below, in the IMU's frame) and its mount (/tf_static base_link →
+    /// imu_link) into every MCAP run.
     #[arg(long)]
     pub imu: bool,
     /// IMU messages per second (Hz).
@@ -148,6 +149,20 @@ pub struct ImuArgs {
     /// Gaussian noise of each yaw-rate sample (rad/s).
     #[arg(long, value_name = "RAD_S", default_value_t = 0.002, requires = "imu")]
     pub imu_noise: f64,
+    /// How the IMU sits on the base: ROLL,PITCH,YAW in degrees (URDF's rpy: 180,0,0 upside down, 90,0,0 on
+    /// its side).
+    #[arg(
+        long,
+        value_name = "ROLL,PITCH,YAW_DEG",
+        default_value = "0,0,0",
+        requires = "imu",
+        allow_hyphen_values = true
+    )]
+    pub imu_mount: String,
+    /// The mount the recordings' /tf_static states: ROLL,PITCH,YAW_DEG, or `none` for no /tf_static (a
+    /// robot without a description). Default: the true mount (--imu-mount).
+    #[arg(long, value_name = "ROLL,PITCH,YAW_DEG|none", requires = "imu", allow_hyphen_values = true)]
+    pub imu_tf: Option<String>,
 }
 
 impl ImuArgs {
@@ -159,9 +174,22 @@ impl ImuArgs {
         if format != Format::Mcap {
             bail!("--imu writes Imu messages into ROS 2 bags: use --format mcap (the default)");
         }
-        let imu = Imu { rate_hz: self.imu_rate, bias_rad_s: self.imu_bias, noise_rad_s: self.imu_noise };
+        let mount = imu_mount_arg(&self.imu_mount, "--imu-mount")?;
+        let stated = match self.imu_tf.as_deref() {
+            None => Some(mount),
+            Some("none") => None,
+            Some(tf) => Some(imu_mount_arg(tf, "--imu-tf")?),
+        };
+        let imu = Imu { rate_hz: self.imu_rate, bias_rad_s: self.imu_bias, noise_rad_s: self.imu_noise, mount, stated };
         Ok(Some(imu.checked()?))
     }
+}
+
+/// `ROLL,PITCH,YAW_DEG` (degrees) of option `flag` as an IMU mount.
+fn imu_mount_arg(text: &str, flag: &str) -> anyhow::Result<omni_kin::gyro::ImuMount> {
+    crate::api::imu::mount_from_text(text).with_context(|| {
+        format!("{flag} {text:?}: expected ROLL,PITCH,YAW_DEG (three numbers in degrees, e.g. 180,0,0)")
+    })
 }
 
 /// `X,Y,YAW_DEG` (m, m, degrees) of option `flag` as a pose.

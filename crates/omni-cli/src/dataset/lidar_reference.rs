@@ -59,6 +59,7 @@ pub(super) fn with_lidar_path(
     }
     loaded.notes.extend(notes(path, topic, &read, &sensor, runs.len()));
     loaded.runs = runs;
+    loaded.lidar_mount_from_tf = Some(read.base_from_sensor.is_some());
     Ok(loaded)
 }
 
@@ -99,7 +100,7 @@ fn mount_text(read: &lidar::ScanRead) -> String {
     match read.base_from_sensor {
         Some(m) => format!(
             "its path moved to the base by the static transforms {}{upside_down} (x {:.3} m, y {:.3} m, yaw \
-             {:.2}°); the fit corrects that mount",
+             {:.2}°); a base model that can tell a mount from the base corrects it (a free matrix keeps it)",
             read.chain_text(),
             m.x_m,
             m.y_m,

@@ -57,6 +57,10 @@ pub struct Dataset {
     /// The measured point's pose in the base frame, when given (`--gt-mount`): the ground truth was moved
     /// to the base by it, and no fit adds a mount.
     pub mount: Option<omni_kin::Pose2>,
+    /// A lidar reference (`--gt-scans`) moved to the base by every recording's own static transforms (its
+    /// `/tf_static` places the lidar): a fit corrects that mount only where the base model can tell a mount
+    /// from the base; a free matrix keeps it as given.
+    pub sensor_mount_from_recordings: bool,
 }
 
 /// The design one input declares (an OptiOdom set's metadata), with the runs read from it.
@@ -376,6 +380,8 @@ struct Loaded {
     /// The Unix second a recording's run times count from (`None`: CSV and OptiOdom runs, whose times are
     /// their own).
     origin_s: Option<i64>,
+    /// With a lidar reference: whether its path was moved to the base by the recording's static transforms.
+    lidar_mount_from_tf: Option<bool>,
 }
 
 /// The recording's name, for matching ground-truth files: a folder's name, a file's stem.
@@ -438,6 +444,7 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
         declared: None,
         clock: r.ground_truth_clock,
         origin_s: Some(r.origin_s),
+        lidar_mount_from_tf: None,
     };
     // The lidar's path as a ROS recording's ground truth, when --gt-scans is given.
     let lidar = |p: &Path, l: Loaded| match &opts.scans {
@@ -501,7 +508,7 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
                 }
             })?;
             let declared = Some((set.kind, set.robot));
-            Ok(Ok(Loaded { runs: set.runs, skipped, notes: Vec::new(), declared, clock: None, origin_s: None }))
+            Ok(Ok(Loaded { runs: set.runs, skipped, declared, ..Default::default() }))
         }
     }
 }
@@ -547,6 +554,9 @@ fn merge(
             if let Some(origin_s) = l.origin_s {
                 ds.time_origins_s.extend(l.runs.iter().map(|r| (r.name().to_string(), origin_s)));
                 ds.recordings.extend(l.runs.iter().map(|r| (r.name().to_string(), source.to_path_buf())));
+            }
+            if let Some(from_tf) = l.lidar_mount_from_tf {
+                ds.sensor_mount_from_recordings = from_tf && (ds.runs.is_empty() || ds.sensor_mount_from_recordings);
             }
             ds.runs.extend(l.runs);
             ds.skipped.extend(l.skipped);

@@ -411,18 +411,22 @@ def imu(
     topic: str = "/imu",
     window_s: float = 1.0,
     out: Optional[_Path] = None,
+    mount: Union[tuple[float, float, float], str, None] = None,
     robot: Optional[_Path] = None,
     joints: Optional[Sequence[str]] = None,
     joints_topic: Optional[str] = None,
     skip_invalid: bool = False,
     max_file_mb: int = 1024,
 ) -> dict[str, Any]:
-    """The wheel matrix's rotation row and the gyro's bias from an IMU's yaw rate (``topic``'s
-    ``angular_velocity.z``) over windows of ``window_s`` seconds: ``omnical imu --json``'s document,
-    ``{"fit": {"row", "row_std" (rad/s per wheel rad/s), "bias_rad_s", "bias_std_rad_s" (rad/s), "windows",
-    "turned_rad", "residual_rms_rad" (rad)}, "design_row", "wheel_names", "topic", "window_s", "out",
-    "schema_version", "command"}``. ``out`` writes the design's matrix with this row as a model file. A
-    recording without the topic raises ``DatasetError`` naming the file and the topic."""
+    """The wheel matrix's rotation row and the gyro's bias from an IMU's yaw rate (``topic``'s angular
+    velocity turned into the base frame by the IMU's mount: ``mount`` ``(roll_deg, pitch_deg, yaw_deg)``,
+    else the recording's static transforms, else upright) over windows of ``window_s`` seconds: ``omnical
+    imu --json``'s document, ``{"fit": {"row", "row_std" (rad/s per wheel rad/s), "bias_rad_s",
+    "bias_std_rad_s" (rad/s), "windows", "turned_rad", "residual_rms_rad" (rad)}, "design_row",
+    "wheel_names", "topic", "window_s", "out", "mounts", "against_design", "schema_version", "command"}``.
+    ``out`` writes the design's matrix with this row as a model file. A recording without the topic, or an
+    IMU read upright whose row points against the design's (upside down, no mount stated), raises
+    ``DatasetError`` naming the files and the topic."""
 
 def load_model(path: _Path, *, effects: Sequence[Any] = ...) -> Model:
     """Read a model file (TOML); ``effects``: Python effects it names."""
@@ -455,14 +459,17 @@ def simulate(
     imu_rate: float = 100.0,
     imu_bias: float = 0.005,
     imu_noise: float = 0.002,
+    imu_mount: Union[tuple[float, float, float], str] = "0,0,0",
+    imu_tf: Union[tuple[float, float, float], str, None] = None,
 ) -> list[Run]:
     """The benchmark commands x runs_per_command of ``robot`` (default ``"apr02"``: the flower) on the true
     robot ``truth`` (default: Eq. 9 on APR-02, else the robot's design). ``out``: also write them as ROS 2
     bags (one per run, robot.toml beside them; a folder holding files raises ``FileExistsError`` unless
     ``force=True``), with a simulated 2D lidar in the room ``lidar`` (``"room"``, ``"corridor"`` or a room
-    file; mount ``(x_m, y_m, yaw_deg)``, rate [Hz], field of view ``lidar_fov`` [degrees], max range and
-    noise [m]) and/or an IMU's yaw rate
-    (``imu=True``; rate [Hz], bias and noise [rad/s]); the sensors need ``out``."""
+    file; mount ``(x_m, y_m, yaw_deg)``, rate [Hz], field of view ``lidar_fov`` [degrees], max range
+    and noise [m]) and/or an IMU's yaw rate
+    (``imu=True``; rate [Hz], bias and noise [rad/s], mount ``(roll_deg, pitch_deg, yaw_deg)`` and the mount
+    ``/tf_static`` states, or ``"none"``); the sensors need ``out``."""
 
 def train(
     model: _ModelArg,
@@ -530,8 +537,10 @@ def train_files(args: list[str]) -> dict[str, Any]:
     ``end_s`` [s], ``runs``, ``notes``, ``skipped``, ``warnings``. ``ValueError`` for bad arguments,
     ``OmnicalError`` with the command's message for a failed load or fit."""
 
-def diagnose_files(args: list[str]) -> dict[str, Any]:
-    """``omnical diagnose ARGS...`` inside this process; returns what ``--json`` prints."""
+def diagnose_files(args: list[str], train_args: Optional[list[str]] = None) -> dict[str, Any]:
+    """``omnical diagnose ARGS...`` inside this process; returns what ``--json`` prints. With ``train_args``
+    the runs are read as ``omnical train TRAIN_ARGS...`` reads them (its data options replace those of
+    ``args``)."""
 
 def _fleet_args(args: list[str]) -> tuple[Optional[dict[str, Any]], str, int]:
     """``omnical fleet ARGS...`` parsed by the command line's parser: (options, "", 0), or (None, text,
@@ -546,6 +555,7 @@ def _dataset_from_state(
     design: str,
     robot: Optional[str] = None,
     declared: str = "",
+    reading: str = "",
 ) -> Dataset: ...
 def _model_from_toml(text: str, effects: list[Any] = ...) -> Model: ...
 def _calibration_from_state(state: dict[str, Any]) -> Calibration: ...

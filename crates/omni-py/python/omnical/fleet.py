@@ -220,16 +220,17 @@ def calibrate_session(task: dict[str, Any]) -> dict[str, Any]:
     if task.get("diagnose") and row["status"] == "ok":
         t1 = time.perf_counter()
         try:
-            row.update(diagnose_session(session, model_path))
+            row.update(diagnose_session(session, model_path, task.get("extra", ())))
         except Exception as e:  # the fit stands; the row says why it has no diagnosis
             row["diagnose_error"] = f"{type(e).__name__}: {e}".strip()
         row["diagnose_seconds"] = time.perf_counter() - t1
     return row
 
 
-def diagnose_session(session: Session, model_path: str) -> dict[str, Any]:
+def diagnose_session(session: Session, model_path: str, extra_train_args: Sequence[str] = ()) -> dict[str, Any]:
     """``omnical diagnose --model MODEL SESSION`` as row fields: verdict (an effect id or empty), its
-    text, and the named effect's fitted parameters with standard errors.
+    text, and the named effect's fitted parameters with standard errors. The runs are read as the session's
+    training read them (``extra_train_args``' data options: ``--gt-scans /scan`` diagnoses on the lidar).
 
     >>> import tempfile
     >>> fleet = Path(tempfile.mkdtemp())
@@ -242,7 +243,8 @@ def diagnose_session(session: Session, model_path: str) -> dict[str, Any]:
     args = ["--model", model_path, session.path]
     if session.robot_toml:
         args += ["--robot", session.robot_toml]
-    d = _omnical.diagnose_files(args)
+    reading = [session.path, *(["--robot", session.robot_toml] if session.robot_toml else []), *extra_train_args]
+    d = _omnical.diagnose_files(args, train_args=reading)
     out: dict[str, Any] = {"diagnosed": True, "verdict": d.get("verdict") or "", "verdict_text": d.get("verdict_text", "")}
     named = next((c for c in d.get("ranking", []) if c.get("effect") == d.get("verdict")), None)
     for p in (named or {}).get("params", []):

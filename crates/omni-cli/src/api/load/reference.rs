@@ -111,7 +111,13 @@ pub(super) fn cut_into_windows(ds: &mut Dataset, data: &DataOptions) -> Result<(
         ds.runs.len(),
         runs.len(),
         if gaps > 0 { format!(", {gaps} gaps in the reference") } else { String::new() },
-        if ds.mount.is_none() { "; the sensor's mount is fitted with the wheels" } else { "" },
+        match (ds.mount, ds.sensor_mount_from_recordings) {
+            (Some(_), _) => "",
+            (None, true) =>
+                "; the sensor's mount is the recordings' static transform, corrected by a base model that \
+                             can tell it from the base",
+            (None, false) => "; the sensor's mount is fitted with the wheels",
+        },
     )));
     ds.runs = runs;
     ds.reference = ReferenceKind::Relative;

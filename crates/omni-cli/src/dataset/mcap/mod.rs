@@ -84,8 +84,8 @@ use crate::dataset::ground_truth::{ExternalTruth, GtClock};
 use omni_kin::{Run, StampedPose};
 use std::path::Path;
 
-pub use imu::GyroRead;
 pub(crate) use imu::ImuSink;
+pub use imu::{BASE_FRAMES as IMU_BASE_FRAMES, GyroRead, ImuRate, StatedMount};
 pub(crate) use inspect::InventorySink;
 pub use inspect::{Inventory, ROBOT_DESCRIPTION_TOPIC, TopicSummary, inspect, inspect_bytes};
 pub use laser_scan::ScanRead;
@@ -249,9 +249,9 @@ pub struct WriteOptions {
     /// A lidar's scans, on `/scan` (LaserScan, frame `laser`), and its mount on `/tf_static`
     /// (`base_link` → `laser`). Default none.
     pub lidar: Option<LidarTrack>,
-    /// An IMU's yaw rates (on the run's clock), on `/imu` (`sensor_msgs/msg/Imu`, frame `imu_link`). Default
-    /// none.
-    pub imu: Option<Vec<omni_kin::gyro::GyroSample>>,
+    /// An IMU, on `/imu` (`sensor_msgs/msg/Imu`, frame `imu_link`), and its mount on `/tf_static`
+    /// (`base_link` → `imu_link`). Default none.
+    pub imu: Option<ImuTrack>,
     /// The recording's own topics carried over as recorded ([`copy`]: transforms, the URDF, the commands),
     /// each on its own topic; a recorded command topic replaces the run's written one. A topic whose name
     /// the file already writes otherwise is left out. Default none.
@@ -265,6 +265,18 @@ pub struct LidarTrack {
     pub scans: Vec<omni_kin::lidar::Scan>,
     /// The lidar's pose in the base frame that `/tf_static` states (m, rad); `None`: no `/tf_static`.
     pub base_from_sensor: Option<omni_kin::Pose2>,
+}
+
+/// An IMU to write into a bag: the base's yaw rates it senses (stamps on the run's clock) and how it sits on
+/// the robot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImuTrack {
+    /// The base's yaw rates, in time order; written as the angular velocity in the IMU's frame.
+    pub samples: Vec<omni_kin::gyro::GyroSample>,
+    /// The IMU's true mount.
+    pub mount: omni_kin::gyro::ImuMount,
+    /// The mount `/tf_static` states (`base_link` → `imu_link`); `None`: none.
+    pub stated: Option<omni_kin::gyro::ImuMount>,
 }
 
 impl Default for WriteOptions {

@@ -284,7 +284,8 @@ impl Bag<'_> {
                         ),
                     },
                     self.listing()
-                ) + &localization_hint(&localizations),
+                ) + &localization_hint(&localizations)
+                    + &self.without_motion_capture(),
             )),
             _ => {
                 let list: Vec<&str> = found.iter().map(|(_, d)| d.as_str()).collect();
@@ -493,6 +494,33 @@ pub(super) fn localization_note(path: &Path, topic: &str) -> Option<Note> {
             ),
         )
     })
+}
+
+/// Whether `schema` is the ROS type `package/Name` (ROS 2's `package/msg/Name` or ROS 1's).
+fn is_type(schema: &str, package: &str, name: &str) -> bool {
+    schema == format!("{package}/msg/{name}") || schema == format!("{package}/{name}")
+}
+
+impl Bag<'_> {
+    /// The end of the "no ground truth" message: the references that need no motion capture, naming the
+    /// recording's own lidar and IMU topics when it has them.
+    fn without_motion_capture(&self) -> String {
+        let topics = |name: &str| -> Vec<&str> {
+            let of = self.channels.iter().filter(|c| c.messages > 0 && is_type(&c.schema, "sensor_msgs", name));
+            of.map(|c| c.topic.as_str()).collect()
+        };
+        let mut ways = Vec::new();
+        match topics("LaserScan").first() {
+            Some(t) => ways.push(format!("its lidar's scans as the reference: --gt-scans {t}")),
+            None => ways.push("a lidar's scans (--gt-scans TOPIC)".to_string()),
+        }
+        ways.push("a sensor's or a localization's own path (--gt-kind relative with --gt-topic or --gt)".into());
+        ways.push("tape-measured end poses (--gt-kind end-pose --gt TABLE; omnical plan --umbmark)".into());
+        if let Some(t) = topics("Imu").first() {
+            ways.push(format!("its IMU for the rotation row alone: omnical imu RECORDING --topic {t}"));
+        }
+        format!(". Without motion capture: {}", ways.join("; "))
+    }
 }
 
 /// The end of the "no ground truth" message when localizations were passed over.

@@ -6,9 +6,12 @@
 //! topic (ROS 2, ROS 1's tf2 `static_transform_publisher`), and a pair of another TF topic when every one of
 //! its messages carries the same transform ([`Seen`]): ROS 1's tf `static_transform_publisher` and
 //! robot_state_publisher (Indigo) republish fixed joints on `/tf`, and a pair published once is fixed too.
-//! A pair whose value changes (odom → base_link) never is.
+//! A pair whose value changes (odom → base_link) never is. For a sensor that is not upright (an IMU upside
+//! down or on its side), the full 3D rotation of the chain too ([`StaticTree::add_transform`]); the IMU's
+//! reader finds the fixed `/tf` pairs with [`ConstantPairs`] (exact equality).
 
-use super::tf::{TfMessage, Transform};
+use super::tf::{TfMessage, Transform, TransformStamped};
+use nalgebra::{Quaternion, UnitQuaternion};
 use omni_kin::Pose2;
 use std::collections::BTreeMap;
 
@@ -19,6 +22,9 @@ pub(super) struct StaticTree {
     /// Child frames whose transform turns z downwards (a lidar mounted upside down): seen from above, such a
     /// frame is mirrored, its y axis opposite to what its yaw says.
     flipped: std::collections::BTreeSet<String>,
+    /// Each child's full rotation in its parent, where a transform gave one ([`StaticTree::add_transform`]);
+    /// a child added planar turns about z by its pose's yaw.
+    rotation_of: BTreeMap<String, UnitQuaternion<f64>>,
 }
 
 /// Longest chain followed (a TF tree is shallow; this stops a cycle).
@@ -141,6 +147,44 @@ impl StaticTree {
         }
     }
 
+    /// Takes one `geometry_msgs/TransformStamped` whole: its planar pose, its full rotation, and whether it
+    /// turns z downwards. A transform with a non-finite field or a zero quaternion is left out (`false`).
+    pub fn add_transform(&mut self, t: &TransformStamped) -> bool {
+        let (p, q) = (&t.transform.translation, &t.transform.rotation);
+        let rotation = Quaternion::new(q.w, q.x, q.y, q.z);
+        let finite = [p.x, p.y, q.x, q.y, q.z, q.w].iter().all(|v| v.is_finite());
+        if !finite || rotation.norm() == 0.0 {
+            return false;
+        }
+        let (parent, child) = (t.header.frame_id.frame(), t.child_frame_id.frame());
+        if self.parent_of.contains_key(child) {
+            return true;
+        }
+        self.add(parent, child, Pose2::new(p.x, p.y, q.yaw_rad()));
+        let rotation = UnitQuaternion::from_quaternion(rotation);
+        // The child's z axis in the parent: R₂₂ = w² − x² − y² + z².
+        if (rotation * nalgebra::Vector3::z()).z < 0.0 {
+            self.mark_flipped(child);
+        }
+        self.rotation_of.insert(child.to_string(), rotation);
+        true
+    }
+
+    /// The 3D rotation of frame `to` in frame `from` through the static transforms down from `from` (a link
+    /// added planar turns about z by its yaw); `None` when `to` does not hang from `from`.
+    pub fn rotation(&self, from: &str, to: &str) -> Option<UnitQuaternion<f64>> {
+        let (_, frames) = self.offset(from, to)?;
+        let mut r = UnitQuaternion::identity();
+        for f in &frames {
+            let local = match self.rotation_of.get(f) {
+                Some(q) => *q,
+                None => UnitQuaternion::from_euler_angles(0.0, 0.0, self.parent_of.get(f)?.1.theta_rad),
+            };
+            r *= local;
+        }
+        Some(r)
+    }
+
     /// Marks `child`'s transform as turning z downwards (see [`StaticTree::flipped`]).
     pub fn mark_flipped(&mut self, child: &str) {
         self.flipped.insert(child.to_string());
@@ -171,6 +215,38 @@ impl StaticTree {
             at = parent;
         }
         None
+    }
+}
+
+/// The pairs of a `/tf` topic, kept while each repeats its first value: at the end, those that never
+/// moved are static transforms published the ROS 1 way (a pair seen once counts too, as in
+/// [`super::tf::TfPairs::add_statics`]).
+#[derive(Debug, Default)]
+pub(super) struct ConstantPairs {
+    /// (parent, child) → the first transform, and whether every later one had the same value.
+    pairs: BTreeMap<(String, String), (TransformStamped, bool)>,
+}
+
+impl ConstantPairs {
+    /// Takes the transforms of one `/tf` message.
+    pub fn push(&mut self, transforms: &[TransformStamped]) {
+        for t in transforms {
+            let key = (t.header.frame_id.frame().to_string(), t.child_frame_id.frame().to_string());
+            match self.pairs.get_mut(&key) {
+                None => {
+                    self.pairs.insert(key, (t.clone(), true));
+                }
+                Some((first, constant)) => *constant &= first.transform == t.transform,
+            }
+        }
+    }
+
+    /// Adds the pairs that never moved to `tree` (after the `/tf_static` ones: a child `/tf_static` places
+    /// keeps its place).
+    pub fn add_to(&self, tree: &mut StaticTree) {
+        for (t, _) in self.pairs.values().filter(|(_, constant)| *constant) {
+            tree.add_transform(t);
+        }
     }
 }
 
@@ -252,5 +328,54 @@ mod tests {
         tree.mark_flipped("plate");
         assert_eq!(tree.mirrored("base_link", "laser"), Some(false));
         assert_eq!(tree.mirrored("laser", "base_link"), None);
+    }
+
+    /// `child` in `parent` at (x, 0) turned by the quaternion (x, y, z, w).
+    fn transform(parent: &str, child: &str, x_m: f64, q: [f64; 4]) -> TransformStamped {
+        use super::super::common::{Header, Quaternion as Q, RosString, Vector3};
+        use super::super::tf::Transform;
+        TransformStamped {
+            header: Header { frame_id: RosString(parent.into()), ..Header::default() },
+            child_frame_id: RosString(child.into()),
+            transform: Transform {
+                translation: Vector3 { x: x_m, y: 0.0, z: 0.0 },
+                rotation: Q { x: q[0], y: q[1], z: q[2], w: q[3] },
+            },
+        }
+    }
+
+    #[test]
+    fn the_rotation_of_a_chain_composes_its_links_in_3d() {
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        let mut tree = StaticTree::default();
+        // A plate turned 90° about z (planar), the IMU on it upside down (roll π, a quaternion of 2 × 90°).
+        tree.add("base_link", "plate", Pose2::new(0.1, 0.0, std::f64::consts::FRAC_PI_2));
+        assert!(tree.add_transform(&transform("/plate", "imu_link", 0.02, [2.0 * h, 0.0, 0.0, 0.0])));
+        assert!(!tree.add_transform(&transform("plate", "bad", 0.0, [0.0; 4])), "a zero quaternion");
+        assert!(!tree.add_transform(&transform("plate", "bad", f64::NAN, [0.0, 0.0, 0.0, 1.0])));
+        let r = tree.rotation("base_link", "imu_link").unwrap();
+        // The IMU's x axis along the base's y (the plate's yaw), its z axis down (the roll).
+        let (x, z) = (r * nalgebra::Vector3::x(), r * nalgebra::Vector3::z());
+        assert!((x - nalgebra::Vector3::y()).norm() < 1e-12 && (z + nalgebra::Vector3::z()).norm() < 1e-12, "{r:?}");
+        assert_eq!(tree.mirrored("base_link", "imu_link"), Some(true));
+        assert_eq!(tree.rotation("imu_link", "base_link"), None);
+    }
+
+    #[test]
+    fn a_tf_pair_that_never_moves_is_static_and_one_that_moves_is_not() {
+        let up = [0.0, 0.0, 0.0, 1.0];
+        let mut pairs = ConstantPairs::default();
+        for k in 0..5 {
+            let odom = transform("odom", "base_link", 0.1 * k as f64, up);
+            pairs.push(&[odom, transform("base_link", "imu_link", 0.05, [1.0, 0.0, 0.0, 0.0])]);
+        }
+        let mut tree = StaticTree::default();
+        // /tf_static's own base_link → laser stays; /tf's constant pair is added beside it.
+        tree.add_transform(&transform("base_link", "laser", 0.2, up));
+        pairs.add_to(&mut tree);
+        let r = tree.rotation("base_link", "imu_link").unwrap();
+        assert!((r.angle() - std::f64::consts::PI).abs() < 1e-12, "{r:?}");
+        assert_eq!(tree.offset("odom", "base_link"), None, "odom → base_link moves: not static");
+        assert!(tree.offset("base_link", "laser").is_some());
     }
 }

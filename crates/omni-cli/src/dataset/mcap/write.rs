@@ -120,10 +120,15 @@ fn recorded_command(w: &WriteOptions) -> bool {
 /// The copied topics the file carries: all but those on a topic written from the run (the command
 /// excepted, see [`recorded_command`]).
 fn carried(w: &WriteOptions) -> Vec<&super::copy::CopiedTopic> {
-    let lidar_tf = w.lidar.as_ref().is_some_and(|l| l.base_from_sensor.is_some());
-    let written =
-        |topic: &str| topic != COMMAND_TOPIC && FIXED_TOPICS.contains(&topic) && (topic != TF_STATIC_TOPIC || lidar_tf);
+    let written = |topic: &str| {
+        topic != COMMAND_TOPIC && FIXED_TOPICS.contains(&topic) && (topic != TF_STATIC_TOPIC || writes_statics(w))
+    };
     w.copied.iter().filter(|c| !written(&c.topic)).collect()
+}
+
+/// Whether the file writes `/tf_static` (a lidar's or an IMU's stated mount).
+fn writes_statics(w: &WriteOptions) -> bool {
+    w.lidar.as_ref().is_some_and(|l| l.base_from_sensor.is_some()) || w.imu.as_ref().is_some_and(|i| i.stated.is_some())
 }
 
 /// Writes the file's messages. Channel slots: 0 joints, 1 truth, 2 command, 3 odometry, 4 calibrated
@@ -174,18 +179,8 @@ fn messages(path: &Path, run: &Run, w: &WriteOptions) -> Result<Vec<Pending>, Da
     if let Some(lidar) = &w.lidar {
         lidar_messages(&mut m, lidar, t.first().copied().unwrap_or(0.0))?;
     }
-    for g in w.imu.iter().flatten() {
-        let msg = imu::Imu {
-            header: header(m.stamp(g.t_s)?, IMU_FRAME),
-            orientation: Quaternion { x: 0.0, y: 0.0, z: 0.0, w: 1.0 },
-            // REP-145: an orientation covariance of −1 says the IMU gives no orientation.
-            orientation_covariance: [-1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-            angular_velocity: Vector3 { x: 0.0, y: 0.0, z: g.z_rad_s },
-            angular_velocity_covariance: [0.0; 9],
-            linear_acceleration: Vector3::default(),
-            linear_acceleration_covariance: [0.0; 9],
-        };
-        m.push(msg.header.stamp, 7, &msg)?;
+    if let Some(track) = &w.imu {
+        imu_messages(&mut m, track, t.first().copied().unwrap_or(0.0))?;
     }
     for (k, c) in carried(w).into_iter().enumerate() {
         m.out.extend(c.messages.iter().map(|(t, bytes)| (*t, FIXED_SLOTS + k, bytes.clone())));
@@ -193,6 +188,33 @@ fn messages(path: &Path, run: &Run, w: &WriteOptions) -> Result<Vec<Pending>, Da
     // Time order; at equal times, channel order (joints first), and message order within a channel.
     m.out.sort_by_key(|&(t, slot, _)| (t, slot));
     Ok(m.out)
+}
+
+/// The IMU's messages (frame `imu_link`: the base's yaw rate turned into the IMU's frame by its true mount)
+/// and its stated mount, one `/tf_static` message at `first_t_s` (the first wheel sample), when it has one.
+fn imu_messages(m: &mut Messages<'_>, track: &super::ImuTrack, first_t_s: f64) -> Result<(), DatasetError> {
+    if let Some(mount) = &track.stated {
+        let stamp = m.stamp(first_t_s)?;
+        let mut tf = laser_scan::static_transform(header(stamp, BASE_FRAME), IMU_FRAME, &omni_kin::Pose2::IDENTITY);
+        let q = mount.base_from_imu;
+        tf.transforms[0].transform.rotation = Quaternion { x: q.i, y: q.j, z: q.k, w: q.w };
+        m.push(stamp, 6, &tf)?;
+    }
+    for g in &track.samples {
+        let [x, y, z] = track.mount.imu_rates(g.z_rad_s);
+        let msg = imu::Imu {
+            header: header(m.stamp(g.t_s)?, IMU_FRAME),
+            orientation: Quaternion { x: 0.0, y: 0.0, z: 0.0, w: 1.0 },
+            // REP-145: an orientation covariance of −1 says the IMU gives no orientation.
+            orientation_covariance: [-1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            angular_velocity: Vector3 { x, y, z },
+            angular_velocity_covariance: [0.0; 9],
+            linear_acceleration: Vector3::default(),
+            linear_acceleration_covariance: [0.0; 9],
+        };
+        m.push(msg.header.stamp, 7, &msg)?;
+    }
+    Ok(())
 }
 
 /// The lidar's scans (frame `laser`) and its stated mount, one `/tf_static` message at `first_t_s` (the
@@ -281,7 +303,7 @@ fn write_file(tmp: &Path, run: &Run, w: &WriteOptions, pending: &[Pending]) -> R
         (odometry::NAME, odometry::schema(), ODOM_TOPIC, w.design_odometry.is_some()),
         (odometry::NAME, odometry::schema(), CALIBRATED_TOPIC, w.calibrated_odometry.is_some()),
         (laser_scan::NAME, laser_scan::schema(), SCAN_TOPIC, w.lidar.is_some()),
-        (super::tf::NAME, laser_scan::tf_schema(), TF_STATIC_TOPIC, w.lidar.is_some()),
+        (super::tf::NAME, laser_scan::tf_schema(), TF_STATIC_TOPIC, w.lidar.is_some() || writes_statics(w)),
         (imu::NAME, imu::schema(), IMU_TOPIC, w.imu.is_some()),
     ] {
         let id = if used {
