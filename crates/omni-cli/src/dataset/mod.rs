@@ -429,15 +429,9 @@ fn expand(p: &Path, out: &mut Vec<Result<Input, DatasetError>>) {
     });
 }
 
-/// Reads one input. The outer error always stops the load (a file above the size cap); the inner one is
-/// the input's own failure, which [`merge`] lists as skipped under `skip_invalid`.
-fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, DatasetError>, DatasetError> {
-    let mo = mcap::McapOptions {
-        skip_invalid: opts.skip_invalid,
-        recorded_odometry: opts.recorded_odometry,
-        ..opts.mcap.clone()
-    };
-    let from_bag = |r: mcap::McapRead| Loaded {
+/// A ROS recording's read as a [`Loaded`].
+fn from_bag(r: mcap::McapRead) -> Loaded {
+    Loaded {
         runs: r.runs,
         skipped: r.skipped.into_iter().map(|(source, reason)| Skipped { source, reason }).collect(),
         notes: r.notes,
@@ -445,6 +439,16 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
         clock: r.ground_truth_clock,
         origin_s: Some(r.origin_s),
         lidar_mount_from_tf: None,
+    }
+}
+
+/// Reads one input. The outer error always stops the load (a file above the size cap); the inner one is
+/// the input's own failure, which [`merge`] lists as skipped under `skip_invalid`.
+fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, DatasetError>, DatasetError> {
+    let mo = mcap::McapOptions {
+        skip_invalid: opts.skip_invalid,
+        recorded_odometry: opts.recorded_odometry,
+        ..opts.mcap.clone()
     };
     // The lidar's path as a ROS recording's ground truth, when --gt-scans is given.
     let lidar = |p: &Path, l: Loaded| match &opts.scans {
