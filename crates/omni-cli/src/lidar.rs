@@ -27,8 +27,10 @@ pub use omni_kin::lidar::{
 pub const DEFAULT_SCAN_TOPIC: &str = "/scan";
 
 /// Reads the LaserScan messages on `topic` of the ROS recording at `path` (a `.mcap`, `.db3` or `.bag`
-/// file, or a rosbag2 folder). Ranges are kept as recorded (inf, NaN and out-of-range values are no
-/// returns, see [`Scan::is_return`]). Errors name the file, the topic and, for a bad message, its index
+/// file, or a rosbag2 folder). Ranges are kept as recorded (inf, NaN, 0 and out-of-range values are no
+/// returns, see [`Scan::is_return`]). The lidar's mount is read from the static transforms (`…tf_static`
+/// topics, and pairs republished unchanged on `/tf`) from `base_link`, else `base_footprint`, down to the
+/// scans' `header.frame_id` ([`ScanRead::chain`]). Errors name the file, the topic and, for a bad message, its index
 /// (0-based within the topic) and field; a recording without the topic lists its topics.
 ///
 /// ```no_run
@@ -38,8 +40,15 @@ pub const DEFAULT_SCAN_TOPIC: &str = "/scan";
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn read_scans(path: &Path, topic: &str) -> Result<ScanRead, DatasetError> {
-    let sink =
-        dataset::feed_ros(path, dataset::DEFAULT_MAX_FILE_BYTES, |zstd| dataset::mcap::ScanSink::new(topic, zstd))?;
+    read_scans_from(path, topic, None)
+}
+
+/// [`read_scans`] with the lidar's mount looked up from `base_frame` (a robot description's `[frames]
+/// base`) instead of `base_link`, else `base_footprint`.
+pub fn read_scans_from(path: &Path, topic: &str, base_frame: Option<&str>) -> Result<ScanRead, DatasetError> {
+    let sink = dataset::feed_ros(path, dataset::DEFAULT_MAX_FILE_BYTES, |zstd| {
+        dataset::mcap::ScanSink::new(topic, zstd).with_base_frame(base_frame)
+    })?;
     sink.finish(path)
 }
 

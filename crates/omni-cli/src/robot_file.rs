@@ -238,6 +238,9 @@ pub fn fill_mcap_options(mcap: &mut McapOptions, joints_open: bool, robot: Optio
         "frames",
         "ground_truth_child",
     );
+    if mcap.base_frame.is_none() {
+        mcap.base_frame.clone_from(&r.frames.base);
+    }
     mcap.wheel_data = r.wheel_data.clone();
     // The design's forward kinematics, for a recording whose wheels come from its own odometry (its rows
     // are the description's wheels, so only when they are the wheels read).
@@ -383,10 +386,11 @@ pub fn to_toml(d: &RobotDescription, comments: &Comments) -> String {
         text(&mut s, "command", &t.command);
     }
     let f = &d.frames;
-    if f.ground_truth_parent.is_some() || f.ground_truth_child.is_some() {
+    if f.ground_truth_parent.is_some() || f.ground_truth_child.is_some() || f.base.is_some() {
         s.push_str("\n[frames]\n");
         text(&mut s, "ground_truth_parent", &f.ground_truth_parent);
         text(&mut s, "ground_truth_child", &f.ground_truth_child);
+        text(&mut s, "base", &f.base);
     }
     if let Some(g) = &d.ground_truth {
         s.push_str("\n[ground_truth]\n");

@@ -107,6 +107,7 @@ fn simulate_writes_the_lidar_and_scan_odometry_follows_it_whatever_the_threads()
     assert_eq!((j["scans"].as_u64(), j["matched"].as_u64(), j["rejected"].as_u64()), (Some(49), Some(48), Some(0)));
     assert_eq!(j["segments"].as_array().unwrap().len(), 1);
     assert!((j["base_from_sensor"]["theta_rad"].as_f64().unwrap() - 5f64.to_radians()).abs() < 1e-12);
+    assert_eq!(j["mount_chain"], serde_json::json!(["base_link", "laser"]));
     assert!(j["quality"]["rms_m"]["median"].as_f64().unwrap() < 0.012, "{j}");
     assert!(j["quality"]["condition"]["max"].as_f64().unwrap() < 10.0, "{j}");
     let tum = std::fs::read_to_string(d.join("s.tum")).unwrap();

@@ -309,7 +309,7 @@ fn a_lidar_alone_calibrates_as_motion_capture_does() {
     let (mocap, _) = json(&["train", "sim/train", "--out", "mocap.toml"], d);
     let (lidar, stderr) = json(&["train", "sim/train", "--gt-scans", "/scan", "--out", "lidar.toml"], d);
     let said = "lidar \"/scan\" matched scan to scan as the reference; its path moved to the base by the static \
-                transform to \"laser\" (x 0.200 m, y 0.000 m, yaw 5.00°)";
+                transforms base_link → laser (x 0.200 m, y 0.000 m, yaw 5.00°)";
     assert!(stderr.contains(said), "{stderr}");
     for name in ["r_left", "r_right", "b"] {
         let (m, m_se) = param(&mocap, name);
@@ -352,8 +352,15 @@ fn a_lidars_mount_is_found_from_its_motion() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
     for (tf, said) in [
-        ("none", "no static transform from the base to \"laser\": the lidar's mount is fitted from zero"),
-        ("0,0,0", "its path moved to the base by the static transform to \"laser\" (x 0.000 m, y 0.000 m, yaw 0.00°)"),
+        (
+            "none",
+            "no static transform from the base (base_link, base_footprint or [frames] base) to \"laser\": the lidar's \
+             mount is fitted from zero",
+        ),
+        (
+            "0,0,0",
+            "its path moved to the base by the static transforms base_link → laser (x 0.000 m, y 0.000 m, yaw 0.00°)",
+        ),
     ] {
         std::fs::remove_dir_all(d.join("sim")).ok();
         simulate_lidar(d, "room", "1", tf);

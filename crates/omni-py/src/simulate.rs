@@ -43,7 +43,8 @@ use std::sync::Arc;
 ///   that comes within 0.25 m of a wall raises ``ValueError``; a room file that does not exist,
 ///   ``FileNotFoundError``. ``lidar_mount``: the lidar's pose on the base ``(x_m, y_m, yaw_deg)`` or the
 ///   CLI's ``"X,Y,YAW_DEG"``; ``lidar_tf``: the mount ``/tf_static`` states, the same, or ``"none"``
-///   (default: the true mount); ``lidar_rate`` [Hz]; ``lidar_beams`` over 360°; ``lidar_max_range`` [m];
+///   (default: the true mount); ``lidar_rate`` [Hz]; ``lidar_beams`` over ``lidar_fov`` [degrees, centred on
+///   the lidar's x axis; 360 all round, 270 a Hokuyo's]; ``lidar_max_range`` [m];
 ///   ``lidar_noise``: Gaussian range noise [m]; ``lidar_dropout``: share of beams with no return;
 ///   ``lidar_sweep``: measure each scan's beams over its period, as a spinning lidar.
 /// - ``imu=True``: a gyro on ``/imu`` (Imu, frame ``imu_link``): the base's true turn rate plus ``imu_bias``
@@ -64,11 +65,11 @@ use std::sync::Arc;
 // The defaults are `omnical simulate`'s (SimConfig::default() and its --seed default, 7; the sensors'
 // ScanSettings::default() and Imu::default()), spelt out so that help() shows them; tests/test_mirror.py
 // and crates/omni-cli/tests/config.rs compare them with the CLI's.
-#[pyo3(signature = (truth = None, *, robot = None, runs_per_command = 5, duration_s = 10.0, seed = 7, noise_free = false, prefix = "train/", sample_drop_probability = 0.0, sample_jitter_s = 0.0, out = None, force = false, lidar = None, lidar_mount = MountArg::text("0,0,0"), lidar_tf = None, lidar_rate = 10.0, lidar_beams = 720, lidar_max_range = 12.0, lidar_noise = 0.01, lidar_dropout = 0.01, lidar_sweep = false, imu = false, imu_rate = 100.0, imu_bias = 0.005, imu_noise = 0.002, imu_mount = MountArg::text("0,0,0"), imu_tf = None))]
+#[pyo3(signature = (truth = None, *, robot = None, runs_per_command = 5, duration_s = 10.0, seed = 7, noise_free = false, prefix = "train/", sample_drop_probability = 0.0, sample_jitter_s = 0.0, out = None, force = false, lidar = None, lidar_mount = MountArg::text("0,0,0"), lidar_tf = None, lidar_rate = 10.0, lidar_beams = 720, lidar_fov = 360.0, lidar_max_range = 12.0, lidar_noise = 0.01, lidar_dropout = 0.01, lidar_sweep = false, imu = false, imu_rate = 100.0, imu_bias = 0.005, imu_noise = 0.002, imu_mount = MountArg::text("0,0,0"), imu_tf = None))]
 // pyo3 shows a default it cannot spell as `...`: the text signature spells lidar_mount's as the CLI's
 // (mypy's stubtest compares it with _omnical.pyi).
 #[pyo3(
-    text_signature = "(truth=None, *, robot=None, runs_per_command=5, duration_s=10.0, seed=7, noise_free=False, prefix=\"train/\", sample_drop_probability=0.0, sample_jitter_s=0.0, out=None, force=False, lidar=None, lidar_mount=\"0,0,0\", lidar_tf=None, lidar_rate=10.0, lidar_beams=720, lidar_max_range=12.0, lidar_noise=0.01, lidar_dropout=0.01, lidar_sweep=False, imu=False, imu_rate=100.0, imu_bias=0.005, imu_noise=0.002, imu_mount=\"0,0,0\", imu_tf=None)"
+    text_signature = "(truth=None, *, robot=None, runs_per_command=5, duration_s=10.0, seed=7, noise_free=False, prefix=\"train/\", sample_drop_probability=0.0, sample_jitter_s=0.0, out=None, force=False, lidar=None, lidar_mount=\"0,0,0\", lidar_tf=None, lidar_rate=10.0, lidar_beams=720, lidar_fov=360.0, lidar_max_range=12.0, lidar_noise=0.01, lidar_dropout=0.01, lidar_sweep=False, imu=False, imu_rate=100.0, imu_bias=0.005, imu_noise=0.002, imu_mount=\"0,0,0\", imu_tf=None)"
 )]
 // long: one parameter per keyword (the CLI's flags, 27 of them), then the settings built by helpers.
 #[allow(clippy::too_many_arguments)]
@@ -90,6 +91,7 @@ pub fn simulate(
     lidar_tf: Option<MountArg>,
     lidar_rate: f64,
     lidar_beams: usize,
+    lidar_fov: f64,
     lidar_max_range: f64,
     lidar_noise: f64,
     lidar_dropout: f64,
@@ -117,6 +119,7 @@ pub fn simulate(
     let settings = ScanSettings {
         rate_hz: lidar_rate,
         beams: lidar_beams,
+        fov_rad: lidar_fov.to_radians(),
         range_max_m: lidar_max_range,
         range_noise_m: lidar_noise,
         dropout: lidar_dropout,

@@ -165,7 +165,8 @@ pub struct DataArgs {
     pub gt_mount: Option<omni_kin::Pose2>,
     /// The ground truth from a 2D lidar without motion capture: the scans of this LaserScan topic (e.g.
     /// `/scan`) matched scan to scan into the lidar's own path, a relative reference (`--gt-kind relative`
-    /// implied); its mount from the recording's /tf_static when there, corrected by the fit.
+    /// implied); its mount from the recording's static transforms when there (/tf_static, or fixed pairs
+    /// republished on /tf; from base_link, else base_footprint), corrected by the fit.
     #[arg(long, value_name = "TOPIC")]
     pub gt_scans: Option<String>,
     /// Cut MCAP files into runs where the robot stands still at least this long (s).

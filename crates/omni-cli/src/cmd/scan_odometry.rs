@@ -122,8 +122,8 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     }
     if let Some(m) = read.base_from_sensor {
         println!(
-            "mount on /tf_static: base_link → {}: ({:.3}, {:.3}) m, {:.2}°",
-            read.frame_id,
+            "mount from static transforms {}: ({:.3}, {:.3}) m, {:.2}°",
+            read.chain_text(),
             m.x_m,
             m.y_m,
             m.theta_rad.to_degrees()
@@ -167,6 +167,7 @@ fn json_doc(a: &Args, read: &lidar::ScanRead, path: &SensorPath, written: &[Path
         },
         "segments": segments,
         "base_from_sensor": read.base_from_sensor.map(|m| json!({ "x_m": m.x_m, "y_m": m.y_m, "theta_rad": m.theta_rad })),
+        "mount_chain": read.chain,
         "tum": written,
     })
 }

@@ -108,9 +108,13 @@ pub struct LidarArgs {
     /// Scans per second (Hz).
     #[arg(long, value_name = "HZ", default_value_t = ScanSettings::default().rate_hz, requires = "lidar")]
     pub lidar_rate: f64,
-    /// Beams per scan, over 360°.
+    /// Beams per scan, evenly over the field of view (--lidar-fov).
     #[arg(long, value_name = "N", default_value_t = ScanSettings::default().beams, requires = "lidar")]
     pub lidar_beams: usize,
+    /// Field of view (degrees), centred on the lidar's x axis: 360 all round (beams from −180°), or less
+    /// (270: a Hokuyo's, beams from −135° to +135° inclusive).
+    #[arg(long, value_name = "DEG", default_value_t = ScanSettings::default().fov_rad.to_degrees(), requires = "lidar")]
+    pub lidar_fov: f64,
     /// Longest range (m): farther walls give no return (+inf).
     #[arg(long, value_name = "M", default_value_t = ScanSettings::default().range_max_m, requires = "lidar")]
     pub lidar_max_range: f64,
@@ -210,6 +214,7 @@ impl LidarArgs {
         let settings = ScanSettings {
             rate_hz: self.lidar_rate,
             beams: self.lidar_beams,
+            fov_rad: self.lidar_fov.to_radians(),
             range_max_m: self.lidar_max_range,
             range_noise_m: self.lidar_noise,
             dropout: self.lidar_dropout,

@@ -10,15 +10,16 @@ use crate::lidar::{self, MatchSettings};
 use omni_kin::{Run, StampedPose};
 use std::path::Path;
 
-/// The runs of `loaded` (read wheels only from the recording at `path`) with the lidar's path on `topic` as
-/// their ground truth.
+/// The runs of `loaded` (read wheels only from the recording at `path`) with the lidar's path on `topic`
+/// (matched with `settings`) as their ground truth, the mount looked up from `base_frame` (`[frames] base`;
+/// default `base_link`, else `base_footprint`).
 pub(super) fn with_lidar_path(
     path: &Path,
-    topic: &str,
-    settings: &MatchSettings,
+    (topic, settings): &(String, MatchSettings),
+    base_frame: Option<&str>,
     mut loaded: Loaded,
 ) -> Result<Loaded, DatasetError> {
-    let read = lidar::read_scans(path, topic)?;
+    let read = lidar::read_scans_from(path, topic, base_frame)?;
     let sensor = lidar::sensor_path(&read.scans, settings)
         .map_err(|e| DatasetError::at(path, format!("topic {topic:?}"), e.to_string()))?;
     if sensor.matched == 0 {
@@ -90,25 +91,43 @@ fn rejections(why: &std::collections::BTreeMap<&'static str, usize>) -> String {
     why.iter().map(|(k, n)| format!("{k} {n}")).collect::<Vec<_>>().join(", ")
 }
 
-/// The notes a lidar reference leaves: where the mount came from (the same words for every recording, so a
-/// load says it once), and the rejected matches and stretches when there were any.
-fn notes(path: &Path, topic: &str, read: &lidar::ScanRead, sensor: &lidar::SensorPath, runs: usize) -> Vec<Note> {
+/// Where the lidar's mount came from, in words: the chain of static transforms, or why there is none.
+fn mount_text(read: &lidar::ScanRead) -> String {
     let frame = &read.frame_id;
     let upside_down = if read.mirrored { " (mounted upside down: its scans are read mirrored)" } else { "" };
-    let mount = match read.base_from_sensor {
+    let from_zero = "the lidar's mount is fitted from zero (within ±0.5 m, ±28.6°; give it with --gt-mount when it \
+                     is turned further)";
+    match read.base_from_sensor {
         Some(m) => format!(
-            "its path moved to the base by the static transform to {frame:?}{upside_down} (x {:.3} m, y {:.3} m, \
-             yaw {:.2}°); a base model that can tell a mount from the base corrects it (a free matrix keeps it)",
+            "its path moved to the base by the static transforms {}{upside_down} (x {:.3} m, y {:.3} m, yaw \
+             {:.2}°); a base model that can tell a mount from the base corrects it (a free matrix keeps it)",
+            read.chain_text(),
             m.x_m,
             m.y_m,
             m.theta_rad.to_degrees()
         ),
+        None if frame.is_empty() => {
+            format!("the scans' header.frame_id is empty, so no static transform places the lidar: {from_zero}")
+        }
         None => format!(
-            "no static transform from the base to {frame:?}: the lidar's mount is fitted from zero (within \
-             ±0.5 m, ±28.6°; give it with --gt-mount when it is turned further)"
+            "no static transform from the base (base_link, base_footprint or [frames] base) to {frame:?}: {from_zero}"
         ),
-    };
-    let mut out = vec![Note::about(path, format!("lidar {topic:?} matched scan to scan as the reference; {mount}"))];
+    }
+}
+
+/// The notes a lidar reference leaves: where the mount came from (the same words for every recording, so a
+/// load says it once), and the rejected matches and stretches when there were any.
+fn notes(path: &Path, topic: &str, read: &lidar::ScanRead, sensor: &lidar::SensorPath, runs: usize) -> Vec<Note> {
+    let mut out =
+        vec![Note::about(path, format!("lidar {topic:?} matched scan to scan as the reference; {}", mount_text(read)))];
+    if read.by_log_time {
+        out.push(Note::about(
+            path,
+            format!(
+                "lidar {topic:?}: header.stamp is 0 (never filled by the driver): the scans are timed by their log time"
+            ),
+        ));
+    }
     if sensor.deskewed > 0 {
         out.push(Note::about(
             path,

@@ -429,6 +429,19 @@ fn expand(p: &Path, out: &mut Vec<Result<Input, DatasetError>>) {
     });
 }
 
+/// A ROS recording's read as a [`Loaded`].
+fn from_bag(r: mcap::McapRead) -> Loaded {
+    Loaded {
+        runs: r.runs,
+        skipped: r.skipped.into_iter().map(|(source, reason)| Skipped { source, reason }).collect(),
+        notes: r.notes,
+        declared: None,
+        clock: r.ground_truth_clock,
+        origin_s: Some(r.origin_s),
+        lidar_mount_from_tf: None,
+    }
+}
+
 /// Reads one input. The outer error always stops the load (a file above the size cap); the inner one is
 /// the input's own failure, which [`merge`] lists as skipped under `skip_invalid`.
 fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, DatasetError>, DatasetError> {
@@ -437,18 +450,9 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
         recorded_odometry: opts.recorded_odometry,
         ..opts.mcap.clone()
     };
-    let from_bag = |r: mcap::McapRead| Loaded {
-        runs: r.runs,
-        skipped: r.skipped.into_iter().map(|(source, reason)| Skipped { source, reason }).collect(),
-        notes: r.notes,
-        declared: None,
-        clock: r.ground_truth_clock,
-        origin_s: Some(r.origin_s),
-        lidar_mount_from_tf: None,
-    };
     // The lidar's path as a ROS recording's ground truth, when --gt-scans is given.
     let lidar = |p: &Path, l: Loaded| match &opts.scans {
-        Some((topic, settings)) => lidar_reference::with_lidar_path(p, topic, settings, l),
+        Some(scans) => lidar_reference::with_lidar_path(p, scans, opts.mcap.base_frame.as_deref(), l),
         None => Ok(l),
     };
     // The ground-truth file of a ROS recording, when --gt is given.

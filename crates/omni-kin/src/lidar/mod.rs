@@ -40,13 +40,15 @@ pub struct Scan {
 }
 
 impl Scan {
-    /// Whether beam `i`'s range is a return: finite and in [`range_min_m`, `range_max_m`).
+    /// Whether beam `i`'s range is a return: finite, in [`range_min_m`, `range_max_m`) and not 0. A range of
+    /// exactly 0 is many drivers' "no return" (Hokuyo's urg_node, SICK's, RPLIDAR's with `range_min` 0), never
+    /// a point at the sensor.
     ///
     /// [`range_min_m`]: Self::range_min_m
     /// [`range_max_m`]: Self::range_max_m
     pub fn is_return(&self, i: usize) -> bool {
         let r = f64::from(self.ranges_m[i]);
-        r.is_finite() && r >= self.range_min_m && r < self.range_max_m
+        r.is_finite() && r > 0.0 && r >= self.range_min_m && r < self.range_max_m
     }
 
     /// The returns as points in the sensor frame (m), in beam order, with their beam indices.
@@ -115,5 +117,29 @@ mod tests {
         assert_eq!(p.xy_m[0], [2.0, 0.0]);
         // Beam 5 at 5 · 90° = 450° ≡ 90°.
         assert!((p.xy_m[1][0]).abs() < 1e-12 && (p.xy_m[1][1] - 3.0).abs() < 1e-12);
+        // With range_min 0 (as many drivers declare it), a range of 0 is still no return; a small one is one.
+        let zero_min = Scan { range_min_m: 0.0, ranges_m: vec![0.0, 0.02, -0.0, 1.0], ..scan };
+        assert_eq!(zero_min.points().beam, vec![1, 3]);
+    }
+
+    /// A 270° scan as a Hokuyo UTM-30LX's driver writes it, clockwise (negative `angle_increment`, from
+    /// +135° to −135°): the points lie where the beams point.
+    #[test]
+    fn a_partial_clockwise_scan_puts_its_points_where_the_beams_point() {
+        let beams = 1081;
+        let inc = -(270f64.to_radians()) / (beams - 1) as f64;
+        let scan = Scan {
+            t_s: 0.0,
+            time_increment_s: 0.0,
+            angle_min_rad: 135f64.to_radians(),
+            angle_increment_rad: inc,
+            range_min_m: 0.0,
+            range_max_m: 30.0,
+            ranges_m: vec![2.0; beams],
+        };
+        let p = scan.points();
+        assert_eq!(p.xy_m.len(), beams);
+        let at = |k: usize| p.xy_m[k][1].atan2(p.xy_m[k][0]).to_degrees();
+        assert!((at(0) - 135.0).abs() < 1e-9 && (at(540)).abs() < 1e-9 && (at(1080) + 135.0).abs() < 1e-9);
     }
 }

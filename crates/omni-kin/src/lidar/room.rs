@@ -138,8 +138,13 @@ fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
 pub struct ScanSettings {
     /// Scans per second. Hz. Default 10.
     pub rate_hz: f64,
-    /// Beams per scan, evenly spread over 360° from −180°. Default 720 (0.5° apart).
+    /// Beams per scan, evenly spread over the field of view. Default 720 (0.5° apart over 360°).
     pub beams: usize,
+    /// Field of view, centred on the sensor's x axis. rad. Default 2π: beams from −180°, `2π / beams` apart;
+    /// a partial one (a 270° Hokuyo) from `−fov / 2` to `+fov / 2` inclusive, `fov / (beams − 1)` apart, as its
+    /// driver writes `angle_min`, `angle_max` and `angle_increment`.
+    #[serde(default = "full_turn_rad")]
+    pub fov_rad: f64,
     /// Shortest valid range. m. Default 0.05.
     pub range_min_m: f64,
     /// Longest valid range: a wall farther away is no return (+inf). m. Default 12.
@@ -154,11 +159,17 @@ pub struct ScanSettings {
     pub sweeping: bool,
 }
 
+/// 2π: a lidar that sees all round.
+fn full_turn_rad() -> f64 {
+    2.0 * PI
+}
+
 impl Default for ScanSettings {
     fn default() -> Self {
         Self {
             rate_hz: 10.0,
             beams: 720,
+            fov_rad: full_turn_rad(),
             range_min_m: 0.05,
             range_max_m: 12.0,
             range_noise_m: 0.01,
@@ -178,6 +189,9 @@ impl ScanSettings {
         if self.beams < 3 {
             return bad("beams", "must be at least 3");
         }
+        if !(self.fov_rad > 0.0 && self.fov_rad <= 2.0 * PI) {
+            return bad("fov_rad", "must be in (0, 2π] (a field of view of up to 360°)");
+        }
         if !(self.range_min_m >= 0.0 && self.range_max_m > self.range_min_m && self.range_max_m.is_finite()) {
             return bad("range_max_m", "need 0 ≤ range_min_m < range_max_m, finite");
         }
@@ -190,9 +204,19 @@ impl ScanSettings {
         Ok(())
     }
 
+    /// Whether the beams go all round (the last one is not repeated by a first at +180°).
+    fn all_round(&self) -> bool {
+        self.fov_rad >= 2.0 * PI
+    }
+
+    /// Angle of the first beam: −180° all round, else −fov / 2. rad.
+    pub fn angle_min_rad(&self) -> f64 {
+        if self.all_round() { -PI } else { -0.5 * self.fov_rad }
+    }
+
     /// Angle between beams. rad.
     pub fn angle_increment_rad(&self) -> f64 {
-        2.0 * PI / self.beams as f64
+        if self.all_round() { 2.0 * PI / self.beams as f64 } else { self.fov_rad / (self.beams - 1) as f64 }
     }
 
     /// Time between beams: the scan period over the beams when sweeping, else 0. s.
@@ -224,7 +248,7 @@ pub fn simulate_sweep(
     settings: &ScanSettings,
     rng: &mut ChaCha8Rng,
 ) -> Scan {
-    let angle_min_rad = -PI;
+    let angle_min_rad = settings.angle_min_rad();
     let inc = settings.angle_increment_rad();
     let ranges_m = (0..settings.beams)
         .map(|i| {
@@ -299,6 +323,26 @@ pub fn first_collision(room: &Room, base: &[StampedPose], clearance_m: f64) -> O
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A 270° lidar of 1081 beams (a Hokuyo UTM-30LX) spans −135° to +135° inclusive, 0.25° apart, and
+    /// sees nothing behind it; 360° keeps the all-round layout (−180°, 0.5° apart for 720 beams).
+    #[test]
+    fn a_partial_field_of_view_spans_it_inclusive_and_sees_nothing_behind() {
+        let s = ScanSettings { beams: 1081, fov_rad: 270f64.to_radians(), dropout: 0.0, ..ScanSettings::default() };
+        s.check().unwrap();
+        assert!((s.angle_min_rad().to_degrees() + 135.0).abs() < 1e-12);
+        assert!((s.angle_increment_rad().to_degrees() - 0.25).abs() < 1e-12);
+        let all = ScanSettings::default();
+        assert_eq!((all.angle_min_rad(), all.angle_increment_rad()), (-PI, 2.0 * PI / 720.0));
+        let room = Room::builtin("room").unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let scan = simulate_scan(&room, &Pose2::IDENTITY, 0.0, &s, &mut rng);
+        let p = scan.points();
+        assert!(p.xy_m.len() > 1000 && p.xy_m.iter().all(|q| q[1].atan2(q[0]).abs() < 2.357), "{}", p.xy_m.len());
+        for fov_deg in [0.0, 361.0, f64::NAN] {
+            assert!(ScanSettings { fov_rad: fov_deg.to_radians(), ..all.clone() }.check().is_err(), "{fov_deg}");
+        }
+    }
 
     #[test]
     fn ray_casting_gives_exact_ranges_in_the_room() {

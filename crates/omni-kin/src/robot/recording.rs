@@ -34,6 +34,11 @@ pub struct Frames {
     /// The tracked frame on the robot, e.g. `base_link` (`--gt-child-frame`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ground_truth_child: Option<String>,
+    /// The robot's base frame, the frame the wheels move (default `base_link`, else `base_footprint`): a
+    /// lidar's mount (`--gt-scans`) and a tracked frame's offset are looked up from it in the static
+    /// transforms.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub base: Option<String>,
 }
 
 impl Frames {

@@ -453,6 +453,7 @@ def simulate(
     lidar_tf: Union[tuple[float, float, float], str, None] = None,
     lidar_rate: float = 10.0,
     lidar_beams: int = 720,
+    lidar_fov: float = 360.0,
     lidar_max_range: float = 12.0,
     lidar_noise: float = 0.01,
     lidar_dropout: float = 0.01,
@@ -468,7 +469,8 @@ def simulate(
     robot ``truth`` (default: Eq. 9 on APR-02, else the robot's design). ``out``: also write them as ROS 2
     bags (one per run, robot.toml beside them; a folder holding files raises ``FileExistsError`` unless
     ``force=True``), with a simulated 2D lidar in the room ``lidar`` (``"room"``, ``"corridor"`` or a room
-    file; mount ``(x_m, y_m, yaw_deg)``, rate [Hz], max range and noise [m]) and/or an IMU's yaw rate
+    file; mount ``(x_m, y_m, yaw_deg)``, rate [Hz], field of view ``lidar_fov`` [degrees], max range
+    and noise [m]) and/or an IMU's yaw rate
     (``imu=True``; rate [Hz], bias and noise [rad/s], mount ``(roll_deg, pitch_deg, yaw_deg)`` and the mount
     ``/tf_static`` states, or ``"none"``); the sensors need ``out``."""
 

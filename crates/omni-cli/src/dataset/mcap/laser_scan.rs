@@ -1,13 +1,14 @@
 //! `sensor_msgs/msg/LaserScan`: a planar lidar's ranges (REP-117: +inf nothing in range, NaN an erroneous
-//! reading), read into [`omni_kin::lidar::Scan`]s and written by the simulator; and the `/tf_static`
-//! message that places the lidar on the robot.
+//! reading), read into [`omni_kin::lidar::Scan`]s and written by the simulator; and the static transforms
+//! that place the lidar on the robot (`…tf_static` topics, and fixed pairs republished on `/tf`, as ROS 1
+//! bags hold them: [`super::statics`]), from `base_link`, else `base_footprint`, down to the scans' frame.
 
 use super::common::{
     HEADER_DEF, Header, MsgDef, NS_PER_S, QUATERNION_DEF, RosString, TIME_DEF, VECTOR3_DEF, decode, schema_text,
     seconds_since,
 };
 use super::recording::{MessageSink, payload};
-use super::statics::StaticTree;
+use super::statics::{SeenPairs, StaticTree, base_frames};
 use super::tf::{self, TfMessage, Transform, TransformStamped};
 use crate::dataset::DatasetError;
 use omni_kin::Pose2;
@@ -79,9 +80,6 @@ pub(super) fn static_transform(header: Header, child: &str, pose: &omni_kin::Pos
     }
 }
 
-/// The base frame the lidar's mount is looked up from in `/tf_static`.
-const BASE_FRAME: &str = "base_link";
-
 /// A lidar's scans read from a recording.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ScanRead {
@@ -89,13 +87,19 @@ pub struct ScanRead {
     pub scans: Vec<Scan>,
     /// The whole second (`header.stamp.sec`) of the first scan. s since the epoch (or sim-time start).
     pub origin_s: i64,
-    /// The scans' `header.frame_id` (of the first scan).
+    /// The scans' `header.frame_id` (of the first scan, without a leading `/`); empty when the driver left
+    /// it empty.
     pub frame_id: String,
-    /// The lidar's pose in `base_link` from the recording's static transforms, when they hold it (m, rad).
+    /// The lidar's pose in the base frame from the recording's static transforms, when they hold it (m, rad).
     pub base_from_sensor: Option<Pose2>,
+    /// The frames the mount was composed along, from the base to [`Self::frame_id`]
+    /// (`["base_footprint", "base_link", "base_scan"]`); empty without a mount.
+    pub chain: Vec<String>,
     /// The static transforms mount the lidar upside down: the scans' beam angles were mirrored (negated), so
     /// that they sweep counter-clockwise seen from above as the base's frame does.
     pub mirrored: bool,
+    /// The scans' `header.stamp` was 0 on the first two (never filled): they are timed by their log time.
+    pub by_log_time: bool,
 }
 
 impl ScanRead {
@@ -109,6 +113,11 @@ impl ScanRead {
         }
         self.origin_s = origin_s;
     }
+
+    /// The mount's chain as `base_link → laser`.
+    pub fn chain_text(&self) -> String {
+        self.chain.join(" → ")
+    }
 }
 
 /// One topic as the storage declares it.
@@ -118,17 +127,32 @@ struct Declared {
     /// The encodings are ROS 2's (`ros2msg`/`ros2idl` schemas, `cdr` messages).
     cdr: bool,
     messages: usize,
+    /// A TF topic's pairs, for its static transforms.
+    tf: SeenPairs,
+}
+
+impl Declared {
+    fn is_tf(&self) -> bool {
+        self.schema == tf::NAME && self.cdr
+    }
+}
+
+/// One scan as read: `header.stamp` and log time (ns), and the scan (its `t_s` not yet set).
+struct Taken {
+    stamp_ns: i64,
+    log_ns: i64,
+    scan: Scan,
 }
 
 /// Gathers the LaserScan messages of one topic (and the static transforms) from any storage reader.
 pub(crate) struct ScanSink {
     topic: String,
     zstd_messages: bool,
+    /// The frame the lidar's mount is looked up from; `None`: `base_link`, else `base_footprint`.
+    base_frame: Option<String>,
     channels: Vec<Declared>,
-    /// Stamp (ns) and scan (its `t_s` not yet set).
-    scans: Vec<(i64, Scan)>,
+    scans: Vec<Taken>,
     frame_id: Option<String>,
-    statics: StaticTree,
     /// The first problem on the topic: message index and what.
     problem: Option<(usize, String)>,
 }
@@ -139,16 +163,23 @@ impl ScanSink {
         Self {
             topic: topic.to_string(),
             zstd_messages,
+            base_frame: None,
             channels: Vec::new(),
             scans: Vec::new(),
             frame_id: None,
-            statics: StaticTree::default(),
             problem: None,
         }
     }
 
-    /// Takes the next message of the scan topic (index `k` within it).
-    fn take_scan(&mut self, k: usize, data: &[u8]) -> Result<(), String> {
+    /// Looks the lidar's mount up from `base_frame` (`[frames] base` of a robot description) instead of the
+    /// first of `base_link` and `base_footprint` that holds it.
+    pub(crate) fn with_base_frame(mut self, base_frame: Option<&str>) -> Self {
+        self.base_frame = base_frame.map(str::to_string);
+        self
+    }
+
+    /// Takes the next message of the scan topic, logged at `log_ns`.
+    fn take_scan(&mut self, data: &[u8], log_ns: i64) -> Result<(), String> {
         let m: LaserScan = decode(data)?;
         for (field, v) in [
             ("angle_min", m.angle_min),
@@ -166,18 +197,6 @@ impl ScanSink {
         if !(m.range_min >= 0.0 && m.range_max > m.range_min) {
             return Err(format!("fields range_min {} and range_max {} do not make a range", m.range_min, m.range_max));
         }
-        let ns = m.header.stamp.ns();
-        if let Some(&(prev, _)) = self.scans.last()
-            && ns <= prev
-        {
-            let stamp = super::common::Stamp;
-            return Err(format!(
-                "field header.stamp {} is not after the previous scan's {} (message {})",
-                stamp(ns),
-                stamp(prev),
-                k - 1
-            ));
-        }
         self.frame_id.get_or_insert_with(|| m.header.frame_id.frame().to_string());
         // The time between beams; a value that is not finite says nothing (beams taken at once).
         let time_increment_s = Some(f64::from(m.time_increment)).filter(|t| t.is_finite()).unwrap_or(0.0);
@@ -190,12 +209,12 @@ impl ScanSink {
             range_max_m: f64::from(m.range_max),
             ranges_m: m.ranges,
         };
-        self.scans.push((ns, scan));
+        self.scans.push(Taken { stamp_ns: m.header.stamp.ns(), log_ns, scan });
         Ok(())
     }
 
-    /// The scans read, or the error naming the file `path`, the topic, the message and the field.
-    pub(crate) fn finish(self, path: &Path) -> Result<ScanRead, DatasetError> {
+    /// The error when the scan topic is missing or not a ROS 2 LaserScan (naming the file `path`).
+    fn check_topic(&self, path: &Path) -> Result<(), DatasetError> {
         let here = format!("topic {:?}", self.topic);
         let Some(c) = self.channels.iter().find(|c| c.topic == self.topic) else {
             let mut list: Vec<String> = self.channels.iter().map(|c| format!("{} ({})", c.topic, c.schema)).collect();
@@ -221,21 +240,77 @@ impl ScanSink {
         if !c.cdr {
             return Err(DatasetError::at(path, here, "its encoding is not ROS 2's (ros2msg schema, cdr messages)"));
         }
-        if let Some((k, what)) = self.problem {
-            return Err(DatasetError::at(path, format!("{here}, message {k}"), what));
+        Ok(())
+    }
+
+    /// Each scan's time (ns): `header.stamp`, or the log time when the first two stamps are 0 (a driver
+    /// that never fills them); an error naming the message when they do not increase.
+    fn times_ns(&self) -> Result<(Vec<i64>, bool), (usize, String)> {
+        let by_log_time = self.scans.len() >= 2 && self.scans[..2].iter().all(|s| s.stamp_ns == 0);
+        let times: Vec<i64> = self.scans.iter().map(|s| if by_log_time { s.log_ns } else { s.stamp_ns }).collect();
+        let field = if by_log_time { "log time" } else { "field header.stamp" };
+        for (k, w) in times.windows(2).enumerate() {
+            if w[1] <= w[0] {
+                let stamp = super::common::Stamp;
+                return Err((
+                    k + 1,
+                    format!(
+                        "{field} {} is not after the previous scan's {} (message {k}): a scan topic's stamps must \
+                         increase; record the lidar driver's topic as it publishes it (one driver, its own clock)",
+                        stamp(w[1]),
+                        stamp(w[0]),
+                    ),
+                ));
+            }
         }
-        let Some(&(first_ns, _)) = self.scans.first() else {
+        Ok((times, by_log_time))
+    }
+
+    /// The recording's static transforms: those of the `…tf_static` topics first, then the fixed pairs of
+    /// the other TF topics.
+    fn statics(&self) -> StaticTree {
+        let mut tree = StaticTree::default();
+        for on_static_topic in [true, false] {
+            for c in self.channels.iter().filter(|c| c.is_tf() && tf::is_static_topic(&c.topic) == on_static_topic) {
+                c.tf.add_statics(on_static_topic, &mut tree);
+            }
+        }
+        tree
+    }
+
+    /// The lidar's mount (pose in the base, the frames from the base to `frame`, mirrored), from the named
+    /// base frame or the first of `base_link` and `base_footprint` that `frame` hangs from.
+    fn mount(&self, frame: &str) -> Option<(Pose2, Vec<String>, bool)> {
+        let tree = self.statics();
+        base_frames(self.base_frame.as_deref()).into_iter().find_map(|base| {
+            let (pose, frames) = tree.offset(base, frame)?;
+            let mirrored = tree.mirrored(base, frame) == Some(true);
+            Some((pose, std::iter::once(base.to_string()).chain(frames).collect(), mirrored))
+        })
+    }
+
+    /// The scans read, or the error naming the file `path`, the topic, the message and the field.
+    pub(crate) fn finish(self, path: &Path) -> Result<ScanRead, DatasetError> {
+        self.check_topic(path)?;
+        let here = format!("topic {:?}", self.topic);
+        if let Some((k, what)) = &self.problem {
+            return Err(DatasetError::at(path, format!("{here}, message {k}"), what.clone()));
+        }
+        if self.scans.is_empty() {
             return Err(DatasetError::at(path, here, "holds no scans: record the lidar while the robot moves"));
-        };
-        let origin_s = first_ns.div_euclid(NS_PER_S);
-        let frame_id = self.frame_id.unwrap_or_default();
-        let base_from_sensor = self.statics.offset(BASE_FRAME, &frame_id).map(|(p, _)| p);
+        }
+        let (times, by_log_time) =
+            self.times_ns().map_err(|(k, what)| DatasetError::at(path, format!("{here}, message {k}"), what))?;
+        let origin_s = times[0].div_euclid(NS_PER_S);
+        let frame_id = self.frame_id.clone().unwrap_or_default();
+        let mount = if frame_id.is_empty() { None } else { self.mount(&frame_id) };
         // A lidar mounted upside down sweeps clockwise seen from above: its beams' angles are mirrored.
-        let mirrored = self.statics.mirrored(BASE_FRAME, &frame_id) == Some(true);
+        let mirrored = mount.as_ref().is_some_and(|m| m.2);
         let scans = self
             .scans
             .into_iter()
-            .map(|(ns, s)| {
+            .zip(times)
+            .map(|(Taken { scan: s, .. }, ns)| {
                 let t_s = seconds_since(ns, origin_s);
                 match mirrored {
                     true => {
@@ -245,7 +320,8 @@ impl ScanSink {
                 }
             })
             .collect();
-        Ok(ScanRead { scans, origin_s, frame_id, base_from_sensor, mirrored })
+        let (base_from_sensor, chain) = mount.map_or((None, Vec::new()), |(p, c, _)| (Some(p), c));
+        Ok(ScanRead { scans, origin_s, frame_id, base_from_sensor, chain, mirrored, by_log_time })
     }
 }
 
@@ -255,17 +331,17 @@ impl MessageSink for ScanSink {
             return i;
         }
         let cdr = matches!(schema_encoding, "ros2msg" | "ros2idl") && message_encoding == "cdr";
-        self.channels.push(Declared { topic: topic.into(), schema: schema.into(), cdr, messages: 0 });
+        let tf = SeenPairs::default();
+        self.channels.push(Declared { topic: topic.into(), schema: schema.into(), cdr, messages: 0, tf });
         self.channels.len() - 1
     }
 
-    fn message(&mut self, i: usize, data: &[u8], _log_time_ns: u64) {
+    fn message(&mut self, i: usize, data: &[u8], log_time_ns: u64) {
         let c = &mut self.channels[i];
         let k = c.messages;
         c.messages += 1;
         let is_scan = c.topic == self.topic && c.schema == NAME && c.cdr;
-        let is_static = tf::is_static_topic(&c.topic) && c.schema == tf::NAME && c.cdr;
-        if !(is_scan && self.problem.is_none() || is_static) {
+        if !(is_scan && self.problem.is_none() || c.is_tf()) {
             return;
         }
         let data = match payload(self.zstd_messages, data) {
@@ -277,118 +353,15 @@ impl MessageSink for ScanSink {
             Err(_) => return,
         };
         if is_scan {
-            if let Err(e) = self.take_scan(k, &data) {
+            let log_ns = i64::try_from(log_time_ns).unwrap_or(i64::MAX);
+            if let Err(e) = self.take_scan(&data, log_ns) {
                 self.problem = Some((k, e));
             }
         } else if let Ok(m) = decode::<TfMessage>(&data) {
-            for t in &m.transforms {
-                let (p, q) = (&t.transform.translation, &t.transform.rotation);
-                if p.x.is_finite() && p.y.is_finite() && q.yaw_rad().is_finite() {
-                    let pose = Pose2::new(p.x, p.y, q.yaw_rad());
-                    self.statics.add(t.header.frame_id.frame(), t.child_frame_id.frame(), pose);
-                    // The child's z axis in the parent: R₂₂ = w² − x² − y² + z² (over the norm).
-                    if q.w * q.w - q.x * q.x - q.y * q.y + q.z * q.z < 0.0 {
-                        self.statics.mark_flipped(t.child_frame_id.frame());
-                    }
-                }
-            }
+            c.tf.push(&m);
         }
     }
 }
 
 #[cfg(test)]
-mod tests {
-    use super::super::common::{Time, decode, encode};
-    use super::*;
-
-    /// A scan of frame `laser` stamped `stamp`: `ranges` from −3 rad every `angle_increment` rad, 0.05 to 12 m.
-    fn message(stamp: Time, angle_increment: f32, ranges: Vec<f32>) -> LaserScan {
-        LaserScan {
-            header: Header { stamp, frame_id: RosString("laser".into()) },
-            angle_min: -3.0,
-            angle_max: 3.0,
-            angle_increment,
-            time_increment: 0.0,
-            scan_time: 0.1,
-            range_min: 0.05,
-            range_max: 12.0,
-            ranges,
-            intensities: vec![],
-        }
-    }
-
-    #[test]
-    fn laser_scan_round_trips_with_inf_and_nan() {
-        let m = message(Time { sec: 5, nanosec: 7 }, 0.0087, vec![1.5, f32::INFINITY, f32::NAN]);
-        let back: LaserScan = decode(&encode(&m).unwrap()).unwrap();
-        assert_eq!(back.header, m.header);
-        assert_eq!(back.ranges[..2], m.ranges[..2]);
-        assert!(back.ranges[2].is_nan());
-        assert_eq!((back.angle_increment, back.range_max), (0.0087, 12.0));
-    }
-
-    /// A lidar whose /tf_static turns it upside down (roll π, yaw 90°) is read mirrored: the beams sweep
-    /// clockwise seen from above, and its mount keeps the yaw of its x axis.
-    #[test]
-    fn an_upside_down_lidar_is_read_mirrored() {
-        let scan = message(Time { sec: 1, nanosec: 0 }, 0.5, vec![1.0; 13]);
-        let read = |roll_pi: bool| {
-            let mut tf =
-                static_transform(Header::default(), "laser", &Pose2::new(0.1, 0.0, std::f64::consts::FRAC_PI_2));
-            if roll_pi {
-                // Rz(90°)·Rx(180°): the rotation by π about the axis (cos 45°, sin 45°, 0).
-                let h = std::f64::consts::FRAC_1_SQRT_2;
-                tf.transforms[0].transform.rotation = super::super::common::Quaternion { x: h, y: h, z: 0.0, w: 0.0 };
-            }
-            tf.transforms[0].header.frame_id = RosString("base_link".into());
-            let mut sink = ScanSink::new("/scan", false);
-            let t = sink.channel("/tf_static", tf::NAME, "ros2msg", "cdr");
-            let i = sink.channel("/scan", NAME, "ros2msg", "cdr");
-            sink.message(t, &encode(&tf).unwrap(), 0);
-            sink.message(i, &encode(&scan).unwrap(), 0);
-            sink.finish(Path::new("rec.mcap")).unwrap()
-        };
-        let upright = read(false);
-        assert!(!upright.mirrored && upright.scans[0].angle_min_rad == -3.0);
-        let flipped = read(true);
-        assert!(flipped.mirrored);
-        assert_eq!((flipped.scans[0].angle_min_rad, flipped.scans[0].angle_increment_rad), (3.0, -0.5));
-        let m = flipped.base_from_sensor.unwrap();
-        assert!((m.x_m - 0.1).abs() < 1e-12 && (m.theta_rad - std::f64::consts::FRAC_PI_2).abs() < 1e-12, "{m:?}");
-    }
-
-    #[test]
-    fn a_bad_scan_names_the_message_and_the_field() {
-        let path = Path::new("rec.mcap");
-        let scan = |sec: i32, inc: f32| message(Time { sec, nanosec: 0 }, inc, vec![1.0; 4]);
-        let run = |msgs: &[LaserScan]| {
-            let mut sink = ScanSink::new("/scan", false);
-            let i = sink.channel("/scan", NAME, "ros2msg", "cdr");
-            for m in msgs {
-                sink.message(i, &encode(m).unwrap(), 0);
-            }
-            sink.finish(path)
-        };
-        let err = run(&[scan(1, 0.1), scan(2, 0.0)]).unwrap_err().to_string();
-        assert_eq!(
-            err,
-            "rec.mcap: topic \"/scan\", message 1: field angle_increment is 0: the beams have no directions"
-        );
-        let err = run(&[scan(1, 0.1), scan(2, f32::NAN)]).unwrap_err().to_string();
-        assert_eq!(err, "rec.mcap: topic \"/scan\", message 1: field angle_increment is NaN");
-        let err = run(&[scan(2, 0.1), scan(1, 0.1)]).unwrap_err().to_string();
-        assert_eq!(
-            err,
-            "rec.mcap: topic \"/scan\", message 1: field header.stamp 1.000000000 is not after the previous scan's \
-             2.000000000 (message 0)"
-        );
-        assert_eq!(
-            run(&[]).unwrap_err().to_string(),
-            "rec.mcap: topic \"/scan\": holds no scans: record the lidar while the robot moves"
-        );
-        let mut ok = run(&[scan(2, 0.1), scan(3, 0.1)]).unwrap();
-        assert_eq!((ok.origin_s, ok.scans[1].t_s, ok.base_from_sensor), (2, 1.0, None));
-        ok.rebase(-1);
-        assert_eq!((ok.origin_s, ok.scans[0].t_s, ok.scans[1].t_s), (-1, 3.0, 4.0));
-    }
-}
+mod tests;

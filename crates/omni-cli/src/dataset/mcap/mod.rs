@@ -115,6 +115,9 @@ pub struct McapOptions {
     /// The ground truth's tracked frame (`--gt-child-frame`): selects the TF pair, and must match an
     /// Odometry's `child_frame_id`. Default: any.
     pub truth_child_frame: Option<String>,
+    /// The robot's base frame (`[frames] base`): a tracked frame and a lidar are moved to it through static
+    /// transforms. Default: `base_link`, else `base_footprint`.
+    pub base_frame: Option<String>,
     /// The command topic (Twist or TwistStamped). Default: `/cmd_vel`, else the only one.
     pub command_topic: Option<String>,
     /// Cut the file into runs at standstills of at least this long. s. Default: one run per file.
@@ -200,6 +203,7 @@ impl Default for McapOptions {
             truth_topic: None,
             truth_parent_frame: None,
             truth_child_frame: None,
+            base_frame: None,
             command_topic: None,
             split: None,
             wheels_only: false,

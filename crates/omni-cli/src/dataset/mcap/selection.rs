@@ -6,7 +6,7 @@
 use super::joint_state;
 use super::odometry::{self, ODOM_FRAME};
 use super::recording::{Channel, Content, MsgType};
-use super::statics::StaticTree;
+use super::statics::{StaticTree, base_frames};
 use super::{McapOptions, Origin, tf, twist};
 use crate::dataset::ground_truth::GtClock;
 use crate::dataset::{DatasetError, Note};
@@ -319,7 +319,9 @@ impl Bag<'_> {
                 if let Some((m, what)) = pair.problem {
                     return Err(DatasetError::at(self.path, format!("topic {topic:?}, message {m}"), what));
                 }
-                if let Some(note) = to_base_frame(&mut pair, &statics, opts.truth_child_frame.as_deref()) {
+                if let Some(note) =
+                    to_base_frame(&mut pair, &statics, opts.truth_child_frame.as_deref(), opts.base_frame.as_deref())
+                {
                     notes.push(Note::about(self.path, format!("topic {topic:?}: {note}")));
                 }
                 pair.poses
@@ -435,16 +437,20 @@ impl Bag<'_> {
     }
 }
 
-/// The robot frames a tracked frame is moved to by default, the first that static transforms reach.
-const BASE_FRAMES: [&str; 2] = ["base_link", "base_footprint"];
-
 /// Moves a TF pair's poses from its child frame (a motion-capture marker) along static transforms to
-/// `target` (`--gt-child-frame`), or by default to the first of [`BASE_FRAMES`] they reach; says so.
-fn to_base_frame(pair: &mut tf::Pair, statics: &StaticTree, target: Option<&str>) -> Option<String> {
+/// `target` (`--gt-child-frame`), or by default to the robot's base (`base`, `[frames] base`; else the first
+/// of [`super::statics::BASE_FRAMES`] they reach); says so.
+fn to_base_frame(
+    pair: &mut tf::Pair,
+    statics: &StaticTree,
+    target: Option<&str>,
+    base: Option<&str>,
+) -> Option<String> {
+    let bases = base_frames(base);
     let (to, (offset, frames)) = match target {
         Some(t) => (t, statics.offset(&pair.child, t)?),
-        None if BASE_FRAMES.contains(&pair.child.as_str()) => return None,
-        None => BASE_FRAMES.iter().find_map(|&t| statics.offset(&pair.child, t).map(|o| (t, o)))?,
+        None if bases.contains(&pair.child.as_str()) => return None,
+        None => bases.iter().find_map(|&t| statics.offset(&pair.child, t).map(|o| (t, o)))?,
     };
     for p in &mut pair.poses.xy_yaw {
         let moved = Pose2::new(p[0], p[1], p[2]).compose(&offset);

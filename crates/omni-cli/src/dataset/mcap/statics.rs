@@ -1,11 +1,16 @@
-//! Static transforms (`/tf_static`, as robot_state_publisher and mocap setups publish them): the fixed
-//! offsets between a tracked frame (a motion-capture marker) and the robot's base, through any number of
-//! frames, planar; and, for a sensor that is not upright (an IMU upside down or on its side), the full 3D
-//! rotation of the chain. The ground truth of a TF pair is moved along them to the frame the wheels move.
-//! ROS 1 setups often publish a static transform on `/tf` instead, repeated with the same value
-//! (`static_transform_publisher` of `tf`): [`ConstantPairs`] finds those.
+//! Static transforms, planar: the fixed offsets between a tracked frame (a motion-capture marker, a lidar)
+//! and the robot's base, through any number of frames. The ground truth of a TF pair is moved along them to
+//! the frame the wheels move, and a lidar's path likewise.
+//!
+//! Which pairs are static ([`StaticTree::take`]), as real recordings hold them: every pair of a `…tf_static`
+//! topic (ROS 2, ROS 1's tf2 `static_transform_publisher`), and a pair of another TF topic when every one of
+//! its messages carries the same transform ([`Seen`]): ROS 1's tf `static_transform_publisher` and
+//! robot_state_publisher (Indigo) republish fixed joints on `/tf`, and a pair published once is fixed too.
+//! A pair whose value changes (odom → base_link) never is. For a sensor that is not upright (an IMU upside
+//! down or on its side), the full 3D rotation of the chain too ([`StaticTree::add_transform`]); the IMU's
+//! reader finds the fixed `/tf` pairs with [`ConstantPairs`] (exact equality).
 
-use super::tf::TransformStamped;
+use super::tf::{TfMessage, Transform, TransformStamped};
 use nalgebra::{Quaternion, UnitQuaternion};
 use omni_kin::Pose2;
 use std::collections::BTreeMap;
@@ -25,10 +30,121 @@ pub(super) struct StaticTree {
 /// Longest chain followed (a TF tree is shallow; this stops a cycle).
 const MAX_DEPTH: usize = 64;
 
+/// The robot frames searched for by default, in this order, for the base (the frame the wheels move): REP-105's
+/// `base_link`, else `base_footprint` (a TurtleBot's `base_footprint → base_link → base_scan`; some robots
+/// hang the laser from `base_footprint` directly).
+pub(super) const BASE_FRAMES: [&str; 2] = ["base_link", "base_footprint"];
+
+/// The base frames to search: the one a robot description names (`[frames] base`, without a leading `/`),
+/// else [`BASE_FRAMES`].
+pub(super) fn base_frames(named: Option<&str>) -> Vec<&str> {
+    named.map_or_else(|| BASE_FRAMES.to_vec(), |f| vec![f.trim_start_matches('/')])
+}
+
+/// Two transforms of one pair are the same when no translation (m) or quaternion component differs by more.
+/// A publisher that repeats a fixed transform sends the same numbers each time (bit for bit; recomputed from
+/// a URDF, within round-off, about 1e-16), while a pair that moves changes by far more between two messages
+/// (1 mm/s over 10 ms is 1e-5 m); a robot that stands still a whole recording leaves its odom → base_link
+/// fixed, which is true of that recording and concerns no frame below the base.
+pub(super) const SAME_TOLERANCE: f64 = 1e-9;
+
+/// What one TF pair's messages carried: its first transform, and whether every later one was the same.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct Seen {
+    /// Translation x, y, z (m) and rotation x, y, z, w of the first message.
+    first: [f64; 7],
+    /// Every transform was finite and within [`SAME_TOLERANCE`] of the first.
+    same: bool,
+    /// How many messages carried the pair.
+    pub messages: usize,
+}
+
+/// A transform's seven numbers.
+fn numbers(t: &Transform) -> [f64; 7] {
+    let (p, q) = (&t.translation, &t.rotation);
+    [p.x, p.y, p.z, q.x, q.y, q.z, q.w]
+}
+
+impl Seen {
+    /// The pair's first message.
+    pub fn new(t: &Transform) -> Self {
+        let first = numbers(t);
+        Self { first, same: first.iter().all(|v| v.is_finite()), messages: 1 }
+    }
+
+    /// A later message of the pair.
+    pub fn see(&mut self, t: &Transform) {
+        self.messages += 1;
+        self.same &= numbers(t).iter().zip(&self.first).all(|(a, b)| (a - b).abs() <= SAME_TOLERANCE);
+    }
+
+    /// Whether every message carried the same transform (finite).
+    pub fn is_fixed(&self) -> bool {
+        self.same
+    }
+
+    /// The first transform, planar (x, y and the yaw); `None` when it is not finite.
+    pub fn pose(&self) -> Option<Pose2> {
+        let [x, y, _, qx, qy, qz, qw] = self.first;
+        let q = super::common::Quaternion { x: qx, y: qy, z: qz, w: qw };
+        let pose = Pose2::new(x, y, q.yaw_rad());
+        (x.is_finite() && y.is_finite() && pose.theta_rad.is_finite()).then_some(pose)
+    }
+
+    /// Whether the first transform turns z downwards (a lidar mounted upside down): the child's z axis in
+    /// the parent, R₂₂ = w² − x² − y² + z² (over the norm), is negative.
+    pub fn flipped(&self) -> bool {
+        let [_, _, _, x, y, z, w] = self.first;
+        w * w - x * x - y * y + z * z < 0.0
+    }
+}
+
+/// The pairs of one TF topic as [`Seen`], for a reader that needs only the static transforms (a lidar's
+/// mount), not the poses of every pair.
+#[derive(Debug, Default)]
+pub(super) struct SeenPairs {
+    /// (parent, child, what its messages carried), frames without a leading `/`, in order of first appearance.
+    pairs: Vec<(String, String, Seen)>,
+}
+
+impl SeenPairs {
+    /// Takes one message of the topic.
+    pub fn push(&mut self, msg: &TfMessage) {
+        for t in &msg.transforms {
+            let (parent, child) = (t.header.frame_id.frame(), t.child_frame_id.frame());
+            match self.pairs.iter_mut().find(|(p, c, _)| p == parent && c == child) {
+                Some((_, _, seen)) => seen.see(&t.transform),
+                None => self.pairs.push((parent.to_string(), child.to_string(), Seen::new(&t.transform))),
+            }
+        }
+    }
+
+    /// Adds the static ones to `tree` (see [`StaticTree::take`]).
+    pub fn add_statics(&self, on_static_topic: bool, tree: &mut StaticTree) {
+        for (parent, child, seen) in &self.pairs {
+            tree.take(parent, child, seen, on_static_topic);
+        }
+    }
+}
+
 impl StaticTree {
     /// Takes `child` at `pose` in `parent` (the first one given for a child wins: a latched topic repeats).
     pub fn add(&mut self, parent: &str, child: &str, pose: Pose2) {
         self.parent_of.entry(child.to_string()).or_insert_with(|| (parent.to_string(), pose));
+    }
+
+    /// Takes a TF pair `parent → child` as its messages carried it (`seen`): on a static topic (`…tf_static`)
+    /// always, on another TF topic only when every message carried the same transform (see the module docs).
+    pub fn take(&mut self, parent: &str, child: &str, seen: &Seen, on_static_topic: bool) {
+        if !(on_static_topic || seen.is_fixed()) {
+            return;
+        }
+        if let Some(pose) = seen.pose() {
+            self.add(parent, child, pose);
+            if seen.flipped() {
+                self.mark_flipped(child);
+            }
+        }
     }
 
     /// Takes one `geometry_msgs/TransformStamped` whole: its planar pose, its full rotation, and whether it
@@ -156,6 +272,49 @@ mod tests {
         assert_eq!(tree.offset("marker", "marker"), None);
         tree.add("laser", "marker", Pose2::IDENTITY);
         assert_eq!(tree.offset("odom", "marker"), None, "a cycle ends");
+    }
+
+    /// The ground truth's reader (TfPairs) and the lidar's (SeenPairs) take the same pairs as static from a
+    /// `/tf` topic: a fixed pair republished with every message (ROS 1), and one published once; never the
+    /// moving pair, nor one that changes by a micrometre once.
+    #[test]
+    fn fixed_pairs_on_tf_are_static_for_both_readers() {
+        use super::super::common::{Header, RosString, Time};
+        use super::super::laser_scan::static_transform;
+        let tf = |k: i32, pairs: &[(&str, &str, f64)]| TfMessage {
+            transforms: pairs
+                .iter()
+                .flat_map(|&(parent, child, x)| {
+                    let header = Header { stamp: Time { sec: k, nanosec: 0 }, frame_id: RosString(parent.into()) };
+                    static_transform(header, child, &Pose2::new(x, 0.0, 0.0)).transforms
+                })
+                .collect(),
+        };
+        let messages: Vec<TfMessage> = (1..=4)
+            .map(|k| {
+                let jitter = if k == 2 { 1e-6 } else { 0.0 };
+                let mut pairs = vec![("/world", "/marker", 0.1 * f64::from(k)), ("/marker", "/base_link", -0.1)];
+                pairs.push(("/base_link", "/laser", 0.2 + jitter));
+                if k == 1 {
+                    pairs.push(("/base_link", "/imu", 0.05));
+                }
+                tf(k, &pairs)
+            })
+            .collect();
+        let (mut pairs, mut seen) = (super::super::tf::TfPairs::default(), SeenPairs::default());
+        for (k, m) in messages.iter().enumerate() {
+            pairs.push(k, m);
+            seen.push(m);
+        }
+        let (mut a, mut b) = (StaticTree::default(), StaticTree::default());
+        pairs.add_statics(false, &mut a);
+        seen.add_statics(false, &mut b);
+        for tree in [&a, &b] {
+            assert_eq!(tree.offset("marker", "base_link").map(|(p, _)| p.x_m), Some(-0.1));
+            assert_eq!(tree.offset("base_link", "imu").map(|(p, _)| p.x_m), Some(0.05));
+            assert_eq!(tree.offset("base_link", "laser"), None, "changed once");
+            assert_eq!(tree.offset("world", "marker"), None, "moves");
+        }
     }
 
     #[test]

@@ -6,7 +6,7 @@
 
 use super::common::{Header, Quaternion, RosString, Vector3};
 use super::poses::PoseSeries;
-use super::statics::StaticTree;
+use super::statics::{Seen, StaticTree};
 use serde::{Deserialize, Serialize};
 
 /// The schema name.
@@ -45,6 +45,8 @@ pub(super) struct Pair {
     pub poses: PoseSeries,
     /// The first problem, as (message index, what); the pair takes nothing after it.
     pub problem: Option<(usize, String)>,
+    /// What its messages carried, every one (after a problem too): whether it is a fixed transform.
+    pub seen: Seen,
 }
 
 /// Every pair of one TF topic.
@@ -61,13 +63,10 @@ pub(super) fn is_static_topic(topic: &str) -> bool {
 
 impl TfPairs {
     /// Adds the static transforms of this topic to `tree`: every pair of a static topic, and on another
-    /// topic the pairs published once.
+    /// topic the pairs whose every message carried the same transform ([`StaticTree::take`]).
     pub fn add_statics(&self, is_static_topic: bool, tree: &mut StaticTree) {
         for p in &self.pairs {
-            let once = p.poses.t_ns.len() == 1 && p.problem.is_none();
-            if let (true, Some(&[x, y, yaw])) = (is_static_topic || once, p.poses.xy_yaw.first()) {
-                tree.add(&p.parent, &p.child, omni_kin::Pose2::new(x, y, yaw));
-            }
+            tree.take(&p.parent, &p.child, &p.seen, is_static_topic);
         }
     }
 
@@ -76,13 +75,17 @@ impl TfPairs {
         for (i, tr) in msg.transforms.iter().enumerate() {
             let (parent, child) = (tr.header.frame_id.frame(), tr.child_frame_id.frame());
             let k = match self.pairs.iter().position(|p| p.parent == parent && p.child == child) {
-                Some(k) => k,
+                Some(k) => {
+                    self.pairs[k].seen.see(&tr.transform);
+                    k
+                }
                 None => {
                     self.pairs.push(Pair {
                         parent: parent.to_string(),
                         child: child.to_string(),
                         poses: PoseSeries::default(),
                         problem: None,
+                        seen: Seen::new(&tr.transform),
                     });
                     self.pairs.len() - 1
                 }
