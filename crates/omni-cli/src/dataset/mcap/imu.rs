@@ -8,7 +8,7 @@ use super::common::{
     seconds_since,
 };
 use super::recording::{MessageSink, payload};
-use super::statics::{ConstantPairs, StaticTree};
+use super::statics::{SeenPairs, StaticTree};
 use super::tf::{self, TfMessage};
 use crate::dataset::DatasetError;
 use omni_kin::gyro::{GyroSample, ImuMount};
@@ -99,7 +99,7 @@ pub(crate) struct ImuSink {
     samples: Vec<(i64, [f64; 3])>,
     frame_id: Option<String>,
     statics: StaticTree,
-    tf_pairs: ConstantPairs,
+    tf_pairs: SeenPairs,
     problem: Option<(usize, String)>,
 }
 
@@ -113,7 +113,7 @@ impl ImuSink {
             samples: Vec::new(),
             frame_id: None,
             statics: StaticTree::default(),
-            tf_pairs: ConstantPairs::default(),
+            tf_pairs: SeenPairs::default(),
             problem: None,
         }
     }
@@ -146,7 +146,7 @@ impl ImuSink {
     /// The IMU's mount on the first base frame that the static transforms (`/tf_static`, then the pairs
     /// that never moved on `/tf`) place it under; the identity when its frame is a base frame.
     fn stated_mount(mut self, frame_id: &str) -> Option<StatedMount> {
-        self.tf_pairs.add_to(&mut self.statics);
+        self.tf_pairs.add_statics(false, &mut self.statics);
         BASE_FRAMES.iter().find_map(|base| {
             let rotation = match *base == frame_id {
                 true => nalgebra::UnitQuaternion::identity(),
@@ -197,7 +197,7 @@ impl ImuSink {
                 self.statics.add_transform(t);
             });
         } else {
-            self.tf_pairs.push(&m.transforms);
+            self.tf_pairs.push(&m);
         }
     }
 }

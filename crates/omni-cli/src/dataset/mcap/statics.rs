@@ -6,9 +6,9 @@
 //! topic (ROS 2, ROS 1's tf2 `static_transform_publisher`), and a pair of another TF topic when every one of
 //! its messages carries the same transform ([`Seen`]): ROS 1's tf `static_transform_publisher` and
 //! robot_state_publisher (Indigo) republish fixed joints on `/tf`, and a pair published once is fixed too.
-//! A pair whose value changes (odom → base_link) never is. For a sensor that is not upright (an IMU upside
-//! down or on its side), the full 3D rotation of the chain too ([`StaticTree::add_transform`]); the IMU's
-//! reader finds the fixed `/tf` pairs with [`ConstantPairs`] (exact equality).
+//! A pair whose value changes (odom → base_link) never is. The ground truth's, the lidar's and the IMU's
+//! readers take them by this one rule. Each static transform keeps its full 3D rotation too
+//! ([`StaticTree::add_transform`]), for a sensor that is not upright (an IMU upside down or on its side).
 
 use super::tf::{TfMessage, Transform, TransformStamped};
 use nalgebra::{Quaternion, UnitQuaternion};
@@ -51,8 +51,8 @@ pub(super) const SAME_TOLERANCE: f64 = 1e-9;
 /// What one TF pair's messages carried: its first transform, and whether every later one was the same.
 #[derive(Clone, Debug, PartialEq)]
 pub(super) struct Seen {
-    /// Translation x, y, z (m) and rotation x, y, z, w of the first message.
-    first: [f64; 7],
+    /// The first message's transform.
+    first: TransformStamped,
     /// Every transform was finite and within [`SAME_TOLERANCE`] of the first.
     same: bool,
     /// How many messages carried the pair.
@@ -67,39 +67,25 @@ fn numbers(t: &Transform) -> [f64; 7] {
 
 impl Seen {
     /// The pair's first message.
-    pub fn new(t: &Transform) -> Self {
-        let first = numbers(t);
-        Self { first, same: first.iter().all(|v| v.is_finite()), messages: 1 }
+    pub fn new(t: &TransformStamped) -> Self {
+        let same = numbers(&t.transform).iter().all(|v| v.is_finite());
+        Self { first: t.clone(), same, messages: 1 }
     }
 
     /// A later message of the pair.
     pub fn see(&mut self, t: &Transform) {
         self.messages += 1;
-        self.same &= numbers(t).iter().zip(&self.first).all(|(a, b)| (a - b).abs() <= SAME_TOLERANCE);
+        let first = numbers(&self.first.transform);
+        self.same &= numbers(t).iter().zip(&first).all(|(a, b)| (a - b).abs() <= SAME_TOLERANCE);
     }
 
     /// Whether every message carried the same transform (finite).
     pub fn is_fixed(&self) -> bool {
         self.same
     }
-
-    /// The first transform, planar (x, y and the yaw); `None` when it is not finite.
-    pub fn pose(&self) -> Option<Pose2> {
-        let [x, y, _, qx, qy, qz, qw] = self.first;
-        let q = super::common::Quaternion { x: qx, y: qy, z: qz, w: qw };
-        let pose = Pose2::new(x, y, q.yaw_rad());
-        (x.is_finite() && y.is_finite() && pose.theta_rad.is_finite()).then_some(pose)
-    }
-
-    /// Whether the first transform turns z downwards (a lidar mounted upside down): the child's z axis in
-    /// the parent, R₂₂ = w² − x² − y² + z² (over the norm), is negative.
-    pub fn flipped(&self) -> bool {
-        let [_, _, _, x, y, z, w] = self.first;
-        w * w - x * x - y * y + z * z < 0.0
-    }
 }
 
-/// The pairs of one TF topic as [`Seen`], for a reader that needs only the static transforms (a lidar's
+/// The pairs of one TF topic as [`Seen`], for a reader that needs only the static transforms (a sensor's
 /// mount), not the poses of every pair.
 #[derive(Debug, Default)]
 pub(super) struct SeenPairs {
@@ -114,15 +100,15 @@ impl SeenPairs {
             let (parent, child) = (t.header.frame_id.frame(), t.child_frame_id.frame());
             match self.pairs.iter_mut().find(|(p, c, _)| p == parent && c == child) {
                 Some((_, _, seen)) => seen.see(&t.transform),
-                None => self.pairs.push((parent.to_string(), child.to_string(), Seen::new(&t.transform))),
+                None => self.pairs.push((parent.to_string(), child.to_string(), Seen::new(t))),
             }
         }
     }
 
     /// Adds the static ones to `tree` (see [`StaticTree::take`]).
     pub fn add_statics(&self, on_static_topic: bool, tree: &mut StaticTree) {
-        for (parent, child, seen) in &self.pairs {
-            tree.take(parent, child, seen, on_static_topic);
+        for (_, _, seen) in &self.pairs {
+            tree.take(seen, on_static_topic);
         }
     }
 }
@@ -133,17 +119,12 @@ impl StaticTree {
         self.parent_of.entry(child.to_string()).or_insert_with(|| (parent.to_string(), pose));
     }
 
-    /// Takes a TF pair `parent → child` as its messages carried it (`seen`): on a static topic (`…tf_static`)
-    /// always, on another TF topic only when every message carried the same transform (see the module docs).
-    pub fn take(&mut self, parent: &str, child: &str, seen: &Seen, on_static_topic: bool) {
-        if !(on_static_topic || seen.is_fixed()) {
-            return;
-        }
-        if let Some(pose) = seen.pose() {
-            self.add(parent, child, pose);
-            if seen.flipped() {
-                self.mark_flipped(child);
-            }
+    /// Takes a TF pair as its messages carried it (`seen`): on a static topic (`…tf_static`) always, on
+    /// another TF topic only when every message carried the same transform (see the module docs); whole
+    /// ([`StaticTree::add_transform`]).
+    pub fn take(&mut self, seen: &Seen, on_static_topic: bool) {
+        if on_static_topic || seen.is_fixed() {
+            self.add_transform(&seen.first);
         }
     }
 
@@ -215,38 +196,6 @@ impl StaticTree {
             at = parent;
         }
         None
-    }
-}
-
-/// The pairs of a `/tf` topic, kept while each repeats its first value: at the end, those that never
-/// moved are static transforms published the ROS 1 way (a pair seen once counts too, as in
-/// [`super::tf::TfPairs::add_statics`]).
-#[derive(Debug, Default)]
-pub(super) struct ConstantPairs {
-    /// (parent, child) → the first transform, and whether every later one had the same value.
-    pairs: BTreeMap<(String, String), (TransformStamped, bool)>,
-}
-
-impl ConstantPairs {
-    /// Takes the transforms of one `/tf` message.
-    pub fn push(&mut self, transforms: &[TransformStamped]) {
-        for t in transforms {
-            let key = (t.header.frame_id.frame().to_string(), t.child_frame_id.frame().to_string());
-            match self.pairs.get_mut(&key) {
-                None => {
-                    self.pairs.insert(key, (t.clone(), true));
-                }
-                Some((first, constant)) => *constant &= first.transform == t.transform,
-            }
-        }
-    }
-
-    /// Adds the pairs that never moved to `tree` (after the `/tf_static` ones: a child `/tf_static` places
-    /// keeps its place).
-    pub fn add_to(&self, tree: &mut StaticTree) {
-        for (t, _) in self.pairs.values().filter(|(_, constant)| *constant) {
-            tree.add_transform(t);
-        }
     }
 }
 
@@ -364,15 +313,17 @@ mod tests {
     #[test]
     fn a_tf_pair_that_never_moves_is_static_and_one_that_moves_is_not() {
         let up = [0.0, 0.0, 0.0, 1.0];
-        let mut pairs = ConstantPairs::default();
+        let mut pairs = SeenPairs::default();
         for k in 0..5 {
             let odom = transform("odom", "base_link", 0.1 * k as f64, up);
-            pairs.push(&[odom, transform("base_link", "imu_link", 0.05, [1.0, 0.0, 0.0, 0.0])]);
+            pairs.push(&TfMessage {
+                transforms: vec![odom, transform("base_link", "imu_link", 0.05, [1.0, 0.0, 0.0, 0.0])],
+            });
         }
         let mut tree = StaticTree::default();
         // /tf_static's own base_link → laser stays; /tf's constant pair is added beside it.
         tree.add_transform(&transform("base_link", "laser", 0.2, up));
-        pairs.add_to(&mut tree);
+        pairs.add_statics(false, &mut tree);
         let r = tree.rotation("base_link", "imu_link").unwrap();
         assert!((r.angle() - std::f64::consts::PI).abs() < 1e-12, "{r:?}");
         assert_eq!(tree.offset("odom", "base_link"), None, "odom → base_link moves: not static");

@@ -66,7 +66,7 @@ impl TfPairs {
     /// topic the pairs whose every message carried the same transform ([`StaticTree::take`]).
     pub fn add_statics(&self, is_static_topic: bool, tree: &mut StaticTree) {
         for p in &self.pairs {
-            tree.take(&p.parent, &p.child, &p.seen, is_static_topic);
+            tree.take(&p.seen, is_static_topic);
         }
     }
 
@@ -85,7 +85,7 @@ impl TfPairs {
                         child: child.to_string(),
                         poses: PoseSeries::default(),
                         problem: None,
-                        seen: Seen::new(&tr.transform),
+                        seen: Seen::new(tr),
                     });
                     self.pairs.len() - 1
                 }
