@@ -23,6 +23,24 @@ pub use omni_kin::lidar::{
     sensor_path, simulate_scans,
 };
 
+/// What the scans returned, for a message about matches that failed: `each scan returned a median of N of
+/// its M beams (range_min … range_max m; a match needs K)`. A lidar whose range is short for its room
+/// (most beams beyond `range_max`) returns too few points to match.
+pub fn returns_text(scans: &[Scan], settings: &MatchSettings) -> String {
+    let mut returns: Vec<usize> =
+        scans.iter().map(|s| (0..s.ranges_m.len()).filter(|&i| s.is_return(i)).count()).collect();
+    returns.sort_unstable();
+    let Some(first) = scans.first() else { return "no scans".into() };
+    format!(
+        "each scan returned a median of {} of its {} beams (range {:.2} to {:.2} m; a match needs {} points)",
+        returns[returns.len() / 2],
+        first.ranges_m.len(),
+        first.range_min_m,
+        first.range_max_m,
+        settings.min_inliers
+    )
+}
+
 /// The default LaserScan topic.
 pub const DEFAULT_SCAN_TOPIC: &str = "/scan";
 

@@ -176,9 +176,16 @@ fn a_corridor_leaves_motion_along_it_unconstrained_and_every_match_is_rejected()
     assert_eq!(
         err.trim(),
         "error: sim/train/00-r0.mcap: topic \"/scan\": none of the 28 scan matches was accepted (ill_conditioned \
-         28); the scans do not constrain the lidar's motion (a corridor, a single wall, an empty room?) or do not \
+         28; each scan returned a median of 617 of its 720 beams (range 0.05 to 12.00 m; a match needs 60 points)); \
+         the scans do not constrain the lidar's motion (a corridor, a single wall, an empty room?) or do not \
          overlap: record where walls face several ways"
     );
+    // A lidar whose range is short for its room (3.5 m in the 10 × 8 m room) returns too few points: said.
+    let short = ["--lidar", "room", "--lidar-beams", "360", "--lidar-max-range", "3.5", "--out", "short"];
+    ok(&[&["simulate", "--runs-per-command", "1", "--duration", "2", "-q"][..], &short[..]].concat(), d);
+    let err = refused(&["train", "short/train/00-r0.mcap", "--gt-scans", "/scan"], d);
+    assert!(err.contains("(28 rejected: too_few_points 28; each scan returned a median of 19 of"), "{err}");
+    assert!(err.contains("of its 360 beams (range 0.05 to 3.50 m; a match needs 60 points))"), "{err}");
 }
 
 #[test]

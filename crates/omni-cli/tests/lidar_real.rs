@@ -13,21 +13,12 @@ use serde_json::Value;
 use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::path::Path;
-use support::{ok_with_stderr, succeeded, test_data};
+use support::{ok_with_stderr, param_se as param, succeeded, test_data};
 
 /// `omnical ARGS --json` in `dir`, which must succeed: the document, and stderr.
 fn json(args: &[&str], dir: &Path) -> (Value, String) {
     let (stdout, stderr) = ok_with_stderr(&[args, &["--json"]].concat(), dir);
     (serde_json::from_str(&stdout).unwrap(), stderr)
-}
-
-/// A fitted parameter's value and standard error from `train --json`.
-fn param(fit: &Value, name: &str) -> (f64, f64) {
-    let value = fit["params"].as_array().unwrap().iter().find(|p| p["name"] == name).unwrap()["value"].as_f64();
-    let se =
-        fit["identifiability"]["params"].as_array().unwrap().iter().find(|p| p["name"] == name).unwrap()["std_error"]
-            .as_f64();
-    (value.unwrap(), se.unwrap_or(f64::NAN))
 }
 
 /// `builtin_interfaces/msg/Time`.
@@ -199,18 +190,7 @@ fn a_270_degree_lidar_mounted_on_tf_under_base_footprint_calibrates_as_motion_ca
     let said = "its path moved to the base by the static transforms base_footprint → laser (x 0.200 m, y 0.000 m, \
                 yaw 5.00°)";
     assert!(stderr.contains(said), "{stderr}");
-    let wheels = [("r_left", 0.03366), ("r_right", 0.033), ("b", 0.287)];
-    for (name, truth) in wheels {
-        let (m, m_se) = param(&mocap, name);
-        let (l, l_se) = param(&lidar, name);
-        eprintln!("{name}: lidar {l:.6} ± {l_se:.1e}, motion capture {m:.6} ± {m_se:.1e} (true {truth})");
-    }
-    for (name, truth) in wheels {
-        let (m, m_se) = param(&mocap, name);
-        let (l, l_se) = param(&lidar, name);
-        assert!((l - m).abs() <= 2.0 * m_se.max(l_se), "{name}: lidar {l} vs motion capture {m} ± {m_se}");
-        assert!((l - truth).abs() < 1e-3 * truth, "{name}: {l} vs {truth}");
-    }
+    support::assert_wheels_as_motion_capture(&lidar, &mocap, "lidar");
     // The fit's correction of the mount read from /tf.
     let (dx, _) = param(&lidar, "sensor_offset_yaw.dx_m");
     let (dy, _) = param(&lidar, "sensor_offset_yaw.dy_m");

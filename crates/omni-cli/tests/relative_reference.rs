@@ -9,7 +9,7 @@ mod support;
 
 use serde_json::Value;
 use std::path::Path;
-use support::{ok_with_stderr, omnical, shared_set, succeeded, test_data};
+use support::{ok_with_stderr, omnical, param_se as param, shared_set, succeeded, test_data};
 
 /// `omnical ARGS --json` in `dir`, which must succeed: the document, and stderr.
 fn json(args: &[&str], dir: &Path) -> (Value, String) {
@@ -37,15 +37,6 @@ fn simulate(dir: &Path, robot: &str) {
     );
 }
 
-/// A fitted parameter's value and standard error from `train --json`.
-fn param(fit: &Value, name: &str) -> (f64, f64) {
-    let value = fit["params"].as_array().unwrap().iter().find(|p| p["name"] == name).unwrap()["value"].as_f64();
-    let se =
-        fit["identifiability"]["params"].as_array().unwrap().iter().find(|p| p["name"] == name).unwrap()["std_error"]
-            .as_f64();
-    (value.unwrap(), se.unwrap_or(f64::NAN))
-}
-
 #[test]
 fn a_diff_drive_from_its_sensors_own_motion_matches_motion_capture() {
     let tmp = tempfile::tempdir().unwrap();
@@ -58,12 +49,7 @@ fn a_diff_drive_from_its_sensors_own_motion_matches_motion_capture() {
         "the windows are said: {stderr}"
     );
     // The true radii: left 1.02 × 0.033 m (wheel a), right 0.033 m; separation 0.287 m.
-    for (name, truth) in [("r_left", 0.03366), ("r_right", 0.033), ("b", 0.287)] {
-        let (m, m_se) = param(&mocap, name);
-        let (r, r_se) = param(&relative, name);
-        assert!((r - m).abs() <= 2.0 * m_se.max(r_se), "{name}: relative {r} vs motion capture {m} ± {m_se}");
-        assert!((r - truth).abs() < 1e-3 * truth, "{name}: {r} vs {truth}");
-    }
+    support::assert_wheels_as_motion_capture(&relative, &mocap, "relative");
     let (dx, _) = param(&relative, "sensor_offset_yaw.dx_m");
     let (dy, _) = param(&relative, "sensor_offset_yaw.dy_m");
     let (dyaw, dyaw_se) = param(&relative, "sensor_offset_yaw.dyaw_rad");

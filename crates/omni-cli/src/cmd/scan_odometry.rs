@@ -90,13 +90,14 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     if path.segments.is_empty() {
         let why: Vec<String> = path.rejected_why.iter().map(|(k, n)| format!("{k} {n}")).collect();
         bail!(
-            "{}: topic {:?}: none of the {} scan matches was accepted ({}); the scans do not constrain the lidar's \
-             motion (a corridor, a single wall, an empty room?) or do not overlap: record where walls face several \
-             ways",
+            "{}: topic {:?}: none of the {} scan matches was accepted ({}; {}); the scans do not constrain the \
+             lidar's motion (a corridor, a single wall, an empty room?) or do not overlap: record where walls face \
+             several ways",
             a.recording.display(),
             a.topic,
             path.rejected,
-            why.join(", ")
+            why.join(", "),
+            lidar::returns_text(&read.scans, &MatchSettings::default())
         );
     }
     let mut written = Vec::new();

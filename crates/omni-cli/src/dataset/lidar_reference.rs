@@ -27,10 +27,11 @@ pub(super) fn with_lidar_path(
             path,
             format!("topic {topic:?}"),
             format!(
-                "no scan matched the one before it ({} rejected: {}): the scans see too little structure, or the \
-                 robot moves too far between scans; the lidar cannot be the reference here",
+                "no scan matched the one before it ({} rejected: {}; {}): the scans see too little structure, or \
+                 the robot moves too far between scans; the lidar cannot be the reference here",
                 sensor.rejected,
-                rejections(&sensor.rejected_why)
+                rejections(&sensor.rejected_why),
+                lidar::returns_text(&read.scans, settings)
             ),
         ));
     }

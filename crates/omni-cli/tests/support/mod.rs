@@ -77,6 +77,27 @@ pub fn param(summary: &Value, name: &str) -> f64 {
     p.unwrap_or_else(|| panic!("no {name} in {}", summary["params"]))["value"].as_f64().unwrap()
 }
 
+/// A fitted parameter's value and standard error from a `train --json` summary.
+pub fn param_se(fit: &Value, name: &str) -> (f64, f64) {
+    let se = fit["identifiability"]["params"].as_array().unwrap().iter().find(|p| p["name"] == name);
+    (param(fit, name), se.and_then(|p| p["std_error"].as_f64()).unwrap_or(f64::NAN))
+}
+
+/// The simulated diff drive of the relative-reference tests: its true wheels (the left 2 % large). m.
+pub const DIFF_WHEELS: [(&str, f64); 3] = [("r_left", 0.03366), ("r_right", 0.033), ("b", 0.287)];
+
+/// Asserts that `fit` (trained on another reference, `what`) gives the diff drive's wheels within 2
+/// standard errors of `mocap`'s fit on the same runs and 0.1 % of the truth ([`DIFF_WHEELS`]).
+pub fn assert_wheels_as_motion_capture(fit: &Value, mocap: &Value, what: &str) {
+    for (name, truth) in DIFF_WHEELS {
+        let (m, m_se) = param_se(mocap, name);
+        let (r, r_se) = param_se(fit, name);
+        eprintln!("{name}: {what} {r:.6} ± {r_se:.1e}, motion capture {m:.6} ± {m_se:.1e} (true {truth})");
+        assert!((r - m).abs() <= 2.0 * m_se.max(r_se), "{name}: {what} {r} vs motion capture {m} ± {m_se}");
+        assert!((r - truth).abs() < 1e-3 * truth, "{name}: {what} {r} vs {truth}");
+    }
+}
+
 /// The URDF link and joint of one of APR-02's omni wheels (r = 0.148 m, 0.195 m out) at `angle_deg`: the
 /// joint frame is yawed to the wheel's angle and turns about −x (the axle points inwards), so positive speed
 /// pushes along the counter-clockwise tangent.
