@@ -391,11 +391,7 @@ fn against_model(
     let gyro = omni_kin::gyro::fit_gyro_scale(&rec.runs, &rec.gyro, window_s, &row)
         .map_err(|e| ImuError::Model(Box::new(e)))?;
     let difference_sigmas = (0..n).map(|i| (fit.row[i] - row[i]) / fit.row_std[i]).collect();
-    let name = match spec {
-        super::ModelSpec::File(p) => p.display().to_string(),
-        other => format!("{other:?}").to_lowercase(),
-    };
-    Ok(AgainstModel { model: name, row, gyro, difference_sigmas })
+    Ok(AgainstModel { model: spec.to_string(), row, gyro, difference_sigmas })
 }
 
 /// Refuses the recordings read upright when their IMU's x or y axis turns more than its z (RMS): the IMU
