@@ -46,6 +46,9 @@ pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
         Ok(found) => found,
         Err(status) => return status,
     };
+    if let Some(p) = &project {
+        crate::out_path::note_project_file(&p.path);
+    }
     match run_quiet_on_closed_pipe(cli) {
         Ok(()) => 0,
         Err(e) => match Failure::of(&e) {

@@ -7,8 +7,73 @@
 //! folder that mixes old runs with new ones. Folders of fixed file names that a user may share with other
 //! files (`report --png`, `export --robot-config`, `man --out`) are [`prepared`](prepare_dir) instead: the
 //! command writes its own file names and leaves the rest alone.
+//!
+//! A result folder never holds, nor lies inside, anything the command reads ([`Inputs`]): the recordings,
+//! the robot file, the commands, the model, the project file. That is refused before any work, with or
+//! without `--force`, so `--force` can never delete an input, and an export never lands among the data it
+//! would be read back with.
 
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
+use std::sync::OnceLock;
+
+/// A file or folder a command reads, with what it is for messages (`the data`, `--robot`, `model=`).
+#[derive(Clone, Debug)]
+pub struct Input {
+    /// What the input is, as the user gave it: `the data`, `--robot`, `commands=`.
+    pub what: String,
+    /// Its path as given.
+    pub path: PathBuf,
+}
+
+/// Everything a command reads from files, gathered before its result folders are claimed
+/// ([`OutDir::claim`]). The project file in force (`--config FILE` or `./omnical.toml`) is always one.
+#[derive(Clone, Debug, Default)]
+pub struct Inputs(Vec<Input>);
+
+/// The project file in force for this process, set once when it is read (`entry`).
+static PROJECT_FILE: OnceLock<PathBuf> = OnceLock::new();
+
+/// Records the project file this process read its defaults from, so that no result folder replaces it.
+pub fn note_project_file(path: &Path) {
+    let _ = PROJECT_FILE.set(path.to_path_buf());
+}
+
+impl Inputs {
+    /// No inputs but the project file in force.
+    pub fn new() -> Self {
+        let inputs = Self(Vec::new());
+        match PROJECT_FILE.get() {
+            Some(p) => inputs.with("the project file", p),
+            None => inputs,
+        }
+    }
+
+    /// The data paths (files or folders) a command reads.
+    pub fn data(paths: &[PathBuf]) -> Self {
+        paths.iter().fold(Self::new(), |i, p| i.with("the data", p))
+    }
+
+    /// Adds the input `path`, described as `what`.
+    #[must_use]
+    pub fn with(mut self, what: &str, path: impl AsRef<Path>) -> Self {
+        self.0.push(Input { what: what.to_string(), path: path.as_ref().to_path_buf() });
+        self
+    }
+
+    /// Adds `path` when given.
+    #[must_use]
+    pub fn with_some(self, what: &str, path: Option<impl AsRef<Path>>) -> Self {
+        match path {
+            Some(p) => self.with(what, p),
+            None => self,
+        }
+    }
+
+    /// The inputs gathered.
+    pub fn iter(&self) -> impl Iterator<Item = &Input> {
+        self.0.iter()
+    }
+}
 
 /// What is wrong with a place for results. Every variant names the option (`flag`: `--out`, `out=`) and
 /// the path it gave; an OS error is chained as the source.
@@ -150,6 +215,25 @@ pub enum OutPathError {
         /// The OS error.
         source: std::io::Error,
     },
+    /// A result folder holds, or lies inside, an input of the command (refused with or without `--force`).
+    #[error(
+        "{flag} {}: {relation} {what} {}, which this command reads; give {flag} a folder apart from its inputs \
+         (--force never replaces an input)",
+        dir.display(),
+        input.display()
+    )]
+    OverlapsInput {
+        /// The option.
+        flag: String,
+        /// The folder.
+        dir: PathBuf,
+        /// `this folder holds` or `this folder is inside`.
+        relation: &'static str,
+        /// What the input is (`the data`, `--robot`).
+        what: String,
+        /// The input's path as given.
+        input: PathBuf,
+    },
     /// The old folder, moved aside, could not be removed.
     #[error("removing the old {} ({})", target.display(), old.display())]
     RemoveOld {
@@ -250,6 +334,60 @@ fn check_replaceable(dir: &Path, flag: &str) -> Result<(), OutPathError> {
     Ok(())
 }
 
+/// `path` made absolute and resolved as far as it exists: its longest existing ancestor canonical (links
+/// followed), the rest appended with `.` and `..` taken lexically.
+fn resolved(path: &Path) -> PathBuf {
+    let cwd = std::env::current_dir().unwrap_or_default();
+    let absolute = if path.is_absolute() { path.to_path_buf() } else { cwd.join(path) };
+    let mut lexical = PathBuf::new();
+    for c in absolute.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                lexical.pop();
+            }
+            other => lexical.push(other),
+        }
+    }
+    let mut existing = lexical.as_path();
+    let mut rest = Vec::new();
+    loop {
+        if let Ok(c) = existing.canonicalize() {
+            return rest.iter().rev().fold(c, |p, n| p.join(n));
+        }
+        match (existing.parent(), existing.file_name()) {
+            (Some(parent), Some(name)) => {
+                rest.push(name.to_os_string());
+                existing = parent;
+            }
+            _ => return lexical,
+        }
+    }
+}
+
+/// Refuses the result folder `dir` (given with `flag`) when it holds or lies inside one of `inputs`.
+pub fn check_apart(dir: &Path, flag: &str, inputs: &Inputs) -> Result<(), OutPathError> {
+    let out = resolved(dir);
+    for input in inputs.iter() {
+        let at = resolved(&input.path);
+        let relation = if at.starts_with(&out) {
+            "this folder holds"
+        } else if out.starts_with(&at) {
+            "this folder is inside"
+        } else {
+            continue;
+        };
+        return Err(OutPathError::OverlapsInput {
+            flag: flag.into(),
+            dir: dir.to_path_buf(),
+            relation,
+            what: input.what.clone(),
+            input: input.path.clone(),
+        });
+    }
+    Ok(())
+}
+
 /// A result folder of per-run files, claimed before the work ([`OutDir::claim`]), filled at
 /// [`OutDir::path`] and put in place by [`OutDir::commit`]. Dropped without a commit, it removes what was
 /// written and leaves the target as it was.
@@ -263,10 +401,12 @@ pub struct OutDir {
 }
 
 impl OutDir {
-    /// Claims `target` (given with `flag`, e.g. `--out`): a folder that already holds files is refused
+    /// Claims `target` (given with `flag`, e.g. `--out`): a folder that holds or lies inside one of the
+    /// command's `inputs` is refused, whatever `force`; a folder that already holds files is refused
     /// unless `force` (then it is replaced whole at the commit); missing parent folders are created; the
     /// staging folder is made now, so a folder that takes no files fails before the work.
-    pub fn claim(target: &Path, flag: &str, force: bool) -> Result<Self, OutPathError> {
+    pub fn claim(target: &Path, flag: &str, force: bool, inputs: &Inputs) -> Result<Self, OutPathError> {
+        check_apart(target, flag, inputs)?;
         if target.exists() && !target.is_dir() {
             return Err(OutPathError::IsFile { flag: flag.into(), dir: target.to_path_buf() });
         }
@@ -389,7 +529,7 @@ mod tests {
         std::fs::create_dir_all(out.join("train")).unwrap();
         std::fs::write(out.join("train/old.csv"), "old").unwrap();
         std::fs::write(out.join("truth.json"), "{}").unwrap();
-        let e = OutDir::claim(&out, "--out", false).unwrap_err().to_string();
+        let e = OutDir::claim(&out, "--out", false, &Inputs::new()).unwrap_err().to_string();
         assert_eq!(
             e,
             format!(
@@ -398,7 +538,7 @@ mod tests {
                 out.display()
             )
         );
-        let d = OutDir::claim(&out, "--out", true).unwrap();
+        let d = OutDir::claim(&out, "--out", true, &Inputs::new()).unwrap();
         std::fs::create_dir(d.path().join("train")).unwrap();
         std::fs::write(d.path().join("train/new.csv"), "new").unwrap();
         assert_eq!(d.shown(&d.path().join("train/new.csv")), out.join("train/new.csv"));
@@ -418,7 +558,7 @@ mod tests {
         std::fs::create_dir(&out).unwrap();
         std::fs::write(out.join("a.mcap"), "old").unwrap();
         {
-            let d = OutDir::claim(&out, "--mcap", true).unwrap();
+            let d = OutDir::claim(&out, "--mcap", true, &Inputs::new()).unwrap();
             std::fs::write(d.path().join("b.mcap"), "half").unwrap();
         }
         assert_eq!(files(tmp.path()), ["bags"]);
@@ -429,13 +569,13 @@ mod tests {
     fn new_and_empty_folders_need_no_force() {
         let tmp = tempfile::tempdir().unwrap();
         let out = tmp.path().join("deep/er/sim");
-        let d = OutDir::claim(&out, "--out", false).unwrap();
+        let d = OutDir::claim(&out, "--out", false, &Inputs::new()).unwrap();
         std::fs::write(d.path().join("x"), "x").unwrap();
         d.commit().unwrap();
         assert_eq!(files(&out), ["x"]);
         let empty = tmp.path().join("empty");
         std::fs::create_dir(&empty).unwrap();
-        let d = OutDir::claim(&empty, "--out", false).unwrap();
+        let d = OutDir::claim(&empty, "--out", false, &Inputs::new()).unwrap();
         std::fs::write(d.path().join("y"), "y").unwrap();
         d.commit().unwrap();
         assert_eq!(files(&empty), ["y"]);
@@ -445,8 +585,41 @@ mod tests {
     fn force_never_replaces_a_folder_holding_the_working_directory() {
         let here = std::env::current_dir().unwrap();
         let parent = here.parent().unwrap();
-        let e = OutDir::claim(parent, "--out", true).unwrap_err().to_string();
+        let e = OutDir::claim(parent, "--out", true, &Inputs::new()).unwrap_err().to_string();
         assert!(e.ends_with("--force will not replace a folder that holds the working directory"), "{e}");
+    }
+
+    #[test]
+    fn a_folder_that_holds_or_lies_inside_an_input_is_refused_even_with_force() {
+        let tmp = tempfile::tempdir().unwrap();
+        let data = tmp.path().join("data");
+        std::fs::create_dir(&data).unwrap();
+        std::fs::write(data.join("run.mcap"), "bag").unwrap();
+        let inputs = Inputs::data(std::slice::from_ref(&data.join("run.mcap"))).with("--robot", data.join("r.toml"));
+        for force in [false, true] {
+            let e = OutDir::claim(&data, "--tum", force, &inputs).unwrap_err().to_string();
+            assert_eq!(
+                e,
+                format!(
+                    "--tum {}: this folder holds the data {}, which this command reads; give --tum a folder apart \
+                     from its inputs (--force never replaces an input)",
+                    data.display(),
+                    data.join("run.mcap").display()
+                )
+            );
+        }
+        // Inside the data's folder, through a `..` and a link: refused too, and nothing is created.
+        let inputs = Inputs::data(std::slice::from_ref(&data));
+        let inside = tmp.path().join("other/../data/exported");
+        let e = OutDir::claim(&inside, "--mcap", true, &inputs).unwrap_err().to_string();
+        assert!(e.contains(": this folder is inside the data "), "{e}");
+        std::os::unix::fs::symlink(&data, tmp.path().join("link")).unwrap();
+        let e = OutDir::claim(&tmp.path().join("link"), "--out", true, &inputs).unwrap_err().to_string();
+        assert!(e.contains(": this folder holds the data "), "{e}");
+        assert_eq!(files(&data), ["run.mcap"]);
+        assert_eq!(files(tmp.path()), ["data", "link"]);
+        // A sibling folder is fine.
+        OutDir::claim(&tmp.path().join("tum"), "--tum", true, &inputs).unwrap().commit().unwrap();
     }
 
     #[test]

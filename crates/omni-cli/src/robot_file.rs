@@ -51,6 +51,16 @@ pub struct RobotFile {
     pub source: Source,
 }
 
+impl RobotFile {
+    /// The file it was read from (`None` for the built-in robot).
+    pub fn path(&self) -> Option<&Path> {
+        match &self.source {
+            Source::Flag(p) | Source::Discovered(p) => Some(p),
+            Source::Builtin => None,
+        }
+    }
+}
+
 /// What is wrong with a robot description file. Every variant names the file.
 #[derive(Debug, Error)]
 pub enum RobotFileError {

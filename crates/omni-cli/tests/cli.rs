@@ -195,3 +195,86 @@ fn a_closed_stdout_pipe_ends_quietly() {
         assert!(!stderr.contains("panicked") && !stderr.contains("Broken pipe"), "{stderr}");
     }
 }
+
+/// Issue 44, item 1: `--force` never deletes or overwrites what a command reads. A result folder that holds,
+/// or lies inside, any input is refused before any work, naming both paths, with or without `--force`.
+#[test]
+fn force_never_replaces_an_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = ["simulate", "--out", "data", "--runs-per-command", "1", "--duration", "2", "--seed", "3"];
+    let out = omnical(&sim, dir.path());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let listing = |p: &str| {
+        let mut v: Vec<String> = std::fs::read_dir(dir.path().join(p))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    };
+    let before = listing("data/train");
+    let refused = |args: &[&str], expected: &str| {
+        for force in [false, true] {
+            let mut args = args.to_vec();
+            if force {
+                args.push("--force");
+            }
+            let out = omnical(&args, dir.path());
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+            assert!(err.contains(expected), "{args:?}: {err}");
+            assert!(err.contains("(--force never replaces an input)"), "{err}");
+        }
+    };
+    // export --tum and --mcap into the folder of the recording being exported, or its parent.
+    let run = "data/train/00-r0.mcap";
+    refused(
+        &["export", "--model", "design", run, "--tum", "data/train"],
+        "error: --tum data/train: this folder holds the data data/train/00-r0.mcap, which this command reads",
+    );
+    refused(
+        &["export", "--model", "design", "data/train", "--mcap", "data"],
+        "--mcap data: this folder holds the data data/train",
+    );
+    // An export inside the data folder would be read back as data.
+    refused(
+        &["export", "--model", "design", "data/train", "--tum", "data/train/tum"],
+        "this folder is inside the data data/train",
+    );
+    // The model file read.
+    std::fs::create_dir(dir.path().join("models")).unwrap();
+    std::fs::copy(dir.path().join("data/truth.json"), dir.path().join("models/keep.json")).unwrap();
+    let out = omnical(&["train", "data/train", "--out", "models/fit.toml"], dir.path());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    refused(
+        &["export", "--model", "models/fit.toml", run, "--tum", "models"],
+        "this folder holds --model models/fit.toml",
+    );
+    // simulate --out over its own --robot and --commands.
+    std::fs::create_dir(dir.path().join("setup")).unwrap();
+    std::fs::copy(dir.path().join("data/train/robot.toml"), dir.path().join("setup/robot.toml")).unwrap();
+    std::fs::write(dir.path().join("setup/cmds.csv"), "v_m_s,alpha_deg,omega_rad_s,repetitions\n0.2,0,0,1\n").unwrap();
+    refused(
+        &["simulate", "--out", "setup", "--robot", "setup/robot.toml", "--duration", "2"],
+        "--out setup: this folder holds --robot setup/robot.toml",
+    );
+    refused(
+        &["simulate", "--out", "setup", "--commands", "setup/cmds.csv", "--duration", "2"],
+        "--out setup: this folder holds --commands setup/cmds.csv",
+    );
+    // demo --out over its --robot.
+    refused(&["demo", "--out", "setup", "--robot", "setup/robot.toml"], "this folder holds --robot setup/robot.toml");
+    // The project file the defaults came from.
+    std::fs::write(dir.path().join("setup/omnical.toml"), "seed = 5\n").unwrap();
+    refused(
+        &["--config", "setup/omnical.toml", "simulate", "--out", "setup", "--duration", "2"],
+        "--out setup: this folder holds the project file setup/omnical.toml",
+    );
+    // Nothing was touched.
+    assert_eq!(listing("data/train"), before);
+    assert_eq!(listing("setup"), ["cmds.csv", "omnical.toml", "robot.toml"]);
+    assert_eq!(listing("models"), ["fit.toml", "keep.json"]);
+    // A folder apart from the inputs is still replaced with --force.
+    let out = omnical(&["export", "--model", "design", run, "--tum", "models", "--force"], dir.path());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}

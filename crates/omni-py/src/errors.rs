@@ -195,6 +195,17 @@ pub fn file_error(e: &(dyn std::error::Error + 'static)) -> PyErr {
     }
 }
 
+/// An output folder refused or not written: `FileExistsError` for one that already holds files (without
+/// `force`), `ValueError` for one that holds or lies inside an input (whatever `force`), else as its cause.
+pub fn out_error(e: omni_cli::out_path::OutPathError) -> PyErr {
+    use omni_cli::out_path::OutPathError;
+    match e {
+        OutPathError::NotEmpty { .. } => pyo3::exceptions::PyFileExistsError::new_err(chain_text(&e)),
+        OutPathError::OverlapsInput { .. } => value_error(chain_text(&e)),
+        e => file_error(&e),
+    }
+}
+
 /// A `ValueError` with this message (bad shapes, bad option values).
 pub fn value_error(message: impl Into<String>) -> PyErr {
     PyValueError::new_err(message.into())

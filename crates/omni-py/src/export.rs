@@ -1,13 +1,12 @@
 //! `export`: trajectories for other tools, as `omnical export` writes them (its own functions): TUM files
 //! for evo, MCAP bags with the model's odometry on /omnical/odometry for Foxglove.
 
-use crate::errors::{chain_text, file_error, value_error};
+use crate::errors::{file_error, out_error, value_error};
 use crate::robot::{check_order, designs_for, model_spec, per_run};
 use crate::run::{origin_of, runs_from};
 use omni_cli::api::load::DataOptions;
 use omni_cli::export::{RecordedTopics, write_mcap, write_tum};
-use omni_cli::out_path::{OutDir, OutPathError};
-use pyo3::exceptions::PyFileExistsError;
+use omni_cli::out_path::{Inputs, OutDir};
 use pyo3::prelude::*;
 use std::path::PathBuf;
 
@@ -59,10 +58,17 @@ pub fn export(
         Some(_) => DataOptions::default().wheel_joints(&origin),
         None => fm.model.kinematics.wheel_names(),
     };
+    // What the export reads, which neither folder may hold: the recordings, the robot and model files.
+    let model_file = model.extract::<PathBuf>().ok().filter(|p| p.is_file());
+    let inputs = (origin.sources.iter().chain(origin.recordings.values()))
+        .fold(Inputs::new(), |i, p| i.with("the data", p))
+        .with_some("robot=", origin.robot_file.as_ref().and_then(|r| r.path()))
+        .with_some("robot=", robot.as_ref())
+        .with_some("model=", model_file);
     // Each failure becomes the Python exception of its cause here, with the CLI's message.
     let written = py.detach(|| -> PyResult<Vec<PathBuf>> {
         let claim = |dir: &Option<PathBuf>, flag| {
-            dir.as_deref().map(|d| OutDir::claim(d, flag, force)).transpose().map_err(out_error)
+            dir.as_deref().map(|d| OutDir::claim(d, flag, force, &inputs)).transpose().map_err(out_error)
         };
         let (tum, mcap) = (claim(&tum, "tum=")?, claim(&mcap, "mcap=")?);
         let mut written = Vec::new();
@@ -93,12 +99,6 @@ pub fn export(
 
 /// A result folder refused or not written: `FileExistsError` for one that already holds files (without
 /// `force`), else as [`cause`].
-fn out_error(e: OutPathError) -> PyErr {
-    match e {
-        OutPathError::NotEmpty { .. } => PyFileExistsError::new_err(chain_text(&e)),
-        e => cause(e),
-    }
-}
 
 /// An export failure as the Python exception of its cause (`FileNotFoundError`, `OSError`, else
 /// `OmnicalError`), with the CLI's message.

@@ -429,6 +429,7 @@ pub fn load(
         sensor_mount_from_recordings: ds.sensor_mount_from_recordings,
         time_origins_s: ds.time_origins_s,
         recordings: ds.recordings,
+        sources: ds.sources,
         ..Default::default()
     };
     Ok(PyDataset {
@@ -546,6 +547,7 @@ pub fn origin_of(obj: &Bound<'_, PyAny>) -> omni_cli::dataset::Dataset {
                 sensor_mount_from_recordings: o.sensor_mount_from_recordings,
                 time_origins_s: o.time_origins_s.clone(),
                 recordings: o.recordings.clone(),
+                sources: o.sources.clone(),
                 ..Default::default()
             }
         }

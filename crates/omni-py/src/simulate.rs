@@ -3,19 +3,18 @@
 //! ([`omni_cli::api::simulate`], the CLI's code).
 
 use crate::effect::PyEffect;
-use crate::errors::{PyResultExt, chain_text, file_error, value_error};
+use crate::errors::{PyResultExt, out_error, value_error};
 use crate::model::model_arg;
 use crate::robot::{robot_arg, robot_design, robot_error};
 use crate::run::PyRun;
 use omni_cli::api::imu::mount_from_text as mount_from_text_rpy;
 use omni_cli::api::simulate::{Format, Imu, Lidar, mount_from_text, simulate_split, write_robot, write_split};
 use omni_cli::lidar::ScanSettings;
-use omni_cli::out_path::{OutDir, OutPathError};
+use omni_cli::out_path::{Inputs, OutDir};
 use omni_cli::robot_file::{self, RobotFile};
 use omni_kin::gyro::ImuMount;
 use omni_kin::simulate::{SimConfig, benchmark_commands, simulate as rs_simulate};
 use omni_kin::{FittedModel, IkMatrix, KinematicsKind, Pose2, Run};
-use pyo3::exceptions::PyFileExistsError;
 use pyo3::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -112,6 +111,7 @@ pub fn simulate(
         ..SimConfig::default()
     };
     let robot = robot_arg(robot.as_ref())?;
+    let truth_arg = truth.and_then(|t| t.extract::<String>().ok());
     let (truth, adapters) = true_robot(truth, robot.as_ref(), &mut config)?;
     if noise_free {
         config = config.noise_free();
@@ -151,7 +151,10 @@ pub fn simulate(
                 None => robot_file::from_arg(robot_file::BUILTIN_APR02).map_err(robot_error)?,
             };
             let sensors = Sensors { lidar: lidar.as_ref(), imu: imu.as_ref() };
-            errors.check(py.detach(|| write_simulation(&config, &truth, prefix, sensors, &robot, &out, force)))??
+            let truth_file = truth_arg.filter(|t| !["paper", "design"].contains(&t.as_str()));
+            let inputs = Inputs::new().with_some("robot=", robot.path()).with_some("truth=", truth_file);
+            let target = (out.as_path(), force, &inputs);
+            errors.check(py.detach(|| write_simulation(&config, &truth, prefix, sensors, &robot, target)))??
         }
     };
     Ok(runs.into_iter().map(|inner| PyRun { inner }).collect())
@@ -219,18 +222,17 @@ struct Sensors<'a> {
     imu: Option<&'a Imu>,
 }
 
-/// Simulates the runs with their sensors and writes them into the claimed folder `out` (the CLI's
-/// `OUT/train/`: one MCAP bag per run, the robot.toml beside them).
+/// Simulates the runs with their sensors and writes them into the folder `out` (the CLI's `OUT/train/`: one
+/// MCAP bag per run, the robot.toml beside them), claimed apart from `inputs` and replaced if `force`.
 fn write_simulation(
     config: &SimConfig,
     truth: &FittedModel,
     prefix: &str,
     sensors: Sensors<'_>,
     robot: &RobotFile,
-    out: &Path,
-    force: bool,
+    (out, force, inputs): (&Path, bool, &Inputs),
 ) -> PyResult<Vec<Run>> {
-    let dir = OutDir::claim(out, "out=", force).map_err(out_error)?;
+    let dir = OutDir::claim(out, "out=", force, inputs).map_err(out_error)?;
     let (runs, simulated) = simulate_split(config, truth, prefix, sensors.lidar, sensors.imu).py()?;
     let joints = robot.description.joints();
     write_split(dir.path(), &runs, Format::Mcap, &joints, simulated.as_sensors()).py()?;
@@ -292,14 +294,5 @@ impl MountArg {
                 "{keyword} {shown}: expected (roll_deg, pitch_deg, yaw_deg) or \"ROLL,PITCH,YAW_DEG\"{none}"
             ))
         })
-    }
-}
-
-/// An output folder refused or not written: `FileExistsError` for one that already holds files (without
-/// `force`), else as its cause.
-fn out_error(e: OutPathError) -> PyErr {
-    match e {
-        OutPathError::NotEmpty { .. } => PyFileExistsError::new_err(chain_text(&e)),
-        e => file_error(&e),
     }
 }

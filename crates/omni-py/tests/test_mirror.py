@@ -324,3 +324,27 @@ def test_load_reads_ground_truth_files_with_the_cli_clock_alignment(tmp_path: Pa
     np.testing.assert_allclose(from_csv[0].truth, original.truth, atol=1e-6)
     with pytest.raises(ValueError, match="q"):
         omnical.load(bag, gt=csv, gt_columns={"q": "stamp_ns"})
+
+
+def test_force_never_replaces_an_input(csv_runs: Path, tmp_path: Path) -> None:
+    # Issue 44: export(force=True) into the folder of the data it exports, or a folder inside it, deleted the
+    # data. Both are refused before any work, whatever force, naming both paths; so is simulate(out=) over
+    # its robot file.
+    import shutil
+    data = tmp_path / "data"
+    shutil.copytree(csv_runs / "validation", data)
+    before = _read(data)
+    ds = omnical.load(data)
+    for force in (False, True):
+        with pytest.raises(ValueError, match=r"tum= .*data: this folder holds the data .*data, which this command "
+                                             r"reads; give tum= a folder apart from its inputs"):
+            omnical.export("design", ds, tum=data, force=force)
+        with pytest.raises(ValueError, match=r"mcap= .*inside: this folder is inside the data"):
+            omnical.export("design", ds, mcap=data / "inside", force=force)
+    assert _read(data) == before
+    robot = tmp_path / "setup" / "robot.toml"
+    robot.parent.mkdir()
+    robot.write_text((csv_runs / "train" / "robot.toml").read_text())
+    with pytest.raises(ValueError, match=r"out= .*setup: this folder holds robot= .*robot.toml"):
+        omnical.simulate(robot=robot, runs_per_command=1, duration_s=1.0, out=robot.parent, force=True)
+    assert robot.exists()

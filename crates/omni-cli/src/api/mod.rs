@@ -53,6 +53,14 @@ pub enum ModelSpec {
 }
 
 impl ModelSpec {
+    /// The model file this spec reads, if any.
+    pub fn file(&self) -> Option<&Path> {
+        match self {
+            Self::File(p) => Some(p),
+            Self::Design | Self::Paper => None,
+        }
+    }
+
     /// The spec a path spells: `design` and `paper` are the built-in names, anything else a model file.
     pub fn from_path(path: &Path) -> Self {
         match path.to_str() {

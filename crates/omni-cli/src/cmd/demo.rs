@@ -9,7 +9,7 @@ use super::train::print_summary;
 use crate::api::load::{DataOptions, LoadRequest};
 use crate::api::simulate::{Format, Sensors, write_robot, write_split};
 use crate::design::{design_for, paper_calibrated};
-use crate::out_path::OutDir;
+use crate::out_path::{Inputs, OutDir};
 use crate::report::{self, ReportInput};
 use crate::robot_file::RobotFile;
 use crate::{atomic, model_file, progress, robot_file};
@@ -233,7 +233,8 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     };
     apply_effect_spec(hidden, &mut setup.truth, &mut setup.config, &setup.wheels)?;
     // Everything is written into a staging folder that becomes --out at the end.
-    let out = OutDir::claim(&a.out, "--out", a.force)?;
+    let robot_file = robot.filter(|r| *r != robot_file::BUILTIN_APR02);
+    let out = OutDir::claim(&a.out, "--out", a.force, &Inputs::new().with_some("--robot", robot_file))?;
     let dir = out.path();
     if text {
         println!("== simulate: true robot = {} + a hidden effect ({hidden})", setup.true_robot);

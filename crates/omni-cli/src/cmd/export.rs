@@ -63,11 +63,15 @@ fn claim_folders(a: &Args) -> anyhow::Result<(Option<OutDir>, Option<OutDir>)> {
             }
         }
     }
+    let inputs = a.data.options().inputs(&a.runs).with_some("--model", a.model.file());
+    if let Some(dir) = &a.robot_config {
+        out_path::check_apart(dir, "--robot-config", &inputs)?;
+    }
+    let tum = a.tum.as_deref().map(|d| OutDir::claim(d, "--tum", a.force, &inputs)).transpose()?;
+    let mcap = a.mcap.as_deref().map(|d| OutDir::claim(d, "--mcap", a.force, &inputs)).transpose()?;
     if let Some(dir) = &a.robot_config {
         out_path::prepare_dir(dir, "--robot-config")?;
     }
-    let tum = a.tum.as_deref().map(|d| OutDir::claim(d, "--tum", a.force)).transpose()?;
-    let mcap = a.mcap.as_deref().map(|d| OutDir::claim(d, "--mcap", a.force)).transpose()?;
     Ok((tum, mcap))
 }
 

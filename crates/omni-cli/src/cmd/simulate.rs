@@ -4,7 +4,7 @@ use super::{OutputArgs, sim_spec};
 use crate::api::simulate::{Imu, Lidar, mount_from_text, simulate_split, write_robot, write_split};
 use crate::cli::effect_help;
 use crate::lidar::ScanSettings;
-use crate::out_path::OutDir;
+use crate::out_path::{Inputs, OutDir};
 use crate::robot_file::{self, RobotFile};
 use crate::{atomic, dataset, design, model_file};
 use anyhow::{Context, bail};
@@ -270,6 +270,17 @@ fn split_costs(design: &FittedModel, truth: &FittedModel, runs: &[Run]) -> anyho
         .collect()
 }
 
+/// The files `simulate` reads: the robot, the commands, the true robot's model file and the room file (the
+/// built-in names left out), which no `--out` may hold.
+fn inputs(a: &Args) -> Inputs {
+    let named = |v: Option<&str>, builtin: &[&str]| v.filter(|v| !builtin.contains(v)).map(PathBuf::from);
+    Inputs::new()
+        .with_some("--robot", named(Some(a.robot.as_str()), &[robot_file::BUILTIN_APR02]))
+        .with_some("--commands", a.commands.as_ref())
+        .with_some("--truth", named(a.truth.as_deref(), &["paper", "design"]))
+        .with_some("--lidar", named(a.lidar.lidar.as_deref(), &["room", "corridor"]))
+}
+
 /// Runs `omnical simulate`; `quiet` hides the progress display.
 pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     if a.fleet.is_some() {
@@ -296,7 +307,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     }
     let lidar = a.lidar.lidar(a.format)?;
     let imu = a.imu.settings(a.format)?;
-    let out = OutDir::claim(&a.out, "--out", a.force)?;
+    let out = OutDir::claim(&a.out, "--out", a.force, &inputs(a))?;
     let (mut summary, mut written) = (serde_json::Map::new(), serde_json::Map::new());
     for (split, seed) in [("train", a.seed), ("validation", a.seed.wrapping_add(1))] {
         let cfg = SimConfig { seed, ..config.clone() };

@@ -51,6 +51,9 @@ pub struct Dataset {
     /// The ROS recording each run was read from, by run name (exports carry its other topics over:
     /// [`recorded_topics`]).
     pub recordings: std::collections::BTreeMap<String, PathBuf>,
+    /// Every input file or folder the runs were read from (for the check that no result folder holds one:
+    /// [`crate::out_path::Inputs`]).
+    pub sources: Vec<PathBuf>,
     /// What the ground truth measures: a relative reference's runs are its windows
     /// ([`omni_kin::reference::windows`]), and a fit adds the sensor's mount.
     pub reference: omni_kin::reference::ReferenceKind,
@@ -525,6 +528,7 @@ fn merge(
     source: &Path,
     read: Result<Loaded, DatasetError>,
 ) -> Result<(), DatasetError> {
+    ds.sources.push(source.to_path_buf());
     match read {
         Ok(l) => {
             tracing::info!(

@@ -80,6 +80,13 @@ impl Default for DataOptions {
 }
 
 impl DataOptions {
+    /// The files a read with these options takes, besides the data `paths`: the robot file and the
+    /// ground-truth file (for the check that no result folder holds them, [`crate::out_path::Inputs`]).
+    pub fn inputs(&self, paths: &[PathBuf]) -> crate::out_path::Inputs {
+        let robot = self.robot.as_deref().filter(|r| *r != robot_file::BUILTIN_APR02);
+        crate::out_path::Inputs::data(paths).with_some("--robot", robot).with_some("--gt", self.gt.as_ref())
+    }
+
     /// The wheel joint names runs of `ds` were read with: [`DataOptions::joints`], else the robot
     /// description's, else the default `wheel_a`, `wheel_b`, `wheel_c`.
     pub fn wheel_joints(&self, ds: &Dataset) -> Vec<String> {
