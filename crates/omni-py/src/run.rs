@@ -429,7 +429,8 @@ pub fn load(
         sensor_mount_from_recordings: ds.sensor_mount_from_recordings,
         time_origins_s: ds.time_origins_s,
         recordings: ds.recordings,
-        sources: ds.sources,
+        // The paths as given (a data folder too, so that no export lands inside it), then each file read.
+        sources: request.paths.iter().map(|p| p.to_path_buf()).chain(ds.sources).collect(),
         ..Default::default()
     };
     Ok(PyDataset {

@@ -336,8 +336,8 @@ def test_force_never_replaces_an_input(csv_runs: Path, tmp_path: Path) -> None:
     before = _read(data)
     ds = omnical.load(data)
     for force in (False, True):
-        with pytest.raises(ValueError, match=r"tum= .*data: this folder holds the data .*data, which this command "
-                                             r"reads; give tum= a folder apart from its inputs"):
+        with pytest.raises(ValueError, match=r"tum= .*data: this folder holds the data .*/data, which "
+                                             r"this command reads; give tum= a folder apart from its inputs"):
             omnical.export("design", ds, tum=data, force=force)
         with pytest.raises(ValueError, match=r"mcap= .*inside: this folder is inside the data"):
             omnical.export("design", ds, mcap=data / "inside", force=force)
