@@ -70,7 +70,7 @@ pub struct SimConfig {
     /// rates of an odometry noise model ([`crate::noise::NoiseRates`]; its floor is not used: the ground
     /// truth's noise is `truth_noise_*`), drawn per fine step along, across (holonomic designs) and in
     /// heading. Default none.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub slip_noise: Option<crate::noise::NoiseRates>,
     /// Seed of every random draw.
     pub seed: u64,
