@@ -118,6 +118,10 @@ pub struct ModelFile {
     /// How the model was made (free-form summary; ignored when reading).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fit: Option<toml::Table>,
+    /// How far to trust the odometry: the noise model `train` fits with the calibration (issue 46; read by
+    /// `eval` and `export --robot-config`, see [`read_noise`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise: Option<omni_kin::noise::OdometryNoise>,
 }
 
 impl ModelFile {
@@ -147,6 +151,7 @@ impl ModelFile {
             integration: f.model.integration,
             effects,
             fit,
+            noise: None,
         })
     }
 
@@ -226,6 +231,17 @@ pub fn read(path: &Path) -> Result<FittedModel, ModelFileError> {
         ParseFailure::Toml(message) => ModelFileError::Parse { path: name.clone(), message },
         ParseFailure::Model(message) => ModelFileError::Invalid { path: name.clone(), message },
     })
+}
+
+/// The noise model a model file holds (`None`: the file has none, e.g. written before issue 46 or by hand;
+/// `design` and `paper` have none).
+pub fn read_noise(path: &Path) -> Result<Option<omni_kin::noise::OdometryNoise>, ModelFileError> {
+    let name = path.display().to_string();
+    let text =
+        std::fs::read_to_string(path).map_err(|source| ModelFileError::Io { path: name.clone(), error: source })?;
+    let file: ModelFile = toml::from_str(&text)
+        .map_err(|e| ModelFileError::Parse { path: name, message: crate::toml_error::locate(&text, &e) })?;
+    Ok(file.noise)
 }
 
 enum ParseFailure {

@@ -117,6 +117,10 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             runs: &ds.runs,
             wheel_names: joint_names(&model, &data.wheel_joints(&ds)),
             controller: a.controller,
+            noise: match &a.model {
+                crate::api::ModelSpec::File(path) => crate::model_file::read_noise(path)?,
+                _ => None,
+            },
         };
         let config = robot_config::build(&request)?;
         robot_config::write(dir, &config)?;

@@ -150,6 +150,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     let mount = crate::api::train::mount_warning(&c);
     let interrupted = interrupt::requested();
     let mut s = summary(&c, preset_name, a.seed, ds.runs.len())?;
+    crate::api::noise::add_to_summary(&mut s, &c.fitted, &ds.runs)?;
     let designs = designs_figure(&c, &ds, &plan, a.start.is_none())?;
     if let Some(d) = &designs {
         s["designs"] = d.to_json();
@@ -177,6 +178,9 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
             println!("interrupted (Ctrl-C): the best model found so far (the GA stopped early; no polish)");
         }
         print_summary(&c, preset_name, ds.runs.len());
+        if let Some(n) = crate::api::noise::from_summary(&s) {
+            println!("{}", crate::api::noise::describe(&n));
+        }
         if let Some(d) = &designs {
             println!("{}", d.describe());
         }

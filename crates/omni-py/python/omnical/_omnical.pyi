@@ -536,7 +536,8 @@ def cli_main(argv: list[str]) -> int:
 def train_files(args: list[str]) -> dict[str, Any]:
     """``omnical train ARGS...`` (without the program and subcommand names) inside this process, the
     command's own code path (the ``--out`` model file is byte-identical), printing nothing and installing no
-    Ctrl-C handler. Returns ``summary`` (``--json``'s), ``design`` (name -> start value), ``start_s`` /
+    Ctrl-C handler. Returns ``summary`` (``--json``'s; ``summary["noise"]`` is the odometry noise model the
+    model file keeps as ``[noise]``: rates, standard errors, systematic part), ``design`` (name -> start value), ``start_s`` /
     ``end_s`` [s], ``runs``, ``notes``, ``skipped``, ``warnings``. ``ValueError`` for bad arguments,
     ``OmnicalError`` with the command's message for a failed load or fit."""
 

@@ -70,6 +70,7 @@ mod odom_wheels;
 mod odometry;
 mod pose_stamped;
 mod poses;
+mod qos;
 pub(crate) mod recording;
 pub(crate) mod review;
 pub(crate) mod selection;

@@ -182,6 +182,22 @@ pub enum Advice {
     OtherMotions,
     /// Add runs that exercise these effects (ids).
     ExerciseEffects(Vec<String>),
+    /// Nothing: the parameters enter the kinematics only together, so no run can separate them; read
+    /// them as one combination (a mecanum base's `lx` and `ly`, of which only `lx + ly` counts).
+    OneCombination(Combination),
+}
+
+/// Parameters of the base kinematics that enter the IK matrix only through one combination: along the
+/// unconstrained direction the matrix does not change at all, whatever the runs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Combination {
+    /// The parameters, in parameter order.
+    pub names: Vec<String>,
+    /// Their unit (the first parameter's).
+    pub unit: String,
+    /// With two parameters `a`, `b`: the coefficients `(1, k)` of the combination `a + k b` that counts
+    /// (orthogonal to the direction in parameter units), and its value at the fit. `None` with more.
+    pub sum: Option<([f64; 2], f64)>,
 }
 
 /// The identifiability of a model on a set of runs.

@@ -13,7 +13,8 @@ use crate::science::diagnose::{
     UnexplainedEvidence, Verdict,
 };
 use crate::science::identify::{
-    Advice, CovarianceKind, Identifiability, MIN_SEGMENT_S, MotionParts, PatternPresence, WeakDirection, WheelEvidence,
+    Advice, Combination, CovarianceKind, Identifiability, MIN_SEGMENT_S, MotionParts, PatternPresence, WeakDirection,
+    WheelEvidence,
 };
 
 mod explore;
@@ -342,6 +343,9 @@ fn groups_short(basis: GroupBasis) -> &'static str {
 /// An unconstrained direction in words: the parameters carrying it, how badly it is constrained, and the
 /// wheel-speed pattern behind it.
 pub fn weak_direction(w: &WeakDirection) -> String {
+    if let Advice::OneCombination(c) = &w.remedy {
+        return combination(c);
+    }
     let names: Vec<&str> = w.loadings.iter().map(|(n, _)| n.as_str()).collect();
     let same_sign = w.loadings.iter().all(|(_, d)| *d > 0.0);
     let who = match names.len() {
@@ -363,6 +367,23 @@ pub fn weak_direction(w: &WeakDirection) -> String {
         text.push_str(&format!(": {}", wheel_evidence(e, u)));
     }
     text
+}
+
+/// Parameters that enter the kinematics only together: `lx and ly enter the kinematics only as lx + ly
+/// (0.37000 m at the fit)`.
+fn combination(c: &Combination) -> String {
+    let names = match &c.names[..] {
+        [a, b] => format!("{a} and {b}"),
+        many => many.join(", "),
+    };
+    match (&c.names[..], c.sum) {
+        ([a, b], Some(([_, k], value))) => {
+            let term = if (k.abs() - 1.0).abs() < 1e-3 { b.clone() } else { format!("{:.3} {b}", k.abs()) };
+            let sign = if k < 0.0 { "−" } else { "+" };
+            format!("{names} enter the kinematics only as {a} {sign} {term} ({value:.5} {} at the fit)", c.unit)
+        }
+        _ => format!("{names} enter the kinematics only together"),
+    }
 }
 
 /// What the runs say about the wheel-speed pattern `u` of a direction.
@@ -436,6 +457,9 @@ pub fn advice(a: &Advice) -> String {
         Advice::ExerciseEffects(effects) => {
             format!("add runs that exercise {} (see `omnical plan --effect …`)", effects.join(", "))
         }
+        Advice::OneCombination(_) => "no run can separate them: read them as one combination (the fit holds the \
+                                      rest at the design)"
+            .into(),
     }
 }
 
