@@ -123,7 +123,12 @@ fn result_files_are_checked_first_and_train_says_when_nothing_is_written() {
     );
     assert_eq!(refused(&["plan", "--out", "sim"], d), "error: --out sim: this is a folder; give a file name in it\n");
     let (out, err) = ok_with_stderr(&["train", "sim/train"], d);
-    assert!(out.starts_with("preset default: 36 training runs, objective path\n"), "{out}");
+    assert!(
+        out.starts_with(
+            "preset default: 36 training runs, objective path, integration exact arcs, each run's median step\n"
+        ),
+        "{out}"
+    );
     assert!(err.ends_with("note: the fitted model was not written (no --out FILE)\n"), "{err}");
     let (_, err) = ok_with_stderr(&["train", "sim/train", "--out", "m.toml"], d);
     assert!(!err.contains("not written"), "{err}");
@@ -187,7 +192,12 @@ fn a_diff_matrix_keeps_its_units_and_one_run_is_singular() {
     let one = entries(&d.join("sim/train")).into_iter().find(|f| f.ends_with(".csv")).unwrap();
     let one = format!("sim/train/{one}");
     let (out, _) = ok_with_stderr(&["train", &one, "--model", "ik"], d);
-    assert!(out.starts_with("preset default: 1 training run, objective path\n"), "{out}");
+    assert!(
+        out.starts_with(
+            "preset default: 1 training run, objective path, integration exact arcs, each run's median step\n"
+        ),
+        "{out}"
+    );
     let (out, _) = ok_with_stderr(&["eval", "--model", "design", &one], d);
     assert!(out.starts_with("model design: 1 run\n"), "{out}");
 }

@@ -81,6 +81,15 @@ impl ModelSpec {
         }
     }
 
+    /// Whether this spec is a model file marked interrupted ([`crate::model_file::ModelFile::interrupted`]);
+    /// a file that cannot be read is not (reading it for the model says why).
+    pub fn interrupted(&self) -> bool {
+        match self {
+            Self::File(path) => crate::model_file::read_marked(path).is_ok_and(|(_, interrupted)| interrupted),
+            Self::Design | Self::Paper => false,
+        }
+    }
+
     /// The model of every run of `sets`: `design` each run's own ([`design::declared_each`]; none is an
     /// error), else [`ModelSpec::resolve`]'s one model for all.
     pub fn resolve_each(&self, sets: &[&Dataset]) -> Result<RunModels, ResolveError> {

@@ -321,8 +321,8 @@ impl DesignsFigure {
     pub fn describe(&self) -> String {
         let start = self.start.as_ref().map_or("the --start model".to_string(), |s| format!("{s}'s design"));
         format!(
-            "design, each run its own input's ({} designs): Eq. 6 {:.5}, objective {:.5}; the fit started from {start} \
-             (the \"design\" above)",
+            "each run with its own input's design ({} designs): Eq. 6 {:.5}, objective {:.5} (not the \"design\" \
+             figures above: those are of the fit's start, {start}, on every run)",
             self.designs, self.end_pose, self.objective
         )
     }

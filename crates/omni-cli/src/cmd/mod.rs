@@ -152,7 +152,9 @@ pub struct DataArgs {
     pub gt_units: Vec<String>,
     /// What the ground truth measures: `absolute`, the pose of a point on the robot in a fixed world frame
     /// (motion capture); `relative`, a sensor's own motion (lidar or visual odometry) at an unknown mount,
-    /// compared over windows (`--gt-window`), the mount fitted with the wheels. Default absolute.
+    /// compared over windows (`--gt-window`), the mount fitted with the wheels; `end-pose`, hand-measured
+    /// end poses (a tape measure, no motion capture): --gt names a table run,x_m,y_m,yaw_deg, each in the
+    /// frame of the run's start (`plan --umbmark --out` writes one to fill in). Default absolute.
     #[arg(long, value_name = "KIND", value_parser = crate::cli::choice::<ReferenceKind>())]
     pub gt_kind: Option<ReferenceKind>,
     /// The window of a relative reference (s): the model's motion is compared with the sensor's over

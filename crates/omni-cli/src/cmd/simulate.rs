@@ -33,9 +33,11 @@ pub struct Args {
     /// Seed (training uses it, validation seed + 1).
     #[arg(long, default_value_t = DEFAULT_SEED)]
     pub seed: u64,
-    /// Repetitions of each command.
-    #[arg(long, default_value_t = SimConfig::default().runs_per_command)]
-    pub runs_per_command: usize,
+    /// Repetitions of each command, in each split (train and validation). Default: 5 on the robot's
+    /// benchmark; 1 with --commands, whose repetitions column already says how many runs of each command
+    /// (`plan --runs 12` then `simulate --commands` gives 12 runs in each split).
+    #[arg(long)]
+    pub runs_per_command: Option<usize>,
     /// Duration of each command (s).
     #[arg(long = "duration", value_name = "DURATION", default_value_t = SimConfig::default().duration_s)]
     pub duration_s: f64,
@@ -295,7 +297,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     let mut config = SimConfig {
         design: geometry,
         commands,
-        runs_per_command: a.runs_per_command,
+        runs_per_command: a.runs_per_command_or_default(),
         duration_s: a.duration_s,
         ..SimConfig::default()
     };
@@ -308,6 +310,9 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     let lidar = a.lidar.lidar(a.format)?;
     let imu = a.imu.settings(a.format)?;
     let out = OutDir::claim(&a.out, "--out", a.force, &inputs(a))?;
+    if let (Some(path), false) = (&a.commands, a.output.json) {
+        println!("{}", commands_line(path, &config));
+    }
     let (mut summary, mut written) = (serde_json::Map::new(), serde_json::Map::new());
     for (split, seed) in [("train", a.seed), ("validation", a.seed.wrapping_add(1))] {
         let cfg = SimConfig { seed, ..config.clone() };
@@ -350,6 +355,27 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     }
     println!("wrote {}", a.out.display());
     Ok(())
+}
+
+impl Args {
+    /// `--runs-per-command`, else 1 with `--commands` (its repetitions column counts the runs) and the
+    /// simulator's default on the benchmark.
+    fn runs_per_command_or_default(&self) -> usize {
+        self.runs_per_command.unwrap_or(if self.commands.is_some() { 1 } else { SimConfig::default().runs_per_command })
+    }
+}
+
+/// How a `--commands` file becomes runs: its commands counted with their repetitions, times
+/// `--runs-per-command`, in each split (train and validation: two sets of the same size).
+fn commands_line(path: &Path, config: &SimConfig) -> String {
+    let (commands, k) = (config.commands.len(), config.runs_per_command);
+    format!(
+        "{}: {} (with their repetitions) × {k} run{} per command = {} in each of train and validation",
+        path.display(),
+        crate::units::count(commands, "command"),
+        if k == 1 { "" } else { "s" },
+        crate::units::count(commands * k, "run")
+    )
 }
 
 /// Writes `truth_model.toml` and `truth.json` (the costs of each split in `summary`, the true model, the

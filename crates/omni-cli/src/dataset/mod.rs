@@ -20,8 +20,8 @@ pub(crate) use error::{check_size, too_large};
 pub use note::Note;
 use omni_kin::{RobotGeometry, Run};
 use rayon::prelude::*;
-pub use ros::{Inspected, inspect, recorded_topics, review};
-pub(crate) use ros::{feed_ros, ros_recordings};
+pub use ros::{InputKind, Inspected, inspect, recorded_topics, review};
+pub(crate) use ros::{feed_ros, inputs, ros_recordings};
 use std::path::{Path, PathBuf};
 
 /// A set of runs, with what was skipped and what was noticed while loading.
@@ -229,12 +229,18 @@ pub fn load(paths: &[PathBuf], opts: &LoadOptions) -> Result<Dataset, DatasetErr
     let mut reads: Vec<_> = inputs.par_iter().map(|i| i.as_ref().ok().map(|i| read_input(i, opts))).collect();
     let shared_clock = shared_clock_retry(&inputs, &mut reads, opts);
     let mut ds = Dataset::default();
+    let mut read_from = Vec::new();
     for (input, read) in inputs.into_iter().zip(reads) {
         // A path that is no input (unreadable, unsupported) stops the load where it stands in the order.
         let input = input?;
         if let Some(read) = read {
+            let before = ds.runs.len();
             merge(&mut ds, opts, input.path(), read?)?;
+            read_from.push((input.path().to_path_buf(), ds.runs.len() - before));
         }
+    }
+    for line in read_lines(&read_from) {
+        tracing::info!("{line}");
     }
     ds.notes.extend(designs_note(&ds));
     ds.notes.extend(shared_clock);
@@ -249,6 +255,40 @@ pub fn load(paths: &[PathBuf], opts: &LoadOptions) -> Result<Dataset, DatasetErr
         });
     }
     Ok(ds)
+}
+
+/// Inputs of one folder beyond which `-v` says one line for the folder instead of one per input.
+pub const READ_LINES_PER_FOLDER: usize = 4;
+
+/// `-v`'s lines on what was read: one per input (`read sim/a.mcap: 1 run`), or, for a folder of more than
+/// [`READ_LINES_PER_FOLDER`] inputs, one for the folder (`read 180 files in sim/train (00-r0.mcap …
+/// 35-r4.mcap): 180 runs`), in the order read.
+fn read_lines(read: &[(PathBuf, usize)]) -> Vec<String> {
+    let runs = |n: usize| format!("{n} run{}", if n == 1 { "" } else { "s" });
+    let mut lines = Vec::new();
+    let mut rest = read;
+    while let Some((first, _)) = rest.first() {
+        let folder = first.parent();
+        let same = rest.iter().take_while(|(p, _)| p.parent() == folder).count();
+        let (group, after) = rest.split_at(same);
+        match (group, folder) {
+            ([.., (last, _)], Some(folder)) if group.len() > READ_LINES_PER_FOLDER => {
+                let name =
+                    |p: &Path| p.file_name().map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into());
+                lines.push(format!(
+                    "read {} inputs in {} ({} … {}): {}",
+                    group.len(),
+                    folder.display(),
+                    name(first),
+                    name(last),
+                    runs(group.iter().map(|(_, n)| n).sum())
+                ));
+            }
+            _ => lines.extend(group.iter().map(|(p, n)| format!("read {}: {}", p.display(), runs(*n)))),
+        }
+        rest = after;
+    }
+    lines
 }
 
 /// The reads of [`load`], one per input.
@@ -531,12 +571,6 @@ fn merge(
     ds.sources.push(source.to_path_buf());
     match read {
         Ok(l) => {
-            tracing::info!(
-                "read {}: {} run{}",
-                source.display(),
-                l.runs.len(),
-                if l.runs.len() == 1 { "" } else { "s" }
-            );
             for r in &l.runs {
                 tracing::debug!(
                     "run {}: {} wheel samples over {:.3} s, {} ground-truth poses",

@@ -96,6 +96,58 @@ pub(crate) fn ros_recordings(paths: &[PathBuf]) -> Result<Vec<PathBuf>, DatasetE
         .collect()
 }
 
+/// What kind of input a path of `omnical info` is, as [`super::load`] reads it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InputKind {
+    /// A ROS recording (`.mcap`, `.db3`, `.bag`, a rosbag2 folder): its topics are reviewed.
+    Ros,
+    /// An omnical CSV run.
+    CsvRun,
+    /// An OptiOdom set folder (its metadata and run CSVs with motion capture).
+    OptiOdom,
+}
+
+impl InputKind {
+    /// The id `omnical info --json` gives it (`ros`, `csv`, `optiodom`).
+    pub fn id(self) -> &'static str {
+        match self {
+            Self::Ros => "ros",
+            Self::CsvRun => "csv",
+            Self::OptiOdom => "optiodom",
+        }
+    }
+
+    /// What it is, in words.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Self::Ros => "a ROS recording",
+            Self::CsvRun => "an omnical CSV run (t_s, wheel speeds, ground-truth pose per row: docs/formats.md)",
+            Self::OptiOdom => {
+                "an OptiOdom set (its metadata CSV declares the robot's type and geometry; one CSV per run with \
+                 wheel speeds and motion capture)"
+            }
+        }
+    }
+}
+
+/// Every input at `paths` (files or folders, expanded as [`super::load`] expands them) with its kind.
+pub(crate) fn inputs(paths: &[PathBuf]) -> Result<Vec<(PathBuf, InputKind)>, DatasetError> {
+    let mut inputs = Vec::new();
+    for p in paths {
+        expand(p, &mut inputs);
+    }
+    inputs
+        .into_iter()
+        .map(|i| {
+            Ok(match i? {
+                Input::Csv(p) => (p, InputKind::CsvRun),
+                Input::OptiOdom(p) => (p, InputKind::OptiOdom),
+                Input::Mcap(p) | Input::Db3(p) | Input::Recording(p) | Input::Ros1(p) => (p, InputKind::Ros),
+            })
+        })
+        .collect()
+}
+
 /// Feeds every message of the one ROS recording at `path` (a `.mcap`, `.db3` or `.bag` file, or a rosbag2
 /// recording folder; each storage file at most `max_file_bytes` long) into the sink `make(zstd_messages)`
 /// makes (`zstd_messages`: rosbag2's per-message compression, which the sink undoes).

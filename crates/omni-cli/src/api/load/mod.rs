@@ -67,7 +67,7 @@ impl LoadRequest {
             "read {} run{} from {} in {:.2} s",
             ds.runs.len(),
             if ds.runs.len() == 1 { "" } else { "s" },
-            self.paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "),
+            paths_text(&self.paths),
             started.elapsed().as_secs_f64()
         );
         Ok(ds)
@@ -188,5 +188,16 @@ fn say_load_notes(sets: &[&Dataset]) {
     }
     for c in sets.iter().flat_map(|ds| &ds.ground_truth_clocks) {
         crate::note!("{}", c.describe());
+    }
+}
+
+/// The paths a load read, for `-v`: all of them, or the first and last of more than
+/// [`dataset::READ_LINES_PER_FOLDER`] (`180 paths: sim/a.mcap … sim/z.mcap`; a shell glob gives many).
+fn paths_text(paths: &[PathBuf]) -> String {
+    match paths {
+        [first, .., last] if paths.len() > crate::dataset::READ_LINES_PER_FOLDER => {
+            format!("{} paths: {} … {}", paths.len(), first.display(), last.display())
+        }
+        _ => paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "),
     }
 }
