@@ -150,7 +150,34 @@ fn look_at(data: &DataOptions, path: &Path) -> Result<RecordingInfo, LoadError> 
 /// `data`'s options. A path that is no ROS recording (a CSV run) or cannot be read is an error naming it; a
 /// recording that reads but makes no runs has its error in [`RecordingInfo::read`].
 pub fn info(paths: &[PathBuf], data: &DataOptions) -> Result<Vec<RecordingInfo>, LoadError> {
-    dataset::ros_recordings(paths)?.iter().map(|path| look_at(data, path)).collect()
+    let recordings = dataset::ros_recordings(paths)?;
+    if recordings.is_empty() {
+        return Err(no_recording(paths).into());
+    }
+    recordings.iter().map(|path| look_at(data, path)).collect()
+}
+
+/// The error for paths (folders) that hold no ROS recording: what was looked for, and what is there.
+fn no_recording(paths: &[PathBuf]) -> dataset::DatasetError {
+    let what = paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ");
+    let mut entries: Vec<String> = paths
+        .iter()
+        .filter_map(|p| std::fs::read_dir(p).ok())
+        .flat_map(|d| d.filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned())))
+        .collect();
+    entries.sort();
+    let held = match &entries[..] {
+        [] => "the folder is empty".to_string(),
+        [one] => format!("it holds only {one}"),
+        [first, ..] => format!("it holds {} entries (first {first}), none of them a recording", entries.len()),
+    };
+    dataset::DatasetError::file(
+        Path::new(&what),
+        format!(
+            "no ROS recording here: looked for .mcap, .db3 and .bag files and rosbag2 recording folders \
+             (metadata.yaml), in the folder and its subfolders; {held}"
+        ),
+    )
 }
 
 /// The JSON of one recording's info (`omnical info --json`'s `recordings` entries).
