@@ -264,8 +264,8 @@ fn position_and_velocity_that_disagree_are_refused_unless_the_source_is_declared
     assert_eq!(k, 0);
     assert_eq!(
         e,
-        "field velocity gives a mean wheel rate of 13.200 rad/s and field position 2.000 rad/s (6.60 times more by \
-         velocity; both read as rad and rad/s): the two fields disagree beyond noise (more than 1.2×), so one of \
+        "field velocity gives a wheel rate of 13.200 rad/s and field position 2.000 rad/s (medians over 0.5 s \
+         windows: 6.60 times more by velocity; both read as rad and rad/s): the two fields disagree beyond noise (more than 1.2×), so one of \
          them is in another unit or on another shaft (motor rpm beside wheel encoder counts?). Say which to read in \
          robot.toml: [wheel_data] source = \"position\" or \"velocity\", with that field's unit and gear_ratio \
          (docs/formats.md)"
