@@ -169,13 +169,40 @@ fn look_at_file_input(data: &DataOptions, path: &Path, kind: InputKind) -> Resul
 /// or folders of them), each looked at with `data`'s options. A path that is no input or cannot be opened is
 /// an error naming it; an input that opens but makes no runs has its error in [`RecordingInfo::read`].
 pub fn info(paths: &[PathBuf], data: &DataOptions) -> Result<Vec<RecordingInfo>, LoadError> {
-    dataset::inputs(paths)?
+    let inputs = dataset::inputs(paths)?;
+    if inputs.is_empty() {
+        return Err(no_recording(paths).into());
+    }
+    inputs
         .iter()
         .map(|(path, kind)| match kind {
             InputKind::Ros => look_at(data, path),
             _ => look_at_file_input(data, path, *kind),
         })
         .collect()
+}
+
+/// The error for paths (folders) that hold no input: what was looked for, and what is there.
+fn no_recording(paths: &[PathBuf]) -> dataset::DatasetError {
+    let what = paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ");
+    let mut entries: Vec<String> = paths
+        .iter()
+        .filter_map(|p| std::fs::read_dir(p).ok())
+        .flat_map(|d| d.filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned())))
+        .collect();
+    entries.sort();
+    let held = match &entries[..] {
+        [] => "the folder is empty".to_string(),
+        [one] => format!("it holds only {one}"),
+        [first, ..] => format!("it holds {} entries (first {first}), none of them a recording", entries.len()),
+    };
+    dataset::DatasetError::file(
+        Path::new(&what),
+        format!(
+            "no ROS recording here: looked for .mcap, .db3 and .bag files and rosbag2 recording folders \
+             (metadata.yaml), CSV runs and OptiOdom sets, in the folder and its subfolders; {held}"
+        ),
+    )
 }
 
 /// The JSON of one recording's info (`omnical info --json`'s `recordings` entries).

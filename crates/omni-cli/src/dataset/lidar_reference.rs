@@ -17,9 +17,10 @@ pub(super) fn with_lidar_path(
     path: &Path,
     (topic, settings): &(String, MatchSettings),
     base_frame: Option<&str>,
+    max_file_bytes: u64,
     mut loaded: Loaded,
 ) -> Result<Loaded, DatasetError> {
-    let read = lidar::read_scans_from(path, topic, base_frame)?;
+    let read = lidar::read_scans_within(path, topic, base_frame, max_file_bytes)?;
     let sensor = lidar::sensor_path(&read.scans, settings)
         .map_err(|e| DatasetError::at(path, format!("topic {topic:?}"), e.to_string()))?;
     if sensor.matched == 0 {
@@ -128,6 +129,9 @@ fn notes(path: &Path, topic: &str, read: &lidar::ScanRead, sensor: &lidar::Senso
                 "lidar {topic:?}: header.stamp is 0 (never filled by the driver): the scans are timed by their log time"
             ),
         ));
+    }
+    if let Some(m) = &read.angle_max_mismatch {
+        out.push(Note::about(path, m.describe(topic)));
     }
     if sensor.deskewed > 0 {
         out.push(Note::about(

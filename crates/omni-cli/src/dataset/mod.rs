@@ -220,10 +220,9 @@ pub const SUPPORTED: &str = ".csv (omnical run), .mcap (ROS 2 bag), .db3 (rosbag
 
 /// Load runs from files and folders, in the order given (folders: files sorted by name).
 pub fn load(paths: &[PathBuf], opts: &LoadOptions) -> Result<Dataset, DatasetError> {
-    let mut inputs = Vec::new();
-    for p in paths {
-        expand(p, &mut inputs);
-    }
+    let found = Inputs::of(paths);
+    let repeated = found.repeated_note();
+    let inputs = found.list;
     // The inputs are read in parallel (one file or recording per task) and merged in their order, so the
     // dataset, its notes and the first error are those of a serial load whatever the thread count.
     let mut reads: Vec<_> = inputs.par_iter().map(|i| i.as_ref().ok().map(|i| read_input(i, opts))).collect();
@@ -244,6 +243,7 @@ pub fn load(paths: &[PathBuf], opts: &LoadOptions) -> Result<Dataset, DatasetErr
     }
     ds.notes.extend(designs_note(&ds));
     ds.notes.extend(shared_clock);
+    ds.notes.extend(repeated);
     if ds.runs.is_empty() {
         let what = paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ");
         return Err(match ds.skipped.first() {
@@ -433,23 +433,65 @@ fn recording_name(p: &Path, folder: bool) -> String {
     name.map_or_else(|| p.display().to_string(), |s| s.to_string_lossy().into_owned())
 }
 
+/// The inputs under some paths, in order, each file and folder taken once.
+#[derive(Debug, Default)]
+struct Inputs {
+    /// The inputs, and the paths that are none, in their places.
+    list: Vec<Result<Input, DatasetError>>,
+    /// The files and folders taken, by their real path (symbolic links resolved).
+    seen: std::collections::HashSet<PathBuf>,
+    /// Paths passed over because they lead to a file or folder already taken (a symbolic link to a folder
+    /// above it, or to a file beside it; a path given twice).
+    repeated: Vec<PathBuf>,
+}
+
+impl Inputs {
+    /// The inputs under `paths`, in order.
+    fn of(paths: &[PathBuf]) -> Self {
+        let mut inputs = Self::default();
+        for p in paths {
+            expand(p, &mut inputs);
+        }
+        inputs
+    }
+
+    /// The note on paths passed over because they repeat a file or folder already read.
+    fn repeated_note(&self) -> Option<Note> {
+        let first = self.repeated.first()?;
+        Some(Note::general(format!(
+            "{} path{} lead{} to files or folders already read (symbolic links, or a path given twice), first {}: \
+             each file is read once",
+            self.repeated.len(),
+            if self.repeated.len() == 1 { "" } else { "s" },
+            if self.repeated.len() == 1 { "s" } else { "" },
+            first.display()
+        )))
+    }
+}
+
 /// The inputs under `p`, in order: a folder's entries sorted by name, recursively; a recording folder or an
-/// OptiOdom set is one input. A path that is no input is an error in its place.
-fn expand(p: &Path, out: &mut Vec<Result<Input, DatasetError>>) {
+/// OptiOdom set is one input. A path that is no input is an error in its place; a file or folder already
+/// taken (through a symbolic link, or given twice) is passed over and listed in [`Inputs::repeated`].
+fn expand(p: &Path, out: &mut Inputs) {
     let meta = match std::fs::metadata(p) {
         Ok(m) => m,
-        Err(e) => return out.push(Err(DatasetError::io(p, e))),
+        Err(e) => return out.list.push(Err(DatasetError::io(p, e))),
     };
+    if let Ok(real) = std::fs::canonicalize(p)
+        && !out.seen.insert(real)
+    {
+        return out.repeated.push(p.to_path_buf());
+    }
     if meta.is_dir() {
         if optiodom::metadata_file(p).is_some() {
-            return out.push(Ok(Input::OptiOdom(p.to_path_buf())));
+            return out.list.push(Ok(Input::OptiOdom(p.to_path_buf())));
         }
         if rosbag2::is_recording(p) {
-            return out.push(Ok(Input::Recording(p.to_path_buf())));
+            return out.list.push(Ok(Input::Recording(p.to_path_buf())));
         }
         let entries = match std::fs::read_dir(p) {
             Ok(entries) => entries,
-            Err(e) => return out.push(Err(DatasetError::io(p, e))),
+            Err(e) => return out.list.push(Err(DatasetError::io(p, e))),
         };
         let mut entries: Vec<PathBuf> = entries
             .filter_map(|e| e.ok().map(|e| e.path()))
@@ -463,7 +505,7 @@ fn expand(p: &Path, out: &mut Vec<Result<Input, DatasetError>>) {
         }
         return;
     }
-    out.push(match p.extension().and_then(|e| e.to_str()) {
+    out.list.push(match p.extension().and_then(|e| e.to_str()) {
         Some("csv") => Ok(Input::Csv(p.to_path_buf())),
         Some("mcap") => Ok(Input::Mcap(p.to_path_buf())),
         Some("db3") => Ok(Input::Db3(p.to_path_buf())),
@@ -495,7 +537,9 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
     };
     // The lidar's path as a ROS recording's ground truth, when --gt-scans is given.
     let lidar = |p: &Path, l: Loaded| match &opts.scans {
-        Some(scans) => lidar_reference::with_lidar_path(p, scans, opts.mcap.base_frame.as_deref(), l),
+        Some(scans) => {
+            lidar_reference::with_lidar_path(p, scans, opts.mcap.base_frame.as_deref(), opts.max_file_bytes, l)
+        }
         None => Ok(l),
     };
     // The ground-truth file of a ROS recording, when --gt is given.

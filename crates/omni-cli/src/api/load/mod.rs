@@ -8,6 +8,7 @@
 //! - `reference.rs`: the ground truth of the runs read: measured end poses set, moved to the base, cut into
 //!   the windows of a relative reference; the wheel-scale check.
 
+mod end_pose_check;
 mod error;
 mod options;
 mod reference;
@@ -102,7 +103,7 @@ impl LoadRequest {
             return Err(LoadError::OffsetUnused { offset_s });
         }
         if let Some(file) = &end_poses {
-            set_end_poses(&mut ds, file)?;
+            set_end_poses(&mut ds, file, robot.as_ref())?;
         } else if let Some(r) = &robot {
             check_wheel_scale(&ds, r)?;
         }
@@ -123,6 +124,7 @@ impl LoadRequest {
             truth_parent_frame: data.gt_parent_frame.clone(),
             truth_child_frame: data.gt_child_frame.clone(),
             split: data.split_s,
+            split_every_s: data.split_every_s,
             skip_invalid: data.skip_invalid,
             recorded_odometry: self.recorded_odometry,
             ..Default::default()

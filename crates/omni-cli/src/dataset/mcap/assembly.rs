@@ -32,11 +32,15 @@ fn joint_wheels(bag: &mut Bag, j: usize, opts: &McapOptions, notes: &mut Vec<Not
     };
     let origin_s = first_ns.div_euclid(NS_PER_S);
     let t_s: Vec<f64> = series.t_ns.iter().map(|&t| seconds_since(t, origin_s)).collect();
-    let wheels = series
-        .finish(&opts.wheel_joints, &t_s, &opts.wheel_data)
-        .map_err(|(k, what)| DatasetError::at(path, format!("topic {topic:?}, message {k}"), what))?;
+    let wheels = series.finish(&opts.wheel_joints, &t_s, &opts.wheel_data).map_err(|(k, what)| {
+        let what = match &hint {
+            Some(h) if joint_state::is_missing_wheel(&what) => format!("{what}; {h}"),
+            _ => what,
+        };
+        DatasetError::at(path, format!("topic {topic:?}, message {k}"), what)
+    })?;
     notes.extend(wheels.notes.iter().map(|n| Note::about(path, format!("topic {topic:?}: {n}"))));
-    if let Some(without) = wheels.differentiated {
+    if let Some(without) = wheels.differentiated.filter(|&n| n > 0 && opts.wheel_data.source.is_none()) {
         notes.push(Note::about(
             path,
             format!(
@@ -138,14 +142,16 @@ impl Streams {
     /// standstills named `stem#1`, `stem#2`, …; each with its name, or the error that refuses it.
     fn runs(&self, path: &Path, stem: &str, opts: &McapOptions) -> Vec<(String, Result<Run, DatasetError>)> {
         let (t_s, n_wheels) = (&self.t_s, opts.wheel_joints.len());
-        let pieces = match opts.split {
-            Some(min_s) => split::pieces(t_s, &self.wheels.rad_s, n_wheels, &self.truth, min_s),
-            None => vec![(0, t_s.len() - 1)],
+        let pieces = match (opts.split, opts.split_every_s) {
+            (_, Some(length_s)) => split::fixed_pieces(t_s, length_s),
+            (Some(min_s), None) => split::pieces(t_s, &self.wheels.rad_s, n_wheels, &self.truth, min_s),
+            (None, None) => vec![(0, t_s.len() - 1)],
         };
         let last_piece = pieces.len() - 1;
         let mut out = Vec::with_capacity(pieces.len());
         for (p, &(lo, hi)) in pieces.iter().enumerate() {
-            let name = if opts.split.is_some() { format!("{stem}#{}", p + 1) } else { stem.to_string() };
+            let split = opts.split.is_some() || opts.split_every_s.is_some();
+            let name = if split { format!("{stem}#{}", p + 1) } else { stem.to_string() };
             let span = t_s[lo]..=t_s[hi];
             let within = |poses: &[StampedPose]| {
                 let mut v: Vec<StampedPose> = poses.iter().copied().filter(|q| span.contains(&q.t_s)).collect();
@@ -305,7 +311,20 @@ pub(crate) fn runs(
             Err(e) => return Err(e),
         }
     }
+    out.notes.extend(split_note(path, opts, out.runs.len() + out.skipped.len()));
     Ok(out)
+}
+
+/// The note on a recording cut into `pieces` runs of a fixed length (`--split 20s`).
+fn split_note(path: &Path, opts: &McapOptions, pieces: usize) -> Option<Note> {
+    let length_s = opts.split_every_s?;
+    Some(Note::about(
+        path,
+        format!(
+            "cut into {pieces} runs of {length_s} s (--split {length_s}s; the last takes up to half a length more; a \
+             bare number, --split N, cuts at standstills instead)"
+        ),
+    ))
 }
 
 /// Reads one bag. See the module docs of [`super`].

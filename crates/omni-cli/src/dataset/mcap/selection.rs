@@ -145,14 +145,20 @@ impl Bag<'_> {
                 (Some(i), None) => Err(DatasetError::file(
                     self.path,
                     format!(
-                        "no {} topic for the wheel speeds; {} is the robot's own odometry: {NEED_DESIGN}",
+                        "no {} topic for the wheel speeds; {topic} is the robot's own odometry: {NEED_DESIGN}; with \
+                         it, {topic} stands in for the wheels (--joints-topic {topic})",
                         joint_state::NAME,
-                        self.channels[i].topic
+                        topic = self.channels[i].topic
                     ),
                 )),
                 (None, _) => Err(DatasetError::file(
                     self.path,
-                    format!("no {} topic for the wheel speeds; topics: {}", joint_state::NAME, self.listing()),
+                    format!(
+                        "no {} topic for the wheel speeds; topics: {}{}",
+                        joint_state::NAME,
+                        self.listing(),
+                        self.any_odometry_hint()
+                    ),
                 )),
             };
         }
@@ -345,6 +351,20 @@ impl Bag<'_> {
         }
     }
 
+    /// Without JointState and without an odometry in frame `odom` (REP-105): an odometry in another frame
+    /// may still be the wheels', named with the way to read it (`; if … --joints-topic …`), or nothing.
+    fn any_odometry_hint(&self) -> String {
+        let odometry = self.channels.iter().find(|c| c.msg_type == MsgType::Odometry);
+        odometry.map_or_else(String::new, |c| {
+            format!(
+                "; if {topic} is the robot's own wheel odometry, it can stand in for the wheels through the robot's \
+                 design: --joints-topic {topic}, with a robot description (omnical init RECORDING writes robot.toml \
+                 from its URDF, or --robot FILE)",
+                topic = c.topic
+            )
+        })
+    }
+
     /// What to try when the JointState topic does not carry the wheels and the robot's own odometry is
     /// recorded: name it as the wheel source.
     pub(super) fn odometry_hint(&self) -> Option<String> {
@@ -447,10 +467,22 @@ fn to_base_frame(
     base: Option<&str>,
 ) -> Option<String> {
     let bases = base_frames(base);
-    let (to, (offset, frames)) = match target {
-        Some(t) => (t, statics.offset(&pair.child, t)?),
+    let found = match target {
+        Some(t) => statics.between(&pair.child, t).map(|o| (t, o)),
         None if bases.contains(&pair.child.as_str()) => return None,
-        None => bases.iter().find_map(|&t| statics.offset(&pair.child, t).map(|o| (t, o)))?,
+        None => bases.iter().find_map(|&t| statics.between(&pair.child, t).map(|o| (t, o))),
+    };
+    let Some((to, (offset, frames))) = found else {
+        // Static transforms that name the tracked frame but reach no base: said, not silently passed over.
+        let wanted = target.map_or_else(|| bases.join(" or "), str::to_string);
+        return statics.names(&pair.child).then(|| {
+            format!(
+                "the ground truth tracks {:?}, which the static transforms name, but they do not join it to {wanted}: \
+                 the ground truth is left where it was measured (give --gt-mount X,Y,YAW_DEG, or record the \
+                 transform between them)",
+                pair.child
+            )
+        });
     };
     for p in &mut pair.poses.xy_yaw {
         let moved = Pose2::new(p[0], p[1], p[2]).compose(&offset);
