@@ -290,8 +290,6 @@ pub fn simulate_scan(
 struct Draws {
     /// Standard normal: the range noise.
     noise: f64,
-    /// Uniform: the dropout (or the burst's step).
-    dropout: f64,
     /// Uniform: a dark surface's dropout.
     dark: f64,
     /// Uniform: where a mixed pixel lies between its surfaces.
@@ -322,7 +320,7 @@ pub fn simulate_sweep(
             let dropout = rng.random_range(0.0..1.0);
             let (dark, mix) =
                 if realistic { (rng.random_range(0.0..1.0), rng.random_range(0.0..1.0)) } else { (1.0, 0.0) };
-            let draws = Draws { noise, dropout, dark, mix };
+            let draws = Draws { noise, dark, mix };
             in_burst = if settings.dropout_burst_beams <= 1.0 {
                 dropout < settings.dropout
             } else if in_burst {

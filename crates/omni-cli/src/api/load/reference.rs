@@ -130,17 +130,25 @@ const SCALE_MIN_RAD: f64 = std::f64::consts::PI;
 /// A calibration corrects a few per cent; the wheels' distance or turning off by more than this factor
 /// from the ground truth's is wheel data in another unit, or a design far from the robot.
 const SCALE_MAX_FACTOR: f64 = 3.0;
+/// The wheels' distance off by more than this factor from the ground truth's (but within
+/// [`SCALE_MAX_FACTOR`]) is fitted, and said: a constant of the robot's description is likely wrong.
+pub const SCALE_WARN_FACTOR: f64 = 1.3;
 
 /// Refuses runs whose wheels, through the robot description's design, travel and turn more than
 /// [`SCALE_MAX_FACTOR`] times more, or less, than their ground truth (both measurable, both off):
-/// joints in rpm, degrees or counts read as rad/s, or a radius in the wrong unit.
-pub(super) fn check_wheel_scale(ds: &Dataset, robot: &robot_file::RobotFile) -> Result<(), LoadError> {
+/// joints in rpm, degrees or counts read as rad/s, or a radius in the wrong unit. A distance off by more
+/// than [`SCALE_WARN_FACTOR`] within that is a note naming the ratio and the likely causes (the fit
+/// corrects it: a metric reference determines the scale).
+pub(super) fn check_wheel_scale(ds: &mut Dataset, robot: &robot_file::RobotFile) -> Result<(), LoadError> {
     use std::f64::consts::TAU;
     let Ok(ik) = robot.description.design_ik() else { return Ok(()) };
     let travel = omni_kin::travel::Travel::of(&ds.runs, &ik);
-    let (Some(ratio), Some(turning)) = (travel.distance_ratio(SCALE_MIN_M), travel.turning_ratio(SCALE_MIN_RAD)) else {
-        return Ok(());
-    };
+    let Some(ratio) = travel.distance_ratio(SCALE_MIN_M) else { return Ok(()) };
+    let turning = travel.turning_ratio(SCALE_MIN_RAD);
+    if !(1.0 / SCALE_WARN_FACTOR..=SCALE_WARN_FACTOR).contains(&ratio) {
+        ds.notes.push(Note::general(scale_mismatch_text(&travel, ratio, turning)));
+    }
+    let Some(turning) = turning else { return Ok(()) };
     // A unit scales distance and turning alike; one alone off is the data's or the design's own business.
     let (lo, hi) = (1.0 / SCALE_MAX_FACTOR, SCALE_MAX_FACTOR);
     if !(ratio > hi && turning > hi || ratio < lo && turning < lo) {
@@ -150,4 +158,21 @@ pub(super) fn check_wheel_scale(ds: &Dataset, robot: &robot_file::RobotFile) -> 
     let units = [(60.0 / TAU, "rpm"), (360.0 / TAU, "deg_s"), (TAU.recip(), "rev_s")];
     let near_unit = units.into_iter().find(|(f, _)| (ratio / f - 1.0).abs() < 0.15);
     Err(LoadError::WheelScale { robot: robot.source.clone(), runs: ds.runs.len(), travel, ratio, near_unit })
+}
+
+/// The note of a wheel scale off by more than [`SCALE_WARN_FACTOR`]: the ratio, and what usually causes it.
+fn scale_mismatch_text(travel: &omni_kin::travel::Travel, ratio: f64, turning: Option<f64>) -> String {
+    let turn = match turning {
+        Some(t) => format!(" and turn {t:.2}× its turning"),
+        None => String::new(),
+    };
+    format!(
+        "wheel scale: through the robot description's design the wheels travel {ratio:.2}× the ground truth's \
+         distance ({:.2} m against {:.2} m){turn}, more than {:.0} % off: the fit corrects it (the reference \
+         measures distance), but a constant of the description is likely wrong: the encoder's ticks per \
+         revolution, a gear ratio, the wheel radius, or the joints' unit (counts or degrees read as radians)",
+        travel.wheels_m,
+        travel.truth_m,
+        100.0 * (SCALE_WARN_FACTOR - 1.0)
+    )
 }
