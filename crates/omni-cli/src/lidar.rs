@@ -19,8 +19,8 @@ use std::path::Path;
 pub use crate::dataset::mcap::ScanRead;
 pub use omni_kin::lidar::room::BUILTIN_ROOMS;
 pub use omni_kin::lidar::{
-    CLEARANCE_M, MatchQuality, MatchSettings, Rejection, Room, Scan, ScanSettings, SensorPath, first_collision,
-    sensor_path, simulate_scans,
+    CLEARANCE_M, LidarModel, MatchQuality, MatchSettings, Rejection, Room, Scan, ScanSettings, SensorPath,
+    first_collision, sensor_path, simulate_scans,
 };
 
 /// What the scans returned, for a message about matches that failed: `each scan returned a median of N of

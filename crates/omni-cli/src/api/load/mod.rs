@@ -105,7 +105,7 @@ impl LoadRequest {
         if let Some(file) = &end_poses {
             set_end_poses(&mut ds, file, robot.as_ref())?;
         } else if let Some(r) = &robot {
-            check_wheel_scale(&ds, r)?;
+            check_wheel_scale(&mut ds, r)?;
         }
         ds.robot_file = robot;
         move_to_base(&mut ds, data)?;

@@ -144,15 +144,25 @@ const SCALE_MIN_RAD: f64 = std::f64::consts::PI;
 /// A calibration corrects a few per cent; the wheels' distance or turning off by more than this factor
 /// from the ground truth's is wheel data in another unit, or a design far from the robot.
 const SCALE_MAX_FACTOR: f64 = 3.0;
+/// The wheels' distance off by more than this factor from the ground truth's (but within
+/// [`SCALE_MAX_FACTOR`]) is fitted, and said: a constant of the robot's description is likely wrong.
+pub const SCALE_WARN_FACTOR: f64 = 1.3;
 
 /// Refuses runs whose wheels, through the robot description's design, travel or turn more than
 /// [`SCALE_MAX_FACTOR`] times more, or less, than their ground truth, in every way the ground truth moved
 /// enough to tell (distance, turning, or both, all off the same way): joints in rpm, degrees or counts read as
 /// rad/s, or a radius in the wrong unit. All runs together first, then every run on its own, so that a run
-/// that barely turns, or one recording of several in another unit, is judged too.
-pub(super) fn check_wheel_scale(ds: &Dataset, robot: &robot_file::RobotFile) -> Result<(), LoadError> {
+/// that barely turns, or one recording of several in another unit, is judged too. A distance off by more
+/// than [`SCALE_WARN_FACTOR`] within that is a note naming the ratio and the likely causes (the fit
+/// corrects it: a metric reference determines the scale).
+pub(super) fn check_wheel_scale(ds: &mut Dataset, robot: &robot_file::RobotFile) -> Result<(), LoadError> {
     use omni_kin::travel::Travel;
     let Ok(ik) = robot.description.design_ik() else { return Ok(()) };
+    let all = Travel::of(&ds.runs, &ik);
+    let mismatch = all
+        .distance_ratio(SCALE_MIN_M)
+        .filter(|r| !(1.0 / SCALE_WARN_FACTOR..=SCALE_WARN_FACTOR).contains(r))
+        .map(|r| scale_mismatch_text(&all, r, all.turning_ratio(SCALE_MIN_RAD)));
     let refuse = |travel: Travel, run: Option<&str>| {
         let ratio = scale_off(&travel)?;
         // The factor of a unit read as rad/s, within what a calibration corrects besides.
@@ -172,7 +182,7 @@ pub(super) fn check_wheel_scale(ds: &Dataset, robot: &robot_file::RobotFile) -> 
         [one] => Some(one.name()),
         _ => None,
     };
-    if let Some(e) = refuse(Travel::of(&ds.runs, &ik), only) {
+    if let Some(e) = refuse(all, only) {
         return Err(e);
     }
     for run in &ds.runs {
@@ -180,6 +190,7 @@ pub(super) fn check_wheel_scale(ds: &Dataset, robot: &robot_file::RobotFile) -> 
             return Err(e);
         }
     }
+    ds.notes.extend(mismatch.map(Note::general));
     Ok(())
 }
 
@@ -193,4 +204,21 @@ fn scale_off(travel: &omni_kin::travel::Travel) -> Option<f64> {
     let told: Vec<f64> = ratios.into_iter().flatten().collect();
     let off = !told.is_empty() && (told.iter().all(|&r| r > hi) || told.iter().all(|&r| r < lo));
     off.then(|| told[0])
+}
+
+/// The note of a wheel scale off by more than [`SCALE_WARN_FACTOR`]: the ratio, and what usually causes it.
+fn scale_mismatch_text(travel: &omni_kin::travel::Travel, ratio: f64, turning: Option<f64>) -> String {
+    let turn = match turning {
+        Some(t) => format!(" and turn {t:.2}× its turning"),
+        None => String::new(),
+    };
+    format!(
+        "wheel scale: through the robot description's design the wheels travel {ratio:.2}× the ground truth's \
+         distance ({:.2} m against {:.2} m){turn}, more than {:.0} % off: the fit corrects it (the reference \
+         measures distance), but a constant of the description is likely wrong: the encoder's ticks per \
+         revolution, a gear ratio, the wheel radius, or the joints' unit (counts or degrees read as radians)",
+        travel.wheels_m,
+        travel.truth_m,
+        100.0 * (SCALE_WARN_FACTOR - 1.0)
+    )
 }
