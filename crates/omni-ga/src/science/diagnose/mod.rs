@@ -30,6 +30,7 @@
 //! the correlation of residuals along a path; iid only with too few runs), the same numbers `train` reports
 //! for the same model on the same runs.
 
+mod clock;
 mod compare;
 mod evidence;
 mod findings;
@@ -38,6 +39,7 @@ mod noise;
 mod search;
 mod unexplained;
 
+pub use clock::{ClockLag, clock_lag};
 pub use compare::{Turn, costs_of, costs_of_each};
 pub(crate) use evidence::unbounded;
 pub use evidence::{differentiable_start, refit, refit_on};
@@ -380,17 +382,28 @@ fn split_held_out(train: &[Run]) -> (Vec<Run>, Vec<Run>) {
 }
 
 /// The recommended effect: the best candidate if it passes with confidence and also helps on kinds of
-/// path it was not fitted on (when the runs have several); and that check.
+/// path it was not fitted on (when the runs have several); and that check. A `time_offset` whose fitted
+/// lag the model-free estimate `lag` confirms skips the kinds check: a clock does not depend on the kind of
+/// path, and a fit on fewer kinds determines it worse, not differently.
 fn recommend(
     model: &FittedModel,
     ranking: &[Candidate],
     train: &[Run],
     every: usize,
     opts: &DiagnoseOptions,
+    lag: Option<&ClockLag>,
 ) -> Result<(Option<String>, Option<KindOut>), Error> {
     let Some(winner) = ranking.first().filter(|c| passes(c, opts) && confident(c, opts)) else {
         return Ok((None, None));
     };
+    let confirmed = lag.is_some_and(|l| {
+        winner.effect == "time_offset"
+            && l.named()
+            && winner.params.first().is_some_and(|p| l.confirms(p.value, p.std_error))
+    });
+    if confirmed {
+        return Ok((Some(winner.effect.clone()), None));
+    }
     let effect = candidate_effect(&winner.effect, model.model.n_wheels(), opts)?;
     let kind_check = kind_out(model, &effect, train, every)?;
     let failed = kind_check.as_ref().is_some_and(|k| k.gain < 0.0);
@@ -479,7 +492,9 @@ pub fn diagnose(
     let base_fit = if protocol == HeldOut::CrossValidation { BaseFit::OtherRuns } else { BaseFit::TheseRuns };
     let bench = Bench { design, fit_runs: &fit_runs, held_runs: &held_runs, every, noise: noise.as_ref(), base_fit };
     let climb = search::climb(&bench, model, &costs, &design_costs, opts)?;
-    let (verdict, kind_check) = recommend(model, &climb.ranking, train, every, opts)?;
+    // A clock offset between the wheels and the reference, measured without a model.
+    let lag = clock::clock_lag(train);
+    let (verdict, kind_check) = recommend(model, &climb.ranking, train, every, opts, lag.as_ref())?;
     // What the runs constrain in the model as given, and where it fails.
     let identifiability = unbounded(&model.model, &fit_runs, every)
         .ok()
@@ -487,6 +502,9 @@ pub fn diagnose(
     let repeat_floor = repeatability_floor(&cmp.groups);
     let mut facts =
         findings(&cmp.runs, &cmp.groups, &cmp.growth, &climb.ranking, identifiability.as_ref(), repeat_floor);
+    if let Some(l) = lag.filter(ClockLag::named) {
+        facts.insert(0, Finding::ClockLag(l));
+    }
     let coverage = held_out_findings(&mut facts, (model, design), (&fit_runs, &held_runs), protocol, every)?;
     // The repeat structure with the accepted effects: the verdict's (refitted), or those `auto` added.
     let accepted = match (&verdict, climb.ranking.first(), opts.auto) {
