@@ -445,20 +445,6 @@ pub fn warning(w: &WeakDirection) -> String {
     format!("{}; {}", w.text, w.advice)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::percent_1;
-
-    #[test]
-    fn shares_print_as_percentages_never_nan_or_negative_zero() {
-        assert_eq!(percent_1(0.3834), "38.3");
-        assert_eq!(percent_1(-0.004), "-0.4");
-        assert_eq!(percent_1(-1e-6), "0.0");
-        assert_eq!(percent_1(-0.0), "0.0");
-        assert_eq!(percent_1(f64::NAN), "-");
-    }
-}
-
 /// A clock offset between the wheels and the reference, in words.
 fn clock_lag(l: &crate::science::diagnose::ClockLag) -> String {
     let a = &l.estimate;
@@ -476,4 +462,18 @@ fn clock_lag(l: &crate::science::diagnose::ClockLag) -> String {
         if l.runs == 1 { "" } else { "s" },
         a.offset_s
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::percent_1;
+
+    #[test]
+    fn shares_print_as_percentages_never_nan_or_negative_zero() {
+        assert_eq!(percent_1(0.3834), "38.3");
+        assert_eq!(percent_1(-0.004), "-0.4");
+        assert_eq!(percent_1(-1e-6), "0.0");
+        assert_eq!(percent_1(-0.0), "0.0");
+        assert_eq!(percent_1(f64::NAN), "-");
+    }
 }
