@@ -377,7 +377,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
 impl Args {
     /// `--runs-per-command`, else 1 with `--commands` (its repetitions column counts the runs) and the
     /// simulator's default on the benchmark.
-    fn runs_per_command_or_default(&self) -> usize {
+    pub fn runs_per_command_or_default(&self) -> usize {
         self.runs_per_command.unwrap_or(if self.commands.is_some() { 1 } else { SimConfig::default().runs_per_command })
     }
 }

@@ -48,6 +48,14 @@ pub(super) fn with_lidar_path(
                 .collect()
         })
         .collect();
+    // The lidar's clock against the wheels, on its longest stretch (dataset::sensor_clock).
+    let clock =
+        segments.iter().max_by_key(|s| s.len()).and_then(|s| super::sensor_clock::sensor_clock(&loaded.runs, s));
+    let clock_shift_s = clock.map_or(0.0, |c| c.applied_s());
+    let segments: Vec<Vec<StampedPose>> = segments
+        .into_iter()
+        .map(|seg| seg.into_iter().map(|p| StampedPose { t_s: p.t_s + clock_shift_s, ..p }).collect())
+        .collect();
     let mut runs = Vec::new();
     for run in &loaded.runs {
         runs.extend(stretches(run, &segments).map_err(|e| DatasetError::Run { path: path.to_path_buf(), error: e })?);
@@ -60,6 +68,7 @@ pub(super) fn with_lidar_path(
         ));
     }
     loaded.notes.extend(notes(path, topic, &read, &sensor, runs.len()));
+    loaded.notes.extend(clock.and_then(|c| c.note(path, &format!("lidar {topic:?}"))));
     loaded.runs = runs;
     loaded.lidar_mount_from_tf = Some(read.base_from_sensor.is_some());
     Ok(loaded)

@@ -14,6 +14,7 @@ pub mod optiodom;
 mod ros;
 pub mod ros1;
 pub mod rosbag2;
+pub(crate) mod sensor_clock;
 
 pub use error::{DatasetError, Skipped};
 pub(crate) use error::{check_size, too_large};
@@ -295,9 +296,8 @@ fn read_lines(read: &[(PathBuf, usize)]) -> Vec<String> {
 type Reads = Vec<Option<Result<Result<Loaded, DatasetError>, DatasetError>>>;
 
 /// Recordings read with one `--gt` source (a file covering them all, or a folder of takes) share its clock:
-/// a recording whose own alignment failed (a short, still or sparsely tracked one), is weak (standard error
-/// above [`mcap::selection::TOPIC_CLOCK_MAX_STD_ERROR_S`] or explaining less than
-/// [`mcap::selection::TOPIC_CLOCK_MIN_R_SQUARED`] of the motion), or lands more than
+/// a recording whose own alignment failed (a short, still or sparsely tracked one), is not clear
+/// ([`omni_kin::clock::ClockAlignment::is_clear`]), or lands more than
 /// [`mcap::selection::SAME_CLOCK_MAX_OFFSET_S`] from the others (another stretch of a long take matched) is read
 /// again at the median offset of the clear estimates, and a note per such recording says so. A few
 /// milliseconds of drift between clear estimates is kept: each recording keeps its own. Nothing changes when
@@ -307,10 +307,7 @@ fn shared_clock_retry(inputs: &[Result<Input, DatasetError>], reads: &mut Reads,
     let estimate = |r: &Option<Result<Result<Loaded, DatasetError>, DatasetError>>| {
         r.as_ref()?.as_ref().ok()?.as_ref().ok()?.clock.as_ref()?.estimate
     };
-    let clear = |a: &omni_kin::clock::ClockAlignment| {
-        a.std_error_s <= mcap::selection::TOPIC_CLOCK_MAX_STD_ERROR_S
-            && a.r_squared >= mcap::selection::TOPIC_CLOCK_MIN_R_SQUARED
-    };
+    let clear = |a: &omni_kin::clock::ClockAlignment| a.is_clear();
     let mut offsets: Vec<f64> = reads.iter().filter_map(estimate).filter(clear).map(|a| a.offset_s).collect();
     if offsets.is_empty() {
         return vec![];
@@ -553,13 +550,18 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
              .db3, rosbag2 folders, .bag); this input carries its own ground truth",
         ));
     }
-    if opts.ground_truth.is_some() && matches!(input, Input::Csv(_) | Input::OptiOdom(_)) {
+    if opts.ground_truth.is_some() && matches!(input, Input::OptiOdom(_)) {
         return Err(DatasetError::file(
             input.path(),
-            "--gt gives the ground truth of ROS recordings (.mcap, .db3, rosbag2 folders, .bag); this input has its own",
+            "--gt gives the ground truth of ROS recordings (.mcap, .db3, rosbag2 folders, .bag) and of CSV runs \
+             without pose columns; an OptiOdom set has its own",
         ));
     }
     match input {
+        Input::Csv(p) if opts.ground_truth.is_some() => {
+            check_size(p, opts.max_file_bytes)?;
+            Ok(csv_with_gt(p, opts))
+        }
         Input::Csv(p) => {
             check_size(p, opts.max_file_bytes)?;
             Ok(csv::read_run_for(p, opts.ticks_per_rev, &opts.csv_joints).map(|r| Loaded {
@@ -602,6 +604,23 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
             Ok(Ok(Loaded { runs: set.runs, skipped, declared, ..Default::default() }))
         }
     }
+}
+
+/// A CSV run without pose columns with its ground truth from `--gt` (the file named after it, or the
+/// folder's file that covers it), on the wheel clock as a recording's ([`mcap::assembly::truth_for_wheels`]).
+fn csv_with_gt(p: &Path, opts: &LoadOptions) -> Result<Loaded, DatasetError> {
+    let Some(gt) = opts.ground_truth.as_ref() else { return Err(DatasetError::file(p, "no --gt given")) };
+    let stem = recording_name(p, false);
+    let ext = ground_truth::read_for(gt, p, &stem)?;
+    let (mut notes, mut clock) = (Vec::new(), None);
+    let mut attach = |t_s: &[f64], rad_s: &[f64], n: usize| {
+        let (poses, c) = mcap::assembly::truth_for_wheels(p, &ext, &stem, t_s, rad_s, n, &mut notes)?;
+        clock = Some(c);
+        Ok(poses)
+    };
+    let run = csv::read_run_with_truth(p, opts.ticks_per_rev, &opts.csv_joints, &mut attach)?;
+    let run = if opts.recorded_odometry { run } else { run.without_recorded_odometry() };
+    Ok(Loaded { runs: vec![run], notes, clock, ..Default::default() })
 }
 
 /// Adds what one input gave to the dataset; a failed input stops the load, or is listed as skipped with

@@ -127,11 +127,8 @@ impl InputKind {
 
 /// Every input at `paths` (files or folders, expanded as [`super::load`] expands them) with its kind.
 pub(crate) fn inputs(paths: &[PathBuf]) -> Result<Vec<(PathBuf, InputKind)>, DatasetError> {
-    let mut inputs = Vec::new();
-    for p in paths {
-        expand(p, &mut inputs);
-    }
-    inputs
+    Inputs::of(paths)
+        .list
         .into_iter()
         .map(|i| {
             Ok(match i? {

@@ -69,7 +69,6 @@ impl Correlator {
 }
 
 /// The best lag on the coarse grid (step 1 of the module docs).
-// long: the grid's sequences, their correlations and the per-lag score read as one computation
 pub(super) fn coarse(wheels: &WheelAngles<'_>, poses: &Poses<'_>) -> Result<Coarse, ClockError> {
     let (w0, w1) = (wheels.t_s[0], wheels.t_s[wheels.t_s.len() - 1]);
     let (g0, g1) = poses.span();
@@ -118,17 +117,17 @@ pub(super) fn coarse(wheels: &WheelAngles<'_>, poses: &Poses<'_>) -> Result<Coar
     // the largest term), not motion.
     let tss_floor = 1e-12 * tss.iter().flatten().fold(0.0f64, |m, &v| m.max(v));
     let mut best: Option<(f64, usize)> = None;
-    for k in 0..nw + ng - 1 {
-        if pairs[k].round() < min_pairs as f64 {
+    for (k, count) in pairs.iter().enumerate() {
+        if count.round() < min_pairs as f64 {
             continue;
         }
         let g = DMatrix::from_fn(n, n, |r, s| gram[r.min(s) * n + r.max(s)][k]);
         let Some(chol) = g.cholesky() else { continue };
         let mut score = 0.0;
-        for c in 0..3 {
-            if tss[c][k] > tss_floor {
-                let bc = DVector::from_fn(n, |r, _| b[c][r][k]);
-                score += bc.dot(&chol.solve(&bc)) / tss[c][k];
+        for (tss_c, b_c) in tss.iter().zip(&b) {
+            if tss_c[k] > tss_floor {
+                let bc = DVector::from_fn(n, |r, _| b_c[r][k]);
+                score += bc.dot(&chol.solve(&bc)) / tss_c[k];
             }
         }
         if best.is_none_or(|(s, _)| score > s) {

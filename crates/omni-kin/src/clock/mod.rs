@@ -117,6 +117,9 @@ pub const MIN_NAMED_LAG_S: f64 = 0.02;
 pub enum SameRecording {
     /// The clocks agree: within the same-clock band and not a lag worth naming.
     Agree,
+    /// A lag within the band, beyond three standard errors and [`MIN_NAMED_LAG_S`], that is not clear: a
+    /// note may say it is suggested; never applied.
+    UnclearLag,
     /// A clear lag within the band ([`SAME_CLOCK_MAX_OFFSET_S`]), beyond three standard errors and
     /// [`MIN_NAMED_LAG_S`]: a clock offset between wheels and sensor the `time_offset` effect fits; named,
     /// not applied.
@@ -137,10 +140,10 @@ impl ClockAlignment {
     pub fn same_recording(&self, recording_s: f64) -> SameRecording {
         let beyond_noise = self.differs_from(0.0);
         if self.offset_s.abs() <= SAME_CLOCK_MAX_OFFSET_S || !beyond_noise {
-            return if self.is_clear() && beyond_noise && self.offset_s.abs() >= MIN_NAMED_LAG_S {
-                SameRecording::Lag
-            } else {
-                SameRecording::Agree
+            return match (beyond_noise && self.offset_s.abs() >= MIN_NAMED_LAG_S, self.is_clear()) {
+                (true, true) => SameRecording::Lag,
+                (true, false) => SameRecording::UnclearLag,
+                (false, _) => SameRecording::Agree,
             };
         }
         if !self.is_clear() {

@@ -149,7 +149,7 @@ pub enum LoadError {
         /// The one run judged, when all together were not off.
         run: Option<String>,
         /// Their travel, by the wheels and by the ground truth.
-        travel: Travel,
+        travel: Box<Travel>,
         /// The wheels' distance over the ground truth's.
         ratio: f64,
         /// The unit read as rad/s whose factor the ratio is near, with that factor.

@@ -134,6 +134,7 @@ pub fn finding(f: &Finding) -> String {
         ),
         Finding::Unconstrained(w) => format!("the model itself: {}", warning(w)),
         Finding::MissingMotions(c) => motion_coverage(c),
+        Finding::ClockLag(l) => clock_lag(l),
         Finding::RepeatabilityFloor { scatter, basis: GroupBasis::Command } => format!(
             "repeatability floor: end-pose errors scatter by {scatter:.4} between repeats of the same command (no deterministic effect removes that part)"
         ),
@@ -466,6 +467,25 @@ pub fn advice(a: &Advice) -> String {
 /// One warning line for an unconstrained direction: its text and advice.
 pub fn warning(w: &WeakDirection) -> String {
     format!("{}; {}", w.text, w.advice)
+}
+
+/// A clock offset between the wheels and the reference, in words.
+fn clock_lag(l: &crate::science::diagnose::ClockLag) -> String {
+    let a = &l.estimate;
+    format!(
+        "the wheels and the reference disagree in time: the reference's motion follows the wheels best with the \
+         wheels' stamps {:.3} s ± {:.1} ms {} (explaining {:.0} % of it, {:.0} % as recorded; from {} run{}, \
+         without a model): a clock offset between the wheels and the sensor, which `train --effect time_offset` \
+         fits (tau_s {:+.3})",
+        a.offset_s.abs(),
+        a.std_error_s * 1e3,
+        if a.offset_s > 0.0 { "later" } else { "earlier" },
+        a.r_squared * 100.0,
+        l.r_squared_as_recorded * 100.0,
+        l.runs,
+        if l.runs == 1 { "" } else { "s" },
+        a.offset_s
+    )
 }
 
 #[cfg(test)]
