@@ -97,9 +97,6 @@ pub fn export(
     Ok(written.iter().map(|p| p.display().to_string()).collect())
 }
 
-/// A result folder refused or not written: `FileExistsError` for one that already holds files (without
-/// `force`), else as [`cause`].
-
 /// An export failure as the Python exception of its cause (`FileNotFoundError`, `OSError`, else
 /// `OmnicalError`), with the CLI's message.
 fn cause(e: impl std::error::Error + 'static) -> PyErr {

@@ -143,7 +143,7 @@ pub enum LoadError {
     )]
     WheelScale {
         /// The robot description.
-        robot: robot_file::Source,
+        robot: Box<robot_file::Source>,
         /// The runs read.
         runs: usize,
         /// The one run judged, when all together were not off.
