@@ -174,23 +174,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         s["out"] = json!(a.out.as_ref().map(|p| p.display().to_string()));
         super::print_json("train", s)?;
     } else {
-        if interrupted {
-            println!("interrupted (Ctrl-C): the best model found so far (the GA stopped early; no polish)");
-        }
-        print_summary(&c, preset_name, ds.runs.len());
-        if let Some(n) = crate::api::noise::from_summary(&s) {
-            println!("{}", crate::api::noise::describe(&n));
-        }
-        if let Some(d) = &designs {
-            println!("{}", d.describe());
-        }
-        for p in &priors {
-            println!("{}", p.describe(&c.fitted));
-        }
-        if let Some(out) = &a.out {
-            let what = if interrupted { "best-so-far model" } else { "model" };
-            println!("{what} written to {}", out.display());
-        }
+        print_text(&c, (&s, preset_name, ds.runs.len()), designs.as_ref(), &priors, (a.out.as_deref(), interrupted));
     }
     if let Some(w) = &mount {
         tracing::warn!("{w}");
@@ -202,6 +186,34 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         return Err(interrupt::Interrupted.into());
     }
     Ok(())
+}
+
+/// `train`'s text on stdout: the fit's summary, its noise model, the designs, the priors and where the
+/// model went (`out`, and whether the fit was `interrupted`).
+fn print_text(
+    c: &Calibration,
+    (s, preset_name, runs): (&serde_json::Value, &str, usize),
+    designs: Option<&crate::api::train::DesignsFigure>,
+    priors: &[crate::api::fit::PriorUse],
+    (out, interrupted): (Option<&std::path::Path>, bool),
+) {
+    if interrupted {
+        println!("interrupted (Ctrl-C): the best model found so far (the GA stopped early; no polish)");
+    }
+    print_summary(c, preset_name, runs);
+    if let Some(n) = crate::api::noise::from_summary(s) {
+        println!("{}", crate::api::noise::describe(&n));
+    }
+    if let Some(d) = designs {
+        println!("{}", d.describe());
+    }
+    for p in priors {
+        println!("{}", p.describe(&c.fitted));
+    }
+    if let Some(out) = out {
+        let what = if interrupted { "best-so-far model" } else { "model" };
+        println!("{what} written to {}", out.display());
+    }
 }
 
 /// Human-readable fit summary on stdout; its warnings and notes go to stderr.
