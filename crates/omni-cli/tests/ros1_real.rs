@@ -483,8 +483,8 @@ fn a_marker_below_base_link_is_followed_up_the_tree() {
         let omega = 0.3 / RADIUS_M;
         for k in 0..=400u64 {
             let (t, ns) = (k as f64 * 0.02, T0_NS + k * 20_000_000);
-            let p = vec![omega * t; 4];
-            messages.push((0, ns, ros1::joint_state(ns, &JOINTS, &p, &vec![omega; 4])));
+            let p = [omega * t; 4];
+            messages.push((0, ns, ros1::joint_state(ns, &JOINTS, &p, &[omega; 4])));
         }
         messages.push((2, T0_NS, ros1::tf(T0_NS, statics)));
         for k in 0..=800u64 {

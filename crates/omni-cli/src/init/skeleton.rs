@@ -21,10 +21,9 @@ fn joint_topic(inv: &Inventory) -> Option<&TopicSummary> {
 /// The skeleton's text, its joints and the topic they come from; an error when the recording names no joint.
 pub fn skeleton(inv: &Inventory, recording: &str, kind: BaseKind) -> Result<(String, Vec<String>, String), String> {
     let Some(topic) = joint_topic(inv) else {
-        return Err(format!(
-            "the recording has no JointState topic with joint names, which a skeleton names the wheels after; \
-             write robot.toml by hand (docs/formats.md)"
-        ));
+        return Err("the recording has no JointState topic with joint names, which a skeleton names the wheels \
+                    after; write robot.toml by hand (docs/formats.md)"
+            .to_string());
     };
     let joints = topic.joint_names.clone();
     let mut s = String::new();
