@@ -148,8 +148,8 @@ pub enum LoadError {
         runs: usize,
         /// The one run judged, when all together were not off.
         run: Option<String>,
-        /// Their travel, by the wheels and by the ground truth.
-        travel: Travel,
+        /// Their travel, by the wheels and by the ground truth (boxed: the error stays small).
+        travel: Box<Travel>,
         /// The wheels' distance over the ground truth's.
         ratio: f64,
         /// The unit read as rad/s whose factor the ratio is near, with that factor.

@@ -163,7 +163,7 @@ pub(super) fn check_wheel_scale(ds: &Dataset, robot: &robot_file::RobotFile) -> 
             robot: robot.source.clone(),
             runs,
             run: run.map(str::to_string),
-            travel,
+            travel: Box::new(travel),
             ratio,
             near_unit,
         })
