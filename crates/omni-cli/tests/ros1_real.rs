@@ -356,7 +356,7 @@ fn folders_as_people_leave_them() {
     assert_eq!(
         err.lines().last().unwrap(),
         "error: empty: no ROS recording here: looked for .mcap, .db3 and .bag files and rosbag2 recording folders \
-         (metadata.yaml), CSV runs and OptiOdom sets, in the folder and its subfolders; the folder is empty"
+         (metadata.yaml), in the folder and its subfolders; the folder is empty"
     );
     std::fs::create_dir(d.join("notes")).unwrap();
     std::fs::write(d.join("notes/readme.txt"), "x").unwrap();
@@ -483,7 +483,7 @@ fn a_marker_below_base_link_is_followed_up_the_tree() {
         let omega = 0.3 / RADIUS_M;
         for k in 0..=400u64 {
             let (t, ns) = (k as f64 * 0.02, T0_NS + k * 20_000_000);
-            let p = vec![omega * t; 4];
+            let p = [omega * t; 4];
             messages.push((0, ns, ros1::joint_state(ns, &JOINTS, &p, &[omega; 4])));
         }
         messages.push((2, T0_NS, ros1::tf(T0_NS, statics)));

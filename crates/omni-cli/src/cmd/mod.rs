@@ -171,8 +171,8 @@ pub struct DataArgs {
     /// republished on /tf; from base_link, else base_footprint), corrected by the fit.
     #[arg(long, value_name = "TOPIC")]
     pub gt_scans: Option<String>,
-    /// Cut recordings into runs: a bare number N at standstills at least N s long; a length with its unit
-    /// (`20s`, `2min`) into pieces of that length, for a robot that never stops.
+    /// Cut recordings into runs: a bare number at standstills at least this long (s); a length with its
+    /// unit (20s, 2min) into pieces of that length, for a robot that never stops.
     #[arg(long, value_name = "N|LENGTH", value_parser = parse_split)]
     pub split: Option<Split>,
     /// Skip runs that fail to load (they are listed) instead of stopping.

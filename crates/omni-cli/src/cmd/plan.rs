@@ -132,7 +132,7 @@ const MAX_PLAN_OMEGA_RAD_S: f64 = 4.0 * std::f64::consts::PI;
 /// for rad/s), naming the flag and the unit.
 fn check_pace(a: &Args) -> anyhow::Result<()> {
     anyhow::ensure!(
-        a.speed_m_s.partial_cmp(&MAX_PLAN_SPEED_M_S) != Some(std::cmp::Ordering::Greater),
+        a.speed_m_s <= MAX_PLAN_SPEED_M_S || a.speed_m_s.is_nan(),
         "--speed {} m/s: faster than the calibration runs of a wheeled robot are driven (at most \
          {MAX_PLAN_SPEED_M_S} m/s; the default is {} m/s); give the runs' translation speed in m/s (not km/h or \
          mm/s)",
@@ -140,7 +140,7 @@ fn check_pace(a: &Args) -> anyhow::Result<()> {
         PlanRequest::default().speed_m_s
     );
     anyhow::ensure!(
-        a.omega_rad_s.partial_cmp(&MAX_PLAN_OMEGA_RAD_S) != Some(std::cmp::Ordering::Greater),
+        a.omega_rad_s <= MAX_PLAN_OMEGA_RAD_S || a.omega_rad_s.is_nan(),
         "--omega {} rad/s: {:.0}°/s, faster than the calibration runs of a wheeled robot turn (at most {:.1} rad/s, \
          two turns a second; the default is {} rad/s); give the turn rate in rad/s (not deg/s)",
         a.omega_rad_s,

@@ -58,7 +58,7 @@ pub(super) fn check(run: &Run, measured: &EndPose, ik: &IkMatrix) -> Option<(Str
     let told = wheels_m >= MIN_DISTANCE_M && wheels_m >= MIN_STRAIGHTNESS * w.path_m;
     let beyond_path = measured_m > DISTANCE_FACTOR * w.path_m + 0.1;
     let ratio = measured_m / wheels_m;
-    if beyond_path || told && !(1.0 / DISTANCE_FACTOR..=DISTANCE_FACTOR).contains(&ratio) {
+    if beyond_path || (told && !(1.0 / DISTANCE_FACTOR..=DISTANCE_FACTOR).contains(&ratio)) {
         let fits = ["m", "cm", "mm"]
             .into_iter()
             .zip([1.0, 0.01, 0.001])

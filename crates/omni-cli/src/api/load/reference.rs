@@ -170,7 +170,7 @@ pub(super) fn check_wheel_scale(ds: &mut Dataset, robot: &robot_file::RobotFile)
         let near_unit = units.into_iter().find(|(f, _)| (ratio / f - 1.0).abs() < 0.15);
         let runs = if run.is_some() { 1 } else { ds.runs.len() };
         Some(LoadError::WheelScale {
-            robot: Box::new(robot.source.clone()),
+            robot: robot.source.clone(),
             runs,
             run: run.map(str::to_string),
             travel: Box::new(travel),

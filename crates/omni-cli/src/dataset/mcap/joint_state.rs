@@ -71,15 +71,8 @@ pub(super) struct JointSeries {
     /// names stay the same (they almost always do).
     names: Vec<RosString>,
     index: Vec<Option<usize>>,
-    /// Where a wheel joint named twice in the last names has its other entry (the first; `index` holds the
-    /// last).
-    other_entry: Vec<Option<usize>>,
-    /// The other entries' values of wheel joints named twice, message by message.
-    copies: Vec<repair::Copy>,
-    /// Samples `(message, wheel)` where a wheel joint was missing, and per wheel the first such message's
-    /// problem (`wheel joint "x" is missing (names: …)`).
-    missing: Vec<(usize, usize)>,
-    missing_text: Vec<Option<(usize, String)>>,
+    /// Wheel joints named twice or missing (boxed: a topic's content stays small).
+    entries: Box<Entries>,
     /// Messages passed over: naming no wheel joint (another publisher), and exact repeats.
     other_publisher: usize,
     /// Messages pushed, and the first passed over for naming no wheel joint (its index, and which joint is
@@ -93,6 +86,20 @@ pub(super) struct JointSeries {
     first_log_ns: i64,
     /// Messages whose wheel velocity was NaN and whose speeds come from positions.
     nan_velocity: usize,
+}
+
+/// Wheel joints named twice in a message, or missing from one.
+#[derive(Debug, Default)]
+struct Entries {
+    /// Where a wheel joint named twice in the last names has its other entry (the first; `index` holds the
+    /// last).
+    other_entry: Vec<Option<usize>>,
+    /// The other entries' values of wheel joints named twice, message by message.
+    copies: Vec<repair::Copy>,
+    /// Samples `(message, wheel)` where a wheel joint was missing, and per wheel the first such message's
+    /// problem (`wheel joint "x" is missing (names: …)`).
+    missing: Vec<(usize, usize)>,
+    missing_text: Vec<Option<(usize, String)>>,
 }
 
 /// Wheel data ready to build runs from.
@@ -139,7 +146,7 @@ impl JointSeries {
             return Ok(());
         }
         if msg.name != self.names {
-            (self.index, self.other_entry) = wheel_entries(&msg.name, wheel_joints);
+            (self.index, self.entries.other_entry) = wheel_entries(&msg.name, wheel_joints);
             self.names = msg.name;
         }
         // Never filled: the first two messages both stamped 0 (a real clock is not 0 twice).
@@ -199,21 +206,21 @@ impl JointSeries {
     /// Records sample `k` (message `index`)'s missing wheel joints and the other entries of joints named
     /// twice.
     fn note_entries(&mut self, k: usize, index: usize, velocity: &[f64], position: &[f64], wheel_joints: &[String]) {
-        self.missing_text.resize(wheel_joints.len(), None);
+        self.entries.missing_text.resize(wheel_joints.len(), None);
         for (j, at) in self.index.iter().enumerate() {
             if at.is_none() {
-                self.missing.push((k, j));
-                if self.missing_text[j].is_none() {
+                self.entries.missing.push((k, j));
+                if self.entries.missing_text[j].is_none() {
                     let names: Vec<&str> = self.names.iter().map(|s| s.0.as_str()).collect();
                     let what = format!("{MISSING_WHEEL}{:?} is missing (names: {})", wheel_joints[j], names.join(", "));
-                    self.missing_text[j] = Some((index, what));
+                    self.entries.missing_text[j] = Some((index, what));
                 }
             }
         }
-        for (j, other) in self.other_entry.iter().enumerate() {
+        for (j, other) in self.entries.other_entry.iter().enumerate() {
             if let Some(i) = *other {
                 let value = |v: &[f64]| v.get(i).copied().unwrap_or(f64::NAN);
-                self.copies.push(repair::Copy { k, j, velocity: value(velocity), position: value(position) });
+                self.entries.copies.push(repair::Copy { k, j, velocity: value(velocity), position: value(position) });
             }
         }
     }
@@ -266,8 +273,8 @@ impl JointSeries {
         let w = wheel_joints.len();
         let mut notes = self.notes();
         let (mut velocity, mut position) = (self.velocity, self.position);
-        notes.extend(repair::resolve_copies(&self.copies, &mut velocity, &mut position, wheel_joints)?);
-        let gaps = repair::Gaps { missing: &self.missing, first: &self.missing_text };
+        notes.extend(repair::resolve_copies(&self.entries.copies, &mut velocity, &mut position, wheel_joints)?);
+        let gaps = repair::Gaps { missing: &self.entries.missing, first: &self.entries.missing_text };
         notes.extend(repair::fill_gaps(&gaps, t_s, &mut velocity, &mut position, wheel_joints)?);
         if !units.is_identity() {
             let (p, v) = (units.position_rad_per_unit(), units.velocity_rad_s_per_unit());
