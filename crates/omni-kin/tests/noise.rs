@@ -38,10 +38,11 @@ fn slip_noise_rates_are_recovered_and_held_out_coverage_is_95_percent() {
         ..SimConfig::default()
     };
     let runs = simulate(&config, &truth, "").unwrap();
-    let (train, held_out): (Vec<(usize, Run)>, Vec<(usize, Run)>) =
-        runs.into_iter().enumerate().partition(|(i, _)| i % 3 != 2);
-    let train: Vec<Run> = train.into_iter().map(|(_, r)| r).collect();
-    let held_out: Vec<Run> = held_out.into_iter().map(|(_, r)| r).collect();
+    // Two repetitions of each command to train on, the third held out.
+    let (mut train, mut held_out) = (Vec::new(), Vec::new());
+    for (i, r) in runs.into_iter().enumerate() {
+        if i % 3 == 2 { held_out.push(r) } else { train.push(r) }
+    }
     let fitted = noise::fit(&poses(&truth, &train), true, &FitNoiseOptions::default()).unwrap();
     let (got, want) = (fitted.rates.to_vec(), TRUTH.to_vec());
     eprintln!(
