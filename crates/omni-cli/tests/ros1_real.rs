@@ -356,7 +356,7 @@ fn folders_as_people_leave_them() {
     assert_eq!(
         err.lines().last().unwrap(),
         "error: empty: no ROS recording here: looked for .mcap, .db3 and .bag files and rosbag2 recording folders \
-         (metadata.yaml), in the folder and its subfolders; the folder is empty"
+         (metadata.yaml), CSV runs and OptiOdom sets, in the folder and its subfolders; the folder is empty"
     );
     std::fs::create_dir(d.join("notes")).unwrap();
     std::fs::write(d.join("notes/readme.txt"), "x").unwrap();
