@@ -148,16 +148,14 @@ pub enum KinError {
         /// Parameters of the model.
         expected: usize,
     },
-    /// An unknown effect or parameter name; build it with [`KinError::unknown`], which finds the nearest
-    /// known name.
-    #[error("unknown {what} {name:?}{}; known: {known}", did_you_mean(nearest.as_deref()))]
+    /// An unknown effect or parameter name; the message names the known name it most likely meant
+    /// ([`nearest_name`]).
+    #[error("unknown {what} {name:?}{}; known: {known}", did_you_mean(name, known))]
     Unknown {
         /// `effect` or `parameter`.
         what: &'static str,
         /// The name given.
         name: String,
-        /// The known name it most likely meant (a typo away), if any.
-        nearest: Option<String>,
         /// The accepted names, comma-separated.
         known: String,
     },
@@ -247,28 +245,34 @@ fn twists_named(needed: usize) -> String {
     }
 }
 
-/// `" (did you mean \"x\"?)"`, or nothing.
-fn did_you_mean(nearest: Option<&str>) -> String {
-    nearest.map_or_else(String::new, |n| format!(" (did you mean {n:?}?)"))
+/// `" (did you mean \"x\"?)"` for the [`nearest_name`] of `name` among the comma-separated `known`, or
+/// nothing.
+fn did_you_mean(name: &str, known: &str) -> String {
+    nearest_name(name, known.split(", ")).map_or_else(String::new, |n| format!(" (did you mean {n:?}?)"))
+}
+
+/// The known name a mistyped `name` most likely meant: the only one it begins, else the nearest a typo away
+/// (Damerau–Levenshtein distance at most 1 for names up to five letters, else at most a third of the
+/// name's length).
+pub fn nearest_name<'a>(name: &str, known: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    let names: Vec<&str> = known.into_iter().collect();
+    let prefixed: Vec<&str> = names.iter().copied().filter(|k| !name.is_empty() && k.starts_with(name)).collect();
+    if let [only] = prefixed[..] {
+        return Some(only);
+    }
+    let limit = (name.chars().count() / 3).max(1);
+    names
+        .iter()
+        .map(|k| (strsim::damerau_levenshtein(name, k), *k))
+        .filter(|(d, _)| *d <= limit)
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, k)| k)
 }
 
 impl KinError {
-    /// An unknown `what` named `name`, among the `known` names: with the nearest of them when `name` is a
-    /// typo away from it (Damerau–Levenshtein distance at most 1 for names up to four letters, else at most
-    /// a third of the name's length), or when it begins only that one.
+    /// An unknown `what` named `name`, among the `known` names.
     pub fn unknown(what: &'static str, name: &str, known: &[impl AsRef<str>]) -> Self {
-        let names: Vec<&str> = known.iter().map(AsRef::as_ref).collect();
-        let limit = (name.chars().count() / 3).max(1);
-        let prefixed: Vec<&str> = names.iter().copied().filter(|k| !name.is_empty() && k.starts_with(name)).collect();
-        let nearest = match prefixed[..] {
-            [only] => Some(only),
-            _ => names
-                .iter()
-                .map(|k| (strsim::damerau_levenshtein(name, k), *k))
-                .filter(|(d, _)| *d <= limit)
-                .min_by_key(|(d, _)| *d)
-                .map(|(_, k)| k),
-        };
-        Self::Unknown { what, name: name.into(), nearest: nearest.map(str::to_string), known: names.join(", ") }
+        let known: Vec<&str> = known.iter().map(AsRef::as_ref).collect();
+        Self::Unknown { what, name: name.into(), known: known.join(", ") }
     }
 }
