@@ -78,11 +78,11 @@ pub(super) fn compare(
         return Ok(None);
     }
     let (factor, more) = if ratio > 1.0 { (ratio, "velocity") } else { (1.0 / ratio, "position") };
-    // The factor between two units, within 15 %: a unit declared wrong rather than a gear.
+    // The factor between two units, within 3 %: a unit declared wrong rather than a gear.
     let tau = std::f64::consts::TAU;
     let units_apart = [(60.0 / tau, "rad/s and rpm"), (360.0 / tau, "rad and degrees"), (tau, "turns and rad")]
         .into_iter()
-        .find(|(f, _)| (factor / f - 1.0).abs() < 0.15)
+        .find(|(f, _)| (factor / f - 1.0).abs() < 0.03)
         .map_or_else(String::new, |(f, what)| format!(", near {f:.3}, the factor between {what}"));
     let rates = format!(
         "field velocity gives a wheel rate of {v:.3} rad/s and field position {p:.3} rad/s (medians over 0.5 s \
