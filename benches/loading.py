@@ -72,6 +72,15 @@ def main(binary, data):
             cpu = statistics.median(r[1] for r in runs)
             row.append(f'{wall:.3f} s ({cpu:.3f} s)')
         print(f'| {label} | {row[0]} | {row[1]} |')
+    # The yardstick (issue 44): the same bare MCAP files read with Python rosbags (benches/rosbags_read.py),
+    # against `omnical eval` on 2 threads.
+    cmd = [sys.executable, str(here / 'rosbags_read.py'), str(data / 'train')]
+    timed(cmd)
+    rosbags = statistics.median(timed(cmd)[0] for _ in range(3))
+    cmd = [binary, '--threads', '2', 'eval', str(data / 'train')]
+    ours = statistics.median(timed(cmd)[0] for _ in range(REPEATS))
+    print(f'rosbags (AnyReader, every message deserialized): {rosbags:.3f} s; omnical eval, 2 threads: {ours:.3f} s: '
+          f'{rosbags / ours:.1f}x')
     print(f'load average after: {load()}')
 
 

@@ -77,7 +77,7 @@ fn command_line_defaults_are_the_library_defaults() {
     let cli = Cli::try_parse_from(["omnical", "simulate", "--out", "sim"]).unwrap();
     let Command::Simulate(s) = cli.command else { panic!("simulate") };
     let sim = SimConfig::default();
-    assert_eq!((s.runs_per_command, s.duration_s), (sim.runs_per_command, sim.duration_s));
+    assert_eq!((s.runs_per_command_or_default(), s.duration_s), (sim.runs_per_command, sim.duration_s));
     assert_eq!(s.robot, "apr02");
 
     let cli = Cli::try_parse_from(["omnical", "init", "rec.mcap"]).unwrap();

@@ -79,9 +79,9 @@ pub enum Command {
     /// An IMU's yaw rate as a rotation reference: the wheel matrix's rotation row and the gyro's bias (the
     /// translation rows need a reference that senses translation).
     Imu(cmd::imu::Args),
-    /// What a ROS recording holds (topics, types, counts, rates, joints) and what omnical makes of it: each
-    /// topic's role and why, the runs a read gives (samples, rates, gaps, the ground truth's clock), its
-    /// notes, or the error that stops it.
+    /// What an input holds (a ROS recording's topics, types, counts, rates, joints; a CSV run; an OptiOdom
+    /// set's declared robot) and what omnical makes of it: each topic's role and why, the runs a read gives
+    /// (samples, rates, gaps, the ground truth's clock), its notes, or the error that stops it.
     Info(cmd::info::Args),
     /// Propose calibration runs that excite every parameter of a model (and its effects), with the
     /// standard errors they would give for a stated ground-truth noise.
@@ -112,12 +112,7 @@ pub enum Command {
 /// The effect ids, for help texts: the built-in catalogue (`sensor_offset, sensor_offset_yaw, time_offset,
 /// …`), then the explorer's learned corrections (`learned:wheel, …`).
 pub fn effect_ids() -> String {
-    let mut ids: Vec<String> = omni_kin::effect::CATALOGUE.iter().map(|s| s.to_string()).collect();
-    if let Some(i) = ids.iter().position(|id| id == "sensor_offset") {
-        ids.insert(i + 1, "sensor_offset_yaw".into());
-    }
-    ids.extend(omni_kin::effect::learned::ids());
-    ids.join(", ")
+    omni_kin::effect::ids().join(", ")
 }
 
 /// The help of an option that takes effect ids: `lead`, then the ids.

@@ -19,8 +19,8 @@ use std::path::Path;
 pub use crate::dataset::mcap::ScanRead;
 pub use omni_kin::lidar::room::BUILTIN_ROOMS;
 pub use omni_kin::lidar::{
-    CLEARANCE_M, MatchQuality, MatchSettings, Rejection, Room, Scan, ScanSettings, SensorPath, first_collision,
-    sensor_path, simulate_scans,
+    CLEARANCE_M, LidarModel, MatchQuality, MatchSettings, Rejection, Room, Scan, ScanSettings, SensorPath,
+    first_collision, sensor_path, simulate_scans,
 };
 
 /// What the scans returned, for a message about matches that failed: `each scan returned a median of N of
@@ -64,7 +64,17 @@ pub fn read_scans(path: &Path, topic: &str) -> Result<ScanRead, DatasetError> {
 /// [`read_scans`] with the lidar's mount looked up from `base_frame` (a robot description's `[frames]
 /// base`) instead of `base_link`, else `base_footprint`.
 pub fn read_scans_from(path: &Path, topic: &str, base_frame: Option<&str>) -> Result<ScanRead, DatasetError> {
-    let sink = dataset::feed_ros(path, dataset::DEFAULT_MAX_FILE_BYTES, |zstd| {
+    read_scans_within(path, topic, base_frame, dataset::DEFAULT_MAX_FILE_BYTES)
+}
+
+/// [`read_scans_from`] refusing a storage file larger than `max_file_bytes` (`--max-file-mb`).
+pub fn read_scans_within(
+    path: &Path,
+    topic: &str,
+    base_frame: Option<&str>,
+    max_file_bytes: u64,
+) -> Result<ScanRead, DatasetError> {
+    let sink = dataset::feed_ros(path, max_file_bytes, |zstd| {
         dataset::mcap::ScanSink::new(topic, zstd).with_base_frame(base_frame)
     })?;
     sink.finish(path)

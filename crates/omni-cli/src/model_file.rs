@@ -115,9 +115,14 @@ pub struct ModelFile {
     /// Effects in pipeline order.
     #[serde(default)]
     pub effects: Vec<EffectEntry>,
-    /// How the model was made (free-form summary; ignored when reading).
+    /// How the model was made (free-form summary; ignored when reading but for `interrupted = true`,
+    /// which every command that reads the model says, see [`ModelFile::interrupted`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fit: Option<toml::Table>,
+    /// How far to trust the odometry: the noise model `train` fits with the calibration (issue 46; read by
+    /// `eval` and `export --robot-config`, see [`read_noise`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise: Option<omni_kin::noise::OdometryNoise>,
 }
 
 impl ModelFile {
@@ -147,6 +152,7 @@ impl ModelFile {
             integration: f.model.integration,
             effects,
             fit,
+            noise: None,
         })
     }
 
@@ -199,6 +205,12 @@ impl ModelFile {
         FittedModel::new(model, params).map_err(|e| e.to_string())
     }
 
+    /// Whether the `[fit]` table marks the model `interrupted = true`: `train` was stopped by Ctrl-C and
+    /// wrote the best model found so far.
+    pub fn interrupted(&self) -> bool {
+        self.fit.as_ref().and_then(|t| t.get("interrupted")).and_then(toml::Value::as_bool).unwrap_or(false)
+    }
+
     /// The keys that describe the base kinematics.
     fn base_record(&self) -> BaseRecord {
         BaseRecord {
@@ -217,8 +229,19 @@ impl ModelFile {
     }
 }
 
-/// Read a model file; `design` and `paper` name the paper's APR-02 design model (Eq. 7).
+/// Read a model file; a model marked `interrupted = true` (a `train` stopped by Ctrl-C) is read with a
+/// warning on stderr that says so ([`interrupted_warning`]), for every command that takes it.
 pub fn read(path: &Path) -> Result<FittedModel, ModelFileError> {
+    let (model, interrupted) = read_marked(path)?;
+    if interrupted {
+        tracing::warn!("{}", interrupted_warning(path));
+    }
+    Ok(model)
+}
+
+/// Read a model file, printing nothing: the model, and whether its `[fit]` table marks it interrupted
+/// ([`ModelFile::interrupted`]).
+pub fn read_marked(path: &Path) -> Result<(FittedModel, bool), ModelFileError> {
     let name = path.display().to_string();
     let text =
         std::fs::read_to_string(path).map_err(|source| ModelFileError::Io { path: name.clone(), error: source })?;
@@ -228,14 +251,36 @@ pub fn read(path: &Path) -> Result<FittedModel, ModelFileError> {
     })
 }
 
+/// The noise model a model file holds (`None`: the file has none, e.g. written before issue 46 or by hand;
+/// `design` and `paper` have none).
+pub fn read_noise(path: &Path) -> Result<Option<omni_kin::noise::OdometryNoise>, ModelFileError> {
+    let name = path.display().to_string();
+    let text =
+        std::fs::read_to_string(path).map_err(|source| ModelFileError::Io { path: name.clone(), error: source })?;
+    let file: ModelFile = toml::from_str(&text)
+        .map_err(|e| ModelFileError::Parse { path: name, message: crate::toml_error::locate(&text, &e) })?;
+    Ok(file.noise)
+}
+
+/// What a command says when it reads a model marked interrupted: the file, why it is not a finished fit,
+/// and what to do.
+pub fn interrupted_warning(path: &Path) -> String {
+    format!("{}: {INTERRUPTED_REASON}; train again without stopping it before relying on this model", path.display())
+}
+
+/// Why a model marked interrupted is not a finished fit (the words of [`interrupted_warning`] and of
+/// `export --robot-config`'s refusal).
+pub const INTERRUPTED_REASON: &str = "the model is marked interrupted = true (its training was stopped by Ctrl-C: \
+                                      the best model found so far, the search cut short and not polished)";
+
 enum ParseFailure {
     Toml(String),
     Model(String),
 }
 
-fn parse(text: &str) -> Result<FittedModel, ParseFailure> {
+fn parse(text: &str) -> Result<(FittedModel, bool), ParseFailure> {
     let file: ModelFile = toml::from_str(text).map_err(|e| ParseFailure::Toml(crate::toml_error::locate(text, &e)))?;
-    file.to_fitted().map_err(ParseFailure::Model)
+    Ok((file.to_fitted().map_err(ParseFailure::Model)?, file.interrupted()))
 }
 
 /// The TOML text of a fitted model, with optional fit metadata.
@@ -257,7 +302,7 @@ mod tests {
         f.set("time_offset.tau_s", 0.1 + 0.2).unwrap();
         f.set("wheel_asymmetry.a_b", -1e-17).unwrap();
         let text = to_toml(&f, None).unwrap();
-        let back = parse(&text).ok().unwrap();
+        let back = parse(&text).ok().unwrap().0;
         assert_eq!(
             back.params.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
             f.params.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
@@ -265,7 +310,7 @@ mod tests {
         assert_eq!(back.model.effects.len(), 2);
 
         let g = FittedModel::nominal(Model::geometry(RobotGeometry::apr02()));
-        let back = parse(&to_toml(&g, None).unwrap()).ok().unwrap();
+        let back = parse(&to_toml(&g, None).unwrap()).ok().unwrap().0;
         assert_eq!(back.params, g.params);
     }
 
@@ -312,6 +357,25 @@ mod tests {
             proptest::prop_assert_eq!(bits(&back.params), bits(&f.params));
             proptest::prop_assert_eq!(to_toml(&back, None).unwrap(), text);
         }
+    }
+
+    /// `interrupted = true` in `[fit]` (what `train` writes after Ctrl-C) marks the model; no `[fit]`, or
+    /// one without it, does not.
+    #[test]
+    fn the_fit_table_marks_an_interrupted_model() {
+        let f = FittedModel::nominal(Model::ik(IkMatrix::paper_design()));
+        let fit = |interrupted: bool| {
+            let mut t = toml::Table::new();
+            t.insert("preset".into(), "default".into());
+            if interrupted {
+                t.insert("interrupted".into(), true.into());
+            }
+            Some(t)
+        };
+        let marked = |fit: Option<toml::Table>| parse(&to_toml(&f, fit).unwrap()).ok().unwrap().1;
+        assert!(marked(fit(true)));
+        assert!(!marked(fit(false)));
+        assert!(!marked(None));
     }
 
     #[test]

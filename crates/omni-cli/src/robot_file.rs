@@ -96,6 +96,17 @@ pub enum RobotFileError {
 
 /// Parse and validate the text of a robot description; `path` names it in errors.
 pub fn parse(text: &str, path: &Path) -> Result<RobotDescription, RobotFileError> {
+    if let Some((line, field)) = crate::init::skeleton::first_mark(text) {
+        return Err(RobotFileError::At {
+            path: path.to_path_buf(),
+            line,
+            field,
+            message: format!(
+                "is still marked {} (a skeleton from omnical init): measure it, write its value and remove the mark",
+                crate::init::skeleton::FILL_IN
+            ),
+        });
+    }
     let d: RobotDescription = toml::from_str(text).map_err(|e| {
         let span = e.span().unwrap_or(0..0);
         match locate::path_at(text, &span) {

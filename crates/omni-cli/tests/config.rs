@@ -432,7 +432,7 @@ mod settings_table {
             .filter(|a| a.get_id() != "json")
             .map(|a| a.get_id().to_string())
             .collect();
-        assert_eq!(sensors.len(), 16, "{sensors:?}");
+        assert_eq!(sensors.len(), 17, "{sensors:?}");
         assert_eq!(sensors, keys(|s| s.flag == Flag::Of("simulate")), "omnical simulate's sensors against SETTINGS");
     }
 }

@@ -123,7 +123,12 @@ fn result_files_are_checked_first_and_train_says_when_nothing_is_written() {
     );
     assert_eq!(refused(&["plan", "--out", "sim"], d), "error: --out sim: this is a folder; give a file name in it\n");
     let (out, err) = ok_with_stderr(&["train", "sim/train"], d);
-    assert!(out.starts_with("preset default: 36 training runs, objective path\n"), "{out}");
+    assert!(
+        out.starts_with(
+            "preset default: 36 training runs, objective path, integration exact arcs, each run's median step\n"
+        ),
+        "{out}"
+    );
     assert!(err.ends_with("note: the fitted model was not written (no --out FILE)\n"), "{err}");
     let (_, err) = ok_with_stderr(&["train", "sim/train", "--out", "m.toml"], d);
     assert!(!err.contains("not written"), "{err}");
@@ -187,7 +192,12 @@ fn a_diff_matrix_keeps_its_units_and_one_run_is_singular() {
     let one = entries(&d.join("sim/train")).into_iter().find(|f| f.ends_with(".csv")).unwrap();
     let one = format!("sim/train/{one}");
     let (out, _) = ok_with_stderr(&["train", &one, "--model", "ik"], d);
-    assert!(out.starts_with("preset default: 1 training run, objective path\n"), "{out}");
+    assert!(
+        out.starts_with(
+            "preset default: 1 training run, objective path, integration exact arcs, each run's median step\n"
+        ),
+        "{out}"
+    );
     let (out, _) = ok_with_stderr(&["eval", "--model", "design", &one], d);
     assert!(out.starts_with("model design: 1 run\n"), "{out}");
 }
@@ -241,15 +251,12 @@ fn wheels_in_another_unit_than_declared_are_refused() {
     let robot = std::fs::read_to_string(d.join("sim/train/robot.toml")).unwrap();
     // The simulated joints are rad/s; declared rpm, they go 2π/60 as far as the ground truth.
     std::fs::write(d.join("rpm.toml"), format!("{robot}\n[wheel_data]\nvelocity = \"rpm\"\n")).unwrap();
+    // The joints' positions (rad) tell it first: velocity read as rpm gives 2π/60 of their rate (issue 44).
     let err = refused(&["eval", "sim/train", "--robot", "rpm.toml"], d);
     let last = err.lines().last().unwrap();
-    assert!(last.starts_with("error: through the design of rpm.toml, the wheels of these 36 runs travel "), "{err}");
+    assert!(last.contains(": field velocity gives a wheel rate of "), "{err}");
     assert!(
-        last.ends_with(
-            ": 0.10 times, beyond what a calibration corrects. Are the joints in another unit (rpm, deg/s, encoder \
-             counts)? Declare it in the robot description's [wheel_data] (docs/formats.md); otherwise check its \
-             radius_m and distances"
-        ),
+        last.contains("(medians over 0.5 s windows: 9.55 times more by position, near 9.549, the factor between rad/s and rpm; position read in rad and velocity in rpm, as [wheel_data] declares)"),
         "{err}"
     );
     // A radius 60/2π too large looks like rpm read as rad/s.

@@ -209,3 +209,37 @@ fn refusals_name_the_file() {
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).starts_with("error: bad.urdf: not a URDF"), "{}", stderr(&out));
 }
+
+/// A differential drive with a passive caster wheel (a cylinder on a continuous joint below a vertical
+/// swivel, named neither caster nor wheel), whose joints the recording publishes too: the caster is not
+/// driven, so the base is the two wheels.
+#[test]
+fn a_passive_caster_wheel_is_not_taken_as_driven() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let urdf = DIFF_URDF.replace(
+        "</robot>",
+        r#"<link name="fork"/>
+<link name="roller"><collision><origin rpy="1.5707963267948966 0 0"/><geometry><cylinder radius="0.02" length="0.01"/></geometry></collision></link>
+<joint name="swivel_joint" type="continuous"><parent link="base_link"/><child link="fork"/>
+  <origin xyz="-0.1 0 0.0"/><axis xyz="0 0 1"/></joint>
+<joint name="roller_joint" type="continuous"><parent link="fork"/><child link="roller"/>
+  <origin xyz="-0.02 0 -0.01" rpy="-1.5707963267948966 0 0"/><axis xyz="0 0 1"/></joint>
+</robot>"#,
+    );
+    write_bag(
+        &d.join("rec.mcap"),
+        Some(&urdf),
+        &["wheel_right_joint", "wheel_left_joint", "swivel_joint", "roller_joint"],
+    );
+    let out = omnical(&["init", "rec.mcap", "--out", "rover.toml"], d);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("kind diff: guessed from the 2 wheels"), "{stdout}");
+    assert!(
+        stdout.contains("Not driven (passive casters: below a swivel joint, or named caster): roller_joint."),
+        "{stdout}"
+    );
+    let r = robot_file::read(&d.join("rover.toml")).unwrap();
+    assert_eq!(r.joints(), ["wheel_left_joint", "wheel_right_joint"]);
+}

@@ -200,7 +200,12 @@ fn demo_out_keeps_the_runs_and_its_commands_repeat_each_step() {
         assert!(d.join("demo").join(f).is_file(), "demo/{f} missing");
     }
     let (_, repeat) = t.split_once("== repeat each step by hand on these files:\n").unwrap_or_else(|| panic!("{t}"));
-    let commands: Vec<&str> = repeat.lines().map(str::trim).collect();
+    // The commands, then the demo's last line: the hidden effect and what was found of it.
+    let commands: Vec<&str> = repeat.lines().map(str::trim).filter(|l| l.starts_with("omnical ")).collect();
+    assert!(
+        repeat.lines().last().unwrap().starts_with("hidden time_offset=0.06 → found time_offset.tau_s = "),
+        "{repeat}"
+    );
     assert_eq!(commands.len(), 5, "{repeat}");
     assert_eq!(commands[0], "omnical simulate --out demo --force --runs-per-command 1 --effect time_offset=0.06");
     assert_eq!(commands[1], "omnical train demo/train --out demo/fitted_matrix.toml");

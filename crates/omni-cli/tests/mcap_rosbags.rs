@@ -264,6 +264,7 @@ fn encoder_counts_and_motor_rpm_are_read_with_the_declared_units() {
         velocity: VelocityUnit::Rpm,
         counts_per_rev: Some(1024.0),
         gear_ratio: Some(30.0),
+        source: None,
     };
     let opts = McapOptions { wheel_data: units, ..Default::default() };
     let read = |name: &str, opts: &McapOptions| {

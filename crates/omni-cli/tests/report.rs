@@ -198,6 +198,18 @@ fn mcap_export_adds_the_calibrated_odometry_topic() {
     assert_eq!(back.runs[0].truth().len(), orig.runs[0].truth().len());
     let (a, b) = (back.runs[0].end().pose, orig.runs[0].end().pose);
     assert!((a.x_m - b.x_m).abs() < 1e-12 && (a.y_m - b.y_m).abs() < 1e-12);
+    // Every channel carries the QoS rosbag2 writes (volatile here: nothing latched in this bag), and the
+    // file the `rosbag2` record that says how to read it.
+    for c in summary.channels.values() {
+        let qos = &c.metadata["offered_qos_profiles"];
+        assert!(qos.starts_with("- history: 1\n") && qos.contains("durability: 2\n"), "{}: {qos}", c.topic);
+    }
+    assert!(summary.metadata_indexes.iter().any(|m| m.name == "rosbag2"), "{:?}", summary.metadata_indexes);
+    // /omnical/odometry names the frame its poses are in: the ground truth's (`map`; CDR: 4 bytes of
+    // encapsulation, the stamp, then the frame's length and text).
+    let stream = mcap::MessageStream::new(&bytes).unwrap();
+    let first = stream.map(Result::unwrap).find(|m| m.channel.id == calibrated_id).unwrap();
+    assert_eq!(&first.data[12..20], b"\x04\0\0\0map\0", "{:?}", &first.data[..24]);
 }
 
 #[test]

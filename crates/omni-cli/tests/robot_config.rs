@@ -381,3 +381,202 @@ fn effects_a_matrix_cannot_carry_are_listed_as_warnings() {
     assert_eq!(alone.split_whitespace().filter_map(|t| t.parse::<f64>().ok()).count(), 2, "{alone}");
     assert!(err.contains("warning: the controller cannot carry the model's effects (time_offset)."), "{err}");
 }
+
+/// Parameter names each file's reader declares, from its source: ros2_controllers'
+/// `diff_drive_controller/src/diff_drive_controller_parameter.yaml`,
+/// `mecanum_drive_controller/src/mecanum_drive_controller.yaml` (released 2.43 / 4.x),
+/// `omni_wheel_drive_controller/src/omni_wheel_drive_controller_parameters.yaml`; Nav2's
+/// `nav2_amcl/src/amcl_node.cpp` (the motion-model ones); robot_localization's `params/ekf.yaml` (the ones
+/// written). Nested names are dotted.
+const SCHEMAS: [(&str, &[&str]); 5] = [
+    (
+        "diff_drive_controller",
+        &[
+            "left_wheel_names",
+            "right_wheel_names",
+            "wheel_separation",
+            "wheels_per_side",
+            "wheel_radius",
+            "wheel_separation_multiplier",
+            "left_wheel_radius_multiplier",
+            "right_wheel_radius_multiplier",
+            "odom_frame_id",
+            "base_frame_id",
+            "pose_covariance_diagonal",
+            "twist_covariance_diagonal",
+            "open_loop",
+            "position_feedback",
+            "enable_odom_tf",
+            "cmd_vel_timeout",
+            "publish_rate",
+        ],
+    ),
+    (
+        "mecanum_drive_controller",
+        &[
+            "reference_timeout",
+            "front_left_wheel_command_joint_name",
+            "front_right_wheel_command_joint_name",
+            "rear_right_wheel_command_joint_name",
+            "rear_left_wheel_command_joint_name",
+            "front_left_wheel_state_joint_name",
+            "front_right_wheel_state_joint_name",
+            "rear_right_wheel_state_joint_name",
+            "rear_left_wheel_state_joint_name",
+            "kinematics.base_frame_offset.x",
+            "kinematics.base_frame_offset.y",
+            "kinematics.base_frame_offset.theta",
+            "kinematics.wheels_radius",
+            "kinematics.sum_of_robot_center_projection_on_X_Y_axis",
+            "base_frame_id",
+            "odom_frame_id",
+            "enable_odom_tf",
+            "twist_covariance_diagonal",
+            "pose_covariance_diagonal",
+        ],
+    ),
+    (
+        "omni_wheel_drive_controller",
+        &[
+            "wheel_offset",
+            "wheel_names",
+            "robot_radius",
+            "wheel_radius",
+            "odom_frame_id",
+            "base_frame_id",
+            "diagonal_covariance.pose",
+            "diagonal_covariance.twist",
+            "open_loop",
+            "position_feedback",
+            "enable_odom_tf",
+            "cmd_vel_timeout",
+        ],
+    ),
+    ("amcl", &["robot_model_type", "alpha1", "alpha2", "alpha3", "alpha4", "alpha5", "update_min_d", "update_min_a"]),
+    (
+        "ekf_filter_node",
+        &[
+            "frequency",
+            "two_d_mode",
+            "odom0",
+            "odom0_config",
+            "odom0_differential",
+            "odom0_relative",
+            "odom0_queue_size",
+        ],
+    ),
+];
+
+/// The dotted names of every parameter under `node: ros__parameters:`.
+fn parameter_names(y: &Yaml, node: &str) -> Vec<String> {
+    fn walk(y: &Yaml, prefix: &str, out: &mut Vec<String>) {
+        match y.as_hash() {
+            Some(h) => {
+                for (k, v) in h {
+                    let k = k.as_str().unwrap();
+                    walk(v, &if prefix.is_empty() { k.to_string() } else { format!("{prefix}.{k}") }, out);
+                }
+            }
+            None => out.push(prefix.to_string()),
+        }
+    }
+    let mut out = Vec::new();
+    walk(&y[node]["ros__parameters"], "", &mut out);
+    assert!(!out.is_empty(), "no parameters under {node}");
+    out
+}
+
+/// Every parameter written for `node` is one its source declares.
+fn assert_schema(y: &Yaml, node: &str) {
+    let schema = SCHEMAS.iter().find(|(n, _)| *n == node).unwrap().1;
+    for name in parameter_names(y, node) {
+        assert!(schema.contains(&name.as_str()), "{node}: `{name}` is not a parameter of its source");
+    }
+}
+
+/// A model file's `[noise]` table with these rates (no floor, no systematic part), as `train` writes it.
+fn noise_table(holonomic: bool, rates: [f64; 5]) -> String {
+    let [rr, rm, tm, tr, sm] = rates;
+    let keys = format!(
+        "rot_per_rad = {rr:?}\nrot_per_m = {rm:?}\ntrans_per_m = {tm:?}\ntrans_per_rad = {tr:?}\nstrafe_per_m = {sm:?}\n\
+         floor_position_m2 = 4e-6\nfloor_heading_rad2 = 9e-6\n"
+    );
+    format!(
+        "\n[noise]\nholonomic = {holonomic}\nruns = 12\nwindows = 300\n[noise.rates]\n{keys}[noise.std_errors]\n{keys}\
+         [noise.systematic]\nper_displacement = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]\nposition_share = 0.0\n"
+    )
+}
+
+fn reals(y: &Yaml) -> Vec<f64> {
+    y.as_vec().unwrap_or_else(|| panic!("not a list: {y:?}")).iter().map(real).collect()
+}
+
+#[test]
+fn every_exported_parameter_is_its_readers_and_the_noise_model_reaches_the_ros_stack() {
+    // A mecanum base (holonomic: the omni motion model) and a differential drive (the differential one).
+    let rates = [4e-4, 3e-4, 6e-4, 2e-4, 5e-4];
+    let m = RobotGeometry::mecanum4(0.05, 0.2, 0.15);
+    let names: Vec<String> = ["fl", "fr", "rl", "rr"].iter().map(|s| s.to_string()).collect();
+    let mecanum = FittedModel::nominal(Model::geometry(RobotGeometry { wheel_names: names.clone(), wheels: m.wheels }));
+    let diff = FittedModel::new(Model::ik(diff_matrix(0.4, 0.05, 0.05)), {
+        let d = diff_matrix(0.4, 0.05, 0.05);
+        [d.row(0), d.row(2)].concat()
+    })
+    .unwrap();
+    let diff_names = vec!["right_wheel_joint".to_string(), "left_wheel_joint".to_string()];
+    for (label, fitted, joints, holonomic, node, amcl_model) in [
+        ("mecanum", &mecanum, &names, true, "mecanum_drive_controller", "nav2_amcl::OmniMotionModel"),
+        ("diff", &diff, &diff_names, false, "diff_drive_controller", "nav2_amcl::DifferentialMotionModel"),
+    ] {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
+        write_runs(&dir.join("runs"), fitted, joints);
+        let mut text = omni_cli::model_file::to_toml(fitted, None).unwrap();
+        text.push_str(&noise_table(holonomic, rates));
+        std::fs::write(dir.join("m.toml"), text).unwrap();
+        let joined = joints.join(",");
+        omnical_with_stderr(&["export", "--model", "m.toml", "--robot-config", "rc", "runs", "--joints", &joined], dir);
+        let rc = dir.join("rc");
+        let controller = yaml(&rc.join("ros2_controllers.yaml"));
+        assert_schema(&controller, node);
+        let p = &controller[node]["ros__parameters"];
+        // The pose diagonal: the covariance after 1 m driven straight; it does not grow.
+        let pose = reals(&p["pose_covariance_diagonal"]);
+        let strafe = if holonomic { rates[4] } else { 0.0 };
+        assert_close(&[pose[0], pose[1], pose[5]], &[rates[2], strafe + rates[1] / 3.0, rates[1]], 1e-15, label);
+        assert_eq!(reals(&p["twist_covariance_diagonal"]).len(), 6);
+        let amcl = yaml(&rc.join("nav2_amcl.yaml"));
+        assert_schema(&amcl, "amcl");
+        let a = &amcl["amcl"]["ros__parameters"];
+        assert_eq!(a["robot_model_type"].as_str(), Some(amcl_model), "{label}");
+        let (d, turn) = (real(&a["update_min_d"]), real(&a["update_min_a"]));
+        let alpha2 = if holonomic { rates[1] / d } else { rates[1] / (2.0 * d) };
+        let want = [rates[0] / turn, alpha2, rates[2] / d, rates[3] / turn, strafe / d];
+        let got: Vec<f64> = (1..=5).map(|k| real(&a[format!("alpha{k}").as_str()])).collect();
+        assert_close(&got, &want, 1e-15, &format!("{label}: AMCL alphas"));
+        let ekf = yaml(&rc.join("robot_localization.yaml"));
+        assert_schema(&ekf, "ekf_filter_node");
+        // Each file names the ROS distributions it is for.
+        for f in ["ros2_controllers.yaml", "nav2_amcl.yaml", "robot_localization.yaml", "omnical_odometry.yaml"] {
+            let text = std::fs::read_to_string(rc.join(f)).unwrap();
+            assert!(text.contains("Humble") && text.contains("Rolling"), "{label} {f}:\n{text}");
+        }
+        assert!(std::fs::read_to_string(rc.join("omnical_odometry.h")).unwrap().contains("no ROS dependency"));
+    }
+}
+
+#[test]
+fn without_a_noise_model_no_amcl_file_is_written_and_the_controller_keeps_its_defaults() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let m = RobotGeometry::mecanum4(0.05, 0.2, 0.15);
+    let names: Vec<String> = ["fl", "fr", "rl", "rr"].iter().map(|s| s.to_string()).collect();
+    let fitted = FittedModel::nominal(Model::geometry(RobotGeometry { wheel_names: names.clone(), wheels: m.wheels }));
+    write_runs(&dir.join("runs"), &fitted, &names);
+    write_model(&dir.join("m.toml"), &fitted);
+    omnical_with_stderr(&["export", "--model", "m.toml", "--robot-config", "rc", "runs"], dir);
+    assert!(!dir.join("rc/nav2_amcl.yaml").exists() && !dir.join("rc/robot_localization.yaml").exists());
+    let controller = yaml(&dir.join("rc/ros2_controllers.yaml"));
+    assert_schema(&controller, "mecanum_drive_controller");
+    assert!(controller["mecanum_drive_controller"]["ros__parameters"]["pose_covariance_diagonal"].is_badvalue());
+}

@@ -220,6 +220,11 @@ fn mecanum_workbench() {
     }
     let sum = param(&s, "lx") + param(&s, "ly");
     assert!(rel(sum, 0.37) < 5e-3, "lx + ly {sum}");
+    // Only lx + ly enters the kinematics: reported as one combination, never as runs to add.
+    let warnings: Vec<&str> = s["warnings"].as_array().unwrap().iter().map(|w| w.as_str().unwrap()).collect();
+    let lx = warnings.iter().find(|w| w.contains("lx")).unwrap_or_else(|| panic!("{warnings:#?}"));
+    assert!(lx.starts_with("lx and ly enter the kinematics only as lx + ly (0.3"), "{lx}");
+    assert!(lx.contains("no run can separate them") && !lx.contains("add runs"), "{lx}");
     plan_and_report(d, 4);
 }
 

@@ -148,8 +148,9 @@ pub enum KinError {
         /// Parameters of the model.
         expected: usize,
     },
-    /// An unknown effect or parameter name.
-    #[error("unknown {what} {name:?}; known: {known}")]
+    /// An unknown effect or parameter name; the message names the known name it most likely meant
+    /// ([`nearest_name`]).
+    #[error("unknown {what} {name:?}{}; known: {known}", did_you_mean(name, known))]
     Unknown {
         /// `effect` or `parameter`.
         what: &'static str,
@@ -241,5 +242,37 @@ fn twists_named(needed: usize) -> String {
         "every planar twist".to_string()
     } else {
         format!("{needed} independent twist directions")
+    }
+}
+
+/// `" (did you mean \"x\"?)"` for the [`nearest_name`] of `name` among the comma-separated `known`, or
+/// nothing.
+fn did_you_mean(name: &str, known: &str) -> String {
+    nearest_name(name, known.split(", ")).map_or_else(String::new, |n| format!(" (did you mean {n:?}?)"))
+}
+
+/// The known name a mistyped `name` most likely meant: the only one it begins, else the nearest a typo away
+/// (Damerau–Levenshtein distance at most 1 for names up to five letters, else at most a third of the
+/// name's length).
+pub fn nearest_name<'a>(name: &str, known: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    let names: Vec<&str> = known.into_iter().collect();
+    let prefixed: Vec<&str> = names.iter().copied().filter(|k| !name.is_empty() && k.starts_with(name)).collect();
+    if let [only] = prefixed[..] {
+        return Some(only);
+    }
+    let limit = (name.chars().count() / 3).max(1);
+    names
+        .iter()
+        .map(|k| (strsim::damerau_levenshtein(name, k), *k))
+        .filter(|(d, _)| *d <= limit)
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, k)| k)
+}
+
+impl KinError {
+    /// An unknown `what` named `name`, among the `known` names.
+    pub fn unknown(what: &'static str, name: &str, known: &[impl AsRef<str>]) -> Self {
+        let known: Vec<&str> = known.iter().map(AsRef::as_ref).collect();
+        Self::Unknown { what, name: name.into(), known: known.join(", ") }
     }
 }

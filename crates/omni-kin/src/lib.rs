@@ -9,6 +9,7 @@
 //! Units follow ROS REP-103: metres, seconds, radians, rad/s; x forward, y left, yaw counter-clockwise.
 #![deny(missing_docs)]
 
+pub mod ape;
 pub mod choice;
 pub mod clock;
 pub mod cost;
@@ -22,6 +23,7 @@ pub mod ik;
 pub mod kinematics;
 pub mod lidar;
 pub mod model;
+pub mod noise;
 pub mod odometry;
 pub mod plan;
 pub mod pose;
@@ -34,6 +36,7 @@ pub mod simulate;
 pub mod stats;
 pub mod travel;
 
+pub use ape::{AbsoluteErrors, ApeSummary};
 pub use choice::Choice;
 pub use cost::{CostKind, CostName};
 pub use effect::{Effect, EffectKind, ParamSpec, Stage};

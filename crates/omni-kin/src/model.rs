@@ -278,11 +278,9 @@ impl FittedModel {
                 self.params[i] = value;
                 Ok(())
             }
-            None => Err(KinError::Unknown {
-                what: "parameter",
-                name: name.into(),
-                known: specs.iter().map(|p| p.name.as_str()).collect::<Vec<_>>().join(", "),
-            }),
+            None => {
+                Err(KinError::unknown("parameter", name, &specs.iter().map(|p| p.name.as_str()).collect::<Vec<_>>()))
+            }
         }
     }
 

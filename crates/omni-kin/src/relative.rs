@@ -238,6 +238,30 @@ pub fn estimate_at_truth(truth: &[StampedPose], errors_after_first: &[PoseError]
     first.into_iter().chain(later).collect()
 }
 
+/// Every run's odometry at its ground-truth samples ([`estimate_at_truth`]) from its errors at every
+/// ground-truth pose after the first (`errors` from an evaluator at
+/// [`crate::odometry::Selection::Path`]`(1)`, in run order); errors at other poses are refused, naming the
+/// run.
+pub fn estimates_at_truth(runs: &[Run], errors: &RunErrors) -> Result<Vec<Vec<Pose2>>, KinError> {
+    if errors.n_runs() != runs.len() {
+        return Err(KinError::Shape { what: "runs' errors".into(), got: errors.n_runs(), expected: runs.len() });
+    }
+    runs.iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let (truth, e) = (r.truth(), errors.run(i));
+            if e.len() + 1 != truth.len() {
+                return Err(KinError::Shape {
+                    what: format!("run {}: errors at the ground-truth poses after the first", r.name()),
+                    got: e.len(),
+                    expected: truth.len() - 1,
+                });
+            }
+            Ok(estimate_at_truth(truth, e))
+        })
+        .collect()
+}
+
 /// Statistics of the pair errors of one run or of all.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RpeSummary {
@@ -282,23 +306,10 @@ impl RelativeErrors {
     /// from an evaluator at [`crate::odometry::Selection::Path`]`(1)`, in run order); errors at other
     /// poses are refused, naming the run.
     pub fn new(runs: &[Run], errors: &RunErrors, delta: RpeDelta) -> Result<Self, KinError> {
-        if errors.n_runs() != runs.len() {
-            return Err(KinError::Shape { what: "runs' errors".into(), got: errors.n_runs(), expected: runs.len() });
-        }
         let each = runs
             .iter()
-            .enumerate()
-            .map(|(i, r)| {
-                let (truth, e) = (r.truth(), errors.run(i));
-                if e.len() + 1 != truth.len() {
-                    return Err(KinError::Shape {
-                        what: format!("run {}: errors at the ground-truth poses after the first", r.name()),
-                        got: e.len(),
-                        expected: truth.len() - 1,
-                    });
-                }
-                pair_errors(truth, &estimate_at_truth(truth, e), delta)
-            })
+            .zip(estimates_at_truth(runs, errors)?)
+            .map(|(r, estimate)| pair_errors(r.truth(), &estimate, delta))
             .collect::<Result<_, _>>()?;
         Ok(Self { delta, runs: each })
     }

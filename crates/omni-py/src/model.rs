@@ -243,14 +243,28 @@ impl PyModel {
 #[pyo3(signature = (path, *, effects = Vec::new()))]
 pub fn load_model(py: Python<'_>, path: PathBuf, effects: Vec<Bound<'_, PyAny>>) -> PyResult<PyModel> {
     if effects.is_empty() {
-        let f = py.detach(|| model_file::read(&path)).py()?;
+        let (f, interrupted) = py.detach(|| model_file::read_marked(&path)).py()?;
+        warn_if_interrupted(py, &path, interrupted)?;
         return Ok(PyModel::from_fitted(f, Vec::new()));
     }
     let name = path.display().to_string();
     let text = py
         .detach(|| std::fs::read_to_string(&path))
         .map_err(|error| ModelFileError::Io { path: name.clone(), error }.to_py_err())?;
-    model_from_text(&text, &name, &effects)
+    let model = model_from_text(&text, &name, &effects)?;
+    warn_if_interrupted(py, &path, toml::from_str::<ModelFile>(&text).is_ok_and(|f| f.interrupted()))?;
+    Ok(model)
+}
+
+/// The CLI's warning on a model file marked `interrupted = true` (a training stopped by Ctrl-C), as a
+/// `UserWarning`.
+fn warn_if_interrupted(py: Python<'_>, path: &std::path::Path, interrupted: bool) -> PyResult<()> {
+    if !interrupted {
+        return Ok(());
+    }
+    let text = std::ffi::CString::new(format!("omnical.load_model: {}", model_file::interrupted_warning(path)))
+        .map_err(|e| value_error(e.to_string()))?;
+    PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyUserWarning>(), &text, 1)
 }
 
 /// Unpickling a `Model`: the model file text and the Python effects it names.

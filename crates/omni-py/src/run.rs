@@ -485,6 +485,7 @@ pub(crate) fn data_options(
         gt_mount: gt_mount.map(|(x, y, yaw_deg)| omni_kin::Pose2::new(x, y, yaw_deg.to_radians())),
         gt_scans,
         split_s,
+        split_every_s: None,
         skip_invalid,
         ticks_per_rev,
         max_file_mb,

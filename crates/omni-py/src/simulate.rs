@@ -45,7 +45,11 @@ use std::sync::Arc;
 ///   (default: the true mount); ``lidar_rate`` [Hz]; ``lidar_beams`` over ``lidar_fov`` [degrees, centred on
 ///   the lidar's x axis; 360 all round, 270 a Hokuyo's]; ``lidar_max_range`` [m];
 ///   ``lidar_noise``: Gaussian range noise [m]; ``lidar_dropout``: share of beams with no return;
-///   ``lidar_sweep``: measure each scan's beams over its period, as a spinning lidar.
+///   ``lidar_sweep``: measure each scan's beams over its period, as a spinning lidar; ``lidar_model``:
+///   ``"ideal"`` (the settings above), ``"urg04lx"`` or ``"rplidar"`` (scans made as a Hokuyo URG-04LX's
+///   or an RPLidar A2's come out: noise growing with range, about half the beams empty, mixed pixels, a
+///   sweep; they set the scanner themselves, so another ``lidar_rate`` … ``lidar_sweep`` raises
+///   ``ValueError``).
 /// - ``imu=True``: a gyro on ``/imu`` (Imu, frame ``imu_link``): the base's true turn rate plus ``imu_bias``
 ///   [rad/s] and Gaussian noise of ``imu_noise`` [rad/s], ``imu_rate`` [Hz] messages, as the angular velocity
 ///   in the IMU's frame; ``imu_mount``: how the IMU sits on the base, ``(roll_deg, pitch_deg, yaw_deg)`` or
@@ -64,13 +68,13 @@ use std::sync::Arc;
 // The defaults are `omnical simulate`'s (SimConfig::default() and its --seed default, 7; the sensors'
 // ScanSettings::default() and Imu::default()), spelt out so that help() shows them; tests/test_mirror.py
 // and crates/omni-cli/tests/config.rs compare them with the CLI's.
-#[pyo3(signature = (truth = None, *, robot = None, runs_per_command = 5, duration_s = 10.0, seed = 7, noise_free = false, prefix = "train/", sample_drop_probability = 0.0, sample_jitter_s = 0.0, out = None, force = false, lidar = None, lidar_mount = MountArg::text("0,0,0"), lidar_tf = None, lidar_rate = 10.0, lidar_beams = 720, lidar_fov = 360.0, lidar_max_range = 12.0, lidar_noise = 0.01, lidar_dropout = 0.01, lidar_sweep = false, imu = false, imu_rate = 100.0, imu_bias = 0.005, imu_noise = 0.002, imu_mount = MountArg::text("0,0,0"), imu_tf = None))]
+#[pyo3(signature = (truth = None, *, robot = None, runs_per_command = 5, duration_s = 10.0, seed = 7, noise_free = false, prefix = "train/", sample_drop_probability = 0.0, sample_jitter_s = 0.0, out = None, force = false, lidar = None, lidar_mount = MountArg::text("0,0,0"), lidar_tf = None, lidar_rate = 10.0, lidar_beams = 720, lidar_fov = 360.0, lidar_max_range = 12.0, lidar_noise = 0.01, lidar_dropout = 0.01, lidar_sweep = false, lidar_model = "ideal", imu = false, imu_rate = 100.0, imu_bias = 0.005, imu_noise = 0.002, imu_mount = MountArg::text("0,0,0"), imu_tf = None))]
 // pyo3 shows a default it cannot spell as `...`: the text signature spells lidar_mount's as the CLI's
 // (mypy's stubtest compares it with _omnical.pyi).
 #[pyo3(
-    text_signature = "(truth=None, *, robot=None, runs_per_command=5, duration_s=10.0, seed=7, noise_free=False, prefix=\"train/\", sample_drop_probability=0.0, sample_jitter_s=0.0, out=None, force=False, lidar=None, lidar_mount=\"0,0,0\", lidar_tf=None, lidar_rate=10.0, lidar_beams=720, lidar_fov=360.0, lidar_max_range=12.0, lidar_noise=0.01, lidar_dropout=0.01, lidar_sweep=False, imu=False, imu_rate=100.0, imu_bias=0.005, imu_noise=0.002, imu_mount=\"0,0,0\", imu_tf=None)"
+    text_signature = "(truth=None, *, robot=None, runs_per_command=5, duration_s=10.0, seed=7, noise_free=False, prefix=\"train/\", sample_drop_probability=0.0, sample_jitter_s=0.0, out=None, force=False, lidar=None, lidar_mount=\"0,0,0\", lidar_tf=None, lidar_rate=10.0, lidar_beams=720, lidar_fov=360.0, lidar_max_range=12.0, lidar_noise=0.01, lidar_dropout=0.01, lidar_sweep=False, lidar_model=\"ideal\", imu=False, imu_rate=100.0, imu_bias=0.005, imu_noise=0.002, imu_mount=\"0,0,0\", imu_tf=None)"
 )]
-// long: one parameter per keyword (the CLI's flags, 27 of them), then the settings built by helpers.
+// long: one parameter per keyword (the CLI's flags, 28 of them), then the settings built by helpers.
 #[allow(clippy::too_many_arguments)]
 pub fn simulate(
     py: Python<'_>,
@@ -95,6 +99,7 @@ pub fn simulate(
     lidar_noise: f64,
     lidar_dropout: f64,
     lidar_sweep: bool,
+    lidar_model: &str,
     imu: bool,
     imu_rate: f64,
     imu_bias: f64,
@@ -126,6 +131,7 @@ pub fn simulate(
         sweeping: lidar_sweep,
         ..ScanSettings::default()
     };
+    let settings = of_lidar_model(lidar_model, settings)?;
     let lidar = lidar.map(|room| lidar_in(&room, &lidar_mount, lidar_tf.as_ref(), settings)).transpose()?;
     let imu = imu
         .then(|| {
@@ -295,4 +301,22 @@ impl MountArg {
             ))
         })
     }
+}
+
+/// The scanner `lidar_model` names: `ideal` keeps `given` (the keywords' settings); a real kind sets the
+/// scanner itself, so a keyword set away from its default is refused, as the CLI's flags conflict.
+fn of_lidar_model(lidar_model: &str, given: ScanSettings) -> PyResult<ScanSettings> {
+    use omni_cli::lidar::LidarModel;
+    use omni_kin::choice::Choice;
+    let model = LidarModel::from_id(lidar_model).map_err(|e| value_error(format!("lidar_model {e}")))?;
+    if model == LidarModel::Ideal {
+        return Ok(given);
+    }
+    if given != ScanSettings::default() {
+        return Err(value_error(format!(
+            "lidar_model={lidar_model:?} sets the scanner itself: leave lidar_rate, lidar_beams, lidar_fov, \
+             lidar_max_range, lidar_noise, lidar_dropout and lidar_sweep at their defaults"
+        )));
+    }
+    Ok(ScanSettings::of_model(model))
 }

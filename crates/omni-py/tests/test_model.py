@@ -89,3 +89,20 @@ def test_model_file_errors(tmp_path: Path) -> None:
         omnical.load_model(wrong)
     with pytest.raises(OSError):
         omnical.Model.design().save(tmp_path / "no" / "such" / "dir" / "m.toml")
+
+
+def test_a_model_marked_interrupted_is_loaded_with_a_warning(tmp_path: Path) -> None:
+    """`train` stopped by Ctrl-C marks its model file `interrupted = true` (issue 48): Python says so as the CLI
+    does; a finished model loads quietly."""
+    import warnings
+
+    done = tmp_path / "done.toml"
+    omnical.Model.paper().save(done)
+    marked = tmp_path / "m.toml"
+    marked.write_text(done.read_text() + "\n[fit]\ninterrupted = true\n")
+    with pytest.warns(UserWarning, match=r"m\.toml: the model is marked interrupted = true .* train again without stopping it"):
+        m = omnical.load_model(marked)
+    np.testing.assert_array_equal(m.matrix, omnical.Model.paper().matrix)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        omnical.load_model(done)

@@ -302,6 +302,20 @@ fn check_overlap(path: &Path, topic: &str, run: &Run, read: &GyroRead) -> Result
     ))
 }
 
+/// The gyro's yaw rates with their clock checked against `run`'s wheels by the rules of every sensor
+/// recorded with them ([`dataset::sensor_clock`]): moved when clearly on another clock, a lag named, an
+/// unclear estimate kept as recorded with a note.
+fn on_wheel_clock(path: &Path, topic: &str, run: &Run, mut rates: Vec<GyroSample>) -> Vec<GyroSample> {
+    if let Some(clock) = dataset::sensor_clock::gyro_clock(run, &rates) {
+        let shift_s = clock.applied_s();
+        rates.iter_mut().for_each(|g| g.t_s += shift_s);
+        if let Some(note) = clock.note(path, &format!("IMU {topic:?}")) {
+            crate::note!("{note}");
+        }
+    }
+    rates
+}
+
 /// Reads each recording's wheels and gyro; the gyro on the run's clock.
 fn read(request: &ImuRequest) -> Result<Recordings, ImuError> {
     let (mut runs, mut gyro, mut mounts, mut assumed) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
@@ -324,7 +338,7 @@ fn read(request: &ImuRequest) -> Result<Recordings, ImuError> {
             }
             check_overlap(path, &request.topic, run, &read)?;
             runs.push(run.clone());
-            gyro.push(read.yaw_rates(&used.mount));
+            gyro.push(on_wheel_clock(path, &request.topic, run, read.yaw_rates(&used.mount)));
         }
         tally(&mut mounts, used);
         first.get_or_insert(ds);

@@ -1,11 +1,11 @@
-//! What ROS recordings hold (as `ros2 bag info` shows it) and what a read with given data options makes of
-//! them: each topic's role and why, the runs (samples, rates, gaps, the ground truth's clock), the read's
+//! What the inputs hold (a ROS recording as `ros2 bag info` shows it; a CSV run or an OptiOdom set, which
+//! have no topics) and what a read with given data options makes of them: each topic's role and why, the runs (samples, rates, gaps, the ground truth's clock), the read's
 //! notes, or the error that stops it. `omnical info` prints it ([`RecordingInfo`]) or its JSON
 //! ([`to_json`]); Python's `omnical.info` returns the JSON as a dict.
 
 use super::load::{DataOptions, LoadError, LoadRequest};
 use crate::dataset::mcap::{Inventory, Role, TopicReview};
-use crate::dataset::{self, Dataset};
+use crate::dataset::{self, Dataset, InputKind};
 use omni_kin::Run;
 use serde::Serialize;
 use serde_json::json;
@@ -91,18 +91,21 @@ fn rate_and_gap(t_s: &[f64]) -> Option<(f64, f64)> {
     (median > 0.0).then(|| (1.0 / median, largest))
 }
 
-/// What one recording holds and what a read makes of it.
+/// What one input holds and what a read makes of it: a ROS recording's messages and topics, or a CSV run
+/// or OptiOdom set, which have no topics.
 #[derive(Debug)]
 pub struct RecordingInfo {
-    /// The recording.
+    /// The input.
     pub path: PathBuf,
-    /// Its first message's stamp. Unix time, s.
-    pub start_unix_s: f64,
-    /// From its first to its last message. s.
-    pub duration_s: f64,
-    /// Messages on all topics.
-    pub messages: u64,
-    /// Its topics, in the recording's order.
+    /// What kind of input it is.
+    pub kind: InputKind,
+    /// Its first message's stamp. Unix time, s. `None` but for a ROS recording.
+    pub start_unix_s: Option<f64>,
+    /// From its first to its last message. s. `None` but for a ROS recording.
+    pub duration_s: Option<f64>,
+    /// Messages on all topics. `None` but for a ROS recording.
+    pub messages: Option<u64>,
+    /// Its topics, in the recording's order (none but for a ROS recording).
     pub topics: Vec<TopicInfo>,
     /// The read's runs, notes and clocks, or its error (the CLI's `error:` text).
     pub read: Result<Dataset, String>,
@@ -138,19 +141,68 @@ fn look_at(data: &DataOptions, path: &Path) -> Result<RecordingInfo, LoadError> 
     let last_ns = inv.topics.iter().map(|t| t.last_ns).max().unwrap_or(0);
     Ok(RecordingInfo {
         path: path.to_path_buf(),
-        start_unix_s: first_ns as f64 * 1e-9,
-        duration_s: last_ns.saturating_sub(first_ns) as f64 * 1e-9,
-        messages: inv.topics.iter().map(|t| t.count).sum(),
+        kind: InputKind::Ros,
+        start_unix_s: Some(first_ns as f64 * 1e-9),
+        duration_s: Some(last_ns.saturating_sub(first_ns) as f64 * 1e-9),
+        messages: Some(inv.topics.iter().map(|t| t.count).sum()),
         topics: topics(&inv, review),
         read: request.read_for_robot(robot).map_err(|e| format!("{e:#}")),
     })
 }
 
-/// Every ROS recording at `paths` (files, rosbag2 folders, or folders of them), each looked at with
-/// `data`'s options. A path that is no ROS recording (a CSV run) or cannot be read is an error naming it; a
-/// recording that reads but makes no runs has its error in [`RecordingInfo::read`].
+/// Looks at one CSV run or OptiOdom set with `data`'s options: no topics, the read as `train` makes it.
+fn look_at_file_input(data: &DataOptions, path: &Path, kind: InputKind) -> Result<RecordingInfo, LoadError> {
+    let request = LoadRequest::new(std::slice::from_ref(&path.to_path_buf()), data);
+    let robot = request.robot()?;
+    Ok(RecordingInfo {
+        path: path.to_path_buf(),
+        kind,
+        start_unix_s: None,
+        duration_s: None,
+        messages: None,
+        topics: Vec::new(),
+        read: request.read_for_robot(robot).map_err(|e| format!("{e:#}")),
+    })
+}
+
+/// Every input at `paths` that the loader reads (ROS recordings, rosbag2 folders, CSV runs, OptiOdom sets,
+/// or folders of them), each looked at with `data`'s options. A path that is no input or cannot be opened is
+/// an error naming it; an input that opens but makes no runs has its error in [`RecordingInfo::read`].
 pub fn info(paths: &[PathBuf], data: &DataOptions) -> Result<Vec<RecordingInfo>, LoadError> {
-    dataset::ros_recordings(paths)?.iter().map(|path| look_at(data, path)).collect()
+    let inputs = dataset::inputs(paths)?;
+    if inputs.is_empty() {
+        return Err(no_recording(paths).into());
+    }
+    inputs
+        .iter()
+        .map(|(path, kind)| match kind {
+            InputKind::Ros => look_at(data, path),
+            _ => look_at_file_input(data, path, *kind),
+        })
+        .collect()
+}
+
+/// The error for paths (folders) that hold no input: what was looked for, and what is there.
+fn no_recording(paths: &[PathBuf]) -> dataset::DatasetError {
+    let what = paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ");
+    let mut entries: Vec<String> = paths
+        .iter()
+        .filter_map(|p| std::fs::read_dir(p).ok())
+        .flat_map(|d| d.filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned())))
+        .collect();
+    entries.sort();
+    let held = match &entries[..] {
+        [] => "the folder is empty".to_string(),
+        [one] => format!("it holds only {one}"),
+        [first, ..] => format!("it holds {} entries (first {first}), none of them a recording", entries.len()),
+    };
+    dataset::DatasetError::file(
+        Path::new(&what),
+        format!(
+            "no ROS recording here: looked for .mcap, .db3 and .bag files and rosbag2 recording folders \
+             (metadata.yaml), CSV runs and OptiOdom sets, in the folder and its subfolders; {held}"
+        ),
+    )
 }
 
 /// The JSON of one recording's info (`omnical info --json`'s `recordings` entries).
@@ -170,12 +222,22 @@ pub fn to_json(info: &RecordingInfo) -> serde_json::Value {
     };
     json!({
         "path": info.path.display().to_string(),
+        "kind": info.kind.id(),
+        "declared": declared_json(info),
         "start_unix_s": info.start_unix_s,
         "duration_s": info.duration_s,
         "messages": info.messages,
         "topics": info.topics,
         "read": read,
     })
+}
+
+/// The robot an input declares (an OptiOdom set's type and wheel count), else null.
+fn declared_json(info: &RecordingInfo) -> serde_json::Value {
+    match info.read.as_ref().ok().and_then(|ds| ds.declared.first()) {
+        Some(d) => json!({ "type": d.kind, "wheels": d.geometry.n_wheels() }),
+        None => serde_json::Value::Null,
+    }
 }
 
 /// The whole `omnical info --json` document: `{"recordings": […], "schema_version": …, "command": "info"}`

@@ -23,6 +23,7 @@ pub mod held_out;
 pub mod imu;
 pub mod info;
 pub mod load;
+pub mod noise;
 pub mod session;
 pub mod settings;
 pub mod simulate;
@@ -76,7 +77,20 @@ impl ModelSpec {
         match self {
             Self::Design => Ok(design::declared(ds)?.ok_or_else(|| robot_file::no_design("--model design"))?),
             Self::Paper => Ok(design::paper_calibrated()),
-            Self::File(path) => crate::model_file::read(path).map_err(ResolveError::ModelFile),
+            Self::File(path) => {
+                let model = crate::model_file::read(path).map_err(ResolveError::ModelFile)?;
+                same_wheels(&model, ds, path)?;
+                Ok(model)
+            }
+        }
+    }
+
+    /// Whether this spec is a model file marked interrupted ([`crate::model_file::ModelFile::interrupted`]);
+    /// a file that cannot be read is not (reading it for the model says why).
+    pub fn interrupted(&self) -> bool {
+        match self {
+            Self::File(path) => crate::model_file::read_marked(path).is_ok_and(|(_, interrupted)| interrupted),
+            Self::Design | Self::Paper => false,
         }
     }
 
@@ -93,6 +107,19 @@ impl ModelSpec {
     }
 }
 
+/// Refuses a model file whose wheels are named otherwise than the joints of the robot description the data
+/// was read with (another robot's model, or the same wheels in another column order); either side's
+/// default names (`wheel_a`, …) say nothing.
+fn same_wheels(model: &FittedModel, ds: &Dataset, path: &Path) -> Result<(), ResolveError> {
+    let Some(robot) = &ds.robot_file else { return Ok(()) };
+    let (names, joints) = (model.model.kinematics.wheel_names(), robot.description.joints());
+    let default = |v: &[String]| *v == omni_kin::geometry::default_wheel_names(v.len());
+    if names == joints || default(&names) || default(&joints) {
+        return Ok(());
+    }
+    Err(ResolveError::OtherWheels { model: path.to_path_buf(), names, robot: robot.source.clone(), joints })
+}
+
 /// Why a [`ModelSpec`] stands for no model.
 #[derive(Debug, thiserror::Error)]
 pub enum ResolveError {
@@ -105,6 +132,25 @@ pub enum ResolveError {
     /// The model file could not be read.
     #[error("reading the model")]
     ModelFile(#[source] ModelFileError),
+    /// A model file of wheels named otherwise than the robot description's joints.
+    #[error(
+        "{}: the model's wheels are {}, but {robot} names the robot's wheel joints {}: {}; use the model trained for \
+         this robot (or give --robot the description it was trained with)",
+        model.display(),
+        names.join(", "),
+        joints.join(", "),
+        order_or_other(names, joints)
+    )]
+    OtherWheels {
+        /// The model file.
+        model: PathBuf,
+        /// Its wheel names, in its column order.
+        names: Vec<String>,
+        /// The robot description.
+        robot: robot_file::Source,
+        /// Its wheel joints, in column order.
+        joints: Vec<String>,
+    },
     /// Nothing to resolve the spec for (a bug in the caller).
     #[error("no runs to resolve {spec} for (a bug)")]
     NoRuns {
@@ -130,4 +176,12 @@ impl std::fmt::Display for ModelSpec {
             Self::File(p) => write!(f, "{}", p.display()),
         }
     }
+}
+
+/// Whether two lists of wheel names are the same wheels in another order, in words.
+fn order_or_other(names: &[String], joints: &[String]) -> &'static str {
+    let (mut a, mut b) = (names.to_vec(), joints.to_vec());
+    a.sort();
+    b.sort();
+    if a == b { "the same wheels in another column order" } else { "a model of another robot" }
 }

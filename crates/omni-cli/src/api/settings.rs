@@ -296,6 +296,7 @@ pub const SETTINGS: &[Setting] = &[
     simulate_setting!("lidar_noise", "simulate: Gaussian lidar range noise (m)"),
     simulate_setting!("lidar_dropout", "simulate: share of lidar beams that return nothing"),
     simulate_setting!("lidar_sweep", "simulate: measure each scan's beams one after another over its period"),
+    simulate_setting!("lidar_model", "simulate: the kind of lidar: ideal, or scans as a urg04lx's or an rplidar's"),
     simulate_setting!("imu", "simulate: an IMU's yaw rate beside the wheels"),
     simulate_setting!("imu_rate", "simulate: IMU messages per second (Hz)"),
     simulate_setting!("imu_bias", "simulate: the gyro's bias (rad/s)"),

@@ -255,7 +255,10 @@ pub fn mount_warning(c: &Calibration) -> Option<String> {
 pub fn write_model(c: &Calibration, s: &serde_json::Value, out: &std::path::Path) -> Result<(), TrainError> {
     let mut fit: toml::Table = toml::Table::try_from(toml_safe(s.clone())).map_err(TrainError::FitSummary)?;
     fit.remove("seconds");
-    let text = model_file::to_toml(&c.fitted, Some(fit))?;
+    fit.remove("noise");
+    let mut file = model_file::ModelFile::from_fitted(&c.fitted, Some(fit)).map_err(ModelTextError::from)?;
+    file.noise = crate::api::noise::from_summary(s);
+    let text = file.to_toml()?;
     atomic::write_atomic(out, text.as_bytes()).map_err(|source| TrainError::Write { path: out.to_path_buf(), source })
 }
 
@@ -285,6 +288,7 @@ pub fn train_quietly(a: &TrainRequest) -> Result<Trained, TrainError> {
     warnings.extend(check_fit(&c, &plan, &ds.runs, a.force)?);
     warnings.extend(mount_warning(&c));
     let mut s = summary(&c, a.preset.id(), a.seed, ds.runs.len())?;
+    crate::api::noise::add_to_summary(&mut s, &c.fitted, &ds.runs)?;
     if let Some(d) = designs_figure(&c, &ds, &plan, a.start.is_none())? {
         s["designs"] = d.to_json();
     }
@@ -317,8 +321,8 @@ impl DesignsFigure {
     pub fn describe(&self) -> String {
         let start = self.start.as_ref().map_or("the --start model".to_string(), |s| format!("{s}'s design"));
         format!(
-            "design, each run its own input's ({} designs): Eq. 6 {:.5}, objective {:.5}; the fit started from {start} \
-             (the \"design\" above)",
+            "each run with its own input's design ({} designs): Eq. 6 {:.5}, objective {:.5} (not the \"design\" \
+             figures above: those are of the fit's start, {start}, on every run)",
             self.designs, self.end_pose, self.objective
         )
     }

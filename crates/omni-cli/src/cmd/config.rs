@@ -179,7 +179,7 @@ pub fn rows(a: &Args, threads: Option<usize>, project: Option<&ProjectFile>) -> 
     ];
     rows.extend(reference_rows(&layers, d));
     rows.extend([
-        layers.row("split", d.split.map(|s| format!("{s} s")), None, "none: one file is one run"),
+        layers.row("split", d.split.map(|s| s.to_string()), None, "none: one file is one run"),
         layers.row("preset", a.preset.map(|p| p.id().to_string()), None, Preset::default().id()),
         layers.row("seed", a.seed.map(|s| s.to_string()), None, "0 (train), 7 (simulate)"),
         layers.row("objective", a.objective.map(|o| o.id().to_string()), None, "the preset's"),

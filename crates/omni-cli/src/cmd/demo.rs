@@ -26,7 +26,8 @@ use std::path::{Path, PathBuf};
 pub struct Args {
     /// Write everything here: the simulated runs (train/ and validation/, each with its robot.toml), the
     /// true model, the fitted models, diagnosis.json and report.html. The `omnical` commands that repeat
-    /// each step on these files are printed at the end. A folder that already holds files is refused
+    /// each step on these files are printed at the end. An earlier demo's folder (marked by its
+    /// .omnical-demo file, holding nothing else) is replaced; any other folder that holds files is refused
     /// unless --force.
     #[arg(long, default_value = "omnical-demo")]
     pub out: PathBuf,
@@ -135,6 +136,31 @@ const FITTED_MATRIX: &str = "fitted_matrix.toml";
 const FITTED_WITH_EFFECTS: &str = "fitted_with_effects.toml";
 const DIAGNOSIS: &str = "diagnosis.json";
 const REPORT: &str = "report.html";
+/// The marker every demo writes into its `--out`: a folder that holds it and nothing but the demo's own
+/// outputs is an earlier demo's, which the next demo replaces without `--force` ([`earlier_demo_only`]).
+pub const MARKER: &str = ".omnical-demo";
+/// What the marker says to someone who finds it.
+const MARKER_TEXT: &str = "This folder was written by `omnical demo`. The next `omnical demo --out` into it replaces \
+                           it whole (it holds no input of yours); a file of yours added here keeps it.\n";
+
+/// Whether `dir` holds only an earlier demo's output: its [`MARKER`], and else only the demo's own names
+/// (the runs' folders holding only bags and robot.toml, the models, the diagnosis and the report). Such a
+/// folder holds no input of the user's, so a demo may replace it as if `--force` were given; any other
+/// folder that holds files is refused as every `--out` is.
+fn earlier_demo_only(dir: &Path) -> bool {
+    let own = [MARKER, TRAIN, VALIDATION, TRUTH_MODEL, FITTED_MATRIX, FITTED_WITH_EFFECTS, DIAGNOSIS, REPORT];
+    let names = |d: &Path| -> Option<Vec<String>> {
+        std::fs::read_dir(d).ok()?.map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned())).collect()
+    };
+    let Some(top) = names(dir) else { return false };
+    let runs_only = |split: &str| {
+        names(&dir.join(split))
+            .is_some_and(|files| files.iter().all(|f| f == robot_file::FILE_NAME || f.ends_with(".mcap")))
+    };
+    top.iter().any(|n| n == MARKER)
+        && top.iter().all(|n| own.contains(&n.as_str()))
+        && [TRAIN, VALIDATION].iter().all(|s| !top.iter().any(|n| n == s) || runs_only(s))
+}
 
 /// Simulates the training (seed 7) and validation (seed 8) runs, writes them as MCAP bags with the robot's
 /// robot.toml into `dir`/train and `dir`/validation as `omnical simulate` does, and reads them back as the
@@ -232,10 +258,13 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         Some(arg) => robot_setup(arg, runs_per_command)?,
     };
     apply_effect_spec(hidden, &mut setup.truth, &mut setup.config, &setup.wheels)?;
-    // Everything is written into a staging folder that becomes --out at the end.
+    // Everything is written into a staging folder that becomes --out at the end; an earlier demo's folder
+    // is replaced as with --force (never one that holds the --robot file read).
     let robot_file = robot.filter(|r| *r != robot_file::BUILTIN_APR02);
-    let out = OutDir::claim(&a.out, "--out", a.force, &Inputs::new().with_some("--robot", robot_file))?;
+    let inputs = Inputs::new().with_some("--robot", robot_file);
+    let out = OutDir::claim(&a.out, "--out", a.force || earlier_demo_only(&a.out), &inputs)?;
     let dir = out.path();
+    atomic::write_atomic(&dir.join(MARKER), MARKER_TEXT.as_bytes()).with_context(|| format!("writing {MARKER}"))?;
     if text {
         println!("== simulate: true robot = {} + a hidden effect ({hidden})", setup.true_robot);
     }
@@ -300,7 +329,29 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     for (_, c) in &commands {
         println!("   {c}");
     }
+    println!("{}", hidden_and_found(hidden, &d));
     Ok(())
+}
+
+/// The demo's last line, as the Python quickstart's: the hidden effect and what the diagnosis found of it
+/// (the parameters of the same effect in the final model, or what it concluded instead).
+fn hidden_and_found(hidden: &str, d: &Diagnosis) -> String {
+    let (head, _) = hidden.split_once('=').unwrap_or((hidden, ""));
+    let learned = head.starts_with(omni_kin::effect::learned::PREFIX);
+    let id = if learned { head } else { head.split(':').next().unwrap_or(head) };
+    let id = if id == "sensor_offset_yaw" { "sensor_offset" } else { id };
+    let found: Vec<String> = d
+        .final_model
+        .iter()
+        .flat_map(|f| f.model.params().into_iter().zip(f.params.clone()))
+        .filter(|(p, _)| p.name.split_once('.').is_some_and(|(effect, _)| effect == id))
+        .map(|(p, v)| format!("{} = {}", p.name, crate::units::value_text(v, &p.unit).trim_start()))
+        .collect();
+    if found.is_empty() {
+        format!("hidden {hidden} → not found; the diagnosis: {}", d.verdict_text)
+    } else {
+        format!("hidden {hidden} → found {} (in {FITTED_WITH_EFFECTS})", found.join(", "))
+    }
 }
 
 /// The `--json` document of `omnical demo`.

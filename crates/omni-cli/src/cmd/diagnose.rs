@@ -5,8 +5,9 @@ use crate::api::ModelSpec;
 use crate::api::diagnose::{DiagnoseRequest, diagnose_loaded};
 use crate::cli::effect_help;
 use crate::units::{std_error_text, value_text};
-use omni_ga::diagnose::{DiagnoseOptions, Diagnosis};
+use omni_ga::diagnose::{DiagnoseOptions, Diagnosis, Finding};
 use omni_ga::explore::{Exploration, ExploreOptions, explore};
+use omni_ga::identify::Advice;
 use omni_ga::science::text;
 use std::path::PathBuf;
 
@@ -130,8 +131,21 @@ pub fn print_diagnosis(d: &Diagnosis) {
         d.costs.train_path, d.costs.train_end_pose, d.costs.held_out_path, d.costs.held_out_end_pose
     );
     println!("2. where it fails");
-    for f in &d.findings {
+    // Directions no run can excite (the wheels fighting each other), held at the design: one line, as there
+    // is nothing to do about them; every other finding as it is.
+    let nowhere = |f: &Finding| matches!(f, Finding::Unconstrained(w) if w.remedy == Advice::HeldAtDesign);
+    let facts = d.facts.len() == d.findings.len();
+    let shown = d.findings.iter().enumerate().filter(|(i, _)| !(facts && nowhere(&d.facts[*i])));
+    for (_, f) in shown {
         println!("   - {f}");
+    }
+    let held = if facts { d.facts.iter().filter(|f| nowhere(f)).count() } else { 0 };
+    if held > 0 {
+        println!(
+            "   - the model itself: {} that no run can excite (the wheels fighting each other, which moves the robot \
+             nowhere), held at the design: nothing to do",
+            crate::units::count(held, "direction")
+        );
     }
     if let Some(nf) = &d.noise_floor {
         println!(

@@ -1,12 +1,13 @@
 //! `omnical eval`: the cost of a model on runs — the summary first (Eq. 6, path RMS, statistics of the
-//! end-position and end-heading errors, as evo_ape prints them; the relative pose error over a window of
+//! end-position and end-heading errors; the absolute pose error at every ground-truth pose, as evo_ape
+//! computes it on the TUM export, without and with its `--align`; the relative pose error over a window of
 //! travel or time, as evo_rpe's, and its drift in % of distance), each run's row with `--per-run`.
 
 use super::{DataArgs, OutputArgs};
-use crate::api::ModelSpec;
+use crate::api::{ModelSpec, noise};
 use omni_kin::cost::CostKind;
 use omni_kin::relative::{RelativeErrors, RpeSummary};
-use omni_kin::{PoseError, RpeDelta, Stats};
+use omni_kin::{AbsoluteErrors, ApeSummary, PoseError, RpeDelta, Stats};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -63,6 +64,8 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     // Every ground-truth pose (the path cost's): the relative errors read the odometry at each.
     let all = models.errors(&ds.runs, CostKind::PATH.selection())?;
     let relative = RelativeErrors::new(&ds.runs, &all, a.rpe_delta)?;
+    let absolute = AbsoluteErrors::new(&ds.runs, &all)?;
+    let trust = noise_check(&a.model, &models, &ds.runs, &all)?;
     let errors = all.ends();
     let c = all.end_pose_cost();
     let path = all.path_cost(CostKind::PATH.heading_weight());
@@ -80,6 +83,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
                     "dx_m": e.dx_m, "dy_m": e.dy_m, "dtheta_rad": e.dtheta_rad,
                     "pos_err_m": e.position_m(), "eq6_term": e.norm(),
                     "rpe": rpe_json(&relative.run_summary(i)),
+                    "ape": ape_json(&absolute.run_summary(i)),
                 })
             })
             .collect();
@@ -89,20 +93,70 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         let mut out = json!({
             "cost": c, "path_cost": path, "model": model, "runs": runs,
             "end_position_error_m": stats_json(position), "end_heading_error_rad": stats_json(heading),
-            "rpe": rpe,
+            "rpe": rpe, "ape": ape_json(&absolute.summary()),
         });
+        if let Some((n, checks)) = &trust {
+            out["noise"] = serde_json::to_value(n)?;
+            out["noise_coverage"] = noise::coverage_json(checks);
+            out["noise_verdict"] = json!(noise::verdict(n, &checks[0]));
+        }
         if !ds.ground_truth_clocks.is_empty() {
             out["ground_truth_clock"] = ds.ground_truth_clocks.iter().map(|g| g.to_json()).collect();
         }
         return super::print_json("eval", out);
     }
     print_summary(model, ds.runs.len(), c, path, position, heading.scaled(180.0 / std::f64::consts::PI));
+    print_ape(&absolute.summary());
     print_rpe(&relative);
+    if let Some((n, checks)) = &trust {
+        print_noise(n, checks);
+    }
     if a.per_run {
         println!();
-        print_rows(&ds.runs, errors, &relative);
+        print_rows(&ds.runs, errors, &relative, &absolute);
     }
     Ok(())
+}
+
+/// The model file's noise model (`None` for `design`, `paper` and files without one) and its check on the
+/// runs beside the stock defaults.
+fn noise_check(
+    spec: &ModelSpec,
+    models: &omni_kin::RunModels,
+    runs: &[omni_kin::Run],
+    errors: &omni_kin::evaluate::RunErrors,
+) -> anyhow::Result<Option<(omni_kin::noise::OdometryNoise, Vec<omni_kin::noise::Coverage>)>> {
+    let ModelSpec::File(path) = spec else { return Ok(None) };
+    let Some(n) = crate::model_file::read_noise(path)? else { return Ok(None) };
+    let checks = noise::check(&n, models.first(), runs, errors)?;
+    Ok(Some((n, checks)))
+}
+
+/// How far to trust the odometry: the share of windows inside the noise model's 95 % ellipse and the NEES
+/// at each horizon, for the model and the stock defaults; a coverage outside 90–98 % says why.
+fn print_noise(n: &omni_kin::noise::OdometryNoise, checks: &[omni_kin::noise::Coverage]) {
+    println!();
+    println!("{}", noise::describe(n));
+    let Some(first) = checks.first() else { return };
+    let heads: Vec<String> = first.horizons.iter().map(|h| noise::horizon_text(h.horizon)).collect();
+    print!("{:<34}", "inside the 95 % ellipse (NEES)");
+    for h in &heads {
+        print!(" {h:>20}");
+    }
+    println!();
+    for c in checks {
+        print!("{:<34}", c.predictor);
+        for h in &c.horizons {
+            let cell =
+                if h.windows == 0 { "-".to_string() } else { format!("{:.1} % ({:.2})", 100.0 * h.coverage, h.nees) };
+            print!(" {cell:>20}");
+        }
+        println!();
+    }
+    println!("(NEES: mean eᵀ Σ⁻¹ e of the position error, 2 for a true model)");
+    if let Some(v) = noise::verdict(n, first) {
+        tracing::warn!("{v}");
+    }
 }
 
 /// The relative pose error of some pairs in JSON: SI units (m, rad), drift in %.
@@ -114,6 +168,30 @@ fn rpe_json(s: &RpeSummary) -> serde_json::Value {
         "drift_pairs": s.drift_pairs,
         "drift_pct": stats_json(s.drift_pct),
     })
+}
+
+/// The absolute pose error of some runs in JSON (m): evo_ape's translation part, without and with
+/// `--align`.
+fn ape_json(s: &ApeSummary) -> serde_json::Value {
+    json!({
+        "poses": s.poses,
+        "translation_m": stats_json(s.translation_m),
+        "aligned_translation_m": stats_json(s.aligned_translation_m),
+    })
+}
+
+/// The absolute pose error at every ground-truth pose: evo_ape's figure on the TUM export.
+fn print_ape(s: &ApeSummary) {
+    println!();
+    println!(
+        "absolute pose error at {} (evo_ape tum GT EST: translation part, poses matched by stamp; \
+         aligned: its --align, a rigid Umeyama fit per run)",
+        crate::units::count(s.poses, "ground-truth pose")
+    );
+    print_stats(
+        "APE translation m",
+        &[("evo_ape default", s.translation_m), ("evo_ape --align", s.aligned_translation_m)],
+    );
 }
 
 /// The summary: the costs, then the statistics of the end-position (m) and end-heading (deg) errors.
@@ -164,19 +242,31 @@ fn print_rpe(relative: &RelativeErrors) {
     println!("{:<22} {:>9.4} {:>9.4} {:>9.4} {:>9.4}{of}", "drift % of distance", d.mean, d.median, d.rmse, d.max);
 }
 
-/// One row per run: the end-pose error in m and deg, the RPE's pairs, translation RMSE (m) and mean drift (%).
-fn print_rows(runs: &[omni_kin::Run], errors: &[PoseError], relative: &RelativeErrors) {
+/// One row per run: the end-pose error in m and deg, the RPE's pairs, translation RMSE (m) and mean drift
+/// (%), and the APE's RMSE (m) without and with alignment.
+fn print_rows(runs: &[omni_kin::Run], errors: &[PoseError], relative: &RelativeErrors, absolute: &AbsoluteErrors) {
     println!(
-        "{:<28} {:>18} {:>9} {:>9} {:>10} {:>12} {:>9} {:>11} {:>9}",
-        "run", "command", "dx_m", "dy_m", "pos_err_m", "yaw_err_deg", "rpe_pairs", "rpe_rmse_m", "drift_pct"
+        "{:<28} {:>18} {:>9} {:>9} {:>10} {:>12} {:>9} {:>11} {:>9} {:>11} {:>13}",
+        "run",
+        "command",
+        "dx_m",
+        "dy_m",
+        "pos_err_m",
+        "yaw_err_deg",
+        "rpe_pairs",
+        "rpe_rmse_m",
+        "drift_pct",
+        "ape_rmse_m",
+        "ape_aligned_m"
     );
     for (i, (r, e)) in runs.iter().zip(errors).enumerate() {
         let cmd = r.command().map(|c| c.label()).unwrap_or_else(|| "-".into());
         let rpe = relative.run_summary(i);
+        let ape = absolute.run_summary(i);
         let (t, d) = (rpe.translation_m.rmse, rpe.drift_pct.mean);
         let cell = |v: f64, prec: usize| if v.is_nan() { "-".to_string() } else { format!("{v:.prec$}") };
         println!(
-            "{:<28} {:>18} {:>9.4} {:>9.4} {:>10.4} {:>12.3} {:>9} {:>11} {:>9}",
+            "{:<28} {:>18} {:>9.4} {:>9.4} {:>10.4} {:>12.3} {:>9} {:>11} {:>9} {:>11} {:>13}",
             r.name(),
             cmd,
             e.dx_m,
@@ -185,7 +275,9 @@ fn print_rows(runs: &[omni_kin::Run], errors: &[PoseError], relative: &RelativeE
             e.dtheta_rad.to_degrees(),
             rpe.pairs,
             cell(t, 4),
-            cell(d, 2)
+            cell(d, 2),
+            cell(ape.translation_m.rmse, 4),
+            cell(ape.aligned_translation_m.rmse, 4)
         );
     }
 }

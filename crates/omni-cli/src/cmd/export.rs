@@ -30,7 +30,8 @@ pub struct Args {
     #[arg(long, value_name = "DIR")]
     pub mcap: Option<PathBuf>,
     /// Replace a --tum or --mcap folder that already holds files, whole (files of other runs left in it
-    /// would be taken for this export's).
+    /// would be taken for this export's); with --robot-config, also export a model marked interrupted
+    /// (a `train` stopped by Ctrl-C), which is refused without it.
     #[arg(long)]
     pub force: bool,
     /// Write the calibration for the robot into this folder: the matrix as ROS 2 parameters
@@ -80,6 +81,14 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     if a.tum.is_none() && a.mcap.is_none() && a.robot_config.is_none() {
         anyhow::bail!("nothing to export: give --tum DIR and/or --mcap DIR (or --robot-config DIR)");
     }
+    if a.robot_config.is_some() && !a.force && a.model.interrupted() {
+        anyhow::bail!(
+            "--robot-config: {}: {}; a robot should get a finished fit: train again without stopping it, or \
+             give --force to export this one anyway",
+            a.model,
+            crate::model_file::INTERRUPTED_REASON
+        );
+    }
     let (tum_dir, mcap_dir) = claim_folders(a)?;
     let data = a.data.options();
     let ds = LoadRequest { recorded_odometry: true, ..LoadRequest::new(&a.runs, &data) }.load()?;
@@ -117,6 +126,10 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             runs: &ds.runs,
             wheel_names: joint_names(&model, &data.wheel_joints(&ds)),
             controller: a.controller,
+            noise: match &a.model {
+                crate::api::ModelSpec::File(path) => crate::model_file::read_noise(path)?,
+                _ => None,
+            },
         };
         let config = robot_config::build(&request)?;
         robot_config::write(dir, &config)?;

@@ -1,5 +1,5 @@
-//! `omnical info`: what a ROS recording holds (as `ros2 bag info` shows it) and what omnical would make of
-//! it with the options given ([`crate::api::info`] computes it), printed as text or JSON.
+//! `omnical info`: what an input holds (a ROS recording as `ros2 bag info` shows it; a CSV run or an
+//! OptiOdom set) and what omnical would make of it with the options given ([`crate::api::info`] computes it), printed as text or JSON.
 
 use super::{DataArgs, OutputArgs};
 use crate::api::info::{self as api, RecordingInfo, RunInfo};
@@ -12,7 +12,8 @@ pub use crate::api::info::GAP_FACTOR;
 /// Arguments of `omnical info`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// ROS recordings (.mcap, .db3 or .bag files, rosbag2 folders, or folders of them).
+    /// Inputs as `train` reads them: ROS recordings (.mcap, .db3 or .bag files, rosbag2 folders), omnical
+    /// CSV runs, OptiOdom set folders, or folders of them.
     #[arg(value_name = "RECORDING", required = true)]
     pub recordings: Vec<PathBuf>,
     /// Output options.
@@ -41,7 +42,18 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
 
 fn print_info(info: &RecordingInfo) {
     println!("{}", info.path.display());
-    println!("  {} messages over {:.3} s, from Unix time {:.3} s", info.messages, info.duration_s, info.start_unix_s);
+    if let (Some(messages), Some(duration_s), Some(start_unix_s)) = (info.messages, info.duration_s, info.start_unix_s)
+    {
+        println!("  {messages} messages over {duration_s:.3} s, from Unix time {start_unix_s:.3} s");
+    } else {
+        println!("  {}", info.kind.describe());
+    }
+    if let Some(d) = info.read.as_ref().ok().and_then(|ds| ds.declared.first()) {
+        println!("  declares a {} robot with {} wheels (its design geometry)", d.kind, d.geometry.n_wheels());
+    }
+    if info.topics.is_empty() {
+        return print_read_or_error(info);
+    }
     println!("  topics:");
     for t in &info.topics {
         let rate = t.rate_hz.map_or_else(String::new, |r| format!(", {r:.1} Hz"));
@@ -52,6 +64,10 @@ fn print_info(info: &RecordingInfo) {
         }
         println!("      {}: {}", role_word(t.role), t.why);
     }
+    print_read_or_error(info);
+}
+
+fn print_read_or_error(info: &RecordingInfo) {
     match &info.read {
         Ok(ds) => print_read(ds),
         Err(e) => println!("  omnical cannot read it with these options: {e}"),

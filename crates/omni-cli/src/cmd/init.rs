@@ -51,7 +51,9 @@ fn urdf_text(a: &Args, recording: &Path, inv: &Inventory) -> anyhow::Result<(Str
         )),
         None => bail!(
             "{}: the recording has no {} topic (std_msgs/msg/String) with the robot's URDF; give it with --urdf FILE \
-             (for a .xacro, run `xacro robot.urdf.xacro > robot.urdf` first)",
+             (for a .xacro, run `xacro robot.urdf.xacro > robot.urdf` first), or, without a URDF, add --kind \
+             diff|omni|mecanum for a robot.toml skeleton named after the recording's joints, the values to measure \
+             marked",
             recording.display(),
             mcap::ROBOT_DESCRIPTION_TOPIC
         ),
@@ -74,6 +76,9 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         );
     }
     let inv = found.inventory;
+    if let (None, None, Some(kind)) = (&a.urdf, &inv.robot_description, a.kind) {
+        return write_skeleton(a, &inv, kind);
+    }
     let (text, source, urdf_path) = urdf_text(a, &found.recording, &inv)?;
     let (recordings, inspected) = (found.recordings, found.recording.clone());
     let found = urdf::wheels(&text).map_err(|e| anyhow::anyhow!("{}: {e}", source.label))?;
@@ -115,6 +120,30 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         d.description.joints().join(", "),
         a.out.display(),
         a.recording.display()
+    );
+    Ok(())
+}
+
+/// `omnical init REC --kind KIND` without a URDF: the skeleton ([`init::skeleton`]) written, and what to do.
+fn write_skeleton(a: &Args, inv: &Inventory, kind: BaseKind) -> anyhow::Result<()> {
+    let recording = a.recording.display().to_string();
+    let (toml, joints, topic) =
+        init::skeleton::skeleton(inv, &recording, kind).map_err(|e| anyhow::anyhow!("{recording}: {e}"))?;
+    atomic::write_atomic(&a.out, toml.as_bytes()).with_context(|| format!("writing {}", a.out.display()))?;
+    let marks = toml.lines().filter(|l| !l.starts_with('#') && l.contains(init::skeleton::FILL_IN)).count();
+    if a.output.json {
+        let doc = serde_json::json!({
+            "out": a.out, "recording": a.recording, "kind": kind.to_string(), "joints": joints,
+            "joint_states": topic, "skeleton": true, "to_fill_in": marks,
+        });
+        return super::print_json("init", doc);
+    }
+    println!(
+        "wrote {}: a {kind} skeleton with the joints of {topic} ({}); the recording has no URDF, so {marks} values \
+         are marked {}: measure them, write them and remove the marks (omnical refuses the file until then)",
+        a.out.display(),
+        joints.join(", "),
+        init::skeleton::FILL_IN
     );
     Ok(())
 }

@@ -152,7 +152,9 @@ pub struct DataArgs {
     pub gt_units: Vec<String>,
     /// What the ground truth measures: `absolute`, the pose of a point on the robot in a fixed world frame
     /// (motion capture); `relative`, a sensor's own motion (lidar or visual odometry) at an unknown mount,
-    /// compared over windows (`--gt-window`), the mount fitted with the wheels. Default absolute.
+    /// compared over windows (`--gt-window`), the mount fitted with the wheels; `end-pose`, hand-measured
+    /// end poses (a tape measure, no motion capture): --gt names a table run,x_m,y_m,yaw_deg, each in the
+    /// frame of the run's start (`plan --umbmark --out` writes one to fill in). Default absolute.
     #[arg(long, value_name = "KIND", value_parser = crate::cli::choice::<ReferenceKind>())]
     pub gt_kind: Option<ReferenceKind>,
     /// The window of a relative reference (s): the model's motion is compared with the sensor's over
@@ -169,9 +171,10 @@ pub struct DataArgs {
     /// republished on /tf; from base_link, else base_footprint), corrected by the fit.
     #[arg(long, value_name = "TOPIC")]
     pub gt_scans: Option<String>,
-    /// Cut MCAP files into runs where the robot stands still at least this long (s).
-    #[arg(long)]
-    pub split: Option<f64>,
+    /// Cut recordings into runs: a bare number at standstills at least this long (s); a length with its
+    /// unit (20s, 2min) into pieces of that length, for a robot that never stops.
+    #[arg(long, value_name = "N|LENGTH", value_parser = parse_split)]
+    pub split: Option<Split>,
     /// Skip runs that fail to load (they are listed) instead of stopping.
     #[arg(long)]
     pub skip_invalid: bool,
@@ -181,6 +184,43 @@ pub struct DataArgs {
     /// Refuse input files (CSV, MCAP) larger than this (MiB); each is read into memory whole.
     #[arg(long, value_name = "MIB", default_value_t = dataset::DEFAULT_MAX_FILE_BYTES >> 20)]
     pub max_file_mb: u64,
+}
+
+/// How `--split` cuts recordings into runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Split {
+    /// At standstills at least this long (a bare number). s.
+    Standstill(f64),
+    /// Into pieces of this length (a number with its unit, `20s`, `2min`). s.
+    Every(f64),
+}
+
+impl std::fmt::Display for Split {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Standstill(s) => write!(f, "at standstills of {s} s"),
+            Self::Every(s) => write!(f, "into pieces of {s} s"),
+        }
+    }
+}
+
+/// `N` (standstills of N s) or `Ns` / `Nmin` (pieces of that length).
+fn parse_split(text: &str) -> Result<Split, String> {
+    let t = text.trim();
+    let (number, seconds_per_unit, every) = if let Some(n) = t.strip_suffix("min") {
+        (n, 60.0, true)
+    } else if let Some(n) = t.strip_suffix('s') {
+        (n, 1.0, true)
+    } else {
+        (t, 1.0, false)
+    };
+    let v: f64 = number.trim().parse().map_err(|_| {
+        format!("{text:?}: expected a number of seconds (standstills that long) or a length with its unit (20s, 2min)")
+    })?;
+    if !(v.is_finite() && v > 0.0) {
+        return Err(format!("{text:?}: the length must be a finite number > 0"));
+    }
+    Ok(if every { Split::Every(v * seconds_per_unit) } else { Split::Standstill(v) })
 }
 
 /// `X,Y,YAW_DEG` (m, m, degrees) as a pose.
@@ -213,7 +253,14 @@ impl DataArgs {
             gt_window_s: self.gt_window,
             gt_mount: self.gt_mount,
             gt_scans: self.gt_scans.clone(),
-            split_s: self.split,
+            split_s: match self.split {
+                Some(Split::Standstill(s)) => Some(s),
+                _ => None,
+            },
+            split_every_s: match self.split {
+                Some(Split::Every(s)) => Some(s),
+                _ => None,
+            },
             skip_invalid: self.skip_invalid,
             ticks_per_rev: self.ticks_per_rev,
             max_file_mb: self.max_file_mb,

@@ -93,6 +93,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     if let Some(side_m) = a.umbmark {
         return umbmark(side_m, a);
     }
+    check_pace(a)?;
     let robot = plan_robot(a)?;
     let mut model = FittedModel::nominal(Model::design(a.model, Some(&robot))?);
     for id in &a.effects {
@@ -118,6 +119,35 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     if let Some(out) = &a.out {
         println!("plan written to {}", out.display());
     }
+    Ok(())
+}
+
+/// The fastest commands a plan is made for: a wheeled robot's calibration runs (a warehouse robot drives
+/// 2 m/s; a plan is driven at a calibration run's pace, 0.2 m/s by default). m/s and rad/s (two turns a
+/// second).
+const MAX_PLAN_SPEED_M_S: f64 = 5.0;
+const MAX_PLAN_OMEGA_RAD_S: f64 = 4.0 * std::f64::consts::PI;
+
+/// Refuses a speed or turn rate no robot's calibration run is driven at (m/s taken for km/h or mm/s, deg/s
+/// for rad/s), naming the flag and the unit.
+fn check_pace(a: &Args) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        a.speed_m_s <= MAX_PLAN_SPEED_M_S || a.speed_m_s.is_nan(),
+        "--speed {} m/s: faster than the calibration runs of a wheeled robot are driven (at most \
+         {MAX_PLAN_SPEED_M_S} m/s; the default is {} m/s); give the runs' translation speed in m/s (not km/h or \
+         mm/s)",
+        a.speed_m_s,
+        PlanRequest::default().speed_m_s
+    );
+    anyhow::ensure!(
+        a.omega_rad_s <= MAX_PLAN_OMEGA_RAD_S || a.omega_rad_s.is_nan(),
+        "--omega {} rad/s: {:.0}°/s, faster than the calibration runs of a wheeled robot turn (at most {:.1} rad/s, \
+         two turns a second; the default is {} rad/s); give the turn rate in rad/s (not deg/s)",
+        a.omega_rad_s,
+        a.omega_rad_s.to_degrees(),
+        MAX_PLAN_OMEGA_RAD_S,
+        PlanRequest::default().omega_rad_s
+    );
     Ok(())
 }
 

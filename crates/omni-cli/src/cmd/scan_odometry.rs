@@ -85,6 +85,9 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         out_path::check_file(t, "--tum")?;
     }
     let read = lidar::read_scans(&a.recording, &a.topic)?;
+    if let Some(m) = &read.angle_max_mismatch {
+        crate::note!("note: {}", m.describe(&a.topic));
+    }
     let path = lidar::sensor_path(&read.scans, &MatchSettings::default())
         .with_context(|| format!("{}: topic {:?}", a.recording.display(), a.topic))?;
     if path.segments.is_empty() {

@@ -150,6 +150,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     let mount = crate::api::train::mount_warning(&c);
     let interrupted = interrupt::requested();
     let mut s = summary(&c, preset_name, a.seed, ds.runs.len())?;
+    crate::api::noise::add_to_summary(&mut s, &c.fitted, &ds.runs)?;
     let designs = designs_figure(&c, &ds, &plan, a.start.is_none())?;
     if let Some(d) = &designs {
         s["designs"] = d.to_json();
@@ -173,20 +174,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         s["out"] = json!(a.out.as_ref().map(|p| p.display().to_string()));
         super::print_json("train", s)?;
     } else {
-        if interrupted {
-            println!("interrupted (Ctrl-C): the best model found so far (the GA stopped early; no polish)");
-        }
-        print_summary(&c, preset_name, ds.runs.len());
-        if let Some(d) = &designs {
-            println!("{}", d.describe());
-        }
-        for p in &priors {
-            println!("{}", p.describe(&c.fitted));
-        }
-        if let Some(out) = &a.out {
-            let what = if interrupted { "best-so-far model" } else { "model" };
-            println!("{what} written to {}", out.display());
-        }
+        print_text(&c, (&s, preset_name, ds.runs.len()), designs.as_ref(), &priors, (a.out.as_deref(), interrupted));
     }
     if let Some(w) = &mount {
         tracing::warn!("{w}");
@@ -200,9 +188,44 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `train`'s text on stdout: the fit's summary, its noise model, the designs, the priors and where the
+/// model went (`out`, and whether the fit was `interrupted`).
+fn print_text(
+    c: &Calibration,
+    (s, preset_name, runs): (&serde_json::Value, &str, usize),
+    designs: Option<&crate::api::train::DesignsFigure>,
+    priors: &[crate::api::fit::PriorUse],
+    (out, interrupted): (Option<&std::path::Path>, bool),
+) {
+    if interrupted {
+        println!("interrupted (Ctrl-C): the best model found so far (the GA stopped early; no polish)");
+    }
+    print_summary(c, preset_name, runs);
+    if let Some(n) = crate::api::noise::from_summary(s) {
+        println!("{}", crate::api::noise::describe(&n));
+    }
+    if let Some(d) = designs {
+        println!("{}", d.describe());
+    }
+    for p in priors {
+        println!("{}", p.describe(&c.fitted));
+    }
+    if let Some(out) = out {
+        let what = if interrupted { "best-so-far model" } else { "model" };
+        println!("{what} written to {}", out.display());
+    }
+}
+
 /// Human-readable fit summary on stdout; its warnings and notes go to stderr.
 pub fn print_summary(c: &Calibration, preset: &str, runs: usize) {
-    println!("preset {preset}: {}, objective {}", count(runs, "training run"), c.objective.name());
+    // The integration belongs to the figures: the same design costs a little differently under another
+    // preset's integration (the paper's Euler steps of 10 ms, the default's exact arcs).
+    println!(
+        "preset {preset}: {}, objective {}, integration {}",
+        count(runs, "training run"),
+        c.objective.name(),
+        integration_text(c.fitted.model.integration)
+    );
     println!(
         "cost (Eq. 6)  design {:.5}  fitted {:.5}  improvement {:.1} %",
         c.end_pose_start,
@@ -233,19 +256,46 @@ pub fn print_summary(c: &Calibration, preset: &str, runs: usize) {
         tracing::warn!("ended on a bound of the GA box: {}", c.at_bound.join(", "));
     }
     if !c.outside_box.is_empty() {
-        crate::note!("note: the polish left the GA box (the box was too small) for: {}", c.outside_box.join(", "));
+        // Nothing to do: the polish is not bound by the GA's box, and its result is the fit above.
+        tracing::info!(
+            "the polish moved {} beyond the GA's search box (the polish is not bound by it; the fit above is its result)",
+            c.outside_box.join(", ")
+        );
     }
     print_identifiability(c);
 }
 
-/// Standard errors and condition number on stdout; a warning per unconstrained direction on stderr.
+/// How a model integrates: `exact arcs, each run's median step`, `Euler, fixed 0.010 s steps`.
+pub fn integration_text(i: omni_kin::Integration) -> String {
+    let scheme = match i.scheme {
+        omni_kin::Scheme::Euler => "Euler",
+        omni_kin::Scheme::ExactArc => "exact arcs",
+    };
+    let step = match i.step {
+        omni_kin::StepMode::Fixed { dt_s: Some(dt) } => format!("fixed {dt:.3} s steps"),
+        omni_kin::StepMode::Fixed { dt_s: None } => "each run's median step".into(),
+        omni_kin::StepMode::Stamps => "the measured stamps".into(),
+    };
+    format!("{scheme}, {step}")
+}
+
+/// Standard errors and condition number on stdout. Directions the runs do not constrain: when the fit
+/// held them at the start (the default), one note says so and what they are (each one's description with
+/// `-v`), and the standard errors are those with them held, marked; when the fit let them move, a warning
+/// per direction says what to do.
 pub fn print_identifiability(c: &Calibration) {
     let id = &c.identifiability;
+    let held = !c.held.is_empty();
     println!(
-        "identifiability: condition number {:.3e} (scaled), residual RMS {:.4} m, standard errors {}",
+        "identifiability: condition number {:.3e} (scaled), residual RMS {:.4} m, standard errors {}{}",
         id.condition_number,
         id.residual_rms,
-        text::covariance(id)
+        text::covariance(id),
+        if held && id.params.iter().any(|p| p.std_error.is_none()) {
+            format!("; * = with the {} held at the start", count(c.held.len(), "direction"))
+        } else {
+            String::new()
+        }
     );
     // The IK matrix's ω row is in rad per wheel rad, a ratio and not an angle: it keeps its unit.
     let model = &c.fitted.model;
@@ -254,25 +304,75 @@ pub fn print_identifiability(c: &Calibration) {
     } else {
         Vec::new()
     };
+    // A parameter that carries a held direction has no standard error of its own; with the held directions
+    // fixed (what the fit did) it has one: the covariance over the constrained directions.
+    let with_held = |i: usize| id.covariance.get(i).and_then(|row| row.get(i)).map(|v| v.max(0.0).sqrt());
     let se: Vec<String> = id
         .params
         .iter()
-        .map(|p| match p.std_error {
-            Some(s) if ik_entries.contains(&p.name) => format!("{} ±{:.2e} {}", p.name, s, p.unit),
-            Some(s) => format!("{} {}", p.name, std_error_text(s, &p.unit)),
-            None => format!("{} undetermined", p.name),
+        .enumerate()
+        .map(|(i, p)| match (p.std_error, with_held(i).filter(|_| held)) {
+            (Some(s), _) if ik_entries.contains(&p.name) => format!("{} ±{:.2e} {}", p.name, s, p.unit),
+            (Some(s), _) => format!("{} {}", p.name, std_error_text(s, &p.unit)),
+            (None, Some(s)) if ik_entries.contains(&p.name) => format!("{} ±{:.2e} {}*", p.name, s, p.unit),
+            (None, Some(s)) => format!("{} {}*", p.name, std_error_text(s, &p.unit)),
+            (None, None) => format!("{} undetermined", p.name),
         })
         .collect();
     for chunk in se.chunks(3) {
         println!("  {}", chunk.join(" · "));
     }
-    for w in id.warnings() {
-        tracing::warn!("{w}");
+    // A held direction leaves the fit as the start has it: a warning only where the command itself could
+    // do better (an end-pose objective on runs whose paths would constrain it); the others are in the note,
+    // each described with -v. Directions the fit let move are each a warning.
+    let end_pose = matches!(c.objective, CostKind::EndPose);
+    for w in &id.weak {
+        let actionable = !held || (end_pose && w.remedy == omni_ga::identify::Advice::PathObjective);
+        let line = text::warning(w);
+        match (actionable, end_pose) {
+            (true, _) => tracing::warn!("{line}"),
+            (false, true) => tracing::info!("{line}"),
+            (false, false) => {
+                tracing::info!("{}", line.replace(PATH_OBJECTIVE_ADVICE, "add runs along different paths"))
+            }
+        }
     }
-    if !c.held.is_empty() {
-        crate::note!(
-            "note: {} direction(s) held at the start values (truncated update; `--unexcited move` lets them move)",
-            c.held.len()
-        );
+    if held {
+        crate::note!("note: {}", held_text(c));
     }
+}
+
+/// The advice of a direction the residuals barely see, whose first half is moot under the path objective.
+const PATH_OBJECTIVE_ADVICE: &str =
+    "fit the path objective (every ground-truth pose), or add runs along different paths";
+
+/// The note on the directions the fit held at the start: how many, which of them no run can excite
+/// (nothing to do) and which are poorly constrained (with what would determine them).
+fn held_text(c: &Calibration) -> String {
+    let nowhere = c.held.iter().filter(|w| w.remedy == omni_ga::identify::Advice::HeldAtDesign).count();
+    let poorly: Vec<String> = c
+        .held
+        .iter()
+        .filter(|w| w.remedy != omni_ga::identify::Advice::HeldAtDesign)
+        .map(|w| w.std_error.map_or_else(|| "not excited".to_string(), |s| format!("±{:.1} %", 100.0 * s)))
+        .collect();
+    let mut parts = Vec::new();
+    if nowhere > 0 {
+        parts.push(format!(
+            "{nowhere} that no run can excite (the wheels fighting each other, which moves the robot nowhere: nothing to do)"
+        ));
+    }
+    if !poorly.is_empty() {
+        parts.push(format!(
+            "{} poorly constrained by these runs ({} of scale; runs along other paths would determine them)",
+            poorly.len(),
+            poorly.join(", ")
+        ));
+    }
+    format!(
+        "{} direction(s) held at the start values (truncated update; `--unexcited move` lets them move): {}; `-v` \
+         describes each",
+        c.held.len(),
+        parts.join("; ")
+    )
 }

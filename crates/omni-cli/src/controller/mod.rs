@@ -158,10 +158,12 @@ impl FromStr for ControllerKind {
 
     /// Accepts the package names and their aliases ([`Choice::aliases`]: `diff`, `mecanum`, `omni`, …).
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        <Self as Choice>::from_id(s).map_err(|_| KinError::Unknown {
-            what: "controller",
-            name: s.into(),
-            known: "diff_drive_controller, mecanum_drive_controller, omni_wheel_drive_controller".into(),
+        <Self as Choice>::from_id(s).map_err(|_| {
+            KinError::unknown(
+                "controller",
+                s,
+                &["diff_drive_controller", "mecanum_drive_controller", "omni_wheel_drive_controller"],
+            )
         })
     }
 }

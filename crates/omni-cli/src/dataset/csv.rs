@@ -113,15 +113,42 @@ fn headerless_hint(path: &Path, headers: &[String]) -> String {
     }
 }
 
+/// The ground truth of a CSV run that has no pose columns, from elsewhere (a `--gt` file): given the wheel
+/// times (s, as written), speeds (rad/s, row-major) and the wheel count, the poses on the same clock.
+pub type ExternalPoses<'a> = &'a mut dyn FnMut(&[f64], &[f64], usize) -> Result<Vec<StampedPose>, DatasetError>;
+
+/// [`read_run_for`] for a CSV run whose ground truth is given apart (`--gt`): the file must have no pose
+/// columns (`x_m`, `y_m`, `theta_rad`); `external` gives its poses from its wheel data.
+pub fn read_run_with_truth(
+    path: &Path,
+    ticks_per_rev: Option<f64>,
+    joints: &[String],
+    external: ExternalPoses<'_>,
+) -> Result<Run, DatasetError> {
+    let bytes = std::fs::read(path).map_err(|e| DatasetError::io(path, e))?;
+    parse_run_inner(path, &bytes, ticks_per_rev, joints, Some(external))
+}
+
 /// [`parse_run`] with the wheel columns in the order of `joints` ([`read_run_for`]).
-///
-/// long: one pass over header and rows, each check with its own message naming file, line and column;
-/// to split into header, row and ground-truth parts (issue 15 leftover).
 pub fn parse_run_for(
     path: &Path,
     bytes: &[u8],
     ticks_per_rev: Option<f64>,
     joints: &[String],
+) -> Result<Run, DatasetError> {
+    parse_run_inner(path, bytes, ticks_per_rev, joints, None)
+}
+
+/// [`parse_run_for`], the poses from `external` when given ([`read_run_with_truth`]).
+///
+/// long: one pass over header and rows, each check with its own message naming file, line and column;
+/// to split into header, row and ground-truth parts (issue 15 leftover).
+fn parse_run_inner(
+    path: &Path,
+    bytes: &[u8],
+    ticks_per_rev: Option<f64>,
+    joints: &[String],
+    mut external: Option<ExternalPoses<'_>>,
 ) -> Result<Run, DatasetError> {
     let text = std::str::from_utf8(bytes).map_err(|e| {
         DatasetError::file(path, format!("is not UTF-8 text (invalid byte at offset {})", e.valid_up_to()))
@@ -202,7 +229,18 @@ pub fn parse_run_for(
         (_, v) => v.unwrap_or(1.0),
     };
     let pose_cols: Vec<Option<usize>> = POSE.iter().map(|n| find(n)).collect();
-    if pose_cols.iter().any(Option::is_none) {
+    if external.is_some() && pose_cols.iter().any(Option::is_some) {
+        return Err(DatasetError::at(
+            path,
+            format!("line {header_line}"),
+            format!(
+                "has ground-truth columns of its own ({}), and --gt gives another: drop --gt, or remove the \
+                 columns to use the --gt file",
+                POSE.join(", ")
+            ),
+        ));
+    }
+    if external.is_none() && pose_cols.iter().any(Option::is_none) {
         let missing: Vec<&str> = POSE.iter().zip(&pose_cols).filter(|(_, c)| c.is_none()).map(|(n, _)| *n).collect();
         return Err(DatasetError::at(
             path,
@@ -286,6 +324,9 @@ pub fn parse_run_for(
                 *v = *v * k / dt;
             }
         }
+    }
+    if let Some(external) = external.as_mut() {
+        truth = external(&wheel_t, &wheel, n_w)?;
     }
     unwrap_headings(&mut truth);
     let command = match (meta_num("command_v_m_s")?, meta_num("command_alpha_rad")?, meta_num("command_omega_rad_s")?) {

@@ -2,7 +2,9 @@
 //! in the frame of where it started (x along its start heading, y to its left, the heading turned
 //! counter-clockwise). CSV with a header: `run,x_m,y_m,yaw_deg` (`yaw_rad` instead of `yaw_deg`, and `x_mm`,
 //! `y_mm` or `x_cm`, `y_cm` are accepted); `run` names the recording (its file name without extension).
-//! Lines starting with `#` are comments. See docs/formats.md, "Measured end poses".
+//! Lines starting with `#` are comments. A table a spreadsheet wrote with decimal commas separates its cells
+//! with `;` (`cw-1;0,012;-0,03;1,5`): read so; a decimal comma in a `,`-separated table makes more cells than
+//! the header names, which is refused. See docs/formats.md, "Measured end poses".
 
 use super::DatasetError;
 use omni_kin::Pose2;
@@ -17,6 +19,20 @@ pub struct EndPose {
     pub pose: Pose2,
     /// Its line in the file (1-based), for messages.
     pub line: usize,
+    /// The columns its values were read from, as the header names them (`x_mm`, `yaw_deg`): what a check
+    /// against the wheels names when a value looks like another unit.
+    pub columns: Columns,
+}
+
+/// The header's names of the position and heading columns.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Columns {
+    /// `x_m`, `x_cm` or `x_mm` (`y_…` alike), and its metres per unit.
+    pub length: String,
+    /// Metres per unit of the length columns.
+    pub metres_per_unit: f64,
+    /// `yaw_deg` or `yaw_rad`.
+    pub yaw: String,
 }
 
 /// The length columns accepted, with their metres per unit.
@@ -29,7 +45,9 @@ pub fn read(path: &Path) -> Result<Vec<EndPose>, DatasetError> {
     let Some((header_no, header)) = rows.next() else {
         return Err(DatasetError::file(path, "is empty: expected a header run,x_m,y_m,yaw_deg and one row per run"));
     };
-    let names: Vec<&str> = header.split(',').map(str::trim).collect();
+    // A table written with decimal commas separates its cells with semicolons.
+    let separator = if header.contains(';') { ';' } else { ',' };
+    let names: Vec<&str> = header.split(separator).map(str::trim).collect();
     let find = |name: &str| names.iter().position(|n| *n == name);
     let length = |axis: &str| LENGTHS.iter().find_map(|(suffix, f)| find(&format!("{axis}{suffix}")).map(|i| (i, *f)));
     let angle = find("yaw_deg").map(|i| (i, 1f64.to_radians())).or_else(|| find("yaw_rad").map(|i| (i, 1.0)));
@@ -43,9 +61,25 @@ pub fn read(path: &Path) -> Result<Vec<EndPose>, DatasetError> {
     let mut out: Vec<EndPose> = Vec::new();
     for (no, line) in rows {
         let at = |column: &str| format!("line {}, column {column}", no + 1);
-        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        let cells: Vec<String> = line
+            .split(separator)
+            .map(|c| if separator == ';' { c.trim().replace(',', ".") } else { c.trim().to_string() })
+            .collect();
+        if cells.len() > names.len() && cells[names.len()..].iter().any(|c| !c.is_empty()) {
+            return Err(DatasetError::at(
+                path,
+                format!("line {}", no + 1),
+                format!(
+                    "{line:?} has {} cells but the header names {} columns: a decimal comma (1,5)? Write decimals \
+                     with a point (1.5), or separate the cells with semicolons (run;x_m;y_m;yaw_deg) as spreadsheets \
+                     do with decimal commas",
+                    cells.len(),
+                    names.len()
+                ),
+            ));
+        }
         let cell = |i: usize, column: &str| {
-            cells.get(i).copied().ok_or_else(|| DatasetError::at(path, at(column), "is missing"))
+            cells.get(i).map(String::as_str).ok_or_else(|| DatasetError::at(path, at(column), "is missing"))
         };
         let number = |(i, f): (usize, f64), column: &str| -> Result<f64, DatasetError> {
             let text = cell(i, column)?;
@@ -63,7 +97,8 @@ pub fn read(path: &Path) -> Result<Vec<EndPose>, DatasetError> {
             ));
         }
         let pose = Pose2::new(number(x, names[x.0])?, number(y, names[y.0])?, number(yaw, names[yaw.0])?);
-        out.push(EndPose { run: name, pose, line: no + 1 });
+        let columns = Columns { length: names[x.0].to_string(), metres_per_unit: x.1, yaw: names[yaw.0].to_string() };
+        out.push(EndPose { run: name, pose, line: no + 1, columns });
     }
     if out.is_empty() {
         return Err(DatasetError::file(path, "has a header but no rows: one row per run, run,x_m,y_m,yaw_deg"));

@@ -17,9 +17,10 @@ pub(super) fn with_lidar_path(
     path: &Path,
     (topic, settings): &(String, MatchSettings),
     base_frame: Option<&str>,
+    max_file_bytes: u64,
     mut loaded: Loaded,
 ) -> Result<Loaded, DatasetError> {
-    let read = lidar::read_scans_from(path, topic, base_frame)?;
+    let read = lidar::read_scans_within(path, topic, base_frame, max_file_bytes)?;
     let sensor = lidar::sensor_path(&read.scans, settings)
         .map_err(|e| DatasetError::at(path, format!("topic {topic:?}"), e.to_string()))?;
     if sensor.matched == 0 {
@@ -47,6 +48,14 @@ pub(super) fn with_lidar_path(
                 .collect()
         })
         .collect();
+    // The lidar's clock against the wheels, on its longest stretch (dataset::sensor_clock).
+    let clock =
+        segments.iter().max_by_key(|s| s.len()).and_then(|s| super::sensor_clock::sensor_clock(&loaded.runs, s));
+    let clock_shift_s = clock.map_or(0.0, |c| c.applied_s());
+    let segments: Vec<Vec<StampedPose>> = segments
+        .into_iter()
+        .map(|seg| seg.into_iter().map(|p| StampedPose { t_s: p.t_s + clock_shift_s, ..p }).collect())
+        .collect();
     let mut runs = Vec::new();
     for run in &loaded.runs {
         runs.extend(stretches(run, &segments).map_err(|e| DatasetError::Run { path: path.to_path_buf(), error: e })?);
@@ -59,6 +68,7 @@ pub(super) fn with_lidar_path(
         ));
     }
     loaded.notes.extend(notes(path, topic, &read, &sensor, runs.len()));
+    loaded.notes.extend(clock.and_then(|c| c.note(path, &format!("lidar {topic:?}"))));
     loaded.runs = runs;
     loaded.lidar_mount_from_tf = Some(read.base_from_sensor.is_some());
     Ok(loaded)
@@ -128,6 +138,9 @@ fn notes(path: &Path, topic: &str, read: &lidar::ScanRead, sensor: &lidar::Senso
                 "lidar {topic:?}: header.stamp is 0 (never filled by the driver): the scans are timed by their log time"
             ),
         ));
+    }
+    if let Some(m) = &read.angle_max_mismatch {
+        out.push(Note::about(path, m.describe(topic)));
     }
     if sensor.deskewed > 0 {
         out.push(Note::about(

@@ -14,14 +14,15 @@ pub mod optiodom;
 mod ros;
 pub mod ros1;
 pub mod rosbag2;
+pub(crate) mod sensor_clock;
 
 pub use error::{DatasetError, Skipped};
 pub(crate) use error::{check_size, too_large};
 pub use note::Note;
 use omni_kin::{RobotGeometry, Run};
 use rayon::prelude::*;
-pub use ros::{Inspected, inspect, recorded_topics, review};
-pub(crate) use ros::{feed_ros, ros_recordings};
+pub use ros::{InputKind, Inspected, inspect, recorded_topics, review};
+pub(crate) use ros::{feed_ros, inputs, ros_recordings};
 use std::path::{Path, PathBuf};
 
 /// A set of runs, with what was skipped and what was noticed while loading.
@@ -220,24 +221,30 @@ pub const SUPPORTED: &str = ".csv (omnical run), .mcap (ROS 2 bag), .db3 (rosbag
 
 /// Load runs from files and folders, in the order given (folders: files sorted by name).
 pub fn load(paths: &[PathBuf], opts: &LoadOptions) -> Result<Dataset, DatasetError> {
-    let mut inputs = Vec::new();
-    for p in paths {
-        expand(p, &mut inputs);
-    }
+    let found = Inputs::of(paths);
+    let repeated = found.repeated_note();
+    let inputs = found.list;
     // The inputs are read in parallel (one file or recording per task) and merged in their order, so the
     // dataset, its notes and the first error are those of a serial load whatever the thread count.
     let mut reads: Vec<_> = inputs.par_iter().map(|i| i.as_ref().ok().map(|i| read_input(i, opts))).collect();
     let shared_clock = shared_clock_retry(&inputs, &mut reads, opts);
     let mut ds = Dataset::default();
+    let mut read_from = Vec::new();
     for (input, read) in inputs.into_iter().zip(reads) {
         // A path that is no input (unreadable, unsupported) stops the load where it stands in the order.
         let input = input?;
         if let Some(read) = read {
+            let before = ds.runs.len();
             merge(&mut ds, opts, input.path(), read?)?;
+            read_from.push((input.path().to_path_buf(), ds.runs.len() - before));
         }
+    }
+    for line in read_lines(&read_from) {
+        tracing::info!("{line}");
     }
     ds.notes.extend(designs_note(&ds));
     ds.notes.extend(shared_clock);
+    ds.notes.extend(repeated);
     if ds.runs.is_empty() {
         let what = paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ");
         return Err(match ds.skipped.first() {
@@ -251,13 +258,46 @@ pub fn load(paths: &[PathBuf], opts: &LoadOptions) -> Result<Dataset, DatasetErr
     Ok(ds)
 }
 
+/// Inputs of one folder beyond which `-v` says one line for the folder instead of one per input.
+pub const READ_LINES_PER_FOLDER: usize = 4;
+
+/// `-v`'s lines on what was read: one per input (`read sim/a.mcap: 1 run`), or, for a folder of more than
+/// [`READ_LINES_PER_FOLDER`] inputs, one for the folder (`read 180 files in sim/train (00-r0.mcap …
+/// 35-r4.mcap): 180 runs`), in the order read.
+fn read_lines(read: &[(PathBuf, usize)]) -> Vec<String> {
+    let runs = |n: usize| format!("{n} run{}", if n == 1 { "" } else { "s" });
+    let mut lines = Vec::new();
+    let mut rest = read;
+    while let Some((first, _)) = rest.first() {
+        let folder = first.parent();
+        let same = rest.iter().take_while(|(p, _)| p.parent() == folder).count();
+        let (group, after) = rest.split_at(same);
+        match (group, folder) {
+            ([.., (last, _)], Some(folder)) if group.len() > READ_LINES_PER_FOLDER => {
+                let name =
+                    |p: &Path| p.file_name().map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into());
+                lines.push(format!(
+                    "read {} inputs in {} ({} … {}): {}",
+                    group.len(),
+                    folder.display(),
+                    name(first),
+                    name(last),
+                    runs(group.iter().map(|(_, n)| n).sum())
+                ));
+            }
+            _ => lines.extend(group.iter().map(|(p, n)| format!("read {}: {}", p.display(), runs(*n)))),
+        }
+        rest = after;
+    }
+    lines
+}
+
 /// The reads of [`load`], one per input.
 type Reads = Vec<Option<Result<Result<Loaded, DatasetError>, DatasetError>>>;
 
 /// Recordings read with one `--gt` source (a file covering them all, or a folder of takes) share its clock:
-/// a recording whose own alignment failed (a short, still or sparsely tracked one), is weak (standard error
-/// above [`mcap::selection::TOPIC_CLOCK_MAX_STD_ERROR_S`] or explaining less than
-/// [`mcap::selection::TOPIC_CLOCK_MIN_R_SQUARED`] of the motion), or lands more than
+/// a recording whose own alignment failed (a short, still or sparsely tracked one), is not clear
+/// ([`omni_kin::clock::ClockAlignment::is_clear`]), or lands more than
 /// [`mcap::selection::SAME_CLOCK_MAX_OFFSET_S`] from the others (another stretch of a long take matched) is read
 /// again at the median offset of the clear estimates, and a note per such recording says so. A few
 /// milliseconds of drift between clear estimates is kept: each recording keeps its own. Nothing changes when
@@ -267,10 +307,7 @@ fn shared_clock_retry(inputs: &[Result<Input, DatasetError>], reads: &mut Reads,
     let estimate = |r: &Option<Result<Result<Loaded, DatasetError>, DatasetError>>| {
         r.as_ref()?.as_ref().ok()?.as_ref().ok()?.clock.as_ref()?.estimate
     };
-    let clear = |a: &omni_kin::clock::ClockAlignment| {
-        a.std_error_s <= mcap::selection::TOPIC_CLOCK_MAX_STD_ERROR_S
-            && a.r_squared >= mcap::selection::TOPIC_CLOCK_MIN_R_SQUARED
-    };
+    let clear = |a: &omni_kin::clock::ClockAlignment| a.is_clear();
     let mut offsets: Vec<f64> = reads.iter().filter_map(estimate).filter(clear).map(|a| a.offset_s).collect();
     if offsets.is_empty() {
         return vec![];
@@ -393,23 +430,65 @@ fn recording_name(p: &Path, folder: bool) -> String {
     name.map_or_else(|| p.display().to_string(), |s| s.to_string_lossy().into_owned())
 }
 
+/// The inputs under some paths, in order, each file and folder taken once.
+#[derive(Debug, Default)]
+struct Inputs {
+    /// The inputs, and the paths that are none, in their places.
+    list: Vec<Result<Input, DatasetError>>,
+    /// The files and folders taken, by their real path (symbolic links resolved).
+    seen: std::collections::HashSet<PathBuf>,
+    /// Paths passed over because they lead to a file or folder already taken (a symbolic link to a folder
+    /// above it, or to a file beside it; a path given twice).
+    repeated: Vec<PathBuf>,
+}
+
+impl Inputs {
+    /// The inputs under `paths`, in order.
+    fn of(paths: &[PathBuf]) -> Self {
+        let mut inputs = Self::default();
+        for p in paths {
+            expand(p, &mut inputs);
+        }
+        inputs
+    }
+
+    /// The note on paths passed over because they repeat a file or folder already read.
+    fn repeated_note(&self) -> Option<Note> {
+        let first = self.repeated.first()?;
+        Some(Note::general(format!(
+            "{} path{} lead{} to files or folders already read (symbolic links, or a path given twice), first {}: \
+             each file is read once",
+            self.repeated.len(),
+            if self.repeated.len() == 1 { "" } else { "s" },
+            if self.repeated.len() == 1 { "s" } else { "" },
+            first.display()
+        )))
+    }
+}
+
 /// The inputs under `p`, in order: a folder's entries sorted by name, recursively; a recording folder or an
-/// OptiOdom set is one input. A path that is no input is an error in its place.
-fn expand(p: &Path, out: &mut Vec<Result<Input, DatasetError>>) {
+/// OptiOdom set is one input. A path that is no input is an error in its place; a file or folder already
+/// taken (through a symbolic link, or given twice) is passed over and listed in [`Inputs::repeated`].
+fn expand(p: &Path, out: &mut Inputs) {
     let meta = match std::fs::metadata(p) {
         Ok(m) => m,
-        Err(e) => return out.push(Err(DatasetError::io(p, e))),
+        Err(e) => return out.list.push(Err(DatasetError::io(p, e))),
     };
+    if let Ok(real) = std::fs::canonicalize(p)
+        && !out.seen.insert(real)
+    {
+        return out.repeated.push(p.to_path_buf());
+    }
     if meta.is_dir() {
         if optiodom::metadata_file(p).is_some() {
-            return out.push(Ok(Input::OptiOdom(p.to_path_buf())));
+            return out.list.push(Ok(Input::OptiOdom(p.to_path_buf())));
         }
         if rosbag2::is_recording(p) {
-            return out.push(Ok(Input::Recording(p.to_path_buf())));
+            return out.list.push(Ok(Input::Recording(p.to_path_buf())));
         }
         let entries = match std::fs::read_dir(p) {
             Ok(entries) => entries,
-            Err(e) => return out.push(Err(DatasetError::io(p, e))),
+            Err(e) => return out.list.push(Err(DatasetError::io(p, e))),
         };
         let mut entries: Vec<PathBuf> = entries
             .filter_map(|e| e.ok().map(|e| e.path()))
@@ -423,7 +502,7 @@ fn expand(p: &Path, out: &mut Vec<Result<Input, DatasetError>>) {
         }
         return;
     }
-    out.push(match p.extension().and_then(|e| e.to_str()) {
+    out.list.push(match p.extension().and_then(|e| e.to_str()) {
         Some("csv") => Ok(Input::Csv(p.to_path_buf())),
         Some("mcap") => Ok(Input::Mcap(p.to_path_buf())),
         Some("db3") => Ok(Input::Db3(p.to_path_buf())),
@@ -455,7 +534,9 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
     };
     // The lidar's path as a ROS recording's ground truth, when --gt-scans is given.
     let lidar = |p: &Path, l: Loaded| match &opts.scans {
-        Some(scans) => lidar_reference::with_lidar_path(p, scans, opts.mcap.base_frame.as_deref(), l),
+        Some(scans) => {
+            lidar_reference::with_lidar_path(p, scans, opts.mcap.base_frame.as_deref(), opts.max_file_bytes, l)
+        }
         None => Ok(l),
     };
     // The ground-truth file of a ROS recording, when --gt is given.
@@ -469,13 +550,18 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
              .db3, rosbag2 folders, .bag); this input carries its own ground truth",
         ));
     }
-    if opts.ground_truth.is_some() && matches!(input, Input::Csv(_) | Input::OptiOdom(_)) {
+    if opts.ground_truth.is_some() && matches!(input, Input::OptiOdom(_)) {
         return Err(DatasetError::file(
             input.path(),
-            "--gt gives the ground truth of ROS recordings (.mcap, .db3, rosbag2 folders, .bag); this input has its own",
+            "--gt gives the ground truth of ROS recordings (.mcap, .db3, rosbag2 folders, .bag) and of CSV runs \
+             without pose columns; an OptiOdom set has its own",
         ));
     }
     match input {
+        Input::Csv(p) if opts.ground_truth.is_some() => {
+            check_size(p, opts.max_file_bytes)?;
+            Ok(csv_with_gt(p, opts))
+        }
         Input::Csv(p) => {
             check_size(p, opts.max_file_bytes)?;
             Ok(csv::read_run_for(p, opts.ticks_per_rev, &opts.csv_joints).map(|r| Loaded {
@@ -520,6 +606,23 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
     }
 }
 
+/// A CSV run without pose columns with its ground truth from `--gt` (the file named after it, or the
+/// folder's file that covers it), on the wheel clock as a recording's ([`mcap::assembly::truth_for_wheels`]).
+fn csv_with_gt(p: &Path, opts: &LoadOptions) -> Result<Loaded, DatasetError> {
+    let Some(gt) = opts.ground_truth.as_ref() else { return Err(DatasetError::file(p, "no --gt given")) };
+    let stem = recording_name(p, false);
+    let ext = ground_truth::read_for(gt, p, &stem)?;
+    let (mut notes, mut clock) = (Vec::new(), None);
+    let mut attach = |t_s: &[f64], rad_s: &[f64], n: usize| {
+        let (poses, c) = mcap::assembly::truth_for_wheels(p, &ext, &stem, t_s, rad_s, n, &mut notes)?;
+        clock = Some(c);
+        Ok(poses)
+    };
+    let run = csv::read_run_with_truth(p, opts.ticks_per_rev, &opts.csv_joints, &mut attach)?;
+    let run = if opts.recorded_odometry { run } else { run.without_recorded_odometry() };
+    Ok(Loaded { runs: vec![run], notes, clock, ..Default::default() })
+}
+
 /// Adds what one input gave to the dataset; a failed input stops the load, or is listed as skipped with
 /// `skip_invalid`.
 fn merge(
@@ -531,12 +634,6 @@ fn merge(
     ds.sources.push(source.to_path_buf());
     match read {
         Ok(l) => {
-            tracing::info!(
-                "read {}: {} run{}",
-                source.display(),
-                l.runs.len(),
-                if l.runs.len() == 1 { "" } else { "s" }
-            );
             for r in &l.runs {
                 tracing::debug!(
                     "run {}: {} wheel samples over {:.3} s, {} ground-truth poses",

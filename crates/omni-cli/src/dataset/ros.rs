@@ -2,7 +2,7 @@
 //! what `omnical init` inspects, what `omnical info` reviews, the topics an export copies, and the message
 //! feed behind the lidar and IMU readers. Runs are read by [`super::load`].
 
-use super::{DatasetError, Input, check_size, expand, mcap, ros1, rosbag2};
+use super::{DatasetError, Input, Inputs, check_size, mcap, ros1, rosbag2};
 use std::path::{Path, PathBuf};
 
 /// The error for an input that is no ROS recording (a run CSV, an OptiOdom set) where one is needed.
@@ -25,10 +25,8 @@ pub struct Inspected {
 /// a folder of them: whatever [`super::load`] reads as recordings), reading it whole; each file at most
 /// `max_file_bytes` long.
 pub fn inspect(path: &Path, max_file_bytes: u64) -> Result<Inspected, DatasetError> {
-    let mut inputs = Vec::new();
-    expand(path, &mut inputs);
     let mut recordings = Vec::new();
-    for input in inputs {
+    for input in Inputs::of(&[path.to_path_buf()]).list {
         match input? {
             i @ (Input::Mcap(_) | Input::Db3(_) | Input::Recording(_) | Input::Ros1(_)) => recordings.push(i),
             Input::Csv(_) | Input::OptiOdom(_) => {}
@@ -83,15 +81,61 @@ pub fn recorded_topics(path: &Path, max_file_bytes: u64) -> Result<Vec<mcap::cop
 /// The ROS recordings at `paths` (files, rosbag2 folders, folders of them), in the order `load` reads them;
 /// anything else is an error naming it.
 pub(crate) fn ros_recordings(paths: &[PathBuf]) -> Result<Vec<PathBuf>, DatasetError> {
-    let mut inputs = Vec::new();
-    for p in paths {
-        expand(p, &mut inputs);
-    }
-    inputs
+    Inputs::of(paths)
+        .list
         .into_iter()
         .map(|i| match i? {
             Input::Csv(p) | Input::OptiOdom(p) => Err(not_a_recording(&p)),
             i => Ok(i.path().to_path_buf()),
+        })
+        .collect()
+}
+
+/// What kind of input a path of `omnical info` is, as [`super::load`] reads it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InputKind {
+    /// A ROS recording (`.mcap`, `.db3`, `.bag`, a rosbag2 folder): its topics are reviewed.
+    Ros,
+    /// An omnical CSV run.
+    CsvRun,
+    /// An OptiOdom set folder (its metadata and run CSVs with motion capture).
+    OptiOdom,
+}
+
+impl InputKind {
+    /// The id `omnical info --json` gives it (`ros`, `csv`, `optiodom`).
+    pub fn id(self) -> &'static str {
+        match self {
+            Self::Ros => "ros",
+            Self::CsvRun => "csv",
+            Self::OptiOdom => "optiodom",
+        }
+    }
+
+    /// What it is, in words.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Self::Ros => "a ROS recording",
+            Self::CsvRun => "an omnical CSV run (t_s, wheel speeds, ground-truth pose per row: docs/formats.md)",
+            Self::OptiOdom => {
+                "an OptiOdom set (its metadata CSV declares the robot's type and geometry; one CSV per run with \
+                 wheel speeds and motion capture)"
+            }
+        }
+    }
+}
+
+/// Every input at `paths` (files or folders, expanded as [`super::load`] expands them) with its kind.
+pub(crate) fn inputs(paths: &[PathBuf]) -> Result<Vec<(PathBuf, InputKind)>, DatasetError> {
+    Inputs::of(paths)
+        .list
+        .into_iter()
+        .map(|i| {
+            Ok(match i? {
+                Input::Csv(p) => (p, InputKind::CsvRun),
+                Input::OptiOdom(p) => (p, InputKind::OptiOdom),
+                Input::Mcap(p) | Input::Db3(p) | Input::Recording(p) | Input::Ros1(p) => (p, InputKind::Ros),
+            })
         })
         .collect()
 }
@@ -104,8 +148,7 @@ pub(crate) fn feed_ros<S: mcap::recording::MessageSink>(
     max_file_bytes: u64,
     make: impl FnOnce(bool) -> S,
 ) -> Result<S, DatasetError> {
-    let mut inputs = Vec::new();
-    expand(path, &mut inputs);
+    let mut inputs = Inputs::of(&[path.to_path_buf()]).list;
     let not_one = |found: String| {
         DatasetError::file(
             path,
@@ -132,6 +175,7 @@ pub(crate) fn feed_ros<S: mcap::recording::MessageSink>(
             Ok(sink)
         }
         Input::Ros1(p) => {
+            check_size(&p, max_file_bytes)?;
             let mut sink = make(false);
             ros1::feed(&p, &mut sink)?;
             Ok(sink)

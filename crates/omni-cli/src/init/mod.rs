@@ -6,6 +6,7 @@
 //! from the wheels (2 → `diff`; 4 with "mecanum" in a joint or link name → `mecanum`, rollers guessed by
 //! quadrant; otherwise `omni`), and every guess is written as a comment beside the value.
 
+pub mod skeleton;
 pub mod urdf;
 
 use crate::dataset::mcap::{Inventory, TopicSummary};
@@ -236,6 +237,21 @@ fn inventory_lines(inv: &Inventory, recording: &str) -> Vec<String> {
     lines
 }
 
+/// The header lines on continuous joints not taken as wheels: without a cylinder, or passive casters.
+fn not_wheels(found: &UrdfWheels) -> Vec<String> {
+    let mut lines = Vec::new();
+    if !found.without_cylinder.is_empty() {
+        lines.push(format!("Not wheels (no cylinder on the child link): {}.", found.without_cylinder.join(", ")));
+    }
+    if !found.casters.is_empty() {
+        lines.push(format!(
+            "Not driven (passive casters: below a swivel joint, or named caster): {}.",
+            found.casters.join(", ")
+        ));
+    }
+    lines
+}
+
 /// Drafts a robot description from what a recording and a URDF hold.
 pub fn draft(
     inv: &Inventory,
@@ -275,9 +291,7 @@ pub fn draft(
             round(t[2], 9)
         ),
     });
-    if !found.without_cylinder.is_empty() {
-        header.push(format!("Not wheels (no cylinder on the child link): {}.", found.without_cylinder.join(", ")));
-    }
+    header.extend(not_wheels(found));
     header.push(String::new());
     header.push("Guessed:".into());
     header.push(format!("  {kind_note}"));

@@ -55,6 +55,9 @@ pub struct UrdfWheels {
     pub wheels: Vec<UrdfWheel>,
     /// Continuous joints whose child link has no cylinder (not taken as wheels).
     pub without_cylinder: Vec<String>,
+    /// Passive casters, not taken as wheels: continuous joints with a cylinder below a joint that swivels
+    /// about a vertical axis, or named `caster`.
+    pub casters: Vec<String>,
 }
 
 fn rpy_matrix([roll, pitch, yaw]: [f64; 3]) -> Mat3 {
@@ -102,6 +105,29 @@ fn pose_in_root(robot: &urdf_rs::Robot, link: &str) -> Option<(Mat3, [f64; 3])> 
         r = mul(&r, &rpy_matrix(*j.origin.rpy));
     }
     Some((r, t))
+}
+
+/// Whether the wheel on `joint` is a passive caster: named so (joint or link), or hanging below a
+/// non-fixed joint whose axis is vertical in the root's frame (the caster's swivel).
+fn is_caster(robot: &urdf_rs::Robot, joint: &urdf_rs::Joint) -> bool {
+    let named = |s: &str| s.to_lowercase().contains("caster");
+    if named(&joint.name) || named(&joint.child.link) {
+        return true;
+    }
+    let mut at = joint.parent.link.as_str();
+    for _ in 0..robot.joints.len() {
+        let Some(up) = robot.joints.iter().find(|j| j.child.link == at) else { return false };
+        if up.joint_type != urdf_rs::JointType::Fixed {
+            let r = pose_in_root(robot, &up.parent.link).map_or(IDENTITY, |(r, _)| r);
+            let a = apply(&mul(&r, &rpy_matrix(*up.origin.rpy)), *up.axis.xyz);
+            let norm = a.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if norm > 0.0 && (a[2] / norm).abs() > 0.9 {
+                return true;
+            }
+        }
+        at = &up.parent.link;
+    }
+    false
 }
 
 /// The radius of a link's cylinder: collision geometry first, else visual.
@@ -154,6 +180,10 @@ pub fn wheels(text: &str) -> Result<UrdfWheels, String> {
             out.without_cylinder.push(j.name.clone());
             continue;
         };
+        if is_caster(&robot, j) {
+            out.casters.push(j.name.clone());
+            continue;
+        }
         let (r, _) = pose_in_root(&robot, &j.parent.link)
             .ok_or_else(|| format!("joint {:?}: the links above it form a loop", j.name))?;
         let (_, position_m) = pose_in_root(&robot, &j.child.link)

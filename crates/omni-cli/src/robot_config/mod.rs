@@ -17,9 +17,14 @@
 //! them ([`write()`]); the text of the matrix files is made in `odometry`, that of the controller file and of
 //! the command's summary in `ros2_controllers`.
 
+mod noise;
 mod odometry;
 mod ros2_controllers;
 
+pub use noise::{
+    AMCL_YAML, ROBOT_LOCALIZATION_YAML, TypicalMotion, amcl_yaml, pose_diagonal, robot_localization_yaml,
+    twist_diagonal,
+};
 pub use odometry::{num, odometry_header, odometry_yaml, wrap};
 pub use ros2_controllers::{accuracy_lines, controller_yaml, params_text, summary, warning_lines};
 
@@ -119,6 +124,9 @@ pub struct Request<'a> {
     pub wheel_names: Vec<String>,
     /// Controller to fit (default: the one that matches the base).
     pub controller: Option<ControllerKind>,
+    /// The model file's odometry noise model, if it has one (issue 46): the covariance diagonals, Nav2 AMCL
+    /// and robot_localization files are written from it.
+    pub noise: Option<omni_kin::noise::OdometryNoise>,
 }
 
 /// Everything the files say, computed once.
@@ -148,6 +156,10 @@ pub struct RobotConfig {
     pub matrix_accuracy: Option<Accuracy>,
     /// The controller's odometry.
     pub controller_accuracy: Accuracy,
+    /// The odometry noise model, if the model file has one.
+    pub noise: Option<omni_kin::noise::OdometryNoise>,
+    /// The runs' RMS speed and turn rate under the fitted matrix (the twist diagonal's operating point).
+    pub motion: TypicalMotion,
 }
 
 impl RobotConfig {
@@ -239,17 +251,38 @@ pub fn build(req: &Request<'_>) -> Result<RobotConfig, RobotConfigError> {
         fit,
         design_fit,
         n_runs: req.runs.len(),
+        noise: req.noise.clone(),
+        motion: typical_motion(&matrix, req.runs),
     })
+}
+
+/// The RMS speed and turn rate of the runs' wheel samples under `matrix`.
+fn typical_motion(matrix: &IkMatrix, runs: &[Run]) -> TypicalMotion {
+    let (mut v2, mut w2, mut n) = (0.0, 0.0, 0usize);
+    for r in runs {
+        for k in 0..r.n_samples() {
+            let t = matrix.twist(r.wheel_sample(k));
+            v2 += t.vx_m_s * t.vx_m_s + t.vy_m_s * t.vy_m_s;
+            w2 += t.omega_rad_s * t.omega_rad_s;
+            n += 1;
+        }
+    }
+    let rms = |s: f64| if n == 0 { 0.0 } else { (s / n as f64).sqrt() };
+    TypicalMotion { speed_m_s: rms(v2), turn_rad_s: rms(w2) }
 }
 
 /// Write the three files into `dir` (created if needed).
 pub fn write(dir: &Path, c: &RobotConfig) -> Result<(), RobotConfigError> {
     std::fs::create_dir_all(dir).map_err(|source| RobotConfigError::CreateDir { dir: dir.to_path_buf(), source })?;
-    let files = [
+    let mut files = vec![
         (ODOMETRY_YAML, odometry_yaml(c)),
         (ODOMETRY_HEADER, odometry_header(c)),
         (CONTROLLER_YAML, controller_yaml(c)),
     ];
+    if let Some(n) = &c.noise {
+        files.push((AMCL_YAML, amcl_yaml(c, n)));
+        files.push((ROBOT_LOCALIZATION_YAML, robot_localization_yaml(c, n)));
+    }
     for (name, text) in files {
         let path = dir.join(name);
         crate::atomic::write_atomic(&path, text.as_bytes())

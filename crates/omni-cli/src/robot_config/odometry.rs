@@ -114,7 +114,11 @@ fn formula_comment(c: &RobotConfig, prefix: &str) -> String {
 
 /// The matrix as a ROS 2 parameter file.
 pub fn odometry_yaml(c: &RobotConfig) -> String {
-    let mut s = formula_comment(c, "# ");
+    let mut s = String::from(
+        "# A ROS 2 parameter file for an odometry node of your own (`/**`: any node name), for every ROS 2\n\
+         # distribution (Humble, Jazzy, Kilted, Rolling).\n",
+    );
+    s.push_str(&formula_comment(c, "# "));
     let names: Vec<&str> = c.wheel_names.iter().map(String::as_str).collect();
     let _ = writeln!(s, "/**:\n  ros__parameters:");
     let _ = writeln!(s, "    format: \"omnical-odometry/1\"");
@@ -157,6 +161,7 @@ pub fn odometry_yaml(c: &RobotConfig) -> String {
 pub fn odometry_header(c: &RobotConfig) -> String {
     let n = c.wheel_names.len();
     let mut s = String::from("/*\n");
+    s.push_str(" * C99 with no ROS dependency: for a ROS 1 or ROS 2 node of any distribution, or firmware.\n");
     s.push_str(&formula_comment(c, " * "));
     s.push_str(
         " * omnical_twist() applies the matrix; omnical_step() is one integration step (omnical's formula).\n */\n",

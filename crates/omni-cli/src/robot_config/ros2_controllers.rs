@@ -214,14 +214,22 @@ pub fn controller_yaml(c: &RobotConfig) -> String {
             );
         }
     }
+    if let Some(n) = &c.noise {
+        s.push_str(&super::noise::controller_lines(c, n));
+    }
     s
 }
 
 /// What `omnical export` prints about the robot configuration (on stdout; [`warning_lines`] go to stderr).
 pub fn summary(c: &RobotConfig, dir: &Path) -> String {
     let t = c.fit.twist_rms;
+    let noise_files = if c.noise.is_some() {
+        format!(", {} and {}", super::AMCL_YAML, super::ROBOT_LOCALIZATION_YAML)
+    } else {
+        String::new()
+    };
     let mut s = format!(
-        "wrote {ODOMETRY_YAML}, {ODOMETRY_HEADER} and {CONTROLLER_YAML} to {}\n{}: {} (nearest fit; twist RMS \
+        "wrote {ODOMETRY_YAML}, {ODOMETRY_HEADER}, {CONTROLLER_YAML}{noise_files} to {}\n{}: {} (nearest fit; twist RMS \
          difference vx {:.2e} m/s, vy {:.2e} m/s, ω {:.2e} rad/s)\n",
         dir.display(),
         c.kind(),

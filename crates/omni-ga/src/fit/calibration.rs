@@ -115,6 +115,9 @@ pub fn calibrate(
     observer: &mut dyn Observer,
 ) -> Result<Calibration, Error> {
     let t0 = Instant::now();
+    // A direction along which the data move the fit well away from the start is not held there.
+    let identify = IdentifyOptions { start: Some(start.params.clone()), ..plan.identify.clone() };
+    let plan = &Plan { identify, ..plan.clone() };
     let model = start.model.clone().with_integration(plan.integration);
     let bounds = search_box_with(&model, &start.params, plan.box_rule, &plan.half_widths)?;
     let problem = CalibrationProblem::new(&model, train, plan.objective, bounds.clone())?;

@@ -116,11 +116,11 @@ impl Learned {
     /// `learned:<family>` for a robot with `n_wheels` wheels.
     pub fn from_id(id: &str, n_wheels: usize) -> Result<Self, KinError> {
         let name = id.strip_prefix(PREFIX).unwrap_or(id);
-        let family = Family::ALL.iter().copied().find(|f| f.id() == name).ok_or_else(|| KinError::Unknown {
-            what: "effect",
-            name: id.into(),
-            known: ids().join(", "),
-        })?;
+        let family = Family::ALL
+            .iter()
+            .copied()
+            .find(|f| f.id() == name)
+            .ok_or_else(|| KinError::unknown("effect", id, &ids()))?;
         Ok(Self { family, n_wheels })
     }
 

@@ -210,6 +210,17 @@ pub const CATALOGUE: &[&str] = &[
     "world_drift",
 ];
 
+/// Every id [`EffectKind::from_id`] accepts, for help texts and messages: the [`CATALOGUE`] with
+/// `sensor_offset_yaw` after `sensor_offset`, then the learned corrections (`learned:wheel`, …).
+pub fn ids() -> Vec<String> {
+    let mut ids: Vec<String> = CATALOGUE.iter().map(|s| s.to_string()).collect();
+    if let Some(i) = ids.iter().position(|id| id == "sensor_offset") {
+        ids.insert(i + 1, "sensor_offset_yaw".into());
+    }
+    ids.extend(learned::ids());
+    ids
+}
+
 impl EffectKind {
     /// A built-in effect by id for a robot with `n_wheels` wheels. `sensor_offset_yaw` is `sensor_offset`
     /// with a yaw parameter.
@@ -228,13 +239,7 @@ impl EffectKind {
             "sample_timing" => Self::SampleTiming(SampleTiming {}),
             "world_drift" => Self::WorldDrift(WorldDrift {}),
             other if other.starts_with(learned::PREFIX) => Self::Learned(Learned::from_id(other, n_wheels)?),
-            other => {
-                return Err(KinError::Unknown {
-                    what: "effect",
-                    name: other.into(),
-                    known: format!("{}, sensor_offset_yaw", CATALOGUE.join(", ")),
-                });
-            }
+            other => return Err(KinError::unknown("effect", other, &ids())),
         })
     }
 

@@ -28,9 +28,15 @@ use serde::{Deserialize, Serialize};
 pub struct MatchSettings {
     /// Gauss–Newton iterations at most. Default 30.
     pub max_iterations: usize,
+    /// Points on a line within this angle of their beam are dropped before matching (mixed pixels at depth
+    /// jumps, the edges they join, grazing walls: [`super::ScanPoints::without_edges`]); 0 keeps them. rad.
+    /// Default 0.17 (10°).
+    #[serde(default = "edge_angle_rad")]
+    pub edge_angle_rad: f64,
     /// A current point farther than this from its nearest reference point is not paired. m. Default 0.3.
     pub max_correspondence_m: f64,
-    /// Beams either side of a reference point that may join its line. Default 4.
+    /// Beams either side of a reference point that may join its line (a real lidar's empty beams and its
+    /// noise, growing with range, need the longer lines). Default 8.
     pub line_window: usize,
     /// Neighbours farther than this from the point do not join its line. m. Default 0.5.
     pub line_radius_m: f64,
@@ -40,6 +46,7 @@ pub struct MatchSettings {
     pub trim_sigmas: f64,
     /// The robust standard deviation is at least this (the range noise of a good lidar). m. Default 0.005.
     pub sigma_floor_m: f64,
+
     /// Fewer inlier pairs than this reject the match. Default 60.
     pub min_inliers: usize,
     /// A smaller inlier share of the current scan's returns rejects the match. Default 0.5.
@@ -58,12 +65,18 @@ pub struct MatchSettings {
     pub max_gap_s: f64,
 }
 
+/// 10°: the default [`MatchSettings::edge_angle_rad`].
+fn edge_angle_rad() -> f64 {
+    10f64.to_radians()
+}
+
 impl Default for MatchSettings {
     fn default() -> Self {
         Self {
             max_iterations: 30,
+            edge_angle_rad: edge_angle_rad(),
             max_correspondence_m: 0.3,
-            line_window: 4,
+            line_window: 8,
             line_radius_m: 0.5,
             line_rms_max_m: 0.03,
             trim_sigmas: 3.0,
@@ -167,7 +180,7 @@ pub struct Reference {
 impl Reference {
     /// The lines of `scan`'s returns (see the module docs) and their k-d tree.
     pub fn new(scan: &Scan, s: &MatchSettings) -> Self {
-        Self::from_points(&scan.points(), s)
+        Self::from_points(&scan.points().without_edges(s.edge_angle_rad), s)
     }
 
     /// The lines of a scan's returns `pts` (as [`Scan::points`] gives them, or de-skewed) and their k-d
@@ -313,7 +326,7 @@ fn condition(rows: &[[f64; 3]], length_m: f64) -> f64 {
 /// Matches `current` against `reference`, starting from `guess` (the current sensor pose in the reference
 /// frame: the previous motion, or the identity). See the module docs.
 pub fn match_scans(reference: &Reference, current: &Scan, guess: Pose2, s: &MatchSettings) -> ScanMatch {
-    match_points(reference, &current.points().xy_m, guess, s)
+    match_points(reference, &current.points().without_edges(s.edge_angle_rad).xy_m, guess, s)
 }
 
 /// [`match_scans`] for a scan's returns `points` (sensor frame, m) as [`Scan::points`] gives them, or
@@ -370,7 +383,7 @@ pub fn match_points(reference: &Reference, points: &[[f64; 2]], guess: Pose2, s:
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lidar::room::{Room, ScanSettings, simulate_scan};
+    use crate::lidar::{Room, ScanSettings, simulate_scan};
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 

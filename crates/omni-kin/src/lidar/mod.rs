@@ -9,11 +9,16 @@
 pub mod icp;
 pub mod path;
 pub mod room;
+pub mod scanner;
+
+#[cfg(test)]
+mod real_lidars;
 
 use crate::pose::Pose2;
 pub use icp::{MatchQuality, MatchSettings, Rejection, ScanMatch, match_points, match_scans};
 pub use path::{SensorPath, sensor_path};
-pub use room::{CLEARANCE_M, Room, ScanSettings, first_collision, simulate_scan, simulate_scans, simulate_sweep};
+pub use room::{CLEARANCE_M, RayHit, Room, first_collision};
+pub use scanner::{LidarModel, NoReturn, ScanSettings, simulate_scan, simulate_scans, simulate_sweep};
 
 /// One scan, as `sensor_msgs/msg/LaserScan` carries it: beam `i` points at `angle_min_rad + i ·
 /// angle_increment_rad` in the sensor frame and measured `ranges_m[i]`. A range that is not finite or lies
@@ -77,7 +82,38 @@ pub struct ScanPoints {
     pub beam: Vec<usize>,
 }
 
+/// Neighbours whose ranges differ by less than this are never an edge ([`ScanPoints::without_edges`]):
+/// range noise alone. m.
+pub const EDGE_JUMP_M: f64 = 0.05;
+
 impl ScanPoints {
+    /// The points without those at depth jumps: point `k` is dropped when a neighbour (the return before or
+    /// after it, at most two beams away) lies more than [`EDGE_JUMP_M`] nearer or farther and the line to it
+    /// runs within `min_angle_rad` of `k`'s beam. That line is a surface seen edge-on: a **mixed pixel**
+    /// (a beam whose footprint straddled a foreground and a background reads a range between them, a point
+    /// in mid-air), the edges it joins, and walls at grazing incidence, whose ranges real lidars read
+    /// poorly. None of them lies where the next scan sees it again. `min_angle_rad` 0 keeps every point.
+    pub fn without_edges(&self, min_angle_rad: f64) -> Self {
+        if min_angle_rad <= 0.0 {
+            return self.clone();
+        }
+        let sin_min = min_angle_rad.sin();
+        // Whether the line from point k to point j runs within the angle of k's beam.
+        let edge_on = |k: usize, j: usize| {
+            let (p, q) = (self.xy_m[k], self.xy_m[j]);
+            let r = p[0].hypot(p[1]);
+            let v = [q[0] - p[0], q[1] - p[1]];
+            let across = (p[0] * v[1] - p[1] * v[0]).abs() / r;
+            self.beam[k].abs_diff(self.beam[j]) <= 2
+                && (q[0].hypot(q[1]) - r).abs() > EDGE_JUMP_M
+                && across < sin_min * v[0].hypot(v[1])
+        };
+        let n = self.xy_m.len();
+        let keep: Vec<usize> =
+            (0..n).filter(|&k| !(k > 0 && edge_on(k, k - 1) || k + 1 < n && edge_on(k, k + 1))).collect();
+        Self { xy_m: keep.iter().map(|&k| self.xy_m[k]).collect(), beam: keep.iter().map(|&k| self.beam[k]).collect() }
+    }
+
     /// The points as the sensor would have seen them all at the scan's stamp, for a sensor moving at the
     /// constant body twist `per_s` (vx, vy m/s and ω rad/s as a [`Pose2`] per second) while beam `i` is
     /// measured `i · time_increment_s` after it: each point is moved by the sensor's motion from the stamp
@@ -120,6 +156,32 @@ mod tests {
         // With range_min 0 (as many drivers declare it), a range of 0 is still no return; a small one is one.
         let zero_min = Scan { range_min_m: 0.0, ranges_m: vec![0.0, 0.02, -0.0, 1.0], ..scan };
         assert_eq!(zero_min.points().beam, vec![1, 3]);
+    }
+
+    /// A wall at 2 m ends at beam 4; beam 5 is a mixed pixel at 2.9 m, half-way to the background at 4 m
+    /// behind it (beams 6 on). The mixed pixel and the two points it joins are dropped; the points on
+    /// either surface stay. A wall seen head-on keeps every point.
+    #[test]
+    fn a_mixed_pixel_and_the_edge_it_joins_are_dropped() {
+        let scan = Scan {
+            t_s: 0.0,
+            time_increment_s: 0.0,
+            angle_min_rad: 0.0,
+            angle_increment_rad: 0.5f64.to_radians(),
+            range_min_m: 0.02,
+            range_max_m: 10.0,
+            ranges_m: vec![2.0, 2.0, 2.0, 2.0, 2.0, 2.9, 4.0, 4.0, 4.0, 4.0],
+        };
+        let kept = scan.points().without_edges(10f64.to_radians());
+        assert_eq!(kept.beam, vec![0, 1, 2, 3, 7, 8, 9]);
+        assert_eq!(scan.points().without_edges(0.0).beam.len(), 10);
+        // A wall 1 m ahead across the beams (x = 1): no edge, however close the points.
+        let wall = Scan {
+            angle_min_rad: -0.3,
+            ranges_m: (0..10).map(|i| (1.0 / (-0.3 + i as f64 * 0.5f64.to_radians()).cos()) as f32).collect(),
+            ..scan
+        };
+        assert_eq!(wall.points().without_edges(10f64.to_radians()).beam.len(), 10);
     }
 
     /// A 270° scan as a Hokuyo UTM-30LX's driver writes it, clockwise (negative `angle_increment`, from

@@ -209,7 +209,7 @@ pub fn sensor_path(scans: &[Scan], s: &MatchSettings) -> Result<SensorPath, KinE
         qualities: Vec::new(),
         deskewed: 0,
     };
-    let raw: Vec<ScanPoints> = scans.par_iter().map(Scan::points).collect();
+    let raw: Vec<ScanPoints> = scans.par_iter().map(|scan| scan.points().without_edges(s.edge_angle_rad)).collect();
     let mut out = fresh();
     let chains = scan_to_scan(scans, &raw, s, &mut out);
     if scans.iter().all(|scan| scan.time_increment_s == 0.0) {
@@ -260,7 +260,7 @@ fn chain_twists(scans: &[Scan], chains: &[Chain]) -> Vec<Option<Pose2>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lidar::room::{Room, ScanSettings, simulate_scan, simulate_sweep};
+    use crate::lidar::{Room, ScanSettings, simulate_scan, simulate_sweep};
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 

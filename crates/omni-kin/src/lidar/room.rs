@@ -7,14 +7,8 @@
 //! A beam's range is the distance to the nearest wall segment it crosses (exact, in float64, before the
 //! simulated noise); a beam that crosses nothing within the maximum range is no return (+inf).
 
-use super::Scan;
-use crate::error::{KinError, Settings};
-use crate::pose::{Pose2, StampedPose};
-use rand::{RngExt, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
-use serde::{Deserialize, Serialize};
-use std::f64::consts::PI;
+use crate::error::KinError;
+use crate::pose::StampedPose;
 
 /// Distance the robot keeps from every wall and obstacle (its footprint's radius, about). m.
 pub const CLEARANCE_M: f64 = 0.25;
@@ -26,6 +20,17 @@ pub struct Room {
     polygons: Vec<Vec<[f64; 2]>>,
     /// Every wall segment (from, to). m.
     segments: Vec<([f64; 2], [f64; 2])>,
+}
+
+/// Where a ray meets a wall ([`Room::ray_hit`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayHit {
+    /// Distance along the ray. m.
+    pub range_m: f64,
+    /// The wall segment met: polygon after polygon, vertex `i` to vertex `i + 1` of each.
+    pub segment: usize,
+    /// Cosine of the angle of incidence (between the ray and the wall's normal): 1 head-on, 0 grazing.
+    pub cos_incidence: f64,
 }
 
 /// An axis-aligned rectangle's corners, counter-clockwise. m.
@@ -83,9 +88,16 @@ impl Room {
     /// The range along the ray from `origin` (m) in direction `angle_rad` (room frame) to the nearest wall
     /// segment, `None` when it meets none. m.
     pub fn ray_range(&self, origin: [f64; 2], angle_rad: f64) -> Option<f64> {
+        self.ray_hit(origin, angle_rad).map(|h| h.range_m)
+    }
+
+    /// Where the ray from `origin` (m) in direction `angle_rad` (room frame) first meets a wall segment:
+    /// its range, the segment's index (polygon after polygon, vertex after vertex) and how squarely it
+    /// meets it; `None` when it meets none.
+    pub fn ray_hit(&self, origin: [f64; 2], angle_rad: f64) -> Option<RayHit> {
         let (dy, dx) = angle_rad.sin_cos();
-        let mut best: Option<f64> = None;
-        for &(a, b) in &self.segments {
+        let mut best: Option<RayHit> = None;
+        for (k, &(a, b)) in self.segments.iter().enumerate() {
             let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
             // origin + t d = a + u e: solve by Cramer's rule.
             let den = dx * ey - dy * ex;
@@ -95,8 +107,10 @@ impl Room {
             let (wx, wy) = (a[0] - origin[0], a[1] - origin[1]);
             let t = (wx * ey - wy * ex) / den;
             let u = (wx * dy - wy * dx) / den;
-            if t > 0.0 && (0.0..=1.0).contains(&u) && best.is_none_or(|b| t < b) {
-                best = Some(t);
+            if t > 0.0 && (0.0..=1.0).contains(&u) && best.is_none_or(|b| t < b.range_m) {
+                // |d × e| / |e|: the cosine of the angle between the ray and the segment's normal.
+                let cos_incidence = den.abs() / ex.hypot(ey);
+                best = Some(RayHit { range_m: t, segment: k, cos_incidence });
             }
         }
         best
@@ -133,188 +147,6 @@ fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     (p[0] - a[0] - u * ex).hypot(p[1] - a[1] - u * ey)
 }
 
-/// How the simulated lidar scans. Defaults: a 10 Hz, 720-beam, 360° scanner of 12 m range.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ScanSettings {
-    /// Scans per second. Hz. Default 10.
-    pub rate_hz: f64,
-    /// Beams per scan, evenly spread over the field of view. Default 720 (0.5° apart over 360°).
-    pub beams: usize,
-    /// Field of view, centred on the sensor's x axis. rad. Default 2π: beams from −180°, `2π / beams` apart;
-    /// a partial one (a 270° Hokuyo) from `−fov / 2` to `+fov / 2` inclusive, `fov / (beams − 1)` apart, as its
-    /// driver writes `angle_min`, `angle_max` and `angle_increment`.
-    #[serde(default = "full_turn_rad")]
-    pub fov_rad: f64,
-    /// Shortest valid range. m. Default 0.05.
-    pub range_min_m: f64,
-    /// Longest valid range: a wall farther away is no return (+inf). m. Default 12.
-    pub range_max_m: f64,
-    /// Gaussian noise on each range. m. Default 0.01.
-    pub range_noise_m: f64,
-    /// Share of beams that return nothing (NaN), at random. Default 0.01.
-    pub dropout: f64,
-    /// The beams are measured one after another over the scan period (1 / `rate_hz`), as a spinning lidar
-    /// measures them, so a moving robot bends its scans; false: each scan at one instant. Default false.
-    #[serde(default)]
-    pub sweeping: bool,
-}
-
-/// 2π: a lidar that sees all round.
-fn full_turn_rad() -> f64 {
-    2.0 * PI
-}
-
-impl Default for ScanSettings {
-    fn default() -> Self {
-        Self {
-            rate_hz: 10.0,
-            beams: 720,
-            fov_rad: full_turn_rad(),
-            range_min_m: 0.05,
-            range_max_m: 12.0,
-            range_noise_m: 0.01,
-            dropout: 0.01,
-            sweeping: false,
-        }
-    }
-}
-
-impl ScanSettings {
-    /// Checks the settings; the error names the field.
-    pub fn check(&self) -> Result<(), KinError> {
-        let bad = |f: &str, why: &str| Err(KinError::Setting { of: Settings::Lidar, field: f.into(), why: why.into() });
-        if !(self.rate_hz > 0.0 && self.rate_hz.is_finite()) {
-            return bad("rate_hz", "must be finite and > 0");
-        }
-        if self.beams < 3 {
-            return bad("beams", "must be at least 3");
-        }
-        if !(self.fov_rad > 0.0 && self.fov_rad <= 2.0 * PI) {
-            return bad("fov_rad", "must be in (0, 2π] (a field of view of up to 360°)");
-        }
-        if !(self.range_min_m >= 0.0 && self.range_max_m > self.range_min_m && self.range_max_m.is_finite()) {
-            return bad("range_max_m", "need 0 ≤ range_min_m < range_max_m, finite");
-        }
-        if !(self.range_noise_m >= 0.0 && self.range_noise_m.is_finite()) {
-            return bad("range_noise_m", "must be finite and ≥ 0");
-        }
-        if !(0.0..1.0).contains(&self.dropout) {
-            return bad("dropout", "must be in [0, 1)");
-        }
-        Ok(())
-    }
-
-    /// Whether the beams go all round (the last one is not repeated by a first at +180°).
-    fn all_round(&self) -> bool {
-        self.fov_rad >= 2.0 * PI
-    }
-
-    /// Angle of the first beam: −180° all round, else −fov / 2. rad.
-    pub fn angle_min_rad(&self) -> f64 {
-        if self.all_round() { -PI } else { -0.5 * self.fov_rad }
-    }
-
-    /// Angle between beams. rad.
-    pub fn angle_increment_rad(&self) -> f64 {
-        if self.all_round() { 2.0 * PI / self.beams as f64 } else { self.fov_rad / (self.beams - 1) as f64 }
-    }
-
-    /// Time between beams: the scan period over the beams when sweeping, else 0. s.
-    pub fn time_increment_s(&self) -> f64 {
-        if self.sweeping { 1.0 / (self.rate_hz * self.beams as f64) } else { 0.0 }
-    }
-}
-
-/// One scan at `t_s` from a sensor at `room_from_sensor` in `room`: each beam's exact range plus Gaussian
-/// noise (`range_noise_m`), a dropout (NaN) with probability `dropout`, +inf beyond `range_max_m`. Draws
-/// two numbers per beam from `rng`, whatever happens to the beam, so streams stay aligned.
-pub fn simulate_scan(
-    room: &Room,
-    room_from_sensor: &Pose2,
-    t_s: f64,
-    settings: &ScanSettings,
-    rng: &mut ChaCha8Rng,
-) -> Scan {
-    simulate_sweep(room, |_| *room_from_sensor, t_s, 0.0, settings, rng)
-}
-
-/// [`simulate_scan`] for beams measured one after another: beam `i` from the sensor pose
-/// `room_from_sensor_at(i · time_increment_s)` (s after `t_s`).
-pub fn simulate_sweep(
-    room: &Room,
-    room_from_sensor_at: impl Fn(f64) -> Pose2,
-    t_s: f64,
-    time_increment_s: f64,
-    settings: &ScanSettings,
-    rng: &mut ChaCha8Rng,
-) -> Scan {
-    let angle_min_rad = settings.angle_min_rad();
-    let inc = settings.angle_increment_rad();
-    let ranges_m = (0..settings.beams)
-        .map(|i| {
-            let beam = angle_min_rad + i as f64 * inc;
-            let noise: f64 = StandardNormal.sample(rng);
-            let dropped = rng.random_range(0.0..1.0) < settings.dropout;
-            let sensor = room_from_sensor_at(i as f64 * time_increment_s);
-            let exact = room.ray_range([sensor.x_m, sensor.y_m], sensor.theta_rad + beam);
-            match exact.map(|r| r + settings.range_noise_m * noise) {
-                _ if dropped => f32::NAN,
-                Some(r) if r < settings.range_max_m => r.max(0.0) as f32,
-                _ => f32::INFINITY,
-            }
-        })
-        .collect();
-    Scan {
-        t_s,
-        time_increment_s,
-        angle_min_rad,
-        angle_increment_rad: inc,
-        range_min_m: settings.range_min_m,
-        range_max_m: settings.range_max_m,
-        ranges_m,
-    }
-}
-
-/// Salt mixed into the simulator's seed for the lidar's draws, so that adding a lidar leaves every other
-/// draw of a simulated dataset as it was.
-const LIDAR_SEED_SALT: u64 = 0x6c69_6461_7220_3238;
-
-/// The scans of a sensor at `base_from_sensor` on a robot whose true base poses (`room_from_base`, the
-/// run starting at the room's origin) are `base`, one scan per pose at its time: random stream `stream` of
-/// `seed` (the run's own, as the simulator's), so the same seed gives the same scans whatever the thread
-/// count.
-pub fn simulate_scans(
-    room: &Room,
-    base: &[StampedPose],
-    base_from_sensor: &Pose2,
-    settings: &ScanSettings,
-    seed: u64,
-    stream: u64,
-) -> Vec<Scan> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ LIDAR_SEED_SALT);
-    rng.set_stream(stream);
-    let tau = settings.time_increment_s();
-    (0..base.len())
-        .map(|k| {
-            // While sweeping, the base between this scan's pose and the next's (linear; the last extrapolates).
-            let (a, b) = if k + 1 < base.len() { (base[k], base[k + 1]) } else { (base[k.max(1) - 1], base[k]) };
-            let dt = b.t_s - a.t_s;
-            let at = |offset_s: f64| {
-                if offset_s == 0.0 {
-                    return base[k].pose.compose(base_from_sensor);
-                }
-                let f = if dt > 0.0 { (base[k].t_s + offset_s - a.t_s) / dt } else { 0.0 };
-                let lerp = |x: f64, y: f64| x + f * (y - x);
-                let (p, q) = (a.pose, b.pose);
-                // The heading the short way round (poses may be wrapped to (−π, π]).
-                let theta = p.theta_rad + f * crate::pose::wrap_angle(q.theta_rad - p.theta_rad);
-                Pose2::new(lerp(p.x_m, q.x_m), lerp(p.y_m, q.y_m), theta).compose(base_from_sensor)
-            };
-            simulate_sweep(room, at, base[k].t_s, tau, settings, &mut rng)
-        })
-        .collect()
-}
-
 /// The first base pose (room frame) closer than `clearance_m` to a wall or obstacle, or outside the room.
 pub fn first_collision(room: &Room, base: &[StampedPose], clearance_m: f64) -> Option<StampedPose> {
     base.iter().find(|b| !room.is_free([b.pose.x_m, b.pose.y_m], clearance_m)).copied()
@@ -323,26 +155,7 @@ pub fn first_collision(room: &Room, base: &[StampedPose], clearance_m: f64) -> O
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A 270° lidar of 1081 beams (a Hokuyo UTM-30LX) spans −135° to +135° inclusive, 0.25° apart, and
-    /// sees nothing behind it; 360° keeps the all-round layout (−180°, 0.5° apart for 720 beams).
-    #[test]
-    fn a_partial_field_of_view_spans_it_inclusive_and_sees_nothing_behind() {
-        let s = ScanSettings { beams: 1081, fov_rad: 270f64.to_radians(), dropout: 0.0, ..ScanSettings::default() };
-        s.check().unwrap();
-        assert!((s.angle_min_rad().to_degrees() + 135.0).abs() < 1e-12);
-        assert!((s.angle_increment_rad().to_degrees() - 0.25).abs() < 1e-12);
-        let all = ScanSettings::default();
-        assert_eq!((all.angle_min_rad(), all.angle_increment_rad()), (-PI, 2.0 * PI / 720.0));
-        let room = Room::builtin("room").unwrap();
-        let mut rng = ChaCha8Rng::seed_from_u64(1);
-        let scan = simulate_scan(&room, &Pose2::IDENTITY, 0.0, &s, &mut rng);
-        let p = scan.points();
-        assert!(p.xy_m.len() > 1000 && p.xy_m.iter().all(|q| q[1].atan2(q[0]).abs() < 2.357), "{}", p.xy_m.len());
-        for fov_deg in [0.0, 361.0, f64::NAN] {
-            assert!(ScanSettings { fov_rad: fov_deg.to_radians(), ..all.clone() }.check().is_err(), "{fov_deg}");
-        }
-    }
+    use std::f64::consts::PI;
 
     #[test]
     fn ray_casting_gives_exact_ranges_in_the_room() {
@@ -357,19 +170,13 @@ mod tests {
         assert!((to_corner - 20f64.sqrt()).abs() < 1e-12, "{to_corner}");
         // The box x 3..4, y 2..3 from (1, 2.5) along +x: its face at x = 3.
         assert!((room.ray_range([1.0, 2.5], 0.0).unwrap() - 2.0).abs() < 1e-12);
-    }
-
-    #[test]
-    fn noise_free_scan_matches_the_ray_cast_and_the_max_range() {
-        let room = Room::builtin("corridor").unwrap();
-        let settings = ScanSettings { range_noise_m: 0.0, dropout: 0.0, ..ScanSettings::default() };
-        let mut rng = ChaCha8Rng::seed_from_u64(1);
-        let scan = simulate_scan(&room, &Pose2::new(0.0, 0.5, 0.0), 0.0, &settings, &mut rng);
-        // Beam 360 looks along +x: the far end is 20 m away, beyond 12 m: no return.
-        assert_eq!(scan.ranges_m[360], f32::INFINITY);
-        // Beam 540 looks along +y (90°): the wall at y = 2.5, 2 m away; beam 180 along −y: 3 m.
-        assert!((f64::from(scan.ranges_m[540]) - 2.0).abs() < 1e-6);
-        assert!((f64::from(scan.ranges_m[180]) - 3.0).abs() < 1e-6);
+        // Head-on the right wall (segment 1: (5, −4) to (5, 4)); at −60° the bottom wall (segment 0), 30°
+        // from its normal.
+        let hit = room.ray_hit([0.0, 0.0], 0.0).unwrap();
+        assert_eq!((hit.segment, hit.cos_incidence), (1, 1.0));
+        let oblique = room.ray_hit([0.0, 0.0], (-60f64).to_radians()).unwrap();
+        assert_eq!(oblique.segment, 0);
+        assert!((oblique.cos_incidence - 0.75f64.sqrt()).abs() < 1e-12, "{oblique:?}");
     }
 
     #[test]
@@ -379,33 +186,5 @@ mod tests {
         assert!(!room.is_free([4.9, 0.0], CLEARANCE_M));
         assert!(!room.is_free([3.5, 2.5], CLEARANCE_M)); // inside the box
         assert!(!room.is_free([6.0, 0.0], 0.0)); // outside the walls
-    }
-
-    #[test]
-    fn same_seed_same_scan_and_noise_has_its_sigma() {
-        let room = Room::builtin("room").unwrap();
-        let s = ScanSettings::default();
-        let pose = Pose2::new(0.3, -0.2, 0.4);
-        let a = simulate_scan(&room, &pose, 0.0, &s, &mut ChaCha8Rng::seed_from_u64(9));
-        let b = simulate_scan(&room, &pose, 0.0, &s, &mut ChaCha8Rng::seed_from_u64(9));
-        assert_eq!(format!("{:?}", a.ranges_m), format!("{:?}", b.ranges_m));
-        let exact = simulate_scan(
-            &room,
-            &pose,
-            0.0,
-            &ScanSettings { range_noise_m: 0.0, dropout: 0.0, ..s.clone() },
-            &mut ChaCha8Rng::seed_from_u64(9),
-        );
-        let d: Vec<f64> = a
-            .ranges_m
-            .iter()
-            .zip(&exact.ranges_m)
-            .filter(|(r, _)| r.is_finite())
-            .map(|(r, e)| f64::from(*r) - f64::from(*e))
-            .collect();
-        let sigma = (d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64).sqrt();
-        assert!((sigma - 0.01).abs() < 0.001, "sigma {sigma}");
-        let dropped = a.ranges_m.iter().filter(|r| r.is_nan()).count();
-        assert!((1..=20).contains(&dropped), "{dropped} dropouts of 720");
     }
 }

@@ -34,7 +34,7 @@ mod wheels;
 pub use error::{RobotError, RobotProblem};
 pub use priors::{PRIOR_BOX_SIGMAS, Priors};
 pub use recording::{Frames, GroundTruthFile, Topics};
-pub use wheel_data::{PositionUnit, VelocityUnit, WheelData};
+pub use wheel_data::{PositionUnit, VelocityUnit, WheelData, WheelField};
 pub use wheels::{DiffSpec, MAX_WHEEL_DISTANCE_M, MAX_WHEEL_RADIUS_M, WheelSpec};
 
 use crate::geometry::{RobotGeometry, Wheel};

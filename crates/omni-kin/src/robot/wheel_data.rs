@@ -39,6 +39,27 @@ pub enum VelocityUnit {
     CountsS,
 }
 
+/// Which field of the joints gives the wheel speeds (`[wheel_data] source`), when a recording has both and
+/// they disagree (a driver's `velocity` in motor rpm beside `position` in wheel encoder counts).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WheelField {
+    /// The speeds are differences of `position` over the stamps.
+    Position,
+    /// The speeds are `velocity`.
+    Velocity,
+}
+
+impl WheelField {
+    /// The name used in `robot.toml` and in messages (the JointState field's).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Position => "position",
+            Self::Velocity => "velocity",
+        }
+    }
+}
+
 /// `[wheel_data]`: the units of the wheels' joint data and the encoder and gearbox between the measured
 /// shaft and the wheel. Every wheel joint shares them. The default (empty table) is ROS's rad and rad/s on
 /// the wheel's own shaft.
@@ -58,6 +79,10 @@ pub struct WheelData {
     /// 19.2). Default 1.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gear_ratio: Option<f64>,
+    /// The field the wheel speeds come from when a recording has both `position` and `velocity`. Default:
+    /// `velocity`, and a recording whose two fields give different rates is refused until this is set.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<WheelField>,
 }
 
 impl PositionUnit {
@@ -97,7 +122,8 @@ impl WheelData {
 
     /// Whether the data is ROS's rad and rad/s on the wheel's shaft (nothing to convert).
     pub fn is_identity(&self) -> bool {
-        *self == Self::default() || (self.position_rad_per_unit() == 1.0 && self.velocity_rad_s_per_unit() == 1.0)
+        *self == Self { source: self.source, ..Self::default() }
+            || (self.position_rad_per_unit() == 1.0 && self.velocity_rad_s_per_unit() == 1.0)
     }
 
     /// Turns of the measured shaft per wheel turn.
@@ -172,6 +198,7 @@ mod tests {
             velocity: VelocityUnit::Rpm,
             counts_per_rev: Some(4096.0),
             gear_ratio: Some(19.2),
+            source: None,
         };
         // 4096 counts · 19.2 = one wheel turn; 60 · 19.2 motor rpm = one wheel turn per second.
         assert!((enc.position_rad_per_unit() * 4096.0 * 19.2 - TAU).abs() < 1e-12);

@@ -66,6 +66,12 @@ pub struct SimConfig {
     pub sample_drop_probability: f64,
     /// Uniform jitter of sample times (late samples). s. Default 0.
     pub sample_jitter_s: f64,
+    /// Slip of the base that the encoders do not see: a random walk of the true motion with the variance
+    /// rates of an odometry noise model ([`crate::noise::NoiseRates`]; its floor is not used: the ground
+    /// truth's noise is `truth_noise_*`), drawn per fine step along, across (holonomic designs) and in
+    /// heading. Default none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub slip_noise: Option<crate::noise::NoiseRates>,
     /// Seed of every random draw.
     pub seed: u64,
 }
@@ -88,6 +94,7 @@ impl Default for SimConfig {
             fine_step_s: 0.001,
             sample_drop_probability: 0.0,
             sample_jitter_s: 0.0,
+            slip_noise: None,
             seed: 0,
         }
     }

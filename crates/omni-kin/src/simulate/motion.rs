@@ -14,6 +14,28 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use std::f64::consts::PI;
 
+/// `after` (a fine step from `before` at twist `tw` for `h` s) moved by the slip noise `q`: along and across
+/// the motion (across only on a `holonomic` base) and in heading, with the variances of the step's distance
+/// and turn. Three draws per step.
+fn slipped(
+    rng: &mut ChaCha8Rng,
+    q: &crate::noise::NoiseRates,
+    holonomic: bool,
+    before: Pose2,
+    after: Pose2,
+    tw: crate::pose::Twist2,
+    h: f64,
+) -> Pose2 {
+    let d = tw.vx_m_s.hypot(tw.vy_m_s) * h;
+    let phi = tw.omega_rad_s.abs() * h;
+    let along = gauss(rng, (q.trans_per_m * d + q.trans_per_rad * phi).sqrt());
+    let across_var = if holonomic { q.strafe_per_m * d + q.trans_per_rad * phi } else { 0.0 };
+    let across = gauss(rng, across_var.sqrt());
+    let heading = gauss(rng, (q.rot_per_rad * phi + q.rot_per_m * d).sqrt());
+    let (s, c) = (before.theta_rad + tw.vy_m_s.atan2(tw.vx_m_s)).sin_cos();
+    Pose2::new(after.x_m + c * along - s * across, after.y_m + s * along + c * across, after.theta_rad + heading)
+}
+
 /// Zero-mean Gaussian noise of standard deviation `sigma` (one draw, always, so streams stay aligned).
 fn gauss(rng: &mut ChaCha8Rng, sigma: f64) -> f64 {
     let z: f64 = StandardNormal.sample(rng);
@@ -38,6 +60,8 @@ pub(super) fn simulate_motion(
     let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
     rng.set_stream(stream);
     let res = truth.model.resolve(&truth.params)?;
+    // A base whose wheels can push it sideways slips sideways too.
+    let holonomic = res.ik.row(1).iter().any(|v| v.abs() > 1e-12);
     let n_w = config.design.n_wheels();
     let fwd = config.design.wheels_from_twist();
     // Each leg's wheel-speed targets and when it ends (since the motion started). s.
@@ -103,7 +127,11 @@ pub(super) fn simulate_motion(
             for (e, p) in &res.twist_effects {
                 tw = crate::effect::Effect::twist_at(*e, p, tw, w, &at);
             }
+            let before = pose;
             pose = step(Scheme::ExactArc, pose, tw, h);
+            if let Some(q) = &config.slip_noise {
+                pose = slipped(&mut rng, q, holonomic, before, pose, tw, h);
+            }
         }
         body[k] = pose;
     }

@@ -458,6 +458,7 @@ def simulate(
     lidar_noise: float = 0.01,
     lidar_dropout: float = 0.01,
     lidar_sweep: bool = False,
+    lidar_model: str = "ideal",
     imu: bool = False,
     imu_rate: float = 100.0,
     imu_bias: float = 0.005,
@@ -470,7 +471,8 @@ def simulate(
     bags (one per run, robot.toml beside them; a folder holding files raises ``FileExistsError`` unless
     ``force=True``), with a simulated 2D lidar in the room ``lidar`` (``"room"``, ``"corridor"`` or a room
     file; mount ``(x_m, y_m, yaw_deg)``, rate [Hz], field of view ``lidar_fov`` [degrees], max range
-    and noise [m]) and/or an IMU's yaw rate
+    and noise [m]; or ``lidar_model="urg04lx"`` / ``"rplidar"``: scans made as a real URG-04LX's or
+    RPLidar A2's come out) and/or an IMU's yaw rate
     (``imu=True``; rate [Hz], bias and noise [rad/s], mount ``(roll_deg, pitch_deg, yaw_deg)`` and the mount
     ``/tf_static`` states, or ``"none"``); the sensors need ``out``."""
 
@@ -536,7 +538,8 @@ def cli_main(argv: list[str]) -> int:
 def train_files(args: list[str]) -> dict[str, Any]:
     """``omnical train ARGS...`` (without the program and subcommand names) inside this process, the
     command's own code path (the ``--out`` model file is byte-identical), printing nothing and installing no
-    Ctrl-C handler. Returns ``summary`` (``--json``'s), ``design`` (name -> start value), ``start_s`` /
+    Ctrl-C handler. Returns ``summary`` (``--json``'s; ``summary["noise"]`` is the odometry noise model the
+    model file keeps as ``[noise]``: rates, standard errors, systematic part), ``design`` (name -> start value), ``start_s`` /
     ``end_s`` [s], ``runs``, ``notes``, ``skipped``, ``warnings``. ``ValueError`` for bad arguments,
     ``OmnicalError`` with the command's message for a failed load or fit."""
 

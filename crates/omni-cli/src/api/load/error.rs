@@ -94,6 +94,19 @@ pub enum LoadError {
         /// The end-pose table.
         file: PathBuf,
     },
+    /// A measured end pose far from where the wheels put its run (a value in another unit than its
+    /// column's).
+    #[error("{}: line {line}, column {column}: {what}", file.display())]
+    EndPoseOff {
+        /// The end-pose table.
+        file: PathBuf,
+        /// The row's line (1-based).
+        line: usize,
+        /// The column whose value is off.
+        column: String,
+        /// How far off, and the unit the value fits.
+        what: String,
+    },
     /// `--gt-window` without a relative reference.
     #[error(
         "--gt-window {window_s} changes nothing here: it is the window of a relative reference (--gt-kind \
@@ -117,10 +130,11 @@ pub enum LoadError {
     /// The wheels, through the robot description's design, travel and turn far more or less than the ground
     /// truth: wheel data in another unit, or a design far from the robot.
     #[error(
-        "through the design of {robot}, the wheels of these {runs} runs travel {:.1} m and turn {:.1} rad where \
+        "through the design of {robot}, the wheels of {} travel {:.1} m and turn {:.1} rad where \
          their ground truth travels {:.1} m and turns {:.1} rad: {ratio:.2} times, beyond what a calibration \
          corrects. Are the joints in another unit (rpm, deg/s, encoder counts)? Declare it in the robot \
          description's [wheel_data] (docs/formats.md){}; otherwise check its radius_m and distances",
+        run.as_ref().map_or_else(|| format!("these {runs} runs"), |r| format!("run {r}")),
         travel.wheels_m,
         travel.wheels_rad,
         travel.truth_m,
@@ -132,8 +146,10 @@ pub enum LoadError {
         robot: robot_file::Source,
         /// The runs read.
         runs: usize,
-        /// Their travel, by the wheels and by the ground truth.
-        travel: Travel,
+        /// The one run judged, when all together were not off.
+        run: Option<String>,
+        /// Their travel, by the wheels and by the ground truth (boxed: the error stays small).
+        travel: Box<Travel>,
         /// The wheels' distance over the ground truth's.
         ratio: f64,
         /// The unit read as rad/s whose factor the ratio is near, with that factor.

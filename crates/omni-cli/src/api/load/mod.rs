@@ -8,6 +8,7 @@
 //! - `reference.rs`: the ground truth of the runs read: measured end poses set, moved to the base, cut into
 //!   the windows of a relative reference; the wheel-scale check.
 
+mod end_pose_check;
 mod error;
 mod options;
 mod reference;
@@ -67,7 +68,7 @@ impl LoadRequest {
             "read {} run{} from {} in {:.2} s",
             ds.runs.len(),
             if ds.runs.len() == 1 { "" } else { "s" },
-            self.paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "),
+            paths_text(&self.paths),
             started.elapsed().as_secs_f64()
         );
         Ok(ds)
@@ -102,9 +103,9 @@ impl LoadRequest {
             return Err(LoadError::OffsetUnused { offset_s });
         }
         if let Some(file) = &end_poses {
-            set_end_poses(&mut ds, file)?;
+            set_end_poses(&mut ds, file, robot.as_ref())?;
         } else if let Some(r) = &robot {
-            check_wheel_scale(&ds, r)?;
+            check_wheel_scale(&mut ds, r)?;
         }
         ds.robot_file = robot;
         move_to_base(&mut ds, data)?;
@@ -123,6 +124,7 @@ impl LoadRequest {
             truth_parent_frame: data.gt_parent_frame.clone(),
             truth_child_frame: data.gt_child_frame.clone(),
             split: data.split_s,
+            split_every_s: data.split_every_s,
             skip_invalid: data.skip_invalid,
             recorded_odometry: self.recorded_odometry,
             ..Default::default()
@@ -188,5 +190,16 @@ fn say_load_notes(sets: &[&Dataset]) {
     }
     for c in sets.iter().flat_map(|ds| &ds.ground_truth_clocks) {
         crate::note!("{}", c.describe());
+    }
+}
+
+/// The paths a load read, for `-v`: all of them, or the first and last of more than
+/// [`dataset::READ_LINES_PER_FOLDER`] (`180 paths: sim/a.mcap … sim/z.mcap`; a shell glob gives many).
+fn paths_text(paths: &[PathBuf]) -> String {
+    match paths {
+        [first, .., last] if paths.len() > crate::dataset::READ_LINES_PER_FOLDER => {
+            format!("{} paths: {} … {}", paths.len(), first.display(), last.display())
+        }
+        _ => paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "),
     }
 }

@@ -46,6 +46,8 @@ pub struct DataOptions {
     pub gt_scans: Option<String>,
     /// Cut MCAP files into runs at standstills at least this long (s).
     pub split_s: Option<f64>,
+    /// Cut recordings into runs of this length (s), the last one up to half as long again.
+    pub split_every_s: Option<f64>,
     /// Skip runs that fail to load (listed) instead of stopping.
     pub skip_invalid: bool,
     /// Encoder ticks per wheel revolution (CSV tick columns).
@@ -72,6 +74,7 @@ impl Default for DataOptions {
             gt_mount: None,
             gt_scans: None,
             split_s: None,
+            split_every_s: None,
             skip_invalid: false,
             ticks_per_rev: None,
             max_file_mb: dataset::DEFAULT_MAX_FILE_BYTES >> 20,
@@ -118,7 +121,8 @@ pub(super) fn end_pose_file(data: &DataOptions) -> Result<Option<PathBuf>, LoadE
         return Ok(None);
     }
     let Some(file) = &data.gt else { return Err(LoadError::EndPoseWithoutTable) };
-    for (set, flag) in [(data.split_s.is_some(), "--split"), (data.gt_topic.is_some(), "--gt-topic")] {
+    let split = data.split_s.is_some() || data.split_every_s.is_some();
+    for (set, flag) in [(split, "--split"), (data.gt_topic.is_some(), "--gt-topic")] {
         if set {
             return Err(LoadError::EndPoseWith { flag });
         }

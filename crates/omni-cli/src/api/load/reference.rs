@@ -6,11 +6,25 @@ use super::{DataOptions, LoadError};
 use crate::dataset::{self, Dataset, Note};
 use crate::robot_file;
 use omni_kin::reference::ReferenceKind;
+use std::f64::consts::TAU;
 
 /// Each run's placeholder end replaced by its measured end pose from `file`; a row naming no run read, or a
 /// run without a row, is an error naming both.
-pub(super) fn set_end_poses(ds: &mut Dataset, file: &std::path::Path) -> Result<(), LoadError> {
+pub(super) fn set_end_poses(
+    ds: &mut Dataset,
+    file: &std::path::Path,
+    robot: Option<&robot_file::RobotFile>,
+) -> Result<(), LoadError> {
     let measured = dataset::end_poses::read(file)?;
+    // Each row against where the wheels put its run, through the design (when the robot has one).
+    if let Some(ik) = robot.and_then(|r| r.description.design_ik().ok()) {
+        for run in &ds.runs {
+            let Some(e) = measured.iter().find(|e| e.run == run.name()) else { continue };
+            if let Some((column, what)) = super::end_pose_check::check(run, e, &ik) {
+                return Err(LoadError::EndPoseOff { file: file.to_path_buf(), line: e.line, column, what });
+            }
+        }
+    }
     let names: Vec<&str> = ds.runs.iter().map(omni_kin::Run::name).collect();
     if let Some(e) = measured.iter().find(|e| !names.contains(&e.run.as_str())) {
         return Err(LoadError::EndPoseOfNoRun {
@@ -130,24 +144,81 @@ const SCALE_MIN_RAD: f64 = std::f64::consts::PI;
 /// A calibration corrects a few per cent; the wheels' distance or turning off by more than this factor
 /// from the ground truth's is wheel data in another unit, or a design far from the robot.
 const SCALE_MAX_FACTOR: f64 = 3.0;
+/// The wheels' distance off by more than this factor from the ground truth's (but within
+/// [`SCALE_MAX_FACTOR`]) is fitted, and said: a constant of the robot's description is likely wrong.
+pub const SCALE_WARN_FACTOR: f64 = 1.3;
 
-/// Refuses runs whose wheels, through the robot description's design, travel and turn more than
-/// [`SCALE_MAX_FACTOR`] times more, or less, than their ground truth (both measurable, both off):
-/// joints in rpm, degrees or counts read as rad/s, or a radius in the wrong unit.
-pub(super) fn check_wheel_scale(ds: &Dataset, robot: &robot_file::RobotFile) -> Result<(), LoadError> {
-    use std::f64::consts::TAU;
+/// Refuses runs whose wheels, through the robot description's design, travel or turn more than
+/// [`SCALE_MAX_FACTOR`] times more, or less, than their ground truth, in every way the ground truth moved
+/// enough to tell (distance, turning, or both, all off the same way): joints in rpm, degrees or counts read as
+/// rad/s, or a radius in the wrong unit. All runs together first, then every run on its own, so that a run
+/// that barely turns, or one recording of several in another unit, is judged too. A distance off by more
+/// than [`SCALE_WARN_FACTOR`] within that is a note naming the ratio and the likely causes (the fit
+/// corrects it: a metric reference determines the scale).
+pub(super) fn check_wheel_scale(ds: &mut Dataset, robot: &robot_file::RobotFile) -> Result<(), LoadError> {
+    use omni_kin::travel::Travel;
     let Ok(ik) = robot.description.design_ik() else { return Ok(()) };
-    let travel = omni_kin::travel::Travel::of(&ds.runs, &ik);
-    let (Some(ratio), Some(turning)) = (travel.distance_ratio(SCALE_MIN_M), travel.turning_ratio(SCALE_MIN_RAD)) else {
-        return Ok(());
+    let all = Travel::of(&ds.runs, &ik);
+    let mismatch = all
+        .distance_ratio(SCALE_MIN_M)
+        .filter(|r| !(1.0 / SCALE_WARN_FACTOR..=SCALE_WARN_FACTOR).contains(r))
+        .map(|r| scale_mismatch_text(&all, r, all.turning_ratio(SCALE_MIN_RAD)));
+    let refuse = |travel: Travel, run: Option<&str>| {
+        let ratio = scale_off(&travel)?;
+        // The factor of a unit read as rad/s, within what a calibration corrects besides.
+        let units = [(60.0 / TAU, "rpm"), (360.0 / TAU, "deg_s"), (TAU.recip(), "rev_s")];
+        let near_unit = units.into_iter().find(|(f, _)| (ratio / f - 1.0).abs() < 0.15);
+        let runs = if run.is_some() { 1 } else { ds.runs.len() };
+        Some(LoadError::WheelScale {
+            robot: robot.source.clone(),
+            runs,
+            run: run.map(str::to_string),
+            travel: Box::new(travel),
+            ratio,
+            near_unit,
+        })
     };
-    // A unit scales distance and turning alike; one alone off is the data's or the design's own business.
-    let (lo, hi) = (1.0 / SCALE_MAX_FACTOR, SCALE_MAX_FACTOR);
-    if !(ratio > hi && turning > hi || ratio < lo && turning < lo) {
-        return Ok(());
+    let only = match &ds.runs[..] {
+        [one] => Some(one.name()),
+        _ => None,
+    };
+    if let Some(e) = refuse(all, only) {
+        return Err(e);
     }
-    // The factor of a unit read as rad/s, within what a calibration corrects besides.
-    let units = [(60.0 / TAU, "rpm"), (360.0 / TAU, "deg_s"), (TAU.recip(), "rev_s")];
-    let near_unit = units.into_iter().find(|(f, _)| (ratio / f - 1.0).abs() < 0.15);
-    Err(LoadError::WheelScale { robot: robot.source.clone(), runs: ds.runs.len(), travel, ratio, near_unit })
+    for run in &ds.runs {
+        if let Some(e) = refuse(Travel::of(std::slice::from_ref(run), &ik), Some(run.name())) {
+            return Err(e);
+        }
+    }
+    ds.notes.extend(mismatch.map(Note::general));
+    Ok(())
+}
+
+/// The wheels' ratio to the ground truth when it is off beyond [`SCALE_MAX_FACTOR`]: the distance's where
+/// the ground truth went far enough, else the turning's; `None` when nothing can be told or it is not off.
+/// A unit scales distance and turning alike, so when both can be told both must be off the same way (one
+/// alone off is the data's or the design's own business).
+fn scale_off(travel: &omni_kin::travel::Travel) -> Option<f64> {
+    let (lo, hi) = (1.0 / SCALE_MAX_FACTOR, SCALE_MAX_FACTOR);
+    let ratios = [travel.distance_ratio(SCALE_MIN_M), travel.turning_ratio(SCALE_MIN_RAD)];
+    let told: Vec<f64> = ratios.into_iter().flatten().collect();
+    let off = !told.is_empty() && (told.iter().all(|&r| r > hi) || told.iter().all(|&r| r < lo));
+    off.then(|| told[0])
+}
+
+/// The note of a wheel scale off by more than [`SCALE_WARN_FACTOR`]: the ratio, and what usually causes it.
+fn scale_mismatch_text(travel: &omni_kin::travel::Travel, ratio: f64, turning: Option<f64>) -> String {
+    let turn = match turning {
+        Some(t) => format!(" and turn {t:.2}× its turning"),
+        None => String::new(),
+    };
+    format!(
+        "wheel scale: through the robot description's design the wheels travel {ratio:.2}× the ground truth's \
+         distance ({:.2} m against {:.2} m){turn}, more than {:.0} % off: the fit corrects it (the reference \
+         measures distance), but a constant of the description is likely wrong: the encoder's ticks per \
+         revolution, a gear ratio, the wheel radius, or the joints' unit (counts or degrees read as radians)",
+        travel.wheels_m,
+        travel.truth_m,
+        100.0 * (SCALE_WARN_FACTOR - 1.0)
+    )
 }

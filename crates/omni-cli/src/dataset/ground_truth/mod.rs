@@ -120,6 +120,18 @@ pub struct GtClock {
     pub offset_s: f64,
     /// The estimate (offset, standard error, fit), or `None` when the offset was forced.
     pub estimate: Option<omni_kin::clock::ClockAlignment>,
+    /// Why the estimate was not applied, when it was not: the stamps are kept as recorded (`offset_s` 0)
+    /// and the note ([`GtClock::describe`]) says so.
+    pub kept: Option<Kept>,
+}
+
+/// Why a clock estimate was not applied.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kept {
+    /// It is not clear ([`omni_kin::clock::ClockAlignment::is_clear`]).
+    Unclear,
+    /// It is clear but longer than the recording while the stamps overlap as recorded.
+    Implausible,
 }
 
 impl GtClock {
@@ -133,6 +145,22 @@ impl GtClock {
         );
         match &self.estimate {
             None => format!("{head} (forced; wheel time = ground-truth time + offset)"),
+            Some(a) if self.kept.is_some() => format!(
+                "{head}: stamps kept as recorded, since the estimate, {:+.4} s ± {:.2} ms explaining {:.1} % of the \
+                 ground truth's motion, {}; give the offset with --gt-time-offset SECONDS if it is known",
+                a.offset_s,
+                a.std_error_s * 1e3,
+                a.r_squared * 100.0,
+                match self.kept {
+                    Some(Kept::Implausible) => "is longer than the recording".to_string(),
+                    _ => format!(
+                        "is not clear (a clear one has a standard error of at most {:.0} ms and explains at least \
+                         {:.0} %)",
+                        omni_kin::clock::CLEAR_MAX_STD_ERROR_S * 1e3,
+                        omni_kin::clock::CLEAR_MIN_R_SQUARED * 100.0
+                    ),
+                }
+            ),
             Some(a) => format!(
                 "{head} ± {:.2} ms (estimated: coarse {:+.3} s on a {:.0} ms grid, refined; explains {:.1} % of the \
                  ground truth's motion over {:.1} s; wheel time = ground-truth time + offset)",
@@ -153,6 +181,8 @@ impl GtClock {
             "offset_s": self.offset_s,
             "std_error_s": self.estimate.map(|a| a.std_error_s),
             "estimated": self.estimate.is_some(),
+            "clear": self.estimate.map(|a| a.is_clear()),
+            "applied": self.kept.is_none(),
             "r_squared": self.estimate.map(|a| a.r_squared),
         })
     }

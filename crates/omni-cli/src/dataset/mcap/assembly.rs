@@ -11,7 +11,7 @@ use super::recording::{Content, Recording};
 use super::selection::{Bag, Truth, WheelSource, localization_note, topic_clock, topic_location};
 use super::twist::Commands;
 use super::{McapOptions, McapRead, split};
-use crate::dataset::ground_truth::{ExternalTruth, GtClock, TruthSample};
+use crate::dataset::ground_truth::{ExternalTruth, GtClock, Kept, TruthSample};
 use crate::dataset::{DatasetError, Note};
 use omni_kin::clock::ClockAlignment;
 use omni_kin::error::Sample;
@@ -32,11 +32,15 @@ fn joint_wheels(bag: &mut Bag, j: usize, opts: &McapOptions, notes: &mut Vec<Not
     };
     let origin_s = first_ns.div_euclid(NS_PER_S);
     let t_s: Vec<f64> = series.t_ns.iter().map(|&t| seconds_since(t, origin_s)).collect();
-    let wheels = series
-        .finish(&opts.wheel_joints, &t_s, &opts.wheel_data)
-        .map_err(|(k, what)| DatasetError::at(path, format!("topic {topic:?}, message {k}"), what))?;
+    let wheels = series.finish(&opts.wheel_joints, &t_s, &opts.wheel_data).map_err(|(k, what)| {
+        let what = match &hint {
+            Some(h) if joint_state::is_missing_wheel(&what) => format!("{what}; {h}"),
+            _ => what,
+        };
+        DatasetError::at(path, format!("topic {topic:?}, message {k}"), what)
+    })?;
     notes.extend(wheels.notes.iter().map(|n| Note::about(path, format!("topic {topic:?}: {n}"))));
-    if let Some(without) = wheels.differentiated {
+    if let Some(without) = wheels.differentiated.filter(|&n| n > 0 && opts.wheel_data.source.is_none()) {
         notes.push(Note::about(
             path,
             format!(
@@ -138,14 +142,16 @@ impl Streams {
     /// standstills named `stem#1`, `stem#2`, …; each with its name, or the error that refuses it.
     fn runs(&self, path: &Path, stem: &str, opts: &McapOptions) -> Vec<(String, Result<Run, DatasetError>)> {
         let (t_s, n_wheels) = (&self.t_s, opts.wheel_joints.len());
-        let pieces = match opts.split {
-            Some(min_s) => split::pieces(t_s, &self.wheels.rad_s, n_wheels, &self.truth, min_s),
-            None => vec![(0, t_s.len() - 1)],
+        let pieces = match (opts.split, opts.split_every_s) {
+            (_, Some(length_s)) => split::fixed_pieces(t_s, length_s),
+            (Some(min_s), None) => split::pieces(t_s, &self.wheels.rad_s, n_wheels, &self.truth, min_s),
+            (None, None) => vec![(0, t_s.len() - 1)],
         };
         let last_piece = pieces.len() - 1;
         let mut out = Vec::with_capacity(pieces.len());
         for (p, &(lo, hi)) in pieces.iter().enumerate() {
-            let name = if opts.split.is_some() { format!("{stem}#{}", p + 1) } else { stem.to_string() };
+            let split = opts.split.is_some() || opts.split_every_s.is_some();
+            let name = if split { format!("{stem}#{}", p + 1) } else { stem.to_string() };
             let span = t_s[lo]..=t_s[hi];
             let within = |poses: &[StampedPose]| {
                 let mut v: Vec<StampedPose> = poses.iter().copied().filter(|q| span.contains(&q.t_s)).collect();
@@ -305,7 +311,20 @@ pub(crate) fn runs(
             Err(e) => return Err(e),
         }
     }
+    out.notes.extend(split_note(path, opts, out.runs.len() + out.skipped.len()));
     Ok(out)
+}
+
+/// The note on a recording cut into `pieces` runs of a fixed length (`--split 20s`).
+fn split_note(path: &Path, opts: &McapOptions, pieces: usize) -> Option<Note> {
+    let length_s = opts.split_every_s?;
+    Some(Note::about(
+        path,
+        format!(
+            "cut into {pieces} runs of {length_s} s (--split {length_s}s; the last takes up to half a length more; a \
+             bare number, --split N, cuts at standstills instead)"
+        ),
+    ))
 }
 
 /// Reads one bag. See the module docs of [`super`].
@@ -329,6 +348,35 @@ pub(super) fn read_bytes(
     feed_mcap(path, buf, &mut rec)?;
     let stem = path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned());
     runs(path, &stem, rec, opts, external)
+}
+
+/// A `--gt` file's poses for wheel data that is not a ROS recording's (a CSV run, times `t_s` in seconds as
+/// written): the file named after the recording `stem`, or the folder's file that covers it, on the wheel
+/// clock by the same rules as a recording's ([`external_truth`]); notes say which file and its clock.
+pub(crate) fn truth_for_wheels(
+    path: &Path,
+    ext: &ExternalTruth,
+    stem: &str,
+    t_s: &[f64],
+    rad_s: &[f64],
+    n_wheels: usize,
+    notes: &mut Vec<Note>,
+) -> Result<(Vec<StampedPose>, GtClock), DatasetError> {
+    // Small numbers for the estimate: times since the first whole second.
+    let origin_s = t_s.first().map_or(0.0, |t| t.floor());
+    let rel: Vec<f64> = t_s.iter().map(|t| t - origin_s).collect();
+    let origin = origin_s as i64;
+    let folder_file;
+    let ext = if ext.by_time.is_empty() {
+        ext
+    } else {
+        folder_file = overlapping_file(path, ext, origin, &rel, notes)?;
+        &folder_file
+    };
+    let (all, truth_where, label, clock) = external_file(ext, stem, origin, &rel, rad_s, n_wheels)?;
+    let clock = clock.ok_or_else(|| DatasetError::file(path, "no clock for the --gt file"))?;
+    let poses = within_wheels(path, &all, &rel, ("the wheel columns", &truth_where, &label), notes)?;
+    Ok((poses.into_iter().map(|p| StampedPose { t_s: p.t_s + origin_s, ..p }).collect(), clock))
 }
 
 /// The poses of a ground-truth file on the wheel clock (seconds since `origin_s`), with the clock offset:
@@ -368,6 +416,7 @@ fn external_truth(
         file: ext.path.clone(),
         offset_s,
         estimate,
+        kept: None,
     };
     if let Some(offset_s) = ext.time_offset_s {
         let poses = ext.samples.iter().map(|s| pose(s, seconds_since(s.t_ns, origin_s) + offset_s)).collect();
@@ -376,15 +425,74 @@ fn external_truth(
     // The truth's times relative to its own first whole second (small numbers for the estimate).
     let truth_origin_s = ext.samples.first().map_or(0, |s| s.t_ns.div_euclid(NS_PER_S));
     let own: Vec<StampedPose> = ext.samples.iter().map(|s| pose(s, seconds_since(s.t_ns, truth_origin_s))).collect();
-    let a = omni_kin::clock::align_clocks(t_s, rad_s, n_wheels, &own).map_err(|e| DatasetError::Clock {
+    let cannot = |message: String| DatasetError::Clock {
         path: ext.path.clone(),
-        message: format!("cannot align its clock with recording {recording:?}: {e}"),
-    })?;
-    // own + a.offset_s is on the wheel clock since origin_s.
-    let poses = own.iter().map(|p| StampedPose { t_s: p.t_s + a.offset_s, ..*p }).collect();
+        message: format!("cannot align its clock with recording {recording:?}: {message}"),
+    };
+    let a = omni_kin::clock::align_clocks(t_s, rad_s, n_wheels, &own).map_err(|e| cannot(e.to_string()))?;
     // t_wheel = t_truth + offset in absolute time: the relative offset less the origins' difference.
     let origins_s = (origin_s - truth_origin_s) as f64;
     let offset_s = a.offset_s + origins_s;
     let estimate = ClockAlignment { offset_s, coarse_offset_s: a.coarse_offset_s + origins_s, ..a };
-    Ok((poses, clock(offset_s, Some(estimate))))
+    let as_recorded: Vec<StampedPose> = own.iter().map(|p| StampedPose { t_s: p.t_s - origins_s, ..*p }).collect();
+    match clock_verdict(&estimate, t_s, &as_recorded) {
+        ClockVerdict::Apply => {
+            // own + a.offset_s is on the wheel clock since origin_s.
+            let poses = own.iter().map(|p| StampedPose { t_s: p.t_s + a.offset_s, ..*p }).collect();
+            Ok((poses, clock(offset_s, Some(estimate))))
+        }
+        ClockVerdict::KeepAsRecorded => {
+            Ok((as_recorded, GtClock { kept: Some(Kept::Unclear), ..clock(0.0, Some(estimate)) }))
+        }
+        ClockVerdict::Refuse(why) => Err(cannot(why)),
+    }
+}
+
+/// What a `--gt` file's clock estimate decides.
+#[derive(Debug, PartialEq)]
+enum ClockVerdict {
+    /// Move the file's stamps by the estimate.
+    Apply,
+    /// The estimate is not clear, and the file's stamps overlap the wheel data as recorded: keep them (a
+    /// note says so).
+    KeepAsRecorded,
+    /// Refuse, saying why.
+    Refuse(String),
+}
+
+/// The rules of a clock estimate for a ground-truth file (docs/formats.md, "Ground truth from a separate
+/// file"): a clear estimate ([`ClockAlignment::is_clear`]) is applied unless it is implausible (larger than
+/// the recording while the stamps overlap as recorded, so both are on one time base and another stretch of
+/// the file matched); one that is not clear is never applied: the stamps are kept when they overlap the
+/// wheel data as recorded, else the file is refused. `t_s`: the wheel times; `as_recorded`: the file's
+/// poses at their own stamps on the wheel clock (offset 0).
+fn clock_verdict(a: &ClockAlignment, t_s: &[f64], as_recorded: &[StampedPose]) -> ClockVerdict {
+    let (w0, w1) = (t_s[0], t_s[t_s.len() - 1]);
+    let (g0, g1) = (as_recorded[0].t_s, as_recorded[as_recorded.len() - 1].t_s);
+    let overlaps = w1.min(g1) > w0.max(g0);
+    let clear = format!(
+        "a clear estimate has a standard error of at most {:.0} ms and explains at least {:.0} % of the motion",
+        omni_kin::clock::CLEAR_MAX_STD_ERROR_S * 1e3,
+        omni_kin::clock::CLEAR_MIN_R_SQUARED * 100.0
+    );
+    let estimate = format!(
+        "the best offset, {:+.4} s ± {:.1} ms, explains {:.1} % of the ground truth's motion",
+        a.offset_s,
+        a.std_error_s * 1e3,
+        a.r_squared * 100.0
+    );
+    match (a.is_clear(), overlaps) {
+        (true, true) if a.offset_s.abs() > w1 - w0 => ClockVerdict::Refuse(format!(
+            "{estimate}, but it is longer than the recording ({:.1} s) while the file's stamps overlap the wheel \
+             data as recorded (one time base): another stretch of the file looks alike; give the offset with \
+             --gt-time-offset SECONDS (0 when both are on one clock)",
+            w1 - w0
+        )),
+        (true, _) => ClockVerdict::Apply,
+        (false, true) => ClockVerdict::KeepAsRecorded,
+        (false, false) => ClockVerdict::Refuse(format!(
+            "{estimate}: not a clear estimate ({clear}), and the file's stamps ({g0:.3}..{g1:.3} s) do not overlap \
+             the wheel data's ({w0:.3}..{w1:.3} s) as recorded; give the offset with --gt-time-offset SECONDS"
+        )),
+    }
 }

@@ -25,7 +25,7 @@ fn schema_of(name: &str) -> Option<String> {
 
 /// Whether a topic is published once and latched: copied whole into every run.
 fn is_static(topic: &str) -> bool {
-    super::tf::is_static_topic(topic) || topic.ends_with("/robot_description")
+    super::qos::is_latched(topic)
 }
 
 /// One topic carried over: its type and schema text, and its messages (log time ns, CDR bytes) in log order.

@@ -15,10 +15,19 @@
 //! - a wheel velocity that is NaN in a message that has the wheel positions (ros2_control on
 //!   position-only wheels): the speeds come from the positions, as for an empty velocity;
 //! - positions that wrap (an encoder angle reported modulo 2π, in [−π, π] or [0, 2π]): unwrapped before
-//!   they are differentiated.
+//!   they are differentiated;
+//! - a wheel joint named twice in a message (a stale copy beside the live one): the copy that changes is
+//!   read ([`repair::resolve_copies`]);
+//! - a wheel joint missing from a message now and then: filled from the neighbouring messages, a long gap
+//!   refused ([`repair::fill_gaps`]);
+//! - `position` and `velocity` that give different wheel rates (motor rpm beside wheel encoder counts):
+//!   refused unless `[wheel_data] source` names the field to read ([`fields`]).
+
+mod fields;
+mod repair;
 
 use super::common::{HEADER_DEF, Header, RosString, Stamp, TIME_DEF, schema_text};
-use omni_kin::robot::WheelData;
+use omni_kin::robot::{WheelData, WheelField};
 use serde::{Deserialize, Serialize};
 
 /// The schema name.
@@ -61,7 +70,9 @@ pub(super) struct JointSeries {
     /// The joint names of the last message and where each wheel joint is among them, reused while the
     /// names stay the same (they almost always do).
     names: Vec<RosString>,
-    index: Vec<usize>,
+    index: Vec<Option<usize>>,
+    /// Wheel joints named twice or missing (boxed: a topic's content stays small).
+    entries: Box<Entries>,
     /// Messages passed over: naming no wheel joint (another publisher), and exact repeats.
     other_publisher: usize,
     /// Messages pushed, and the first passed over for naming no wheel joint (its index, and which joint is
@@ -75,6 +86,20 @@ pub(super) struct JointSeries {
     first_log_ns: i64,
     /// Messages whose wheel velocity was NaN and whose speeds come from positions.
     nan_velocity: usize,
+}
+
+/// Wheel joints named twice in a message, or missing from one.
+#[derive(Debug, Default)]
+struct Entries {
+    /// Where a wheel joint named twice in the last names has its other entry (the first; `index` holds the
+    /// last).
+    other_entry: Vec<Option<usize>>,
+    /// The other entries' values of wheel joints named twice, message by message.
+    copies: Vec<repair::Copy>,
+    /// Samples `(message, wheel)` where a wheel joint was missing, and per wheel the first such message's
+    /// problem (`wheel joint "x" is missing (names: …)`).
+    missing: Vec<(usize, usize)>,
+    missing_text: Vec<Option<(usize, String)>>,
 }
 
 /// Wheel data ready to build runs from.
@@ -114,14 +139,14 @@ impl JointSeries {
         if !msg.name.iter().any(|name| wheel_joints.contains(&name.0)) {
             self.other_publisher += 1;
             if self.first_other.is_none()
-                && let Err(missing) = wheel_index(&msg.name, wheel_joints)
+                && let Some(missing) = missing_wheel(&msg.name, wheel_joints)
             {
                 self.first_other = Some((index, missing));
             }
             return Ok(());
         }
         if msg.name != self.names {
-            self.index = wheel_index(&msg.name, wheel_joints)?;
+            (self.index, self.entries.other_entry) = wheel_entries(&msg.name, wheel_joints);
             self.names = msg.name;
         }
         // Never filled: the first two messages both stamped 0 (a real clock is not 0 twice).
@@ -137,7 +162,7 @@ impl JointSeries {
             if values.is_empty() {
                 vec![f64::NAN; self.index.len()]
             } else {
-                self.index.iter().map(|&i| values[i]).collect()
+                self.index.iter().map(|i| i.map_or(f64::NAN, |i| values[i])).collect()
             }
         };
         let (mut velocity, position) = (wheel(&msg.velocity), wheel(&msg.position));
@@ -164,6 +189,7 @@ impl JointSeries {
             self.nan_velocity += 1;
         }
         let k = self.t_ns.len();
+        self.note_entries(k, index, &msg.velocity, &msg.position, wheel_joints);
         self.t_ns.push(t);
         if msg.velocity.is_empty() || nan_velocity {
             self.first_without_velocity.get_or_insert(k);
@@ -175,6 +201,28 @@ impl JointSeries {
         self.velocity.extend(velocity);
         self.position.extend(position);
         Ok(())
+    }
+
+    /// Records sample `k` (message `index`)'s missing wheel joints and the other entries of joints named
+    /// twice.
+    fn note_entries(&mut self, k: usize, index: usize, velocity: &[f64], position: &[f64], wheel_joints: &[String]) {
+        self.entries.missing_text.resize(wheel_joints.len(), None);
+        for (j, at) in self.index.iter().enumerate() {
+            if at.is_none() {
+                self.entries.missing.push((k, j));
+                if self.entries.missing_text[j].is_none() {
+                    let names: Vec<&str> = self.names.iter().map(|s| s.0.as_str()).collect();
+                    let what = format!("{MISSING_WHEEL}{:?} is missing (names: {})", wheel_joints[j], names.join(", "));
+                    self.entries.missing_text[j] = Some((index, what));
+                }
+            }
+        }
+        for (j, other) in self.entries.other_entry.iter().enumerate() {
+            if let Some(i) = *other {
+                let value = |v: &[f64]| v.get(i).copied().unwrap_or(f64::NAN);
+                self.entries.copies.push(repair::Copy { k, j, velocity: value(velocity), position: value(position) });
+            }
+        }
     }
 
     /// When no message names a wheel joint: the first message's index and which joint it lacks.
@@ -219,11 +267,15 @@ impl JointSeries {
     }
 
     /// The wheel data, given the stamps in seconds (`t_s[k]` for message `k`) and the units the joints are
-    /// published in (`[wheel_data]`: turned into the wheel's rad and rad/s); `Err((message, problem))`.
+    /// published in (`[wheel_data]`: turned into the wheel's rad and rad/s; its `source`: the field read);
+    /// `Err((message, problem))`.
     pub fn finish(self, wheel_joints: &[String], t_s: &[f64], units: &WheelData) -> Result<Wheels, (usize, String)> {
         let w = wheel_joints.len();
         let mut notes = self.notes();
         let (mut velocity, mut position) = (self.velocity, self.position);
+        notes.extend(repair::resolve_copies(&self.entries.copies, &mut velocity, &mut position, wheel_joints)?);
+        let gaps = repair::Gaps { missing: &self.entries.missing, first: &self.entries.missing_text };
+        notes.extend(repair::fill_gaps(&gaps, t_s, &mut velocity, &mut position, wheel_joints)?);
         if !units.is_identity() {
             let (p, v) = (units.position_rad_per_unit(), units.velocity_rad_s_per_unit());
             velocity.iter_mut().for_each(|x| *x *= v);
@@ -231,22 +283,35 @@ impl JointSeries {
             notes.push(format!("{} ([wheel_data] in the robot description)", describe_units(units)));
         }
         let position = self.first_without_position.is_none().then_some(position);
-        let (rad_s, differentiated) = match (self.first_without_velocity, position.as_ref()) {
-            (None, _) => (velocity, None),
-            (Some(_), Some(p)) => {
-                // An encoder behind a gearbox wraps on its own shaft, not on the wheel's: left as it is.
-                let geared = units.gear_ratio.is_some_and(|g| g != 1.0);
-                let (unwrapped, wrapped) = if geared { (p.clone(), vec![0; w]) } else { unwrap(p, w) };
-                for (j, wraps) in wrapped.iter().enumerate().filter(|(_, n)| **n > 0) {
-                    notes.push(format!(
-                        "the position of joint {:?} wraps around (an angle modulo 2π): unwrapped at {wraps} jumps \
-                         before it is differentiated",
-                        wheel_joints[j]
-                    ));
-                }
-                (differentiate(t_s, &unwrapped, w), Some(self.without_velocity))
+        // An encoder behind a gearbox wraps on its own shaft, not on the wheel's: left as it is.
+        let geared = units.gear_ratio.is_some_and(|g| g != 1.0);
+        let unwrapped = |p: &[f64]| if geared { (p.to_vec(), vec![0; w]) } else { unwrap(p, w) };
+        if self.first_without_velocity.is_none()
+            && let Some(p) = position.as_ref()
+        {
+            notes.extend(fields::compare(t_s, &velocity, &unwrapped(p).0, w, units)?);
+        }
+        let from_position = match (self.first_without_velocity, position.as_ref(), units.source) {
+            (Some(j), _, Some(WheelField::Velocity)) => {
+                return Err((
+                    j,
+                    "field velocity is empty (or NaN), but [wheel_data] source = \"velocity\" reads the \
+                                wheel speeds from it: remove source, or record the joints' velocities"
+                        .to_string(),
+                ));
             }
-            (Some(j), None) => {
+            (None, None, Some(WheelField::Position)) => {
+                let k = self.first_without_position.unwrap_or_default();
+                return Err((
+                    k,
+                    "field position is empty, but [wheel_data] source = \"position\" reads the wheel \
+                                speeds from it: remove source, or record the joints' positions"
+                        .to_string(),
+                ));
+            }
+            (Some(_), Some(_), _) | (None, Some(_), Some(WheelField::Position)) => true,
+            (None, _, _) => false,
+            (Some(j), None, _) => {
                 let k = self.first_without_position.unwrap_or_default();
                 return Err((
                     k,
@@ -256,6 +321,21 @@ impl JointSeries {
                     ),
                 ));
             }
+        };
+        let (rad_s, differentiated) = match (from_position, position.as_ref()) {
+            (true, Some(p)) => {
+                let (unwrapped, wrapped) = unwrapped(p);
+                for (j, wraps) in wrapped.iter().enumerate().filter(|(_, n)| **n > 0) {
+                    notes.push(format!(
+                        "the position of joint {:?} wraps around (an angle modulo 2π): unwrapped at {wraps} jumps \
+                         before it is differentiated",
+                        wheel_joints[j]
+                    ));
+                }
+                let without = if self.first_without_velocity.is_some() { self.without_velocity } else { t_s.len() };
+                (differentiate(t_s, &unwrapped, w), Some(without))
+            }
+            _ => (velocity, None),
         };
         let used =
             if differentiated.is_some() { ("position", position.as_deref()) } else { ("velocity", Some(&rad_s[..])) };
@@ -290,17 +370,23 @@ pub(super) fn is_missing_wheel(what: &str) -> bool {
     what.starts_with(MISSING_WHEEL)
 }
 
-/// Where each of `wheel_joints` is in `names`, or which is missing.
-fn wheel_index(names: &[RosString], wheel_joints: &[String]) -> Result<Vec<usize>, String> {
-    wheel_joints
-        .iter()
-        .map(|joint| {
-            names.iter().position(|name| name.0 == *joint).ok_or_else(|| {
-                let names: Vec<&str> = names.iter().map(|s| s.0.as_str()).collect();
-                format!("{MISSING_WHEEL}{joint:?} is missing (names: {})", names.join(", "))
-            })
-        })
-        .collect()
+/// Where each of `wheel_joints` is in `names` (its last entry; `None`: missing), and where a joint named
+/// twice has its first entry.
+fn wheel_entries(names: &[RosString], wheel_joints: &[String]) -> (Vec<Option<usize>>, Vec<Option<usize>>) {
+    let at = |joint: &String| -> Vec<usize> {
+        names.iter().enumerate().filter(|(_, n)| n.0 == *joint).map(|(i, _)| i).collect()
+    };
+    let entries: Vec<Vec<usize>> = wheel_joints.iter().map(at).collect();
+    let last = entries.iter().map(|e| e.last().copied()).collect();
+    let first = entries.iter().map(|e| if e.len() > 1 { e.first().copied() } else { None }).collect();
+    (last, first)
+}
+
+/// Which of `wheel_joints` `names` lacks (the first), as a problem.
+fn missing_wheel(names: &[RosString], wheel_joints: &[String]) -> Option<String> {
+    let joint = wheel_joints.iter().find(|j| !names.iter().any(|n| n.0 == **j))?;
+    let names: Vec<&str> = names.iter().map(|s| s.0.as_str()).collect();
+    Some(format!("{MISSING_WHEEL}{joint:?} is missing (names: {})", names.join(", ")))
 }
 
 /// `position` (`samples × w`) with each joint's wrap-arounds undone, and the jumps undone per joint. A
@@ -348,167 +434,4 @@ fn differentiate(t_s: &[f64], position: &[f64], w: usize) -> Vec<f64> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::dataset::mcap::common::Time;
-
-    fn wheels() -> Vec<String> {
-        ["wheel_a", "wheel_b", "wheel_c"].map(String::from).to_vec()
-    }
-
-    fn msg(ns: i64, names: &[&str], position: &[f64], velocity: &[f64]) -> JointState {
-        JointState {
-            header: Header { stamp: Time::from_ns(ns).unwrap(), frame_id: RosString::default() },
-            name: names.iter().map(|s| RosString(s.to_string())).collect(),
-            position: position.to_vec(),
-            velocity: velocity.to_vec(),
-            effort: vec![],
-        }
-    }
-
-    #[test]
-    fn maps_joints_by_name() {
-        let mut s = JointSeries::default();
-        s.push(msg(0, &["x", "wheel_c", "wheel_a", "wheel_b"], &[], &[9.0, 3.0, 1.0, 2.0]), &wheels(), 0).unwrap();
-        s.push(msg(10, &["wheel_b", "wheel_a", "wheel_c"], &[], &[5.0, 4.0, 6.0]), &wheels(), 10).unwrap();
-        let w = s.finish(&wheels(), &[0.0, 1e-8], &WheelData::default()).unwrap();
-        assert_eq!(w.rad_s, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
-        assert_eq!(w.differentiated, None);
-        assert_eq!(w.position, None);
-    }
-
-    #[test]
-    fn differentiates_position_when_velocity_is_empty() {
-        let mut s = JointSeries::default();
-        let names = ["wheel_a", "wheel_b", "wheel_c"];
-        s.push(msg(0, &names, &[0.0, 0.0, 0.0], &[]), &wheels(), 0).unwrap();
-        s.push(msg(500_000_000, &names, &[1.0, -2.0, 0.5], &[]), &wheels(), 500_000_000).unwrap();
-        s.push(msg(1_000_000_000, &names, &[2.0, -4.0, 0.5], &[]), &wheels(), 1_000_000_000).unwrap();
-        let w = s.finish(&wheels(), &[0.0, 0.5, 1.0], &WheelData::default()).unwrap();
-        assert_eq!(w.rad_s, [2.0, -4.0, 1.0, 2.0, -4.0, 1.0, 2.0, -4.0, 0.0]);
-        assert_eq!(w.differentiated, Some(3));
-    }
-
-    #[test]
-    fn problems_name_the_field() {
-        let mut s = JointSeries::default();
-        let e = s.push(msg(0, &["wheel_a", "wheel_b"], &[], &[1.0, 2.0]), &wheels(), 0).unwrap_err();
-        assert_eq!(e, "wheel joint \"wheel_c\" is missing (names: wheel_a, wheel_b)");
-        let e = s.push(msg(0, &["wheel_a", "wheel_b", "wheel_c"], &[], &[1.0, 2.0]), &wheels(), 0).unwrap_err();
-        assert_eq!(e, "field velocity has 2 entries, expected 3 (one per name) or none");
-        let names = ["wheel_a", "wheel_b", "wheel_c"];
-        s.push(msg(5, &names, &[], &[1.0, f64::NAN, 2.0]), &wheels(), 5).unwrap();
-        let e = s.push(msg(5, &names, &[], &[1.0, 1.0, 2.0]), &wheels(), 5).unwrap_err();
-        assert_eq!(
-            e,
-            "header.stamp 0.000000005 is not after the previous message's 0.000000005 (stamps must increase)"
-        );
-        s.push(msg(6, &names, &[], &[1.0, 1.0, 2.0]), &wheels(), 6).unwrap();
-        let e = s.finish(&wheels(), &[0.0, 1e-9], &WheelData::default()).unwrap_err();
-        assert_eq!(e, (0, "field velocity[1] (joint \"wheel_b\") is NaN".to_string()));
-    }
-
-    #[test]
-    fn other_publishers_repeats_and_unfilled_stamps_are_noted_not_refused() {
-        let mut s = JointSeries::default();
-        let names = ["wheel_a", "wheel_b", "wheel_c"];
-        // header.stamp never filled: log time instead (the first message re-stamped).
-        s.push(msg(0, &names, &[], &[1.0, 2.0, 3.0]), &wheels(), 100).unwrap();
-        s.push(msg(0, &["shoulder", "elbow"], &[0.1, 0.2], &[]), &wheels(), 105).unwrap();
-        s.push(msg(0, &names, &[], &[4.0, 5.0, 6.0]), &wheels(), 110).unwrap();
-        s.push(msg(0, &names, &[], &[4.0, 5.0, 6.0]), &wheels(), 110).unwrap();
-        let w = s.finish(&wheels(), &[0.0, 1e-8], &WheelData::default()).unwrap();
-        assert_eq!(w.t_ns, [100, 110]);
-        assert_eq!(w.rad_s, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
-        assert_eq!(
-            w.notes,
-            [
-                "1 messages name none of the wheel joints (another publisher on the topic): passed over",
-                "1 messages repeat the one before exactly (stamp and values): dropped",
-                "header.stamp is 0: the messages are stamped by their log time instead",
-            ]
-        );
-        // A repeated stamp with other values is still an error.
-        let mut s = JointSeries::default();
-        s.push(msg(5, &names, &[], &[1.0, 2.0, 3.0]), &wheels(), 5).unwrap();
-        assert!(s.push(msg(5, &names, &[], &[1.0, 2.0, 4.0]), &wheels(), 6).unwrap_err().contains("not after"));
-    }
-
-    #[test]
-    fn nan_velocity_beside_positions_uses_the_positions() {
-        let mut s = JointSeries::default();
-        let names = ["wheel_a", "wheel_b", "wheel_c"];
-        let nan = f64::NAN;
-        s.push(msg(0, &names, &[0.0, 0.0, 0.0], &[nan, nan, nan]), &wheels(), 0).unwrap();
-        s.push(msg(500_000_000, &names, &[1.0, -2.0, 0.5], &[nan, nan, nan]), &wheels(), 1).unwrap();
-        let w = s.finish(&wheels(), &[0.0, 0.5], &WheelData::default()).unwrap();
-        assert_eq!(w.rad_s, [2.0, -4.0, 1.0, 2.0, -4.0, 1.0]);
-        assert_eq!(w.differentiated, Some(2));
-        assert_eq!(
-            w.notes,
-            ["2 messages have a NaN wheel velocity beside finite positions: their speeds come from the positions"]
-        );
-    }
-
-    #[test]
-    fn wrapped_positions_are_unwrapped() {
-        use std::f64::consts::{PI, TAU};
-        // Wheel a turns +2 rad/s, wheel b −3 rad/s, reported modulo 2π in [−π, π]; wheel c counts turns.
-        let wrap = |p: f64| (p + PI).rem_euclid(TAU) - PI;
-        let mut s = JointSeries::default();
-        let names = ["wheel_a", "wheel_b", "wheel_c"];
-        let t: Vec<f64> = (0..40).map(|k| 0.1 * k as f64).collect();
-        for (k, &ts) in t.iter().enumerate() {
-            let p = [wrap(2.0 * ts), wrap(-3.0 * ts), 10.0 + ts];
-            s.push(msg(100_000_000 * k as i64 + 1, &names, &p, &[]), &wheels(), 0).unwrap();
-        }
-        let w = s.finish(&wheels(), &t, &WheelData::default()).unwrap();
-        for k in 1..t.len() {
-            let v = &w.rad_s[3 * k..3 * k + 3];
-            assert!((v[0] - 2.0).abs() < 1e-9 && (v[1] + 3.0).abs() < 1e-9 && (v[2] - 1.0).abs() < 1e-9, "{k}: {v:?}");
-        }
-        assert_eq!(
-            w.notes,
-            [
-                "the position of joint \"wheel_a\" wraps around (an angle modulo 2π): unwrapped at 1 jumps before it is differentiated",
-                "the position of joint \"wheel_b\" wraps around (an angle modulo 2π): unwrapped at 2 jumps before it is differentiated",
-            ]
-        );
-    }
-
-    #[test]
-    fn counts_and_rpm_behind_a_gear_become_wheel_radians() {
-        use omni_kin::robot::{PositionUnit, VelocityUnit};
-        use std::f64::consts::TAU;
-        let names = ["wheel_a", "wheel_b", "wheel_c"];
-        // A motor-side encoder of 1024 counts behind a 30:1 gear; velocities in motor rpm.
-        let units = WheelData {
-            position: PositionUnit::Counts,
-            velocity: VelocityUnit::Rpm,
-            counts_per_rev: Some(1024.0),
-            gear_ratio: Some(30.0),
-        };
-        // Wheel speeds 1, −2, 0.5 rad/s: motor rpm = ω · 30 · 60 / 2π; counts = θ · 30 · 1024 / 2π.
-        let omega = [1.0, -2.0, 0.5];
-        let rpm: Vec<f64> = omega.iter().map(|w| w * 30.0 * 60.0 / TAU).collect();
-        let mut s = JointSeries::default();
-        let t = [0.0, 0.5];
-        for (k, ts) in t.iter().enumerate() {
-            let counts: Vec<f64> = omega.iter().map(|w| (w * ts * 30.0 * 1024.0 / TAU).round()).collect();
-            s.push(msg(500_000_000 * k as i64 + 1, &names, &counts, &rpm), &wheels(), 0).unwrap();
-        }
-        let w = s.finish(&wheels(), &t, &units).unwrap();
-        for (got, want) in w.rad_s.iter().zip(omega.iter().chain(&omega)) {
-            assert!((got - want).abs() < 1e-12, "{got} vs {want}");
-        }
-        let p = w.position.unwrap();
-        for (got, want) in p[3..].iter().zip(omega.map(|w| w * 0.5)) {
-            assert!((got - want).abs() < TAU / (30.0 * 1024.0), "{got} vs {want}");
-        }
-        assert_eq!(
-            w.notes,
-            ["joint positions in counts and velocities in rpm (1024 counts per revolution) behind a 30:1 gear are \
-                 converted to the wheel's rad and rad/s ([wheel_data] in the robot description)"]
-        );
-    }
-}
+mod tests;

@@ -100,6 +100,37 @@ pub struct ScanRead {
     pub mirrored: bool,
     /// The scans' `header.stamp` was 0 on the first two (never filled): they are timed by their log time.
     pub by_log_time: bool,
+    /// Scans whose `angle_max` disagrees with their beams (`angle_min + (n − 1)·angle_increment`), when any
+    /// do: the beams' angles are taken from `angle_min` and `angle_increment`, `angle_max` is not used.
+    pub angle_max_mismatch: Option<AngleMaxMismatch>,
+}
+
+/// Scans whose `angle_max` is not where their beams end.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AngleMaxMismatch {
+    /// How many scans disagree.
+    pub scans: usize,
+    /// The first one's `angle_max`. rad.
+    pub angle_max_rad: f64,
+    /// Where its beams end: `angle_min + (n − 1)·angle_increment`. rad.
+    pub beams_end_rad: f64,
+    /// Its beam count.
+    pub beams: usize,
+}
+
+impl AngleMaxMismatch {
+    /// The note on `topic`: which field is used.
+    pub fn describe(&self, topic: &str) -> String {
+        format!(
+            "lidar {topic:?}: {} scans have an angle_max ({:.2}°) that disagrees with their {} beams, which end at \
+             {:.2}° (angle_min + (n − 1)·angle_increment): the beams' directions are taken from angle_min and \
+             angle_increment, as ROS's laser_geometry takes them; angle_max is not used",
+            self.scans,
+            self.angle_max_rad.to_degrees(),
+            self.beams,
+            self.beams_end_rad.to_degrees()
+        )
+    }
 }
 
 impl ScanRead {
@@ -152,6 +183,8 @@ pub(crate) struct ScanSink {
     base_frame: Option<String>,
     channels: Vec<Declared>,
     scans: Vec<Taken>,
+    /// Scans whose angle_max disagrees with their beams.
+    angle_max_mismatch: Option<AngleMaxMismatch>,
     frame_id: Option<String>,
     /// The first problem on the topic: message index and what.
     problem: Option<(usize, String)>,
@@ -166,6 +199,7 @@ impl ScanSink {
             base_frame: None,
             channels: Vec::new(),
             scans: Vec::new(),
+            angle_max_mismatch: None,
             frame_id: None,
             problem: None,
         }
@@ -197,6 +231,7 @@ impl ScanSink {
         if !(m.range_min >= 0.0 && m.range_max > m.range_min) {
             return Err(format!("fields range_min {} and range_max {} do not make a range", m.range_min, m.range_max));
         }
+        self.check_angle_max(&m);
         self.frame_id.get_or_insert_with(|| m.header.frame_id.frame().to_string());
         // The time between beams; a value that is not finite says nothing (beams taken at once).
         let time_increment_s = Some(f64::from(m.time_increment)).filter(|t| t.is_finite()).unwrap_or(0.0);
@@ -211,6 +246,23 @@ impl ScanSink {
         };
         self.scans.push(Taken { stamp_ns: m.header.stamp.ns(), log_ns, scan });
         Ok(())
+    }
+
+    /// Counts `m` among the scans whose `angle_max` is not where their beams end: beyond one increment
+    /// (drivers differ on whether angle_max is the last beam's or one increment past it) and float32's
+    /// rounding.
+    fn check_angle_max(&mut self, m: &LaserScan) {
+        let beams = m.ranges.len();
+        if beams < 2 || !m.angle_max.is_finite() {
+            return;
+        }
+        let (min, inc, max) = (f64::from(m.angle_min), f64::from(m.angle_increment), f64::from(m.angle_max));
+        let end = min + (beams - 1) as f64 * inc;
+        if (max - end).abs() <= inc.abs() * 1.01 + 1e-5 {
+            return;
+        }
+        let first = AngleMaxMismatch { scans: 0, angle_max_rad: max, beams_end_rad: end, beams };
+        self.angle_max_mismatch.get_or_insert(first).scans += 1;
     }
 
     /// The error when the scan topic is missing or not a ROS 2 LaserScan (naming the file `path`).
@@ -321,7 +373,8 @@ impl ScanSink {
             })
             .collect();
         let (base_from_sensor, chain) = mount.map_or((None, Vec::new()), |(p, c, _)| (Some(p), c));
-        Ok(ScanRead { scans, origin_s, frame_id, base_from_sensor, chain, mirrored, by_log_time })
+        let angle_max_mismatch = self.angle_max_mismatch;
+        Ok(ScanRead { scans, origin_s, frame_id, base_from_sensor, chain, mirrored, by_log_time, angle_max_mismatch })
     }
 }
 

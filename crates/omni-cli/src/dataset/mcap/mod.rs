@@ -70,6 +70,7 @@ mod odom_wheels;
 mod odometry;
 mod pose_stamped;
 mod poses;
+mod qos;
 pub(crate) mod recording;
 pub(crate) mod review;
 pub(crate) mod selection;
@@ -88,8 +89,8 @@ pub(crate) use imu::ImuSink;
 pub use imu::{BASE_FRAMES as IMU_BASE_FRAMES, GyroRead, ImuRate, StatedMount};
 pub(crate) use inspect::InventorySink;
 pub use inspect::{Inventory, ROBOT_DESCRIPTION_TOPIC, TopicSummary, inspect, inspect_bytes};
-pub use laser_scan::ScanRead;
 pub(crate) use laser_scan::ScanSink;
+pub use laser_scan::{AngleMaxMismatch, ScanRead};
 pub use review::{Role, TopicReview};
 pub use write::{COMMAND_TOPIC, IMU_TOPIC, JOINTS_TOPIC, LASER_FRAME, SCAN_TOPIC, TF_STATIC_TOPIC, TRUTH_TOPIC};
 
@@ -122,6 +123,9 @@ pub struct McapOptions {
     pub command_topic: Option<String>,
     /// Cut the file into runs at standstills of at least this long. s. Default: one run per file.
     pub split: Option<f64>,
+    /// Cut each recording into runs of this length instead (`--split 20s`): s. The last piece takes what is
+    /// left when that is less than half a length.
+    pub split_every_s: Option<f64>,
     /// Collect runs that fail validation in [`McapRead::skipped`] instead of failing. Default false.
     pub skip_invalid: bool,
     /// Keep the robot's recorded odometry in [`Run::recorded_odometry`]. Calibration never reads it and it
@@ -206,6 +210,7 @@ impl Default for McapOptions {
             base_frame: None,
             command_topic: None,
             split: None,
+            split_every_s: None,
             wheels_only: false,
             wheels_from_twist: None,
             skip_invalid: false,

@@ -8,8 +8,9 @@ use super::odometry::{self, ODOM_FRAME};
 use super::recording::{Channel, Content, MsgType};
 use super::statics::{StaticTree, base_frames};
 use super::{McapOptions, Origin, tf, twist};
-use crate::dataset::ground_truth::GtClock;
+use crate::dataset::ground_truth::{GtClock, Kept};
 use crate::dataset::{DatasetError, Note};
+use omni_kin::clock::SameRecording;
 use omni_kin::{Pose2, StampedPose};
 use std::path::{Path, PathBuf};
 
@@ -145,14 +146,20 @@ impl Bag<'_> {
                 (Some(i), None) => Err(DatasetError::file(
                     self.path,
                     format!(
-                        "no {} topic for the wheel speeds; {} is the robot's own odometry: {NEED_DESIGN}",
+                        "no {} topic for the wheel speeds; {topic} is the robot's own odometry: {NEED_DESIGN}; with \
+                         it, {topic} stands in for the wheels (--joints-topic {topic})",
                         joint_state::NAME,
-                        self.channels[i].topic
+                        topic = self.channels[i].topic
                     ),
                 )),
                 (None, _) => Err(DatasetError::file(
                     self.path,
-                    format!("no {} topic for the wheel speeds; topics: {}", joint_state::NAME, self.listing()),
+                    format!(
+                        "no {} topic for the wheel speeds; topics: {}{}",
+                        joint_state::NAME,
+                        self.listing(),
+                        self.any_odometry_hint()
+                    ),
                 )),
             };
         }
@@ -345,6 +352,20 @@ impl Bag<'_> {
         }
     }
 
+    /// Without JointState and without an odometry in frame `odom` (REP-105): an odometry in another frame
+    /// may still be the wheels', named with the way to read it (`; if … --joints-topic …`), or nothing.
+    fn any_odometry_hint(&self) -> String {
+        let odometry = self.channels.iter().find(|c| c.msg_type == MsgType::Odometry);
+        odometry.map_or_else(String::new, |c| {
+            format!(
+                "; if {topic} is the robot's own wheel odometry, it can stand in for the wheels through the robot's \
+                 design: --joints-topic {topic}, with a robot description (omnical init RECORDING writes robot.toml \
+                 from its URDF, or --robot FILE)",
+                topic = c.topic
+            )
+        })
+    }
+
     /// What to try when the JointState topic does not carry the wheels and the robot's own odometry is
     /// recorded: name it as the wheel source.
     pub(super) fn odometry_hint(&self) -> Option<String> {
@@ -447,10 +468,22 @@ fn to_base_frame(
     base: Option<&str>,
 ) -> Option<String> {
     let bases = base_frames(base);
-    let (to, (offset, frames)) = match target {
-        Some(t) => (t, statics.offset(&pair.child, t)?),
+    let found = match target {
+        Some(t) => statics.between(&pair.child, t).map(|o| (t, o)),
         None if bases.contains(&pair.child.as_str()) => return None,
-        None => bases.iter().find_map(|&t| statics.offset(&pair.child, t).map(|o| (t, o)))?,
+        None => bases.iter().find_map(|&t| statics.between(&pair.child, t).map(|o| (t, o))),
+    };
+    let Some((to, (offset, frames))) = found else {
+        // Static transforms that name the tracked frame but reach no base: said, not silently passed over.
+        let wanted = target.map_or_else(|| bases.join(" or "), str::to_string);
+        return statics.names(&pair.child).then(|| {
+            format!(
+                "the ground truth tracks {:?}, which the static transforms name, but they do not join it to {wanted}: \
+                 the ground truth is left where it was measured (give --gt-mount X,Y,YAW_DEG, or record the \
+                 transform between them)",
+                pair.child
+            )
+        });
     };
     for p in &mut pair.poses.xy_yaw {
         let moved = Pose2::new(p[0], p[1], p[2]).compose(&offset);
@@ -535,25 +568,20 @@ fn localization_hint(localizations: &[&str]) -> String {
     )
 }
 
-/// Largest clock offset between the wheel data and a ground-truth topic of the same recording taken as
-/// recorded: a lag up to this is physics the `time_offset` effect models (its range) and diagnose names;
-/// beyond it the topic runs on another clock (a motion-capture bridge stamping with its own). s.
-pub(crate) const SAME_CLOCK_MAX_OFFSET_S: f64 = 0.5;
-
-/// How clear an estimate must be for a topic's stamps to be moved: its standard error (s) and the share
-/// of the ground truth's motion the wheels explain at it. A topic whose motion hardly follows the wheels
-/// keeps its stamps (whatever is wrong with it, moving it would hide it).
-pub(crate) const TOPIC_CLOCK_MAX_STD_ERROR_S: f64 = 0.02;
-pub(crate) const TOPIC_CLOCK_MIN_R_SQUARED: f64 = 0.9;
+/// The same-clock band: a lag up to this is physics the `time_offset` effect models (its range) and
+/// diagnose names; beyond it the topic runs on another clock (a motion-capture bridge stamping with its own).
+/// s.
+pub(crate) const SAME_CLOCK_MAX_OFFSET_S: f64 = omni_kin::clock::SAME_CLOCK_MAX_OFFSET_S;
 /// The share of the ground truth's motion the wheels must explain at offset 0 for its clock to be taken as
 /// the wheels' without a search.
 const TOPIC_CLOCK_SEARCH_BELOW_R2: f64 = 0.98;
 
 /// The clock of a ground-truth topic: `forced_s` when given (`--gt-time-offset`), else checked against the
-/// wheels' ([`omni_kin::clock::align_clocks`]): when the
-/// estimated offset is clear and beyond [`SAME_CLOCK_MAX_OFFSET_S`] and three standard errors, the poses
-/// are moved onto the wheel clock and the offset returned (a note); otherwise, or when no estimate is
-/// possible (too little motion), the stamps stay as recorded.
+/// wheels' ([`omni_kin::clock::align_clocks`]). An estimate beyond [`SAME_CLOCK_MAX_OFFSET_S`] and three
+/// standard errors moves the poses onto the wheel clock when it is clear
+/// ([`omni_kin::clock::ClockAlignment::is_clear`]) and no longer than the recording; otherwise the stamps
+/// stay as recorded and the clock returned says why (a note). Within the band, or when no estimate is
+/// possible (too little motion), the stamps stay as recorded without a word.
 #[allow(clippy::too_many_arguments)] // the topic's names, its poses and the wheel data they are checked against
 pub(super) fn topic_clock(
     path: &Path,
@@ -565,15 +593,16 @@ pub(super) fn topic_clock(
     rad_s: &[f64],
     n_wheels: usize,
 ) -> Option<GtClock> {
-    let clock = |offset_s: f64, estimate| GtClock {
+    let clock = |offset_s: f64, estimate, kept| GtClock {
         recording: recording.to_string(),
         file: PathBuf::from(format!("{}, topic {topic:?}", path.display())),
         offset_s,
         estimate,
+        kept,
     };
     if let Some(offset_s) = forced_s {
         poses.iter_mut().for_each(|p| p.t_s += offset_s);
-        return Some(clock(offset_s, None));
+        return Some(clock(offset_s, None, None));
     }
     // On the wheels' clock, or off it by a small lag (nearly always): the wheels explain nearly all the
     // truth's motion at offset 0, and no search is needed. (Half of it is not enough: slow, smooth motion
@@ -584,12 +613,15 @@ pub(super) fn topic_clock(
         return None;
     }
     let a = omni_kin::clock::align_clocks(t_s, rad_s, n_wheels, poses).ok()?;
-    let clear = a.std_error_s <= TOPIC_CLOCK_MAX_STD_ERROR_S && a.r_squared >= TOPIC_CLOCK_MIN_R_SQUARED;
-    if !clear || a.offset_s.abs() <= SAME_CLOCK_MAX_OFFSET_S.max(3.0 * a.std_error_s) {
-        return None;
+    match a.same_recording(t_s[t_s.len() - 1] - t_s[0]) {
+        // A lag within the band is the `time_offset` effect's, which diagnose names.
+        SameRecording::Agree | SameRecording::Lag | SameRecording::UnclearLag => return None,
+        SameRecording::Unclear => return Some(clock(0.0, Some(a), Some(Kept::Unclear))),
+        SameRecording::Implausible => return Some(clock(0.0, Some(a), Some(Kept::Implausible))),
+        SameRecording::Move => {}
     }
     poses.iter_mut().for_each(|p| p.t_s += a.offset_s);
-    Some(clock(a.offset_s, Some(a)))
+    Some(clock(a.offset_s, Some(a), None))
 }
 
 #[cfg(test)]

@@ -56,6 +56,30 @@ pub(super) fn pieces(
     out
 }
 
+/// The pieces of `--split LENGTH` (`20s`): inclusive sample ranges tiling `0..t_s.len()` (neighbours share
+/// the cut sample), each from its first sample to the first at least `length_s` later; what is left at the
+/// end joins the last piece when it is shorter than half a length (no stub of a run), else is a piece of its
+/// own.
+pub(super) fn fixed_pieces(t_s: &[f64], length_s: f64) -> Vec<(usize, usize)> {
+    let n = t_s.len();
+    let mut out = Vec::new();
+    let mut first = 0;
+    for k in 1..n {
+        if t_s[k] - t_s[first] >= length_s {
+            out.push((first, k));
+            first = k;
+        }
+    }
+    let tail_s = t_s[n - 1] - t_s[first];
+    let (stub, left) = (tail_s < 0.5 * length_s, first < n - 1);
+    match out.last_mut() {
+        Some(last) if left && stub => last.1 = n - 1,
+        Some(_) if !left => {}
+        _ => out.push((first, n - 1)),
+    }
+    out
+}
+
 /// Whether the poses stamped in `[from_s, to_s]` stay where the first of them is.
 fn truth_still(truth: &[StampedPose], from_s: f64, to_s: f64) -> bool {
     let lo = truth.partition_point(|p| p.t_s < from_s);
@@ -72,6 +96,15 @@ fn truth_still(truth: &[StampedPose], from_s: f64, to_s: f64) -> bool {
 mod tests {
     use super::*;
     use omni_kin::Pose2;
+
+    #[test]
+    fn fixed_pieces_tile_the_recording_without_a_stub() {
+        let t: Vec<f64> = (0..=100).map(|k| 0.5 * k as f64).collect(); // 50 s at 2 Hz
+        assert_eq!(fixed_pieces(&t, 20.0), [(0, 40), (40, 80), (80, 100)], "10 s left: half a length, its own run");
+        assert_eq!(fixed_pieces(&t, 15.0), [(0, 30), (30, 60), (60, 100)], "5 s left: less than half, joined");
+        assert_eq!(fixed_pieces(&t, 60.0), [(0, 100)]);
+        assert_eq!(fixed_pieces(&t, 50.0), [(0, 100)]);
+    }
 
     fn pose(t_s: f64, x_m: f64) -> StampedPose {
         StampedPose { t_s, pose: Pose2::new(x_m, 0.0, 0.0) }

@@ -178,6 +178,35 @@ impl StaticTree {
         Some(frames.iter().filter(|f| self.flipped.contains(*f)).count() % 2 == 1)
     }
 
+    /// The pose of frame `to` in frame `from` through static transforms in either direction: up from `from`
+    /// to a frame both hang from (a marker that a URDF places below `base_link`, which has a parent of its
+    /// own), then down to `to`; and the frames crossed after `from`, ending with `to`. `None` when no
+    /// static transforms join them.
+    pub fn between(&self, from: &str, to: &str) -> Option<(Pose2, Vec<String>)> {
+        let mut up = Pose2::IDENTITY; // `from` in the frame reached going up
+        let mut crossed = Vec::new();
+        let mut at = from.to_string();
+        for _ in 0..MAX_DEPTH {
+            if at == to {
+                return (!crossed.is_empty()).then(|| (up.inverse(), crossed));
+            }
+            if let Some((down, frames)) = self.offset(&at, to) {
+                crossed.extend(frames);
+                return Some((up.inverse().compose(&down), crossed));
+            }
+            let (parent, local) = self.parent_of.get(&at)?;
+            up = local.compose(&up);
+            crossed.push(parent.clone());
+            at = parent.clone();
+        }
+        None
+    }
+
+    /// Whether any static transform names `frame`, as child or parent.
+    pub fn names(&self, frame: &str) -> bool {
+        self.parent_of.iter().any(|(child, (parent, _))| child == frame || parent == frame)
+    }
+
     /// The pose of frame `to` in frame `from` through static transforms down from `from`, and the frames
     /// crossed after `from` (ending with `to`); `None` when `to` does not hang from `from` by them.
     pub fn offset(&self, from: &str, to: &str) -> Option<(Pose2, Vec<String>)> {
@@ -202,6 +231,29 @@ impl StaticTree {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A marker that a URDF places below base_link (base_link → marker), base_link under base_footprint:
+    /// the base's pose in the marker's frame is the inverse of the marker's on the base, and a frame on
+    /// another branch is reached through the frame both hang from.
+    #[test]
+    fn the_tree_is_followed_up_and_down() {
+        let mut tree = StaticTree::default();
+        tree.add("base_footprint", "base_link", Pose2::new(0.0, 0.0, 0.0));
+        tree.add("base_link", "marker", Pose2::new(0.1, 0.05, 0.3));
+        tree.add("base_link", "laser", Pose2::new(0.2, 0.0, 0.0));
+        assert_eq!(tree.offset("marker", "base_link"), None);
+        let (p, frames) = tree.between("marker", "base_link").unwrap();
+        let back = Pose2::new(0.1, 0.05, 0.3).compose(&p);
+        assert!(back.x_m.abs() < 1e-12 && back.y_m.abs() < 1e-12 && back.theta_rad.abs() < 1e-12, "{back:?}");
+        assert_eq!(frames, ["base_link"]);
+        let (p, frames) = tree.between("marker", "laser").unwrap();
+        let want = Pose2::new(0.1, 0.05, 0.3).inverse().compose(&Pose2::new(0.2, 0.0, 0.0));
+        assert!((p.x_m - want.x_m).abs() < 1e-12 && (p.y_m - want.y_m).abs() < 1e-12, "{p:?} vs {want:?}");
+        assert_eq!(frames, ["base_link", "laser"]);
+        assert_eq!(tree.between("base_link", "marker").map(|(_, f)| f), Some(vec!["marker".to_string()]));
+        assert_eq!(tree.between("marker", "odom"), None);
+        assert!(tree.names("marker") && !tree.names("odom"));
+    }
 
     #[test]
     fn a_chain_of_static_transforms_composes_to_the_offset_of_its_end() {

@@ -15,7 +15,6 @@ use super::twist::{self, TwistStamped, twist_of};
 use crate::dataset::DatasetError;
 use omni_kin::{Run, StampedPose};
 use serde::Serialize;
-use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
@@ -164,11 +163,13 @@ fn messages(path: &Path, run: &Run, w: &WriteOptions) -> Result<Vec<Pending>, Da
             m.push(msg.header.stamp, 2, &msg)?;
         }
     }
-    for (slot, odom) in [(3, &w.design_odometry), (4, &w.calibrated_odometry)] {
+    // The robot's odometry is in its own odom frame; the calibrated odometry starts at the ground truth's
+    // first pose, so its poses are in the ground truth's frame.
+    for (slot, odom, frame) in [(3, &w.design_odometry, ODOM_FRAME), (4, &w.calibrated_odometry, TRUTH_FRAME)] {
         let Some(odom) = odom else { continue };
         for (p, tw) in odom.iter().zip(body_twists(odom)) {
             let msg = Odometry {
-                header: header(m.stamp(p.t_s)?, ODOM_FRAME),
+                header: header(m.stamp(p.t_s)?, frame),
                 child_frame_id: RosString(BASE_FRAME.to_string()),
                 pose: PoseWithCovariance { pose: planar(p), covariance: Default::default() },
                 twist: TwistWithCovariance { twist: tw, covariance: Default::default() },
@@ -294,7 +295,7 @@ fn write_file(tmp: &Path, run: &Run, w: &WriteOptions, pending: &[Pending]) -> R
         .compression_threads(0)
         .create(BufWriter::new(file))
         .map_err(mcap_err)?;
-    let qos = BTreeMap::from([("offered_qos_profiles".to_string(), String::new())]);
+    out.write_metadata(&super::qos::rosbag2_metadata()).map_err(mcap_err)?;
     let mut channel_ids = Vec::new();
     for (name, text, topic, used) in [
         (joint_state::NAME, joint_state::schema(), JOINTS_TOPIC, true),
@@ -308,7 +309,7 @@ fn write_file(tmp: &Path, run: &Run, w: &WriteOptions, pending: &[Pending]) -> R
     ] {
         let id = if used {
             let schema = out.add_schema(name, "ros2msg", text.as_bytes()).map_err(mcap_err)?;
-            out.add_channel(schema, topic, "cdr", &qos).map_err(mcap_err)?
+            out.add_channel(schema, topic, "cdr", &super::qos::channel_metadata(topic)).map_err(mcap_err)?
         } else {
             0
         };
@@ -316,7 +317,8 @@ fn write_file(tmp: &Path, run: &Run, w: &WriteOptions, pending: &[Pending]) -> R
     }
     for c in carried(w) {
         let schema = out.add_schema(&c.schema_name, "ros2msg", c.schema_text.as_bytes()).map_err(mcap_err)?;
-        channel_ids.push(out.add_channel(schema, &c.topic, "cdr", &qos).map_err(mcap_err)?);
+        let metadata = super::qos::channel_metadata(&c.topic);
+        channel_ids.push(out.add_channel(schema, &c.topic, "cdr", &metadata).map_err(mcap_err)?);
     }
     let mut sequence = vec![0u32; channel_ids.len()];
     for (log_time, slot, bytes) in pending {

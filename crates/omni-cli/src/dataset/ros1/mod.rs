@@ -99,7 +99,7 @@ fn check_index(path: &Path) -> Result<(), DatasetError> {
     let mut bytes = Vec::with_capacity(4096);
     file.take(4096).read_to_end(&mut bytes).map_err(cannot)?;
     let Some(rest) = bytes.strip_prefix(MAGIC) else {
-        return Err(DatasetError::file(path, "not a ROS 1 bag: it does not start with \"#ROSBAG V2.0\""));
+        return Err(DatasetError::file(path, not_version_2(&bytes)));
     };
     let index_pos = bag_header_field(rest, b"index_pos").and_then(|v| <[u8; 8]>::try_from(v).ok());
     let Some(index_pos) = index_pos.map(u64::from_le_bytes) else {
@@ -128,6 +128,21 @@ fn check_index(path: &Path) -> Result<(), DatasetError> {
     Ok(())
 }
 
+/// Why a file that does not start as a bag of format 2.0 is refused: another format version of a ROS 1 bag
+/// (`#ROSBAG V1.2`, written by ROS before 2010) named with the way to rewrite it, or no bag at all.
+fn not_version_2(head: &[u8]) -> String {
+    let line = head.split(|&c| c == b'\n').next().unwrap_or_default();
+    match line.strip_prefix(b"#ROSBAG V") {
+        Some(version) if !version.is_empty() && version.len() <= 8 => format!(
+            "a ROS 1 bag of format version {}, which omnical does not read: it reads version 2.0 (as `rosbag record` \
+             writes it); rewrite the bag as version 2.0 with ROS 1's `rosbag filter OLD.bag NEW.bag True` (rosbag \
+             reads version {0} and writes 2.0), then read the new bag",
+            String::from_utf8_lossy(version)
+        ),
+        _ => "not a ROS 1 bag: it does not start with \"#ROSBAG V2.0\"".to_string(),
+    }
+}
+
 /// The value of field `name` in the header of the record at the start of `rest` (ROS 1 bag record: header
 /// length, then `length name=value` fields, all lengths u32 little-endian).
 fn bag_header_field<'a>(rest: &'a [u8], name: &[u8]) -> Option<&'a [u8]> {
@@ -143,4 +158,26 @@ fn bag_header_field<'a>(rest: &'a [u8], name: &[u8]) -> Option<&'a [u8]> {
         }
     }
     None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_bag_of_format_1_2_is_named_with_the_version_read_and_the_one_found() {
+        let dir = tempfile::tempdir().unwrap();
+        let read = |name: &str, bytes: &[u8]| {
+            let p = dir.path().join(name);
+            std::fs::write(&p, bytes).unwrap();
+            check_index(&p).unwrap_err().to_string().replace(&p.display().to_string(), name)
+        };
+        assert_eq!(
+            read("old.bag", b"#ROSBAG V1.2\n\x00\x00\x00\x00"),
+            "old.bag: a ROS 1 bag of format version 1.2, which omnical does not read: it reads version 2.0 (as \
+             `rosbag record` writes it); rewrite the bag as version 2.0 with ROS 1's `rosbag filter OLD.bag NEW.bag \
+             True` (rosbag reads version 1.2 and writes 2.0), then read the new bag"
+        );
+        assert_eq!(read("text.bag", b"hello"), "text.bag: not a ROS 1 bag: it does not start with \"#ROSBAG V2.0\"");
+    }
 }

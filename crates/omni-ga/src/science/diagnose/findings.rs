@@ -64,6 +64,9 @@ pub enum Finding {
     Unconstrained(WeakDirection),
     /// The held-out runs contain motions the training runs never do (e.g. arcs after squares).
     MissingMotions(MotionCoverage),
+    /// The wheels and the reference disagree in time: a clock offset between them, measured without a
+    /// model ([`super::clock_lag`]).
+    ClockLag(super::ClockLag),
     /// Scatter of the end-pose error between repeats of the same command, or runs of one kind (Eq. 6
     /// units).
     RepeatabilityFloor {

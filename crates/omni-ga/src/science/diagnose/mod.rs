@@ -30,6 +30,7 @@
 //! the correlation of residuals along a path; iid only with too few runs), the same numbers `train` reports
 //! for the same model on the same runs.
 
+mod clock;
 mod compare;
 mod evidence;
 mod findings;
@@ -38,6 +39,7 @@ mod noise;
 mod search;
 mod unexplained;
 
+pub use clock::{ClockLag, clock_lag};
 pub use compare::{Turn, costs_of, costs_of_each};
 pub(crate) use evidence::unbounded;
 pub use evidence::{differentiable_start, refit, refit_on};
@@ -380,21 +382,41 @@ fn split_held_out(train: &[Run]) -> (Vec<Run>, Vec<Run>) {
 }
 
 /// The recommended effect: the best candidate if it passes with confidence and also helps on kinds of
-/// path it was not fitted on (when the runs have several); and that check.
+/// path it was not fitted on (when the runs have several); and that check. A `time_offset` whose fitted
+/// lag the model-free estimate `lag` confirms skips the kinds check: a clock does not depend on the kind of
+/// path, and a fit on fewer kinds determines it worse, not differently. Returns that estimate too.
 fn recommend(
     model: &FittedModel,
     ranking: &[Candidate],
     train: &[Run],
     every: usize,
     opts: &DiagnoseOptions,
-) -> Result<(Option<String>, Option<KindOut>), Error> {
+) -> Result<Recommendation, Error> {
+    // A clock offset between the wheels and the reference, measured without a model.
+    let lag = clock::clock_lag(train);
     let Some(winner) = ranking.first().filter(|c| passes(c, opts) && confident(c, opts)) else {
-        return Ok((None, None));
+        return Ok(Recommendation { effect: None, kind_check: None, lag });
     };
+    let confirmed = lag.as_ref().is_some_and(|l| {
+        winner.effect == "time_offset"
+            && l.named()
+            && winner.params.first().is_some_and(|p| l.confirms(p.value, p.std_error))
+    });
+    if confirmed {
+        return Ok(Recommendation { effect: Some(winner.effect.clone()), kind_check: None, lag });
+    }
     let effect = candidate_effect(&winner.effect, model.model.n_wheels(), opts)?;
     let kind_check = kind_out(model, &effect, train, every)?;
     let failed = kind_check.as_ref().is_some_and(|k| k.gain < 0.0);
-    Ok(((!failed).then(|| winner.effect.clone()), kind_check))
+    Ok(Recommendation { effect: (!failed).then(|| winner.effect.clone()), kind_check, lag })
+}
+
+/// What [`recommend`] decides: the effect, the left-out-kinds check when it ran, and the model-free clock
+/// estimate.
+struct Recommendation {
+    effect: Option<String>,
+    kind_check: Option<KindOut>,
+    lag: Option<ClockLag>,
 }
 
 /// Whether something physical is still missing once `model` is used: the one decision of diagnose,
@@ -479,7 +501,7 @@ pub fn diagnose(
     let base_fit = if protocol == HeldOut::CrossValidation { BaseFit::OtherRuns } else { BaseFit::TheseRuns };
     let bench = Bench { design, fit_runs: &fit_runs, held_runs: &held_runs, every, noise: noise.as_ref(), base_fit };
     let climb = search::climb(&bench, model, &costs, &design_costs, opts)?;
-    let (verdict, kind_check) = recommend(model, &climb.ranking, train, every, opts)?;
+    let Recommendation { effect: verdict, kind_check, lag } = recommend(model, &climb.ranking, train, every, opts)?;
     // What the runs constrain in the model as given, and where it fails.
     let identifiability = unbounded(&model.model, &fit_runs, every)
         .ok()
@@ -487,6 +509,7 @@ pub fn diagnose(
     let repeat_floor = repeatability_floor(&cmp.groups);
     let mut facts =
         findings(&cmp.runs, &cmp.groups, &cmp.growth, &climb.ranking, identifiability.as_ref(), repeat_floor);
+    facts.splice(0..0, lag.filter(ClockLag::named).map(Finding::ClockLag));
     let coverage = held_out_findings(&mut facts, (model, design), (&fit_runs, &held_runs), protocol, every)?;
     // The repeat structure with the accepted effects: the verdict's (refitted), or those `auto` added.
     let accepted = match (&verdict, climb.ranking.first(), opts.auto) {

@@ -117,13 +117,16 @@ impl DirectionCovariances {
 /// The unconstrained directions, largest singular value first: null ones (standard error `None`), and
 /// alive ones whose standard error exceeds `max_std_error` or whose excitation is below `min_excitation`.
 /// The excitation rule applies only without per-run standard errors (`kind`): a direction whose per-run
-/// standard error is small is never unconstrained.
+/// standard error is small is never unconstrained. Nor is an excited one along which the fit lies more than
+/// [`super::START_REJECTED_SIGMAS`] standard errors from the start (`departure`: the fit minus the start,
+/// scaled; see [`IdentifyOptions::start`]).
 fn unconstrained(
     sp: &Spectrum,
     alive: &[usize],
     chosen: &DMatrix<f64>,
     kind: CovarianceKind,
     opts: &IdentifyOptions,
+    departure: Option<&DVector<f64>>,
 ) -> Vec<(usize, Option<f64>)> {
     let mut weak = Vec::new();
     let by_excitation = kind != CovarianceKind::PerRun;
@@ -132,7 +135,11 @@ fn unconstrained(
             None => weak.push((k, None)),
             Some(a) => {
                 let se = chosen[(a, a)].max(0.0).sqrt();
-                if se > opts.max_std_error || (by_excitation && sp.sv[k] < opts.min_excitation * sp.smax) {
+                let weakly_excited = sp.sv[k] < opts.min_excitation * sp.smax;
+                let rejects_start = departure.is_some_and(|d| {
+                    !weakly_excited && sp.v.column(k).dot(d).abs() > super::START_REJECTED_SIGMAS * se
+                });
+                if (se > opts.max_std_error || (by_excitation && weakly_excited)) && !rejects_start {
                     weak.push((k, Some(se)));
                 }
             }
@@ -208,7 +215,12 @@ pub(super) fn analyse_core(
     let alive = sp.alive(opts.rcond);
     let va = DMatrix::from_fn(n, alive.len(), |r, c| sp.v[(r, alive[c])]);
     let dirs = DirectionCovariances::new(&sp, &va, &alive, &scores, &noise);
-    let weak_k = unconstrained(&sp, &alive, dirs.chosen(noise.kind), noise.kind, opts);
+    let departure = opts
+        .start
+        .as_ref()
+        .filter(|s| s.len() == n)
+        .map(|s| DVector::from_fn(n, |i, _| (params[i] - s[i]) / scales[i]));
+    let weak_k = unconstrained(&sp, &alive, dirs.chosen(noise.kind), noise.kind, opts, departure.as_ref());
     // Directions that stay: covariance restricted to the constrained subspace, in parameter units.
     let strong: Vec<usize> = (0..alive.len()).filter(|&a| !weak_k.iter().any(|&(k, _)| k == alive[a])).collect();
     let vs = DMatrix::from_fn(n, strong.len(), |r, c| va[(r, strong[c])]);

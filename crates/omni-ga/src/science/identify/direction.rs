@@ -2,7 +2,7 @@
 //! the wheel-speed pattern the runs hardly contain, its design motion and which runs to add. The words are
 //! made from these facts by [`crate::science::text`].
 
-use super::{Advice, MotionParts, PatternPresence, WeakDirection, WheelEvidence};
+use super::{Advice, Combination, MotionParts, PatternPresence, WeakDirection, WheelEvidence};
 use crate::science::text;
 use nalgebra::{DMatrix, DVector};
 use omni_kin::Model;
@@ -37,14 +37,16 @@ pub(super) fn describe(
         .map(|(i, d)| (specs[i].name.clone(), *d))
         .collect();
     loadings.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
-    let pattern = wheel_pattern(model, params, scales, &dir, wheel_moment);
-    let remedy = match &pattern {
-        Some(p) if p.evidence.moves_nowhere => Advice::HeldAtDesign,
-        Some(p) if matches!(p.evidence.presence, PatternPresence::Present(_)) => Advice::PathObjective,
-        Some(p) => {
+    let combination = kinematic_combination(model, params, scales, &dir);
+    let pattern = if combination.is_some() { None } else { wheel_pattern(model, params, scales, &dir, wheel_moment) };
+    let remedy = match (&pattern, combination) {
+        (_, Some(c)) => Advice::OneCombination(c),
+        (Some(p), None) if p.evidence.moves_nowhere => Advice::HeldAtDesign,
+        (Some(p), None) if matches!(p.evidence.presence, PatternPresence::Present(_)) => Advice::PathObjective,
+        (Some(p), None) => {
             Advice::AddRuns { motion: p.evidence.motion, alpha_deg: p.motion[1].atan2(p.motion[0]).to_degrees() }
         }
-        None => {
+        (None, None) => {
             let effects: Vec<String> = model
                 .effects
                 .iter()
@@ -74,6 +76,41 @@ pub(super) fn describe(
     w.text = text::weak_direction(&w);
     w.advice = text::advice(&w.remedy);
     w
+}
+
+/// Relative change of the IK matrix below which a direction leaves it unchanged (rounding of the
+/// analytic derivative).
+const UNCHANGED: f64 = 1e-7;
+
+/// The combination of base parameters a direction moves without changing the IK matrix at all (its change
+/// `∂M/∂p · D dir` below [`UNCHANGED`] of the largest single parameter's): no run can separate them. `None`
+/// when the direction is mostly outside the base kinematics or changes the matrix.
+fn kinematic_combination(model: &Model, params: &[f64], scales: &[f64], dir: &[f64]) -> Option<Combination> {
+    let nb = model.n_base();
+    if dir[..nb].iter().map(|x| x * x).sum::<f64>() < 0.9 {
+        return None;
+    }
+    let jac = model.kinematics.twist_from_wheels_jacobian(&params[..nb]).ok()?;
+    let scaled = DMatrix::from_fn(jac.nrows(), nb, |r, c| jac[(r, c)] * scales[c]);
+    let largest = (0..nb).map(|c| scaled.column(c).norm()).fold(0.0f64, f64::max);
+    let change = (&scaled * DVector::from_column_slice(&dir[..nb])).norm();
+    if largest == 0.0 || change > UNCHANGED * largest {
+        return None;
+    }
+    let specs = model.params();
+    let top = dir[..nb].iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    // In parameter order (lx before ly), as the combination is written.
+    let carried: Vec<usize> = (0..nb).filter(|&i| dir[i].abs() >= NOTABLE * top).collect();
+    let names = carried.iter().map(|&i| specs[i].name.clone()).collect();
+    // In parameter units the direction is d = D dir; `a + k b` is constant along it when k = −d_a / d_b.
+    let sum = match carried[..] {
+        [a, b] => {
+            let k = -(dir[a] * scales[a]) / (dir[b] * scales[b]);
+            Some(([1.0, k], params[a] + k * params[b]))
+        }
+        _ => None,
+    };
+    Some(Combination { names, unit: specs[carried[0]].unit.clone(), sum })
 }
 
 /// A direction's base-kinematics side.

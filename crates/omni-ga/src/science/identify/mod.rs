@@ -56,11 +56,22 @@ pub struct IdentifyOptions {
     /// Singular values below `rcond · s_max` are treated as zero (not excited at all). Default 1e-7 (the
     /// analysis works on `JᵀJ`, whose eigenvalues are the squares).
     pub rcond: f64,
+    /// The fit's start (parameter units), when the analysis judges a fit against it: an excited direction
+    /// along which the fit lies more than [`START_REJECTED_SIGMAS`] standard errors from the start is
+    /// constrained whatever its standard error (the data reject the start along it: a metric reference's
+    /// scale against a design 2× off), so it is given a standard error and not held there. `None`: the
+    /// standard error and the excitation alone decide. Default `None`.
+    #[serde(skip)]
+    pub start: Option<Vec<f64>>,
 }
+
+/// A direction along which the fit lies more than this many standard errors from its start is constrained
+/// ([`IdentifyOptions::start`]): the data reject the start at about 95 %.
+pub const START_REJECTED_SIGMAS: f64 = 2.0;
 
 impl Default for IdentifyOptions {
     fn default() -> Self {
-        Self { max_std_error: 0.05, min_excitation: 0.01, rcond: 1e-7 }
+        Self { max_std_error: 0.05, min_excitation: 0.01, rcond: 1e-7, start: None }
     }
 }
 
@@ -182,6 +193,22 @@ pub enum Advice {
     OtherMotions,
     /// Add runs that exercise these effects (ids).
     ExerciseEffects(Vec<String>),
+    /// Nothing: the parameters enter the kinematics only together, so no run can separate them; read
+    /// them as one combination (a mecanum base's `lx` and `ly`, of which only `lx + ly` counts).
+    OneCombination(Combination),
+}
+
+/// Parameters of the base kinematics that enter the IK matrix only through one combination: along the
+/// unconstrained direction the matrix does not change at all, whatever the runs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Combination {
+    /// The parameters, in parameter order.
+    pub names: Vec<String>,
+    /// Their unit (the first parameter's).
+    pub unit: String,
+    /// With two parameters `a`, `b`: the coefficients `(1, k)` of the combination `a + k b` that counts
+    /// (orthogonal to the direction in parameter units), and its value at the fit. `None` with more.
+    pub sum: Option<([f64; 2], f64)>,
 }
 
 /// The identifiability of a model on a set of runs.

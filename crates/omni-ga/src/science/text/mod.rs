@@ -13,7 +13,8 @@ use crate::science::diagnose::{
     UnexplainedEvidence, Verdict,
 };
 use crate::science::identify::{
-    Advice, CovarianceKind, Identifiability, MIN_SEGMENT_S, MotionParts, PatternPresence, WeakDirection, WheelEvidence,
+    Advice, Combination, CovarianceKind, Identifiability, MIN_SEGMENT_S, MotionParts, PatternPresence, WeakDirection,
+    WheelEvidence,
 };
 
 mod explore;
@@ -133,6 +134,7 @@ pub fn finding(f: &Finding) -> String {
         ),
         Finding::Unconstrained(w) => format!("the model itself: {}", warning(w)),
         Finding::MissingMotions(c) => motion_coverage(c),
+        Finding::ClockLag(l) => clock_lag(l),
         Finding::RepeatabilityFloor { scatter, basis: GroupBasis::Command } => format!(
             "repeatability floor: end-pose errors scatter by {scatter:.4} between repeats of the same command (no deterministic effect removes that part)"
         ),
@@ -342,6 +344,9 @@ fn groups_short(basis: GroupBasis) -> &'static str {
 /// An unconstrained direction in words: the parameters carrying it, how badly it is constrained, and the
 /// wheel-speed pattern behind it.
 pub fn weak_direction(w: &WeakDirection) -> String {
+    if let Advice::OneCombination(c) = &w.remedy {
+        return combination(c);
+    }
     let names: Vec<&str> = w.loadings.iter().map(|(n, _)| n.as_str()).collect();
     let same_sign = w.loadings.iter().all(|(_, d)| *d > 0.0);
     let who = match names.len() {
@@ -363,6 +368,23 @@ pub fn weak_direction(w: &WeakDirection) -> String {
         text.push_str(&format!(": {}", wheel_evidence(e, u)));
     }
     text
+}
+
+/// Parameters that enter the kinematics only together: `lx and ly enter the kinematics only as lx + ly
+/// (0.37000 m at the fit)`.
+fn combination(c: &Combination) -> String {
+    let names = match &c.names[..] {
+        [a, b] => format!("{a} and {b}"),
+        many => many.join(", "),
+    };
+    match (&c.names[..], c.sum) {
+        ([a, b], Some(([_, k], value))) => {
+            let term = if (k.abs() - 1.0).abs() < 1e-3 { b.clone() } else { format!("{:.3} {b}", k.abs()) };
+            let sign = if k < 0.0 { "−" } else { "+" };
+            format!("{names} enter the kinematics only as {a} {sign} {term} ({value:.5} {} at the fit)", c.unit)
+        }
+        _ => format!("{names} enter the kinematics only together"),
+    }
 }
 
 /// What the runs say about the wheel-speed pattern `u` of a direction.
@@ -436,12 +458,34 @@ pub fn advice(a: &Advice) -> String {
         Advice::ExerciseEffects(effects) => {
             format!("add runs that exercise {} (see `omnical plan --effect …`)", effects.join(", "))
         }
+        Advice::OneCombination(_) => "no run can separate them: read them as one combination (the fit holds the \
+                                      rest at the design)"
+            .into(),
     }
 }
 
 /// One warning line for an unconstrained direction: its text and advice.
 pub fn warning(w: &WeakDirection) -> String {
     format!("{}; {}", w.text, w.advice)
+}
+
+/// A clock offset between the wheels and the reference, in words.
+fn clock_lag(l: &crate::science::diagnose::ClockLag) -> String {
+    let a = &l.estimate;
+    format!(
+        "the wheels and the reference disagree in time: the reference's motion follows the wheels best with the \
+         wheels' stamps {:.3} s ± {:.1} ms {} (explaining {:.0} % of it, {:.0} % as recorded; from {} run{}, \
+         without a model): a clock offset between the wheels and the sensor, which `train --effect time_offset` \
+         fits (tau_s {:+.3})",
+        a.offset_s.abs(),
+        a.std_error_s * 1e3,
+        if a.offset_s > 0.0 { "later" } else { "earlier" },
+        a.r_squared * 100.0,
+        l.r_squared_as_recorded * 100.0,
+        l.runs,
+        if l.runs == 1 { "" } else { "s" },
+        a.offset_s
+    )
 }
 
 #[cfg(test)]

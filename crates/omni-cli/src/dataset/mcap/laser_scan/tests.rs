@@ -188,3 +188,29 @@ fn scans_stamped_0_are_timed_by_their_log_time() {
     let t: Vec<f64> = read.scans.iter().map(|s| s.t_s).collect();
     assert!((t[1] - 0.025).abs() < 1e-12 && (t[2] - 0.05).abs() < 1e-12, "{t:?}");
 }
+
+/// A scan whose angle_max is not where its beams end (13 beams of 0.25 rad from −3 rad end at 0 rad, not at
+/// the 3 rad it says) is read by angle_min and angle_increment, and the read says so; a driver's
+/// angle_max one increment past the last beam is no disagreement.
+#[test]
+fn an_angle_max_that_disagrees_with_the_beams_is_named_and_not_used() {
+    let read = |inc: f32, beams: usize| {
+        let mut sink = ScanSink::new("/scan", false);
+        let i = sink.channel("/scan", NAME, "ros2msg", "cdr");
+        for sec in 1..=3 {
+            sink.message(i, &encode(&message(Time { sec, nanosec: 0 }, inc, vec![1.0; beams])).unwrap(), 0);
+        }
+        sink.finish(Path::new("rec.mcap")).unwrap()
+    };
+    let off = read(0.25, 13);
+    assert_eq!((off.scans[0].angle_min_rad, off.scans[0].angle_increment_rad), (-3.0, 0.25));
+    let m = off.angle_max_mismatch.unwrap();
+    assert_eq!(
+        m.describe("/scan"),
+        "lidar \"/scan\": 3 scans have an angle_max (171.89°) that disagrees with their 13 beams, which end at \
+         0.00° (angle_min + (n − 1)·angle_increment): the beams' directions are taken from angle_min and \
+         angle_increment, as ROS's laser_geometry takes them; angle_max is not used"
+    );
+    assert_eq!(read(0.5, 13).angle_max_mismatch, None);
+    assert_eq!(read(0.5, 12).angle_max_mismatch, None, "angle_max one increment past the last beam");
+}

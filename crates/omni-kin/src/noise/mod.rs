@@ -1,0 +1,334 @@
+//! How far to trust the odometry (issue 46): a noise model of the calibrated odometry in the
+//! parameterisation of AMCL's motion models, its covariance along a path, its fit on training runs and its
+//! check on held-out runs.
+//!
+//! ## The model
+//! Each step of the odometry, a body increment of length `d` (m) in the direction `β` and turn `φ = |Δθ|`
+//! (rad), adds independent zero-mean errors along the motion, across it (strafe) and in heading, with
+//! variances growing with the distance driven and the angle turned:
+//!
+//! - along: `trans_per_m · d + trans_per_rad · φ` (m²)
+//! - across: `strafe_per_m · d + trans_per_rad · φ` (m², holonomic bases only; a differential drive
+//!   cannot slip sideways in this model: its lateral error is its heading error driven on)
+//! - heading: `rot_per_rad · φ + rot_per_m · d` (rad²)
+//!
+//! These are Nav2 AMCL's omni motion model (`OmniMotionModel`: `α1` rot from rot, `α2` rot from trans, `α3`
+//! trans from trans, `α4` trans and strafe from rot, `α5` strafe from trans) and differential model
+//! (`DifferentialMotionModel`, the same meaning of `α1`–`α4`) in continuous form: AMCL applies its variances
+//! `α·δ²` per filter update, so over a path of updates of size `δ` they add up to `α δ` per unit of motion,
+//! and [`Amcl::from_rates`] divides the rates by the update thresholds (`update_min_d`, `update_min_a`).
+//!
+//! The ground truth's own noise enters every comparison at both ends of a window as a **floor** (position
+//! variance per axis, heading variance), fitted too and kept out of what is exported.
+//!
+//! ## Propagation
+//! Over a window of the odometry from pose `i` to `j`, in the frame of pose `i`, the covariance of the
+//! end pose grows as `Σ ← F Σ Fᵀ + G Q Gᵀ` per step (`F` moves the heading error into position by the
+//! step's displacement, `G` turns the along/across errors by the motion's direction). It is linear in the
+//! noise parameters, so each window's covariance is `Σ_w = Σ_m θ_m B_{w,m}` with basis matrices `B` taken
+//! once ([`window_basis`]).
+//!
+//! Plain data: no I/O. The odometry at the ground-truth stamps comes from the evaluator's errors
+//! ([`crate::relative::estimate_at_truth`]).
+
+mod check;
+mod fit;
+
+pub use check::{CHI2_2DOF_95, Coverage, HORIZONS_M, Horizon, HorizonCheck, Predictor, coverage, stock_defaults};
+pub use fit::{FitNoiseOptions, NoiseFitError, Systematic, fit};
+
+use crate::error::KinError;
+use crate::evaluate::RunErrors;
+use crate::pose::Pose2;
+use crate::relative::estimates_at_truth;
+use crate::run::Run;
+use nalgebra::Matrix3;
+use serde::{Deserialize, Serialize};
+
+/// Number of noise parameters: five rates and two floor terms.
+pub const N_PARAMS: usize = 7;
+
+/// The parameters' names in vector order (as in model files and JSON).
+pub const PARAM_NAMES: [&str; N_PARAMS] = [
+    "rot_per_rad",
+    "rot_per_m",
+    "trans_per_m",
+    "trans_per_rad",
+    "strafe_per_m",
+    "floor_position_m2",
+    "floor_heading_rad2",
+];
+
+/// The parameters' units in vector order.
+pub const PARAM_UNITS: [&str; N_PARAMS] = ["rad²/rad", "rad²/m", "m²/m", "m²/rad", "m²/m", "m²", "rad²"];
+
+/// A noise model: the variance rates of the odometry and the ground truth's floor.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NoiseRates {
+    /// Heading variance per radian turned. rad²/rad. (AMCL α1.)
+    pub rot_per_rad: f64,
+    /// Heading variance per metre driven. rad²/m. (AMCL α2.)
+    pub rot_per_m: f64,
+    /// Along-track variance per metre driven. m²/m. (AMCL α3.)
+    pub trans_per_m: f64,
+    /// Along-track (and, holonomic, across-track) variance per radian turned. m²/rad. (AMCL α4.)
+    pub trans_per_rad: f64,
+    /// Across-track variance per metre driven (holonomic bases; 0 for a differential drive). m²/m. (AMCL α5.)
+    pub strafe_per_m: f64,
+    /// Ground-truth position variance per axis at each end of a window. m².
+    pub floor_position_m2: f64,
+    /// Ground-truth heading variance at each end of a window. rad².
+    pub floor_heading_rad2: f64,
+}
+
+impl NoiseRates {
+    /// No noise.
+    pub const ZERO: NoiseRates = NoiseRates {
+        rot_per_rad: 0.0,
+        rot_per_m: 0.0,
+        trans_per_m: 0.0,
+        trans_per_rad: 0.0,
+        strafe_per_m: 0.0,
+        floor_position_m2: 0.0,
+        floor_heading_rad2: 0.0,
+    };
+
+    /// The parameters in [`PARAM_NAMES`] order.
+    pub fn to_vec(&self) -> [f64; N_PARAMS] {
+        [
+            self.rot_per_rad,
+            self.rot_per_m,
+            self.trans_per_m,
+            self.trans_per_rad,
+            self.strafe_per_m,
+            self.floor_position_m2,
+            self.floor_heading_rad2,
+        ]
+    }
+
+    /// From parameters in [`PARAM_NAMES`] order.
+    pub fn from_slice(p: &[f64; N_PARAMS]) -> Self {
+        Self {
+            rot_per_rad: p[0],
+            rot_per_m: p[1],
+            trans_per_m: p[2],
+            trans_per_rad: p[3],
+            strafe_per_m: p[4],
+            floor_position_m2: p[5],
+            floor_heading_rad2: p[6],
+        }
+    }
+
+    /// The same rates without the floor (what the odometry itself does: the exported part).
+    pub fn without_floor(&self) -> Self {
+        Self { floor_position_m2: 0.0, floor_heading_rad2: 0.0, ..*self }
+    }
+}
+
+/// The fitted noise model of a calibrated odometry.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct OdometryNoise {
+    /// Whether the base moves sideways (omni, mecanum): `strafe_per_m` is fitted; else it is 0.
+    pub holonomic: bool,
+    /// The fitted rates and floor.
+    pub rates: NoiseRates,
+    /// Each parameter's standard error (bootstrap over runs), same units; `None` from a single run.
+    pub std_errors: Option<NoiseRates>,
+    /// The systematic error left after calibration, kept apart from the noise.
+    pub systematic: Systematic,
+    /// Training runs and windows the fit used.
+    pub runs: usize,
+    /// Windows of the fit.
+    pub windows: usize,
+}
+
+/// A run's ground truth and the model's odometry at the same stamps (the odometry starts at the first).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunPoses {
+    /// Ground truth.
+    pub truth: Vec<Pose2>,
+    /// Odometry.
+    pub odometry: Vec<Pose2>,
+}
+
+/// Each run's ground truth and odometry at the same stamps, from its errors at every ground-truth pose
+/// after the first (an evaluator at [`crate::odometry::Selection::Path`]`(1)`, in run order).
+pub fn run_poses(runs: &[Run], errors: &RunErrors) -> Result<Vec<RunPoses>, KinError> {
+    Ok(runs
+        .iter()
+        .zip(estimates_at_truth(runs, errors)?)
+        .map(|(r, odometry)| RunPoses { truth: r.truth().iter().map(|s| s.pose).collect(), odometry })
+        .collect())
+}
+
+/// `b` seen from `a`: `a⁻¹ b` (x, y in `a`'s frame; heading difference unwrapped).
+pub fn between(a: &Pose2, b: &Pose2) -> Pose2 {
+    let (s, c) = a.theta_rad.sin_cos();
+    let (dx, dy) = (b.x_m - a.x_m, b.y_m - a.y_m);
+    Pose2::new(c * dx + s * dy, -s * dx + c * dy, b.theta_rad - a.theta_rad)
+}
+
+/// The error of a window `i → j`: the odometry's relative pose minus the ground truth's, in the frame of
+/// pose `i` (x m, y m, θ rad).
+pub fn window_error(run: &RunPoses, i: usize, j: usize) -> [f64; 3] {
+    let p = between(&run.odometry[i], &run.odometry[j]);
+    let q = between(&run.truth[i], &run.truth[j]);
+    [p.x_m - q.x_m, p.y_m - q.y_m, crate::pose::wrap_angle(p.theta_rad - q.theta_rad)]
+}
+
+/// Basis covariances of the window `i → j` of `run`'s odometry, one per parameter ([`PARAM_NAMES`]):
+/// the window's covariance is `Σ_m θ_m B_m`. `holonomic` false leaves `strafe_per_m` (and the across part
+/// of `trans_per_rad`) out.
+pub fn window_basis(run: &RunPoses, i: usize, j: usize, holonomic: bool) -> [Matrix3<f64>; N_PARAMS] {
+    let mut b = [Matrix3::zeros(); N_PARAMS];
+    // The floor at the window's start: position per axis, heading.
+    b[5][(0, 0)] = 1.0;
+    b[5][(1, 1)] = 1.0;
+    b[6][(2, 2)] = 1.0;
+    let origin = run.odometry[i];
+    for k in i..j {
+        let at = between(&origin, &run.odometry[k]);
+        let u = between(&run.odometry[k], &run.odometry[k + 1]);
+        let (s, c) = at.theta_rad.sin_cos();
+        let (dx, dy) = (c * u.x_m - s * u.y_m, s * u.x_m + c * u.y_m);
+        let f = Matrix3::new(1.0, 0.0, -dy, 0.0, 1.0, dx, 0.0, 0.0, 1.0);
+        let d = u.x_m.hypot(u.y_m);
+        let phi = u.theta_rad.abs();
+        // Direction of the motion in the window's frame (any, when the step does not translate).
+        let bearing = at.theta_rad + if d > 0.0 { u.y_m.atan2(u.x_m) } else { 0.0 };
+        let (sb, cb) = bearing.sin_cos();
+        let along = Matrix3::new(cb * cb, cb * sb, 0.0, cb * sb, sb * sb, 0.0, 0.0, 0.0, 0.0);
+        let across = Matrix3::new(sb * sb, -cb * sb, 0.0, -cb * sb, cb * cb, 0.0, 0.0, 0.0, 0.0);
+        let mut heading = Matrix3::zeros();
+        heading[(2, 2)] = 1.0;
+        for m in &mut b {
+            *m = f * *m * f.transpose();
+        }
+        b[0] += heading * phi;
+        b[1] += heading * d;
+        b[2] += along * d;
+        b[3] += along * phi;
+        if holonomic {
+            b[3] += across * phi;
+            b[4] += across * d;
+        }
+    }
+    // The floor at the window's end.
+    b[5][(0, 0)] += 1.0;
+    b[5][(1, 1)] += 1.0;
+    b[6][(2, 2)] += 1.0;
+    b
+}
+
+/// `Σ_m θ_m B_m`.
+pub fn covariance(basis: &[Matrix3<f64>; N_PARAMS], rates: &NoiseRates) -> Matrix3<f64> {
+    basis.iter().zip(rates.to_vec()).fold(Matrix3::zeros(), |acc, (b, t)| acc + b * t)
+}
+
+/// Nav2 AMCL's update thresholds by default (`update_min_d` m, `update_min_a` rad, Humble to Rolling).
+pub const AMCL_UPDATE_MIN_D_M: f64 = 0.25;
+/// See [`AMCL_UPDATE_MIN_D_M`].
+pub const AMCL_UPDATE_MIN_A_RAD: f64 = 0.2;
+/// Nav2 AMCL's default `alpha1`…`alpha5` (nav2_params.yaml, Humble to Rolling).
+pub const AMCL_DEFAULT_ALPHA: f64 = 0.2;
+
+/// AMCL's `alpha1`…`alpha5` for a noise model at given update thresholds.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Amcl {
+    /// `alpha1` … `alpha5`.
+    pub alpha: [f64; 5],
+    /// `update_min_d` the alphas are for. m.
+    pub update_min_d_m: f64,
+    /// `update_min_a` the alphas are for. rad.
+    pub update_min_a_rad: f64,
+}
+
+impl Amcl {
+    /// The alphas whose per-update variances, summed over updates of `update_min_d_m` and
+    /// `update_min_a_rad`, grow as `rates` do. The differential model draws its rotation noise twice per
+    /// update (before and after the translation), so its `alpha2` is halved; it has no `alpha5`.
+    pub fn from_rates(rates: &NoiseRates, holonomic: bool, update_min_d_m: f64, update_min_a_rad: f64) -> Self {
+        let (d, a) = (update_min_d_m, update_min_a_rad);
+        let alpha2 = if holonomic { rates.rot_per_m / d } else { rates.rot_per_m / (2.0 * d) };
+        let alpha5 = if holonomic { rates.strafe_per_m / d } else { 0.0 };
+        Self {
+            alpha: [rates.rot_per_rad / a, alpha2, rates.trans_per_m / d, rates.trans_per_rad / a, alpha5],
+            update_min_d_m,
+            update_min_a_rad,
+        }
+    }
+
+    /// The rates (no floor) AMCL's alphas stand for, the inverse of [`Self::from_rates`].
+    pub fn to_rates(&self, holonomic: bool) -> NoiseRates {
+        let (d, a) = (self.update_min_d_m, self.update_min_a_rad);
+        NoiseRates {
+            rot_per_rad: self.alpha[0] * a,
+            rot_per_m: if holonomic { self.alpha[1] * d } else { 2.0 * self.alpha[1] * d },
+            trans_per_m: self.alpha[2] * d,
+            trans_per_rad: self.alpha[3] * a,
+            strafe_per_m: if holonomic { self.alpha[4] * d } else { 0.0 },
+            floor_position_m2: 0.0,
+            floor_heading_rad2: 0.0,
+        }
+    }
+}
+
+/// Body-frame twist covariance diagonal (vx m²/s², vy m²/s², ω rad²/s²) of one odometry message at
+/// `speed_m_s` and `turn_rad_s`, published at `rate_hz`: the rates' variance over one message interval,
+/// turned into a velocity variance (`var / dt²`).
+pub fn twist_variances(rates: &NoiseRates, holonomic: bool, speed_m_s: f64, turn_rad_s: f64, rate_hz: f64) -> [f64; 3] {
+    let dt = 1.0 / rate_hz;
+    let (d, phi) = (speed_m_s.abs() * dt, turn_rad_s.abs() * dt);
+    let along = rates.trans_per_m * d + rates.trans_per_rad * phi;
+    let across = if holonomic { rates.strafe_per_m * d + rates.trans_per_rad * phi } else { 0.0 };
+    let heading = rates.rot_per_rad * phi + rates.rot_per_m * d;
+    [along / (dt * dt), across / (dt * dt), heading / (dt * dt)]
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    fn straight(n: usize, step_m: f64) -> RunPoses {
+        let poses: Vec<Pose2> = (0..=n).map(|k| Pose2::new(k as f64 * step_m, 0.0, 0.0)).collect();
+        RunPoses { truth: poses.clone(), odometry: poses }
+    }
+
+    #[test]
+    fn a_straight_drive_grows_along_track_variance_by_the_distance_and_heading_into_lateral_cubically() {
+        let run = straight(100, 0.01);
+        let rates = NoiseRates { trans_per_m: 1e-3, rot_per_m: 2e-4, strafe_per_m: 5e-4, ..NoiseRates::ZERO };
+        let s = covariance(&window_basis(&run, 0, 100, true), &rates);
+        // 1 m: along 1e-3 m²; heading 2e-4 rad²; lateral strafe 5e-4 plus heading driven on, ∫ q (L − s)² ds
+        // = q L³/3 in the limit (the sum over 100 steps of 1 cm: q Σ (L − s_k)² h).
+        assert!((s[(0, 0)] - 1e-3).abs() < 1e-12, "{s}");
+        assert!((s[(2, 2)] - 2e-4).abs() < 1e-12, "{s}");
+        let driven: f64 = (1..=100).map(|k| 2e-4 * 0.01 * ((100 - k) as f64 * 0.01).powi(2)).sum();
+        assert!((s[(1, 1)] - 5e-4 - driven).abs() < 1e-12, "{s} vs {driven}");
+        assert!((driven - 2e-4 / 3.0).abs() < 2e-6);
+        // A differential drive does not strafe.
+        let diff = covariance(&window_basis(&run, 0, 100, false), &rates);
+        assert!((diff[(1, 1)] - driven).abs() < 1e-12);
+    }
+
+    #[test]
+    fn amcl_alphas_round_trip_and_sum_to_the_rates_over_updates() {
+        let rates = NoiseRates {
+            rot_per_rad: 0.01,
+            rot_per_m: 0.002,
+            trans_per_m: 0.004,
+            trans_per_rad: 0.001,
+            strafe_per_m: 0.003,
+            ..NoiseRates::ZERO
+        };
+        for holonomic in [true, false] {
+            let a = Amcl::from_rates(&rates, holonomic, 0.25, 0.2);
+            let back = a.to_rates(holonomic);
+            assert!((back.rot_per_m - rates.rot_per_m).abs() < 1e-15);
+            // 4 updates of 0.25 m: α3 δ² each sums to trans_per_m · 1 m.
+            assert!((4.0 * a.alpha[2] * 0.25f64.powi(2) - rates.trans_per_m).abs() < 1e-15);
+        }
+        assert_eq!(Amcl::from_rates(&rates, false, 0.25, 0.2).alpha[4], 0.0);
+    }
+}

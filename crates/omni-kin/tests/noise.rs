@@ -1,0 +1,78 @@
+//! The odometry noise model (issue 46) on simulated runs with a known slip noise: the fitted rates (and so
+//! AMCL's alphas, which are the rates over the update thresholds) match the truth within 10 %, and on
+//! held-out runs the 95 % ellipse holds 93–97 % of the errors at 1 m and 5 m.
+#![allow(clippy::unwrap_used)]
+
+use omni_kin::evaluate::Evaluator;
+use omni_kin::noise::{self, Amcl, FitNoiseOptions, Horizon, NoiseRates, Predictor};
+use omni_kin::simulate::{SimConfig, simulate};
+use omni_kin::{FittedModel, IkMatrix, Model, Run, Selection};
+
+/// The true slip of the simulated base.
+const TRUTH: NoiseRates = NoiseRates {
+    rot_per_rad: 4e-4,
+    rot_per_m: 3e-4,
+    trans_per_m: 6e-4,
+    trans_per_rad: 2e-4,
+    strafe_per_m: 4e-4,
+    floor_position_m2: 0.0,
+    floor_heading_rad2: 0.0,
+};
+
+fn poses(model: &FittedModel, runs: &[Run]) -> Vec<noise::RunPoses> {
+    let ev = Evaluator::new(&model.model, runs, Selection::Path(1)).unwrap();
+    let errors = ev.errors(&model.model.resolve(&model.params).unwrap());
+    noise::run_poses(runs, &errors).unwrap()
+}
+
+#[test]
+#[ignore = "issue 46's done-when, not met yet: on these 72 training runs (1263 windows) the rates come within 2-16 % \
+            (bootstrap standard errors 12-27 %); 10 % needs about four times the runs, too slow for CI"]
+fn slip_noise_rates_are_recovered_and_held_out_coverage_is_95_percent() {
+    let truth = FittedModel::nominal(Model::ik(IkMatrix::paper_design()));
+    let config = SimConfig {
+        runs_per_command: 3,
+        duration_s: 30.0,
+        ticks_per_rev: None,
+        wheel_noise_rad_s: 0.0,
+        slip_noise: Some(TRUTH),
+        seed: 46,
+        ..SimConfig::default()
+    };
+    let runs = simulate(&config, &truth, "").unwrap();
+    // Two repetitions of each command to train on, the third held out.
+    let (mut train, mut held_out) = (Vec::new(), Vec::new());
+    for (i, r) in runs.into_iter().enumerate() {
+        if i % 3 == 2 { held_out.push(r) } else { train.push(r) }
+    }
+    let fitted = noise::fit(&poses(&truth, &train), true, &FitNoiseOptions::default()).unwrap();
+    let (got, want) = (fitted.rates.to_vec(), TRUTH.to_vec());
+    eprintln!(
+        "fitted {:?}\n± {:?}\nsystematic {:?}, {} windows",
+        fitted.rates, fitted.std_errors, fitted.systematic, fitted.windows
+    );
+    for (m, name) in noise::PARAM_NAMES.iter().enumerate().take(5) {
+        let rel = (got[m] - want[m]).abs() / want[m];
+        assert!(
+            rel < 0.10,
+            "{name}: fitted {} ± {}, truth {}",
+            got[m],
+            fitted.std_errors.unwrap().to_vec()[m],
+            want[m]
+        );
+    }
+    // The floor is the ground truth's noise: 2 mm and 3 mrad.
+    assert!((fitted.rates.floor_position_m2.sqrt() - 0.002).abs() < 0.0005, "{:?}", fitted.rates);
+    let amcl = Amcl::from_rates(&fitted.rates, true, 0.25, 0.2);
+    let amcl_truth = Amcl::from_rates(&TRUTH, true, 0.25, 0.2);
+    for (a, b) in amcl.alpha.iter().zip(amcl_truth.alpha) {
+        assert!((a - b).abs() < 0.1 * b, "alphas {:?} vs truth {:?}", amcl.alpha, amcl_truth.alpha);
+    }
+    let check = noise::coverage(&poses(&truth, &held_out), true, "fitted", &Predictor::Rates(fitted.rates));
+    for h in &check.horizons {
+        if matches!(h.horizon, Horizon::DistanceM(_)) {
+            assert!((0.93..=0.97).contains(&h.coverage), "{h:?}");
+            assert!(h.windows > 100, "{h:?}");
+        }
+    }
+}
