@@ -23,6 +23,7 @@ pub mod held_out;
 pub mod imu;
 pub mod info;
 pub mod load;
+pub mod plausibility;
 pub mod session;
 pub mod settings;
 pub mod simulate;
