@@ -162,6 +162,9 @@ fn files_text(paths: &[PathBuf]) -> String {
 /// factor for a ground truth).
 const GYRO_MAX_FACTOR: f64 = 3.0;
 
+/// The least windows a units refusal is made on.
+const UNITS_MIN_WINDOWS: usize = 20;
+
 /// What a fitted row `scale` times the design's says: the unit it is near (gyro or wheels), and what to do.
 fn units_text(scale: f64) -> String {
     use std::f64::consts::TAU;
@@ -189,12 +192,15 @@ fn units_text(scale: f64) -> String {
     }
 }
 
-/// Refuses a fitted row more than [`GYRO_MAX_FACTOR`] times larger or smaller than the design's (along it).
-fn check_units(rec: &Recordings, topic: &str, row: &[f64], design_row: &[f64]) -> Result<(), ImuError> {
-    let dot: f64 = row.iter().zip(design_row).map(|(a, b)| a * b).sum();
+/// Refuses a fitted row more than [`GYRO_MAX_FACTOR`] times larger or smaller than the design's (along it),
+/// over at least [`UNITS_MIN_WINDOWS`] windows (a single short recording that barely turns says nothing:
+/// measured, one 6 s run of the flower gives 0.26 with a rad/s gyro).
+fn check_units(rec: &Recordings, topic: &str, fit: &RotationFit, design_row: &[f64]) -> Result<(), ImuError> {
+    let dot: f64 = fit.row.iter().zip(design_row).map(|(a, b)| a * b).sum();
     let norm: f64 = design_row.iter().map(|b| b * b).sum();
     let scale = dot / norm;
-    if !(norm > 0.0) || scale <= 0.0 || (1.0 / GYRO_MAX_FACTOR..=GYRO_MAX_FACTOR).contains(&scale) {
+    let within = (1.0 / GYRO_MAX_FACTOR..=GYRO_MAX_FACTOR).contains(&scale);
+    if !(norm > 0.0) || scale <= 0.0 || within || fit.windows < UNITS_MIN_WINDOWS {
         return Ok(());
     }
     Err(ImuError::Units { recordings: rec.paths.clone(), topic: topic.to_string(), scale })
@@ -413,7 +419,7 @@ pub fn imu(request: &ImuRequest) -> Result<ImuFit, ImuError> {
     // zeros, the vy row, out of its parameters).
     let design_row = design.ik()?.row(2).to_vec();
     let dot: f64 = fit.row.iter().zip(&design_row).map(|(a, b)| a * b).sum();
-    check_units(&rec, &request.topic, &fit.row, &design_row)?;
+    check_units(&rec, &request.topic, &fit, &design_row)?;
     if dot < 0.0 && !rec.assumed.is_empty() {
         let frame_id = rec.mounts.iter().find(|m| m.source == MountSource::Assumed).map(|m| m.frame_id.clone());
         return Err(ImuError::UpsideDown {
