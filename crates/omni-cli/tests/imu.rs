@@ -288,7 +288,7 @@ fn a_differential_drives_rotation_row_comes_back_as_motion_capture_fits_it() {
 /// the topic, the factor and the fix; nothing is written.
 #[test]
 fn a_gyro_in_degrees_per_second_is_refused_naming_the_topic_and_the_fix() {
-    use omni_cli::api::simulate::{Format, Imu, Sensors, simulate_split, write_split};
+    use omni_cli::api::simulate::{Format, Imu, simulate_split, write_split};
     use omni_kin::simulate::{SimConfig, flower_commands};
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();

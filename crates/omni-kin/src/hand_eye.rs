@@ -99,7 +99,7 @@ pub fn rotation_agreement(pairs: &[MotionPair]) -> Option<RotationAgreement> {
         aa += a * a;
         turned += b.abs();
     }
-    if turned < MIN_TURN_RAD || !(aa > 0.0) {
+    if turned < MIN_TURN_RAD || aa.is_nan() || aa <= 0.0 {
         return None;
     }
     let slope = ab / bb;
@@ -145,7 +145,7 @@ pub fn estimate_mount(pairs: &[MotionPair]) -> Option<MountEstimate> {
     let n = r.len();
     let sigma2 = r.iter().map(|e| e * e).sum::<f64>() / (2 * n).saturating_sub(4).max(1) as f64;
     let k = x[2].hypot(x[3]);
-    if !(k > 0.0) || !k.is_finite() {
+    if !k.is_finite() || k <= 0.0 {
         return None;
     }
     // Var of the yaw: the component of (c, s)'s covariance across the direction, over k².
@@ -193,7 +193,7 @@ fn solve(pairs: &[MotionPair], keep: &[bool]) -> Option<(Vector4<f64>, Matrix4<f
     }
     // Singular in practice: a direction of the normal matrix below 1e-9 of its largest.
     let eig = n.symmetric_eigenvalues();
-    if !(eig.min() > 1e-9 * eig.max()) {
+    if eig.min().is_nan() || eig.min() <= 1e-9 * eig.max() {
         return None;
     }
     let cov = n.try_inverse()?;

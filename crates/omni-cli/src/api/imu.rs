@@ -200,7 +200,7 @@ fn check_units(rec: &Recordings, topic: &str, fit: &RotationFit, design_row: &[f
     let norm: f64 = design_row.iter().map(|b| b * b).sum();
     let scale = dot / norm;
     let within = (1.0 / GYRO_MAX_FACTOR..=GYRO_MAX_FACTOR).contains(&scale);
-    if !(norm > 0.0) || scale <= 0.0 || within || fit.windows < UNITS_MIN_WINDOWS {
+    if norm.is_nan() || norm <= 0.0 || scale <= 0.0 || within || fit.windows < UNITS_MIN_WINDOWS {
         return Ok(());
     }
     Err(ImuError::Units { recordings: rec.paths.clone(), topic: topic.to_string(), scale })

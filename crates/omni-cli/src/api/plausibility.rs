@@ -178,7 +178,7 @@ mod tests {
         assert_eq!(r.len(), 1, "{r:?}");
         assert_eq!(
             r[0].to_string(),
-            "row vx is 0.033 times its start's and row ω 0.479 times, 14.3 times apart (a calibration scales them \
+            "row vx is 0.033 times its start's and row ω 0.476 times, 14.3 times apart (a calibration scales them \
              alike, within 3×)"
         );
         // One radius 18 times smaller.

@@ -219,21 +219,7 @@ pub(super) fn start_sensor_mount(ds: &mut Dataset, data: &DataOptions) -> Result
     };
     let m = e.base_from_sensor;
     if let Some(stated) = stated {
-        let (sigmas_m, sigmas_rad) = (m.x_m.hypot(m.y_m) / e.position_std_m, m.theta_rad.abs() / e.yaw_std_rad);
-        let far = m.x_m.hypot(m.y_m) > CONTRADICTION_M && sigmas_m > CONTRADICTION_SIGMAS
-            || m.theta_rad.abs() > CONTRADICTION_RAD && sigmas_rad > CONTRADICTION_SIGMAS;
-        if far {
-            let (position_std_m, yaw_std_rad) = (e.position_std_m, e.yaw_std_rad);
-            let correction = m;
-            return Err(LoadError::MountContradicts {
-                reference,
-                recordings,
-                stated,
-                correction,
-                position_std_m,
-                yaw_std_rad,
-            });
-        }
+        check_stated(&e, stated, (&reference, &recordings))?;
     }
     if ds.mount.is_some() {
         return Ok(());
@@ -276,4 +262,28 @@ fn recordings_text(ds: &Dataset) -> String {
         names.push(format!("and {} more recordings", files.len() - 3));
     }
     names.join(", ")
+}
+
+/// Refuses a stated mount (`stated` names it) that the motions' estimate `e` moves beyond
+/// [`CONTRADICTION_RAD`] or [`CONTRADICTION_M`] (and [`CONTRADICTION_SIGMAS`]).
+fn check_stated(
+    e: &omni_kin::hand_eye::MountEstimate,
+    stated: &'static str,
+    (reference, recordings): (&str, &str),
+) -> Result<(), LoadError> {
+    let m = e.base_from_sensor;
+    let (sigmas_m, sigmas_rad) = (m.x_m.hypot(m.y_m) / e.position_std_m, m.theta_rad.abs() / e.yaw_std_rad);
+    let far = m.x_m.hypot(m.y_m) > CONTRADICTION_M && sigmas_m > CONTRADICTION_SIGMAS
+        || m.theta_rad.abs() > CONTRADICTION_RAD && sigmas_rad > CONTRADICTION_SIGMAS;
+    if !far {
+        return Ok(());
+    }
+    Err(LoadError::MountContradicts {
+        reference: reference.to_string(),
+        recordings: recordings.to_string(),
+        stated,
+        correction: m,
+        position_std_m: e.position_std_m,
+        yaw_std_rad: e.yaw_std_rad,
+    })
 }
