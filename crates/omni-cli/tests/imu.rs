@@ -256,3 +256,65 @@ fn a_model_of_the_turning_gives_the_gyros_scale_that_the_imu_alone_cannot() {
     let err = refusal(&["imu", "sim/train", "--model", "nowhere.toml"], d);
     assert!(err.starts_with("error: --model"), "{err}");
 }
+
+/// `omnical imu` on a differential drive (issue 43: it panicked, exit 101, on every one): the two-wheel
+/// rotation row comes back as motion capture fits it, and the model file keeps the design's structural zeros.
+#[test]
+fn a_differential_drives_rotation_row_comes_back_as_motion_capture_fits_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let robot = support::test_data("diff_robot.toml");
+    simulate_with(d, "sim", "100", &["--robot", robot.to_str().unwrap(), "--effect", "wheel_radius:a=0.02"]);
+    let fit: Value = json(&["train", "sim/train", "--model", "ik", "--json"], d);
+    let mocap: Vec<f64> = fit["matrix"][2].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    let (row, doc) = imu_row(&["imu", "sim/train", "--out", "imu.toml"], d);
+    assert_eq!(doc["wheel_names"], serde_json::json!(["wheel_left_joint", "wheel_right_joint"]));
+    for (i, (r, m)) in row.iter().zip(&mocap).enumerate() {
+        eprintln!("diff wheel {i}: IMU {r:.6}, motion capture {m:.6} ({:+.3} %)", 100.0 * (r / m - 1.0));
+        assert!((r / m - 1.0).abs() < 0.003, "wheel {i}: IMU {r} vs motion capture {m}");
+    }
+    // The left wheel 2 % large turns the base 2 % more per radian: its entry is 2 % above the design's.
+    let design = doc["design_row"][0].as_f64().unwrap();
+    assert!((row[0] / design - 1.02).abs() < 0.004, "left {} vs design {design}", row[0]);
+    let model: toml::Table = std::fs::read_to_string(d.join("imu.toml")).unwrap().parse().unwrap();
+    let matrix = model["matrix"].as_array().unwrap();
+    assert_eq!(matrix[1], toml::Value::Array(vec![toml::Value::Float(0.0), toml::Value::Float(0.0)]));
+    assert!((matrix[2].as_array().unwrap()[1].as_float().unwrap() - row[1]).abs() < 1e-12);
+    // The written model reads back.
+    ok(&["eval", "--model", "imu.toml", "sim/validation/00-r0.mcap"], d);
+}
+
+/// A gyro that reports deg/s (the same simulated runs, every yaw rate × 180/π) is refused naming the files,
+/// the topic, the factor and the fix; nothing is written.
+#[test]
+fn a_gyro_in_degrees_per_second_is_refused_naming_the_topic_and_the_fix() {
+    use omni_cli::api::simulate::{Format, Imu, simulate_split, write_split};
+    use omni_kin::simulate::{SimConfig, flower_commands};
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let commands = flower_commands().into_iter().step_by(6).collect();
+    let config = SimConfig { commands, runs_per_command: 1, duration_s: 4.0, seed: 5, ..SimConfig::default() };
+    let truth = omni_kin::FittedModel::nominal(omni_kin::Model::ik(omni_kin::IkMatrix::paper_calibrated()));
+    let (runs, mut sensors) = simulate_split(&config, &truth, "", None, Some(&Imu::default())).unwrap();
+    for track in sensors.imu.as_mut().unwrap() {
+        track.samples.iter_mut().for_each(|s| s.z_rad_s = s.z_rad_s.to_degrees());
+    }
+    let names: Vec<String> = ["wheel_a", "wheel_b", "wheel_c"].map(String::from).to_vec();
+    write_split(&d.join("deg"), &runs, Format::Mcap, &names, sensors.as_sensors()).unwrap();
+    let err = refusal(&["imu", "deg", "--robot", "apr02", "--out", "imu.toml"], d);
+    assert!(
+        err.starts_with(
+            "error: deg/00-r0.mcap, deg/01-r0.mcap, deg/02-r0.mcap, and 3 more recordings: topic \"/imu\": \
+                         the rotation row the gyro fits is 5"
+        ),
+        "{err}"
+    );
+    assert!(
+        err.ends_with(
+            "57.296 is the factor when the gyro reports deg/s (sensor_msgs/msg/Imu's angular_velocity is rad/s): \
+             convert it in the driver (× π/180)"
+        ),
+        "{err}"
+    );
+    assert!(!d.join("imu.toml").exists());
+}

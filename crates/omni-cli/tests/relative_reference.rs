@@ -341,7 +341,7 @@ fn a_lidars_mount_is_found_from_its_motion() {
         (
             "none",
             "no static transform from the base (base_link, base_footprint or [frames] base) to \"laser\": the lidar's \
-             mount is fitted from zero",
+             mount is fitted, started where the motions put it",
         ),
         (
             "0,0,0",

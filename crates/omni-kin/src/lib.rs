@@ -19,6 +19,7 @@ pub mod evaluate;
 pub mod fast;
 pub mod geometry;
 pub mod gyro;
+pub mod hand_eye;
 pub mod ik;
 pub mod kinematics;
 pub mod lidar;

@@ -9,7 +9,7 @@
 //! | `ModelFileError` (parse / invalid contents) | `omnical.ModelFileError` |
 //! | `OptimizeError` (an optimizer refused its inputs); a refused fit (`train`: a fixed step that misses the runs' sampling, a fit worse than its start) | `omnical.CalibrationError` |
 //! | `SimulateError` (`simulate`'s sensors and files): a room file that does not exist, else as the cause (`DatasetError`, `OSError`); bad sensor settings, a run that leaves the lidar's room | `FileNotFoundError`, `omnical.DatasetError`, `OSError`; `ValueError` |
-//! | `ImuError` (`imu`): the IMU topic missing or unreadable, no recording, an IMU upside down or on its side with no mount stated; the wheels not read; too little turn or a bad window; no design; `out` not writable | `omnical.DatasetError` (`FileNotFoundError` for a path that does not exist); as `load`'s; `ValueError`; `ValueError`; `FileNotFoundError`, `OSError`, else `omnical.OmnicalError` |
+//! | `ImuError` (`imu`): the IMU topic missing or unreadable, no recording, an IMU upside down or on its side with no mount stated, a gyro or wheels in another unit (deg/s); the wheels not read; too little turn or a bad window; no design; `out` not writable | `omnical.DatasetError` (`FileNotFoundError` for a path that does not exist); as `load`'s; `ValueError`; `ValueError`; `FileNotFoundError`, `OSError`, else `omnical.OmnicalError` |
 //! | a report or export that fails ([`file_error`]: the first `io::Error` among the error's sources) | `FileNotFoundError`, `OSError`, else `omnical.OmnicalError`; an export folder that already holds files: `FileExistsError` |
 //!
 //! All omnical-specific exceptions derive from `omnical.OmnicalError`. A message made of an error and its
@@ -145,11 +145,12 @@ impl ToPyErr for ImuError {
         match self {
             ImuError::Load(e) => crate::run::load_error(e),
             ImuError::Dataset(e) => e.to_py_err(),
-            ImuError::NoRecording | ImuError::UpsideDown { .. } | ImuError::OnItsSide { .. } => {
-                DatasetError::new_err(self.to_string())
-            }
+            ImuError::NoRecording
+            | ImuError::UpsideDown { .. }
+            | ImuError::OnItsSide { .. }
+            | ImuError::Units { .. } => DatasetError::new_err(self.to_string()),
             ImuError::Design(DesignError::NoDesign(_)) => crate::robot::no_design("omnical.imu"),
-            ImuError::Fit { .. } | ImuError::Design(_) => PyValueError::new_err(chain_text(&self)),
+            ImuError::Fit { .. } | ImuError::Design(_) | ImuError::Kin(_) => PyValueError::new_err(chain_text(&self)),
             ImuError::OutPath(_) | ImuError::ModelText(_) | ImuError::Write { .. } => file_error(&self),
             ImuError::Model(_) => ModelFileError::new_err(chain_text(&self)),
         }

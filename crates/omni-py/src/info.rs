@@ -29,7 +29,7 @@ use std::path::PathBuf;
 /// >>> [t["role"] for t in rec["topics"] if t["topic"] == "/imu"], rec["read"]["runs"][0]["wheel_samples"]
 /// (['imu'], 279)
 #[pyfunction]
-#[pyo3(signature = (*paths, robot = None, joints = None, joints_topic = None, gt_topic = None, gt_parent_frame = None, gt_child_frame = None, gt = None, gt_time_offset = None, gt_columns = None, gt_units = None, gt_kind = None, gt_window_s = None, gt_mount = None, gt_scans = None, split_s = None, skip_invalid = false, ticks_per_rev = None, max_file_mb = 1024))]
+#[pyo3(signature = (*paths, robot = None, joints = None, joints_topic = None, gt_topic = None, gt_parent_frame = None, gt_child_frame = None, gt = None, gt_time_offset = None, gt_columns = None, gt_units = None, gt_kind = None, gt_window_s = None, gt_mount = None, gt_mount_start = None, gt_scans = None, split_s = None, skip_invalid = false, ticks_per_rev = None, max_file_mb = 1024))]
 #[allow(clippy::too_many_arguments)]
 pub fn info(
     py: Python<'_>,
@@ -47,6 +47,7 @@ pub fn info(
     gt_kind: Option<&str>,
     gt_window_s: Option<f64>,
     gt_mount: Option<(f64, f64, f64)>,
+    gt_mount_start: Option<(f64, f64, f64)>,
     gt_scans: Option<String>,
     split_s: Option<f64>,
     skip_invalid: bool,
@@ -70,6 +71,7 @@ pub fn info(
         gt_kind,
         gt_window_s,
         gt_mount,
+        gt_mount_start,
         gt_scans,
         split_s,
         skip_invalid,

@@ -307,6 +307,7 @@ fn reading_state(ds: &omni_cli::dataset::Dataset) -> String {
         "reference": ds.reference.id(),
         "mount": ds.mount.map(|m| [m.x_m, m.y_m, m.theta_rad]),
         "sensor_mount_from_recordings": ds.sensor_mount_from_recordings,
+        "mount_start": ds.mount_start.map(|m| [m.x_m, m.y_m, m.theta_rad]),
     })
     .to_string()
 }
@@ -320,16 +321,17 @@ fn reading_from_state(text: &str) -> PyResult<omni_cli::dataset::Dataset> {
     let bad = |what: &str| value_error(format!("pickled dataset: reference: {what}"));
     let v: serde_json::Value = serde_json::from_str(text).map_err(|e| bad(&e.to_string()))?;
     let reference = v["reference"].as_str().ok_or_else(|| bad("no kind"))?.parse().map_err(|e| bad(&format!("{e}")))?;
-    let mount = match v["mount"].as_array() {
+    let pose = |key: &str| match v[key].as_array() {
         Some(m) => {
             let x: Vec<f64> = m.iter().filter_map(serde_json::Value::as_f64).collect();
             let [x, y, theta] = x[..] else { return Err(bad("a mount is x, y and yaw")) };
-            Some(omni_kin::Pose2::new(x, y, theta))
+            Ok(Some(omni_kin::Pose2::new(x, y, theta)))
         }
-        None => None,
+        None => Ok(None),
     };
+    let (mount, mount_start) = (pose("mount")?, pose("mount_start")?);
     let sensor_mount_from_recordings = v["sensor_mount_from_recordings"].as_bool().unwrap_or(false);
-    Ok(omni_cli::dataset::Dataset { reference, mount, sensor_mount_from_recordings, ..Default::default() })
+    Ok(omni_cli::dataset::Dataset { reference, mount, sensor_mount_from_recordings, mount_start, ..Default::default() })
 }
 
 /// Load runs from files and folders: omnical CSV (``.csv``), ROS 2 bags (``.mcap``, rosbag2 folders),
@@ -348,7 +350,9 @@ fn reading_from_state(text: &str) -> PyResult<omni_cli::dataset::Dataset> {
 /// ``gt_kind``: what the ground truth measures, ``"absolute"`` (motion capture, the default) or ``"relative"`` (a
 /// sensor's own motion, as lidar or visual odometry: the runs become windows of ``gt_window_s`` seconds,
 /// default 4, and ``train`` fits the sensor's mount with the wheels); ``gt_mount``: the measured point's pose
-/// in the base frame when known, ``(x_m, y_m, yaw_deg)`` (the ground truth is moved to the base by it).
+/// in the base frame when known, ``(x_m, y_m, yaw_deg)`` (the ground truth is moved to the base by it);
+/// ``gt_mount_start``: where ``train`` starts the relative reference's sensor mount, ``(x_m, y_m, yaw_deg)``,
+/// fitted from there (default: found from the motions, any yaw).
 /// ``gt_scans``: the ground truth from a 2D lidar, its LaserScan topic (``"/scan"``) matched scan to scan
 /// into the lidar's path (a relative reference).
 /// ``recorded_odometry``: keep the runs' recorded odometry (for ``export``'s MCAP bags).
@@ -361,7 +365,7 @@ fn reading_from_state(text: &str) -> PyResult<omni_cli::dataset::Dataset> {
 /// >>> len(ds), ds[0].name, ds.design.n_wheels
 /// (36, '00-r0', 3)
 #[pyfunction]
-#[pyo3(signature = (*paths, robot = None, joints = None, joints_topic = None, gt_topic = None, gt_parent_frame = None, gt_child_frame = None, gt = None, gt_time_offset = None, gt_columns = None, gt_units = None, gt_kind = None, gt_window_s = None, gt_mount = None, gt_scans = None, split_s = None, skip_invalid = false, ticks_per_rev = None, max_file_mb = 1024, recorded_odometry = false))]
+#[pyo3(signature = (*paths, robot = None, joints = None, joints_topic = None, gt_topic = None, gt_parent_frame = None, gt_child_frame = None, gt = None, gt_time_offset = None, gt_columns = None, gt_units = None, gt_kind = None, gt_window_s = None, gt_mount = None, gt_mount_start = None, gt_scans = None, split_s = None, skip_invalid = false, ticks_per_rev = None, max_file_mb = 1024, recorded_odometry = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn load(
     py: Python<'_>,
@@ -379,6 +383,7 @@ pub fn load(
     gt_kind: Option<&str>,
     gt_window_s: Option<f64>,
     gt_mount: Option<(f64, f64, f64)>,
+    gt_mount_start: Option<(f64, f64, f64)>,
     gt_scans: Option<String>,
     split_s: Option<f64>,
     skip_invalid: bool,
@@ -403,6 +408,7 @@ pub fn load(
         gt_kind,
         gt_window_s,
         gt_mount,
+        gt_mount_start,
         gt_scans,
         split_s,
         skip_invalid,
@@ -427,6 +433,7 @@ pub fn load(
         reference: ds.reference,
         mount: ds.mount,
         sensor_mount_from_recordings: ds.sensor_mount_from_recordings,
+        mount_start: ds.mount_start,
         time_origins_s: ds.time_origins_s,
         recordings: ds.recordings,
         // The paths as given (a data folder too, so that no export lands inside it), then each file read.
@@ -459,6 +466,7 @@ pub(crate) fn data_options(
     gt_kind: Option<&str>,
     gt_window_s: Option<f64>,
     gt_mount: Option<(f64, f64, f64)>,
+    gt_mount_start: Option<(f64, f64, f64)>,
     gt_scans: Option<String>,
     split_s: Option<f64>,
     skip_invalid: bool,
@@ -483,6 +491,7 @@ pub(crate) fn data_options(
             .unwrap_or_default(),
         gt_window_s,
         gt_mount: gt_mount.map(|(x, y, yaw_deg)| omni_kin::Pose2::new(x, y, yaw_deg.to_radians())),
+        gt_mount_start: gt_mount_start.map(|(x, y, yaw_deg)| omni_kin::Pose2::new(x, y, yaw_deg.to_radians())),
         gt_scans,
         split_s,
         split_every_s: None,
@@ -547,6 +556,7 @@ pub fn origin_of(obj: &Bound<'_, PyAny>) -> omni_cli::dataset::Dataset {
                 reference: o.reference,
                 mount: o.mount,
                 sensor_mount_from_recordings: o.sensor_mount_from_recordings,
+                mount_start: o.mount_start,
                 time_origins_s: o.time_origins_s.clone(),
                 recordings: o.recordings.clone(),
                 sources: o.sources.clone(),

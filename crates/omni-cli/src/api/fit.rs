@@ -91,7 +91,8 @@ impl FitOptions {
 }
 
 /// A fit refused (the command's exit status 1, nothing written) unless `--force`: a preset whose fixed step
-/// misses the runs' sampling (before fitting), or a fit worse than its start on its own training runs.
+/// misses the runs' sampling (before fitting), a fit worse than its start on its own training runs, or one
+/// implausibly far from its start.
 #[derive(Debug, thiserror::Error)]
 #[error("{0}")]
 pub struct Refused(pub String);
@@ -142,14 +143,39 @@ pub fn check_step(plan: &Plan, runs: &[omni_kin::Run], force: bool) -> Result<Op
     }
 }
 
-/// After fitting: a fit worse than its start is refused (nothing written), or with `force` a warning
-/// (returned).
+/// After fitting: a fit worse than its start, or implausibly far from it ([`implausible_text`]), is refused
+/// (nothing written), or with `force` a warning (returned).
 pub fn check_fit(c: &Calibration, plan: &Plan, runs: &[omni_kin::Run], force: bool) -> Result<Option<String>, Refused> {
-    match worse_than_start_text(c, plan, runs) {
-        Some(w) if !force => Err(Refused(format!("{w}; nothing written (--force writes it anyway)"))),
-        Some(w) => Ok(Some(format!("{w}; kept because of --force"))),
-        None => Ok(None),
+    let found: Vec<String> =
+        [worse_than_start_text(c, plan, runs), implausible_text(c)].into_iter().flatten().collect();
+    if found.is_empty() {
+        return Ok(None);
     }
+    let w = found.join("; ");
+    if force {
+        Ok(Some(format!("{w}; kept because of --force")))
+    } else {
+        Err(Refused(format!("{w}; nothing written (--force writes it anyway)")))
+    }
+}
+
+/// A fitted model implausibly far from its start ([`crate::api::plausibility`]), in words: the reasons and
+/// the base parameters that moved most.
+pub fn implausible_text(c: &Calibration) -> Option<String> {
+    use crate::api::plausibility::{implausible, moved_params};
+    let (fitted, start) = (c.fitted.ik().ok()?, c.start.ik().ok()?);
+    let reasons = implausible(&fitted, &start, &c.fitted.model.kinematics.wheel_names());
+    if reasons.is_empty() {
+        return None;
+    }
+    let moved = moved_params(&c.fitted, &c.start);
+    Some(format!(
+        "the fitted model is implausibly far from its start: {}{}. A mount the fit could not find (give \
+         --gt-mount-start X,Y,YAW_DEG), a reference of another robot or in other units, or a robot description far \
+         from the robot",
+        reasons.iter().map(ToString::to_string).collect::<Vec<_>>().join("; "),
+        if moved.is_empty() { String::new() } else { format!(" (moved most: {})", moved.join(", ")) }
+    ))
 }
 
 /// A robot description's prior on one parameter of the fit (docs/formats.md, `[priors]`).

@@ -111,9 +111,27 @@ pub enum ImuError {
         /// RMS of the angular velocity's x, y and z over those recordings. rad/s.
         rms_rad_s: [f64; 3],
     },
+    /// The gyro turns the base many times more, or less, than the wheels through the design do: a unit
+    /// (a gyro in deg/s, wheels in rpm) or a design far from the robot.
+    #[error(
+        "{}: topic {topic:?}: the rotation row the gyro fits is {scale:.3} times the design's (the gyro turns the \
+         base {scale:.3} times as far as the wheels do through the design): {}",
+        files_text(recordings), units_text(*scale)
+    )]
+    Units {
+        /// The recordings read.
+        recordings: Vec<PathBuf>,
+        /// The Imu topic.
+        topic: String,
+        /// The fitted row over the design's (least squares along the design's row).
+        scale: f64,
+    },
     /// The data's robot has no design model.
     #[error(transparent)]
     Design(#[from] DesignError),
+    /// The design's matrix, or the matrix with the fitted row, is not usable.
+    #[error(transparent)]
+    Kin(#[from] KinError),
     /// The model to calibrate the gyro against could not be read, or has another wheel count.
     #[error("--model")]
     Model(#[source] Box<dyn std::error::Error + Send + Sync>),
@@ -137,6 +155,55 @@ fn files_text(paths: &[PathBuf]) -> String {
         names.push(format!("and {} more recordings", paths.len() - 3));
     }
     names.join(", ")
+}
+
+/// A calibration corrects a few per cent; a gyro whose fitted row is more than this factor larger, or
+/// smaller, than the design's measures in another unit, or the wheels do (`check_wheel_scale` has the same
+/// factor for a ground truth).
+const GYRO_MAX_FACTOR: f64 = 3.0;
+
+/// The least windows a units refusal is made on.
+const UNITS_MIN_WINDOWS: usize = 20;
+
+/// What a fitted row `scale` times the design's says: the unit it is near (gyro or wheels), and what to do.
+fn units_text(scale: f64) -> String {
+    use std::f64::consts::TAU;
+    // (factor, what), the row's scale when the gyro, or the wheels, report in another unit than rad/s.
+    let units = [
+        (
+            360.0 / TAU,
+            "the gyro reports deg/s (sensor_msgs/msg/Imu's angular_velocity is rad/s): convert it in the \
+                       driver (× π/180)",
+        ),
+        (1000.0, "the gyro reports mrad/s: convert it to rad/s in the driver"),
+        (
+            TAU / 60.0,
+            "the wheels' JointState velocities are rpm, not rad/s: convert them, or give the robot's wheel \
+                      units",
+        ),
+        (TAU / 360.0, "the wheels' JointState velocities are deg/s, not rad/s: convert them"),
+    ];
+    match units.iter().find(|(f, _)| (scale / f - 1.0).abs() < 0.15) {
+        Some((f, what)) => format!("{f:.3} is the factor when {what}"),
+        None => "the gyro or the wheels measure in another unit than rad/s, or the design's wheel radii or spacing \
+                 are far from the robot's: check the IMU's angular_velocity unit, the wheels' velocity unit and the \
+                 robot description"
+            .to_string(),
+    }
+}
+
+/// Refuses a fitted row more than [`GYRO_MAX_FACTOR`] times larger or smaller than the design's (along it),
+/// over at least [`UNITS_MIN_WINDOWS`] windows (a single short recording that barely turns says nothing:
+/// measured, one 6 s run of the flower gives 0.26 with a rad/s gyro).
+fn check_units(rec: &Recordings, topic: &str, fit: &RotationFit, design_row: &[f64]) -> Result<(), ImuError> {
+    let dot: f64 = fit.row.iter().zip(design_row).map(|(a, b)| a * b).sum();
+    let norm: f64 = design_row.iter().map(|b| b * b).sum();
+    let scale = dot / norm;
+    let within = (1.0 / GYRO_MAX_FACTOR..=GYRO_MAX_FACTOR).contains(&scale);
+    if norm.is_nan() || norm <= 0.0 || scale <= 0.0 || within || fit.windows < UNITS_MIN_WINDOWS {
+        return Ok(());
+    }
+    Err(ImuError::Units { recordings: rec.paths.clone(), topic: topic.to_string(), scale })
 }
 
 /// The `--mount` that turns the IMU's `axis` (`x` or `y`) to the base's z (`sign` 1) or against it (−1).
@@ -253,6 +320,8 @@ struct Recordings {
     assumed: Vec<PathBuf>,
     /// Their angular velocity per axis.
     assumed_power: AxisPower,
+    /// Every recording read.
+    paths: Vec<PathBuf>,
 }
 
 /// The mount `read` is taken with: the one given, else the recording's, else upright.
@@ -321,8 +390,9 @@ fn read(request: &ImuRequest) -> Result<Recordings, ImuError> {
     let (mut runs, mut gyro, mut mounts, mut assumed) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut assumed_power = AxisPower::default();
     let mut first = None;
+    let paths = dataset::ros_recordings(&request.recordings)?;
     let max_bytes = request.data.max_file_mb.saturating_mul(1 << 20);
-    for path in &dataset::ros_recordings(&request.recordings)? {
+    for path in &paths {
         let load = LoadRequest { wheels_only: true, ..LoadRequest::new(std::slice::from_ref(path), &request.data) };
         let ds = load.read_for_robot(load.robot().map_err(LoadError::from)?)?;
         let sink = dataset::feed_ros(path, max_bytes, |zstd| dataset::mcap::ImuSink::new(&request.topic, zstd))?;
@@ -343,7 +413,8 @@ fn read(request: &ImuRequest) -> Result<Recordings, ImuError> {
         tally(&mut mounts, used);
         first.get_or_insert(ds);
     }
-    Ok(Recordings { first: first.ok_or(ImuError::NoRecording)?, runs, gyro, mounts, assumed, assumed_power })
+    let first = first.ok_or(ImuError::NoRecording)?;
+    Ok(Recordings { first, runs, gyro, mounts, assumed, assumed_power, paths })
 }
 
 /// Fits the rotation row and the gyro's bias from the recordings' IMU, beside the design's row; writes the
@@ -358,9 +429,11 @@ pub fn imu(request: &ImuRequest) -> Result<ImuFit, ImuError> {
     let fit = fit_rotation_row(&rec.runs, &rec.gyro, request.window_s)
         .map_err(|source| ImuError::Fit { topic: request.topic.clone(), source })?;
     let design = FittedModel::nominal(design::model(KinematicsKind::Ik, &rec.first)?);
-    let n = design.model.n_wheels();
-    let design_row = design.params[2 * n..3 * n].to_vec();
+    // The matrix's rotation row, whatever the base (a differential drive's `ik` model leaves its structural
+    // zeros, the vy row, out of its parameters).
+    let design_row = design.ik()?.row(2).to_vec();
     let dot: f64 = fit.row.iter().zip(&design_row).map(|(a, b)| a * b).sum();
+    check_units(&rec, &request.topic, &fit, &design_row)?;
     if dot < 0.0 && !rec.assumed.is_empty() {
         let frame_id = rec.mounts.iter().find(|m| m.source == MountSource::Assumed).map(|m| m.frame_id.clone());
         return Err(ImuError::UpsideDown {
@@ -425,11 +498,15 @@ fn check_upright(rec: &Recordings, topic: &str) -> Result<(), ImuError> {
     })
 }
 
-/// The design's matrix with the fitted rotation row, written atomically.
+/// The design's matrix with the fitted rotation row, written atomically. The row's entries are set by name
+/// (`m31` …): a differential drive's `ik` model leaves its structural zeros (the vy row) out of its
+/// parameters.
 fn write_model(design: &FittedModel, fit: &RotationFit, out: &Path) -> Result<(), ImuError> {
     let mut model = design.clone();
-    let n = model.model.n_wheels();
-    model.params[2 * n..3 * n].copy_from_slice(&fit.row);
+    let names = omni_kin::IkMatrix::entry_names(fit.row.len());
+    for (name, v) in names[2 * fit.row.len()..].iter().zip(&fit.row) {
+        model.set(name, *v)?;
+    }
     let mut table = toml::Table::new();
     table.insert("reference".into(), "imu: the rotation row fitted, the translation rows the design's".into());
     table.insert("gyro_bias_rad_s".into(), fit.bias_rad_s.into());

@@ -24,6 +24,7 @@ pub mod imu;
 pub mod info;
 pub mod load;
 pub mod noise;
+pub mod plausibility;
 pub mod session;
 pub mod settings;
 pub mod simulate;

@@ -164,6 +164,13 @@ pub const SETTINGS: &[Setting] = &[
         Ok(&[(LOAD, "gt_mount"), (INFO, "gt_mount")]),
     ),
     setting(
+        "gt_mount_start",
+        "where the fit starts a relative reference's sensor mount: x, y (m), yaw (degrees)",
+        Yes,
+        Yes,
+        Ok(&[(LOAD, "gt_mount_start"), (INFO, "gt_mount_start")]),
+    ),
+    setting(
         "gt_scans",
         "ground truth from a 2D lidar: its LaserScan topic, matched scan to scan",
         Yes,

@@ -200,11 +200,12 @@ pub fn prepare(a: &TrainRequest) -> Result<Prepared, TrainError> {
     Ok(Prepared { ds, start, effects, plan, priors })
 }
 
-/// `start` with the sensor's mount (`sensor_offset_yaw`, at its null value) when `ds`'s reference is a
-/// sensor's own motion and `start` has no mount yet: the mount is part of what such a reference measures,
-/// so it is fitted with the base from the first stage on. Not when the mount was given (`--gt-mount`), nor
-/// when the recordings' static transforms gave it and the base model absorbs any mount (a free matrix or
-/// geometry: see [`mount_warning`]), which keeps it as given.
+/// `start` with the sensor's mount (`sensor_offset_yaw`, at `ds`'s [`Dataset::mount_start`]: given with
+/// `--gt-mount-start` or found from the motions, else zero) when `ds`'s reference is a sensor's own motion
+/// and `start` has no mount yet: the mount is part of what such a reference measures, so it is fitted with
+/// the base from the first stage on. Not when the mount was given (`--gt-mount`), nor when the recordings'
+/// static transforms gave it and the base model absorbs any mount (a free matrix or geometry: see
+/// [`mount_warning`]), which keeps it as given.
 pub fn with_sensor_mount(start: FittedModel, ds: &Dataset) -> FittedModel {
     use omni_kin::effect::SensorOffset;
     let has_mount = start.model.effects.iter().any(|e| matches!(e, EffectKind::SensorOffset(_)));
@@ -213,7 +214,12 @@ pub fn with_sensor_mount(start: FittedModel, ds: &Dataset) -> FittedModel {
     if ds.reference != omni_kin::reference::ReferenceKind::Relative || kept_as_given || has_mount {
         return start;
     }
-    start.with_effect(EffectKind::SensorOffset(SensorOffset { with_yaw: true }))
+    let mut start = start.with_effect(EffectKind::SensorOffset(SensorOffset { with_yaw: true }));
+    if let Some(m) = ds.mount_start {
+        let n = start.params.len();
+        start.params[n - 3..].copy_from_slice(&[m.x_m, m.y_m, m.theta_rad]);
+    }
+    start
 }
 
 /// Share of a weak direction a mount parameter must carry for the mount to be called undetermined.

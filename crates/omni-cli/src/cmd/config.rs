@@ -200,7 +200,7 @@ pub fn rows(a: &Args, threads: Option<usize>, project: Option<&ProjectFile>) -> 
 }
 
 /// The rows of what the ground truth measures: its kind, a relative reference's window, the mount.
-fn reference_rows(layers: &Layers<'_>, d: &super::DataArgs) -> [Row; 3] {
+fn reference_rows(layers: &Layers<'_>, d: &super::DataArgs) -> [Row; 4] {
     [
         layers.row("gt_kind", d.gt_kind.map(|k| k.id().to_string()), None, "absolute"),
         layers.row("gt_window", d.gt_window.map(|s| format!("{s} s")), None, "4 s (relative references)"),
@@ -209,6 +209,12 @@ fn reference_rows(layers: &Layers<'_>, d: &super::DataArgs) -> [Row; 3] {
             d.gt_mount.map(|m| format!("{} m, {} m, {}°", m.x_m, m.y_m, m.theta_rad.to_degrees())),
             None,
             "fitted (relative references)",
+        ),
+        layers.row(
+            "gt_mount_start",
+            d.gt_mount_start.map(|m| format!("{} m, {} m, {}°", m.x_m, m.y_m, m.theta_rad.to_degrees())),
+            None,
+            "found from the motions (relative references)",
         ),
     ]
 }

@@ -78,6 +78,7 @@ impl Args {
             d.gt_kind.is_some(),
             d.gt_window.is_some(),
             d.gt_mount.is_some(),
+            d.gt_mount_start.is_some(),
             d.gt_time_offset.is_some(),
             d.split.is_some(),
             d.ticks_per_rev.is_some(),
@@ -97,7 +98,7 @@ const GT: &str = "it reads no ground truth (the IMU is the reference)";
 /// The data options `omnical imu` does not read (their keys, in [`Args::ignored`]'s order), each with why:
 /// given on the command line or in the project file's `[imu]` table they are refused; a project-wide key
 /// of the project file leaves `omnical imu` alone ([`ignores_project_wide`]).
-const IGNORED: [(&str, &str); 13] = [
+const IGNORED: [(&str, &str); 14] = [
     ("gt", GT),
     ("gt_topic", GT),
     ("gt_parent_frame", GT),
@@ -108,6 +109,7 @@ const IGNORED: [(&str, &str); 13] = [
     ("gt_kind", GT),
     ("gt_window", GT),
     ("gt_mount", GT),
+    ("gt_mount_start", GT),
     ("gt_time_offset", GT),
     ("split", "each recording is one run"),
     (

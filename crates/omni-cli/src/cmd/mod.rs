@@ -165,6 +165,11 @@ pub struct DataArgs {
     /// X,Y in metres, YAW in degrees. The ground truth is moved to the base by it, and no mount is fitted.
     #[arg(long, value_name = "X,Y,YAW_DEG", value_parser = parse_mount, allow_hyphen_values = true)]
     pub gt_mount: Option<omni_kin::Pose2>,
+    /// Where the fit starts the sensor's mount of a relative reference (`--gt-kind relative`, `--gt-scans`),
+    /// which it then fits with the wheels: X,Y in metres, YAW in degrees. Default: found from the motions
+    /// (the sensor's against the design's dead reckoning, any yaw); a lidar's static transforms are not used.
+    #[arg(long, value_name = "X,Y,YAW_DEG", value_parser = parse_mount, allow_hyphen_values = true, conflicts_with = "gt_mount")]
+    pub gt_mount_start: Option<omni_kin::Pose2>,
     /// The ground truth from a 2D lidar without motion capture: the scans of this LaserScan topic (e.g.
     /// `/scan`) matched scan to scan into the lidar's own path, a relative reference (`--gt-kind relative`
     /// implied); its mount from the recording's static transforms when there (/tf_static, or fixed pairs
@@ -252,6 +257,7 @@ impl DataArgs {
             gt_kind: self.gt_kind.unwrap_or_default(),
             gt_window_s: self.gt_window,
             gt_mount: self.gt_mount,
+            gt_mount_start: self.gt_mount_start,
             gt_scans: self.gt_scans.clone(),
             split_s: match self.split {
                 Some(Split::Standstill(s)) => Some(s),

@@ -3,24 +3,36 @@
 //! recording was read wheels only). Each stretch of the path (a segment ends where the matches failed) is a
 //! run of its own; a relative reference's windows cut them further (`api::load`). When the recording's
 //! static transforms hold the lidar's pose on the base, the path is moved to the base by it (the fit then
-//! corrects the mount around it); otherwise the mount is fitted from zero.
+//! corrects the mount around it); otherwise the mount is fitted, started where the motions put it.
 
 use super::{DatasetError, Loaded, Note};
 use crate::lidar::{self, MatchSettings};
 use omni_kin::{Run, StampedPose};
 use std::path::Path;
 
+/// Where the lidar's mount comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Mount {
+    /// The recording's static transforms, when they place the lidar.
+    Stated,
+    /// Given by the user (`--gt-mount`, `--gt-mount-start`): the static transforms are not used.
+    Given,
+}
+
 /// The runs of `loaded` (read wheels only from the recording at `path`) with the lidar's path on `topic`
 /// (matched with `settings`) as their ground truth, the mount looked up from `base_frame` (`[frames] base`;
-/// default `base_link`, else `base_footprint`).
+/// default `base_link`, else `base_footprint`) unless `mount` is given.
 pub(super) fn with_lidar_path(
     path: &Path,
     (topic, settings): &(String, MatchSettings),
-    base_frame: Option<&str>,
+    (base_frame, mount): (Option<&str>, Mount),
     max_file_bytes: u64,
     mut loaded: Loaded,
 ) -> Result<Loaded, DatasetError> {
-    let read = lidar::read_scans_within(path, topic, base_frame, max_file_bytes)?;
+    let mut read = lidar::read_scans_within(path, topic, base_frame, max_file_bytes)?;
+    if mount == Mount::Given {
+        read.base_from_sensor = None;
+    }
     let sensor = lidar::sensor_path(&read.scans, settings)
         .map_err(|e| DatasetError::at(path, format!("topic {topic:?}"), e.to_string()))?;
     if sensor.matched == 0 {
@@ -67,7 +79,7 @@ pub(super) fn with_lidar_path(
             "the lidar's path does not overlap the wheel data (two matched scans within it are needed)",
         ));
     }
-    loaded.notes.extend(notes(path, topic, &read, &sensor, runs.len()));
+    loaded.notes.extend(notes(path, topic, (&read, mount), &sensor, runs.len()));
     loaded.notes.extend(clock.and_then(|c| c.note(path, &format!("lidar {topic:?}"))));
     loaded.runs = runs;
     loaded.lidar_mount_from_tf = Some(read.base_from_sensor.is_some());
@@ -102,12 +114,16 @@ fn rejections(why: &std::collections::BTreeMap<&'static str, usize>) -> String {
     why.iter().map(|(k, n)| format!("{k} {n}")).collect::<Vec<_>>().join(", ")
 }
 
-/// Where the lidar's mount came from, in words: the chain of static transforms, or why there is none.
-fn mount_text(read: &lidar::ScanRead) -> String {
+/// Where the lidar's mount came from, in words: given, the chain of static transforms, or why there is none.
+fn mount_text(read: &lidar::ScanRead, mount: Mount) -> String {
     let frame = &read.frame_id;
     let upside_down = if read.mirrored { " (mounted upside down: its scans are read mirrored)" } else { "" };
-    let from_zero = "the lidar's mount is fitted from zero (within ±0.5 m, ±28.6°; give it with --gt-mount when it \
-                     is turned further)";
+    let from_zero = "the lidar's mount is fitted, started where the motions put it";
+    if mount == Mount::Given {
+        return format!(
+            "its mount is given (--gt-mount or --gt-mount-start): the static transforms are not used{upside_down}"
+        );
+    }
     match read.base_from_sensor {
         Some(m) => format!(
             "its path moved to the base by the static transforms {}{upside_down} (x {:.3} m, y {:.3} m, yaw \
@@ -128,9 +144,15 @@ fn mount_text(read: &lidar::ScanRead) -> String {
 
 /// The notes a lidar reference leaves: where the mount came from (the same words for every recording, so a
 /// load says it once), and the rejected matches and stretches when there were any.
-fn notes(path: &Path, topic: &str, read: &lidar::ScanRead, sensor: &lidar::SensorPath, runs: usize) -> Vec<Note> {
-    let mut out =
-        vec![Note::about(path, format!("lidar {topic:?} matched scan to scan as the reference; {}", mount_text(read)))];
+fn notes(
+    path: &Path,
+    topic: &str,
+    (read, mount): (&lidar::ScanRead, Mount),
+    sensor: &lidar::SensorPath,
+    runs: usize,
+) -> Vec<Note> {
+    let text = format!("lidar {topic:?} matched scan to scan as the reference; {}", mount_text(read, mount));
+    let mut out = vec![Note::about(path, text)];
     if read.by_log_time {
         out.push(Note::about(
             path,

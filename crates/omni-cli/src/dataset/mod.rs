@@ -65,6 +65,10 @@ pub struct Dataset {
     /// `/tf_static` places the lidar): a fit corrects that mount only where the base model can tell a mount
     /// from the base; a free matrix keeps it as given.
     pub sensor_mount_from_recordings: bool,
+    /// Where a fit starts the sensor's mount of a relative reference (`sensor_offset_yaw`): given
+    /// (`--gt-mount-start`), else found from the motions ([`omni_kin::hand_eye`]), else (`None`) zero.
+    /// When the recordings' static transforms placed the sensor, it is the correction of theirs.
+    pub mount_start: Option<omni_kin::Pose2>,
 }
 
 /// The design one input declares (an OptiOdom set's metadata), with the runs read from it.
@@ -198,6 +202,9 @@ pub struct LoadOptions {
     /// A ROS recording's ground truth from its 2D lidar: the LaserScan topic, matched scan to scan with these
     /// settings (`--gt-scans`); the recording is read wheels only. Default none.
     pub scans: Option<(String, crate::lidar::MatchSettings)>,
+    /// The lidar's mount is given (`--gt-mount`, `--gt-mount-start`): the recordings' static transforms do
+    /// not move its path. Default false.
+    pub scan_mount_given: bool,
 }
 
 impl Default for LoadOptions {
@@ -211,6 +218,7 @@ impl Default for LoadOptions {
             ground_truth: None,
             csv_joints: Vec::new(),
             scans: None,
+            scan_mount_given: false,
         }
     }
 }
@@ -535,7 +543,9 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
     // The lidar's path as a ROS recording's ground truth, when --gt-scans is given.
     let lidar = |p: &Path, l: Loaded| match &opts.scans {
         Some(scans) => {
-            lidar_reference::with_lidar_path(p, scans, opts.mcap.base_frame.as_deref(), opts.max_file_bytes, l)
+            let mount =
+                if opts.scan_mount_given { lidar_reference::Mount::Given } else { lidar_reference::Mount::Stated };
+            lidar_reference::with_lidar_path(p, scans, (opts.mcap.base_frame.as_deref(), mount), opts.max_file_bytes, l)
         }
         None => Ok(l),
     };

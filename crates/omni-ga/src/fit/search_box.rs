@@ -39,9 +39,16 @@ pub fn search_box_with(
     for (i, s) in specs.iter().enumerate() {
         let v = start[i];
         let half = if i >= nb {
-            // Effects: their own bounds, widened to contain the start.
-            lower.push(s.lower.min(v));
-            upper.push(s.upper.max(v));
+            // Effects: their own bounds; a start outside them (a sensor's mount turned 90°, found before the
+            // fit) gets their width centred on it.
+            if (s.lower..=s.upper).contains(&v) {
+                lower.push(s.lower);
+                upper.push(s.upper);
+            } else {
+                let half = 0.5 * (s.upper - s.lower);
+                lower.push(v - half);
+                upper.push(v + half);
+            }
             continue;
         } else if let Some(h) = half_widths.get(&s.name) {
             *h

@@ -155,6 +155,64 @@ pub enum LoadError {
         /// The unit read as rad/s whose factor the ratio is near, with that factor.
         near_unit: Option<(f64, &'static str)>,
     },
+    /// `--gt-mount-start` where no mount is fitted.
+    #[error(
+        "--gt-mount-start does not go with {flag}: it starts the fit of a relative reference's sensor mount \
+         (--gt-kind relative, --gt-scans)"
+    )]
+    MountStartWith {
+        /// What it was given with: `--gt-mount`, or an absolute reference.
+        flag: &'static str,
+    },
+    /// A relative reference whose turning goes against the wheels': its frame is mirrored.
+    #[error(
+        "{reference} of {recordings}: the sensor's path turns against the wheels (its turn per turn of the design's \
+         dead reckoning is {slope:.2}, explaining {:.0} % of its turning, over {pairs} stretches of about 1 s): its \
+         frame is mirrored. {}",
+        100.0 * explained,
+        mirrored_fix(*lidar)
+    )]
+    MirroredReference {
+        /// The reference: its topic or file, with its option.
+        reference: String,
+        /// The recordings or files it was read from, named.
+        recordings: String,
+        /// The reference is a lidar's scans (`--gt-scans`).
+        lidar: bool,
+        /// Sensor turn per base turn (least squares through zero).
+        slope: f64,
+        /// Share of the sensor's turning the slope explains.
+        explained: f64,
+        /// Stretches compared.
+        pairs: usize,
+    },
+    /// A sensor's mount stated (`--gt-mount`, the recordings' static transforms) that its motion contradicts.
+    #[error(
+        "{reference} of {recordings}: the mount of {stated} contradicts the sensor's motion: against the design's \
+         dead reckoning the sensor sits a further x {:.3} m, y {:.3} m, yaw {:.1}° (± {:.1} mm, ± {:.2}°) from where \
+         it puts it. Fix it (a static transform: the URDF joint that robot_state_publisher publishes), or give the \
+         mount: --gt-mount-start X,Y,YAW_DEG to fit it from there, --gt-mount X,Y,YAW_DEG to keep it as given \
+         (either replaces the static transforms)",
+        correction.x_m,
+        correction.y_m,
+        correction.theta_rad.to_degrees(),
+        1e3 * position_std_m,
+        yaw_std_rad.to_degrees()
+    )]
+    MountContradicts {
+        /// The reference: its topic, with its option.
+        reference: String,
+        /// Where the contradicted mount came from: `--gt-mount`, the recordings' static transform.
+        stated: &'static str,
+        /// The recordings it was read from, named.
+        recordings: String,
+        /// The mount the motions give, on top of the stated one.
+        correction: omni_kin::Pose2,
+        /// Its position's standard error. m.
+        position_std_m: f64,
+        /// Its yaw's standard error. rad.
+        yaw_std_rad: f64,
+    },
     /// A `--gt-columns` / `--gt-units` setting that is not `KEY=VALUE`.
     #[error("--gt-columns/--gt-units {setting:?}: expected KEY=VALUE")]
     NotKeyValue {
@@ -164,6 +222,18 @@ pub enum LoadError {
     /// A ground-truth column or unit the CSV reader refuses.
     #[error(transparent)]
     GroundTruthColumns(#[from] CsvColumnsError),
+}
+
+/// What to do about a mirrored reference: a lidar's mount on /tf_static, another sensor's frame.
+fn mirrored_fix(lidar: bool) -> &'static str {
+    if lidar {
+        "The lidar is mounted upside down and the recordings' static transform says upright (or none is \
+         recorded), or the reverse: publish its true mount on /tf_static (base_link → the scans' frame, roll 180° \
+         when upside down, as robot_state_publisher does from the URDF), so that its scans are read mirrored"
+    } else {
+        "The sensor is mounted upside down, or its odometry is published in a left-handed frame: flip its y axis \
+         and its heading (y → −y, yaw → −yaw) before giving it as the reference"
+    }
 }
 
 /// The note on a unit near the wheel-scale ratio: ` (… is near …, the factor of velocity = "rpm")`.

@@ -19,7 +19,7 @@ pub use options::DataOptions;
 use crate::dataset::{self, Dataset, LoadOptions, Note};
 use crate::robot_file;
 use options::{csv_joints, end_pose_file, ground_truth_options, scans_topic};
-use reference::{check_wheel_scale, cut_into_windows, move_to_base, set_end_poses};
+use reference::{check_wheel_scale, cut_into_windows, move_to_base, set_end_poses, start_sensor_mount};
 use std::path::PathBuf;
 
 /// Runs to read: the inputs (files and folders), the data options, and whether to keep the runs' recorded
@@ -93,6 +93,7 @@ impl LoadRequest {
             ground_truth,
             csv_joints: csv_joints(data, robot.as_ref()),
             scans: scans.map(|t| (t, crate::lidar::MatchSettings::default())),
+            scan_mount_given: data.gt_mount.is_some() || data.gt_mount_start.is_some(),
         };
         let mut ds = dataset::load(&self.paths, &opts)?;
         // An option that changes nothing is an error: the offset applies to a --gt file or to the ground-truth
@@ -110,6 +111,7 @@ impl LoadRequest {
         ds.robot_file = robot;
         move_to_base(&mut ds, data)?;
         cut_into_windows(&mut ds, data)?;
+        start_sensor_mount(&mut ds, data)?;
         Ok(ds)
     }
 

@@ -41,6 +41,10 @@ pub struct DataOptions {
     /// The measured point's (the sensor's, the marker's) pose in the base frame, when known (a URDF, a tape
     /// measure): the ground truth is moved to the base by it, and no fit adds a mount.
     pub gt_mount: Option<omni_kin::Pose2>,
+    /// Where the fit starts the sensor's mount of a relative reference (the pose of the sensor in the base
+    /// frame), fitted from there; `None`: found from the motions ([`omni_kin::hand_eye`]). A lidar's static
+    /// transforms are not used when it is given.
+    pub gt_mount_start: Option<omni_kin::Pose2>,
     /// The ground truth from a 2D lidar: this LaserScan topic's scans matched into the sensor's own path, a
     /// relative reference (`--gt-kind relative` is implied).
     pub gt_scans: Option<String>,
@@ -72,6 +76,7 @@ impl Default for DataOptions {
             gt_kind: ReferenceKind::Absolute,
             gt_window_s: None,
             gt_mount: None,
+            gt_mount_start: None,
             gt_scans: None,
             split_s: None,
             split_every_s: None,

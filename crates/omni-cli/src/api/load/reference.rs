@@ -222,3 +222,139 @@ fn scale_mismatch_text(travel: &omni_kin::travel::Travel, ratio: f64, turning: O
         100.0 * (SCALE_WARN_FACTOR - 1.0)
     )
 }
+
+/// A static transform's mount is contradicted by the motions when they move it further than this (rad,
+/// 20°) or [`CONTRADICTION_M`], and by more than [`CONTRADICTION_SIGMAS`] standard errors: a rough URDF
+/// (a lidar placed 0.2 m off, 5° off) is the fit's to correct, a lidar turned or reversed is not.
+const CONTRADICTION_RAD: f64 = 20.0 * std::f64::consts::PI / 180.0;
+/// See [`CONTRADICTION_RAD`]. m.
+const CONTRADICTION_M: f64 = 0.3;
+/// See [`CONTRADICTION_RAD`].
+const CONTRADICTION_SIGMAS: f64 = 5.0;
+/// A sensor turning against the wheels with a slope explaining at least this share of its turning is
+/// mirrored, not noisy.
+const MIRRORED_EXPLAINED: f64 = 0.5;
+
+/// Where a fit starts a relative reference's sensor mount ([`Dataset::mount_start`]): `--gt-mount-start`,
+/// else the mount the motions give ([`omni_kin::hand_eye`]: the sensor's motion against the design's dead
+/// reckoning, any yaw), with a note. Refused: a sensor whose path turns against the wheels (a mirrored
+/// frame), and a mount stated (`--gt-mount`, a lidar's static transforms) that the motions contradict.
+/// Nothing when the reference is not relative or the data has no design.
+pub(super) fn start_sensor_mount(ds: &mut Dataset, data: &DataOptions) -> Result<(), LoadError> {
+    use omni_kin::hand_eye::{estimate_mount, motion_pairs, rotation_agreement};
+    if ds.reference != ReferenceKind::Relative {
+        return match data.gt_mount_start {
+            Some(_) => Err(LoadError::MountStartWith { flag: "an absolute reference (motion capture)" }),
+            None => Ok(()),
+        };
+    }
+    if data.gt_mount.is_some() && data.gt_mount_start.is_some() {
+        return Err(LoadError::MountStartWith { flag: "--gt-mount" });
+    }
+    ds.mount_start = data.gt_mount_start;
+    let Some(ik) = crate::design::model_of(omni_kin::KinematicsKind::Ik, ds)
+        .ok()
+        .flatten()
+        .and_then(|m| omni_kin::FittedModel::nominal(m).ik().ok())
+    else {
+        return Ok(());
+    };
+    let pairs = motion_pairs(&ds.runs, &ik);
+    let (reference, recordings) = (reference_text(data), recordings_text(ds));
+    if let Some(a) = rotation_agreement(&pairs)
+        && a.slope < 0.0
+        && a.explained >= MIRRORED_EXPLAINED
+    {
+        let (slope, explained, pairs, lidar) = (a.slope, a.explained, a.pairs, data.gt_scans.is_some());
+        return Err(LoadError::MirroredReference { reference, recordings, lidar, slope, explained, pairs });
+    }
+    if data.gt_mount_start.is_some() {
+        return Ok(());
+    }
+    // A mount stated (--gt-mount, the recordings' static transforms) leaves the motions' correction of it.
+    let stated = match (data.gt_mount.is_some(), ds.sensor_mount_from_recordings) {
+        (true, _) => Some("--gt-mount"),
+        (false, true) => Some("the recordings' static transform (base → the scans' frame)"),
+        (false, false) => None,
+    };
+    let Some(e) = estimate_mount(&pairs) else {
+        if ds.mount.is_some() {
+            return Ok(());
+        }
+        ds.notes.push(Note::general(format!(
+            "the sensor's mount is fitted from zero: the {} stretches of the reference do not determine it alone \
+             (they need both turns and straight motion)",
+            pairs.len()
+        )));
+        return Ok(());
+    };
+    let m = e.base_from_sensor;
+    if let Some(stated) = stated {
+        check_stated(&e, stated, (&reference, &recordings))?;
+    }
+    if ds.mount.is_some() {
+        return Ok(());
+    }
+    ds.notes.push(Note::general(format!(
+        "the sensor's mount {} at x {:.3} m, y {:.3} m, yaw {:.1}° (± {:.1} mm, ± {:.2}°: the sensor's motion against \
+         the design's dead reckoning over {} stretches, whose distance is {:.3} times the sensor's), and refined by \
+         the fit",
+        if ds.sensor_mount_from_recordings { "is corrected from the static transform's, started" } else { "starts" },
+        m.x_m,
+        m.y_m,
+        m.theta_rad.to_degrees(),
+        1e3 * e.position_std_m,
+        e.yaw_std_rad.to_degrees(),
+        e.pairs,
+        e.body_per_sensor
+    )));
+    ds.mount_start = Some(m);
+    Ok(())
+}
+
+/// The relative reference as its options name it: a lidar's topic, a ground-truth topic or file.
+fn reference_text(data: &DataOptions) -> String {
+    match (&data.gt_scans, &data.gt_topic, &data.gt) {
+        (Some(t), _, _) => format!("lidar {t:?} (--gt-scans)"),
+        (None, Some(t), _) => format!("topic {t:?} (--gt-kind relative)"),
+        (None, None, Some(f)) => format!("{} (--gt-kind relative)", f.display()),
+        (None, None, None) => "the relative reference (--gt-kind relative)".to_string(),
+    }
+}
+
+/// The recordings the runs were read from (three at most, then how many more), or the runs' count.
+fn recordings_text(ds: &Dataset) -> String {
+    let files: std::collections::BTreeSet<String> = ds.recordings.values().map(|p| p.display().to_string()).collect();
+    if files.is_empty() {
+        return format!("{} runs", ds.runs.len());
+    }
+    let mut names: Vec<String> = files.iter().take(3).cloned().collect();
+    if files.len() > 3 {
+        names.push(format!("and {} more recordings", files.len() - 3));
+    }
+    names.join(", ")
+}
+
+/// Refuses a stated mount (`stated` names it) that the motions' estimate `e` moves beyond
+/// [`CONTRADICTION_RAD`] or [`CONTRADICTION_M`] (and [`CONTRADICTION_SIGMAS`]).
+fn check_stated(
+    e: &omni_kin::hand_eye::MountEstimate,
+    stated: &'static str,
+    (reference, recordings): (&str, &str),
+) -> Result<(), LoadError> {
+    let m = e.base_from_sensor;
+    let (sigmas_m, sigmas_rad) = (m.x_m.hypot(m.y_m) / e.position_std_m, m.theta_rad.abs() / e.yaw_std_rad);
+    let far = m.x_m.hypot(m.y_m) > CONTRADICTION_M && sigmas_m > CONTRADICTION_SIGMAS
+        || m.theta_rad.abs() > CONTRADICTION_RAD && sigmas_rad > CONTRADICTION_SIGMAS;
+    if !far {
+        return Ok(());
+    }
+    Err(LoadError::MountContradicts {
+        reference: reference.to_string(),
+        recordings: recordings.to_string(),
+        stated,
+        correction: m,
+        position_std_m: e.position_std_m,
+        yaw_std_rad: e.yaw_std_rad,
+    })
+}
