@@ -210,10 +210,19 @@ fn info_points_the_imu_to_omnical_imu_and_refuses_what_is_no_recording() {
     assert!(text.contains("      IMU: omnical imu --topic /imu fits the wheel matrix's rotation row"), "{text}");
     assert!(text.contains("  omnical reads 1 run:\n    00-r0: "), "{text}");
     ok(&["simulate", "--out", "csv", "--format", "csv", "--runs-per-command", "1", "--duration", "2", "-q"], d);
-    let out = omnical(&["info", "csv/train/00-r0.csv"], d);
+    // A CSV run is an input the loader reads, so info describes it (issue 48); a file that is none is refused
+    // naming what is read.
+    let csv = ok(&["info", "csv/train/00-r0.csv"], d);
+    assert!(csv.contains("  an omnical CSV run (t_s, wheel speeds, ground-truth pose per row"), "{csv}");
+    assert!(csv.contains("  omnical reads 1 run:\n    train/00-r0: "), "{csv}");
+    std::fs::write(d.join("notes.txt"), "not a recording").unwrap();
+    let out = omnical(&["info", "notes.txt"], d);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8(out.stderr).unwrap();
-    assert_eq!(err.trim(), "error: csv/train/00-r0.csv: not a ROS recording (.mcap, .db3, .bag or a rosbag2 folder)");
+    assert!(
+        err.starts_with("error: notes.txt: unsupported input (expected .csv (omnical run), .mcap (ROS 2 bag)"),
+        "{err}"
+    );
 }
 
 /// `model`'s matrix with its rotation row scaled by `factor`, as a model file `out` (the TOML's third

@@ -54,9 +54,9 @@ fn span_ns(path: &Path) -> (u64, u64) {
         .fold((u64::MAX, 0), |(a, b), t| (a.min(t), b.max(t)))
 }
 
-/// `train DIR --gt-scans /scan --json` in `dir`: the summary and stderr.
-fn train(data: &Path, dir: &Path) -> (Value, String) {
-    let args = ["train", data.to_str().unwrap(), "--gt-scans", "/scan", "--json"];
+/// `train DIR --gt-scans /scan --json MORE` in `dir`: the summary and stderr.
+fn train(data: &Path, dir: &Path, more: &[&str]) -> (Value, String) {
+    let args = [&["train", data.to_str().unwrap(), "--gt-scans", "/scan", "--json"][..], more].concat();
     let (stdout, stderr) = ok_with_stderr(&args, dir);
     (serde_json::from_str(&stdout).unwrap(), stderr)
 }
@@ -82,9 +82,14 @@ fn the_two_halves_of_a_real_urg04lx_run_give_the_same_wheels_and_the_scale_misma
         std::fs::create_dir(&folder).unwrap();
         std::fs::copy(exp1().join("robot.toml"), folder.join("robot.toml")).unwrap();
         cut(&source, &folder.join(format!("{name}.mcap")), a, b);
-        fits.push(train(&folder, d));
+        // Half a run (37 s, 9 windows) does not determine the lidar's mount beside the wheels, and train
+        // says so ("give the mount with --gt-mount"): the halves take the nominal mount of the README, as a
+        // user told so would. The whole run fits it.
+        let (fit, stderr) = train(&folder, d, &["--gt-mount", "0.145,0,0"]);
+        assert!(!stderr.contains("the sensor's mount is not determined"), "{name}: {stderr}");
+        fits.push((fit, stderr));
     }
-    let (whole, stderr) = train(&exp1(), d);
+    let (whole, stderr) = train(&exp1(), d, &[]);
     // The lidar's distance is about twice the nominal wheels': said, with the ratio and the likely causes.
     let said = stderr.lines().find(|l| l.contains("wheel scale:")).unwrap_or_else(|| panic!("{stderr}"));
     eprintln!("{said}");

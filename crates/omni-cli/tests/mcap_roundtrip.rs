@@ -165,11 +165,14 @@ fn damaged_files_are_errors_not_panics() {
     let e = read_file(&missing, &McapOptions::default()).unwrap_err();
     assert_eq!(e.to_string(), format!("{}: No such file or directory (os error 2)", missing.display()));
 
-    // The first chunk's CRC (the writer records one): the chunk record follows the magic (8 bytes) and the
-    // header record (opcode, u64 length, body); its CRC follows opcode, length and three u64 fields.
-    let header_len = u64::from_le_bytes(bytes[9..17].try_into().unwrap()) as usize;
-    let chunk = 8 + 1 + 8 + header_len;
-    assert_eq!(bytes[chunk], 0x06, "a chunk record");
+    // The first chunk's CRC (the writer records one): records (opcode, u64 length, body) follow the magic
+    // (8 bytes): the header, rosbag2's metadata, then the first chunk; its CRC follows opcode, length and
+    // three u64 fields.
+    let mut chunk = 8;
+    while bytes[chunk] != 0x06 {
+        assert!([0x01, 0x0C].contains(&bytes[chunk]), "a header or metadata record before the chunk: {}", bytes[chunk]);
+        chunk += 1 + 8 + u64::from_le_bytes(bytes[chunk + 1..chunk + 9].try_into().unwrap()) as usize;
+    }
     let mut flipped = bytes.clone();
     flipped[chunk + 33] ^= 0x01;
     let e = read_bad(&flipped).unwrap_err();

@@ -363,7 +363,7 @@ fn omni4_mecanum_model_finds_radii_and_lx_plus_ly() {
     let held = s["held_at_start"].as_array().unwrap();
     assert_eq!(held.len(), 1, "{}", s["warnings"]);
     let text = held[0].as_str().unwrap();
-    assert!(text.starts_with("lx and ly trade off") || text.starts_with("ly and lx trade off"), "{text}");
+    assert!(text.starts_with("lx and ly enter the kinematics only as lx + ly ("), "{text}");
 }
 
 /// Eq. 6 and path RMS of `model` on the set folders `sets` (`eval --json`).

@@ -66,8 +66,14 @@ def test_bad_paths_are_named(tmp_path: Path, bags: Path) -> None:
         omnical.info(missing)
     csv = tmp_path / "run.csv"
     csv.write_text("t_s\n")
-    with pytest.raises(omnical.DatasetError, match="run.csv"):
-        omnical.info(csv)
+    # A CSV run is an input info describes (issue 48): one it cannot read has its error, naming the file, in
+    # "read"; a file that is no input at all is refused.
+    read = omnical.info(csv)["recordings"][0]["read"]
+    assert read == {"ok": False, "error": f"{csv}: line 1: no wheel columns: expected <joint>_rad_s or <joint>_ticks columns"}
+    notes = tmp_path / "notes.txt"
+    notes.write_text("hello\n")
+    with pytest.raises(omnical.DatasetError, match="notes.txt: unsupported input"):
+        omnical.info(notes)
     with pytest.raises(ValueError, match="at least one path"):
         omnical.info()
     with pytest.raises(ValueError, match="gt_kind"):

@@ -137,7 +137,7 @@ const FITTED_WITH_EFFECTS: &str = "fitted_with_effects.toml";
 const DIAGNOSIS: &str = "diagnosis.json";
 const REPORT: &str = "report.html";
 /// The marker every demo writes into its `--out`: a folder that holds it and nothing but the demo's own
-/// outputs is an earlier demo's, which the next demo replaces without `--force` ([`earlier_demo_only`]).
+/// outputs is an earlier demo's, which the next demo replaces without `--force` (`earlier_demo_only`).
 pub const MARKER: &str = ".omnical-demo";
 /// What the marker says to someone who finds it.
 const MARKER_TEXT: &str = "This folder was written by `omnical demo`. The next `omnical demo --out` into it replaces \

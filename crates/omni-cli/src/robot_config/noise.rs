@@ -37,7 +37,7 @@ pub struct TypicalMotion {
     pub turn_rad_s: f64,
 }
 
-/// The pose covariance diagonal (x, y, z, roll, pitch, yaw) after [`POSE_HORIZON_M`] driven straight.
+/// The pose covariance diagonal (x, y, z, roll, pitch, yaw) after `POSE_HORIZON_M` (1 m) driven straight.
 pub fn pose_diagonal(n: &OdometryNoise) -> [f64; 6] {
     let r = n.rates.without_floor();
     let d = POSE_HORIZON_M;

@@ -28,7 +28,7 @@ pub const TURN_LEVER_M: f64 = 0.25;
 /// Settings of the fit.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FitNoiseOptions {
-    /// Window lengths of motion (m, with [`TURN_LEVER_M`] per radian). Default 0.5 m and 2 m.
+    /// Window lengths of motion (m, with `TURN_LEVER_M` per radian). Default 0.5 m and 2 m.
     pub window_m: Vec<f64>,
     /// Bootstrap resamples for the standard errors. Default 100.
     pub bootstrap: usize,

@@ -144,6 +144,9 @@ const SCALE_MIN_RAD: f64 = std::f64::consts::PI;
 /// A calibration corrects a few per cent; the wheels' distance or turning off by more than this factor
 /// from the ground truth's is wheel data in another unit, or a design far from the robot.
 const SCALE_MAX_FACTOR: f64 = 3.0;
+/// A share of [`SCALE_MIN_M`] and [`SCALE_MIN_RAD`] enough to tell that distance or turning is *not* off by a
+/// unit's factor (though not to tell that it is).
+const SCALE_HINT: f64 = 0.25;
 /// The wheels' distance off by more than this factor from the ground truth's (but within
 /// [`SCALE_MAX_FACTOR`]) is fitted, and said: a constant of the robot's description is likely wrong.
 pub const SCALE_WARN_FACTOR: f64 = 1.3;
@@ -203,7 +206,11 @@ fn scale_off(travel: &omni_kin::travel::Travel) -> Option<f64> {
     let ratios = [travel.distance_ratio(SCALE_MIN_M), travel.turning_ratio(SCALE_MIN_RAD)];
     let told: Vec<f64> = ratios.into_iter().flatten().collect();
     let off = !told.is_empty() && (told.iter().all(|&r| r > hi) || told.iter().all(|&r| r < lo));
-    off.then(|| told[0])
+    // The other quantity, moved too little to judge on its own but enough to say it is not off (a quarter
+    // of the minimum), rules a unit out: a unit would scale it too. What is left is the design's business.
+    let hinted = [travel.distance_ratio(SCALE_MIN_M * SCALE_HINT), travel.turning_ratio(SCALE_MIN_RAD * SCALE_HINT)];
+    let unit_ruled_out = hinted.into_iter().flatten().any(|r| (lo..=hi).contains(&r));
+    (off && !unit_ruled_out).then(|| told[0])
 }
 
 /// The note of a wheel scale off by more than [`SCALE_WARN_FACTOR`]: the ratio, and what usually causes it.

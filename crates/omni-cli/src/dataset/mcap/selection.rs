@@ -259,6 +259,9 @@ impl Bag<'_> {
             }
             match &c.content {
                 Content::Poses(_) if is_localization(&c.topic) => localizations.push(&c.topic),
+                // omnical's own calibrated odometry (export --mcap) is in the ground truth's frame to overlay
+                // it, but it is a model's output: never a measurement, unless --gt-topic names it.
+                Content::Poses(_) if c.topic == super::write::CALIBRATED_TOPIC => {}
                 Content::Poses(_) => {
                     let robot_frame = c.frame().is_some_and(|f| ROBOT_FRAMES.contains(&f));
                     if !robot_frame && self.truth_mismatch(i, opts).is_none() {
