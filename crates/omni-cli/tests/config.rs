@@ -136,7 +136,7 @@ fn bad_project_files_name_the_file_line_and_key() {
         (
             "seed = 5\nsed = 3\n",
             "error: omnical.toml: line 2: sed: unknown key; known keys: threads, robot, joints, joints_topic, \
-             gt_topic, gt_parent_frame, gt_child_frame, gt, gt_time_offset, gt_kind, gt_window, gt_mount, gt_scans, \
+             gt_topic, gt_parent_frame, gt_child_frame, gt, gt_time_offset, gt_kind, gt_window, gt_mount, gt_mount_start, gt_scans, \
              split, skip_invalid, ticks_per_rev, max_file_mb, preset, seed, objective, every, heading_weight, unexcited, rpe_delta",
         ),
         (

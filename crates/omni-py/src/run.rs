@@ -366,6 +366,8 @@ fn reading_from_state(text: &str) -> PyResult<omni_cli::dataset::Dataset> {
 /// (36, '00-r0', 3)
 #[pyfunction]
 #[pyo3(signature = (*paths, robot = None, joints = None, joints_topic = None, gt_topic = None, gt_parent_frame = None, gt_child_frame = None, gt = None, gt_time_offset = None, gt_columns = None, gt_units = None, gt_kind = None, gt_window_s = None, gt_mount = None, gt_mount_start = None, gt_scans = None, split_s = None, skip_invalid = false, ticks_per_rev = None, max_file_mb = 1024, recorded_odometry = false))]
+// long: one parameter per keyword (the CLI's data flags, 21 of them) passed on to data_options, then the
+// Dataset the binding keeps.
 #[allow(clippy::too_many_arguments)]
 pub fn load(
     py: Python<'_>,

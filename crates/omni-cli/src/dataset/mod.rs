@@ -553,20 +553,7 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
     let truth = |p: &Path, folder: bool| -> Result<Option<ground_truth::ExternalTruth>, DatasetError> {
         opts.ground_truth.as_ref().map(|g| ground_truth::read_for(g, p, &recording_name(p, folder))).transpose()
     };
-    if opts.mcap.wheels_only && matches!(input, Input::Csv(_) | Input::OptiOdom(_)) {
-        return Err(DatasetError::file(
-            input.path(),
-            "measured end poses (--gt-kind end-pose) and lidar scans (--gt-scans) go with ROS recordings (.mcap, \
-             .db3, rosbag2 folders, .bag); this input carries its own ground truth",
-        ));
-    }
-    if opts.ground_truth.is_some() && matches!(input, Input::OptiOdom(_)) {
-        return Err(DatasetError::file(
-            input.path(),
-            "--gt gives the ground truth of ROS recordings (.mcap, .db3, rosbag2 folders, .bag) and of CSV runs \
-             without pose columns; an OptiOdom set has its own",
-        ));
-    }
+    refuse_foreign_reference(input, opts)?;
     match input {
         Input::Csv(p) if opts.ground_truth.is_some() => {
             check_size(p, opts.max_file_bytes)?;
@@ -614,6 +601,26 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
             Ok(Ok(Loaded { runs: set.runs, skipped, declared, ..Default::default() }))
         }
     }
+}
+
+/// Refuses a reference that does not go with `input`: end poses or lidar scans for a CSV run or an OptiOdom
+/// set, a `--gt` file for an OptiOdom set (which has its own).
+fn refuse_foreign_reference(input: &Input, opts: &LoadOptions) -> Result<(), DatasetError> {
+    if opts.mcap.wheels_only && matches!(input, Input::Csv(_) | Input::OptiOdom(_)) {
+        return Err(DatasetError::file(
+            input.path(),
+            "measured end poses (--gt-kind end-pose) and lidar scans (--gt-scans) go with ROS recordings (.mcap, \
+             .db3, rosbag2 folders, .bag); this input carries its own ground truth",
+        ));
+    }
+    if opts.ground_truth.is_some() && matches!(input, Input::OptiOdom(_)) {
+        return Err(DatasetError::file(
+            input.path(),
+            "--gt gives the ground truth of ROS recordings (.mcap, .db3, rosbag2 folders, .bag) and of CSV runs \
+             without pose columns; an OptiOdom set has its own",
+        ));
+    }
+    Ok(())
 }
 
 /// A CSV run without pose columns with its ground truth from `--gt` (the file named after it, or the

@@ -241,6 +241,23 @@ const CONTRADICTION_SIGMAS: f64 = 5.0;
 /// A sensor turning against the wheels with a slope explaining at least this share of its turning is
 /// mirrored, not noisy.
 const MIRRORED_EXPLAINED: f64 = 0.5;
+/// The motions' estimate of the mount (or of its correction) is used, to start the fit or to contradict a
+/// stated mount, only within this distance of the base (m: no robot carries its sensor further) and with
+/// standard errors within [`MOUNT_ESTIMATE_STD_M`] and [`MOUNT_ESTIMATE_STD_RAD`]: a short run that turns at
+/// one rate determines it poorly, whatever its scatter says.
+const MOUNT_ESTIMATE_MAX_M: f64 = 2.0;
+/// See [`MOUNT_ESTIMATE_MAX_M`]. m.
+const MOUNT_ESTIMATE_STD_M: f64 = 0.05;
+/// See [`MOUNT_ESTIMATE_MAX_M`]. rad (5°).
+const MOUNT_ESTIMATE_STD_RAD: f64 = 5.0 * std::f64::consts::PI / 180.0;
+
+/// Whether the motions' mount estimate `e` is one to use (see [`MOUNT_ESTIMATE_MAX_M`]).
+fn mount_estimate_determined(e: &omni_kin::hand_eye::MountEstimate) -> bool {
+    let m = e.base_from_sensor;
+    m.x_m.hypot(m.y_m) <= MOUNT_ESTIMATE_MAX_M
+        && e.position_std_m <= MOUNT_ESTIMATE_STD_M
+        && e.yaw_std_rad <= MOUNT_ESTIMATE_STD_RAD
+}
 
 /// Where a fit starts a relative reference's sensor mount ([`Dataset::mount_start`]): `--gt-mount-start`,
 /// else the mount the motions give ([`omni_kin::hand_eye`]: the sensor's motion against the design's dead
@@ -284,13 +301,18 @@ pub(super) fn start_sensor_mount(ds: &mut Dataset, data: &DataOptions) -> Result
         (false, true) => Some("the recordings' static transform (base → the scans' frame)"),
         (false, false) => None,
     };
-    let Some(e) = estimate_mount(&pairs) else {
+    let Some(e) = estimate_mount(&pairs).filter(mount_estimate_determined) else {
         if ds.mount.is_some() {
             return Ok(());
         }
+        let what = if ds.sensor_mount_from_recordings {
+            "the correction of the static transform's mount is fitted from zero"
+        } else {
+            "the sensor's mount is fitted from zero"
+        };
         ds.notes.push(Note::general(format!(
-            "the sensor's mount is fitted from zero: the {} stretches of the reference do not determine it alone \
-             (they need both turns and straight motion)",
+            "{what}: the {} stretches of the reference do not determine it alone (they need both turns and \
+             straight motion, at more than one turning rate)",
             pairs.len()
         )));
         return Ok(());
