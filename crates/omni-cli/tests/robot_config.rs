@@ -580,3 +580,64 @@ fn without_a_noise_model_no_amcl_file_is_written_and_the_controller_keeps_its_de
     assert_schema(&controller, "mecanum_drive_controller");
     assert!(controller["mecanum_drive_controller"]["ros__parameters"]["pose_covariance_diagonal"].is_badvalue());
 }
+
+/// `file` rewritten without the messages on `topic`.
+fn without_topic(file: &Path, topic: &str) {
+    let bytes = std::fs::read(file).unwrap();
+    let mut out = Vec::new();
+    {
+        let mut w = mcap::WriteOptions::new().profile("ros2").create(std::io::Cursor::new(&mut out)).unwrap();
+        for m in mcap::MessageStream::new(&bytes).unwrap() {
+            let m = m.unwrap();
+            if m.channel.topic != topic {
+                w.write(&m).unwrap();
+            }
+        }
+        w.finish().unwrap();
+    }
+    std::fs::write(file, out).unwrap();
+}
+
+#[test]
+fn robot_config_needs_no_ground_truth_and_says_what_it_measured_against() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    succeeded_on_two_threads(&["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "3"], dir);
+    let bags: Vec<_> = std::fs::read_dir(dir.join("sim/validation"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "mcap"))
+        .collect();
+    assert!(bags.len() >= 3, "{bags:?}");
+    for b in &bags {
+        without_topic(b, "/ground_truth/pose");
+    }
+    let args = ["export", "--model", "paper", "--robot-config", "rc", "sim/validation"];
+    let run = support::succeeded(&[&["--threads", "2"], &args[..]].concat(), dir);
+    let (out, err) = (stdout(&run), stderr(&run));
+    assert!(err.contains("note: the runs have no ground truth ("), "{err}");
+    assert!(
+        out.contains("(the runs have no ground truth: measured against the calibrated model's own odometry)"),
+        "{out}"
+    );
+    assert!(!out.contains("given up by the controller"), "a loss against a zero is meaningless: {out}");
+    // The written matrix is still the model's (Eq. 9), and the model's own row is exactly zero.
+    assert_close(written_matrix(&dir.join("rc")).entries(), IkMatrix::paper_calibrated().entries(), 1e-12, "matrix");
+    let model_row: Vec<f64> = out
+        .lines()
+        .find(|l| l.trim_start().starts_with("calibrated model"))
+        .unwrap_or_else(|| panic!("{out}"))
+        .split_whitespace()
+        .filter_map(|t| t.parse().ok())
+        .collect();
+    assert_eq!(model_row, [0.0, 0.0], "{out}");
+    // The JSON names what the figures are against; the design is measurably away from the model.
+    let json = stdout(&succeeded_on_two_threads(&[&args[..4], &["rc2", "--json", "sim/validation"]].concat(), dir));
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let acc = &v["robot_config"]["accuracy"];
+    assert_eq!(acc["against"], "model_odometry", "{json}");
+    assert!(acc["design"]["end_pose"].as_f64().unwrap() > 1e-3, "{json}");
+    // --tum exports the ground truth, so it still needs it: refused naming the file.
+    let e = stderr(&omnical(&["export", "--model", "paper", "--tum", "tum", "sim/validation"], dir));
+    assert!(e.contains("no ground truth"), "{e}");
+}

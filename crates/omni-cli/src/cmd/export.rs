@@ -91,13 +91,16 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
     }
     let (tum_dir, mcap_dir) = claim_folders(a)?;
     let data = a.data.options();
-    let ds = LoadRequest { recorded_odometry: true, ..LoadRequest::new(&a.runs, &data) }.load()?;
+    let (mut ds, against) = load(a, &data)?;
     let model = a.model.resolve(&ds)?;
     // Each run's own input's design (for the design's odometry and accuracy); `--model design` is each
     // run's own in the trajectories too.
     let designs = designs_for(&model, &[&ds]);
     let design = design_for(&model);
     let models = a.model.resolve_each(&[&ds])?;
+    if against == robot_config::Against::ModelOdometry {
+        ds.runs = with_model_odometry(ds.runs, &models)?;
+    }
     let spec = a.model.to_string();
     let mut doc = serde_json::json!({ "model": spec, "runs": ds.runs.len() });
     if let Some(out) = tum_dir {
@@ -124,6 +127,7 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
             designs: &designs,
             spec: &spec,
             runs: &ds.runs,
+            against,
             wheel_names: joint_names(&model, &data.wheel_joints(&ds)),
             controller: a.controller,
             noise: match &a.model {
@@ -146,6 +150,39 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         return super::print_json("export", doc);
     }
     Ok(())
+}
+
+/// The runs to export. `--robot-config` alone needs no ground truth: when the runs cannot be read with it
+/// but can without it (their wheels alone), they are, and a note says that the accuracy figures are against
+/// the calibrated model's own odometry. `--tum` and `--mcap` export the ground truth, so they need it.
+fn load(a: &Args, data: &DataOptions) -> anyhow::Result<(crate::dataset::Dataset, robot_config::Against)> {
+    let request = LoadRequest { recorded_odometry: true, ..LoadRequest::new(&a.runs, data) };
+    let with_truth = match request.load() {
+        Ok(ds) => return Ok((ds, robot_config::Against::GroundTruth)),
+        Err(e) if a.tum.is_none() && a.mcap.is_none() => e,
+        Err(e) => return Err(e.into()),
+    };
+    let Ok(ds) = LoadRequest { wheels_only: true, ..request }.load() else {
+        return Err(with_truth.into());
+    };
+    crate::note!(
+        "note: the runs have no ground truth ({with_truth:#}): --robot-config is exported from the model, and its \
+         accuracy figures are measured against the model's own odometry"
+    );
+    Ok((ds, robot_config::Against::ModelOdometry))
+}
+
+/// `runs` with their reference poses replaced by the odometry of their own model in `models` (for runs
+/// without ground truth).
+fn with_model_odometry(runs: Vec<omni_kin::Run>, models: &RunModels) -> anyhow::Result<Vec<omni_kin::Run>> {
+    runs.into_iter()
+        .map(|run| {
+            let poses = crate::export::odometry_poses(models.for_run(&run)?, &run)?;
+            let mut data = run.into_data();
+            data.truth = poses;
+            Ok(omni_kin::Run::new(data)?)
+        })
+        .collect()
 }
 
 /// `--tum`: three TUM files per run (ground truth, each run's design, the calibrated `models`) in `out`,
@@ -226,6 +263,7 @@ fn robot_config_json(c: &robot_config::RobotConfig, dir: &Path) -> serde_json::V
         "controller_params": params,
         "accuracy": {
             "runs": c.n_runs,
+            "against": c.against.id(),
             "design": acc(&c.design_accuracy),
             "model": acc(&c.model_accuracy),
             "matrix": c.matrix_accuracy.as_ref().map(acc),

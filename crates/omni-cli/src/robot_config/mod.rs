@@ -107,6 +107,34 @@ pub struct EffectSummary {
     pub params: Vec<(String, String, f64)>,
 }
 
+/// What the accuracy figures are measured against.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Against {
+    /// The runs' ground truth.
+    GroundTruth,
+    /// The calibrated model's own odometry, for runs without ground truth (`export --robot-config` needs
+    /// none): the design's and the controller's figures are their distance from the model.
+    ModelOdometry,
+}
+
+impl Against {
+    /// Its id in JSON.
+    pub fn id(self) -> &'static str {
+        match self {
+            Against::GroundTruth => "ground_truth",
+            Against::ModelOdometry => "model_odometry",
+        }
+    }
+
+    /// Words after "on N runs": nothing, or what stands in for the ground truth.
+    pub fn words(self) -> &'static str {
+        match self {
+            Against::GroundTruth => "",
+            Against::ModelOdometry => " against the calibrated model's odometry (no ground truth)",
+        }
+    }
+}
+
 /// What to export.
 #[derive(Debug)]
 pub struct Request<'a> {
@@ -120,6 +148,8 @@ pub struct Request<'a> {
     pub spec: &'a str,
     /// Runs to weight the controller fit with and to measure accuracy on (preferably held out).
     pub runs: &'a [Run],
+    /// What the runs' poses are: ground truth, or the model's own odometry.
+    pub against: Against,
     /// Joint names in the model's column order.
     pub wheel_names: Vec<String>,
     /// Controller to fit (default: the one that matches the base).
@@ -148,6 +178,8 @@ pub struct RobotConfig {
     pub design_fit: Option<ControllerFit>,
     /// Number of runs the accuracy is measured on.
     pub n_runs: usize,
+    /// What the accuracy is measured against.
+    pub against: Against,
     /// The design model.
     pub design_accuracy: Accuracy,
     /// The full model (matrix and effects).
@@ -251,6 +283,7 @@ pub fn build(req: &Request<'_>) -> Result<RobotConfig, RobotConfigError> {
         fit,
         design_fit,
         n_runs: req.runs.len(),
+        against: req.against,
         noise: req.noise.clone(),
         motion: typical_motion(&matrix, req.runs),
     })

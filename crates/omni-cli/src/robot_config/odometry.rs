@@ -100,8 +100,13 @@ fn formula_comment(c: &RobotConfig, prefix: &str) -> String {
         if let Some(m) = c.matrix_accuracy {
             let _ = write!(
                 w,
-                " (on {} runs: Eq. 6 {:.5} instead of {:.5}, path RMS {:.5} instead of {:.5})",
-                c.n_runs, m.end_pose, c.model_accuracy.end_pose, m.path_rms, c.model_accuracy.path_rms
+                " (on {} runs{}: Eq. 6 {:.5} instead of {:.5}, path RMS {:.5} instead of {:.5})",
+                c.n_runs,
+                c.against.words(),
+                m.end_pose,
+                c.model_accuracy.end_pose,
+                m.path_rms,
+                c.model_accuracy.path_rms
             );
         }
         line(&format!("{w}:"));

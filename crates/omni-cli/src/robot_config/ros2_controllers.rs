@@ -66,12 +66,20 @@ pub fn accuracy_lines(c: &RobotConfig) -> Vec<String> {
     let row = |label: &str, a: &Accuracy| format!("  {label:<34} {:>10.5} {:>10.5}", a.end_pose, a.path_rms);
     let title = format!("accuracy on the {} runs given:", c.n_runs);
     let mut v = vec![format!("{title:<36} {:>10} {:>10}", "Eq. 6", "path RMS")];
+    if c.against == super::Against::ModelOdometry {
+        v.push("  (the runs have no ground truth: measured against the calibrated model's own odometry)".into());
+    }
     v.push(row("design (uncalibrated)", &c.design_accuracy));
     v.push(row("calibrated model", &c.model_accuracy));
     if let Some(m) = &c.matrix_accuracy {
         v.push(row("its matrix alone (the header)", m));
     }
     v.push(row(c.kind().id(), &c.controller_accuracy));
+    if c.against == super::Against::ModelOdometry {
+        // The model's row is 0 by construction: the controller's row is already what it gives up.
+        v.push("  (the controller's row is its distance from the calibrated model: what it gives up)".into());
+        return v;
+    }
     let (m, k) = (&c.model_accuracy, &c.controller_accuracy);
     v.push(format!(
         "  {:<34} {:>10} {:>10}",
