@@ -24,6 +24,7 @@ use crate::model::{Model, Resolved, StepMode};
 use crate::odometry::{self, Selection};
 use crate::plan::{StepPlan, wheel_speeds};
 use crate::pose::PoseError;
+use crate::position_only;
 use crate::run::Run;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
@@ -180,6 +181,8 @@ pub struct Evaluator<'a> {
     selection: Selection,
     prepared: Option<PreparedRuns>,
     route: Route,
+    /// Whether any run's ground truth is position-only.
+    position_only: bool,
 }
 
 impl<'a> Evaluator<'a> {
@@ -208,7 +211,8 @@ impl<'a> Evaluator<'a> {
             }
             _ => None,
         };
-        Ok(Self { runs, selection, prepared, route })
+        let position_only = runs.iter().any(Run::truth_position_only);
+        Ok(Self { runs, selection, prepared, route, position_only })
     }
 
     /// The runs.
@@ -233,7 +237,22 @@ impl<'a> Evaluator<'a> {
 
     /// Errors at the selected poses and at each run's end.
     pub fn errors(&self, res: &Resolved<'_>) -> RunErrors {
-        self.fast_errors(res).unwrap_or_else(|| self.unprepared_errors(res, self.selection))
+        let e = self.fast_errors(res).unwrap_or_else(|| self.unprepared_errors(res, self.selection));
+        self.aligned(e, self.selection)
+    }
+
+    /// `e` (at the poses of `selection`) with every position-only run's errors aligned by its best start
+    /// rotation ([`crate::position_only`]); the others as they are.
+    fn aligned(&self, mut e: RunErrors, selection: Selection) -> RunErrors {
+        if !self.position_only {
+            return e;
+        }
+        for (i, run) in self.runs.iter().enumerate().filter(|(_, r)| r.truth_position_only()) {
+            let idx = selection.indices(run.truth().len());
+            let (a, b) = (e.offsets[i], e.offsets[i + 1]);
+            position_only::align(run.truth(), &idx, &mut e.errors[a..b], Some(&mut e.ends[i]));
+        }
+        e
     }
 
     /// Errors at the poses of `selection` without the prepared runs: the general fast walk on
@@ -261,6 +280,10 @@ impl<'a> Evaluator<'a> {
 
     /// The end-pose error of every run (the Eq. 6 terms), in run order.
     pub fn end_pose_errors(&self, res: &Resolved<'_>) -> Vec<PoseError> {
+        if self.position_only {
+            // Aligned over the path the evaluator selects.
+            return self.errors(res).ends;
+        }
         if let Some(e) = self.prepared.as_ref().and_then(|p| p.end_pose_errors(res, self.runs)) {
             return e;
         }
@@ -286,7 +309,7 @@ impl<'a> Evaluator<'a> {
         if kind.selection() == self.selection {
             self.errors(res)
         } else {
-            self.unprepared_errors(res, kind.selection())
+            self.aligned(self.unprepared_errors(res, kind.selection()), kind.selection())
         }
     }
 
@@ -304,11 +327,15 @@ impl<'a> Evaluator<'a> {
         let w = kind.heading_weight();
         let n_runs = self.runs.len();
         let mut r = Vec::new();
+        let mut errors = Vec::new();
         prepared.ik_jacobian_rows(res, self.runs, &mut |rows| {
             let k = residual_weights(n_runs, rows.errors.len(), w);
-            r.clear();
-            r.extend(rows.errors.iter().flat_map(|e| [e.dx_m * k[0], e.dy_m * k[1], e.dtheta_rad * k[2]]));
             let (run, jacobian) = (rows.run, rows.jacobian);
+            errors.clear();
+            errors.extend_from_slice(rows.errors);
+            self.align_block(run, &mut errors, jacobian);
+            r.clear();
+            r.extend(errors.iter().flat_map(|e| [e.dx_m * k[0], e.dy_m * k[1], e.dtheta_rad * k[2]]));
             scale_rows(jacobian, &k);
             visit(IkBlock { run, residuals: &r, jacobian, wheel_columns: rows.wheel_columns });
         })
@@ -357,6 +384,7 @@ impl<'a> Evaluator<'a> {
                 .collect();
             for (&(run, _), mut rows) in batch.iter().zip(rows?) {
                 let k = residual_weights(n_runs, rows.errors.len(), w);
+                self.align_block(run, &mut rows.errors, &mut rows.jacobian);
                 r.clear();
                 r.extend(rows.errors.iter().flat_map(|e| [e.dx_m * k[0], e.dy_m * k[1], e.dtheta_rad * k[2]]));
                 scale_rows(&mut rows.jacobian, &k);
@@ -364,6 +392,18 @@ impl<'a> Evaluator<'a> {
             }
         }
         Some(())
+    }
+
+    /// Run `run`'s errors at this selection and their Jacobian (unscaled rows), aligned by its best start
+    /// rotation when its ground truth is position-only ([`crate::position_only`]).
+    fn align_block(&self, run: usize, errors: &mut [PoseError], jacobian: &mut DMatrix<f64>) {
+        let r = &self.runs[run];
+        if !r.truth_position_only() {
+            return;
+        }
+        let idx = self.selection.indices(r.truth().len());
+        let (delta, ra) = position_only::align(r.truth(), &idx, errors, None);
+        position_only::project_jacobian(jacobian, delta, &ra);
     }
 
     /// The route this evaluator may take.

@@ -28,6 +28,7 @@ pub mod noise;
 pub mod odometry;
 pub mod plan;
 pub mod pose;
+pub mod position_only;
 pub mod reference;
 pub mod relative;
 pub mod robot;

@@ -165,7 +165,24 @@ pub fn residuals(res: &Resolved<'_>, run: &Run, selection: Selection) -> Vec<Res
         },
         |_, _| {},
     );
+    if run.truth_position_only() {
+        let mut errors: Vec<PoseError> = out.iter().map(|r| r.error).collect();
+        let (delta, _) = crate::position_only::align(truth, &idx, &mut errors, None);
+        for (r, e) in out.iter_mut().zip(errors) {
+            r.predicted = turned_about_start(run, delta, r.predicted);
+            r.error = e;
+        }
+    }
     out
+}
+
+/// `p` turned by `delta` about the run's start position: a position-only run's path after the start
+/// rotation that lays it best on the measured positions ([`crate::position_only`]).
+fn turned_about_start(run: &Run, delta: f64, p: Pose2) -> Pose2 {
+    let o = run.start().pose;
+    let (s, c) = delta.sin_cos();
+    let (x, y) = (p.x_m - o.x_m, p.y_m - o.y_m);
+    Pose2::new(o.x_m + c * x - s * y, o.y_m + s * x + c * y, p.theta_rad + delta)
 }
 
 /// The error of the predicted pose at the last ground-truth stamp (the term of the paper's Eq. 6).
@@ -184,8 +201,29 @@ pub fn end_pose_error(res: &Resolved<'_>, run: &Run) -> PoseError {
 }
 
 /// The whole odometry path of the measured point, at the sample times from the first to the last
-/// ground-truth stamp.
+/// ground-truth stamp; for a position-only run, turned by the start rotation that lays it best on the
+/// measured positions ([`crate::position_only`]).
 pub fn integrate(res: &Resolved<'_>, run: &Run) -> Trajectory {
+    let mut tr = integrate_from_start(res, run);
+    if run.truth_position_only() {
+        let idx = Selection::Path(1).indices(run.truth().len());
+        let mut errors: Vec<PoseError> = residuals_unaligned(res, run, &idx);
+        let (delta, _) = crate::position_only::align(run.truth(), &idx, &mut errors, None);
+        tr.poses.iter_mut().for_each(|p| *p = turned_about_start(run, delta, *p));
+    }
+    tr
+}
+
+/// The errors of the walk at ground-truth poses `idx`, as walked.
+fn residuals_unaligned(res: &Resolved<'_>, run: &Run, idx: &[usize]) -> Vec<PoseError> {
+    let truth = run.truth();
+    let mut out = Vec::with_capacity(idx.len());
+    walk(res, run, &StepPlan::new(run, res.clock_lag_s, idx), |i, p| out.push(p.error_to(&truth[i].pose)), |_, _| {});
+    out
+}
+
+/// [`integrate`] from the run's start pose as it is.
+fn integrate_from_start(res: &Resolved<'_>, run: &Run) -> Trajectory {
     let mut tr = Trajectory::default();
     walk(
         res,

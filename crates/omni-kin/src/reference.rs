@@ -147,6 +147,7 @@ pub fn with_truth(run: &Run, truth: Vec<StampedPose>, name: String) -> Result<Ru
         repetition: None,
         recorded_odometry: Vec::new(),
         wheel_start_rad,
+        truth_position_only: run.truth_position_only(),
     })
 }
 

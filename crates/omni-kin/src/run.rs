@@ -51,6 +51,10 @@ pub struct RunData {
     /// Wheel angles at the first sample, one per wheel, when the log has them (JointState position). rad.
     /// Empty when unknown.
     pub wheel_start_rad: Vec<f64>,
+    /// The ground truth measures positions only (UWB, GNSS, a tracker without heading): its headings are
+    /// placeholders (set to 0 by [`Run::new`]), never compared, and every cost aligns the run's start heading
+    /// ([`crate::position_only`]).
+    pub truth_position_only: bool,
 }
 
 /// A validated run. Immutable once built; only [`Run::new`] makes one (no `Deserialize`, so nothing can
@@ -66,6 +70,8 @@ pub struct Run {
     repetition: Option<u32>,
     recorded_odometry: Vec<StampedPose>,
     wheel_start_rad: Vec<f64>,
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    truth_position_only: bool,
     /// Median wheel-sample interval, computed once (the integrator needs it on every evaluation). s.
     median_dt_s: f64,
 }
@@ -205,6 +211,9 @@ impl Run {
         d.wheel_rad_s.shrink_to_fit();
         d.truth.shrink_to_fit();
         d.recorded_odometry.shrink_to_fit();
+        if d.truth_position_only {
+            d.truth.iter_mut().for_each(|p| p.pose.theta_rad = 0.0);
+        }
         Ok(Self {
             median_dt_s,
             name: d.name,
@@ -216,6 +225,7 @@ impl Run {
             repetition: d.repetition,
             recorded_odometry: d.recorded_odometry,
             wheel_start_rad: d.wheel_start_rad,
+            truth_position_only: d.truth_position_only,
         })
     }
 
@@ -231,6 +241,7 @@ impl Run {
             repetition: self.repetition,
             recorded_odometry: self.recorded_odometry,
             wheel_start_rad: self.wheel_start_rad,
+            truth_position_only: self.truth_position_only,
         }
     }
 
@@ -292,6 +303,10 @@ impl Run {
     /// Wheel angles at the first sample (empty when unknown). rad.
     pub fn wheel_start_rad(&self) -> &[f64] {
         &self.wheel_start_rad
+    }
+    /// Whether the ground truth measures positions only (its headings are placeholders).
+    pub fn truth_position_only(&self) -> bool {
+        self.truth_position_only
     }
     /// Median wheel-sample interval. s.
     pub fn median_dt_s(&self) -> f64 {

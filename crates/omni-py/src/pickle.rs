@@ -11,7 +11,7 @@ use pyo3::PyResult;
 pub type Reduced<'py, Args> = PyResult<(pyo3::Bound<'py, pyo3::PyAny>, Args)>;
 
 /// The first bytes of a pickled run (format version 1).
-const MAGIC: &[u8; 8] = b"omnrun1\0";
+const MAGIC: &[u8; 8] = b"omnrun2\0";
 
 fn put_f64s(out: &mut Vec<u8>, values: impl IntoIterator<Item = f64>) {
     for v in values {
@@ -59,6 +59,7 @@ pub fn run_to_bytes(run: &Run) -> Vec<u8> {
     put_poses(&mut out, run.truth());
     put_poses(&mut out, run.recorded_odometry());
     put_f64s(&mut out, run.wheel_start_rad().iter().copied());
+    out.push(u8::from(run.truth_position_only()));
     out
 }
 
@@ -132,6 +133,7 @@ pub fn run_from_bytes(bytes: &[u8]) -> PyResult<Run> {
         repetition,
         recorded_odometry: r.poses(n_odometry)?,
         wheel_start_rad: r.f64s(n_start)?,
+        truth_position_only: r.u8()? != 0,
     };
     if !r.0.is_empty() {
         return Err(value_error("pickled run: unexpected bytes after the run"));

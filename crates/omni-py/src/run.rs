@@ -74,6 +74,7 @@ impl PyRun {
             repetition,
             recorded_odometry: Vec::new(),
             wheel_start_rad,
+            truth_position_only: false,
         };
         Ok(Self { inner: Run::new(data).py()? })
     }

@@ -40,6 +40,16 @@ pub fn fit(fitted: &FittedModel, runs: &[Run]) -> Result<Result<OdometryNoise, n
 /// Adds the noise model of a fit to `train`'s summary `s` (`noise`, which the model file holds as `[noise]`),
 /// or a warning when it cannot be fitted.
 pub fn add_to_summary(s: &mut serde_json::Value, fitted: &FittedModel, runs: &[Run]) -> Result<(), KinError> {
+    if runs.iter().any(Run::truth_position_only) {
+        // Its headings and its turning noise need a reference that measures the heading.
+        if let Some(list) = s["warnings"].as_array_mut() {
+            list.push(json!(
+                "no odometry noise model: the reference gives positions only, and the noise model's \
+                             heading terms need a measured heading"
+            ));
+        }
+        return Ok(());
+    }
     match fit(fitted, runs)? {
         Ok(n) => s["noise"] = serde_json::to_value(&n).unwrap_or_default(),
         Err(e) => {

@@ -179,6 +179,10 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     if let Some(w) = &mount {
         tracing::warn!("{w}");
     }
+    let position_only = ds.runs.iter().filter(|r| r.truth_position_only()).count();
+    if position_only > 0 {
+        crate::note!("note: {}", position_only_text(position_only, ds.runs.len()));
+    }
     if a.out.is_none() {
         crate::note!("note: the fitted model was not written (no --out FILE)");
     }
@@ -186,6 +190,17 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         return Err(interrupt::Interrupted.into());
     }
     Ok(())
+}
+
+/// What a reference of positions only (`n` of `total` runs) leaves undetermined.
+pub fn position_only_text(n: usize, total: usize) -> String {
+    format!(
+        "{n} of {total} runs have a reference of positions only (no heading): each run's start heading is fitted \
+         with the model and headings are not compared. Such a reference cannot see the orientation of the body \
+         frame (one rotation of the vx and vy rows, which turns every path about its start as a start heading \
+         does): the fit holds it at the start's forward direction. Turning in place tells nothing either; turning \
+         while driving determines the rotation row"
+    )
 }
 
 /// `train`'s text on stdout: the fit's summary, its noise model, the designs, the priors and where the

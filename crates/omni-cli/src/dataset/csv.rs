@@ -364,6 +364,7 @@ fn parse_run_inner(
         repetition,
         recorded_odometry: odom,
         wheel_start_rad,
+        truth_position_only: false,
     })
     .map_err(|error| {
         // A bad sample or pose is located by its line.
@@ -518,6 +519,7 @@ mod tests {
                 StampedPose { t_s: 0.7, pose: Pose2::new(0.2, -0.1, 0.5) },
             ],
             wheel_start_rad: vec![0.25, 6.0],
+            truth_position_only: false,
         };
         let run = Run::new(d).unwrap();
         let p = dir.path().join("r.csv");

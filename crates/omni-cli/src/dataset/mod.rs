@@ -635,7 +635,11 @@ fn csv_with_gt(p: &Path, opts: &LoadOptions) -> Result<Loaded, DatasetError> {
         clock = Some(c);
         Ok(poses)
     };
-    let run = csv::read_run_with_truth(p, opts.ticks_per_rev, &opts.csv_joints, &mut attach)?;
+    let mut run = csv::read_run_with_truth(p, opts.ticks_per_rev, &opts.csv_joints, &mut attach)?;
+    if ext.position_only {
+        let data = omni_kin::RunData { truth_position_only: true, ..run.into_data() };
+        run = omni_kin::Run::new(data).map_err(|e| DatasetError::file(p, e.to_string()))?;
+    }
     let run = if opts.recorded_odometry { run } else { run.without_recorded_odometry() };
     Ok(Loaded { runs: vec![run], notes, clock, ..Default::default() })
 }

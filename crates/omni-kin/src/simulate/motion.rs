@@ -257,6 +257,7 @@ pub(super) fn simulate_motion(
         repetition: label.map(|(_, r)| r as u32),
         recorded_odometry,
         wheel_start_rad,
+        truth_position_only: false,
     })?;
     Ok(SampledRun { run, base })
 }

@@ -214,7 +214,9 @@ pub enum LoadError {
         yaw_std_rad: f64,
     },
     /// A `--gt-columns` / `--gt-units` setting that is not `KEY=VALUE`.
-    #[error("--gt-columns/--gt-units {setting:?}: expected KEY=VALUE")]
+    #[error(
+        "--gt-columns/--gt-units {setting:?}: expected KEY=VALUE (or, for --gt-columns, the list of columns present: t,x,y for positions only)"
+    )]
     NotKeyValue {
         /// The setting as given.
         setting: String,

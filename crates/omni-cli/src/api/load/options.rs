@@ -170,10 +170,19 @@ pub(super) fn ground_truth_options(
         columns.extend(g.columns.iter().map(|(k, v)| (k.clone(), v.clone())));
         units.extend(g.units.iter().map(|(k, v)| (k.clone(), v.clone())));
     }
-    if let Some(kv) = data.gt_columns.iter().chain(&data.gt_units).find(|kv| !kv.contains('=')) {
+    // `--gt-columns t,x,y`: the columns present, by their default names; without `yaw`, positions only.
+    let is_listed = |kv: &String| ["t", "x", "y", "yaw"].contains(&kv.trim());
+    let listed: Vec<&String> = data.gt_columns.iter().filter(|kv| is_listed(kv)).collect();
+    if let Some(kv) =
+        data.gt_columns.iter().filter(|kv| !is_listed(kv)).chain(&data.gt_units).find(|kv| !kv.contains('='))
+    {
         return Err(LoadError::NotKeyValue { setting: kv.clone() });
     }
     columns.extend(settings(&data.gt_columns));
+    let yaw_named = listed.iter().any(|k| k.trim() == "yaw") || columns.iter().any(|(k, _)| k == "yaw");
+    if !listed.is_empty() && !yaw_named {
+        columns.push(("yaw".into(), dataset::ground_truth::CsvColumns::NO_HEADING.into()));
+    }
     units.extend(settings(&data.gt_units));
     for (k, v) in &columns {
         csv.set_column(k, v)?;

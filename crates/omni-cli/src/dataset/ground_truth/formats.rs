@@ -63,8 +63,11 @@ pub(super) fn read_csv(
         })
     };
     let (ti, xi, yi) = (need(&cols.t, "time")?, need(&cols.x, "x position")?, need(&cols.y, "y position")?);
+    let quaternion = ["qx", "qy", "qz", "qw"];
     let heading = match find(&cols.yaw) {
+        _ if cols.yaw == CsvColumns::NO_HEADING => Heading::None,
         Some(i) => Heading::Yaw(i),
+        None if quaternion.iter().all(|q| find(q).is_none()) => Heading::None,
         None => Heading::Quaternion([
             need("qx", "heading")?,
             need("qy", "heading")?,
@@ -83,6 +86,8 @@ pub(super) fn read_csv(
         let x = finite(path, &at(xi), field(xi))? * cols.m_per_length_unit;
         let y = finite(path, &at(yi), field(yi))? * cols.m_per_length_unit;
         let yaw = match heading {
+            // Marks a position-only file for `read_file`, which sets the headings to 0.
+            Heading::None => f64::NAN,
             Heading::Yaw(i) => finite(path, &at(i), field(i))? * cols.rad_per_angle_unit,
             Heading::Quaternion(q) => {
                 let mut v = [0.0; 4];
@@ -100,6 +105,8 @@ pub(super) fn read_csv(
 
 #[derive(Clone, Copy)]
 enum Heading {
+    /// Positions only.
+    None,
     Yaw(usize),
     Quaternion([usize; 4]),
 }

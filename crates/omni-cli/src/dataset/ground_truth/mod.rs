@@ -44,7 +44,7 @@ pub struct TruthSample {
     pub x_m: f64,
     /// Position. m.
     pub y_m: f64,
-    /// Heading, unwrapped. rad.
+    /// Heading, unwrapped. rad. 0 in a position-only file ([`ExternalTruth::position_only`]).
     pub yaw_rad: f64,
 }
 
@@ -60,6 +60,9 @@ pub struct ExternalTruth {
     /// When no file of a `--gt` folder is named after the recording: every file of the folder, read, to be
     /// matched to each run by time overlap ([`ExternalTruth::overlapping`]). Empty otherwise.
     pub by_time: Vec<(PathBuf, Vec<TruthSample>)>,
+    /// The file gives positions without a heading (UWB, GNSS, a tracker without heading: a CSV with no
+    /// heading column, or `--gt-columns t,x,y`); its headings are 0 and never compared.
+    pub position_only: bool,
 }
 
 /// The share of a run's span a ground-truth file must cover to be matched to it by time.
@@ -83,6 +86,7 @@ impl ExternalTruth {
                     samples: samples.clone(),
                     time_offset_s: self.time_offset_s,
                     by_time: vec![],
+                    position_only: self.position_only,
                 },
                 share,
             )),
@@ -132,6 +136,8 @@ pub enum Kept {
     Unclear,
     /// It is clear but longer than the recording while the stamps overlap as recorded.
     Implausible,
+    /// There is none: the file gives positions only, and the estimate needs a heading.
+    PositionOnly,
 }
 
 impl GtClock {
@@ -144,6 +150,11 @@ impl GtClock {
             self.offset_s
         );
         match &self.estimate {
+            None if self.kept == Some(Kept::PositionOnly) => format!(
+                "{head}: stamps kept as recorded, since a file of positions only gives no heading to estimate the \
+                 offset with; give it with --gt-time-offset SECONDS if the clocks differ (diagnose names a clock \
+                 offset that the path shows)"
+            ),
             None => format!("{head} (forced; wheel time = ground-truth time + offset)"),
             Some(a) if self.kept.is_some() => format!(
                 "{head}: stamps kept as recorded, since the estimate, {:+.4} s ± {:.2} ms explaining {:.1} % of the \
@@ -218,10 +229,15 @@ pub fn read_for(opts: &GroundTruthOptions, recording: &Path, name: &str) -> Resu
     let path = match file_for(opts, recording, name) {
         Ok(path) => path,
         Err(e) => {
+            let mut position_only = false;
             let by_time = folder_files(&opts.path)
                 .into_iter()
-                .map(|p| read(&p, &opts.csv).map(|s| (p, s)))
-                .collect::<Result<Vec<_>, _>>()?;
+                .map(|p| {
+                    let (samples, positions) = read_file(&p, &opts.csv)?;
+                    position_only |= positions;
+                    Ok((p, samples))
+                })
+                .collect::<Result<Vec<_>, DatasetError>>()?;
             if by_time.is_empty() {
                 return Err(e);
             }
@@ -230,11 +246,12 @@ pub fn read_for(opts: &GroundTruthOptions, recording: &Path, name: &str) -> Resu
                 samples: vec![],
                 time_offset_s: opts.time_offset_s,
                 by_time,
+                position_only,
             });
         }
     };
-    let samples = read(&path, &opts.csv)?;
-    Ok(ExternalTruth { path, samples, time_offset_s: opts.time_offset_s, by_time: vec![] })
+    let (samples, position_only) = read_file(&path, &opts.csv)?;
+    Ok(ExternalTruth { path, samples, time_offset_s: opts.time_offset_s, by_time: vec![], position_only })
 }
 
 /// The ground-truth files (`.tum`, `.txt`, `.csv`) of a folder, sorted; none when it is not a folder.
@@ -252,18 +269,27 @@ fn folder_files(dir: &Path) -> Vec<PathBuf> {
 
 /// Reads a ground-truth file (TUM or CSV, by extension).
 pub fn read(path: &Path, csv: &CsvColumns) -> Result<Vec<TruthSample>, DatasetError> {
+    Ok(read_file(path, csv)?.0)
+}
+
+/// [`read`], and whether the file gives positions only (a CSV without a heading; headings 0).
+pub fn read_file(path: &Path, csv: &CsvColumns) -> Result<(Vec<TruthSample>, bool), DatasetError> {
     let text = super::read_text(path)?;
     let mut uprights = Vec::new();
     let (mut samples, hint) = match path.extension().and_then(|e| e.to_str()) {
         Some("csv") => (read_csv(path, &text, csv, &mut uprights)?, "--gt-units length=mm (or cm)"),
         _ => (read_tum(path, &text, &mut uprights)?, "a TUM file holds metres: convert it"),
     };
+    let position_only = samples.iter().any(|s| s.yaw_rad.is_nan());
+    if position_only {
+        samples.iter_mut().for_each(|s| s.yaw_rad = 0.0);
+    }
     if samples.len() < 2 {
         return Err(DatasetError::file(path, format!("has {} poses; at least 2 are needed", samples.len())));
     }
     plausible(path, &samples, &uprights, hint)?;
     unwrap_yaw(&mut samples);
-    Ok(samples)
+    Ok((samples, position_only))
 }
 
 /// Fastest plausible ground robot, as the 90th percentile of the speeds between poses. m/s.

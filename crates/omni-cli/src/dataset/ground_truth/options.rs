@@ -68,7 +68,8 @@ pub struct CsvColumns {
     pub x: String,
     /// y column. Default `y`.
     pub y: String,
-    /// Heading column; when the header has no such column, a quaternion `qx`, `qy`, `qz`, `qw` is read.
+    /// Heading column; when the header has no such column, a quaternion `qx`, `qy`, `qz`, `qw` is read, and
+    /// when it has neither, or this is [`CsvColumns::NO_HEADING`], the file gives positions only.
     /// Default `yaw`.
     pub yaw: String,
     /// Unit of the time column. Default s.
@@ -94,6 +95,10 @@ impl Default for CsvColumns {
 }
 
 impl CsvColumns {
+    /// The heading column's name for a file without a heading (`--gt-columns yaw=none`, or a list of
+    /// columns without `yaw`: `--gt-columns t,x,y`).
+    pub const NO_HEADING: &'static str = "none";
+
     /// Sets a column name: `t`, `x`, `y` or `yaw` (as in `--gt-columns t=stamp_ns`).
     pub fn set_column(&mut self, key: &str, name: &str) -> Result<(), CsvColumnsError> {
         let slot = match key {

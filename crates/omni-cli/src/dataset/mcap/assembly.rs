@@ -135,6 +135,8 @@ struct Streams {
     odometry: Vec<StampedPose>,
     commands: Option<Commands>,
     joints_topic: String,
+    /// The ground truth gives positions only.
+    position_only: bool,
 }
 
 impl Streams {
@@ -176,6 +178,7 @@ impl Streams {
                     .as_ref()
                     .map(|pos| pos[lo * n_wheels..(lo + 1) * n_wheels].to_vec())
                     .unwrap_or_default(),
+                truth_position_only: self.position_only,
             };
             out.push((name, Run::new(data).map_err(|e| self.run_error(path, lo, e))));
         }
@@ -302,7 +305,8 @@ pub(crate) fn runs(
     };
 
     // Runs.
-    let streams = Streams { t_s, wheels, truth, odometry, commands, joints_topic };
+    let position_only = external.is_some_and(|e| e.position_only);
+    let streams = Streams { t_s, wheels, truth, odometry, commands, joints_topic, position_only };
     let mut out = McapRead { runs: Vec::new(), notes, skipped: Vec::new(), origin_s, ground_truth_clock: clock };
     for (name, run) in streams.runs(path, stem, opts) {
         match run {
@@ -421,6 +425,23 @@ fn external_truth(
     if let Some(offset_s) = ext.time_offset_s {
         let poses = ext.samples.iter().map(|s| pose(s, seconds_since(s.t_ns, origin_s) + offset_s)).collect();
         return Ok((poses, clock(offset_s, None)));
+    }
+    if ext.position_only {
+        // The estimate compares body velocities, which need a heading: keep the stamps as recorded.
+        let poses: Vec<StampedPose> = ext.samples.iter().map(|s| pose(s, seconds_since(s.t_ns, origin_s))).collect();
+        let (w0, w1) = (t_s[0], t_s[t_s.len() - 1]);
+        let (g0, g1) = (poses[0].t_s, poses[poses.len() - 1].t_s);
+        if w1.min(g1) <= w0.max(g0) {
+            return Err(DatasetError::Clock {
+                path: ext.path.clone(),
+                message: format!(
+                    "gives positions only, so its clock cannot be estimated from the wheels (that needs a heading), \
+                 and its stamps ({g0:.3}..{g1:.3} s) do not overlap the wheel data's ({w0:.3}..{w1:.3} s) of \
+                 recording {recording:?} as recorded; give the offset with --gt-time-offset SECONDS"
+                ),
+            });
+        }
+        return Ok((poses, GtClock { kept: Some(Kept::PositionOnly), ..clock(0.0, None) }));
     }
     // The truth's times relative to its own first whole second (small numbers for the estimate).
     let truth_origin_s = ext.samples.first().map_or(0, |s| s.t_ns.div_euclid(NS_PER_S));
