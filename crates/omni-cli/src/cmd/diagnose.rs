@@ -211,8 +211,8 @@ pub fn print_diagnosis(d: &Diagnosis) {
             text::percent_1(c.held_out_gain),
             text::percent_1(c.first_order_explained),
             if c.absorbed { "absorbed".to_string() } else { format!("{:.2}", c.separability) },
-            if c.absorbed { "equivalent " } else { "" },
-            params.join(", ")
+            if c.absorbed { "its value undetermined (the model absorbs it)" } else { "" },
+            if c.absorbed { String::new() } else { params.join(", ") }
         );
     }
     if let Some(k) = &d.kind_out {

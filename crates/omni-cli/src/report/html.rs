@@ -254,8 +254,8 @@ fn ranking_table(h: &mut String, d: &Diagnosis) {
             pct(c.held_out_gain),
             pct(c.first_order_explained),
             if c.absorbed { "absorbed".into() } else { format!("{:.2}", c.separability) },
-            if c.absorbed { "equivalent to " } else { "" },
-            escape(&params.join(", "))
+            if c.absorbed { "its value undetermined (the model absorbs it)" } else { "" },
+            if c.absorbed { String::new() } else { escape(&params.join(", ")) }
         );
     }
     h.push_str("</table>\n");

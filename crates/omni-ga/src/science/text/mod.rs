@@ -119,13 +119,10 @@ pub fn finding(f: &Finding) -> String {
         Finding::ErrorGrowth { early_m, late_m } => {
             format!("position error grows from {early_m:.4} m early to {late_m:.4} m late in the runs")
         }
-        Finding::Absorbed { effect, implied } => {
-            let vals: Vec<String> = implied.iter().map(|p| format!("{} = {:.4} {}", p.name, p.value, p.unit)).collect();
-            format!(
-                "{effect}: indistinguishable from the model on these runs (absorbed by it, or not excited: equivalent {})",
-                vals.join(", ")
-            )
-        }
+        // No "equivalent" value: the runs cannot tell the effect's value from a change of the model (issue 45).
+        Finding::Absorbed { effect, .. } => format!(
+            "{effect}: indistinguishable from the model on these runs (absorbed by it: they cannot tell its value from a change of the model's parameters; runs that excite it differently would)"
+        ),
         Finding::NotExcited { effect, gap } => {
             format!("{effect}: not tested, the training runs do not excite it ({})", excitation_gap(gap))
         }
