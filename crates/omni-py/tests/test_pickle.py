@@ -53,7 +53,7 @@ def test_run_round_trip_is_exact(runs: list[omnical.Run]) -> None:
 
 def test_corrupt_run_bytes_are_refused() -> None:
     with pytest.raises(ValueError, match="pickled run: the data ends early"):
-        omnical._omnical._run_from_bytes(b"omnrun1\0" + b"\x01")
+        omnical._omnical._run_from_bytes(b"omnrun2\0" + b"\x01")
     with pytest.raises(ValueError, match="not a run written by this version"):
         omnical._omnical._run_from_bytes(b"nonsense" * 4)
 
