@@ -305,9 +305,27 @@ pub(crate) fn runs(
     };
 
     // Runs.
-    let position_only = external.is_some_and(|e| e.position_only);
-    let streams = Streams { t_s, wheels, truth, odometry, commands, joints_topic, position_only };
-    let mut out = McapRead { runs: Vec::new(), notes, skipped: Vec::new(), origin_s, ground_truth_clock: clock };
+    let streams = Streams {
+        t_s,
+        wheels,
+        truth,
+        odometry,
+        commands,
+        joints_topic,
+        position_only: external.is_some_and(|e| e.position_only),
+    };
+    let out = McapRead { runs: Vec::new(), notes, skipped: Vec::new(), origin_s, ground_truth_clock: clock };
+    with_runs(out, &streams, (path, stem), opts)
+}
+
+/// `out` with the runs cut from `streams` (those refused listed as skipped under `skip_invalid`) and the
+/// note on a fixed-length cut.
+fn with_runs(
+    mut out: McapRead,
+    streams: &Streams,
+    (path, stem): (&Path, &str),
+    opts: &McapOptions,
+) -> Result<McapRead, DatasetError> {
     for (name, run) in streams.runs(path, stem, opts) {
         match run {
             Ok(run) => out.runs.push(run),
