@@ -215,6 +215,14 @@ pub fn print_diagnosis(d: &Diagnosis) {
             if c.absorbed { String::new() } else { params.join(", ") }
         );
     }
+    if let Some(k) = &d.held_out_kinds {
+        let folds: Vec<String> = k
+            .folds
+            .iter()
+            .map(|(kind, b, a)| format!("{kind} {b:.4} → {a:.4} m ({:+.1} %)", 100.0 * (a - b) / b.max(1e-300)))
+            .collect();
+        println!("   {} on the held-out runs by kind of path: {}", k.effect, folds.join(", "));
+    }
     if let Some(k) = &d.kind_out {
         let folds: Vec<String> = k.folds.iter().map(|(kind, b, a)| format!("{kind} {b:.4} → {a:.4} m")).collect();
         println!(

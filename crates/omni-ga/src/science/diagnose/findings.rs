@@ -104,6 +104,14 @@ pub enum Conclusion {
     /// No catalogued effect helps.
     #[default]
     Nothing,
+    /// The best effect's refit hurts a kind of held-out path (more than 2 % worse on one kind): the term
+    /// depends on the motion.
+    HurtsKinds {
+        /// Effect id.
+        effect: String,
+        /// Per kind of path: (kind, held-out path RMS without it, with it). m.
+        folds: Vec<(String, f64, f64)>,
+    },
     /// The best effect helps on repeats of the training paths but not on kinds of path left out of its fit.
     NotOnNewKinds {
         /// Effect id.
@@ -196,6 +204,8 @@ pub(super) struct Judgement<'a> {
     pub verdict: Option<&'a str>,
     /// The left-out-kinds check of the winner, when it ran.
     pub kind_check: Option<&'a KindOut>,
+    /// The winner's refit on the held-out runs by kind of path.
+    pub held_kinds: Option<&'a KindOut>,
     /// Costs of the model as given.
     pub costs: &'a Costs,
     /// Costs at the ladder's top.
@@ -214,7 +224,12 @@ impl Judgement<'_> {
     /// The verdict as facts.
     pub(super) fn verdict(&self, opts: &DiagnoseOptions) -> Verdict {
         let best = self.ranking.first();
-        let conclusion = match (self.kind_check.filter(|k| k.gain < 0.0), self.verdict, best) {
+        let hurting = self.held_kinds.filter(|k| self.verdict.is_none() && super::search::hurts_a_kind(k));
+        let conclusion = match (self.kind_check.filter(|k| super::search::hurts_a_kind(k)), self.verdict, best) {
+            _ if hurting.is_some() => {
+                let k = hurting.map_or_else(KindOut::default, Clone::clone);
+                Conclusion::HurtsKinds { effect: k.effect, folds: k.folds }
+            }
             (Some(k), _, _) => Conclusion::NotOnNewKinds { effect: k.effect.clone(), gain: k.gain },
             (None, Some(v), Some(c)) => Conclusion::Add {
                 effect: v.to_string(),

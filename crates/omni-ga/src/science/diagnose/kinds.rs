@@ -68,15 +68,20 @@ impl MotionKind {
         self.shape != Shape::Free
     }
 
-    /// `square-like, turning right, ~0.2 m/s, ~4 m`.
-    pub fn label(&self) -> String {
-        let shape = match self.shape {
+    /// The shape in words: `straight`, `turning on the spot`, `sides then turns`, `arcs`, `free`.
+    pub fn shape_label(&self) -> &'static str {
+        match self.shape {
             Shape::Straight => "straight",
             Shape::Spin => "turning on the spot",
             Shape::TranslateThenTurn => "sides then turns",
             Shape::Arc => "arcs",
             Shape::Free => "free",
-        };
+        }
+    }
+
+    /// `square-like, turning right, ~0.2 m/s, ~4 m`.
+    pub fn label(&self) -> String {
+        let shape = self.shape_label();
         let turn = match self.turn {
             Turn::Straight => "no net turn",
             Turn::Left => "net turn left",

@@ -36,7 +36,7 @@ mod evidence;
 mod findings;
 mod kinds;
 mod noise;
-mod search;
+pub(crate) mod search;
 mod unexplained;
 
 pub use clock::{ClockLag, clock_lag};
@@ -58,7 +58,7 @@ use evidence::{Bench, candidate_effect};
 use findings::{Judgement, findings};
 use noise::repeatability_floor;
 use omni_kin::{EffectKind, FittedModel, Run, RunModels, ToRunModels};
-use search::{confident, kind_out, passes};
+use search::{confident, held_out_kinds, hurts_a_kind, kind_out, passes};
 use serde::{Deserialize, Serialize};
 
 /// Diagnosis settings.
@@ -218,7 +218,7 @@ pub struct ParamValue {
 }
 
 /// A candidate judged on whole kinds of path it was not fitted on.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct KindOut {
     /// Effect id.
     pub effect: String,
@@ -307,6 +307,10 @@ pub struct Diagnosis {
     /// The verdict's effect validated on kinds of path left out of its fit (straight, turning left,
     /// turning right), when the runs have several kinds.
     pub kind_out: Option<KindOut>,
+    /// The best candidate's refit on the held-out runs by the shape of their paths (straight, turning on
+    /// the spot, sides then turns, arcs, free): it is not recommended when it hurts one
+    /// (`hurts_a_kind`: a kind more than 2 % worse, or the kinds pooled worse).
+    pub held_out_kinds: Option<KindOut>,
     /// The training runs' motions against the held-out runs' (with a validation set): what the training
     /// runs lack.
     pub coverage: Option<MotionCoverage>,
@@ -388,27 +392,32 @@ fn split_held_out(train: &[Run]) -> (Vec<Run>, Vec<Run>) {
 fn recommend(
     model: &FittedModel,
     ranking: &[Candidate],
-    train: &[Run],
+    (train, held): (&[Run], &[Run]),
     every: usize,
     opts: &DiagnoseOptions,
 ) -> Result<Recommendation, Error> {
     // A clock offset between the wheels and the reference, measured without a model.
     let lag = clock::clock_lag(train);
     let Some(winner) = ranking.first().filter(|c| passes(c, opts) && confident(c, opts)) else {
-        return Ok(Recommendation { effect: None, kind_check: None, lag });
+        return Ok(Recommendation { effect: None, kind_check: None, held_kinds: None, lag });
     };
+    // Transfer is part of passing: the winner's own refit must not hurt a kind of held-out path.
+    let held_kinds = held_out_kinds(model, winner, held, every)?;
+    if held_kinds.as_ref().is_some_and(hurts_a_kind) {
+        return Ok(Recommendation { effect: None, kind_check: None, held_kinds, lag });
+    }
     let confirmed = lag.as_ref().is_some_and(|l| {
         winner.effect == "time_offset"
             && l.named()
             && winner.params.first().is_some_and(|p| l.confirms(p.value, p.std_error))
     });
     if confirmed {
-        return Ok(Recommendation { effect: Some(winner.effect.clone()), kind_check: None, lag });
+        return Ok(Recommendation { effect: Some(winner.effect.clone()), kind_check: None, held_kinds, lag });
     }
     let effect = candidate_effect(&winner.effect, model.model.n_wheels(), opts)?;
     let kind_check = kind_out(model, &effect, train, every)?;
-    let failed = kind_check.as_ref().is_some_and(|k| k.gain < 0.0);
-    Ok(Recommendation { effect: (!failed).then(|| winner.effect.clone()), kind_check, lag })
+    let failed = kind_check.as_ref().is_some_and(hurts_a_kind);
+    Ok(Recommendation { effect: (!failed).then(|| winner.effect.clone()), kind_check, held_kinds, lag })
 }
 
 /// What [`recommend`] decides: the effect, the left-out-kinds check when it ran, and the model-free clock
@@ -416,6 +425,7 @@ fn recommend(
 struct Recommendation {
     effect: Option<String>,
     kind_check: Option<KindOut>,
+    held_kinds: Option<KindOut>,
     lag: Option<ClockLag>,
 }
 
@@ -501,7 +511,8 @@ pub fn diagnose(
     let base_fit = if protocol == HeldOut::CrossValidation { BaseFit::OtherRuns } else { BaseFit::TheseRuns };
     let bench = Bench { design, fit_runs: &fit_runs, held_runs: &held_runs, every, noise: noise.as_ref(), base_fit };
     let climb = search::climb(&bench, model, &costs, &design_costs, opts)?;
-    let Recommendation { effect: verdict, kind_check, lag } = recommend(model, &climb.ranking, train, every, opts)?;
+    let Recommendation { effect: verdict, kind_check, held_kinds, lag } =
+        recommend(model, &climb.ranking, (train, &held_runs), every, opts)?;
     // What the runs constrain in the model as given, and where it fails.
     let identifiability = unbounded(&model.model, &fit_runs, every)
         .ok()
@@ -523,6 +534,7 @@ pub fn diagnose(
         ranking: &climb.ranking,
         verdict: verdict.as_deref(),
         kind_check: kind_check.as_ref(),
+        held_kinds: held_kinds.as_ref(),
         costs: &costs,
         top: climb.ladder.last().map_or(&costs, |r| &r.costs),
         noise: noise.as_ref(),
@@ -549,6 +561,7 @@ pub fn diagnose(
         identifiability,
         repeatability_floor: repeat_floor,
         kind_out: kind_check,
+        held_out_kinds: held_kinds,
         coverage,
         final_model: Some(climb.top),
         protocol,

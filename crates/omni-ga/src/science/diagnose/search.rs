@@ -3,6 +3,7 @@
 
 use super::compare::{Turn, costs_of, path_kind};
 use super::evidence::{Bench, candidate_effect, refit_on};
+use super::kinds::MotionKind;
 use super::{Candidate, Costs, DiagnoseOptions, KindOut, Rung, RungKind};
 use crate::error::Error;
 use crate::fit::BaseFit;
@@ -64,7 +65,13 @@ pub(super) fn climb(
     let mut eligible: Option<Vec<String>> = None;
     loop {
         let ranking = rank(bench, &current, &current_costs, opts, eligible.as_deref())?;
-        let best = ranking.first().filter(|c| passes(c, opts)).cloned();
+        // The best passing candidate, unless it hurts a kind of held-out path (then none is added).
+        let best = match ranking.first().filter(|c| passes(c, opts)) {
+            Some(c) if held_out_kinds(&current, c, bench.held_runs, bench.every)?.is_some_and(|k| hurts_a_kind(&k)) => {
+                None
+            }
+            best => best.cloned(),
+        };
         eligible = Some(ranking.iter().filter(|c| worth_retrying(c)).map(|c| c.effect.clone()).collect());
         if first_ranking.is_none() {
             first_ranking = Some(ranking);
@@ -124,6 +131,51 @@ fn rank(
     let mut ranking = assessed.into_iter().collect::<Result<Vec<_>, _>>()?;
     ranking.sort_by(|a, b| b.held_out_gain.total_cmp(&a.held_out_gain));
     Ok(ranking)
+}
+
+/// The largest rise of the path RMS on one kind of path that an effect may cause and still pass: issue 45's
+/// "no motion kind gets worse by more than 2 %".
+pub const TRANSFER_TOLERANCE: f64 = 0.02;
+
+/// Whether a kinds check finds the effect hurting: the kinds' pooled path cost rises, or one kind's path
+/// RMS rises by more than [`TRANSFER_TOLERANCE`]. The one test of transfer for `diagnose`, its verdict and
+/// `--auto`.
+pub fn hurts_a_kind(k: &KindOut) -> bool {
+    k.gain < 0.0 || k.folds.iter().any(|(_, before, after)| *after > before * (1.0 + TRANSFER_TOLERANCE))
+}
+
+/// `candidate`'s refit against `model` on the held-out runs, by the shape of their paths (straight, turning
+/// on the spot, sides then turns, arcs, free driving; from each run's ground truth): the per-kind path RMS
+/// before and after, and the pooled gain. No refit: the candidate's own, judged on motions that may differ
+/// from the ones it was fitted on. `None` without a refit or when no held-out run has a kind.
+pub(super) fn held_out_kinds(
+    model: &FittedModel,
+    candidate: &Candidate,
+    held: &[Run],
+    every: usize,
+) -> Result<Option<KindOut>, Error> {
+    let Some(fitted) = candidate.fitted.as_ref() else { return Ok(None) };
+    let mut kinds: Vec<(&'static str, Vec<Run>)> = Vec::new();
+    for r in held {
+        let Some(k) = MotionKind::of(r) else { continue };
+        match kinds.iter_mut().find(|(label, _)| *label == k.shape_label()) {
+            Some((_, runs)) => runs.push(r.clone()),
+            None => kinds.push((k.shape_label(), vec![r.clone()])),
+        }
+    }
+    if kinds.is_empty() {
+        return Ok(None);
+    }
+    kinds.sort_by_key(|(label, _)| *label);
+    let mut folds = Vec::with_capacity(kinds.len());
+    for (label, runs) in &kinds {
+        let b = cost::cost(&model.model, &model.params, runs, path_kind(every))?;
+        let a = cost::cost(&fitted.model, &fitted.params, runs, path_kind(every))?;
+        folds.push((format!("{label} ({})", runs.len()), b, a));
+    }
+    let before: f64 = folds.iter().map(|f| f.1 * f.1).sum();
+    let after: f64 = folds.iter().map(|f| f.2 * f.2).sum();
+    Ok(Some(KindOut { effect: candidate.effect.clone(), folds, gain: 1.0 - (after / before.max(1e-300)).sqrt() }))
 }
 
 /// Fit `model + effect` on all kinds of path but one and compare path costs on the kind left out (`None`
