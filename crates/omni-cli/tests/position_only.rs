@@ -172,3 +172,45 @@ fn position_only_columns_can_be_named_and_a_clock_they_cannot_estimate_is_refuse
     );
     assert!(stderr(&e).contains("give the offset with --gt-time-offset SECONDS"), "{}", stderr(&e));
 }
+
+/// GNSS or UWB exported to TUM writes a fixed orientation (an identity quaternion) beside its positions:
+/// a heading that never changes while the robot moves is read as none, not as a robot that never turns.
+#[test]
+fn a_tum_file_whose_heading_never_changes_is_read_as_positions_only() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let sim = ["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "3", "--format", "csv"];
+    succeeded_on_two_threads(&sim, dir);
+    split(dir, "validation");
+    let tum = dir.join("d/validation/tum");
+    std::fs::create_dir_all(&tum).unwrap();
+    for entry in std::fs::read_dir(dir.join("d/validation/gt")).unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let rows: Vec<String> =
+            text.lines().skip(1).map(|l| format!("{} 0 0 0 1", l.replace(',', " ") + " 0")).collect();
+        std::fs::write(tum.join(path.file_stem().unwrap()).with_extension("tum"), rows.join("\n")).unwrap();
+    }
+    let opts = LoadOptions {
+        ground_truth: Some(GroundTruthOptions { path: tum.clone(), ..Default::default() }),
+        ..Default::default()
+    };
+    let ds = dataset::load(&[dir.join("d/validation/wheels")], &opts).unwrap();
+    assert_eq!(ds.runs.len(), 36);
+    assert!(ds.runs.iter().all(omni_kin::Run::truth_position_only));
+    assert!(
+        ds.ground_truth_clocks.iter().all(|c| c.kept == Some(Kept::PositionOnly)),
+        "{:?}",
+        ds.ground_truth_clocks[0]
+    );
+    // The matrix that made the runs (Eq. 9) lies on these positions within millimetres (the path cost, each
+    // run's start heading aligned); the design (Eq. 7) is several times further off.
+    let path_cost = |model: &str| {
+        let args =
+            ["--threads", "2", "eval", "--model", model, "d/validation/wheels", "--gt", "d/validation/tum", "--json"];
+        let v: serde_json::Value = serde_json::from_str(&support::stdout(&support::succeeded(&args, dir))).unwrap();
+        v["path_cost"].as_f64().unwrap_or_else(|| panic!("{v}"))
+    };
+    let (paper, design) = (path_cost("paper"), path_cost("design"));
+    assert!(paper < 0.006 && design > 3.0 * paper, "paper {paper}, design {design}");
+}

@@ -18,6 +18,29 @@
 use crate::pose::{PoseError, StampedPose};
 use nalgebra::DMatrix;
 
+/// Poses a reference must have, at least, before a heading that never changes says it measures none.
+pub const MIN_POSES_FOR_CONSTANT_HEADING: usize = 10;
+/// Distance a reference must span, at least, before a heading that never changes says it measures none. m.
+pub const MIN_SPAN_FOR_CONSTANT_HEADING_M: f64 = 0.1;
+
+/// Whether a reference's headings (rad) are all exactly the first while its positions (m) span more than
+/// [`MIN_SPAN_FOR_CONSTANT_HEADING_M`] over at least [`MIN_POSES_FOR_CONSTANT_HEADING`] poses: a tracker, UWB
+/// or GNSS that writes a fixed orientation (an identity quaternion) beside its positions. A measured heading
+/// is never bit-for-bit constant while the robot moves (its noise alone changes it).
+pub fn heading_never_changes(poses: impl Iterator<Item = (f64, f64, f64)> + Clone) -> bool {
+    let mut first = None;
+    let (mut n, mut span) = (0usize, 0.0f64);
+    for (x, y, theta) in poses {
+        let (x0, y0, t0) = *first.get_or_insert((x, y, theta));
+        if theta != t0 {
+            return false;
+        }
+        span = span.max((x - x0).hypot(y - y0));
+        n += 1;
+    }
+    n >= MIN_POSES_FOR_CONSTANT_HEADING && span > MIN_SPAN_FOR_CONSTANT_HEADING_M
+}
+
 /// The start rotation that best lays `errors` (at the ground-truth poses `idx` of `truth`) on the measured
 /// positions, and the vectors `a` (predicted positions less the start) it rotates. rad.
 fn rotation(truth: &[StampedPose], idx: &[usize], errors: &[PoseError]) -> (f64, Vec<[f64; 2]>) {
@@ -108,6 +131,15 @@ mod tests {
             .enumerate()
             .map(|(k, p)| StampedPose { t_s: k as f64, pose: Pose2::new(p[0], p[1], 0.0) })
             .collect()
+    }
+
+    #[test]
+    fn a_heading_that_never_changes_while_the_robot_moves_is_none() {
+        let line = |theta: fn(usize) -> f64| (0..20).map(move |k| (0.05 * k as f64, 0.0, theta(k)));
+        assert!(heading_never_changes(line(|_| 0.0)));
+        assert!(!heading_never_changes(line(|k| if k == 7 { 1e-12 } else { 0.0 })), "noise is a measurement");
+        assert!(!heading_never_changes((0..20).map(|_| (0.0, 0.0, 0.3))), "standing still says nothing");
+        assert!(!heading_never_changes(line(|_| 0.0).take(5)), "too few poses");
     }
 
     /// A predicted path that is the measured one turned by 0.3 rad about the start aligns to zero error.

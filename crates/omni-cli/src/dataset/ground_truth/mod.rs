@@ -151,9 +151,9 @@ impl GtClock {
         );
         match &self.estimate {
             None if self.kept == Some(Kept::PositionOnly) => format!(
-                "{head}: stamps kept as recorded, since a file of positions only gives no heading to estimate the \
-                 offset with; give it with --gt-time-offset SECONDS if the clocks differ (diagnose names a clock \
-                 offset that the path shows)"
+                "{head}: stamps kept as recorded, since a file of positions only (no heading column, or a heading \
+                 that never changes) gives no heading to estimate the offset with; give it with --gt-time-offset \
+                 SECONDS if the clocks differ (diagnose names a clock offset that the path shows)"
             ),
             None => format!("{head} (forced; wheel time = ground-truth time + offset)"),
             Some(a) if self.kept.is_some() => format!(
@@ -280,7 +280,9 @@ pub fn read_file(path: &Path, csv: &CsvColumns) -> Result<(Vec<TruthSample>, boo
         Some("csv") => (read_csv(path, &text, csv, &mut uprights)?, "--gt-units length=mm (or cm)"),
         _ => (read_tum(path, &text, &mut uprights)?, "a TUM file holds metres: convert it"),
     };
-    let position_only = samples.iter().any(|s| s.yaw_rad.is_nan());
+    // No heading column, or a heading written but never changing (a fixed quaternion beside GNSS or UWB).
+    let position_only = samples.iter().any(|s| s.yaw_rad.is_nan())
+        || omni_kin::position_only::heading_never_changes(samples.iter().map(|s| (s.x_m, s.y_m, s.yaw_rad)));
     if position_only {
         samples.iter_mut().for_each(|s| s.yaw_rad = 0.0);
     }

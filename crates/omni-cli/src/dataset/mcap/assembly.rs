@@ -305,17 +305,28 @@ pub(crate) fn runs(
     };
 
     // Runs.
-    let streams = Streams {
-        t_s,
-        wheels,
-        truth,
-        odometry,
-        commands,
-        joints_topic,
-        position_only: external.is_some_and(|e| e.position_only),
-    };
+    let position_only = external.is_some_and(|e| e.position_only)
+        || truth_ch.is_some() && positions_only_topic(path, &truth_label, &truth, &mut notes);
+    let streams = Streams { t_s, wheels, truth, odometry, commands, joints_topic, position_only };
     let out = McapRead { runs: Vec::new(), notes, skipped: Vec::new(), origin_s, ground_truth_clock: clock };
     with_runs(out, &streams, (path, stem), opts)
+}
+
+/// Whether a ground-truth topic's poses (`label`) give positions only: a heading that never changes while
+/// they move (a tracker, UWB or GNSS that writes a fixed orientation); a note says so.
+fn positions_only_topic(path: &Path, label: &str, truth: &[StampedPose], notes: &mut Vec<Note>) -> bool {
+    let xy_theta = truth.iter().map(|p| (p.pose.x_m, p.pose.y_m, p.pose.theta_rad));
+    if !omni_kin::position_only::heading_never_changes(xy_theta) {
+        return false;
+    }
+    notes.push(Note::about(
+        path,
+        format!(
+            "{label}: its heading never changes while it moves (a fixed orientation beside the positions: a \
+             tracker, UWB or GNSS): read as positions only; each run's start heading is fitted with the model"
+        ),
+    ));
+    true
 }
 
 /// `out` with the runs cut from `streams` (those refused listed as skipped under `skip_invalid`) and the

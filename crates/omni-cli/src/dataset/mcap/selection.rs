@@ -607,6 +607,11 @@ pub(super) fn topic_clock(
         poses.iter_mut().for_each(|p| p.t_s += offset_s);
         return Some(clock(offset_s, None, None));
     }
+    // Positions only (a heading that never changes): the estimate needs a heading; as recorded.
+    if omni_kin::position_only::heading_never_changes(poses.iter().map(|p| (p.pose.x_m, p.pose.y_m, p.pose.theta_rad)))
+    {
+        return None;
+    }
     // On the wheels' clock, or off it by a small lag (nearly always): the wheels explain nearly all the
     // truth's motion at offset 0, and no search is needed. (Half of it is not enough: slow, smooth motion
     // 0.8 s off is still 60 % explained.)

@@ -480,6 +480,16 @@ fn held_out_findings(
     Ok(coverage)
 }
 
+/// The model with the accepted effects, whose repeat structure the verdict reads: the verdict's (refitted),
+/// or those `auto` added; `None` when none was accepted.
+fn accepted(verdict: bool, climb: &search::Climb, auto: bool) -> Option<&FittedModel> {
+    match (verdict, climb.ranking.first(), auto) {
+        (true, Some(Candidate { fitted: Some(f), .. }), false) => Some(f),
+        (_, _, true) if climb.ladder.len() > 2 => Some(&climb.top),
+        _ => None,
+    }
+}
+
 /// Diagnose `model` on `train`, holding out `validation` (or cross-validating over repetitions).
 ///
 /// `design`: the design each run is compared with — one model (a `&FittedModel`) or a model per run
@@ -522,13 +532,8 @@ pub fn diagnose(
         findings(&cmp.runs, &cmp.groups, &cmp.growth, &climb.ranking, identifiability.as_ref(), repeat_floor);
     facts.splice(0..0, lag.filter(ClockLag::named).map(Finding::ClockLag));
     let coverage = held_out_findings(&mut facts, (model, design), (&fit_runs, &held_runs), protocol, every)?;
-    // The repeat structure with the accepted effects: the verdict's (refitted), or those `auto` added.
-    let accepted = match (&verdict, climb.ranking.first(), opts.auto) {
-        (Some(_), Some(Candidate { fitted: Some(f), .. }), false) => Some(f),
-        (_, _, true) if climb.ladder.len() > 2 => Some(&climb.top),
-        _ => None,
-    };
-    let after = accepted.map(|f| compare(f, &designs, train, every)).transpose()?;
+    let after =
+        accepted(verdict.is_some(), &climb, opts.auto).map(|f| compare(f, &designs, train, every)).transpose()?;
     let (groups_after, growth_after) = after.as_ref().map_or((&cmp.groups, &cmp.growth), |c| (&c.groups, &c.growth));
     let conclusion = Judgement {
         ranking: &climb.ranking,
