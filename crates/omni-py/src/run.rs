@@ -124,6 +124,12 @@ impl PyRun {
     fn repetition(&self) -> Option<u32> {
         self.inner.repetition()
     }
+    /// Whether the ground truth gives positions only (UWB, GNSS, a tracker without heading): its headings are
+    /// placeholders (0), never compared; each run's start heading is fitted with the model.
+    #[getter]
+    fn truth_position_only(&self) -> bool {
+        self.inner.truth_position_only()
+    }
     /// Pickling: every field as compact bytes (see `pickle.rs`), validated again on the way back.
     fn __reduce__<'py>(&self, py: Python<'py>) -> crate::pickle::Reduced<'py, (Bound<'py, PyBytes>,)> {
         let rebuild = py.import("omnical._omnical")?.getattr("_run_from_bytes")?;

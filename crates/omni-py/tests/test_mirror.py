@@ -329,6 +329,13 @@ def test_load_reads_ground_truth_files_with_the_cli_clock_alignment(tmp_path: Pa
                             gt_columns={"t": "stamp_ns", "x": "pos_x_mm", "y": "pos_y_mm", "yaw": "heading_deg"},
                             gt_units={"time": "ns", "length": "mm", "angle": "deg"})
     np.testing.assert_allclose(from_csv[0].truth, original.truth, atol=1e-6)
+    assert not from_csv[0].truth_position_only
+    # The same file as a reference of positions only (UWB, GNSS): headings 0 and never compared.
+    positions = omnical.load(bag, gt=csv, gt_time_offset=true_offset + 3.217 - 1.0,
+                             gt_columns={"t": "stamp_ns", "x": "pos_x_mm", "y": "pos_y_mm", "yaw": "none"},
+                             gt_units={"time": "ns", "length": "mm"})
+    assert positions[0].truth_position_only and not positions[0].truth[:, 3].any()
+    np.testing.assert_allclose(positions[0].truth[:, :3], original.truth[:, :3], atol=1e-6)
     with pytest.raises(ValueError, match="q"):
         omnical.load(bag, gt=csv, gt_columns={"q": "stamp_ns"})
 

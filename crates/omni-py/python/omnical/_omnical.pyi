@@ -105,6 +105,9 @@ class Run:
         """(v_m_s, alpha_rad, omega_rad_s) or None."""
     @property
     def repetition(self) -> Optional[int]: ...
+    @property
+    def truth_position_only(self) -> bool:
+        """The ground truth gives positions only (headings are placeholders, never compared)."""
 
 @final
 class Dataset:
