@@ -7,6 +7,7 @@
 mod support;
 
 use serde_json::Value;
+use omni_kin::effect::Effect as _;
 use support::{json, shared_data};
 
 /// Train on `train`, then diagnose (catalogue `candidates`) and explore with `held` held out: the two
@@ -88,4 +89,37 @@ fn diff_diagnose_and_explore_agree() {
     let held = ["230620202144", "231220200029", "231220200040"];
     let (d, e) = verdicts("diff", "230620202042", &held, "time_offset");
     check("diff", &d, &e);
+}
+
+/// Issue 45: `diagnose --auto --out` writes what the explorer passed (omni3: the `wheel` family, +7.2 %
+/// held out), and every passed family's transfer to the held-out kinds of path is reported.
+#[test]
+#[cfg_attr(not(shared_data), ignore = "needs the real robot logs ../shared/data (see crates/omni-cli/build.rs)")]
+fn diagnose_auto_out_writes_the_family_the_explorer_passed_with_its_transfer() {
+    let data = shared_data("omni3");
+    let dir = tempfile::tempdir().unwrap();
+    let (train, held) = (data.join("221220201934"), data.join("221220201953"));
+    let (train, held) = (train.to_str().unwrap(), held.to_str().unwrap());
+    json(&["train", train, "--out", "m.toml", "--json"], dir.path());
+    let d = json(
+        &["diagnose", "--auto", "--model", "m.toml", train, "--validate", held, "--out", "d.toml", "--json"],
+        dir.path(),
+    );
+    let best = d["explore"]["families"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|f| f["passes"] == true)
+        .unwrap_or_else(|| panic!("{d}"));
+    assert_eq!(best["family"], "wheel", "{best}");
+    // Its transfer: per kind of held-out path (these are all squares), none more than 2 % worse.
+    let folds = best["held_out_kinds"]["folds"].as_array().unwrap_or_else(|| panic!("{best}"));
+    assert!(!folds.is_empty());
+    for f in folds {
+        let (before, after) = (f[1].as_f64().unwrap(), f[2].as_f64().unwrap());
+        assert!(after <= before * 1.02, "{f}");
+    }
+    let written = omni_cli::model_file::read(&dir.path().join("d.toml")).unwrap();
+    let ids: Vec<String> = written.model.effects.iter().map(|e| e.id().to_string()).collect();
+    assert!(ids.iter().any(|id| id == "learned:wheel"), "{ids:?}");
 }

@@ -9,7 +9,7 @@ use serde_json::{Value, json};
 pub const SCHEMA_VERSION: u32 = super::JSON_SCHEMA_VERSION;
 
 /// One family in JSON: `{family, effect, status, status_reason, status_text, held_out_gain, gain_std_error,
-/// passes, held_out_cost_m, terms, held, hint, curve}`.
+/// passes, held_out_cost_m, terms, held, hint, curve, held_out_kinds}`.
 fn family_json(f: &FamilyResult) -> Value {
     let reason = match f.status {
         FamilyStatus::NotConverged { reason } => serde_json::to_value(reason).unwrap_or(Value::Null),
@@ -35,6 +35,7 @@ fn family_json(f: &FamilyResult) -> Value {
         "held": f.held,
         "hint": text::explore_hint(f),
         "curve": f.curve,
+        "held_out_kinds": f.held_out_kinds,
     })
 }
 

@@ -77,6 +77,13 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         }
         _ => None,
     };
+    // `--auto --out` writes what the explorer passed: the ladder's model with the best passing family.
+    let explored = exploration.as_ref().and_then(Exploration::best).filter(|_| a.out.is_some());
+    if let (Some(out), Some(f)) = (&a.out, explored) {
+        let text = crate::model_file::to_toml(&f.fitted, None)?;
+        crate::atomic::write_atomic(out, text.as_bytes())
+            .map_err(|e| anyhow::anyhow!("--out {}: {e}", out.display()))?;
+    }
     if a.output.json {
         let mut doc = serde_json::to_value(&d)?;
         if let Some(e) = &exploration {
@@ -89,6 +96,13 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         print_diagnosis(&d);
         if explore_stage {
             print_explore_stage(exploration.as_ref());
+        }
+        if let (Some(out), Some(f)) = (&a.out, explored) {
+            println!(
+                "model written to {} (the ladder's model with learned:{}, which the explorer passed)",
+                out.display(),
+                f.family.id()
+            );
         }
     }
     Ok(())

@@ -36,6 +36,8 @@ use crate::optimizer::observe::NoopObserver;
 use crate::optimizer::problem::{Bounds, LeastSquares};
 use crate::optimizer::{LmConfig, Termination};
 use crate::science::coverage::{MotionCoverage, motion_coverage};
+use crate::science::diagnose::KindOut;
+use crate::science::diagnose::search::{by_kind_of_path, hurts_a_kind};
 use crate::science::diagnose::{UnexplainedEvidence, remains};
 use crate::science::heaviest_first;
 use crate::science::identify::WEAK_LOADING;
@@ -184,6 +186,9 @@ pub struct FamilyResult {
     pub fitted: FittedModel,
     /// The residual against the strongest term.
     pub curve: Option<FeatureCurve>,
+    /// The family's fit against the baseline on the held-out runs by the shape of their paths, when it
+    /// would pass on its gain: it does not pass when it hurts one kind (diagnose's one test of transfer).
+    pub held_out_kinds: Option<KindOut>,
 }
 
 /// What the explorer found.
@@ -238,6 +243,12 @@ pub fn explore(
     let fitted: Vec<Result<FamilyResult, Error>> =
         fitted.into_iter().map(|f| f.map(|f| f.judged((base_cost, &base_runs), opts))).collect();
     let mut families = fitted.into_iter().collect::<Result<Vec<_>, _>>()?;
+    // Transfer is part of passing: a family that hurts a kind of held-out path does not pass.
+    for f in families.iter_mut().filter(|f| f.passes) {
+        let id = format!("learned:{}", f.family.id());
+        f.held_out_kinds = by_kind_of_path(&id, (&baseline.fitted, &f.fitted), validate, 1)?;
+        f.passes = !f.held_out_kinds.as_ref().is_some_and(hurts_a_kind);
+    }
     families.sort_by(|a, b| b.held_out_gain.total_cmp(&a.held_out_gain));
     let (with, held_out_m) = match families.iter().find(|f| f.passes) {
         Some(f) => (&f.fitted, f.held_out_cost),
@@ -323,6 +334,7 @@ fn fit_family(
         held: c.held.iter().map(|w| w.text.clone()).collect(),
         fitted: c.fitted,
         curve,
+        held_out_kinds: None,
     };
     Ok(FamilyFit { result, per_run })
 }

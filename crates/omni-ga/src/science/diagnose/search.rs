@@ -155,6 +155,19 @@ pub(super) fn held_out_kinds(
     every: usize,
 ) -> Result<Option<KindOut>, Error> {
     let Some(fitted) = candidate.fitted.as_ref() else { return Ok(None) };
+    by_kind_of_path(&candidate.effect, (model, fitted), held, every)
+}
+
+/// `after` (a fit with `effect`) against `before` on the `held` runs by the shape of their paths: the
+/// per-kind path RMS (every `every`-th pose) before and after, and the pooled gain; `None` when no run has a
+/// kind. What [`hurts_a_kind`] judges, for diagnose's candidates and the explorer's families alike.
+pub(crate) fn by_kind_of_path(
+    effect: &str,
+    (before, after): (&FittedModel, &FittedModel),
+    held: &[Run],
+    every: usize,
+) -> Result<Option<KindOut>, Error> {
+    let (model, fitted) = (before, after);
     let mut kinds: Vec<(&'static str, Vec<Run>)> = Vec::new();
     for r in held {
         let Some(k) = MotionKind::of(r) else { continue };
@@ -175,7 +188,7 @@ pub(super) fn held_out_kinds(
     }
     let before: f64 = folds.iter().map(|f| f.1 * f.1).sum();
     let after: f64 = folds.iter().map(|f| f.2 * f.2).sum();
-    Ok(Some(KindOut { effect: candidate.effect.clone(), folds, gain: 1.0 - (after / before.max(1e-300)).sqrt() }))
+    Ok(Some(KindOut { effect: effect.to_string(), folds, gain: 1.0 - (after / before.max(1e-300)).sqrt() }))
 }
 
 /// Fit `model + effect` on all kinds of path but one and compare path costs on the kind left out (`None`

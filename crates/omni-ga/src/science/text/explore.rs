@@ -210,13 +210,21 @@ pub fn exploration(e: &Exploration) -> Vec<String> {
             } else {
                 String::new()
             };
+            // A gain that hurts a kind of held-out path: said instead of the hint.
+            let hint = match f
+                .held_out_kinds
+                .as_ref()
+                .filter(|k| !f.passes && crate::science::diagnose::search::hurts_a_kind(k))
+            {
+                Some(k) => super::hurts_kinds(&format!("learned:{}", f.family.id()), &k.folds),
+                None => explore_hint(f),
+            };
             format!(
-                "{:<13} held-out gain {:+6.1} % ± {:4.1} %  {}  {}{status}",
+                "{:<13} held-out gain {:+6.1} % ± {:4.1} %  {}  {hint}{status}",
                 f.family.id(),
                 100.0 * f.held_out_gain,
                 100.0 * f.gain_std_error,
                 if f.passes { "passes" } else { "fails " },
-                explore_hint(f)
             )
         })
         .collect();
