@@ -6,8 +6,8 @@
 
 mod support;
 
-use serde_json::Value;
 use omni_kin::effect::Effect as _;
+use serde_json::Value;
 use support::{json, shared_data};
 
 /// Train on `train`, then diagnose (catalogue `candidates`) and explore with `held` held out: the two

@@ -60,9 +60,12 @@ pub(super) fn with_lidar_path(
                 .collect()
         })
         .collect();
-    // The lidar's clock against the wheels, on its longest stretch (dataset::sensor_clock).
-    let clock =
-        segments.iter().max_by_key(|s| s.len()).and_then(|s| super::sensor_clock::sensor_clock(&loaded.runs, s));
+    // The lidar's clock against the wheels (dataset::sensor_clock): the stretch that gives the sharpest
+    // estimate (the longest may not give one at all: its match noise can hide the motion's shape).
+    let clock = segments
+        .iter()
+        .filter_map(|s| super::sensor_clock::sensor_clock(&loaded.runs, s))
+        .min_by(|a, b| a.estimate.std_error_s.total_cmp(&b.estimate.std_error_s));
     let clock_shift_s = clock.map_or(0.0, |c| c.applied_s());
     let segments: Vec<Vec<StampedPose>> = segments
         .into_iter()

@@ -18,6 +18,8 @@ pub(crate) struct SensorClock {
     pub judged: SameRecording,
     /// The explained share at offset 0, when the overlap allows one.
     pub r_squared_as_recorded: Option<f64>,
+    /// The estimate is the sensor's rotation alone against the wheels (clearer than its whole motion).
+    pub rotation_only: bool,
 }
 
 /// The clock of the sensor's `segment` of path (on the wheel clock as recorded) against the run of `runs`
@@ -30,11 +32,13 @@ pub(crate) fn sensor_clock(runs: &[Run], segment: &[StampedPose]) -> Option<Sens
     };
     let run = runs.iter().max_by(|a, b| overlap(a).total_cmp(&overlap(b)))?;
     let (t, rad, n) = (run.wheel_t_s(), run.wheel_rad_s(), run.n_wheels());
-    let estimate = clock::align_clocks(t, rad, n, segment).ok()?;
+    // The whole motion or the rotation alone, whichever is clearer (a scan matcher's heading is less noisy).
+    let (estimate, used, rotation_only) = clock::align_clocks_clearest(t, rad, n, segment)?;
     Some(SensorClock {
         estimate,
         judged: estimate.same_recording(t[t.len() - 1] - t[0]),
-        r_squared_as_recorded: clock::explained_at(t, rad, n, segment, 0.0),
+        r_squared_as_recorded: clock::explained_at(t, rad, n, &used, 0.0),
+        rotation_only,
     })
 }
 
@@ -62,8 +66,9 @@ impl SensorClock {
     pub fn note(&self, path: &Path, what: &str) -> Option<Note> {
         let a = &self.estimate;
         let at_zero = self.r_squared_as_recorded.map_or(String::new(), |r| format!(", {:.0} % as recorded", r * 100.0));
+        let motion = if self.rotation_only { "rotation (its translation is noisier)" } else { "motion" };
         let estimate = format!(
-            "{:+.3} s ± {:.1} ms (t_wheel = t_sensor + offset; the wheels explain {:.0} % of its motion there{at_zero})",
+            "{:+.3} s ± {:.1} ms (t_wheel = t_sensor + offset; the wheels explain {:.0} % of its {motion} there{at_zero})",
             a.offset_s,
             a.std_error_s * 1e3,
             a.r_squared * 100.0

@@ -1,7 +1,7 @@
 //! Step 2 and 3 of the estimate (see the module docs of [`super`]): the offset refined as a continuous
 //! parameter on the truth's own sample blocks, and its Gauss–Newton standard error.
 
-use super::{FINE_BLOCK_S, Poses, STILL_CHANNEL_SHARE, WheelAngles};
+use super::{FINE_BLOCK_S, MIN_BLOCK_SAMPLES, Poses, STILL_CHANNEL_SHARE, WheelAngles};
 use nalgebra::DMatrix;
 
 /// The fine objective over the ground truth's own sample intervals whose shifted copies stay inside the wheel
@@ -37,7 +37,7 @@ impl<'a> Fine<'a> {
         let p = poses.poses;
         // Blocks of consecutive truth samples spanning about FINE_BLOCK_S: the truth's noise, differenced,
         // shrinks with the block's length while the motion stays resolved. None across a gap.
-        let m = ((FINE_BLOCK_S / poses.median_dt_s).round() as usize).max(1);
+        let m = ((FINE_BLOCK_S / poses.median_dt_s).round() as usize).max(MIN_BLOCK_SAMPLES);
         let intervals: Vec<(f64, f64)> = (0..(p.len() - 1) / m)
             .map(|j| (p[j * m].t_s, p[(j + 1) * m].t_s))
             .filter(|&(a, b)| a + lo >= w0 && b + hi <= w1 && poses.measured(a, b))

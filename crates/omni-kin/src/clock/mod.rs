@@ -62,6 +62,9 @@ pub const STILL_CHANNEL_SHARE: f64 = 0.01;
 pub const MIN_OVERLAP_S: f64 = 2.0;
 /// The fine stage compares truth intervals of about this length (whole truth sample intervals). s.
 pub const FINE_BLOCK_S: f64 = 0.05;
+/// The fine stage's blocks hold at least this many truth intervals: a reference sampled slower than
+/// [`FINE_BLOCK_S`] (a lidar's scans at 10 Hz) would otherwise difference each sample's noise alone.
+pub const MIN_BLOCK_SAMPLES: usize = 2;
 /// The best offset must explain at least this share of the ground truth's motion.
 pub const MIN_R_SQUARED: f64 = 0.5;
 /// Consecutive ground-truth poses farther apart than this many median intervals bound a gap.
@@ -213,6 +216,31 @@ pub fn explained_at(
     let fine = Fine::new(&wheels, &Poses::new(truth), offset_s, offset_s)?;
     let fit = fine.fit(offset_s)?;
     Some(1.0 - fit.normalised_rss / fit.channels as f64)
+}
+
+/// A sensor's clock from its whole motion or from its rotation alone, whichever is clearer: a scan matcher's
+/// heading is far less noisy than its translation over one scan interval, so the rotation may give a clear
+/// estimate ([`ClockAlignment::is_clear`]) where the whole motion does not. The whole motion's estimate is
+/// kept when it is clear, or when the rotation's is neither clear nor sharper. Returns the estimate, the
+/// poses it compared (`truth`, or its headings alone at the origin) and whether they are the rotation alone.
+pub fn align_clocks_clearest(
+    wheel_t_s: &[f64],
+    wheel_rad_s: &[f64],
+    n_wheels: usize,
+    truth: &[StampedPose],
+) -> Option<(ClockAlignment, Vec<StampedPose>, bool)> {
+    let rotation: Vec<StampedPose> =
+        truth.iter().map(|p| StampedPose { t_s: p.t_s, pose: crate::Pose2::new(0.0, 0.0, p.pose.theta_rad) }).collect();
+    let whole = align_clocks(wheel_t_s, wheel_rad_s, n_wheels, truth).ok();
+    let turning = align_clocks(wheel_t_s, wheel_rad_s, n_wheels, &rotation).ok();
+    match (whole, turning) {
+        (Some(w), Some(r)) if !w.is_clear() && (r.is_clear() || r.std_error_s < w.std_error_s) => {
+            Some((r, rotation, true))
+        }
+        (Some(w), _) => Some((w, truth.to_vec(), false)),
+        (None, Some(r)) => Some((r, rotation, true)),
+        (None, None) => None,
+    }
 }
 
 /// Estimates the clock offset `t_wheel = t_truth + offset_s` (see the module docs). Wheel times and speeds as

@@ -1,6 +1,6 @@
 //! A clock offset between the wheels and the reference, measured without any model: each run's reference
-//! motion regressed on its wheel speeds at every offset ([`omni_kin::clock::align_clocks`]), the runs'
-//! estimates pooled by their standard errors. It names the offset the catalogue's `time_offset` fits, and
+//! motion (or its rotation alone, when that is clearer) regressed on its wheel speeds at every offset
+//! ([`omni_kin::clock::align_clocks_clearest`]), the runs' estimates pooled by their standard errors. It names the offset the catalogue's `time_offset` fits, and
 //! it confirms that fit independently of the kinematic model and of the kinds of path.
 
 use omni_kin::Run;
@@ -34,14 +34,59 @@ impl ClockLag {
     }
 }
 
-/// The runs' clock estimates pooled (inverse-variance weighted); `None` when no run gives one.
+/// One stretch of wheel data and reference for a clock estimate: a run, or the windows of a relative
+/// reference (`RUN#1`, `RUN#2`, … cut by [`omni_kin::reference::windows`]) joined back into the stretch they
+/// were cut from, which is long enough for an estimate where a 4 s window is not.
+struct Stretch {
+    wheel_t_s: Vec<f64>,
+    wheel_rad_s: Vec<f64>,
+    n_wheels: usize,
+    truth: Vec<omni_kin::StampedPose>,
+}
+
+/// The runs as stretches: consecutive windows of one run (names `RUN#K`) joined, each sample and pose once.
+fn stretches(runs: &[Run]) -> Vec<Stretch> {
+    let parent = |r: &Run| match r.name().rsplit_once('#') {
+        Some((p, k)) if !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()) => Some(p.to_string()),
+        _ => None,
+    };
+    let mut out: Vec<(Option<String>, Stretch)> = Vec::new();
+    for r in runs {
+        let name = parent(r);
+        match out.last_mut() {
+            Some((Some(p), s)) if name.as_ref() == Some(p) && s.n_wheels == r.n_wheels() => {
+                let last_t = s.wheel_t_s.last().copied().unwrap_or(f64::NEG_INFINITY);
+                for (k, &t) in r.wheel_t_s().iter().enumerate().filter(|(_, t)| **t > last_t) {
+                    s.wheel_t_s.push(t);
+                    s.wheel_rad_s.extend_from_slice(r.wheel_sample(k));
+                }
+                let last_pose = s.truth.last().map_or(f64::NEG_INFINITY, |p| p.t_s);
+                s.truth.extend(r.truth().iter().filter(|p| p.t_s > last_pose));
+            }
+            _ => out.push((
+                name,
+                Stretch {
+                    wheel_t_s: r.wheel_t_s().to_vec(),
+                    wheel_rad_s: r.wheel_rad_s().to_vec(),
+                    n_wheels: r.n_wheels(),
+                    truth: r.truth().to_vec(),
+                },
+            )),
+        }
+    }
+    out.into_iter().map(|(_, s)| s).collect()
+}
+
+/// The runs' clock estimates pooled (inverse-variance weighted); `None` when no run gives one. The windows
+/// of a relative reference are joined back into their stretches first.
 pub fn clock_lag(runs: &[Run]) -> Option<ClockLag> {
-    let estimates: Vec<(ClockAlignment, f64)> = runs
+    let estimates: Vec<(ClockAlignment, f64)> = stretches(runs)
         .iter()
         .filter_map(|r| {
-            let (t, rad, n) = (r.wheel_t_s(), r.wheel_rad_s(), r.n_wheels());
-            let a = clock::align_clocks(t, rad, n, r.truth()).ok()?;
-            let at_zero = clock::explained_at(t, rad, n, r.truth(), 0.0)?;
+            let (t, rad, n, truth) = (&r.wheel_t_s[..], &r.wheel_rad_s[..], r.n_wheels, &r.truth[..]);
+            // The whole motion or the rotation alone, whichever is clearer (as for a sensor's clock).
+            let (a, used, _) = clock::align_clocks_clearest(t, rad, n, truth)?;
+            let at_zero = clock::explained_at(t, rad, n, &used, 0.0)?;
             (a.std_error_s > 0.0 && a.std_error_s.is_finite()).then_some((a, at_zero))
         })
         .collect();
