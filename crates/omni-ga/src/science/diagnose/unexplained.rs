@@ -14,7 +14,8 @@
 //! - **Share test**: a systematic error remains when the number of biased groups is beyond chance (binomial
 //!   tail `P(X ≥ k | G, 5 %)` below [`SHARE_ALPHA`], 1 %) *and* at least [`MIN_SHARE`] (25 %) of the groups
 //!   are biased. It decides only when it can: with one group, even a biased one is as likely as 5 % by
-//!   chance, so a single group never decides.
+//!   chance, so a single group never decides; and groups of fewer than [`MIN_RUNS_TO_CLEAR`] (3) runs can
+//!   find a bias but never clear one (a t-test on 2 runs has almost no power).
 //! - Otherwise the decision falls back to the remaining held-out path error against the measurement noise
 //!   floor (above [`MISSING_RATIO`], 3×), and says so.
 //!
@@ -37,6 +38,10 @@ pub const MISSING_RATIO: f64 = 3.0;
 /// Ratio of the remaining held-out error to the noise floor from which something physical is missing
 /// whatever the groups say.
 pub const FAR_RATIO: f64 = 10.0;
+/// Runs a group needs, at least, for its t-test to clear it: with 2 runs (1 degree of freedom) the test
+/// has almost no power, so groups that small can find a bias but never say that none is left (issue 45: a
+/// real mecanum robot called "no systematic error remains" at 9.8× the noise floor on 2 groups of 2 runs).
+pub const MIN_RUNS_TO_CLEAR: usize = 3;
 
 /// Which evidence decided `unexplained`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -123,8 +128,11 @@ pub(super) fn decide(
         ev.share_biased = Some(share);
         ev.chance_probability = Some(chance);
         // The test can decide only when all groups biased would be beyond chance (two groups or more).
-        (binomial_tail(groups_total, groups_total, GROUP_ALPHA) < SHARE_ALPHA)
-            .then_some(chance < SHARE_ALPHA && share >= MIN_SHARE)
+        let biased = chance < SHARE_ALPHA && share >= MIN_SHARE;
+        // Groups too small to clear decide only when they find a bias; else the noise floor decides.
+        let can_clear = tested.iter().all(|g| g.runs >= MIN_RUNS_TO_CLEAR);
+        (binomial_tail(groups_total, groups_total, GROUP_ALPHA) < SHARE_ALPHA && (biased || can_clear))
+            .then_some(biased)
     } else {
         None
     };
@@ -292,6 +300,31 @@ mod tests {
         // 9 of 36 biased at 5x: missing; 1 of 36 at 5x: the groups say no bias beyond chance.
         assert!(decide(&groups(36, 9, GroupBasis::Command), &growth(), None, 0.010, Some(&floor())).0);
         assert!(!decide(&groups(36, 1, GroupBasis::Command), &growth(), None, 0.010, Some(&floor())).0);
+    }
+
+    #[test]
+    fn groups_of_two_runs_can_find_a_bias_but_never_clear_one() {
+        // Issue 45's mecanum robot cut into 20 s runs: 2 groups of 2 runs, neither biased, 9.8x the floor.
+        // A t-test on 2 runs has 1 degree of freedom: it cannot say no bias is left, so the floor decides.
+        let small = |biased| {
+            let mut g = groups(2, biased, GroupBasis::Motion);
+            g.iter_mut().for_each(|g| g.runs = 2);
+            g
+        };
+        let (missing, ev) = decide(&small(0), &growth(), None, 0.0196, Some(&floor()));
+        assert!(missing, "9.8x the floor");
+        assert_eq!(ev.decided_by, DecidedBy::NoiseFloorRatio);
+        assert_eq!((ev.groups_total, ev.groups_biased), (2, 0));
+        // Both biased: the small groups still find it.
+        let (missing, ev) = decide(&small(2), &growth(), None, 0.004, Some(&floor()));
+        assert!(missing);
+        assert_eq!(ev.decided_by, DecidedBy::Repeats);
+        // Groups of 3 runs may clear it (2x the floor here, so the floor agrees).
+        let mut three = groups(2, 0, GroupBasis::Motion);
+        three.iter_mut().for_each(|g| g.runs = 3);
+        let (missing, ev) = decide(&three, &growth(), None, 0.0196, Some(&floor()));
+        assert!(!missing);
+        assert_eq!(ev.decided_by, DecidedBy::Repeats);
     }
 
     #[test]
