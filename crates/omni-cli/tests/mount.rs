@@ -61,9 +61,13 @@ fn a_diff_drives_wheels_come_back_from_a_lidar_at_any_yaw() {
 
 /// An omni robot (the paper's, a free matrix): the matrix absorbs any mount, so the mount is held where the
 /// motions put it against the design; its rotation row (which no mount changes) comes back within 2
-/// standard errors of motion capture and its translation rows within 1 % of their length, at 90° and −107°.
+/// standard errors of motion capture, and its translation rows within 1 % of their length once turned by
+/// the one angle a free matrix cannot tell from the mount's yaw (that angle within 0.5°, the held mount's
+/// own error: 0.43° at 90°), at 90° and −107°.
 #[test]
-#[ignore = "issue 43, unfinished: the translation rows came out just over 1 % from motion capture at 90° (the mount's yaw held 0.43° off); tolerance to be settled"]
+#[ignore = "issue 43, open: at 90° the vy row is still 1.6 % from motion capture after the best rotation (the \
+            held mount's yaw, 0.33°, and its position both leak into a free matrix's rows); the mount is not \
+            determined by a free matrix, so the tolerance needs the mount's own uncertainty"]
 fn an_omni_robots_rotation_row_comes_back_from_a_lidar_at_any_yaw_and_its_mount_is_held_where_the_motions_put_it() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
@@ -93,10 +97,27 @@ fn an_omni_robots_rotation_row_comes_back_from_a_lidar_at_any_yaw_and_its_mount_
             eprintln!("m3{}: lidar {got:.6}, motion capture {want:.6} ± {se:.1e}", c + 1);
             assert!((got - want).abs() <= 2.0 * se, "m3{}: lidar {got} vs motion capture {want} ± {se}", c + 1);
         }
+        // The rotation of the (vx, vy) rows that lays the lidar's on motion capture's: a wrong mount yaw
+        // turns them by its error, which nothing in a free matrix's fit can see.
+        let (mut cross, mut dot) = (0.0, 0.0);
+        for c in 0..3 {
+            let (a, b) = ([l[0][c], l[1][c]], [m[0][c], m[1][c]]);
+            cross += a[0] * b[1] - a[1] * b[0];
+            dot += a[0] * b[0] + a[1] * b[1];
+        }
+        let turn = f64::atan2(cross, dot);
+        assert!(turn.to_degrees().abs() < 0.5, "{yaw}°: rows turned {:.3}° from motion capture's", turn.to_degrees());
+        let (s, co) = turn.sin_cos();
+        let turned: Vec<[f64; 2]> = (0..3).map(|c| [co * l[0][c] - s * l[1][c], s * l[0][c] + co * l[1][c]]).collect();
         for r in 0..2 {
             let length = m[r].iter().map(|v| v * v).sum::<f64>().sqrt();
-            let apart = l[r].iter().zip(&m[r]).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
-            assert!(apart < 0.01 * length, "row {r}: lidar {:?} vs motion capture {:?}", l[r], m[r]);
+            let apart = (0..3).map(|c| (turned[c][r] - m[r][c]).powi(2)).sum::<f64>().sqrt();
+            assert!(
+                apart < 0.01 * length,
+                "row {r}: lidar {:?} (turned {turn} rad) vs motion capture {:?}",
+                l[r],
+                m[r]
+            );
         }
     }
 }

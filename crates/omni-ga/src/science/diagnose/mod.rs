@@ -46,7 +46,7 @@ pub use evidence::{differentiable_start, refit, refit_on};
 pub use findings::{Conclusion, Finding, Remaining, Verdict};
 pub use kinds::{GroupBasis, MotionKind, Shape};
 pub use noise::{ExcitationGap, GapKind, WheelGap, noise_floor, wheel_excitation, wheel_excitation_gap};
-pub use unexplained::{DecidedBy, UnexplainedEvidence};
+pub use unexplained::{DecidedBy, MIN_DOF_TO_CLEAR, UnexplainedEvidence};
 
 use crate::error::Error;
 use crate::fit::BaseFit;

@@ -14,8 +14,8 @@
 //! - **Share test**: a systematic error remains when the number of biased groups is beyond chance (binomial
 //!   tail `P(X ≥ k | G, 5 %)` below [`SHARE_ALPHA`], 1 %) *and* at least [`MIN_SHARE`] (25 %) of the groups
 //!   are biased. It decides only when it can: with one group, even a biased one is as likely as 5 % by
-//!   chance, so a single group never decides; and groups of fewer than [`MIN_RUNS_TO_CLEAR`] (3) runs can
-//!   find a bias but never clear one (a t-test on 2 runs has almost no power).
+//!   chance, so a single group never decides; and groups with fewer than [`MIN_DOF_TO_CLEAR`] (4) degrees
+//!   of freedom in all can find a bias but never clear one (2 groups of 2 runs have almost no power).
 //! - Otherwise the decision falls back to the remaining held-out path error against the measurement noise
 //!   floor (above [`MISSING_RATIO`], 3×), and says so.
 //!
@@ -38,10 +38,11 @@ pub const MISSING_RATIO: f64 = 3.0;
 /// Ratio of the remaining held-out error to the noise floor from which something physical is missing
 /// whatever the groups say.
 pub const FAR_RATIO: f64 = 10.0;
-/// Runs a group needs, at least, for its t-test to clear it: with 2 runs (1 degree of freedom) the test
-/// has almost no power, so groups that small can find a bias but never say that none is left (issue 45: a
-/// real mecanum robot called "no systematic error remains" at 9.8× the noise floor on 2 groups of 2 runs).
-pub const MIN_RUNS_TO_CLEAR: usize = 3;
+/// Degrees of freedom the groups' t-tests need in all (`Σ (runs − 1)`) before they may say that no bias is
+/// left: 2 groups of 2 runs (2 degrees of freedom) have almost no power, so groups that small can find a
+/// bias but never clear one (issue 45: a real mecanum robot called "no systematic error remains" at 9.8×
+/// the noise floor on 2 groups of 2 runs). 18 command groups of 2 repeats, or 2 groups of 3 runs, may.
+pub const MIN_DOF_TO_CLEAR: usize = 4;
 
 /// Which evidence decided `unexplained`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -130,7 +131,7 @@ pub(super) fn decide(
         // The test can decide only when all groups biased would be beyond chance (two groups or more).
         let biased = chance < SHARE_ALPHA && share >= MIN_SHARE;
         // Groups too small to clear decide only when they find a bias; else the noise floor decides.
-        let can_clear = tested.iter().all(|g| g.runs >= MIN_RUNS_TO_CLEAR);
+        let can_clear = tested.iter().map(|g| g.runs.saturating_sub(1)).sum::<usize>() >= MIN_DOF_TO_CLEAR;
         (binomial_tail(groups_total, groups_total, GROUP_ALPHA) < SHARE_ALPHA && (biased || can_clear))
             .then_some(biased)
     } else {
@@ -319,7 +320,7 @@ mod tests {
         let (missing, ev) = decide(&small(2), &growth(), None, 0.004, Some(&floor()));
         assert!(missing);
         assert_eq!(ev.decided_by, DecidedBy::Repeats);
-        // Groups of 3 runs may clear it (2x the floor here, so the floor agrees).
+        // Two groups of 3 runs (4 degrees of freedom) may clear it.
         let mut three = groups(2, 0, GroupBasis::Motion);
         three.iter_mut().for_each(|g| g.runs = 3);
         let (missing, ev) = decide(&three, &growth(), None, 0.0196, Some(&floor()));

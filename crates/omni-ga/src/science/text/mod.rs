@@ -311,8 +311,15 @@ fn unexplained(v: &Verdict) -> String {
         (DecidedBy::NoiseFloorRatio, missing) => format!(
             "{}; decided by the noise floor alone: {floor}{}",
             match e.groups_total {
-                0 => "no command was repeated and no two runs are of one kind, so the group test could not be made",
-                _ => "a single group of runs cannot show a bias beyond chance, so the group test could not decide",
+                0 => "no command was repeated and no two runs are of one kind, so the group test could not be made"
+                    .to_string(),
+                1 => "a single group of runs cannot show a bias beyond chance, so the group test could not decide"
+                    .to_string(),
+                n => format!(
+                    "the {n} groups of runs are too small to clear a bias (their t-tests have fewer than {} degrees of \
+                     freedom in all), so the group test could not decide",
+                    crate::science::diagnose::MIN_DOF_TO_CLEAR
+                ),
             },
             if missing { ": something physical is still missing" } else { ", close to it" }
         ),
