@@ -37,12 +37,18 @@ impl<'a> Fine<'a> {
         let p = poses.poses;
         // Blocks of consecutive truth samples spanning about FINE_BLOCK_S: the truth's noise, differenced,
         // shrinks with the block's length while the motion stays resolved. None across a gap.
-        let m = ((FINE_BLOCK_S / poses.median_dt_s).round() as usize).max(MIN_BLOCK_SAMPLES);
-        let intervals: Vec<(f64, f64)> = (0..(p.len() - 1) / m)
-            .map(|j| (p[j * m].t_s, p[(j + 1) * m].t_s))
-            .filter(|&(a, b)| a + lo >= w0 && b + hi <= w1 && poses.measured(a, b))
-            .collect();
-        if intervals.len() <= 3 * wheels.n {
+        // At least MIN_BLOCK_SAMPLES intervals per block, unless that leaves too few blocks to fit (a sparse,
+        // short reference keeps its single intervals).
+        let m = ((FINE_BLOCK_S / poses.median_dt_s).round() as usize).max(1);
+        let blocks = |m: usize| -> Vec<(f64, f64)> {
+            (0..(p.len() - 1) / m)
+                .map(|j| (p[j * m].t_s, p[(j + 1) * m].t_s))
+                .filter(|&(a, b)| a + lo >= w0 && b + hi <= w1 && poses.measured(a, b))
+                .collect()
+        };
+        let enough = |v: &Vec<(f64, f64)>| v.len() > 3 * wheels.n;
+        let intervals = Some(blocks(m.max(MIN_BLOCK_SAMPLES))).filter(enough).or_else(|| Some(blocks(m)))?;
+        if !enough(&intervals) {
             return None;
         }
         let mut y = DMatrix::zeros(intervals.len(), 3);

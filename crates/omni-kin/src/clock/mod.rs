@@ -62,8 +62,9 @@ pub const STILL_CHANNEL_SHARE: f64 = 0.01;
 pub const MIN_OVERLAP_S: f64 = 2.0;
 /// The fine stage compares truth intervals of about this length (whole truth sample intervals). s.
 pub const FINE_BLOCK_S: f64 = 0.05;
-/// The fine stage's blocks hold at least this many truth intervals: a reference sampled slower than
-/// [`FINE_BLOCK_S`] (a lidar's scans at 10 Hz) would otherwise difference each sample's noise alone.
+/// The fine stage's blocks hold at least this many truth intervals, when that leaves enough blocks to fit:
+/// a reference sampled slower than [`FINE_BLOCK_S`] (a lidar's scans at 10 Hz) would otherwise difference
+/// each sample's noise alone.
 pub const MIN_BLOCK_SAMPLES: usize = 2;
 /// The best offset must explain at least this share of the ground truth's motion.
 pub const MIN_R_SQUARED: f64 = 0.5;
