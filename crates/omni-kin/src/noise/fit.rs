@@ -28,7 +28,10 @@ pub const TURN_LEVER_M: f64 = 0.25;
 /// Settings of the fit.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FitNoiseOptions {
-    /// Window lengths of motion (m, with `TURN_LEVER_M` per radian). Default 0.5 m and 2 m.
+    /// Window lengths of motion (m, with `TURN_LEVER_M` per radian). Default 0.25, 0.5, 1 and 2 m: the
+    /// short ones tell the rates from the floor and carry most windows (on the simulated check of
+    /// `tests/noise.rs` the rates' standard errors fell from 4–10 % with 0.5 and 2 m to 3–7 %), the long
+    /// ones see how a heading error grows into position.
     pub window_m: Vec<f64>,
     /// Bootstrap resamples for the standard errors. Default 100.
     pub bootstrap: usize,
@@ -38,7 +41,7 @@ pub struct FitNoiseOptions {
 
 impl Default for FitNoiseOptions {
     fn default() -> Self {
-        Self { window_m: vec![0.5, 2.0], bootstrap: 100, seed: 0 }
+        Self { window_m: vec![0.25, 0.5, 1.0, 2.0], bootstrap: 100, seed: 0 }
     }
 }
 
