@@ -192,6 +192,9 @@ impl ModelFile {
             for s in &specs {
                 match entry.params.get(&s.name) {
                     Some(v) => params.push(*v),
+                    // A term added to a learned family after the file was written (the `world` family's
+                    // grain, 2026-12): the file's correction did not have it, which is its null.
+                    None if entry.id.starts_with(omni_kin::effect::learned::PREFIX) => params.push(s.null),
                     None => {
                         return Err(format!(
                             "effects[{i}] ({}): missing parameter {:?} ({})",

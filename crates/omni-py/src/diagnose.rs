@@ -93,6 +93,15 @@ impl PyDiagnosis {
             .map_err(|e| crate::errors::value_error(e.to_string()))?;
         py.import("json")?.call_method1("loads", (text,))
     }
+    /// ``auto`` with held-out runs: the explorer's best passing family, which the verdict names and
+    /// ``final_model`` carries (effect ``learned:<family>``, gain (fraction), before_m [m], after_m [m],
+    /// hint), or None when none passes.
+    #[getter]
+    fn explored<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let text =
+            serde_json::to_string(&self.inner.explored).map_err(|e| crate::errors::value_error(e.to_string()))?;
+        py.import("json")?.call_method1("loads", (text,))
+    }
     /// How held-out costs were obtained.
     #[getter]
     fn held_out(&self) -> String {

@@ -6,7 +6,7 @@ use crate::api::diagnose::{DiagnoseRequest, diagnose_loaded};
 use crate::cli::effect_help;
 use crate::units::{std_error_text, value_text};
 use omni_ga::diagnose::{DiagnoseOptions, Diagnosis, Finding};
-use omni_ga::explore::{Exploration, ExploreOptions, explore};
+use omni_ga::explore::Exploration;
 use omni_ga::identify::Advice;
 use omni_ga::science::text;
 use std::path::PathBuf;
@@ -66,27 +66,13 @@ impl Args {
 
 /// Runs `omnical diagnose`.
 pub fn run(a: &Args) -> anyhow::Result<()> {
-    let (d, loaded) = diagnose_loaded(&a.request())?;
-    // The explorer stage of `--auto`: whenever the catalogue leaves the held-out error above the noise floor
-    // (or something missing), on the same training and held-out runs, from the model the ladder ended with.
-    let explore_stage = a.auto && d.error_remains();
-    let exploration = match (&loaded.validate, explore_stage) {
-        (Some(v), true) => {
-            let from = d.final_model.as_ref().unwrap_or(&loaded.model);
-            Some(explore(from, &loaded.train, v, &ExploreOptions::default())?)
-        }
-        _ => None,
-    };
-    // `--auto --out` writes what the explorer passed: the ladder's model with the best passing family.
-    let explored = exploration.as_ref().and_then(Exploration::best).filter(|_| a.out.is_some());
-    if let (Some(out), Some(f)) = (&a.out, explored) {
-        let text = crate::model_file::to_toml(&f.fitted, None)?;
-        crate::atomic::write_atomic(out, text.as_bytes())
-            .map_err(|e| anyhow::anyhow!("--out {}: {e}", out.display()))?;
-    }
+    let (d, _) = diagnose_loaded(&a.request())?;
+    // `--auto` with held-out runs ran the explorer from the ladder's model; `--out` holds the final model,
+    // with the family it passed.
+    let exploration = d.exploration.as_ref();
     if a.output.json {
         let mut doc = serde_json::to_value(&d)?;
-        if let Some(e) = &exploration {
+        if let Some(e) = exploration {
             doc["explore"] = crate::api::explore::to_json(e);
         }
         doc["out"] =
@@ -94,14 +80,14 @@ pub fn run(a: &Args) -> anyhow::Result<()> {
         super::print_json("diagnose", doc)?;
     } else {
         print_diagnosis(&d);
-        if explore_stage {
-            print_explore_stage(exploration.as_ref());
+        if a.auto {
+            print_explore_stage(exploration);
         }
-        if let (Some(out), Some(f)) = (&a.out, explored) {
+        if let (Some(out), Some(x)) = (&a.out, &d.conclusion.explored) {
             println!(
-                "model written to {} (the ladder's model with learned:{}, which the explorer passed)",
+                "model written to {} (the ladder's model with {}, which the explorer passed)",
                 out.display(),
-                f.family.id()
+                x.effect
             );
         }
     }

@@ -33,7 +33,8 @@ pub struct Args {
     #[arg(long)]
     pub no_diagnose: bool,
     /// Add the explorer's section (which family of features explains the remaining error; needs
-    /// `--validate`).
+    /// `--validate`). The diagnosis runs the explorer whenever `--validate` is given; with `--no-diagnose`
+    /// this runs it alone, from the model given.
     #[arg(long)]
     pub explore: bool,
     /// Output options (JSON: the files written and each model's costs).
@@ -59,7 +60,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     let diagnosis = if a.no_diagnose {
         None
     } else {
-        let spinner = progress::spinner("diagnosing: refitting each candidate effect", quiet);
+        let spinner = progress::spinner("diagnosing: refitting each candidate effect, then the explorer", quiet);
         let opts = DiagnoseOptions { auto: true, ..DiagnoseOptions::default() };
         let held_out = if val.is_empty() { None } else { Some(val.as_slice()) };
         let d = diagnose(&model, &design, &ds.runs, held_out, &opts)?;
@@ -77,18 +78,22 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         diagnosis: diagnosis.as_ref(),
         sources,
     };
-    let extra = if a.explore {
-        if val.is_empty() {
-            anyhow::bail!(
-                "--explore: the explorer judges each family on held-out runs; give them with --validate PATH"
-            );
+    // The diagnosis (`auto`) ran the explorer when held-out runs are given, and its headline names the
+    // family the explorer passed: the section shows that exploration. `--explore` runs it alone otherwise.
+    let extra = match (diagnosis.as_ref().and_then(|d| d.exploration.as_ref()), a.explore) {
+        (Some(e), _) => report::explore::section(e),
+        (None, true) => {
+            if val.is_empty() {
+                anyhow::bail!(
+                    "--explore: the explorer judges each family on held-out runs; give them with --validate PATH"
+                );
+            }
+            let spinner = progress::spinner("exploring: fitting each family of features", quiet);
+            let e = omni_ga::explore::explore(&model, &ds.runs, &val, &omni_ga::explore::ExploreOptions::default())?;
+            spinner.finish_and_clear();
+            report::explore::section(&e)
         }
-        let spinner = progress::spinner("exploring: fitting each family of features", quiet);
-        let e = omni_ga::explore::explore(&model, &ds.runs, &val, &omni_ga::explore::ExploreOptions::default())?;
-        spinner.finish_and_clear();
-        report::explore::section(&e)
-    } else {
-        String::new()
+        (None, false) => String::new(),
     };
     let spinner = progress::spinner("drawing the report", quiet);
     let w = report::write_with(&input, &a.out, a.png.as_deref(), &extra)?;

@@ -8,7 +8,7 @@
 //! |---|---|---|---|
 //! | `wheel` | wheel | `ω_i += f(ω_i, φ_i)` per wheel | `speed_<w>` (s/rad) × ω\|ω\|, `sign_<w>` (1) × \|ω\|, `accel_<w>` (s) × dω/dt, `cos<n>_<w>`, `sin<n>_<w>` (1) × ω cos nφ, ω sin nφ for n = 1, 2, 3 |
 //! | `body` | twist | on the body twist `(v, ω)`, `s = \|v\|`, α its direction | `omega_speed` (rad/m) δω = θ s; `omega_abs` (1) δω = θ \|ω\|; `scale_speed` (s/m) δv = θ s v; `scale_turn` (s/rad) δv = θ \|ω\| v; `turn_omega` (s) δv = θ ω (−vy, vx); `scale_cos<n>`, `scale_sin<n>` (1) δv = θ cos nα v, θ sin nα v for n = 1, 2 |
-//! | `world` | twist (heading) | a world-frame velocity `d` while moving, turned into the body frame | `drift_x`, `drift_y` (m/s) d = (θx, θy); `omega_cos1`, `omega_sin1` (rad/s) δω = θc cos ψ + θs sin ψ (ψ the heading) |
+//! | `world` | twist (heading) | a world-frame velocity `d` while moving, turned into the body frame | `drift_x`, `drift_y` (m/s) d = (θx, θy); `omega_cos1`, `omega_sin1` (rad/s) δω = θc cos ψ + θs sin ψ (ψ the heading); `grain_cos2`, `grain_sin2` (1) δv_w = [[θc, θs], [θs, −θc]] v_w, the world-frame velocity faster along one direction than across it (a carpet's grain) |
 //! | `time` | twist (time) | growing with the time `t` since the run's first ground-truth pose, while moving | `drift_x_per_s`, `drift_y_per_s` (m/s²) d = t (θx, θy); `omega_per_s` (rad/s²) δω = θ t; `scale_per_s` (1/s) δv = θ t v |
 //! | `ground_truth` | measurement | the ground-truth sensor's lever arm and yaw | `lever_x_m`, `lever_y_m` (m), `yaw_rad` (rad) |
 //!
@@ -45,7 +45,7 @@ pub enum Family {
 crate::choice!(Family, {
     Wheel => "wheel": "Per wheel: speed, sign, acceleration, harmonics 1-3 of the wheel angle",
     Body => "body": "Products of the body twist (v·ω, ω², |v|), harmonics of the travel direction",
-    World => "world": "A world-frame drift while moving, and terms of the world heading",
+    World => "world": "A world-frame drift while moving, a turn rate and a speed grain by the world heading",
     Time => "time": "Drift growing with the time since the run started",
     GroundTruth => "ground_truth": "Lever arm and yaw of the ground-truth sensor",
 });
@@ -93,8 +93,14 @@ const BODY_TERMS: [(&str, &str); 9] = [
     ("scale_sin2", "1"),
 ];
 
-const WORLD_TERMS: [(&str, &str); 4] =
-    [("drift_x", "m/s"), ("drift_y", "m/s"), ("omega_cos1", "rad/s"), ("omega_sin1", "rad/s")];
+const WORLD_TERMS: [(&str, &str); 6] = [
+    ("drift_x", "m/s"),
+    ("drift_y", "m/s"),
+    ("omega_cos1", "rad/s"),
+    ("omega_sin1", "rad/s"),
+    ("grain_cos2", "1"),
+    ("grain_sin2", "1"),
+];
 
 const TIME_TERMS: [(&str, &str); 4] =
     [("drift_x_per_s", "m/s²"), ("drift_y_per_s", "m/s²"), ("omega_per_s", "rad/s²"), ("scale_per_s", "1/s")];
@@ -145,6 +151,21 @@ fn add_world(t: &mut Twist2, d: [f64; 2], psi: f64) {
     let (s, c) = psi.sin_cos();
     t.vx_m_s += c * d[0] + s * d[1];
     t.vy_m_s += -s * d[0] + c * d[1];
+}
+
+/// A floor whose grain makes the world-frame velocity `v_w` of the twist `t` (at heading `psi`) faster
+/// along one world direction than across it: `δv_w = G v_w`, `G = [[gc, gs], [gs, −gc]]` (traceless: the
+/// common speed scale is the kinematics'), the speed along the direction `atan2(gs, gc) / 2` scaled by
+/// `1 + hypot(gc, gs)` and across it by `1 − hypot(gc, gs)`; added to `out`'s body velocity.
+fn grain(out: &mut Twist2, t: Twist2, [gc, gs]: [f64; 2], psi: f64) {
+    if gc == 0.0 && gs == 0.0 {
+        return;
+    }
+    // In the body frame the same gain turned by −2ψ.
+    let (s2, c2) = (2.0 * psi).sin_cos();
+    let (c, s) = (gc * c2 + gs * s2, gs * c2 - gc * s2);
+    out.vx_m_s += c * t.vx_m_s + s * t.vy_m_s;
+    out.vy_m_s += s * t.vx_m_s - c * t.vy_m_s;
 }
 
 /// The `body` family's correction of one twist.
@@ -212,6 +233,7 @@ impl Effect for Learned {
                 let mut out = t;
                 add_world(&mut out, [p[0], p[1]], psi);
                 out.omega_rad_s += p[2] * psi.cos() + p[3] * psi.sin();
+                grain(&mut out, t, [p[4], p[5]], psi);
                 out
             }
             Family::Time if moving(&t) => {
@@ -293,13 +315,33 @@ mod tests {
     #[test]
     fn world_drift_is_turned_into_the_body_frame() {
         let e = Learned::from_id("learned:world", 3).unwrap();
-        let p = [0.01, 0.0, 0.0, 0.0];
+        let p = [0.01, 0.0, 0.0, 0.0, 0.0, 0.0];
         let at = TwistAt { pose: Pose2::new(0.0, 0.0, std::f64::consts::FRAC_PI_2), since_start_s: 0.0 };
         let t = e.twist_at(&p, Twist2 { vx_m_s: 0.2, vy_m_s: 0.0, omega_rad_s: 0.0 }, &[], &at);
         // Heading +90°: world +x is the body's −y.
         assert!((t.vx_m_s - 0.2).abs() < 1e-15 && (t.vy_m_s + 0.01).abs() < 1e-15, "{t:?}");
         let rest = e.twist_at(&p, Twist2::default(), &[], &at);
         assert_eq!(rest, Twist2::default());
+    }
+
+    /// A grain along the world's x axis (`grain_cos2` 0.02): driving along it is 2 % faster, across it 2 %
+    /// slower, whatever way the body points; at 45° the speed keeps its size and turns towards the grain.
+    #[test]
+    fn a_floor_grain_scales_the_world_velocity_along_its_axis() {
+        let e = Learned::from_id("learned:world", 3).unwrap();
+        let p = [0.0, 0.0, 0.0, 0.0, 0.02, 0.0];
+        let forward = Twist2 { vx_m_s: 0.2, vy_m_s: 0.0, omega_rad_s: 0.0 };
+        let sideways = Twist2 { vx_m_s: 0.0, vy_m_s: 0.2, omega_rad_s: 0.0 };
+        let at = |deg: f64| TwistAt { pose: Pose2::new(0.0, 0.0, deg.to_radians()), since_start_s: 0.0 };
+        let along = e.twist_at(&p, forward, &[], &at(0.0));
+        assert!((along.vx_m_s - 0.204).abs() < 1e-15 && along.vy_m_s.abs() < 1e-15, "{along:?}");
+        let across = e.twist_at(&p, forward, &[], &at(90.0));
+        assert!((across.vx_m_s - 0.196).abs() < 1e-15 && across.vy_m_s.abs() < 1e-15, "{across:?}");
+        // Heading −90°, driving to the body's left: world +x again, along the grain.
+        let left = e.twist_at(&p, sideways, &[], &at(-90.0));
+        assert!(left.vx_m_s.abs() < 1e-15 && (left.vy_m_s - 0.204).abs() < 1e-15, "{left:?}");
+        let diagonal = e.twist_at(&p, forward, &[], &at(45.0));
+        assert!((diagonal.vx_m_s - 0.2).abs() < 1e-15 && (diagonal.vy_m_s + 0.004).abs() < 1e-15, "{diagonal:?}");
     }
 
     /// The squared test `moving` uses decides as `hypot` does, on and around the threshold.
@@ -336,7 +378,7 @@ mod tests {
         ];
         for (t, moves) in cases {
             assert_eq!(moving(&t), moves, "{t:?}");
-            let a = learned.twist_at(&[0.01, 0.0, 0.0, 0.0], t, &fighting, &at);
+            let a = learned.twist_at(&[0.01, 0.0, 0.0, 0.0, 0.0, 0.0], t, &fighting, &at);
             let b = catalogue.twist_at(&[0.01, 0.0], t, &fighting, &at);
             assert_eq!(a, b, "{t:?}");
             assert_eq!(a.vx_m_s == t.vx_m_s + 0.01, moves, "{t:?}: {a:?}");

@@ -25,7 +25,7 @@ pub(super) enum LaneTwist {
     RotationSlip(f64),
     WorldDrift([f64; 2]),
     Body([f64; 9]),
-    World([f64; 4]),
+    World([f64; 6]),
     Time([f64; 4]),
 }
 
@@ -77,11 +77,13 @@ impl LaneTwist {
                 }
             }
             LaneTwist::Body(p) if p != [0.0; 9] => (0..LANES).for_each(|l| body(&p, v, l)),
-            LaneTwist::World(p) if p != [0.0; 4] => {
+            LaneTwist::World(p) if p != [0.0; 6] => {
                 for l in 0..LANES {
                     if moving(v, l) {
-                        v[0][l] += c[l] * p[0] + s[l] * p[1];
-                        v[1][l] += -s[l] * p[0] + c[l] * p[1];
+                        let (vx, vy) = (v[0][l], v[1][l]);
+                        let (gc, gs) = grain_in_body(p[4], p[5], c[l], s[l]);
+                        v[0][l] += c[l] * p[0] + s[l] * p[1] + gc * vx + gs * vy;
+                        v[1][l] += -s[l] * p[0] + c[l] * p[1] + gs * vx - gc * vy;
                         v[2][l] += p[2] * c[l] + p[3] * s[l];
                     }
                 }
@@ -103,6 +105,14 @@ impl LaneTwist {
             _ => {}
         }
     }
+}
+
+/// The `world` family's grain `(gc, gs)` seen in the body frame at heading cosine and sine `(c, s)`: the
+/// same gain turned by −2ψ (`learned::grain`).
+#[inline(always)]
+fn grain_in_body(gc: f64, gs: f64, c: f64, s: f64) -> (f64, f64) {
+    let (c2, s2) = (c * c - s * s, 2.0 * c * s);
+    (gc * c2 + gs * s2, gs * c2 - gc * s2)
 }
 
 /// `sin x`, `cos x`: the arc factors' polynomials for small angles, the library beyond.
@@ -269,7 +279,8 @@ impl LaneTwist {
             LaneTwist::RotationSlip(_) => 1,
             LaneTwist::WorldDrift(_) => 2,
             LaneTwist::Body(_) => 9,
-            LaneTwist::World(_) | LaneTwist::Time(_) => 4,
+            LaneTwist::World(_) => 6,
+            LaneTwist::Time(_) => 4,
         }
     }
 
@@ -299,9 +310,28 @@ impl LaneTwist {
             LaneTwist::Body(p) => body_slopes(&p, &mut out),
             LaneTwist::World(p) => {
                 if moves() {
-                    out.v = [vx + c * p[0] + s * p[1], vy - s * p[0] + c * p[1], w + p[2] * c + p[3] * s];
-                    out.jth = [-s * p[0] + c * p[1], -c * p[0] - s * p[1], -p[2] * s + p[3] * c];
-                    out.jp[..4].copy_from_slice(&[[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, c], [0.0, 0.0, s]]);
+                    let (gc, gs) = grain_in_body(p[4], p[5], c, s);
+                    let (c2, s2) = (c * c - s * s, 2.0 * c * s);
+                    out.v = [
+                        vx + c * p[0] + s * p[1] + gc * vx + gs * vy,
+                        vy - s * p[0] + c * p[1] + gs * vx - gc * vy,
+                        w + p[2] * c + p[3] * s,
+                    ];
+                    out.jv = [[1.0 + gc, gs, 0.0], [gs, 1.0 - gc, 0.0], [0.0, 0.0, 1.0]];
+                    // d(gc)/dψ = 2 gs, d(gs)/dψ = −2 gc (the body-frame grain turns by −2ψ).
+                    out.jth = [
+                        -s * p[0] + c * p[1] + 2.0 * (gs * vx - gc * vy),
+                        -c * p[0] - s * p[1] - 2.0 * (gc * vx + gs * vy),
+                        -p[2] * s + p[3] * c,
+                    ];
+                    out.jp[..6].copy_from_slice(&[
+                        [c, -s, 0.0],
+                        [s, c, 0.0],
+                        [0.0, 0.0, c],
+                        [0.0, 0.0, s],
+                        [c2 * vx - s2 * vy, -s2 * vx - c2 * vy, 0.0],
+                        [s2 * vx + c2 * vy, c2 * vx - s2 * vy, 0.0],
+                    ]);
                 }
             }
             LaneTwist::Time(p) => {

@@ -8,6 +8,7 @@ use super::unexplained::{MISSING_RATIO, UnexplainedEvidence, decide};
 use super::{Candidate, Costs, DiagnoseOptions, GroupReport, Growth, KindOut, NoiseFloor, ParamValue, RunReport};
 use crate::science::coverage::MotionCoverage;
 use crate::science::identify::{Identifiability, WeakDirection};
+use serde::{Deserialize, Serialize};
 
 /// One fact about where the model fails.
 #[derive(Clone, Debug)]
@@ -146,6 +147,24 @@ pub struct Verdict {
     pub unexplained: bool,
     /// The figures behind `unexplained` and which of them decided.
     pub evidence: UnexplainedEvidence,
+    /// Beyond the catalogue: the explorer's best passing family (`auto` with held-out runs), which the final
+    /// model then carries; `unexplained` and `evidence` are then judged with it.
+    pub explored: Option<Explored>,
+}
+
+/// A learned family the explorer passed on held-out runs, as the verdict names it.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Explored {
+    /// The effect id: `learned:wheel`.
+    pub effect: String,
+    /// Relative fall of the held-out path cost against the explorer's baseline.
+    pub gain: f64,
+    /// Held-out path cost of the baseline (the model refitted without a family). m.
+    pub before_m: f64,
+    /// Held-out path cost with the family. m.
+    pub after_m: f64,
+    /// What its strongest terms mean physically, in words (`an oval wheel`).
+    pub hint: String,
 }
 
 /// Where the model fails, in report order.
@@ -252,6 +271,6 @@ impl Judgement<'_> {
             Remaining { held_out_m, floor_m: nf.path_rms, ratio, missing: ratio > MISSING_RATIO }
         });
         let (unexplained, evidence) = decide(self.groups, self.growth, self.repeat_floor, held_out_m, self.noise);
-        Verdict { conclusion, remaining, unexplained, evidence }
+        Verdict { conclusion, remaining, unexplained, evidence, explored: None }
     }
 }

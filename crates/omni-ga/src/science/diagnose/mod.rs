@@ -43,7 +43,7 @@ pub use clock::{ClockLag, clock_lag};
 pub use compare::{Turn, costs_of, costs_of_each};
 pub(crate) use evidence::unbounded;
 pub use evidence::{differentiable_start, refit, refit_on};
-pub use findings::{Conclusion, Finding, Remaining, Verdict};
+pub use findings::{Conclusion, Explored, Finding, Remaining, Verdict};
 pub use kinds::{GroupBasis, MotionKind, Shape};
 pub use noise::{ExcitationGap, GapKind, WheelGap, noise_floor, wheel_excitation, wheel_excitation_gap};
 pub use unexplained::{DecidedBy, MIN_DOF_TO_CLEAR, UnexplainedEvidence};
@@ -51,6 +51,7 @@ pub use unexplained::{DecidedBy, MIN_DOF_TO_CLEAR, UnexplainedEvidence};
 use crate::error::Error;
 use crate::fit::BaseFit;
 use crate::science::coverage::{MotionCoverage, motion_coverage};
+use crate::science::explore::{Exploration, ExploreOptions, FamilyResult, explore};
 use crate::science::identify::{Identifiability, IdentifyOptions};
 use crate::science::text;
 use compare::compare;
@@ -314,9 +315,16 @@ pub struct Diagnosis {
     /// The training runs' motions against the held-out runs' (with a validation set): what the training
     /// runs lack.
     pub coverage: Option<MotionCoverage>,
-    /// The final model (the input, plus effects added by `auto`).
+    /// `auto` with held-out runs: the explorer's best passing family, which the final model carries and
+    /// the verdict names (`unexplained` is then judged with it).
+    pub explored: Option<Explored>,
+    /// The final model (the input, plus effects added by `auto`, plus the family the explorer passed).
     #[serde(skip)]
     pub final_model: Option<FittedModel>,
+    /// `auto` with held-out runs: the explorer's families, fitted from the ladder's model on the training
+    /// runs and judged on the held-out runs (the verdict names the best passing one).
+    #[serde(skip)]
+    pub exploration: Option<Exploration>,
     /// How held-out costs were obtained.
     #[serde(skip)]
     pub protocol: HeldOut,
@@ -329,9 +337,8 @@ pub struct Diagnosis {
 }
 
 impl Diagnosis {
-    /// An error beyond the catalogue's reach remains: something is missing, or the remaining held-out error
-    /// is above `MISSING_RATIO` (3×) the noise floor. `diagnose --auto` then runs the
-    /// explorer.
+    /// An error remains that the final model does not remove: something is missing, or the remaining
+    /// held-out error is above `MISSING_RATIO` (3×) the noise floor.
     pub fn error_remains(&self) -> bool {
         self.unexplained || self.conclusion.remaining.is_some_and(|r| r.missing)
     }
@@ -509,7 +516,6 @@ pub fn diagnose(
     let designs = design.to_run_models();
     let every = opts.every.max(1);
     let (fit_runs, held_runs, protocol) = held_out_sets(train, validation);
-    // Compare the model and the design with the data.
     let costs = costs_of(model, &fit_runs, &held_runs, every)?;
     let design_costs = costs_of_each(&designs, &fit_runs, &held_runs, every)?;
     let cmp = compare(model, &designs, train, every)?;
@@ -535,7 +541,7 @@ pub fn diagnose(
     let after =
         accepted(verdict.is_some(), &climb, opts.auto).map(|f| compare(f, &designs, train, every)).transpose()?;
     let (groups_after, growth_after) = after.as_ref().map_or((&cmp.groups, &cmp.growth), |c| (&c.groups, &c.growth));
-    let conclusion = Judgement {
+    let mut conclusion = Judgement {
         ranking: &climb.ranking,
         verdict: verdict.as_deref(),
         kind_check: kind_check.as_ref(),
@@ -548,6 +554,7 @@ pub fn diagnose(
         repeat_floor: repeatability_floor(groups_after),
     }
     .verdict(opts);
+    let (top, exploration) = explore_stage(climb.top, train, validation, opts, &mut conclusion)?;
     Ok(Diagnosis {
         verdict,
         verdict_text: text::verdict(&conclusion),
@@ -568,9 +575,47 @@ pub fn diagnose(
         kind_out: kind_check,
         held_out_kinds: held_kinds,
         coverage,
-        final_model: Some(climb.top),
+        explored: conclusion.explored.clone(),
+        final_model: Some(top),
+        exploration,
         protocol,
         facts,
         conclusion,
     })
+}
+
+/// `auto` with held-out runs: the explorer from the ladder's model `top`; when a family passes, the verdict
+/// names it and is judged with it, and the final model carries it. Returns the final model and the
+/// exploration.
+fn explore_stage(
+    top: FittedModel,
+    train: &[Run],
+    validation: Option<&[Run]>,
+    opts: &DiagnoseOptions,
+    conclusion: &mut Verdict,
+) -> Result<(FittedModel, Option<Exploration>), Error> {
+    let (true, Some(v)) = (opts.auto, validation) else { return Ok((top, None)) };
+    let e = explore(&top, train, v, &ExploreOptions { every: opts.every.max(1), ..ExploreOptions::default() })?;
+    let Some(best) = e.best() else { return Ok((top, Some(e))) };
+    conclusion.explored = Some(explored(&e, best));
+    conclusion.unexplained = e.unexplained;
+    conclusion.evidence = e.evidence.clone();
+    let ev = &conclusion.evidence;
+    if let (Some(floor_m), Some(ratio)) = (ev.noise_floor_m, ev.ratio) {
+        let (held_out_m, missing) = (ev.remaining_held_out_m, ratio > unexplained::MISSING_RATIO);
+        conclusion.remaining = Some(Remaining { held_out_m, floor_m, ratio, missing });
+    }
+    let fitted = best.fitted.clone();
+    Ok((fitted, Some(e)))
+}
+
+/// The explorer's best passing family `f`, as the verdict names it.
+fn explored(e: &Exploration, f: &FamilyResult) -> Explored {
+    Explored {
+        effect: format!("{}{}", omni_kin::effect::learned::PREFIX, f.family.id()),
+        gain: f.held_out_gain,
+        before_m: e.baseline_held_out_cost,
+        after_m: f.held_out_cost,
+        hint: text::explore_hint(f),
+    }
 }

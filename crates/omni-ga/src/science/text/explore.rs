@@ -42,6 +42,17 @@ pub fn explore_hint(f: &FamilyResult) -> String {
             "a turn rate that depends on the world heading (amplitude {:.2} mrad/s): a tilted floor turning the robot downhill",
             1e3 * value("omega_cos1").hypot(value("omega_sin1"))
         ),
+        Family::World if top.name.starts_with("grain") => {
+            let (c, s) = (value("grain_cos2"), value("grain_sin2"));
+            format!(
+                "the floor has a grain: the speed along the world direction {:.0}° is {:.1} % higher than across it \
+                 (a carpet's pile, floor boards, a brushed surface)",
+                // An axis: 0°…179° from the world x axis, rounded first (−0.2° is 0°, not 180°; + 0.0 makes −0
+                // print as 0).
+                (0.5 * s.atan2(c).to_degrees()).round().rem_euclid(180.0) + 0.0,
+                100.0 * ((1.0 + c.hypot(s)) / (1.0 - c.hypot(s)) - 1.0)
+            )
+        }
         Family::World => format!(
             "a world-frame drift of ({:+.1}, {:+.1}) mm/s while moving, one drift shared by the runs: a tilted floor, or a ground-truth frame that moves",
             1e3 * value("drift_x"),

@@ -201,7 +201,7 @@ fn kernel_serves_builtin_twist_effects_as_the_walk_does() {
         (vec!["rotation_slip"], vec![-2.5]),
         (vec!["world_drift"], vec![0.004, -0.003]),
         (vec!["learned:body"], vec![0.05, 0.02, 0.1, -0.05, 0.03, 0.02, -0.01, 0.015, 0.01]),
-        (vec!["learned:world"], vec![0.003, -0.002, 0.01, -0.02]),
+        (vec!["learned:world"], vec![0.003, -0.002, 0.01, -0.02, 0.015, -0.01]),
         (vec!["learned:time"], vec![0.001, -0.0005, 0.002, 0.003]),
         (
             vec!["time_offset", "rotation_slip", "wheel_eccentricity", "sensor_offset_yaw", "learned:time"],

@@ -193,7 +193,7 @@ fn forward_jacobian_matches_central_differences() {
         (vec!["turn_scrub"], vec![-0.13], 1),
         (vec!["world_drift"], vec![0.004, -0.003], 2),
         (vec!["learned:body"], vec![0.05, 0.02, 0.1, -0.05, 0.03, 0.02, -0.01, 0.015, 0.01], 9),
-        (vec!["learned:world"], vec![0.003, -0.002, 0.01, -0.02], 4),
+        (vec!["learned:world"], vec![0.003, -0.002, 0.01, -0.02, 0.015, -0.01], 6),
         (vec!["learned:time"], vec![0.001, -0.0005, 0.002, 0.003], 4),
         (vec!["sensor_offset_yaw", "rotation_slip"], vec![0.03, -0.02, 0.05, 0.1], 4),
         (vec!["wheel_eccentricity", "world_drift"], vec![0.02, -0.01, 0.01, 0.015, 0.0, -0.02, 0.004, 0.002], 8),
@@ -201,8 +201,8 @@ fn forward_jacobian_matches_central_differences() {
         (vec!["time_offset", "rotation_slip"], vec![0.03, 0.1], 1),
         (
             vec!["rotation_slip", "learned:world", "learned:body"],
-            [vec![-0.7, 0.003, -0.002, 0.01, -0.02], vec![0.01; 9]].concat(),
-            14,
+            [vec![-0.7, 0.003, -0.002, 0.01, -0.02, 0.015, -0.01], vec![0.01; 9]].concat(),
+            16,
         ),
         // A user's twist-stage effect: its hook's slopes by differences.
         (vec!["spin", "world_drift"], vec![0.02, 0.004, 0.002], 3),
