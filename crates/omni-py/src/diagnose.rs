@@ -159,7 +159,8 @@ impl PyDiagnosis {
             })
             .transpose()
     }
-    /// The final model: the input plus the effects ``auto`` added.
+    /// The final model: the input plus the effects ``auto`` added (and, with ``validate``, the family the
+    /// explorer passed: ``explored``).
     #[getter]
     fn final_model(&self, py: Python<'_>) -> Option<Py<PyModel>> {
         self.final_model.as_ref().map(|m| m.clone_ref(py))
@@ -190,7 +191,8 @@ impl PyDiagnosis {
 /// ``model``: as in :func:`evaluate` (a Model, ``"design"``, ``"paper"`` or a model file path).
 /// ``validate``: held-out runs (``--validate``; default: 2-fold cross-validation over repetitions).
 /// ``candidates``: catalogue ids and/or Python effects (default: the whole catalogue). ``auto``: add effects
-/// one at a time while the held-out cost falls (the error ladder). The GIL is released.
+/// one at a time while the held-out cost falls (the error ladder), then with ``validate`` run the explorer
+/// and name the family it passes (``explored``). The GIL is released.
 ///
 /// >>> truth = omnical.Model.paper().with_effect("time_offset", tau_s=0.06)
 /// >>> runs = omnical.simulate(truth, runs_per_command=1, duration_s=2.0)

@@ -24,7 +24,8 @@ pub struct Args {
     /// cross-validation over repetitions.
     #[arg(long, value_name = "PATH")]
     pub validate: Vec<PathBuf>,
-    /// Add effects one at a time while the held-out cost falls, and print the error ladder.
+    /// Add effects one at a time while the held-out cost falls, and print the error ladder; with
+    /// --validate, then run the explorer and name the family it passes.
     #[arg(long)]
     pub auto: bool,
     /// Candidate effects (effect ids, comma-separated; default: all of them).
@@ -35,7 +36,7 @@ pub struct Args {
     /// Minimum relative fall of the held-out path cost to recommend an effect.
     #[arg(long, default_value_t = DiagnoseOptions::default().min_gain)]
     pub min_gain: f64,
-    /// Write the final model (with effects added by --auto) here.
+    /// Write the final model (with the effects and the explorer's family added by --auto) here.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Output options (JSON: top-level `verdict`, `ranking`, `ladder`, …).
