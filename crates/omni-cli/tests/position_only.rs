@@ -214,3 +214,80 @@ fn a_tum_file_whose_heading_never_changes_is_read_as_positions_only() {
     let (paper, design) = (path_cost("paper"), path_cost("design"));
     assert!(paper < 0.006 && design > 3.0 * paper, "paper {paper}, design {design}");
 }
+
+/// `src` with its ground-truth topic's PoseStamped messages turned into PointStamped ones (the same header
+/// and position, no orientation: a PoseStamped's CDR cut after its position is a PointStamped's), as a
+/// tracker or a total station publishes positions; every other channel as it was.
+fn with_point_stamped(src: &Path, to: &Path) {
+    use std::collections::BTreeMap;
+    let bytes = std::fs::read(src).unwrap();
+    let mut out = mcap::WriteOptions::new().profile("ros2").create(std::io::Cursor::new(Vec::new())).unwrap();
+    let mut ids = BTreeMap::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let schema = m.channel.schema.as_ref().unwrap();
+        let truth = m.channel.topic == omni_cli::dataset::mcap::TRUTH_TOPIC;
+        let id = *ids.entry(m.channel.topic.clone()).or_insert_with(|| {
+            let (name, text): (&str, &[u8]) = if truth {
+                ("geometry_msgs/msg/PointStamped", b"std_msgs/Header header\ngeometry_msgs/Point point\n")
+            } else {
+                (&schema.name, &schema.data)
+            };
+            let s = out.add_schema(name, &schema.encoding, text).unwrap();
+            out.add_channel(s, &m.channel.topic, &m.channel.message_encoding, &BTreeMap::new()).unwrap()
+        });
+        // Encapsulation (4 bytes), stamp (8), frame_id (4 + its length), padding to 8 from byte 4, then x, y, z.
+        let data: &[u8] = if truth {
+            let len = u32::from_le_bytes(m.data[12..16].try_into().unwrap()) as usize;
+            let position = 4 + (12 + len).next_multiple_of(8);
+            &m.data[..position + 24]
+        } else {
+            &m.data
+        };
+        let header = mcap::records::MessageHeader {
+            channel_id: id,
+            sequence: m.sequence,
+            log_time: m.log_time,
+            publish_time: m.publish_time,
+        };
+        out.write_to_known_channel(&header, data).unwrap();
+    }
+    out.finish().unwrap();
+    std::fs::write(to, out.into_inner().into_inner()).unwrap();
+}
+
+/// A ground truth published as `geometry_msgs/msg/PointStamped` (positions, no heading) is read as a
+/// position-only reference, with the same positions as the PoseStamped it came from: the matrix that made
+/// the runs lies on them within millimetres, the design several times further off.
+#[test]
+fn a_point_stamped_ground_truth_is_read_as_positions_only() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let sim = ["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "3"];
+    succeeded_on_two_threads(&sim, dir);
+    let points = dir.join("points");
+    std::fs::create_dir_all(&points).unwrap();
+    std::fs::copy(dir.join("sim/validation/robot.toml"), points.join("robot.toml")).unwrap();
+    for entry in std::fs::read_dir(dir.join("sim/validation")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "mcap") {
+            with_point_stamped(&path, &points.join(path.file_name().unwrap()));
+        }
+    }
+    let ds = dataset::load(std::slice::from_ref(&points), &LoadOptions::default()).unwrap();
+    let poses = dataset::load(&[dir.join("sim/validation")], &LoadOptions::default()).unwrap();
+    assert_eq!(ds.runs.len(), 36);
+    assert!(ds.runs.iter().all(omni_kin::Run::truth_position_only));
+    for (a, b) in ds.runs.iter().zip(&poses.runs) {
+        let (pa, pb) = (a.truth(), b.truth());
+        assert_eq!(pa.len(), pb.len(), "{}", a.name());
+        assert!(pa.iter().zip(pb).all(|(p, q)| p.t_s == q.t_s && p.pose.x_m == q.pose.x_m && p.pose.y_m == q.pose.y_m));
+    }
+    let path_cost = |model: &str| {
+        let args = ["--threads", "2", "eval", "--model", model, "points", "--json"];
+        let v: serde_json::Value = serde_json::from_str(&support::stdout(&support::succeeded(&args, dir))).unwrap();
+        v["path_cost"].as_f64().unwrap_or_else(|| panic!("{v}"))
+    };
+    let (paper, design) = (path_cost("paper"), path_cost("design"));
+    assert!(paper < 0.006 && design > 3.0 * paper, "paper {paper}, design {design}");
+}

@@ -203,7 +203,11 @@ fn guess_topics(inv: &Inventory, joints_topic: Option<String>) -> (Topics, Vec<S
     let of_types = |types: &[&str]| -> Vec<&TopicSummary> {
         inv.topics.iter().filter(|t| types.contains(&t.msg_type.as_str())).collect()
     };
-    let poses = of_types(&["geometry_msgs/msg/PoseStamped", "geometry_msgs/msg/PoseWithCovarianceStamped"]);
+    let poses = of_types(&[
+        "geometry_msgs/msg/PoseStamped",
+        "geometry_msgs/msg/PoseWithCovarianceStamped",
+        "geometry_msgs/msg/PointStamped",
+    ]);
     let other_truth = of_types(&["nav_msgs/msg/Odometry", "tf2_msgs/msg/TFMessage"]);
     let commands = of_types(&["geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped"]);
     let mut notes = Vec::new();

@@ -1,7 +1,10 @@
 //! `geometry_msgs/msg/PoseStamped` and `geometry_msgs/msg/PoseWithCovarianceStamped`: ground truth from a
 //! motion-capture system or a simulator, expressed in `header.frame_id` (e.g. `map`, `world`, `mocap`).
 
-use super::common::{Covariance, HEADER_DEF, Header, POINT_DEF, POSE_DEF, Pose, QUATERNION_DEF, TIME_DEF, schema_text};
+use super::common::{
+    Covariance, HEADER_DEF, Header, POINT_DEF, POSE_DEF, Pose, QUATERNION_DEF, Quaternion, TIME_DEF, Vector3,
+    schema_text,
+};
 use super::poses::Fields;
 use serde::{Deserialize, Serialize};
 
@@ -9,6 +12,25 @@ use serde::{Deserialize, Serialize};
 pub(super) const NAME: &str = "geometry_msgs/msg/PoseStamped";
 /// The schema name of PoseWithCovarianceStamped.
 pub(super) const WITH_COVARIANCE_NAME: &str = "geometry_msgs/msg/PoseWithCovarianceStamped";
+
+/// The schema name of PointStamped: a position without a heading (a tracker, a UWB or total-station
+/// reference), read as a position-only ground truth.
+pub(super) const POINT_NAME: &str = "geometry_msgs/msg/PointStamped";
+
+/// `geometry_msgs/msg/PointStamped`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub(super) struct PointStamped {
+    pub header: Header,
+    pub point: Vector3,
+}
+
+/// The heading a PointStamped's poses carry: none changes, so the run is position-only (the heading is a
+/// placeholder, never compared).
+pub(super) const NO_HEADING: Quaternion = Quaternion { x: 0.0, y: 0.0, z: 0.0, w: 1.0 };
+
+/// Field names of PointStamped, for messages.
+pub(super) const POINT_FIELDS: Fields =
+    Fields { stamp: "header.stamp", position: "point", orientation: "(none: positions only)" };
 
 /// `geometry_msgs/msg/PoseStamped`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -9,7 +9,7 @@
 use super::common::decode;
 use super::joint_state::{self, JointSeries, JointState};
 use super::odometry::{self, ODOM_FRAME, Odometry};
-use super::pose_stamped::{self, PoseStamped, PoseWithCovarianceStamped};
+use super::pose_stamped::{self, PointStamped, PoseStamped, PoseWithCovarianceStamped};
 use super::poses::PoseSeries;
 use super::tf::{self, TfMessage, TfPairs};
 use super::twist::{self, Commands, TwistStamped};
@@ -26,6 +26,7 @@ pub(super) enum MsgType {
     JointState,
     PoseStamped,
     PoseWithCovarianceStamped,
+    PointStamped,
     Odometry,
     Tf,
     Twist,
@@ -39,6 +40,7 @@ impl MsgType {
             joint_state::NAME => Self::JointState,
             pose_stamped::NAME => Self::PoseStamped,
             pose_stamped::WITH_COVARIANCE_NAME => Self::PoseWithCovarianceStamped,
+            pose_stamped::POINT_NAME => Self::PointStamped,
             odometry::NAME => Self::Odometry,
             tf::NAME => Self::Tf,
             twist::NAME => Self::Twist,
@@ -81,7 +83,7 @@ impl Channel {
         let msg_type = MsgType::of(schema);
         let content = match msg_type {
             MsgType::JointState => Content::Joints(JointSeries::default()),
-            MsgType::PoseStamped | MsgType::PoseWithCovarianceStamped | MsgType::Odometry => {
+            MsgType::PoseStamped | MsgType::PoseWithCovarianceStamped | MsgType::PointStamped | MsgType::Odometry => {
                 Content::Poses(PoseSeries::default())
             }
             MsgType::Tf => Content::Tf(TfPairs::default()),
@@ -118,6 +120,11 @@ impl Channel {
                     s.check_frame(m.header.frame_id.frame(), None)?;
                     let p = &m.pose;
                     s.push(m.header.stamp.ns(), &p.position, &p.orientation, &pose_stamped::FIELDS)
+                }),
+                MsgType::PointStamped => decode::<PointStamped>(data).and_then(|m| {
+                    s.check_frame(m.header.frame_id.frame(), None)?;
+                    let (p, q) = (&m.point, &pose_stamped::NO_HEADING);
+                    s.push(m.header.stamp.ns(), p, q, &pose_stamped::POINT_FIELDS)
                 }),
                 MsgType::PoseWithCovarianceStamped => decode::<PoseWithCovarianceStamped>(data).and_then(|m| {
                     s.check_frame(m.header.frame_id.frame(), None)?;

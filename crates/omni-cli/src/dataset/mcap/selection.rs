@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 pub(super) const ROBOT_FRAMES: [&str; 3] = [ODOM_FRAME, "base_link", "base_footprint"];
 /// The types a ground truth can come from.
 const TRUTH_TYPES: &str = "geometry_msgs/msg/PoseStamped, geometry_msgs/msg/PoseWithCovarianceStamped, \
-                           nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage";
+                           nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage, geometry_msgs/msg/PointStamped (positions only)";
 
 /// Where the wheel speeds come from.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -38,6 +38,7 @@ pub(super) fn layout(ros1_type: &str) -> Option<(&'static str, &'static [Field])
     Some(match ros1_type {
         "sensor_msgs/JointState" => ("sensor_msgs/msg/JointState", &[Header, StrSeq, F64Seq, F64Seq, F64Seq]),
         "geometry_msgs/PoseStamped" => ("geometry_msgs/msg/PoseStamped", &[Header, F64(3), F64(4)]),
+        "geometry_msgs/PointStamped" => ("geometry_msgs/msg/PointStamped", &[Header, F64(3)]),
         "geometry_msgs/PoseWithCovarianceStamped" => {
             ("geometry_msgs/msg/PoseWithCovarianceStamped", &[Header, F64(3), F64(4), F64(36)])
         }
