@@ -217,8 +217,9 @@ fn a_tum_file_whose_heading_never_changes_is_read_as_positions_only() {
 
 /// `src` with its ground-truth topic's PoseStamped messages turned into PointStamped ones (the same header
 /// and position, no orientation: a PoseStamped's CDR cut after its position is a PointStamped's), as a
-/// tracker or a total station publishes positions; every other channel as it was.
-fn with_point_stamped(src: &Path, to: &Path) {
+/// tracker or a total station publishes positions; every other channel as it was. `clicked`: the truth
+/// stays, and its first position is also published as a PointStamped on `/clicked_point` (as RViz does).
+fn with_point_stamped(src: &Path, to: &Path, clicked: bool) {
     use std::collections::BTreeMap;
     let bytes = std::fs::read(src).unwrap();
     let mut out = mcap::WriteOptions::new().profile("ros2").create(std::io::Cursor::new(Vec::new())).unwrap();
@@ -226,8 +227,24 @@ fn with_point_stamped(src: &Path, to: &Path) {
     for m in mcap::MessageStream::new(&bytes).unwrap() {
         let m = m.unwrap();
         let schema = m.channel.schema.as_ref().unwrap();
-        let truth = m.channel.topic == omni_cli::dataset::mcap::TRUTH_TOPIC;
-        let id = *ids.entry(m.channel.topic.clone()).or_insert_with(|| {
+        let is_truth = m.channel.topic == omni_cli::dataset::mcap::TRUTH_TOPIC;
+        let truth = is_truth && !clicked;
+        let topic = m.channel.topic.clone();
+        if is_truth && clicked && !ids.contains_key("/clicked_point") {
+            let s = out.add_schema("geometry_msgs/msg/PointStamped", &schema.encoding, b"").unwrap();
+            let id = out.add_channel(s, "/clicked_point", &m.channel.message_encoding, &BTreeMap::new()).unwrap();
+            ids.insert("/clicked_point".to_string(), id);
+            let len = u32::from_le_bytes(m.data[12..16].try_into().unwrap()) as usize;
+            let position = 4 + (12 + len).next_multiple_of(8);
+            let header = mcap::records::MessageHeader {
+                channel_id: id,
+                sequence: 0,
+                log_time: m.log_time,
+                publish_time: m.publish_time,
+            };
+            out.write_to_known_channel(&header, &m.data[..position + 24]).unwrap();
+        }
+        let id = *ids.entry(topic).or_insert_with(|| {
             let (name, text): (&str, &[u8]) = if truth {
                 ("geometry_msgs/msg/PointStamped", b"std_msgs/Header header\ngeometry_msgs/Point point\n")
             } else {
@@ -271,7 +288,7 @@ fn a_point_stamped_ground_truth_is_read_as_positions_only() {
     for entry in std::fs::read_dir(dir.join("sim/validation")).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().is_some_and(|e| e == "mcap") {
-            with_point_stamped(&path, &points.join(path.file_name().unwrap()));
+            with_point_stamped(&path, &points.join(path.file_name().unwrap()), false);
         }
     }
     let ds = dataset::load(std::slice::from_ref(&points), &LoadOptions::default()).unwrap();
@@ -283,6 +300,13 @@ fn a_point_stamped_ground_truth_is_read_as_positions_only() {
         assert_eq!(pa.len(), pb.len(), "{}", a.name());
         assert!(pa.iter().zip(pb).all(|(p, q)| p.t_s == q.t_s && p.pose.x_m == q.pose.x_m && p.pose.y_m == q.pose.y_m));
     }
+    // Beside a full pose, a PointStamped (RViz's /clicked_point) is no candidate: the pose is the truth.
+    let clicked = dir.join("clicked");
+    std::fs::create_dir_all(&clicked).unwrap();
+    std::fs::copy(dir.join("sim/validation/robot.toml"), clicked.join("robot.toml")).unwrap();
+    with_point_stamped(&dir.join("sim/validation/00-r0.mcap"), &clicked.join("00-r0.mcap"), true);
+    let ds = dataset::load(std::slice::from_ref(&clicked), &LoadOptions::default()).unwrap();
+    assert!(!ds.runs[0].truth_position_only() && ds.runs[0].truth().len() == poses.runs[0].truth().len());
     let path_cost = |model: &str| {
         let args = ["--threads", "2", "eval", "--model", model, "points", "--json"];
         let v: serde_json::Value = serde_json::from_str(&support::stdout(&support::succeeded(&args, dir))).unwrap();

@@ -252,6 +252,7 @@ impl Bag<'_> {
             };
         }
         let mut found: Vec<(Truth, String)> = Vec::new();
+        let mut points: Vec<(Truth, String)> = Vec::new();
         let mut localizations: Vec<&str> = Vec::new();
         for (i, c) in self.channels.iter().enumerate() {
             if c.messages == 0 {
@@ -265,7 +266,9 @@ impl Bag<'_> {
                 Content::Poses(_) => {
                     let robot_frame = c.frame().is_some_and(|f| ROBOT_FRAMES.contains(&f));
                     if !robot_frame && self.truth_mismatch(i, opts).is_none() {
-                        found.push((Truth::Poses(i), c.candidate()));
+                        // Positions alone (a tracker, or RViz's /clicked_point) only where nothing gives a pose.
+                        let list = if c.msg_type == MsgType::PointStamped { &mut points } else { &mut found };
+                        list.push((Truth::Poses(i), c.candidate()));
                     }
                 }
                 Content::Tf(_) if tf::is_static_topic(&c.topic) => {}
@@ -277,6 +280,9 @@ impl Bag<'_> {
                 }
                 _ => {}
             }
+        }
+        if found.is_empty() {
+            found = points;
         }
         match &found[..] {
             [(t, _)] => Ok(*t),
