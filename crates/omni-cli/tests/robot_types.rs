@@ -14,7 +14,7 @@ mod support;
 
 use serde_json::Value;
 use std::path::Path;
-use support::{json, omnical, param, succeeded};
+use support::{json, omni_toml, omnical, param, succeeded};
 
 /// Relative error of `got` against `want`.
 fn rel(got: f64, want: f64) -> f64 {
@@ -24,18 +24,7 @@ fn rel(got: f64, want: f64) -> f64 {
 /// The hidden clock lag every true robot here has. s.
 const TAU_S: f64 = 0.06;
 
-/// An omni wheel in a robot.toml: polar position, drive along the counter-clockwise tangent.
-fn omni_toml(name: &str, radius_m: f64, distance_m: f64, angles_deg: &[f64]) -> String {
-    let mut s = format!("name = \"{name}\"\nkind = \"omni\"\n");
-    for (i, a) in angles_deg.iter().enumerate() {
-        s += &format!(
-            "[[wheels]]\njoint = \"w{i}\"\ndistance_m = {distance_m}\nangle_deg = {a}\nradius_m = {radius_m}\n"
-        );
-    }
-    s
-}
-
-/// The forward matrix (wheel speed per twist, N × 3) of [`omni_toml`]'s wheels: `r ω = −sin δ vx + cos δ vy
+/// The forward matrix (wheel speed per twist, N × 3) of [`support::omni_toml`]'s wheels: `r ω = −sin δ vx + cos δ vy
 /// + R ω`.
 fn omni_forward(radius_m: f64, distance_m: f64, angles_deg: &[f64]) -> Vec<[f64; 3]> {
     angles_deg

@@ -8,23 +8,14 @@
 
 mod support;
 
-use std::path::Path;
-use support::{json, param_se, succeeded};
-
-/// A 4-wheel omni robot (wheels at 45°, 135°, 225°, 315°).
-fn omni4(dir: &Path) {
-    let mut s = String::from("name = \"omni4\"\nkind = \"omni\"\n");
-    for (i, a) in [45, 135, 225, 315].iter().enumerate() {
-        s += &format!("[[wheels]]\njoint = \"w{i}\"\ndistance_m = 0.21\nangle_deg = {a}\nradius_m = 0.0508\n");
-    }
-    std::fs::write(dir.join("omni4.toml"), s).unwrap();
-}
+use support::{json, omni_toml, param_se, succeeded};
 
 #[test]
 fn turn_scrub_is_held_on_squares_and_found_by_default_once_circles_are_added() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
-    omni4(d);
+    // A 4-wheel omni robot, wheels at 45°, 135°, 225° and 315°.
+    std::fs::write(d.join("omni4.toml"), omni_toml("omni4", 0.0508, 0.21, &[45.0, 135.0, 225.0, 315.0])).unwrap();
     let squares = "0.2,0,0,2\n0.2,90,0,2\n0.2,180,0,2\n0.2,-90,0,2\n0,0,0.6,2\n0,0,-0.6,2\n";
     let circles = "0.2,0,0.4,2\n0.2,0,-0.4,2\n0.3,90,0.3,2\n0.3,-90,-0.3,2\n";
     let header = "v_m_s,alpha_deg,omega_rad_s,repetitions\n";

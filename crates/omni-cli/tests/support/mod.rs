@@ -171,3 +171,15 @@ pub fn copy_dir(from: &Path, to: &Path) {
         }
     }
 }
+
+/// A robot.toml of omni wheels `name`, each at `distance_m` from the centre at one of `angles_deg` (polar
+/// position), driving along the counter-clockwise tangent.
+pub fn omni_toml(name: &str, radius_m: f64, distance_m: f64, angles_deg: &[f64]) -> String {
+    let mut s = format!("name = \"{name}\"\nkind = \"omni\"\n");
+    for (i, a) in angles_deg.iter().enumerate() {
+        s += &format!(
+            "[[wheels]]\njoint = \"w{i}\"\ndistance_m = {distance_m}\nangle_deg = {a}\nradius_m = {radius_m}\n"
+        );
+    }
+    s
+}

@@ -161,11 +161,18 @@ fn grain(out: &mut Twist2, t: Twist2, [gc, gs]: [f64; 2], psi: f64) {
     if gc == 0.0 && gs == 0.0 {
         return;
     }
-    // In the body frame the same gain turned by −2ψ.
-    let (s2, c2) = (2.0 * psi).sin_cos();
-    let (c, s) = (gc * c2 + gs * s2, gs * c2 - gc * s2);
+    let (sn, cs) = psi.sin_cos();
+    let (c, s) = grain_in_body(gc, gs, cs, sn);
     out.vx_m_s += c * t.vx_m_s + s * t.vy_m_s;
     out.vy_m_s += s * t.vx_m_s - c * t.vy_m_s;
+}
+
+/// The grain `(gc, gs)` seen in the body frame at heading cosine and sine `(c, s)`: the same gain turned by
+/// −2ψ. Shared with the lane kernel, which carries the heading's cosine and sine.
+#[inline(always)]
+pub(crate) fn grain_in_body(gc: f64, gs: f64, c: f64, s: f64) -> (f64, f64) {
+    let (c2, s2) = (c * c - s * s, 2.0 * c * s);
+    (gc * c2 + gs * s2, gs * c2 - gc * s2)
 }
 
 /// The `body` family's correction of one twist.

@@ -12,7 +12,7 @@ use super::kernel::{LaneState, RESYNC_STEPS, arc_factors, measured_error, step_l
 use super::lanes::{LaneOps, Portable};
 use super::prepare::{Group, Increments};
 use super::{Lanes, MAX_STEP_ANGLE_RAD};
-use crate::effect::learned::{Family, Learned};
+use crate::effect::learned::{Family, Learned, grain_in_body};
 use crate::effect::{EffectKind, MOVING_OMEGA_RAD_S, MOVING_SPEED_M_S, longer_than};
 use crate::model::Resolved;
 use crate::plan::interval;
@@ -105,14 +105,6 @@ impl LaneTwist {
             _ => {}
         }
     }
-}
-
-/// The `world` family's grain `(gc, gs)` seen in the body frame at heading cosine and sine `(c, s)`: the
-/// same gain turned by −2ψ (`learned::grain`).
-#[inline(always)]
-fn grain_in_body(gc: f64, gs: f64, c: f64, s: f64) -> (f64, f64) {
-    let (c2, s2) = (c * c - s * s, 2.0 * c * s);
-    (gc * c2 + gs * s2, gs * c2 - gc * s2)
 }
 
 /// `sin x`, `cos x`: the arc factors' polynomials for small angles, the library beyond.

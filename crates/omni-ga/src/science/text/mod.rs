@@ -236,18 +236,18 @@ pub fn verdict(v: &Verdict) -> String {
             -100.0 * gain
         ),
     };
-    if let Some(x) = &v.explored {
-        text.push_str(&format!(
+    match &v.explored {
+        Some(x) => text.push_str(&format!(
             "; beyond the catalogue, the explorer passes {}: held-out path cost falls {:.1} % ({:.4} → {:.4} m); {}; \
-             with it",
+             with it, ",
             x.effect,
             100.0 * x.gain,
             x.before_m,
             x.after_m,
             x.hint
-        ));
+        )),
+        None => text.push_str("; "),
     }
-    text.push_str(if v.explored.is_some() { ", " } else { "; " });
     text.push_str(&unexplained(v));
     text
 }
