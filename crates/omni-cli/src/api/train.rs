@@ -96,7 +96,7 @@ pub struct TrainRequest {
 
 /// The fit summary as JSON (also written into the model file's `[fit]` table).
 pub fn summary(c: &Calibration, preset: &str, seed: u64, runs: usize) -> Result<serde_json::Value, KinError> {
-    Ok(json!({
+    let mut s = json!({
         "preset": preset,
         "seed": seed,
         "runs": runs,
@@ -116,7 +116,22 @@ pub fn summary(c: &Calibration, preset: &str, seed: u64, runs: usize) -> Result<
         "held_at_start": c.held.iter().map(|w| &w.text).collect::<Vec<_>>(),
         "warnings": c.identifiability.warnings(),
         "identifiability": c.identifiability,
-    }))
+    });
+    if let Some(r) = c.start_rescaled {
+        s["start_rescaled"] = json!({"distance_ratio": r.distance_ratio, "turning_ratio": r.turning_ratio});
+    }
+    Ok(s)
+}
+
+/// The line saying the fit started from the design rescaled to the ground truth's travel
+/// ([`Calibration::start_rescaled`]), when it did.
+pub fn start_rescaled_text(c: &Calibration) -> Option<String> {
+    let r = c.start_rescaled?;
+    Some(format!(
+        "the start's dead reckoning went {:.2}× the ground truth's distance and turned {:.2}× its turning: the fit \
+         started from the start rescaled by these ratios (the start as given is what the costs above compare with)",
+        r.distance_ratio, r.turning_ratio
+    ))
 }
 
 /// JSON made fit for TOML, which has no null: null fields are dropped, null array items become "none".

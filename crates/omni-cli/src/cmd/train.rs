@@ -267,6 +267,9 @@ pub fn print_summary(c: &Calibration, preset: &str, runs: usize) {
         }
     }
     println!("{} evaluations, {:.2} s", c.evaluations, c.seconds);
+    if let Some(text) = crate::api::train::start_rescaled_text(c) {
+        crate::note!("{text}");
+    }
     if !c.at_bound.is_empty() {
         tracing::warn!("ended on a bound of the GA box: {}", c.at_bound.join(", "));
     }

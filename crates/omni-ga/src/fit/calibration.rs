@@ -4,6 +4,7 @@ use crate::error::Error;
 use crate::fit::pipeline::{self, Fitted, StageOutcome, Start};
 use crate::fit::plan::Plan;
 use crate::fit::problem::CalibrationProblem;
+use crate::fit::rescale::{self, Rescale};
 use crate::fit::search_box::search_box_with;
 use crate::optimizer::observe::Observer;
 use crate::optimizer::problem::{Bounds, Problem};
@@ -50,6 +51,10 @@ pub struct Calibration {
     /// Directions held at the start by the truncated update ([`crate::fit::Unexcited::Hold`]), as found
     /// after the stages.
     pub held: Vec<WeakDirection>,
+    /// When the start's dead reckoning travelled or turned far from the ground truth's (beyond 1.3×), the
+    /// ratios it was rescaled by before fitting; the fit started there (and held there what the runs do
+    /// not constrain), while [`Self::start`] stays the start as given.
+    pub start_rescaled: Option<Rescale>,
 }
 
 impl Calibration {
@@ -115,25 +120,51 @@ pub fn calibrate(
     observer: &mut dyn Observer,
 ) -> Result<Calibration, Error> {
     let t0 = Instant::now();
-    // A direction along which the data move the fit well away from the start is not held there.
+    let model = start.model.clone().with_integration(plan.integration);
+    let (from_model, start_rescaled) = match rescaled(start, &model, train, plan)? {
+        Some((m, r)) => (m, Some(r)),
+        None => (start.clone(), None),
+    };
+    // A direction along which the data move the fit well away from the start as given is not held (the
+    // rescaling is the data's too: the ground truth's travel).
     let identify = IdentifyOptions { start: Some(start.params.clone()), ..plan.identify.clone() };
     let plan = &Plan { identify, ..plan.clone() };
-    let model = start.model.clone().with_integration(plan.integration);
-    let bounds = search_box_with(&model, &start.params, plan.box_rule, &plan.half_widths)?;
+    let bounds = search_box_with(&model, &from_model.params, plan.box_rule, &plan.half_widths)?;
     let problem = CalibrationProblem::new(&model, train, plan.objective, bounds.clone())?;
-    let objective_start = problem.cost(&start.params);
+    let objective_from = problem.cost(&from_model.params);
     let names: Vec<String> = model.params().into_iter().map(|p| p.name).collect();
-    let from = Start { x: &start.params, objective: objective_start, hold_at: &start.params, fitted: 0 };
+    let from = Start { x: &from_model.params, objective: objective_from, hold_at: &from_model.params, fitted: 0 };
     let mut fit = pipeline::run(&problem, plan, from, &names, observer)?;
+    let objective_start = if start_rescaled.is_some() { problem.cost(&start.params) } else { objective_from };
     let start_as_given = objective_as_given(start, train, plan, objective_start)?;
     let identifiability = fit.identifiability.take();
-    Outcome { fit, identifiability, start_as_given }.report(
+    let mut c = Outcome { fit, identifiability, start_as_given }.report(
         &problem,
         &plan.identify,
         &start.params,
         objective_start,
         t0,
-    )
+    )?;
+    c.start_rescaled = start_rescaled;
+    Ok(c)
+}
+
+/// The start rescaled to the ground truth's travel ([`crate::fit::rescale`]), for a plan with a local
+/// polish (one that can leave the GA's box: the paper's GA alone keeps its box around the design), when
+/// that lowers the plan's objective on `train`.
+fn rescaled(
+    start: &FittedModel,
+    model: &omni_kin::Model,
+    train: &[Run],
+    plan: &Plan,
+) -> Result<Option<(FittedModel, Rescale)>, Error> {
+    if !plan.stages.iter().any(|s| s.refines_held()) {
+        return Ok(None);
+    }
+    let Some((moved, how)) = rescale::rescaled_start(start, train) else { return Ok(None) };
+    let before = cost::cost(model, &start.params, train, plan.objective)?;
+    let after = cost::cost(model, &moved.params, train, plan.objective)?;
+    Ok((after < before).then_some((moved, how)))
 }
 
 /// The objective of `start` as given (its own integration, which the plan's may replace) on `train`:
@@ -316,6 +347,7 @@ impl Outcome {
             stages: fit.stages,
             identifiability,
             held: fit.held,
+            start_rescaled: None,
         })
     }
 }

@@ -5,6 +5,8 @@
 //! - [`Plan`], [`Preset`], [`Unexcited`] (`plan.rs`): the recipe, a list of [`Stage`]s (`stage.rs`), each
 //!   an optimizer with its own settings and stopping rules;
 //! - [`search_box`] (`search_box.rs`): the GA's box around the start;
+//! - [`Rescale`] (`rescale.rs`): a start whose dead reckoning travels or turns far from the ground truth
+//!   (beyond 1.3×) moved to the ratios first, for a plan with a local polish;
 //! - the pipeline (`pipeline.rs`): the stages in order, then the truncated update;
 //! - [`calibrate`] (`calibration.rs`): all of it, and the [`Calibration`] report; [`refine`]: effects
 //!   added to a fitted model and everything refitted by the refining stages and the truncated update (no
@@ -26,6 +28,7 @@ mod calibration;
 pub(crate) mod pipeline;
 mod plan;
 mod problem;
+mod rescale;
 mod search_box;
 mod stage;
 
@@ -35,6 +38,7 @@ pub use calibration::{BaseFit, Calibration, WorseThanStart, calibrate, calibrate
 pub use pipeline::StageOutcome;
 pub use plan::{Plan, Preset, STEP_TOLERANCE, StepMismatch, Unexcited};
 pub use problem::{CalibrationProblem, RunBlock};
+pub use rescale::Rescale;
 pub use search_box::{BoxRule, search_box, search_box_with};
 pub use stage::Stage;
 
