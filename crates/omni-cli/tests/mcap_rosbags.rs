@@ -393,7 +393,7 @@ fn ground_truth_from_tf_pose_with_covariance_and_odometry() {
     assert_eq!(
         error(dir, "pose_cov", &opts),
         "no ground truth: no geometry_msgs/msg/PoseStamped, geometry_msgs/msg/PoseWithCovarianceStamped, \
-         nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage, geometry_msgs/msg/PointStamped (positions only) source \
+         nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage, geometry_msgs/msg/PointStamped and sensor_msgs/msg/NavSatFix (positions only) source \
          outside the robot's frames (odom, base_link, base_footprint) matching --gt-parent-frame \"world\" --gt-child-frame \"(any)\"; topics: /joint_states \
          (sensor_msgs/msg/JointState, 101 messages), /mocap/pose_cov (geometry_msgs/msg/PoseWithCovarianceStamped, \
          21 messages, frame \"mocap\"). Without motion capture: a lidar's scans (--gt-scans TOPIC); a sensor's or a \
@@ -416,7 +416,7 @@ fn errors_name_file_topic_message_and_field() {
             "no_truth",
             d.clone(),
             "no ground truth: no geometry_msgs/msg/PoseStamped, geometry_msgs/msg/PoseWithCovarianceStamped, \
-             nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage, geometry_msgs/msg/PointStamped (positions only) \
+             nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage, geometry_msgs/msg/PointStamped and sensor_msgs/msg/NavSatFix (positions only) \
              source outside the robot's frames (odom, base_link, base_footprint); topics: /chatter (std_msgs/msg/String, 1 message), /joint_states \
              (sensor_msgs/msg/JointState, 101 messages), /odom (nav_msgs/msg/Odometry, 1 message, frame \"odom\": \
              the robot's own odometry). Without motion capture: a lidar's scans (--gt-scans TOPIC); a sensor's or a \
@@ -428,7 +428,7 @@ fn errors_name_file_topic_message_and_field() {
             McapOptions { truth_topic: Some("/chatter".into()), ..d.clone() },
             "topic \"/chatter\": type std_msgs/msg/String cannot be ground truth (supported: \
              geometry_msgs/msg/PoseStamped, geometry_msgs/msg/PoseWithCovarianceStamped, nav_msgs/msg/Odometry, \
-             tf2_msgs/msg/TFMessage, geometry_msgs/msg/PointStamped (positions only))",
+             tf2_msgs/msg/TFMessage, geometry_msgs/msg/PointStamped and sensor_msgs/msg/NavSatFix (positions only))",
         ),
         (
             "no_truth",

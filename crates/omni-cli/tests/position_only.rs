@@ -315,3 +315,105 @@ fn a_point_stamped_ground_truth_is_read_as_positions_only() {
     let (paper, design) = (path_cost("paper"), path_cost("design"));
     assert!(paper < 0.006 && design > 3.0 * paper, "paper {paper}, design {design}");
 }
+
+/// `src` with its ground-truth topic's PoseStamped messages turned into `sensor_msgs/msg/NavSatFix` ones on
+/// `/gnss/fix` (frame `base_link`, as many drivers publish it): the position as WGS 84 latitude and
+/// longitude east and north of (47° N, 8° E, 400 m), no heading; before each fix, one message without a fix
+/// (status −1, latitude NaN), which carries no position.
+fn with_nav_sat_fix(src: &Path, to: &Path) {
+    use std::collections::BTreeMap;
+    let bytes = std::fs::read(src).unwrap();
+    let mut out = mcap::WriteOptions::new().profile("ros2").create(std::io::Cursor::new(Vec::new())).unwrap();
+    let mut ids = BTreeMap::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let schema = m.channel.schema.as_ref().unwrap();
+        let truth = m.channel.topic == omni_cli::dataset::mcap::TRUTH_TOPIC;
+        let topic = if truth { "/gnss/fix".to_string() } else { m.channel.topic.clone() };
+        let id = *ids.entry(topic.clone()).or_insert_with(|| {
+            let name = if truth { "sensor_msgs/msg/NavSatFix" } else { schema.name.as_str() };
+            let s = out.add_schema(name, &schema.encoding, if truth { b"" } else { &schema.data }).unwrap();
+            out.add_channel(s, &topic, &m.channel.message_encoding, &BTreeMap::new()).unwrap()
+        });
+        let header = mcap::records::MessageHeader {
+            channel_id: id,
+            sequence: m.sequence,
+            log_time: m.log_time,
+            publish_time: m.publish_time,
+        };
+        if !truth {
+            out.write_to_known_channel(&header, &m.data).unwrap();
+            continue;
+        }
+        // Encapsulation (4 bytes), stamp (8), frame_id (4 + its length), then the position at 8-byte alignment.
+        let len = u32::from_le_bytes(m.data[12..16].try_into().unwrap()) as usize;
+        let position = 4 + (12 + len).next_multiple_of(8);
+        let f = |k: usize| f64::from_le_bytes(m.data[position + 8 * k..position + 8 * k + 8].try_into().unwrap());
+        let (lat0, lon0, alt0) = (47f64.to_radians(), 8f64.to_radians(), 400.0);
+        let (lat, lon, alt) = map_3d::enu2geodetic(f(0), f(1), 0.0, lat0, lon0, alt0, map_3d::Ellipsoid::WGS84);
+        let base_link = b"base_link\0";
+        for (status, fix) in [(-1i8, [f64::NAN, 0.0, 0.0]), (0, [lat.to_degrees(), lon.to_degrees(), alt])] {
+            let mut v = m.data[..12].to_vec();
+            v.extend_from_slice(&(base_link.len() as u32).to_le_bytes());
+            v.extend_from_slice(base_link);
+            v.push(status as u8);
+            while (v.len() - 4) % 2 != 0 {
+                v.push(0);
+            }
+            v.extend_from_slice(&1u16.to_le_bytes());
+            while (v.len() - 4) % 8 != 0 {
+                v.push(0);
+            }
+            for x in fix.iter().chain(&[0.0; 9]) {
+                v.extend_from_slice(&x.to_le_bytes());
+            }
+            v.push(0);
+            out.write_to_known_channel(&header, &v).unwrap();
+        }
+    }
+    out.finish().unwrap();
+    std::fs::write(to, out.into_inner().into_inner()).unwrap();
+}
+
+/// A GNSS ground truth (`sensor_msgs/msg/NavSatFix`, frame base_link) is read as positions only, in metres
+/// east and north of each recording's first fix: the PoseStamped positions it was made from, moved by the
+/// first, within 0.1 mm; messages without a fix are left out. The matrix that made the runs lies on them
+/// within millimetres, the design several times further off.
+#[test]
+fn a_nav_sat_fix_ground_truth_is_read_as_positions_east_and_north_of_the_first_fix() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let sim = ["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "3"];
+    succeeded_on_two_threads(&sim, dir);
+    let gnss = dir.join("gnss");
+    std::fs::create_dir_all(&gnss).unwrap();
+    std::fs::copy(dir.join("sim/validation/robot.toml"), gnss.join("robot.toml")).unwrap();
+    for entry in std::fs::read_dir(dir.join("sim/validation")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "mcap") {
+            with_nav_sat_fix(&path, &gnss.join(path.file_name().unwrap()));
+        }
+    }
+    let ds = dataset::load(std::slice::from_ref(&gnss), &LoadOptions::default()).unwrap();
+    let poses = dataset::load(&[dir.join("sim/validation")], &LoadOptions::default()).unwrap();
+    assert_eq!(ds.runs.len(), 36);
+    assert!(ds.runs.iter().all(omni_kin::Run::truth_position_only));
+    let mut worst_m = 0.0f64;
+    for (a, b) in ds.runs.iter().zip(&poses.runs) {
+        let (pa, pb) = (a.truth(), b.truth());
+        assert_eq!(pa.len(), pb.len(), "{}", a.name());
+        let (x0, y0) = (pb[0].pose.x_m - pa[0].pose.x_m, pb[0].pose.y_m - pa[0].pose.y_m);
+        for (p, q) in pa.iter().zip(pb) {
+            assert_eq!(p.t_s, q.t_s);
+            worst_m = worst_m.max((p.pose.x_m + x0 - q.pose.x_m).hypot(p.pose.y_m + y0 - q.pose.y_m));
+        }
+    }
+    assert!(worst_m < 1e-4, "GNSS positions {worst_m} m from the poses they were made from");
+    let path_cost = |model: &str| {
+        let args = ["--threads", "2", "eval", "--model", model, "gnss", "--json"];
+        let v: serde_json::Value = serde_json::from_str(&support::stdout(&support::succeeded(&args, dir))).unwrap();
+        v["path_cost"].as_f64().unwrap_or_else(|| panic!("{v}"))
+    };
+    let (paper, design) = (path_cost("paper"), path_cost("design"));
+    assert!(paper < 0.006 && design > 3.0 * paper, "paper {paper}, design {design}");
+}

@@ -207,6 +207,7 @@ fn guess_topics(inv: &Inventory, joints_topic: Option<String>) -> (Topics, Vec<S
         "geometry_msgs/msg/PoseStamped",
         "geometry_msgs/msg/PoseWithCovarianceStamped",
         "geometry_msgs/msg/PointStamped",
+        "sensor_msgs/msg/NavSatFix",
     ]);
     let other_truth = of_types(&["nav_msgs/msg/Odometry", "tf2_msgs/msg/TFMessage"]);
     let commands = of_types(&["geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped"]);

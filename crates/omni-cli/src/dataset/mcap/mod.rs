@@ -7,7 +7,7 @@
 //! | role | types | default topic choice |
 //! |---|---|---|
 //! | wheel speeds | `sensor_msgs/msg/JointState` | the only JointState topic, else the only one carrying all the wheel joints; without JointState, the robot's own odometry through the design ([`McapOptions::wheels_from_twist`]) |
-//! | ground truth | `geometry_msgs/msg/PoseStamped`, `PoseWithCovarianceStamped`, `nav_msgs/msg/Odometry`, one parent → child pair of `tf2_msgs/msg/TFMessage`, or `geometry_msgs/msg/PointStamped` (positions only: a tracker, UWB, a total station) | the only source outside the robot's frames (see below) |
+//! | ground truth | `geometry_msgs/msg/PoseStamped`, `PoseWithCovarianceStamped`, `nav_msgs/msg/Odometry`, one parent → child pair of `tf2_msgs/msg/TFMessage`, or `geometry_msgs/msg/PointStamped` (positions only: a tracker, UWB, a total station) or `sensor_msgs/msg/NavSatFix` (GNSS: positions east and north of the recording's first fix, WGS 84) | the only source outside the robot's frames (see below) |
 //! | recorded odometry | `nav_msgs/msg/Odometry` in frame `odom` | `/odom`, else the only one |
 //! | command | `geometry_msgs/msg/Twist`, `TwistStamped` | `/cmd_vel`, else the only one |
 //!

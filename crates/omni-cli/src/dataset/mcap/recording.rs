@@ -9,7 +9,7 @@
 use super::common::decode;
 use super::joint_state::{self, JointSeries, JointState};
 use super::odometry::{self, ODOM_FRAME, Odometry};
-use super::pose_stamped::{self, PointStamped, PoseStamped, PoseWithCovarianceStamped};
+use super::pose_stamped::{self, NavSatFix, PointStamped, PoseStamped, PoseWithCovarianceStamped};
 use super::poses::PoseSeries;
 use super::tf::{self, TfMessage, TfPairs};
 use super::twist::{self, Commands, TwistStamped};
@@ -27,6 +27,7 @@ pub(super) enum MsgType {
     PoseStamped,
     PoseWithCovarianceStamped,
     PointStamped,
+    NavSatFix,
     Odometry,
     Tf,
     Twist,
@@ -41,6 +42,7 @@ impl MsgType {
             pose_stamped::NAME => Self::PoseStamped,
             pose_stamped::WITH_COVARIANCE_NAME => Self::PoseWithCovarianceStamped,
             pose_stamped::POINT_NAME => Self::PointStamped,
+            pose_stamped::NAV_SAT_FIX_NAME => Self::NavSatFix,
             odometry::NAME => Self::Odometry,
             tf::NAME => Self::Tf,
             twist::NAME => Self::Twist,
@@ -75,6 +77,9 @@ pub(super) struct Channel {
     /// The first problem: the message index (`None` for the channel as a whole) and what is wrong. The
     /// channel takes nothing after it.
     pub(super) problem: Option<(Option<usize>, String)>,
+    /// A NavSatFix channel's first fix (latitude, longitude in degrees, altitude in m): the origin of its
+    /// local east-north-up positions.
+    pub(super) geodetic_origin: Option<[f64; 3]>,
 }
 
 impl Channel {
@@ -83,9 +88,11 @@ impl Channel {
         let msg_type = MsgType::of(schema);
         let content = match msg_type {
             MsgType::JointState => Content::Joints(JointSeries::default()),
-            MsgType::PoseStamped | MsgType::PoseWithCovarianceStamped | MsgType::PointStamped | MsgType::Odometry => {
-                Content::Poses(PoseSeries::default())
-            }
+            MsgType::PoseStamped
+            | MsgType::PoseWithCovarianceStamped
+            | MsgType::PointStamped
+            | MsgType::NavSatFix
+            | MsgType::Odometry => Content::Poses(PoseSeries::default()),
             MsgType::Tf => Content::Tf(TfPairs::default()),
             MsgType::Twist | MsgType::TwistStamped => Content::Commands(Commands::default()),
             MsgType::Other => Content::Nothing,
@@ -102,7 +109,15 @@ impl Channel {
                     ),
                 )
             });
-        Self { topic: topic.to_string(), schema: schema.to_string(), msg_type, messages: 0, content, problem }
+        Self {
+            topic: topic.to_string(),
+            schema: schema.to_string(),
+            msg_type,
+            messages: 0,
+            content,
+            problem,
+            geodetic_origin: None,
+        }
     }
 
     /// Takes the next message.
@@ -125,6 +140,16 @@ impl Channel {
                     s.check_frame(m.header.frame_id.frame(), None)?;
                     let (p, q) = (&m.point, &pose_stamped::NO_HEADING);
                     s.push(m.header.stamp.ns(), p, q, &pose_stamped::POINT_FIELDS)
+                }),
+                MsgType::NavSatFix => decode::<NavSatFix>(data).and_then(|m| {
+                    if !m.has_fix() {
+                        return Ok(());
+                    }
+                    let fix = m.geodetic()?;
+                    s.check_frame(m.header.frame_id.frame(), None)?;
+                    let origin = *self.geodetic_origin.get_or_insert(fix);
+                    let p = NavSatFix::east_north_up(fix, origin);
+                    s.push(m.header.stamp.ns(), &p, &pose_stamped::NO_HEADING, &pose_stamped::NAV_SAT_FIX_FIELDS)
                 }),
                 MsgType::PoseWithCovarianceStamped => decode::<PoseWithCovarianceStamped>(data).and_then(|m| {
                     s.check_frame(m.header.frame_id.frame(), None)?;

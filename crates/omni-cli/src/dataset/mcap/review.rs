@@ -112,7 +112,11 @@ fn topic_role(
     let c = &bag.channels[i];
     match c.msg_type {
         MsgType::JointState => joints_role(bag, i, &choices.joints, opts),
-        MsgType::PoseStamped | MsgType::PoseWithCovarianceStamped | MsgType::PointStamped | MsgType::Odometry => {
+        MsgType::PoseStamped
+        | MsgType::PoseWithCovarianceStamped
+        | MsgType::PointStamped
+        | MsgType::NavSatFix
+        | MsgType::Odometry => {
             if let (Some(Err(e)), Some(named)) = (&choices.truth, &opts.truth_topic)
                 && *named == c.topic
             {

@@ -18,7 +18,8 @@ use std::path::{Path, PathBuf};
 pub(super) const ROBOT_FRAMES: [&str; 3] = [ODOM_FRAME, "base_link", "base_footprint"];
 /// The types a ground truth can come from.
 const TRUTH_TYPES: &str = "geometry_msgs/msg/PoseStamped, geometry_msgs/msg/PoseWithCovarianceStamped, \
-                           nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage, geometry_msgs/msg/PointStamped (positions only)";
+                           nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage, geometry_msgs/msg/PointStamped and sensor_msgs/msg/NavSatFix \
+                           (positions only)";
 
 /// Where the wheel speeds come from.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -264,10 +265,14 @@ impl Bag<'_> {
                 // it, but it is a model's output: never a measurement, unless --gt-topic names it.
                 Content::Poses(_) if c.topic == super::write::CALIBRATED_TOPIC => {}
                 Content::Poses(_) => {
-                    let robot_frame = c.frame().is_some_and(|f| ROBOT_FRAMES.contains(&f));
+                    // A GNSS fix's frame is its antenna's (often base_link); its positions are geographic.
+                    let geodetic = c.msg_type == MsgType::NavSatFix;
+                    let robot_frame = !geodetic && c.frame().is_some_and(|f| ROBOT_FRAMES.contains(&f));
                     if !robot_frame && self.truth_mismatch(i, opts).is_none() {
-                        // Positions alone (a tracker, or RViz's /clicked_point) only where nothing gives a pose.
-                        let list = if c.msg_type == MsgType::PointStamped { &mut points } else { &mut found };
+                        // Positions alone (a tracker, GNSS, or RViz's /clicked_point) only where nothing gives a
+                        // pose.
+                        let positions = geodetic || c.msg_type == MsgType::PointStamped;
+                        let list = if positions { &mut points } else { &mut found };
                         list.push((Truth::Poses(i), c.candidate()));
                     }
                 }

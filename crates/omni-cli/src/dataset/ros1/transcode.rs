@@ -21,6 +21,10 @@ pub(super) enum Field {
     F32(usize),
     /// `float32[]`.
     F32Seq,
+    /// `uint8` or `int8`.
+    U8,
+    /// `uint16`.
+    U16,
     /// `string[]`.
     StrSeq,
     /// `geometry_msgs/TransformStamped[]`.
@@ -39,6 +43,7 @@ pub(super) fn layout(ros1_type: &str) -> Option<(&'static str, &'static [Field])
         "sensor_msgs/JointState" => ("sensor_msgs/msg/JointState", &[Header, StrSeq, F64Seq, F64Seq, F64Seq]),
         "geometry_msgs/PoseStamped" => ("geometry_msgs/msg/PoseStamped", &[Header, F64(3), F64(4)]),
         "geometry_msgs/PointStamped" => ("geometry_msgs/msg/PointStamped", &[Header, F64(3)]),
+        "sensor_msgs/NavSatFix" => ("sensor_msgs/msg/NavSatFix", &[Header, U8, U16, F64(3), F64(9), U8]),
         "geometry_msgs/PoseWithCovarianceStamped" => {
             ("geometry_msgs/msg/PoseWithCovarianceStamped", &[Header, F64(3), F64(4), F64(36)])
         }
@@ -141,6 +146,12 @@ fn fields_to_cdr(r: &mut Ros1<'_>, w: &mut Cdr, fields: &[Field]) -> Result<(), 
                 w.f64s(r.bytes(8 * n as usize)?);
             }
             F32(n) => w.f32s(r.bytes(4 * n)?),
+            U8 => w.0.extend_from_slice(r.bytes(1)?),
+            U16 => {
+                let b = r.bytes(2)?;
+                w.align(2);
+                w.0.extend_from_slice(b);
+            }
             F32Seq => {
                 let n = r.u32()?;
                 w.u32(n);
@@ -206,5 +217,34 @@ mod tests {
             to_cdr(&ros1[..ros1.len() - 6], fields).unwrap_err(),
             "the message is cut short: 59 bytes, field at byte 53 needs 8 more"
         );
+    }
+
+    #[test]
+    fn nav_sat_fix_becomes_cdr_with_its_status_bytes_aligned() {
+        let Some((name, fields)) = layout("sensor_msgs/NavSatFix") else { panic!("no NavSatFix layout") };
+        assert_eq!(name, "sensor_msgs/msg/NavSatFix");
+        // ROS 1: seq, stamp, frame "gps", status −1 (int8), service 1 (uint16), latitude, longitude, altitude,
+        // 9 covariances, covariance type 2 (uint8).
+        let mut ros1 = Vec::new();
+        for v in [9u32, 5, 7, 3] {
+            ros1.extend_from_slice(&v.to_le_bytes());
+        }
+        ros1.extend_from_slice(b"gps");
+        ros1.push(0xff);
+        ros1.extend_from_slice(&1u16.to_le_bytes());
+        let doubles: Vec<f64> = (0..12).map(f64::from).collect();
+        doubles.iter().for_each(|v| ros1.extend_from_slice(&v.to_le_bytes()));
+        ros1.push(2);
+        // CDR: encapsulation, stamp, "gps" with its NUL (ends at byte 16 from the encapsulation), the status
+        // byte, one of padding, the service, 4 of padding to the float64s, the covariance type.
+        let mut cdr = vec![0u8, 1, 0, 0];
+        for v in [5u32, 7, 4] {
+            cdr.extend_from_slice(&v.to_le_bytes());
+        }
+        cdr.extend_from_slice(b"gps\0");
+        cdr.extend_from_slice(&[0xff, 0, 1, 0, 0, 0, 0, 0]);
+        doubles.iter().for_each(|v| cdr.extend_from_slice(&v.to_le_bytes()));
+        cdr.push(2);
+        assert_eq!(to_cdr(&ros1, fields).unwrap(), cdr);
     }
 }

@@ -14,6 +14,7 @@ fn channel(topic: &str, msg_type: MsgType, frame: Option<&str>, problem: Option<
         messages: 3,
         content,
         problem: problem.map(|p| (Some(2), p.to_string())),
+        geodetic_origin: None,
     }
 }
 
