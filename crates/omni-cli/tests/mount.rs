@@ -61,13 +61,12 @@ fn a_diff_drives_wheels_come_back_from_a_lidar_at_any_yaw() {
 
 /// An omni robot (the paper's, a free matrix): the matrix absorbs any mount, so the mount is held where the
 /// motions put it against the design; its rotation row (which no mount changes) comes back within 2
-/// standard errors of motion capture, and its translation rows within 1 % of their length once turned by
-/// the one angle a free matrix cannot tell from the mount's yaw (that angle within 0.5°, the held mount's
-/// own error: 0.43° at 90°), at 90° and −107°.
+/// standard errors of motion capture, and its translation rows, once turned by the one angle a free matrix
+/// cannot tell from the mount's yaw (that angle within 0.5°, the held mount's own error), within 1 % of
+/// their length plus what the held mount's position error leaks into them: a lever arm `d` adds `ω × d` to
+/// the sensor's velocity, which a free matrix takes as `d` times its rotation row (4 mm of mount error at
+/// 90°: 1.6 % of the vy row), at 90° and −107°.
 #[test]
-#[ignore = "issue 43, open: at 90° the vy row is still 1.6 % from motion capture after the best rotation (the \
-            held mount's yaw, 0.33°, and its position both leak into a free matrix's rows); the mount is not \
-            determined by a free matrix, so the tolerance needs the mount's own uncertainty"]
 fn an_omni_robots_rotation_row_comes_back_from_a_lidar_at_any_yaw_and_its_mount_is_held_where_the_motions_put_it() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
@@ -109,12 +108,18 @@ fn an_omni_robots_rotation_row_comes_back_from_a_lidar_at_any_yaw_and_its_mount_
         assert!(turn.to_degrees().abs() < 0.5, "{yaw}°: rows turned {:.3}° from motion capture's", turn.to_degrees());
         let (s, co) = turn.sin_cos();
         let turned: Vec<[f64; 2]> = (0..3).map(|c| [co * l[0][c] - s * l[1][c], s * l[0][c] + co * l[1][c]]).collect();
+        let leak = (x - 0.2).hypot(y - 0.05) * m[2].iter().map(|v| v * v).sum::<f64>().sqrt();
         for r in 0..2 {
             let length = m[r].iter().map(|v| v * v).sum::<f64>().sqrt();
             let apart = (0..3).map(|c| (turned[c][r] - m[r][c]).powi(2)).sum::<f64>().sqrt();
+            eprintln!(
+                "row {r}: {:.2} % apart, 1 % + the mount's leak {:.2} %",
+                100.0 * apart / length,
+                100.0 * leak / length
+            );
             assert!(
-                apart < 0.01 * length,
-                "row {r}: lidar {:?} (turned {turn} rad) vs motion capture {:?}",
+                apart < 0.01 * length + leak,
+                "row {r}: lidar {:?} (turned {turn} rad) vs motion capture {:?}, the mount's leak {leak}",
                 l[r],
                 m[r]
             );
