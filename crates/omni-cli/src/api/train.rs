@@ -303,20 +303,52 @@ pub fn train_quietly(a: &TrainRequest) -> Result<Trained, TrainError> {
     if let Some(out) = &a.out {
         out_path::check_file(out, "--out")?;
     }
-    let Prepared { ds, start, effects, plan, .. } = prepare(a)?;
+    let Prepared { ds, start, effects, plan, priors } = prepare(a)?;
     let mut warnings: Vec<String> = check_step(&plan, &ds.runs, a.force)?.into_iter().collect();
     let c = calibrate_with_effects(&start, &effects, &ds.runs, &plan, &mut omni_ga::observe::NoopObserver)?;
     warnings.extend(check_fit(&c, &plan, &ds.runs, a.force)?);
-    warnings.extend(mount_warning(&c));
-    let mut s = summary(&c, a.preset.id(), a.seed, ds.runs.len())?;
-    crate::api::noise::add_to_summary(&mut s, &c.fitted, &ds.runs)?;
-    if let Some(d) = designs_figure(&c, &ds, &plan, a.start.is_none())? {
-        s["designs"] = d.to_json();
-    }
+    let Summarized { summary: s, mount, .. } = summarize(&c, &ds, &plan, &priors, a)?;
+    warnings.extend(mount);
     if let Some(out) = &a.out {
         write_model(&c, &s, out)?;
     }
     Ok(Trained { calibration: c, summary: s, dataset: ds, warnings })
+}
+
+/// A fit's summary as every front end writes it into the model file ([`summarize`]).
+pub struct Summarized {
+    /// The JSON summary: [`summary`], the noise model, the designs, the priors, and the mount warning among
+    /// its warnings.
+    pub summary: serde_json::Value,
+    /// The designs figure, when the inputs declare several.
+    pub designs: Option<DesignsFigure>,
+    /// The warning of a sensor mount the runs do not determine ([`mount_warning`]).
+    pub mount: Option<String>,
+}
+
+/// The summary of fit `c` of `ds` by `plan` for request `a`, with the robot description's `priors`: the one
+/// place `omnical train` and the fleet build what the model file holds, so that their files are the same.
+pub fn summarize(
+    c: &Calibration,
+    ds: &Dataset,
+    plan: &Plan,
+    priors: &[PriorUse],
+    a: &TrainRequest,
+) -> Result<Summarized, TrainError> {
+    let mut s = summary(c, a.preset.id(), a.seed, ds.runs.len())?;
+    crate::api::noise::add_to_summary(&mut s, &c.fitted, &ds.runs)?;
+    let designs = designs_figure(c, ds, plan, a.start.is_none())?;
+    if let Some(d) = &designs {
+        s["designs"] = d.to_json();
+    }
+    if !priors.is_empty() {
+        s["priors"] = priors.iter().map(|p| p.to_json(&c.fitted)).collect();
+    }
+    let mount = mount_warning(c);
+    if let (Some(w), Some(list)) = (&mount, s["warnings"].as_array_mut()) {
+        list.push(json!(w));
+    }
+    Ok(Summarized { summary: s, designs, mount })
 }
 
 /// The design figure when the training runs' inputs declare different designs: each run under its own

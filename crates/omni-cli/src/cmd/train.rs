@@ -2,7 +2,7 @@
 
 use super::{DataArgs, OutputArgs};
 use crate::api::fit::{FitOptions, check_fit, check_step};
-use crate::api::train::{Prepared, TrainRequest, designs_figure, prepare, summary, write_model};
+use crate::api::train::{Prepared, Summarized, TrainRequest, prepare, summarize, write_model};
 use crate::cli::{choice, effect_help};
 use crate::units::{count, std_error_text, value_text};
 use crate::{interrupt, out_path, progress};
@@ -147,22 +147,10 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     if let Some(w) = check_fit(&c, &plan, &ds.runs, a.force)? {
         tracing::warn!("{w}");
     }
-    let mount = crate::api::train::mount_warning(&c);
     let interrupted = interrupt::requested();
-    let mut s = summary(&c, preset_name, a.seed, ds.runs.len())?;
-    crate::api::noise::add_to_summary(&mut s, &c.fitted, &ds.runs)?;
-    let designs = designs_figure(&c, &ds, &plan, a.start.is_none())?;
-    if let Some(d) = &designs {
-        s["designs"] = d.to_json();
-    }
-    if !priors.is_empty() {
-        s["priors"] = priors.iter().map(|p| p.to_json(&c.fitted)).collect();
-    }
+    let Summarized { summary: mut s, designs, mount } = summarize(&c, &ds, &plan, &priors, &a.request())?;
     if interrupted {
         s["interrupted"] = json!(true);
-    }
-    if let (Some(w), Some(list)) = (&mount, s["warnings"].as_array_mut()) {
-        list.push(json!(w));
     }
     if let Some(out) = &a.out {
         write_model(&c, &s, out)?;
