@@ -215,6 +215,30 @@ fn a_tum_file_whose_heading_never_changes_is_read_as_positions_only() {
     assert!(paper < 0.006 && design > 3.0 * paper, "paper {paper}, design {design}");
 }
 
+/// The built-in robot's simulated MCAP runs (1 per flower command, 3 s) in `dir/sim`, and a copy of its
+/// validation set in `dir/folder` (with the robot.toml) whose every recording `rewrite(from, to)` made.
+fn simulated_validation_rewritten(dir: &Path, folder: &str, rewrite: impl Fn(&Path, &Path)) -> std::path::PathBuf {
+    let sim = ["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "3"];
+    succeeded_on_two_threads(&sim, dir);
+    let to = dir.join(folder);
+    std::fs::create_dir_all(&to).unwrap();
+    std::fs::copy(dir.join("sim/validation/robot.toml"), to.join("robot.toml")).unwrap();
+    for entry in std::fs::read_dir(dir.join("sim/validation")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "mcap") {
+            rewrite(&path, &to.join(path.file_name().unwrap()));
+        }
+    }
+    to
+}
+
+/// `omnical eval --model MODEL dir/FOLDER`'s path cost (on two threads).
+fn path_cost(dir: &Path, folder: &str, model: &str) -> f64 {
+    let args = ["--threads", "2", "eval", "--model", model, folder, "--json"];
+    let v: serde_json::Value = serde_json::from_str(&support::stdout(&support::succeeded(&args, dir))).unwrap();
+    v["path_cost"].as_f64().unwrap_or_else(|| panic!("{v}"))
+}
+
 /// `src` with its ground-truth topic's PoseStamped messages turned into PointStamped ones (the same header
 /// and position, no orientation: a PoseStamped's CDR cut after its position is a PointStamped's), as a
 /// tracker or a total station publishes positions; every other channel as it was. `clicked`: the truth
@@ -280,17 +304,7 @@ fn with_point_stamped(src: &Path, to: &Path, clicked: bool) {
 fn a_point_stamped_ground_truth_is_read_as_positions_only() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
-    let sim = ["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "3"];
-    succeeded_on_two_threads(&sim, dir);
-    let points = dir.join("points");
-    std::fs::create_dir_all(&points).unwrap();
-    std::fs::copy(dir.join("sim/validation/robot.toml"), points.join("robot.toml")).unwrap();
-    for entry in std::fs::read_dir(dir.join("sim/validation")).unwrap() {
-        let path = entry.unwrap().path();
-        if path.extension().is_some_and(|e| e == "mcap") {
-            with_point_stamped(&path, &points.join(path.file_name().unwrap()), false);
-        }
-    }
+    let points = simulated_validation_rewritten(dir, "points", |from, to| with_point_stamped(from, to, false));
     let ds = dataset::load(std::slice::from_ref(&points), &LoadOptions::default()).unwrap();
     let poses = dataset::load(&[dir.join("sim/validation")], &LoadOptions::default()).unwrap();
     assert_eq!(ds.runs.len(), 36);
@@ -307,12 +321,7 @@ fn a_point_stamped_ground_truth_is_read_as_positions_only() {
     with_point_stamped(&dir.join("sim/validation/00-r0.mcap"), &clicked.join("00-r0.mcap"), true);
     let ds = dataset::load(std::slice::from_ref(&clicked), &LoadOptions::default()).unwrap();
     assert!(!ds.runs[0].truth_position_only() && ds.runs[0].truth().len() == poses.runs[0].truth().len());
-    let path_cost = |model: &str| {
-        let args = ["--threads", "2", "eval", "--model", model, "points", "--json"];
-        let v: serde_json::Value = serde_json::from_str(&support::stdout(&support::succeeded(&args, dir))).unwrap();
-        v["path_cost"].as_f64().unwrap_or_else(|| panic!("{v}"))
-    };
-    let (paper, design) = (path_cost("paper"), path_cost("design"));
+    let (paper, design) = (path_cost(dir, "points", "paper"), path_cost(dir, "points", "design"));
     assert!(paper < 0.006 && design > 3.0 * paper, "paper {paper}, design {design}");
 }
 
@@ -383,17 +392,7 @@ fn with_nav_sat_fix(src: &Path, to: &Path) {
 fn a_nav_sat_fix_ground_truth_is_read_as_positions_east_and_north_of_the_first_fix() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
-    let sim = ["simulate", "--out", "sim", "--runs-per-command", "1", "--duration", "3"];
-    succeeded_on_two_threads(&sim, dir);
-    let gnss = dir.join("gnss");
-    std::fs::create_dir_all(&gnss).unwrap();
-    std::fs::copy(dir.join("sim/validation/robot.toml"), gnss.join("robot.toml")).unwrap();
-    for entry in std::fs::read_dir(dir.join("sim/validation")).unwrap() {
-        let path = entry.unwrap().path();
-        if path.extension().is_some_and(|e| e == "mcap") {
-            with_nav_sat_fix(&path, &gnss.join(path.file_name().unwrap()));
-        }
-    }
+    let gnss = simulated_validation_rewritten(dir, "gnss", with_nav_sat_fix);
     let ds = dataset::load(std::slice::from_ref(&gnss), &LoadOptions::default()).unwrap();
     let poses = dataset::load(&[dir.join("sim/validation")], &LoadOptions::default()).unwrap();
     assert_eq!(ds.runs.len(), 36);
@@ -409,11 +408,6 @@ fn a_nav_sat_fix_ground_truth_is_read_as_positions_east_and_north_of_the_first_f
         }
     }
     assert!(worst_m < 1e-4, "GNSS positions {worst_m} m from the poses they were made from");
-    let path_cost = |model: &str| {
-        let args = ["--threads", "2", "eval", "--model", model, "gnss", "--json"];
-        let v: serde_json::Value = serde_json::from_str(&support::stdout(&support::succeeded(&args, dir))).unwrap();
-        v["path_cost"].as_f64().unwrap_or_else(|| panic!("{v}"))
-    };
-    let (paper, design) = (path_cost("paper"), path_cost("design"));
+    let (paper, design) = (path_cost(dir, "gnss", "paper"), path_cost(dir, "gnss", "design"));
     assert!(paper < 0.006 && design > 3.0 * paper, "paper {paper}, design {design}");
 }
