@@ -19,17 +19,19 @@ pub(super) enum Mount {
     Given,
 }
 
-/// The runs of `loaded` (read wheels only from the recording at `path`) with the lidar's path on `topic`
-/// (matched with `settings`) as their ground truth, the mount looked up from `base_frame` (`[frames] base`;
-/// default `base_link`, else `base_footprint`) unless `mount` is given.
+/// The runs of `loaded` (read wheels only from the recording at `path`, with its scans on `topic`: the
+/// recording is read once) with the lidar's path (matched with `settings`) as their ground truth, the mount
+/// from the recording's static transforms (looked up from `[frames] base`; default `base_link`, else
+/// `base_footprint`) unless `mount` is given.
 pub(super) fn with_lidar_path(
     path: &Path,
-    (topic, settings): &(String, MatchSettings),
-    (base_frame, mount): (Option<&str>, Mount),
-    max_file_bytes: u64,
+    (topic, settings): (&str, &MatchSettings),
+    mount: Mount,
     mut loaded: Loaded,
 ) -> Result<Loaded, DatasetError> {
-    let mut read = lidar::read_scans_within(path, topic, base_frame, max_file_bytes)?;
+    let Some(mut read) = loaded.scans.take() else {
+        return Err(DatasetError::at(path, format!("topic {topic:?}"), "the scans were not read with the wheels"));
+    };
     if mount == Mount::Given {
         read.base_from_sensor = None;
     }

@@ -176,6 +176,21 @@ pub fn group_designs<'a>(declared: impl IntoIterator<Item = &'a Declared>) -> Ve
 /// The default cap on one input file's size (`--max-file-mb`). Bytes: 1 GiB.
 pub const DEFAULT_MAX_FILE_BYTES: u64 = 1 << 30;
 
+/// Passes over a storage file's messages (an MCAP, sqlite3 or ROS 1 bag file) since the process started.
+static MESSAGE_PASSES: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// How many times this process has gone through a storage file's messages (an MCAP, sqlite3 or ROS 1 bag
+/// file, each file of a split recording counted): a test checks that a load reads each recording once,
+/// its lidar's scans included.
+pub fn message_passes() -> usize {
+    MESSAGE_PASSES.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Counts one pass over a storage file's messages ([`message_passes`]).
+pub(crate) fn count_message_pass() {
+    MESSAGE_PASSES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+}
+
 /// How to load.
 #[derive(Clone, Debug)]
 pub struct LoadOptions {
@@ -430,6 +445,8 @@ struct Loaded {
     origin_s: Option<i64>,
     /// With a lidar reference: whether its path was moved to the base by the recording's static transforms.
     lidar_mount_from_tf: Option<bool>,
+    /// A recording's scans read with its wheels (`--gt-scans`), for [`lidar_reference::with_lidar_path`].
+    scans: Option<mcap::ScanRead>,
 }
 
 /// The recording's name, for matching ground-truth files: a folder's name, a file's stem.
@@ -529,6 +546,7 @@ fn from_bag(r: mcap::McapRead) -> Loaded {
         clock: r.ground_truth_clock,
         origin_s: Some(r.origin_s),
         lidar_mount_from_tf: None,
+        scans: r.scans,
     }
 }
 
@@ -538,14 +556,16 @@ fn read_input(input: &Input, opts: &LoadOptions) -> Result<Result<Loaded, Datase
     let mo = mcap::McapOptions {
         skip_invalid: opts.skip_invalid,
         recorded_odometry: opts.recorded_odometry,
+        // The scans are read in the same pass as the wheels.
+        scan_topic: opts.scans.as_ref().map(|(topic, _)| topic.clone()),
         ..opts.mcap.clone()
     };
     // The lidar's path as a ROS recording's ground truth, when --gt-scans is given.
     let lidar = |p: &Path, l: Loaded| match &opts.scans {
-        Some(scans) => {
+        Some((topic, settings)) => {
             let mount =
                 if opts.scan_mount_given { lidar_reference::Mount::Given } else { lidar_reference::Mount::Stated };
-            lidar_reference::with_lidar_path(p, scans, (opts.mcap.base_frame.as_deref(), mount), opts.max_file_bytes, l)
+            lidar_reference::with_lidar_path(p, (topic, settings), mount, l)
         }
         None => Ok(l),
     };

@@ -244,7 +244,21 @@ pub(crate) fn runs(
     opts: &McapOptions,
     external: Option<&ExternalTruth>,
 ) -> Result<McapRead, DatasetError> {
-    let mut bag = Bag { path, channels: rec.channels };
+    let (channels, scans) = rec.into_parts();
+    let mut read = wheel_runs(path, stem, channels, opts, external)?;
+    read.scans = scans.map(|s| s.finish(path)).transpose()?;
+    Ok(read)
+}
+
+/// [`runs`] from the recording's channels, without its scans.
+fn wheel_runs(
+    path: &Path,
+    stem: &str,
+    channels: Vec<super::recording::Channel>,
+    opts: &McapOptions,
+    external: Option<&ExternalTruth>,
+) -> Result<McapRead, DatasetError> {
+    let mut bag = Bag { path, channels };
     let mut notes = Vec::new();
 
     let source = bag.joints(opts)?;
@@ -308,7 +322,8 @@ pub(crate) fn runs(
     let position_only = external.is_some_and(|e| e.position_only)
         || truth_ch.is_some() && positions_only_topic(path, &truth_label, &truth, &mut notes);
     let streams = Streams { t_s, wheels, truth, odometry, commands, joints_topic, position_only };
-    let out = McapRead { runs: Vec::new(), notes, skipped: Vec::new(), origin_s, ground_truth_clock: clock };
+    let out =
+        McapRead { runs: Vec::new(), notes, skipped: Vec::new(), origin_s, ground_truth_clock: clock, scans: None };
     with_runs(out, &streams, (path, stem), opts)
 }
 
@@ -377,7 +392,7 @@ pub(super) fn read_bytes(
     opts: &McapOptions,
     external: Option<&ExternalTruth>,
 ) -> Result<McapRead, DatasetError> {
-    let mut rec = Recording::new(&opts.wheel_joints);
+    let mut rec = Recording::for_read(opts);
     feed_mcap(path, buf, &mut rec)?;
     let stem = path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned());
     runs(path, &stem, rec, opts, external)

@@ -132,6 +132,7 @@ fn check_chunks(buf: &[u8]) -> Result<(), String> {
 
 /// Feeds every message of an MCAP file, in file order, into `rec`.
 pub(crate) fn feed_mcap(path: &Path, buf: &[u8], rec: &mut impl MessageSink) -> Result<(), DatasetError> {
+    crate::dataset::count_message_pass();
     // mcap 0.26 can still panic on some damaged files (an integer overflow on a record longer than its
     // uncompressed chunk, in builds with overflow checks): a damaged file is an error, never a crash.
     let mut rec = std::panic::AssertUnwindSafe(rec);

@@ -178,7 +178,8 @@ struct Taken {
 /// Gathers the LaserScan messages of one topic (and the static transforms) from any storage reader.
 pub(crate) struct ScanSink {
     topic: String,
-    zstd_messages: bool,
+    /// Every payload is zstd-compressed on its own (set by a [`super::recording::Recording`] that feeds it).
+    pub(super) zstd_messages: bool,
     /// The frame the lidar's mount is looked up from; `None`: `base_link`, else `base_footprint`.
     base_frame: Option<String>,
     channels: Vec<Declared>,

@@ -148,6 +148,10 @@ pub struct McapOptions {
     pub wheels_from_twist: Option<Vec<[f64; 3]>>,
     /// Where the topics and frames above were set, for messages. Default: their flags.
     pub origins: Origins,
+    /// A LaserScan topic whose scans (and static transforms, for the lidar's mount from [`Self::base_frame`])
+    /// are gathered in the same pass over the recording as the wheels ([`McapRead::scans`]): the lidar
+    /// reference (`--gt-scans`). Default: none.
+    pub scan_topic: Option<String>,
 }
 
 /// Where an option was set, for messages that name it.
@@ -218,6 +222,7 @@ impl Default for McapOptions {
             truth_time_offset_s: None,
             wheel_data: Default::default(),
             origins: Origins::default(),
+            scan_topic: None,
         }
     }
 }
@@ -236,6 +241,8 @@ pub struct McapRead {
     pub origin_s: i64,
     /// The clock offset of a ground truth read from a separate file ([`read_file_with_truth`]).
     pub ground_truth_clock: Option<GtClock>,
+    /// The scans of [`McapOptions::scan_topic`], read in the same pass as the wheels.
+    pub scans: Option<ScanRead>,
 }
 
 /// How to write a bag.

@@ -13,6 +13,7 @@ use super::pose_stamped::{self, NavSatFix, PointStamped, PoseStamped, PoseWithCo
 use super::poses::PoseSeries;
 use super::tf::{self, TfMessage, TfPairs};
 use super::twist::{self, Commands, TwistStamped};
+use super::{McapOptions, ScanSink};
 
 /// Schema encodings whose type names this reader knows. `ros2idl` names the same types with the same CDR
 /// layout as `ros2msg` (rosbag2 writes it for types defined in `.idl` files).
@@ -245,12 +246,30 @@ pub(crate) struct Recording {
     pub(super) channels: Vec<Channel>,
     /// Every message payload is zstd-compressed on its own (rosbag2's `compression_mode: MESSAGE`).
     pub(crate) zstd_messages: bool,
+    /// The lidar's scans gathered in the same pass ([`McapOptions::scan_topic`]), and the scan sink's
+    /// index of each channel.
+    scans: Option<(ScanSink, Vec<usize>)>,
 }
 
 impl Recording {
     /// An empty recording whose JointState topics are read for these wheel joints (in wheel order).
     pub(crate) fn new(wheel_joints: &[String]) -> Self {
-        Self { wheel_joints: wheel_joints.to_vec(), channels: Vec::new(), zstd_messages: false }
+        Self { wheel_joints: wheel_joints.to_vec(), channels: Vec::new(), zstd_messages: false, scans: None }
+    }
+
+    /// An empty recording read with `opts`: its wheel joints, and its scans when it names a scan topic
+    /// (the lidar's mount looked up from its base frame), so that one pass reads both.
+    pub(crate) fn for_read(opts: &McapOptions) -> Self {
+        let scans = opts
+            .scan_topic
+            .as_deref()
+            .map(|topic| (ScanSink::new(topic, false).with_base_frame(opts.base_frame.as_deref()), Vec::new()));
+        Self { scans, ..Self::new(&opts.wheel_joints) }
+    }
+
+    /// The channels, and the scans' sink when they were gathered.
+    pub(super) fn into_parts(self) -> (Vec<Channel>, Option<ScanSink>) {
+        (self.channels, self.scans.map(|(s, _)| s))
     }
 
     /// Messages taken on `topic` (`None`: no such topic).
@@ -265,12 +284,19 @@ impl MessageSink for Recording {
             Some(i) => i,
             None => {
                 self.channels.push(Channel::new(topic, schema, schema_encoding, message_encoding));
+                if let Some((sink, index)) = &mut self.scans {
+                    sink.zstd_messages = self.zstd_messages;
+                    index.push(sink.channel(topic, schema, schema_encoding, message_encoding));
+                }
                 self.channels.len() - 1
             }
         }
     }
 
     fn message(&mut self, i: usize, data: &[u8], log_time_ns: u64) {
+        if let Some((sink, index)) = &mut self.scans {
+            sink.message(index[i], data, log_time_ns);
+        }
         let c = &mut self.channels[i];
         if self.zstd_messages && c.msg_type != MsgType::Other && c.problem.is_none() {
             match payload(true, data) {

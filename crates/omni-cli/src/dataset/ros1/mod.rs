@@ -20,7 +20,7 @@ use std::path::Path;
 /// Reads the ROS 1 bag at `path` into runs, as [`crate::dataset::mcap::read_file_with_truth`] reads an MCAP
 /// file.
 pub fn read_bag(path: &Path, opts: &McapOptions, truth: Option<&ExternalTruth>) -> Result<McapRead, DatasetError> {
-    let mut rec = Recording::new(&opts.wheel_joints);
+    let mut rec = Recording::for_read(opts);
     feed(path, &mut rec)?;
     let stem = path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned());
     assembly::runs(path, &stem, rec, opts, truth)
@@ -35,6 +35,7 @@ pub fn inspect(path: &Path) -> Result<Inventory, DatasetError> {
 
 /// Feeds every message of the bag at `path` into `sink`, in time order (file order within a time).
 pub(crate) fn feed(path: &Path, sink: &mut impl MessageSink) -> Result<(), DatasetError> {
+    crate::dataset::count_message_pass();
     // rosbag 0.6.3 panics on some damaged files (a slice index past the end of a truncated bag): a damaged
     // file is an error, never a crash.
     let mut sink = std::panic::AssertUnwindSafe(sink);

@@ -53,7 +53,7 @@ pub fn read_recording(
     truth: Option<&ExternalTruth>,
 ) -> Result<McapRead, DatasetError> {
     let meta = metadata::read(dir)?;
-    let mut rec = Recording::new(&opts.wheel_joints);
+    let mut rec = Recording::for_read(opts);
     rec.zstd_messages = meta.compression == Compression::MessageZstd;
     feed_files(dir, &meta, max_file_bytes, &mut rec)?;
     let mut notes = Vec::new();
@@ -156,7 +156,7 @@ pub fn read_db3(
     truth: Option<&ExternalTruth>,
 ) -> Result<McapRead, DatasetError> {
     check_size(path, max_file_bytes)?;
-    let mut rec = Recording::new(&opts.wheel_joints);
+    let mut rec = Recording::for_read(opts);
     sqlite::feed(path, None, &mut rec)?;
     let stem = path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned());
     assembly::runs(path, &stem, rec, opts, truth)

@@ -12,6 +12,7 @@ use std::path::Path;
 /// Feeds every message of the sqlite3 file at `path` into `sink`. `image`, when given, is the database's
 /// bytes (a file-compressed recording, decompressed in memory); `path` then only names it.
 pub(crate) fn feed(path: &Path, image: Option<Vec<u8>>, sink: &mut impl MessageSink) -> Result<(), DatasetError> {
+    crate::dataset::count_message_pass();
     let empty = match &image {
         Some(bytes) => bytes.is_empty(),
         None => std::fs::metadata(path).map_err(|e| DatasetError::io(path, e))?.len() == 0,
