@@ -77,16 +77,17 @@ pub fn robot_model(kind: KinematicsKind, f: &RobotFile) -> Result<Model, DesignE
     Ok(Model::design(kind, Some(&g))?)
 }
 
-/// The base model `train` fits when none is named: `diff` for a differential drive, a base that cannot move
-/// sideways (three physical parameters: a 3 × 2 matrix has a fourth direction, weakly determined, that
-/// trades the radii's ratio against the turning), else `ik`, the paper's matrix.
+/// The base model `train` fits when none is named: the kind's own ([`omni_kin::BaseKind::default_model`]:
+/// `diff` for a differential drive, three physical parameters where a 3 × 2 matrix has a fourth direction,
+/// weakly determined, that trades the radii's ratio against the turning; `skid` for a skid-steer base),
+/// else `ik`, the paper's matrix. Data that declares only a geometry (OptiOdom) is a differential drive
+/// when it cannot move sideways.
 pub fn default_kind(ds: &Dataset) -> KinematicsKind {
-    let differential = match robot_file::design(ds) {
-        Some(Design::File(f)) => f.description.kind == omni_kin::BaseKind::Diff,
-        Some(Design::Data(g)) => !g.is_omnidirectional(),
-        None => false,
-    };
-    if differential { KinematicsKind::Diff } else { KinematicsKind::Ik }
+    match robot_file::design(ds) {
+        Some(Design::File(f)) => f.description.kind.default_model(),
+        Some(Design::Data(g)) if !g.is_omnidirectional() => KinematicsKind::Diff,
+        _ => KinematicsKind::Ik,
+    }
 }
 
 /// [`model_of`], where no robot is an error saying how to describe it.

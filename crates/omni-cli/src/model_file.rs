@@ -21,7 +21,8 @@
 //! [fit]                                  # optional: how it was made (not read back into the model)
 //! ```
 //! `geometry` models store `[[wheels]]` (radius_m, distance_m, angle_rad, drive_offset_rad,
-//! roller_angle_rad) and `[[design_wheels]]` instead of the matrices.
+//! roller_angle_rad) and `[[design_wheels]]` instead of the matrices; `skid` models `[[design_wheels]]`
+//! and a `[skid]` table (r_right_m, r_left_m, y_icr_left_m, y_icr_right_m, x_icr_m).
 
 use omni_kin::effect::Effect;
 use omni_kin::{BaseRecord, EffectKind, FittedModel, Integration, KinematicsKind, Model, Wheel};
@@ -110,6 +111,10 @@ pub struct ModelFile {
     /// Design wheels (geometry models).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub design_wheels: Option<Vec<Wheel>>,
+    /// A skid-steer base's parameters (`skid` models): `r_right_m`, `r_left_m`, `y_icr_left_m`,
+    /// `y_icr_right_m`, `x_icr_m`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skid: Option<omni_kin::kinematics::SkidRecord>,
     /// Integration settings.
     pub integration: Integration,
     /// Effects in pipeline order.
@@ -129,7 +134,7 @@ impl ModelFile {
     /// The file form of a fitted model.
     pub fn from_fitted(f: &FittedModel, fit: Option<toml::Table>) -> Result<Self, omni_kin::KinError> {
         let nb = f.model.n_base();
-        let BaseRecord { wheel_names, matrix, design_matrix, wheels, design_wheels } =
+        let BaseRecord { wheel_names, matrix, design_matrix, wheels, design_wheels, skid } =
             f.model.kinematics.record(&f.params[..nb])?;
         let effects = f
             .model
@@ -149,6 +154,7 @@ impl ModelFile {
             design_matrix,
             wheels,
             design_wheels,
+            skid,
             integration: f.model.integration,
             effects,
             fit,
@@ -222,6 +228,7 @@ impl ModelFile {
             design_matrix: self.design_matrix.clone(),
             wheels: self.wheels.clone(),
             design_wheels: self.design_wheels.clone(),
+            skid: self.skid,
         }
     }
 

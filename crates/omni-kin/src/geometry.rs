@@ -159,6 +159,27 @@ impl RobotGeometry {
         Self { wheel_names: default_wheel_names(4), wheels }
     }
 
+    /// A four-wheel skid-steer base: wheels at (±lx, ±ly) in the order front-left, rear-left, front-right,
+    /// rear-right (each side together), driving forward, without rollers (the layout of a `kind = "skid"`
+    /// robot description; Husky: r 0.165 m, lx 0.256 m, ly 0.2775 m).
+    pub fn skid4(radius_m: f64, lx_m: f64, ly_m: f64) -> Self {
+        let corners = [(lx_m, ly_m), (-lx_m, ly_m), (lx_m, -ly_m), (-lx_m, -ly_m)];
+        let wheels = corners
+            .iter()
+            .map(|&(x, y)| {
+                let angle = y.atan2(x);
+                Wheel {
+                    radius_m,
+                    distance_m: x.hypot(y),
+                    angle_rad: angle,
+                    drive_offset_rad: -angle - FRAC_PI_2,
+                    roller_angle_rad: 0.0,
+                }
+            })
+            .collect();
+        Self { wheel_names: default_wheel_names(4), wheels }
+    }
+
     /// A differential drive: two wheels on one axle across y, `separation_m` apart, the left (at +y,
     /// the first column) and the right (at −y), both driving forward at positive speed (the layout of a
     /// `kind = "diff"` robot description). Names `wheel_a` (left), `wheel_b` (right).
@@ -206,6 +227,18 @@ impl RobotGeometry {
         self.rank() == PLANAR_TWIST_DIMENSIONS
     }
 
+    /// The planar twist directions the base is built to drive: 2 when every wheel drives along x without
+    /// rollers (a differential drive's axle, a skid-steer base's sides: they cannot push sideways, and the
+    /// vehicle moves forward and turns), else 3 (omni, mecanum: every planar twist). The wheels' kinds
+    /// decide, not their number.
+    pub fn twist_dof(&self) -> usize {
+        let along_x = |w: &Wheel| {
+            let beta = w.angle_rad + std::f64::consts::FRAC_PI_2 + w.drive_offset_rad;
+            beta.sin().abs() <= 1e-9 && w.roller_angle_rad.abs() <= 1e-9
+        };
+        if !self.wheels.is_empty() && self.wheels.iter().all(along_x) { 2 } else { PLANAR_TWIST_DIMENSIONS }
+    }
+
     /// Checks every wheel, the names and that the wheels drive at least `needed` independent twist
     /// directions ([`Self::rank`]); a base type states what it needs (3: every planar twist).
     pub fn validate_for(&self, needed: usize) -> Result<(), KinError> {
@@ -241,7 +274,7 @@ impl RobotGeometry {
     /// minimum-norm inverse `M = Gᵀ (G Gᵀ)⁻¹ diag(r)`, which on an axle along y has a zero `vy` row.
     pub fn twist_from_wheels(&self) -> Result<IkMatrix, KinError> {
         let n = self.wheels.len();
-        let needed = if n == 2 { 2 } else { PLANAR_TWIST_DIMENSIONS };
+        let needed = if n == 2 { 2 } else { self.twist_dof() };
         self.validate_for(needed)?;
         let m = self.wheels_from_twist();
         // The (pseudo-)inverse exists once the rank is enough; were it lost to rounding, say so as a rank
@@ -254,7 +287,13 @@ impl RobotGeometry {
                 DMatrix::from_diagonal(&nalgebra::DVector::from_iterator(n, self.wheels.iter().map(|w| w.radius_m)));
             let rim = &radii * &m;
             let rt = rim.transpose();
-            if n == 2 {
+            if needed == 2 && n > 2 {
+                // Wheels on two sides (skid-steer): the pseudo-inverse in rim speeds, each side's wheels
+                // sharing its rim speed alike; no wheel pushes sideways, so the vy row is zero.
+                let mut inv = rim.clone().pseudo_inverse(1e-12).map_err(|_| lost)? * radii;
+                inv.row_mut(1).fill(0.0);
+                inv
+            } else if n == 2 {
                 let gram_inv = (&rim * &rt).try_inverse().ok_or(lost)?;
                 let mut inv = rt * gram_inv * radii;
                 // An axle along y cannot push sideways: its vy row is zero, exactly (not sin π's rounding),

@@ -289,7 +289,7 @@ pub fn _calibration_from_state(state: &Bound<'_, PyDict>) -> PyResult<PyCalibrat
 /// Fit a model to training runs, as ``omnical train RUNS`` (the options carry its flags' names).
 ///
 /// ``model``: what to start from. A kinematics, as the CLI's ``--model``: ``"ik"`` (the 3 x W matrix),
-/// ``"geometry"``, ``"diff"`` or ``"mecanum"``, at the design of ``robot`` (a ``robot.toml`` path or
+/// ``"geometry"``, ``"diff"``, ``"mecanum"`` or ``"skid"``, at the design of ``robot`` (a ``robot.toml`` path or
 /// ``"apr02"``, the paper's robot), else of the data's robot (a Dataset's); these parametric fits use the
 /// robot description's ``[priors]`` to bound the search, as the CLI does. ``"design"``: the data's (or
 /// ``robot``'s) design model as ``evaluate`` uses it. Or a start model, as the CLI's ``--start``: an

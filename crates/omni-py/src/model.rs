@@ -75,7 +75,8 @@ impl PyModel {
     /// ``kinematics="ik"`` fits the 3 × W matrix entries (around the robot's design matrix); the
     /// parametric models fit the geometry: ``"geometry"`` (omni: per-wheel radius r [m], distance R [m],
     /// angle delta [rad]), ``"diff"`` (both radii and the separation [m]), ``"mecanum"`` (radii and the
-    /// half-extents [m]). The model's wheel names are the description's joints (model files carry them).
+    /// half-extents [m]), ``"skid"`` (a skid-steer base: each side's radius and the centres of rotation
+    /// [m]). The model's wheel names are the description's joints (model files carry them).
     ///
     /// >>> omnical.Model.design("robot.toml").design_matrix  # doctest: +SKIP
     /// >>> omnical.Model.design("apr02", kinematics="geometry").param_names[:3]

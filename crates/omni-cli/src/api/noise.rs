@@ -13,9 +13,14 @@ pub const COVERAGE_LOW: f64 = 0.90;
 /// Coverage above which the model says it is too cautious.
 pub const COVERAGE_HIGH: f64 = 0.98;
 
-/// Whether the fitted base moves sideways (its matrix has a vy row): its odometry strafes.
+/// Whether the fitted base moves sideways on command (its matrix has a vy row): its odometry strafes. A
+/// differential or skid-steer model never does: a skid-steer base's sideways slip follows its turning
+/// (`vy = −x_icr ω`), it is not a direction of its own.
 pub fn holonomic(fitted: &FittedModel) -> bool {
-    fitted.ik().is_ok_and(|m| m.row(1).iter().any(|v| v.abs() > 1e-12))
+    match fitted.model.kinematics.kind() {
+        KinematicsKind::Diff | KinematicsKind::Skid => false,
+        _ => fitted.ik().is_ok_and(|m| m.row(1).iter().any(|v| v.abs() > 1e-12)),
+    }
 }
 
 /// ros2_controllers' stock pose covariance diagonal (position entries) for the base's controller: 0.1 for

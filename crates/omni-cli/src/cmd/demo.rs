@@ -88,9 +88,13 @@ fn paper_setup(runs_per_command: usize) -> Setup {
 }
 
 /// How the demo's true robot on a `--robot` of kind `kind` with `n_wheels` wheels deviates from its design:
-/// wheel a 1.5 % larger, the last wheel 1 % smaller, and a differential drive's axle 2 % longer (the
-/// `simulate --effect` specs).
+/// wheel a 1.5 % larger, the last wheel 1 % smaller, and a differential drive's axle 2 % longer; a
+/// skid-steer base turns about centres of rotation 0.1 m further out and 0.03 m ahead (the `simulate
+/// --effect` specs).
 pub fn demo_deviations(kind: BaseKind, n_wheels: usize) -> Vec<String> {
+    if kind == BaseKind::Skid {
+        return vec!["icr_shift=0.1,-0.1,0.03".into()];
+    }
     let last = char::from(b'a' + ((n_wheels.max(1) - 1) % 26) as u8);
     let mut v = vec!["wheel_radius:a=0.015".to_string(), format!("wheel_radius:{last}=-0.01")];
     if kind == BaseKind::Diff {

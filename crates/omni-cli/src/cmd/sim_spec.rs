@@ -1,6 +1,7 @@
 //! What `simulate --effect` and `--commands` and `demo --hidden` say about the simulated robot: effect
 //! specs (`NAME=V1,…`, one wheel's `NAME:WHEEL=V`), true-robot deviations from the design
-//! (`wheel_radius:WHEEL=E`, `wheel_separation=E`), and command lists (a `plan` CSV).
+//! (`wheel_radius:WHEEL=E`, `wheel_separation=E`, a skid-steer base's `icr_shift=DYL,DYR,DX`), and
+//! command lists (a `plan` CSV).
 //!
 //! A wheel is named by its letter in the model's column order (`a`, `b`, …: the letters of the per-wheel
 //! parameter names, e.g. `backlash.b_c`) or by its joint name; how many there are is the robot's.
@@ -15,6 +16,10 @@ use std::path::Path;
 pub const WHEEL_RADIUS: &str = "wheel_radius";
 /// `wheel_separation=E`: the true axle of a two-wheel base is `1 + E` times the design's.
 pub const WHEEL_SEPARATION: &str = "wheel_separation";
+/// `icr_shift=DYL,DYR,DX`: a skid-steer base's instantaneous centres of rotation moved from the design's
+/// (m): the left tread's to the left by DYL, the right tread's to the left by DYR (negative: outwards), the
+/// robot's forward by DX.
+pub const ICR_SHIFT: &str = "icr_shift";
 
 /// The letter of wheel `i` in parameter names (`a`, `b`, …), as the effects name them.
 fn letter(i: usize) -> char {
@@ -73,6 +78,7 @@ pub fn apply_effect_spec(
     let values = numbers(spec, values)?;
     match name {
         WHEEL_RADIUS | WHEEL_SEPARATION => deviate_base(spec, name, wheel, &values, truth, wheels),
+        ICR_SHIFT => shift_icr(spec, wheel, &values, truth, &config.design),
         _ => match wheel {
             Some(i) => add_wheel_effect(spec, name, i, &values, truth),
             None => add_effect(spec, name, &values, truth, config),
@@ -183,6 +189,40 @@ fn deviate_base(
     model.integration = truth.model.integration;
     let params = model.nominal()[..model.n_base()].iter().copied().chain(effects).collect();
     *truth = FittedModel::new(model, params).with_context(|| format!("--effect {spec}"))?;
+    Ok(())
+}
+
+/// The true base is a skid-steer base (the ICR-based extended differential drive,
+/// [`omni_kin::kinematics::SkidKinematics`]) at the design's radii with its ICRs moved by
+/// `DYL,DYR,DX` (m); the effects stay.
+fn shift_icr(
+    spec: &str,
+    wheel: Option<usize>,
+    values: &[f64],
+    truth: &mut FittedModel,
+    design: &RobotGeometry,
+) -> anyhow::Result<()> {
+    let [dyl, dyr, dx] = values else {
+        bail!("--effect {spec}: icr_shift takes three lengths in m, DYL,DYR,DX (e.g. icr_shift=0.12,-0.12,0.04)");
+    };
+    if wheel.is_some() {
+        bail!("--effect {spec}: icr_shift belongs to the base, not a wheel: icr_shift=DYL,DYR,DX");
+    }
+    let skid = omni_kin::kinematics::SkidKinematics::new(design.clone()).map_err(|e| {
+        anyhow::anyhow!("--effect {spec}: icr_shift is a skid-steer base's (robot.toml kind = \"skid\"): {e}")
+    })?;
+    let mut p = skid.design_params()?;
+    p[2] += dyl;
+    p[3] += dyr;
+    p[4] += dx;
+    let effects = truth.params[truth.model.n_base()..].to_vec();
+    let model = Model {
+        kinematics: omni_kin::kinematics::Kinematics::Skid(skid),
+        effects: std::mem::take(&mut truth.model.effects),
+        integration: truth.model.integration,
+    };
+    *truth =
+        FittedModel::new(model, p.into_iter().chain(effects).collect()).with_context(|| format!("--effect {spec}"))?;
     Ok(())
 }
 

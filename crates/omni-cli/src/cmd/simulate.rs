@@ -44,12 +44,13 @@ pub struct Args {
     /// Inject an effect into the true robot: NAME=V1,V2,… in the effect's parameter order
     /// (`sample_timing=DROP_PROBABILITY,JITTER_S`); one wheel's: NAME:WHEEL=V (WHEEL: its letter a, b, …
     /// or joint name). The true base: wheel_radius:WHEEL=E (radius 1 + E times the design's),
-    /// wheel_separation=E (a diff base's axle). Repeatable.
+    /// wheel_separation=E (a diff base's axle), icr_shift=DYL,DYR,DX (a skid-steer base's centres of
+    /// rotation moved, m). Repeatable.
     #[arg(long = "effect", value_name = "NAME[:WHEEL]=VALUES", help = effect_help(
         "Inject an effect into the true robot: NAME=V1,V2,… in the effect's parameter order \
          (sample_timing=DROP_PROBABILITY,JITTER_S); one wheel's: NAME:WHEEL=V (WHEEL: its letter a, b, … or \
          joint name). The true base: wheel_radius:WHEEL=E (radius 1 + E times the design's), wheel_separation=E \
-         (a diff base's axle). Repeatable."
+         (a diff base's axle), icr_shift=DYL,DYR,DX (a skid-steer base's centres of rotation moved, m). Repeatable."
     ))]
     pub effects: Vec<String>,
     /// Commands to simulate, a `plan --out` CSV (v_m_s,alpha_deg,omega_rad_s,repetitions), instead of the

@@ -67,32 +67,48 @@ fn initial_guess(kind: ControllerKind, target: &IkMatrix) -> Result<Start, KinEr
     }
 }
 
+/// A differential controller's start: each wheel's side from its column (a left wheel turning forward
+/// turns the robot clockwise), the side's radius and the separation from the columns' `vx` and `ω`. With
+/// more than one wheel per side (a skid-steer base) the controller averages each side's wheels, so a
+/// column carries `1/k` of its side.
 fn diff_start(m: &IkMatrix) -> Result<Start, KinError> {
     let kind = ControllerKind::DiffDrive;
-    let mut sides = [None, None];
-    for c in 0..2 {
+    let n = m.n_wheels();
+    let k = n / 2;
+    // Per side (left 0, right 1): (column, reversed, radius, separation).
+    let mut sides: [Vec<(usize, bool, f64, f64)>; 2] = [Vec::new(), Vec::new()];
+    for c in 0..n {
         let (vx, om) = (m.get(0, c), m.get(2, c));
         if vx == 0.0 || om == 0.0 {
             return Err(layout_error(kind, format!("wheel {} moves the robot neither forward nor round", c + 1)));
         }
         let reversed = vx < 0.0;
-        // A left wheel turning forward turns the robot clockwise (ω < 0).
         let side = usize::from((if reversed { -om } else { om }) > 0.0);
-        if sides[side].is_some() {
-            return Err(layout_error(kind, "both wheels turn the robot the same way (no left and right wheel)".into()));
-        }
-        sides[side] = Some((c, reversed, 2.0 * vx.abs(), 2.0 * vx.abs() / om.abs()));
+        sides[side].push((c, reversed, 2.0 * k as f64 * vx.abs(), 2.0 * vx.abs() / om.abs()));
     }
-    let (Some(l), Some(r)) = (sides[0], sides[1]) else {
-        return Err(layout_error(kind, "no left and right wheel".into()));
+    if sides.iter().any(|s| s.len() != k) {
+        let why = if n == 2 {
+            "both wheels turn the robot the same way (no left and right wheel)".to_string()
+        } else {
+            format!(
+                "{} wheels turn the robot as left wheels and {} as right ones; the controller needs as many on each side",
+                sides[0].len(),
+                sides[1].len()
+            )
+        };
+        return Err(layout_error(kind, why));
+    }
+    let mean = |v: &[(usize, bool, f64, f64)], f: fn(&(usize, bool, f64, f64)) -> f64| {
+        v.iter().map(f).sum::<f64>() / v.len() as f64
     };
+    let all: Vec<_> = sides.iter().flatten().copied().collect();
     Ok(Start {
         params: ControllerParams::DiffDrive {
-            wheel_separation_m: (l.3 + r.3) / 2.0,
-            left_wheel_radius_m: l.2,
-            right_wheel_radius_m: r.2,
+            wheel_separation_m: mean(&all, |w| w.3),
+            left_wheel_radius_m: mean(&sides[0], |w| w.2),
+            right_wheel_radius_m: mean(&sides[1], |w| w.2),
         },
-        layout: WheelLayout { columns: vec![l.0, r.0], reversed: vec![l.1, r.1] },
+        layout: WheelLayout { columns: all.iter().map(|w| w.0).collect(), reversed: all.iter().map(|w| w.1).collect() },
         slot_angles_rad: Vec::new(),
     })
 }

@@ -78,23 +78,29 @@ impl ControllerKind {
         }
     }
 
-    /// Whether the controller can drive a base with `n_wheels` wheels.
+    /// Whether the controller can drive a base with `n_wheels` wheels (a differential controller: as many
+    /// on each side, `left_wheel_names` and `right_wheel_names` of equal length).
     pub fn accepts(self, n_wheels: usize) -> bool {
         match self {
-            Self::DiffDrive => n_wheels == 2,
+            Self::DiffDrive => n_wheels >= 2 && n_wheels.is_multiple_of(2),
             Self::MecanumDrive => n_wheels == 4,
             Self::OmniWheelDrive => n_wheels >= 3,
         }
     }
 
-    /// The controller that matches a base: two wheels → differential drive; four wheels whose rollers
-    /// all sit at ±45° → mecanum; three or more wheels otherwise → omni. `roller_angles_rad` is `None`
-    /// when only a matrix is known (then four wheels count as omni wheels).
-    pub fn for_base(n_wheels: usize, roller_angles_rad: Option<&[f64]>) -> Option<Self> {
-        let mecanum = roller_angles_rad
+    /// The controller that matches a base: a base that drives only forward and turning
+    /// (`twist_dof` 2: a differential drive, a skid-steer base) → differential drive; four wheels whose
+    /// rollers all sit at ±45° → mecanum; three or more wheels otherwise → omni. `design` is the base's
+    /// design geometry, `None` when only a matrix is known (then two wheels count as an axle and more as
+    /// omni wheels).
+    pub fn for_base(n_wheels: usize, design: Option<&omni_kin::RobotGeometry>) -> Option<Self> {
+        let roller_angles: Option<Vec<f64>> = design.map(|g| g.wheels.iter().map(|w| w.roller_angle_rad).collect());
+        let mecanum = roller_angles
             .is_some_and(|a| a.len() == 4 && a.iter().all(|g| (g.abs() - std::f64::consts::FRAC_PI_4).abs() < 1e-6));
+        let two_sided = design.is_some_and(|g| g.twist_dof() == 2 && Self::DiffDrive.accepts(g.n_wheels()));
         match n_wheels {
             2 => Some(Self::DiffDrive),
+            _ if two_sided => Some(Self::DiffDrive),
             4 if mecanum => Some(Self::MecanumDrive),
             n if n >= 3 => Some(Self::OmniWheelDrive),
             _ => None,
@@ -104,7 +110,11 @@ impl ControllerKind {
     /// Names of the controller's wheel slots in its own order (omni: `0`, `1`, … anticlockwise).
     pub fn slot_names(self, n_wheels: usize) -> Vec<String> {
         match self {
-            Self::DiffDrive => vec!["left".into(), "right".into()],
+            Self::DiffDrive if n_wheels <= 2 => vec!["left".into(), "right".into()],
+            Self::DiffDrive => {
+                let k = n_wheels / 2;
+                ["left", "right"].iter().flat_map(|side| (0..k).map(move |i| format!("{side}_{i}"))).collect()
+            }
             Self::MecanumDrive => {
                 ["front_left", "front_right", "rear_left", "rear_right"].iter().map(|s| s.to_string()).collect()
             }
@@ -244,7 +254,12 @@ impl ControllerParams {
     pub fn slot_columns(&self, n_wheels: usize) -> Vec<[f64; 3]> {
         match *self {
             Self::DiffDrive { wheel_separation_m: s, left_wheel_radius_m: rl, right_wheel_radius_m: rr } => {
-                vec![[rl / 2.0, 0.0, -rl / s], [rr / 2.0, 0.0, rr / s]]
+                // The left slots first, then the right: the controller averages each side's wheels.
+                let k = (n_wheels / 2).max(1) as f64;
+                let left = [rl / (2.0 * k), 0.0, -rl / (s * k)];
+                let right = [rr / (2.0 * k), 0.0, rr / (s * k)];
+                let per_side = (n_wheels / 2).max(1);
+                std::iter::repeat_n(left, per_side).chain(std::iter::repeat_n(right, per_side)).collect()
             }
             Self::MecanumDrive { wheels_radius_m: r, lx_plus_ly_m: k } => {
                 let q = r / 4.0;
@@ -394,7 +409,13 @@ mod tests {
         assert_eq!(ControllerKind::for_base(3, None), Some(ControllerKind::OmniWheelDrive));
         assert_eq!(ControllerKind::for_base(4, None), Some(ControllerKind::OmniWheelDrive));
         let q = std::f64::consts::FRAC_PI_4;
-        assert_eq!(ControllerKind::for_base(4, Some(&[-q, q, q, -q])), Some(ControllerKind::MecanumDrive));
+        let mut mecanum = omni_kin::RobotGeometry::apr02();
+        mecanum.wheels.push(mecanum.wheels[0].clone());
+        mecanum.wheel_names.push("d".into());
+        for (w, a) in mecanum.wheels.iter_mut().zip([-q, q, q, -q]) {
+            w.roller_angle_rad = a;
+        }
+        assert_eq!(ControllerKind::for_base(4, Some(&mecanum)), Some(ControllerKind::MecanumDrive));
         assert_eq!(ControllerKind::for_base(1, None), None);
         assert_eq!("mecanum".parse::<ControllerKind>().unwrap(), ControllerKind::MecanumDrive);
     }

@@ -120,6 +120,20 @@ fn guess_kind(wheels: &[UrdfWheel], forced: Option<BaseKind>) -> Result<(BaseKin
         (None, 4) if mecanum_named => {
             Ok((BaseKind::Mecanum, "kind mecanum: guessed from 4 wheels with \"mecanum\" in their names".into()))
         }
+        (None, n)
+            if n >= 4
+                && n.is_multiple_of(2)
+                && wheels.iter().all(|w| w.drive_deg().to_radians().sin().abs() < 1e-3) =>
+        {
+            Ok((
+                BaseKind::Skid,
+                format!(
+                    "kind skid: guessed from {n} wheels whose axles all point sideways. If they are mecanum wheels, \
+                     set kind = \"mecanum\" and roller_angle_deg = ±45 per wheel (docs/formats.md): a URDF does \
+                     not model rollers"
+                ),
+            ))
+        }
         (None, 4) => Ok((
             BaseKind::Omni,
             "kind omni: guessed from 4 wheels. If they are mecanum wheels, set kind = \"mecanum\" and \

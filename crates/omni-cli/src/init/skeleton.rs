@@ -61,7 +61,7 @@ pub fn skeleton(inv: &Inventory, recording: &str, kind: BaseKind) -> Result<(Str
             let _ = writeln!(s, "left_radius_m = 0.0{}", mark("the left wheel's radius, m"));
             let _ = writeln!(s, "right_radius_m = 0.0{}", mark("the right wheel's radius, m"));
         }
-        BaseKind::Omni | BaseKind::Mecanum => {
+        BaseKind::Omni | BaseKind::Mecanum | BaseKind::Skid => {
             if joints.len() > if kind == BaseKind::Mecanum { 4 } else { 8 } {
                 let _ = writeln!(
                     s,
@@ -79,6 +79,12 @@ pub fn skeleton(inv: &Inventory, recording: &str, kind: BaseKind) -> Result<(Str
                         s,
                         "roller_angle_deg = 45.0{}",
                         mark("+45 or −45: the rollers' angle to the axle, seen from above")
+                    );
+                } else if kind == BaseKind::Skid {
+                    let _ = writeln!(
+                        s,
+                        "drive_deg = 0.0{}",
+                        mark("0 if positive speed drives the base forward, 180 if backward")
                     );
                 } else {
                     let _ = writeln!(

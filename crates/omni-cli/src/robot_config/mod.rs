@@ -192,6 +192,9 @@ pub struct RobotConfig {
     pub noise: Option<omni_kin::noise::OdometryNoise>,
     /// The runs' RMS speed and turn rate under the fitted matrix (the twist diagonal's operating point).
     pub motion: TypicalMotion,
+    /// What the base's own model says about the controller, besides the fit (a skid-steer base's
+    /// effective track and the slip a differential controller cannot express).
+    pub base_notes: Vec<String>,
 }
 
 impl RobotConfig {
@@ -217,10 +220,12 @@ impl RobotConfig {
 }
 
 /// The design's roller angles, when the model knows its geometry.
-fn roller_angles(design: &FittedModel) -> Option<Vec<f64>> {
+fn design_geometry(design: &FittedModel) -> Option<omni_kin::RobotGeometry> {
     let nb = design.model.n_base();
-    let g = design.model.kinematics.geometry_at(&design.params[..nb])?.ok()?;
-    Some(g.wheels.iter().map(|w| w.roller_angle_rad).collect())
+    match &design.model.kinematics {
+        omni_kin::kinematics::Kinematics::Skid(k) => Some(k.design.clone()),
+        kinematics => kinematics.geometry_at(&design.params[..nb])?.ok(),
+    }
 }
 
 fn accuracy(fm: &FittedModel, runs: &[Run]) -> Result<Accuracy, KinError> {
@@ -256,8 +261,18 @@ pub fn build(req: &Request<'_>) -> Result<RobotConfig, RobotConfigError> {
     let matrix = model.ik()?;
     let kind = match req.controller {
         Some(k) => k,
-        None => ControllerKind::for_base(n, roller_angles(req.design).as_deref())
-            .ok_or(RobotConfigError::NoController { wheels: n })?,
+        None => match design_geometry(req.design) {
+            Some(g) => ControllerKind::for_base(n, Some(&g)),
+            // Only a matrix: a base whose design cannot push sideways (a zero vy row) on an even number of
+            // wheels is driven as a differential base.
+            None if ControllerKind::DiffDrive.accepts(n)
+                && req.design.ik().is_ok_and(|m| (0..n).all(|c| m.get(1, c) == 0.0)) =>
+            {
+                Some(ControllerKind::DiffDrive)
+            }
+            None => ControllerKind::for_base(n, None),
+        }
+        .ok_or(RobotConfigError::NoController { wheels: n })?,
     };
     let s = controller::wheel_second_moment(req.runs)?;
     let opts = FitOptions::default();
@@ -286,7 +301,34 @@ pub fn build(req: &Request<'_>) -> Result<RobotConfig, RobotConfigError> {
         against: req.against,
         noise: req.noise.clone(),
         motion: typical_motion(&matrix, req.runs),
+        base_notes: base_notes(model, kind),
     })
+}
+
+/// A skid-steer model seen by a differential controller: the effective track it takes as
+/// `wheel_separation`, and the ICR offsets it cannot express (ICR-based extended differential drive,
+/// [`omni_kin::kinematics::SkidKinematics`]).
+fn base_notes(model: &FittedModel, kind: ControllerKind) -> Vec<String> {
+    let omni_kin::kinematics::Kinematics::Skid(k) = &model.model.kinematics else { return Vec::new() };
+    let nb = model.model.n_base();
+    let (p, Ok(d)) = (&model.params[..nb], k.design_params()) else { return Vec::new() };
+    let (track, design_track) = (p[2] - p[3], d[2] - d[3]);
+    let mut v = vec![format!(
+        "skid-steer base (the ICR-based extended differential drive): its effective track is y_icr_left − \
+         y_icr_right = {track:.4} m, {:.3} times the wheels' {design_track:.4} m (the track expansion factor){}.",
+        track / design_track,
+        if kind == ControllerKind::DiffDrive { ", which the controller takes as its wheel separation" } else { "" }
+    )];
+    let (mid, x) = (0.5 * (p[2] + p[3]), p[4]);
+    if mid.abs() > 1e-3 || (x - d[4]).abs() > 1e-3 || x.abs() > 1e-3 {
+        v.push(format!(
+            "a differential controller cannot express the robot's centre of rotation at x = {x:.4} m, y = {mid:.4} m \
+             from the base's origin: turning at ω, the origin slips sideways at −x·ω and moves forward at y·ω. \
+             Publishing the odometry for a frame at that point (a static transform from base_link) removes both; \
+             omnical_odometry.yaml's matrix carries them as they are."
+        ));
+    }
+    v
 }
 
 /// The RMS speed and turn rate of the runs' wheel samples under `matrix`.

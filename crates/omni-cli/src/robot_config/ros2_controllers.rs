@@ -152,6 +152,9 @@ fn comment_block(c: &RobotConfig) -> String {
     ];
     let mut lines: Vec<String> = lines.iter().flat_map(|l| wrap(l, COMMENT_WIDTH)).collect();
     lines.extend(accuracy_lines(c));
+    for n in &c.base_notes {
+        lines.extend(wrap(&format!("NOTE: {n}"), COMMENT_WIDTH));
+    }
     for w in warning_lines(c) {
         lines.extend(wrap(&format!("WARNING: {w}"), COMMENT_WIDTH));
     }
@@ -175,7 +178,10 @@ pub fn controller_yaml(c: &RobotConfig) -> String {
                 }) => (s, (l + r) / 2.0),
                 _ => (wheel_separation_m, (left_wheel_radius_m + right_wheel_radius_m) / 2.0),
             };
-            let _ = writeln!(s, "    left_wheel_names: [{}]\n    right_wheel_names: [{}]", name(0), name(1));
+            let k = c.wheel_names.len() / 2;
+            let names = |slots: std::ops::Range<usize>| slots.map(name).collect::<Vec<_>>().join(", ");
+            let _ =
+                writeln!(s, "    left_wheel_names: [{}]\n    right_wheel_names: [{}]", names(0..k), names(k..2 * k));
             let _ = writeln!(
                 s,
                 "    wheel_separation: {}  # design, m\n    wheel_radius: {}  # design, m",
@@ -248,6 +254,9 @@ pub fn summary(c: &RobotConfig, dir: &Path) -> String {
     );
     for l in accuracy_lines(c) {
         let _ = writeln!(s, "{l}");
+    }
+    for n in &c.base_notes {
+        let _ = writeln!(s, "note: {n}");
     }
     s
 }

@@ -43,7 +43,7 @@ fn docs_examples() -> Vec<(String, String)> {
 fn docs_examples_parse() {
     let examples = docs_examples();
     let titles: Vec<&str> = examples.iter().map(|(t, _)| t.as_str()).collect();
-    assert_eq!(titles, ["APR-02", "four-wheel omni", "mecanum", "differential drive"]);
+    assert_eq!(titles, ["APR-02", "four-wheel omni", "mecanum", "differential drive", "skid-steer"]);
     let parsed: Vec<RobotDescription> =
         examples.iter().map(|(t, text)| parse(text, Path::new(t)).unwrap_or_else(|e| panic!("{e}"))).collect();
     // APR-02: exactly the paper's Eq. 7 and the built-in description's geometry.
@@ -66,6 +66,12 @@ fn docs_examples_parse() {
     // Diff: vx = r (ω_l + ω_r)/2, vy = 0, ω = r (ω_r − ω_l)/s.
     let ik = parsed[3].design_ik().unwrap();
     assert_eq!(ik.rows(), vec![vec![0.0165, 0.0165], vec![0.0, 0.0], vec![-0.033 / 0.287, 0.033 / 0.287]]);
+    // Skid-steer: the differential drive of the sides, each wheel a half of its side's rim speed.
+    let ik = parsed[4].design_ik().unwrap();
+    for (c, side) in [-1.0, -1.0, 1.0, 1.0].into_iter().enumerate() {
+        assert!((ik.get(0, c) - 0.165 / 4.0).abs() < 1e-12 && ik.get(1, c) == 0.0);
+        assert!((ik.get(2, c) - side * 0.165 / (2.0 * 0.555)).abs() < 1e-12, "{}", ik.get(2, c));
+    }
     assert_eq!(parsed[3].joints(), ["wheel_left_joint", "wheel_right_joint"]);
 }
 
@@ -89,7 +95,10 @@ fn syntax_and_schema_errors_name_file_line_and_field() {
         "{e}"
     );
     let e = error(&APR02.replace("kind = \"omni\"", "kind = \"tricycle\""));
-    assert_eq!(e, "robots/r.toml: line 2: kind: unknown variant `tricycle`, expected one of `omni`, `mecanum`, `diff`");
+    assert_eq!(
+        e,
+        "robots/r.toml: line 2: kind: unknown variant `tricycle`, expected one of `omni`, `mecanum`, `diff`, `skid`"
+    );
     let e = error(&format!("wheelbase = 3\n{APR02}"));
     assert!(e.starts_with("robots/r.toml: line 1: wheelbase: unknown field `wheelbase`"), "{e}");
     let e = error(

@@ -159,8 +159,7 @@ impl BaseKinematics for MatrixKinematics {
             wheel_names: self.wheel_names(),
             matrix: Some(self.twist_from_wheels(p)?.rows()),
             design_matrix: Some(self.design.rows()),
-            wheels: None,
-            design_wheels: None,
+            ..BaseRecord::default()
         })
     }
 

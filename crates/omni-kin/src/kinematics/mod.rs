@@ -14,6 +14,7 @@
 //! | `geometry` | [`GeometryKinematics`]: the paper's ref. \[17\], per-wheel radius, distance, angle | `r_a` …, `R_a` …, `delta_a` … |
 //! | `diff` | [`DiffKinematics`]: a differential drive, both radii and the separation (`vy` row zero) | `r_right`, `r_left`, `b` |
 //! | `mecanum` | [`MecanumKinematics`]: four wheels on a rectangle (mecanum, or omni wheels in an X), per-wheel radius and the half-extents | `r_a` … `r_d`, `lx`, `ly` |
+//! | `skid` | [`SkidKinematics`]: a skid-steer base, the ICR-based extended differential drive | `r_right`, `r_left`, `y_icr_left`, `y_icr_right`, `x_icr` |
 //!
 //! To add a robot type: a new file implementing [`BaseKinematics`], and one variant in [`Kinematics`] and
 //! [`KinematicsKind`] (this file).
@@ -22,11 +23,13 @@ mod diff_model;
 mod geometry_model;
 mod matrix_model;
 mod mecanum_model;
+mod skid_model;
 
 pub use diff_model::DiffKinematics;
 pub use geometry_model::GeometryKinematics;
 pub use matrix_model::MatrixKinematics;
 pub use mecanum_model::MecanumKinematics;
+pub use skid_model::{SKID_PARAMS, SkidKinematics, SkidRecord};
 
 use crate::effect::ParamSpec;
 use crate::error::KinError;
@@ -125,6 +128,8 @@ pub enum KinematicsKind {
     Diff,
     /// [`MecanumKinematics`].
     Mecanum,
+    /// [`SkidKinematics`].
+    Skid,
 }
 
 crate::choice!(KinematicsKind, default = Ik, {
@@ -132,6 +137,7 @@ crate::choice!(KinematicsKind, default = Ik, {
     Geometry => "geometry": "Per-wheel radius, distance from the centre and mounting angle (parametric)",
     Diff => "diff": "A differential drive: both wheel radii and the separation",
     Mecanum => "mecanum": "Four wheels on a rectangle (mecanum, omni X): per-wheel radius and the half-extents",
+    Skid => "skid": "A skid-steer base: each side's radius and the ICRs of the treads and of the robot",
 });
 
 /// What a model file stores about the base kinematics (the keys of `omnical-model/1` besides `format`,
@@ -148,6 +154,9 @@ pub struct BaseRecord {
     pub wheels: Option<Vec<Wheel>>,
     /// Design wheels (`geometry`); default: the fitted ones.
     pub design_wheels: Option<Vec<Wheel>>,
+    /// A skid-steer base's parameters (`skid`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skid: Option<SkidRecord>,
 }
 
 impl BaseRecord {
@@ -161,6 +170,7 @@ impl BaseRecord {
             design_matrix: None,
             wheels: Some(fitted.wheels),
             design_wheels: Some(design.wheels.clone()),
+            skid: None,
         }
     }
 
@@ -257,6 +267,8 @@ pub enum Kinematics {
     Diff(DiffKinematics),
     /// Four wheels on a rectangle: per-wheel radius, lx, ly.
     Mecanum(MecanumKinematics),
+    /// A skid-steer base: r_R, r_L, y_ICR,L, y_ICR,R, x_ICR.
+    Skid(SkidKinematics),
 }
 
 /// Delegates each listed method to the model inside a [`Kinematics`]: the only `match` on its variants
@@ -271,6 +283,7 @@ macro_rules! delegate {
                     Kinematics::Geometry(k) => k.$name($($arg),*),
                     Kinematics::Diff(k) => k.$name($($arg),*),
                     Kinematics::Mecanum(k) => k.$name($($arg),*),
+                    Kinematics::Skid(k) => k.$name($($arg),*),
                 }
             }
         )*
@@ -286,6 +299,7 @@ impl Kinematics {
             KinematicsKind::Geometry => Self::Geometry(GeometryKinematics::design_for(robot)?),
             KinematicsKind::Diff => Self::Diff(DiffKinematics::design_for(robot)?),
             KinematicsKind::Mecanum => Self::Mecanum(MecanumKinematics::design_for(robot)?),
+            KinematicsKind::Skid => Self::Skid(SkidKinematics::design_for(robot)?),
         })
     }
 
@@ -308,6 +322,10 @@ impl Kinematics {
                 let (k, p) = MecanumKinematics::from_record(record)?;
                 (Self::Mecanum(k), p)
             }
+            KinematicsKind::Skid => {
+                let (k, p) = SkidKinematics::from_record(record)?;
+                (Self::Skid(k), p)
+            }
         })
     }
 
@@ -326,6 +344,7 @@ impl Kinematics {
             Self::Geometry(k) => Self::Geometry(GeometryKinematics { design: named(k.design) }),
             Self::Diff(k) => Self::Diff(DiffKinematics { design: named(k.design) }),
             Self::Mecanum(k) => Self::Mecanum(MecanumKinematics { design: named(k.design) }),
+            Self::Skid(k) => Self::Skid(SkidKinematics { design: named(k.design) }),
         })
     }
 

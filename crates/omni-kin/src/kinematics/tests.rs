@@ -15,6 +15,7 @@ fn models() -> Vec<Kinematics> {
         )),
         Kinematics::Diff(DiffKinematics::new(super::robot_type_tests::diff_left_first(0.041, 0.043, 0.21)).unwrap()),
         Kinematics::Mecanum(MecanumKinematics::new(RobotGeometry::mecanum4(0.05, 0.2, 0.15)).unwrap()),
+        Kinematics::Skid(SkidKinematics::new(RobotGeometry::skid4(0.165, 0.256, 0.2775)).unwrap()),
     ]
 }
 
@@ -104,10 +105,11 @@ fn records_round_trip_exactly() {
 }
 
 /// The wheel-based models (geometry, diff, mecanum) share one record: the fitted wheels under `wheels`,
-/// the design's under `design_wheels`, the design's names, no matrix.
+/// the design's under `design_wheels`, the design's names, no matrix. (A skid-steer model's parameters
+/// are no wheels: its record is the design's wheels and `[skid]`, tested in `skid_model.rs`.)
 #[test]
 fn wheel_models_record_fitted_and_design_wheels_apart() {
-    for k in models().into_iter().filter(|k| k.kind() != KinematicsKind::Ik) {
+    for k in models().into_iter().filter(|k| !matches!(k.kind(), KinematicsKind::Ik | KinematicsKind::Skid)) {
         let p = perturbed(&k);
         let rec = k.record(&p).unwrap();
         let design = k.record(&nominal(&k)).unwrap();
@@ -149,7 +151,7 @@ fn kind_ids_parse_and_print() {
         assert_eq!(k.id(), k.kind().id());
     }
     let err = "tricycle".parse::<KinematicsKind>().unwrap_err();
-    assert_eq!(err.to_string(), "\"tricycle\": expected \"ik\", \"geometry\", \"diff\" or \"mecanum\"");
+    assert_eq!(err.to_string(), "\"tricycle\": expected \"ik\", \"geometry\", \"diff\", \"mecanum\" or \"skid\"");
 }
 
 #[test]

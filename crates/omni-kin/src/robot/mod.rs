@@ -8,6 +8,9 @@
 //! - `mecanum`: 4 mecanum wheels; rollers at ±45° (`roller_angle_deg`), driving forward by default.
 //! - `diff`: 2 wheels on one axle, `[diff]` with `wheel_separation_m`, the two radii and joints (left
 //!   first). Positive wheel speed drives forward. The design matrix's `vy` row is zero.
+//! - `skid`: 4 or more wheels on two sides (`y_m > 0` left, `< 0` right), driving forward by default
+//!   (`drive_deg` 0, or 180 for a joint that turns the other way), without rollers. The design is the
+//!   differential drive of the sides' mean positions ([`crate::kinematics::SkidKinematics`]).
 //!
 //! Angles in the file are degrees (`_deg`), lengths metres (`_m`); the geometry stores radians. A
 //! description that matches the paper's APR-02 to 1e-12 gives exactly [`RobotGeometry::apr02`] and the
@@ -39,6 +42,7 @@ pub use wheels::{DiffSpec, MAX_WHEEL_DISTANCE_M, MAX_WHEEL_RADIUS_M, WheelSpec};
 
 use crate::geometry::{RobotGeometry, Wheel};
 use crate::ik::IkMatrix;
+use crate::kinematics::{BaseKinematics, SkidKinematics};
 use error::err;
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
@@ -58,16 +62,19 @@ pub enum BaseKind {
     Mecanum,
     /// Differential drive: two wheels on one axle.
     Diff,
+    /// Skid-steer: 4, 6 or more wheels on two sides, driving along x without steering (Husky, Jackal).
+    Skid,
 }
 
 crate::choice!(BaseKind, {
     Omni => "omni": "N ≥ 3 omni wheels",
     Mecanum => "mecanum": "Four mecanum wheels",
     Diff => "diff": "Differential drive",
+    Skid => "skid": "Skid-steer: wheels on two sides, driving along x",
 });
 
 impl BaseKind {
-    /// The name used in `robot.toml`: `omni`, `mecanum`, `diff` (its [`crate::Choice`] id).
+    /// The name used in `robot.toml`: `omni`, `mecanum`, `diff`, `skid` (its [`crate::Choice`] id).
     pub fn name(self) -> &'static str {
         self.id()
     }
@@ -76,7 +83,18 @@ impl BaseKind {
     pub fn dof(self) -> usize {
         match self {
             Self::Omni | Self::Mecanum => 3,
-            Self::Diff => 2,
+            Self::Diff | Self::Skid => 2,
+        }
+    }
+
+    /// The base model `train` fits when none is named: the robot's own parametric model where it has one
+    /// that every robot of the kind obeys (`diff`, `skid`), else the paper's IK matrix (`ik`), which holds
+    /// any wheel layout.
+    pub fn default_model(self) -> crate::KinematicsKind {
+        match self {
+            Self::Omni | Self::Mecanum => crate::KinematicsKind::Ik,
+            Self::Diff => crate::KinematicsKind::Diff,
+            Self::Skid => crate::KinematicsKind::Skid,
         }
     }
 }
@@ -189,6 +207,9 @@ impl RobotDescription {
         let n = self.wheels.len();
         let expected = match kind {
             BaseKind::Mecanum if n != 4 => Some("exactly 4"),
+            BaseKind::Skid if n < 4 || !n.is_multiple_of(2) => {
+                Some("an even number, at least 4 (2 wheels: kind = \"diff\")")
+            }
             BaseKind::Omni if n < 3 => Some("at least 3 (2 wheels on one axle: kind = \"diff\")"),
             _ => None,
         };
@@ -205,6 +226,16 @@ impl RobotDescription {
                 ));
             }
             out.push(w.to_wheel(kind, &at)?);
+        }
+        if kind == BaseKind::Skid {
+            let sides: Vec<f64> = out.iter().map(|w| (w.distance_m * w.angle_rad.sin()).signum()).collect();
+            let left = sides.iter().filter(|s| **s > 0.0).count();
+            if left * 2 != n || sides.contains(&0.0) {
+                return Err(err(
+                    "wheels",
+                    RobotProblem::Layout("a skid-steer base has as many wheels left (y_m > 0) as right (y_m < 0)"),
+                ));
+            }
         }
         let angles: Vec<f64> = self.wheels.iter().filter_map(|w| w.angle_deg).collect();
         let spread = angles.iter().copied().fold(f64::NEG_INFINITY, f64::max)
@@ -237,6 +268,11 @@ impl RobotDescription {
             (BaseKind::Diff, Some(d)) => {
                 let (rl, rr, s) = (d.left_radius_m, d.right_radius_m, d.wheel_separation_m);
                 Ok(IkMatrix::new(2, vec![rl / 2.0, rr / 2.0, 0.0, 0.0, -rl / s, rr / s])?)
+            }
+            (BaseKind::Skid, _) => {
+                let k = SkidKinematics::new(g).map_err(GeometryError::Geometry)?;
+                let p = k.design_params()?;
+                Ok(k.twist_from_wheels(&p)?)
             }
             _ => Ok(g.twist_from_wheels()?),
         }

@@ -32,7 +32,7 @@ pub struct WheelSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub angle_deg: Option<f64>,
     /// Direction the rim pushes the robot at positive wheel speed, from x towards y. deg. Default: omni
-    /// `angle + 90` (counter-clockwise tangent), mecanum `0` (forward).
+    /// `angle + 90` (counter-clockwise tangent), mecanum and skid `0` (forward).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub drive_deg: Option<f64>,
     /// Wheel radius. m.
@@ -109,6 +109,12 @@ impl WheelSpec {
             BaseKind::Mecanum if ((roller_deg.abs() - 45.0).abs() > MECANUM_ROLLER_TOL_DEG) => {
                 return Err(err(field("roller_angle_deg"), RobotProblem::MecanumRoller { value_deg: roller_deg }));
             }
+            BaseKind::Skid if roller_deg != 0.0 => {
+                return Err(err(
+                    field("roller_angle_deg"),
+                    RobotProblem::Layout("a skid-steer base's wheels have no rollers (leave roller_angle_deg out)"),
+                ));
+            }
             _ if roller_deg.abs() >= MAX_ROLLER_DEG => {
                 return Err(err(field("roller_angle_deg"), RobotProblem::RollerTooSteep { value_deg: roller_deg }));
             }
@@ -116,8 +122,8 @@ impl WheelSpec {
         }
         let drive_offset_rad = match (self.drive_deg, kind) {
             (Some(d), _) => wrap_rad(finite(field("drive_deg"), d)?.to_radians() - angle_rad - FRAC_PI_2),
-            // Omni wheels push along the counter-clockwise tangent; mecanum wheels forward.
-            (None, BaseKind::Mecanum) => -angle_rad - FRAC_PI_2,
+            // Omni wheels push along the counter-clockwise tangent; mecanum and skid-steer wheels forward.
+            (None, BaseKind::Mecanum | BaseKind::Skid) => -angle_rad - FRAC_PI_2,
             (None, _) => 0.0,
         };
         Ok(Wheel { radius_m, distance_m, angle_rad, drive_offset_rad, roller_angle_rad: roller_deg.to_radians() })

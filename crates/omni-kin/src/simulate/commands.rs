@@ -49,13 +49,6 @@ pub fn benchmark_commands(design: &RobotGeometry) -> Vec<Command> {
     if design.is_omnidirectional() { flower_commands() } else { diff_commands() }
 }
 
-/// The twist rank a simulated base of `n_wheels` wheels needs: 2 for two wheels (they drive at most
-/// forward and turning, as a differential drive does), 3 (every planar twist) for more: a base of three or
-/// more wheels that drives fewer directions is a singular layout (wheels rolling the same way), refused.
-pub fn needed_rank(n_wheels: usize) -> usize {
-    if n_wheels <= 2 { 2 } else { crate::geometry::PLANAR_TWIST_DIMENSIONS }
-}
-
 /// The part of each command's twist that the base `design` cannot produce, as a twist error (vx m/s, vy
 /// m/s, ω rad/s): the command turned into wheel speeds and back through the design's inverse, minus the
 /// command. Zero (to rounding) for every command of an omnidirectional base; a differential drive's is

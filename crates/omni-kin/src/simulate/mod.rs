@@ -21,7 +21,7 @@ mod motion;
 
 pub use commands::{
     DIFF_SPEED_M_S, DIFF_TURN_RATES_RAD_S, Leg, UNREACHABLE_TOL, benchmark_commands, check_commands, diff_commands,
-    figure_eight_legs, flower_commands, needed_rank, square_legs, unreachable_message, unreachable_twists,
+    figure_eight_legs, flower_commands, square_legs, unreachable_message, unreachable_twists,
 };
 use motion::simulate_motion;
 
@@ -141,7 +141,7 @@ impl SimConfig {
         if self.controller_tau_s <= 0.0 || self.rest_s < 0.0 {
             return bad("controller_tau_s / rest_s", "need tau > 0 and rest ≥ 0");
         }
-        self.design.validate_for(needed_rank(self.design.n_wheels()))?;
+        self.design.validate_for(self.design.twist_dof())?;
         check_commands(&self.design, &self.commands)
     }
 }

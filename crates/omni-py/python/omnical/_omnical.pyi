@@ -6,7 +6,7 @@ Units: m, s, rad, rad/s (ROS REP-103).
 
 from collections.abc import Callable, Iterable, Sequence
 from os import PathLike
-from typing import Any, Optional, Union, final
+from typing import Any, Literal, Optional, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -16,8 +16,10 @@ _Path = Union[str, PathLike[str]]
 _Runs = Union["Dataset", "Run", Iterable["Run"]]
 _EffectArg = Any  # a catalogue id (str) or a Python effect object (see omnical.Effect)
 # A model as the CLI's --model: a Model, "design", "paper" or a model file path (train: also "ik",
-# "geometry", "diff", "mecanum").
+# "geometry", "diff", "mecanum", "skid").
 _ModelArg = Union["Model", str, PathLike[str]]
+# The base models (KinematicsKind's ids).
+_Kinematics = Literal["ik", "geometry", "diff", "mecanum", "skid"]
 
 __all__ = [
     "CATALOGUE",
@@ -141,9 +143,9 @@ class Model:
     """Base kinematics (``ik`` matrix or ``geometry``) plus effects, with parameter values. Immutable."""
 
     @staticmethod
-    def design(robot: _Path = "apr02", *, kinematics: str = "ik") -> Model:
+    def design(robot: _Path = "apr02", *, kinematics: _Kinematics = "ik") -> Model:
         """The design model of ``robot`` (a robot.toml path, or ``"apr02"``: the paper's robot, Eq. 7);
-        ``kinematics`` is ``"ik"``, ``"geometry"``, ``"diff"`` or ``"mecanum"``. Wheel names: its joints."""
+        ``kinematics`` is ``"ik"``, ``"geometry"``, ``"diff"``, ``"mecanum"`` or ``"skid"``. Wheel names: its joints."""
     @staticmethod
     def paper() -> Model:
         """The paper's calibrated matrix (Eq. 9)."""
