@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 PY="${OMNICAL_PYTHON:-.venv/bin/python}"
 out=target/report-check
-figures=ladder,overlay-worst,overlay-typical,flower,heat-map,growth,ranking
+figures=ladder,overlay-worst,overlay-typical,flower,heat-map,growth,trust-ellipses,trust-growth,ranking
 cargo run --release --quiet -p omni-cli -- demo --out "$out" --force --quiet
 "$PY" scripts/check_report.py "$out/report.html" --screenshot "$out/screenshot.png" --expect "$figures"
 if "$PY" scripts/check_report.py scripts/testdata/broken_report.html --screenshot "$out/broken.png" \

@@ -49,9 +49,12 @@ fn choices_have_one_name_everywhere() {
     assert_eq!("x".parse::<RunSet>().unwrap_err().to_string(), r#""x": expected "greedy" or "flower""#);
     assert_eq!(
         "wheels".parse::<KinematicsKind>().unwrap_err().to_string(),
-        r#""wheels": expected "ik", "geometry", "diff" or "mecanum""#
+        r#""wheels": expected "ik", "geometry", "diff", "mecanum" or "skid""#
     );
-    assert_eq!("tank".parse::<BaseKind>().unwrap_err().to_string(), r#""tank": expected "omni", "mecanum" or "diff""#);
+    assert_eq!(
+        "tank".parse::<BaseKind>().unwrap_err().to_string(),
+        r#""tank": expected "omni", "mecanum", "diff" or "skid""#
+    );
 }
 
 #[test]

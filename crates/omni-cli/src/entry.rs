@@ -96,7 +96,11 @@ impl Failure {
         };
         if e.chain().any(closed_pipe) {
             Self::ClosedPipe
-        } else if e.chain().any(|c| c.is::<crate::api::fit::Refused>()) {
+        } else if e.chain().any(|c| {
+            // A refusal, or the training's error holding one (transparent: it is not in the chain of its own).
+            c.is::<crate::api::fit::Refused>()
+                || matches!(c.downcast_ref(), Some(crate::api::train::TrainError::Refused(_)))
+        }) {
             Self::Refused
         } else if e.chain().any(|c| c.is::<crate::interrupt::Interrupted>()) {
             Self::Interrupted
@@ -300,6 +304,8 @@ mod tests {
         let refused = anyhow::Error::from(Refused("worse than its start".into()));
         assert_eq!(Failure::of(&refused), Failure::Refused);
         assert_eq!(Failure::of(&refused.context("training")), Failure::Refused);
+        let in_training = crate::api::train::TrainError::Refused(Refused("implausible".into()));
+        assert_eq!(Failure::of(&anyhow::Error::from(in_training)), Failure::Refused);
         assert_eq!(Failure::of(&anyhow::Error::from(Interrupted).context("loading")), Failure::Interrupted);
         let pipe = std::io::Error::from(std::io::ErrorKind::BrokenPipe);
         assert_eq!(Failure::of(&anyhow::Error::from(pipe).context("writing")), Failure::ClosedPipe);

@@ -5,6 +5,7 @@
 #![deny(missing_docs)]
 
 pub mod api;
+pub mod argv;
 pub mod atomic;
 pub mod cli;
 pub mod cmd;

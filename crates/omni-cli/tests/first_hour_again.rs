@@ -88,6 +88,12 @@ fn demo_reruns_into_its_own_folder_and_ends_with_hidden_and_found() {
         .unwrap();
     assert!((tau - 0.06).abs() < 0.002, "{last}");
     assert!(d.join("demo/.omnical-demo").is_file());
+    // One training (issue 47): the demo's fitted matrix is the file `omnical train` writes on its train/.
+    ok(&["-q", "train", "demo/train", "--out", "train.toml"], d);
+    let trained = std::fs::read_to_string(d.join("train.toml")).unwrap();
+    assert!(trained.contains("[fit]"), "{trained}");
+    assert_eq!(std::fs::read_to_string(d.join("demo/fitted_matrix.toml")).unwrap(), trained);
+    std::fs::remove_file(d.join("train.toml")).unwrap();
     let second = ok(&demo, d);
     let story = |text: &str| text.lines().filter(|l| !l.contains(" evaluations, ")).collect::<Vec<_>>().join("\n");
     assert_eq!(story(&second), story(&first), "the same seeds give the same story (but its wall time)");

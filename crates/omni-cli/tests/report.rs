@@ -62,7 +62,17 @@ fn report_shows_every_figure_and_the_error_falling_with_the_hidden_effect() {
     assert!(with_effect < 0.7 * matrix, "the hidden clock lag should be found and help: {stdout}");
 
     let html = std::fs::read_to_string(root.join("out/report.html")).unwrap();
-    let ids = ["ladder", "overlay-worst", "overlay-typical", "flower", "heat-map", "growth", "ranking"];
+    let ids = [
+        "ladder",
+        "overlay-worst",
+        "overlay-typical",
+        "flower",
+        "heat-map",
+        "growth",
+        "trust-ellipses",
+        "trust-growth",
+        "ranking",
+    ];
     for id in ids {
         assert!(html.contains(&format!("data-figure=\"{id}\"")), "figure {id} missing");
         let png = std::fs::read(root.join(format!("out/png/{id}.png"))).unwrap();

@@ -73,6 +73,21 @@ fn a_hidden_icr_shift_is_calibrated_diagnosed_and_exported() {
     assert!((separation - 0.955).abs() < 0.005, "separation {separation}");
     let amcl = std::fs::read_to_string(d.join("rc/nav2_amcl.yaml")).unwrap();
     assert!(amcl.contains("nav2_amcl::DifferentialMotionModel"), "{amcl}");
+
+    // The report draws how far to trust the odometry (issue 46): the noise model `train` fitted covers
+    // 93-97 % of the held-out poses with its 95 % ellipses (the simulator's wheel and ground-truth noise).
+    let args = ["report", "--model", "m.toml", "sim/train", "--validate", "sim/validation", "--no-diagnose"];
+    succeeded(&[&args[..], &["--out", "r.html", "-q"]].concat(), d);
+    let html = std::fs::read_to_string(d.join("r.html")).unwrap();
+    assert!(html.contains("data-figure=\"trust-ellipses\"") && html.contains("data-figure=\"trust-growth\""));
+    let inside: f64 = html
+        .split(" % of the poses lie inside their ellipse")
+        .next()
+        .and_then(|head| head.rsplit(' ').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no coverage in the report"));
+    eprintln!("held-out poses inside their 95 % ellipse: {inside} %");
+    assert!((93.0..=97.0).contains(&inside), "{inside} %");
 }
 
 #[test]

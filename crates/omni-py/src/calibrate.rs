@@ -8,8 +8,9 @@ use crate::robot::{model_or_design, model_spec, robot_arg};
 use crate::run::runs_from;
 use numpy::PyArray2;
 use omni_cli::api::ModelSpec;
-use omni_cli::api::fit::{FitOptions, Refused, check_fit, check_step, prior_half_widths};
-use omni_ga::calibrate::{Calibration, Plan, Preset, calibrate_with_effects};
+use omni_cli::api::fit::{FitOptions, Refused, check_step, prior_half_widths};
+use omni_cli::api::train::{Fitted, Prepared, Recipe, TrainError, fit_prepared};
+use omni_ga::calibrate::{Calibration, Plan, Preset};
 use omni_ga::observe::{Control, Iteration, Observer};
 use omni_kin::choice::UnknownChoice;
 use omni_kin::effect::Effect;
@@ -168,6 +169,8 @@ pub struct PyCalibration {
     held: Vec<String>,
     identifiability: String,
     steps: Vec<Step>,
+    /// The model file's `[fit]` summary (`omni_cli::api::train::summarize`, the CLI's own).
+    summary: serde_json::Value,
 }
 
 #[pymethods]
@@ -224,6 +227,16 @@ impl PyCalibration {
     fn history<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         self.steps.iter().map(|s| s.dict(py)).collect()
     }
+    /// Write the model file as ``omnical train --out`` writes it: the model and its ``[fit]`` summary (how
+    /// it was made, the identifiability, the noise model, the robot's priors), atomically. The same runs,
+    /// preset and seed give the same bytes as the CLI's file. A model with Python effects cannot be
+    /// written (a model file names catalogue effects only).
+    fn save(&self, py: Python<'_>, path: std::path::PathBuf) -> PyResult<()> {
+        let summary = self.summary.clone();
+        let fitted = self.model.get().inner.clone();
+        py.detach(|| omni_cli::api::train::write_model(&fitted, &summary, &path))
+            .map_err(|e| value_error(format!("Calibration.save: {}", crate::errors::chain_text(&e))))
+    }
     /// Pickling: every field in a dict (the models pickle through their model file text, floats exactly).
     fn __reduce__<'py>(&self, py: Python<'py>) -> crate::pickle::Reduced<'py, (Bound<'py, PyDict>,)> {
         let d = PyDict::new(py);
@@ -245,6 +258,7 @@ impl PyCalibration {
         d.set_item("held", self.held.clone())?;
         d.set_item("identifiability", &self.identifiability)?;
         d.set_item("history", self.history(py)?)?;
+        d.set_item("summary", self.summary.to_string())?;
         let rebuild = py.import("omnical._omnical")?.getattr("_calibration_from_state")?;
         Ok((rebuild, (d,)))
     }
@@ -283,6 +297,7 @@ pub fn _calibration_from_state(state: &Bound<'_, PyDict>) -> PyResult<PyCalibrat
         held: item(state, "held")?,
         identifiability: item(state, "identifiability")?,
         steps: history.iter().map(Step::from_dict).collect::<PyResult<_>>()?,
+        summary: serde_json::from_str(&item::<String>(state, "summary")?).map_err(|e| value_error(e.to_string()))?,
     })
 }
 
@@ -355,6 +370,12 @@ pub fn train(
     if let Some(w) = check_step(&plan, &runs, force).map_err(refused)? {
         warn(py, &w)?;
     }
+    // The training sequence of `omnical train` (api::train::fit_prepared): the fit, its refusal, the model
+    // file's summary (with the priors of a fit from the robot's design).
+    let priors = if from_design { omni_cli::api::fit::priors_of(&start, &origin) } else { Vec::new() };
+    origin.runs = runs;
+    let prepared = Prepared { ds: origin, start, effects: kinds, plan, priors };
+    let recipe = Recipe { preset, seed, from_design };
     let errors = crate::effect::EffectErrors::new(adapters.iter().cloned());
     let mut observer = PyObserver {
         progress,
@@ -364,29 +385,41 @@ pub fn train(
         stopped_by_callback: false,
         failure: None,
     };
-    let result: Result<Calibration, _> =
-        py.detach(|| calibrate_with_effects(&start, &kinds, &runs, &plan, &mut observer));
+    let result = py.detach(|| fit_prepared(&prepared, recipe, force, &mut observer));
     if let Some(e) = observer.failure.take() {
         return Err(e);
     }
-    let c = errors.check(result)?.py()?;
-    // A fit worse than its start on its own training runs is refused (force=True keeps it, with a warning).
-    if let Some(w) = check_fit(&c, &plan, &runs, force).map_err(refused)? {
-        warn(py, &w)?;
+    let Fitted { calibration: c, summarized, warning } = match errors.check(result)? {
+        Ok(f) => f,
+        Err(TrainError::Calibrate(e)) => return Err::<PyCalibration, _>(e).py(),
+        // A fit worse than its start on its own training runs is refused (force=True keeps it, with a warning).
+        Err(TrainError::Refused(r)) => return Err(refused(r)),
+        Err(e) => return Err(value_error(format!("omnical.train: {}", crate::errors::chain_text(&e)))),
+    };
+    for w in warning.iter().chain(&summarized.mount) {
+        warn(py, w)?;
     }
-    if let Some(w) = omni_cli::api::train::mount_warning(&c) {
-        warn(py, &w)?;
-    }
-    if observer.interrupted {
+    let summary = interrupted_summary(py, summarized.summary, observer.interrupted)?;
+    let stopped = (observer.interrupted, observer.stopped_by_callback);
+    calibration_of(py, c, adapters, stopped, observer.history, summary)
+}
+
+/// The summary, marked `interrupted` (as the CLI's) with a warning when Ctrl-C stopped the search.
+fn interrupted_summary(
+    py: Python<'_>,
+    mut summary: serde_json::Value,
+    interrupted: bool,
+) -> PyResult<serde_json::Value> {
+    if interrupted {
         PyErr::warn(
             py,
             &py.get_type::<PyUserWarning>(),
             c"omnical.train: interrupted (Ctrl-C); returning the best parameters found so far",
             1,
         )?;
+        summary["interrupted"] = serde_json::json!(true);
     }
-    let stopped = (observer.interrupted, observer.stopped_by_callback);
-    calibration_of(py, c, adapters, stopped, observer.history)
+    Ok(summary)
 }
 
 /// `train`'s objective and identifiability keywords as the library's [`FitOptions`] (checked when applied).
@@ -422,6 +455,7 @@ fn calibration_of(
     adapters: Vec<std::sync::Arc<crate::effect::PyEffect>>,
     stopped: (bool, bool),
     steps: Vec<Step>,
+    summary: serde_json::Value,
 ) -> PyResult<PyCalibration> {
     Ok(PyCalibration {
         model: Py::new(py, PyModel::from_fitted(c.fitted.clone(), adapters.clone()))?,
@@ -442,6 +476,7 @@ fn calibration_of(
         held: c.held.iter().map(|w| w.text.clone()).collect(),
         identifiability: serde_json::to_string(&c.identifiability).map_err(|e| value_error(e.to_string()))?,
         steps,
+        summary,
     })
 }
 

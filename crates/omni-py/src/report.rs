@@ -71,6 +71,11 @@ pub fn report(
     } else {
         String::new()
     };
+    let noise = model
+        .extract::<std::path::PathBuf>()
+        .ok()
+        .filter(|p| p.is_file())
+        .and_then(|p| omni_cli::model_file::read_noise(&p).ok().flatten());
     let input = ReportInput {
         // The CLI's title names the --model value; a Model object has none.
         title: title.unwrap_or_else(|| match model.is_instance_of::<crate::model::PyModel>() {
@@ -82,6 +87,8 @@ pub fn report(
         held_out: &held_out,
         diagnosis: d.as_ref(),
         sources: Vec::new(),
+        // As the CLI: a model file's noise model draws how far to trust the odometry.
+        noise: noise.map(|n| (&fm, n)),
     };
     let written = py.detach(|| rs_report::write_with(&input, &out, png.as_deref(), &extra));
     written.map(|w| w.figures).map_err(|e| file_error(&e))

@@ -5,8 +5,8 @@
 
 use crate::errors::{OmnicalError, chain_text, value_error};
 use omni_cli::api::diagnose::diagnose_quietly;
-use omni_cli::api::session::{ArgvError, diagnose_request, diagnose_request_reading_as, fleet_request, train_request};
 use omni_cli::api::train::{Trained, train_quietly};
+use omni_cli::argv::{ArgvError, diagnose_request, diagnose_request_reading_as, fleet_request, train_request};
 use omni_kin::FittedModel;
 use pyo3::prelude::*;
 use serde_json::json;

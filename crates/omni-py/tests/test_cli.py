@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import pickle
 import subprocess
 from pathlib import Path
 
@@ -41,3 +42,28 @@ def test_public_api_is_exported() -> None:
     for name in omnical.__all__:
         assert hasattr(omnical, name), name
     assert omnical.__version__ == "0.1.0"
+
+
+def test_a_python_fit_saves_the_clis_model_file_byte_for_byte(tmp_path: Path) -> None:
+    """One training (issue 47): Python's ``train`` builds the model file's summary where ``omnical train``
+    does, so a differential drive with ``[priors]`` gets the same file from both, byte for byte."""
+    robot = Path(__file__).resolve().parents[2] / "omni-cli" / "tests" / "data" / "diff_robot.toml"
+    subprocess.run(
+        [*omnical_command(), "simulate", "--robot", str(robot), "--effect", "wheel_radius:a=0.02",
+         "--runs-per-command", "1", "--duration", "4", "--out", str(tmp_path / "sim"), "-q"],
+        check=True,
+        capture_output=True,
+    )
+    train = tmp_path / "sim" / "train"
+    with open(train / "robot.toml", "a") as f:
+        f.write("\n[priors]\nradius_std_m = 0.001\nseparation_std_m = 0.01\n")
+    cli = tmp_path / "cli.toml"
+    subprocess.run([*omnical_command(), "train", str(train), "--out", str(cli), "-q"], check=True, capture_output=True)
+    fit = omnical.train("diff", omnical.load(train), seed=0)
+    fit.save(tmp_path / "python.toml")
+    text = cli.read_text()
+    assert "[[fit.priors]]" in text and "noise" in text, text
+    assert (tmp_path / "python.toml").read_text() == text
+    # A pickled calibration (a fleet worker's) writes the same file.
+    pickle.loads(pickle.dumps(fit)).save(tmp_path / "unpickled.toml")
+    assert (tmp_path / "unpickled.toml").read_text() == text

@@ -23,7 +23,7 @@ def test_design_and_paper_matrices() -> None:
     g = omnical.Model.design(kinematics="geometry")
     assert g.kinematics == "geometry" and g.param_names[0] == "r_a"
     np.testing.assert_allclose(g.matrix, d.matrix, atol=1e-3)
-    with pytest.raises(ValueError, match='kinematics "wheels": expected "ik", "geometry", "diff" or "mecanum"'):
+    with pytest.raises(ValueError, match='kinematics "wheels": expected "ik", "geometry", "diff", "mecanum" or "skid"'):
         omnical.Model.design(kinematics="wheels")
 
 
@@ -85,7 +85,7 @@ def test_model_file_errors(tmp_path: Path) -> None:
         omnical.load_model(bad)
     wrong = tmp_path / "wrong.toml"
     wrong.write_text(omnical.Model.design().to_toml().replace('kinematics = "ik"', 'kinematics = "wheels"'))
-    with pytest.raises(omnical.ModelFileError, match='kinematics = "wheels": expected "ik", "geometry", "diff" or "mecanum"'):
+    with pytest.raises(omnical.ModelFileError, match='kinematics = "wheels": expected "ik", "geometry", "diff", "mecanum" or "skid"'):
         omnical.load_model(wrong)
     with pytest.raises(OSError):
         omnical.Model.design().save(tmp_path / "no" / "such" / "dir" / "m.toml")

@@ -2,8 +2,8 @@
 //!
 //! The command line's clap `Args` (what was typed, `cmd/`) convert into these requests (what to do); the
 //! Python binding (omni-py) builds the same requests from its keyword arguments. Nothing here parses a
-//! command line but [`session`], which reads `omnical train` / `omnical diagnose` argument lists for
-//! callers that take them as such (the Python wheel's fleet workers).
+//! command line or names a CLI type: argument lists read into these requests (the Python wheel's fleet
+//! workers) are [`crate::argv`]'s, a front end of its own.
 //!
 //! - [`ModelSpec`]: the model a command works with (`design`, `paper` or a model file).
 //! - [`load::LoadRequest`] and [`load::DataOptions`]: which runs to read and how.
@@ -25,7 +25,6 @@ pub mod info;
 pub mod load;
 pub mod noise;
 pub mod plausibility;
-pub mod session;
 pub mod settings;
 pub mod simulate;
 pub mod train;

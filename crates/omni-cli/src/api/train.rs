@@ -273,11 +273,11 @@ pub fn mount_warning(c: &Calibration) -> Option<String> {
 
 /// Writes the model file of a fit with its summary `s` as the `[fit]` table, atomically. Everything but the
 /// wall time goes in: the same data, preset and seed give a byte-identical file.
-pub fn write_model(c: &Calibration, s: &serde_json::Value, out: &std::path::Path) -> Result<(), TrainError> {
+pub fn write_model(fitted: &FittedModel, s: &serde_json::Value, out: &std::path::Path) -> Result<(), TrainError> {
     let mut fit: toml::Table = toml::Table::try_from(toml_safe(s.clone())).map_err(TrainError::FitSummary)?;
     fit.remove("seconds");
     fit.remove("noise");
-    let mut file = model_file::ModelFile::from_fitted(&c.fitted, Some(fit)).map_err(ModelTextError::from)?;
+    let mut file = model_file::ModelFile::from_fitted(fitted, Some(fit)).map_err(ModelTextError::from)?;
     file.noise = crate::api::noise::from_summary(s);
     let text = file.to_toml()?;
     atomic::write_atomic(out, text.as_bytes()).map_err(|source| TrainError::Write { path: out.to_path_buf(), source })
@@ -295,6 +295,33 @@ pub struct Trained {
     pub warnings: Vec<String>,
 }
 
+/// A fit and what every front end makes of it ([`fit_prepared`]).
+pub struct Fitted {
+    /// The fit.
+    pub calibration: Calibration,
+    /// The model file's summary, the designs figure and the mount warning.
+    pub summarized: Summarized,
+    /// [`check_fit`]'s warning: a fit it refuses, kept with `force`.
+    pub warning: Option<String>,
+}
+
+/// The training sequence, the one every front end runs once its start, effects and plan are made
+/// ([`prepare`]; Python makes its own start from its model objects): the fit, its refusal
+/// ([`check_fit`]) and the model file's summary ([`summarize`]). `omnical train`, the fleet's
+/// [`train_quietly`] and Python's `train` call it and only present the result; the fixed-step refusal
+/// ([`check_step`]) comes before, so that its warning is seen before the search starts.
+pub fn fit_prepared(
+    p: &Prepared,
+    recipe: Recipe,
+    force: bool,
+    observer: &mut dyn omni_ga::observe::Observer,
+) -> Result<Fitted, TrainError> {
+    let c = calibrate_with_effects(&p.start, &p.effects, &p.ds.runs, &p.plan, observer)?;
+    let warning = check_fit(&c, &p.plan, &p.ds.runs, force)?;
+    let summarized = summarize(&c, &p.ds, &p.plan, &p.priors, recipe)?;
+    Ok(Fitted { calibration: c, summarized, warning })
+}
+
 /// `omnical train` without a terminal, for callers that run many trainings in one process (the Python
 /// wheel's fleet workers): the same loading, start model, plan and fit as the command, and the same model file
 /// written to `--out` (byte-identical: the same `write_model` either way), but nothing printed, no progress bar
@@ -303,16 +330,15 @@ pub fn train_quietly(a: &TrainRequest) -> Result<Trained, TrainError> {
     if let Some(out) = &a.out {
         out_path::check_file(out, "--out")?;
     }
-    let Prepared { ds, start, effects, plan, priors } = prepare(a)?;
-    let mut warnings: Vec<String> = check_step(&plan, &ds.runs, a.force)?.into_iter().collect();
-    let c = calibrate_with_effects(&start, &effects, &ds.runs, &plan, &mut omni_ga::observe::NoopObserver)?;
-    warnings.extend(check_fit(&c, &plan, &ds.runs, a.force)?);
-    let Summarized { summary: s, mount, .. } = summarize(&c, &ds, &plan, &priors, a)?;
-    warnings.extend(mount);
+    let prepared = prepare(a)?;
+    let mut warnings: Vec<String> = check_step(&prepared.plan, &prepared.ds.runs, a.force)?.into_iter().collect();
+    let fitted = fit_prepared(&prepared, a.recipe(), a.force, &mut omni_ga::observe::NoopObserver)?;
+    let Fitted { calibration: c, summarized: Summarized { summary: s, mount, .. }, warning } = fitted;
+    warnings.extend(warning.into_iter().chain(mount));
     if let Some(out) = &a.out {
-        write_model(&c, &s, out)?;
+        write_model(&c.fitted, &s, out)?;
     }
-    Ok(Trained { calibration: c, summary: s, dataset: ds, warnings })
+    Ok(Trained { calibration: c, summary: s, dataset: prepared.ds, warnings })
 }
 
 /// A fit's summary as every front end writes it into the model file ([`summarize`]).
@@ -326,18 +352,38 @@ pub struct Summarized {
     pub mount: Option<String>,
 }
 
-/// The summary of fit `c` of `ds` by `plan` for request `a`, with the robot description's `priors`: the one
-/// place `omnical train` and the fleet build what the model file holds, so that their files are the same.
+/// How a fit was asked for, as its summary records it: the preset, the seed, and whether it started from
+/// the robot's design (a kinematics named, or the default) rather than a start model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Recipe {
+    /// The preset.
+    pub preset: Preset,
+    /// The GA seed.
+    pub seed: u64,
+    /// Started from the robot's design: its priors bound the search and the designs figure compares with it.
+    pub from_design: bool,
+}
+
+impl TrainRequest {
+    /// The request's [`Recipe`].
+    pub fn recipe(&self) -> Recipe {
+        Recipe { preset: self.preset, seed: self.seed, from_design: self.start.is_none() }
+    }
+}
+
+/// The summary of fit `c` of `ds` by `plan` made by `recipe`, with the robot description's `priors`: the
+/// one place `omnical train`, the fleet and Python's `train` build what the model file holds, so that
+/// their files are the same.
 pub fn summarize(
     c: &Calibration,
     ds: &Dataset,
     plan: &Plan,
     priors: &[PriorUse],
-    a: &TrainRequest,
+    recipe: Recipe,
 ) -> Result<Summarized, TrainError> {
-    let mut s = summary(c, a.preset.id(), a.seed, ds.runs.len())?;
+    let mut s = summary(c, recipe.preset.id(), recipe.seed, ds.runs.len())?;
     crate::api::noise::add_to_summary(&mut s, &c.fitted, &ds.runs)?;
-    let designs = designs_figure(c, ds, plan, a.start.is_none())?;
+    let designs = designs_figure(c, ds, plan, recipe.from_design)?;
     if let Some(d) = &designs {
         s["designs"] = d.to_json();
     }

@@ -8,13 +8,14 @@ use super::simulate::DEFAULT_SEED;
 use super::train::print_summary;
 use crate::api::load::{DataOptions, LoadRequest};
 use crate::api::simulate::{Format, Sensors, write_robot, write_split};
+use crate::api::train::{Fitted, Prepared, Recipe, fit_prepared, write_model};
 use crate::design::{design_for, paper_calibrated};
 use crate::out_path::{Inputs, OutDir};
 use crate::report::{self, ReportInput};
 use crate::robot_file::RobotFile;
 use crate::{atomic, model_file, progress, robot_file};
 use anyhow::Context;
-use omni_ga::calibrate::{Plan, Preset, calibrate};
+use omni_ga::calibrate::{Plan, Preset};
 use omni_ga::diagnose::{DiagnoseOptions, Diagnosis, diagnose};
 use omni_kin::simulate::{SimConfig, simulate};
 use omni_kin::{BaseKind, FittedModel, IkMatrix, Model, Run};
@@ -236,13 +237,19 @@ fn repeat_commands(a: &Args, setup: &Setup, dir: &Path, with_effects: bool) -> V
 }
 
 /// Writes the true model, the fitted models and the diagnosis into `dir`.
-fn write_models(dir: &Path, truth: &FittedModel, fitted: &FittedModel, d: &Diagnosis) -> anyhow::Result<()> {
+/// The fitted matrix's file is `omnical train`'s, with its `[fit]` summary `fitted.1`.
+fn write_models(
+    dir: &Path,
+    truth: &FittedModel,
+    fitted: (&FittedModel, &serde_json::Value),
+    d: &Diagnosis,
+) -> anyhow::Result<()> {
     let write = |name: &str, fm: &FittedModel| -> anyhow::Result<()> {
         let text = model_file::to_toml(fm, None)?;
         atomic::write_atomic(&dir.join(name), text.as_bytes()).with_context(|| format!("writing {name}"))
     };
     write(TRUTH_MODEL, truth)?;
-    write(FITTED_MATRIX, fitted)?;
+    write_model(fitted.0, fitted.1, &dir.join(FITTED_MATRIX)).with_context(|| format!("writing {FITTED_MATRIX}"))?;
     if let Some(f) = &d.final_model {
         write(FITTED_WITH_EFFECTS, f)?;
     }
@@ -284,10 +291,22 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         println!("== train: fit the {n_base}-entry IK matrix (preset default)");
     }
     let preset = Preset::Default;
-    let plan = Plan::preset(preset, n_base).seed(0);
+    // `omnical train`'s sequence (api::train::fit_prepared) on the runs read back from train/, so that
+    // fitted_matrix.toml is the file `omnical train train/ --out fitted_matrix.toml` writes.
+    let prepared = Prepared {
+        ds: crate::dataset::Dataset { runs: train.clone(), ..Default::default() },
+        start: setup.start.clone(),
+        effects: Vec::new(),
+        plan: Plan::preset(preset, n_base).seed(0),
+        priors: Vec::new(),
+    };
+    let recipe = Recipe { preset, seed: 0, from_design: true };
     let mut bar = progress::ProgressObserver::new(quiet);
-    let fit = calibrate(&setup.start, &train, &plan, &mut bar)?;
+    let Fitted { calibration: fit, summarized, warning } = fit_prepared(&prepared, recipe, true, &mut bar)?;
     bar.finish();
+    if let Some(w) = warning {
+        tracing::warn!("{w}");
+    }
     if text {
         print_summary(&fit, preset.id(), train.len());
         println!("== diagnose: which physical effect is missing? (--auto: add effects while held-out error falls)");
@@ -300,7 +319,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     if text {
         print_diagnosis(&d);
     }
-    write_models(dir, &setup.truth, &fit.fitted, &d)?;
+    write_models(dir, &setup.truth, (&fit.fitted, &summarized.summary), &d)?;
     let spinner = progress::spinner("drawing the report", quiet);
     let input = ReportInput {
         title: match robot {
@@ -316,6 +335,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
             setup.commands,
             DEFAULT_SEED + 1
         )],
+        noise: crate::api::noise::from_summary(&summarized.summary).map(|n| (&fit.fitted, n)),
     };
     let w = report::write(&input, &dir.join(REPORT), None)?;
     spinner.finish_and_clear();

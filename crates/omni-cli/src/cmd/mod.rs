@@ -23,7 +23,7 @@ use omni_kin::reference::ReferenceKind;
 use std::path::PathBuf;
 
 /// Arguments of `omnical fleet`, which the Python wheel's console command runs (omnical.fleet, on Dask):
-/// declared here once, parsed for it by `omni_cli::api::session::fleet_request`; the native binary only
+/// declared here once, parsed for it by `omni_cli::argv::fleet_request`; the native binary only
 /// says where to find it.
 #[derive(Debug, clap::Args)]
 #[command(after_help = "Needs dask[distributed] (pip install \"omnical[fleet]\").")]

@@ -67,6 +67,11 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         spinner.finish_and_clear();
         Some(d)
     };
+    // The noise model `train` wrote into the model file, for the figures of how far to trust the odometry.
+    let noise = match a.model.file() {
+        Some(path) => crate::model_file::read_noise(path)?,
+        None => None,
+    };
     let mut sources: Vec<String> = a.runs.iter().map(|p| format!("train: {}", p.display())).collect();
     sources.extend(a.validate.iter().map(|p| format!("validation: {}", p.display())));
     sources.push(format!("model: {}", a.model));
@@ -77,6 +82,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         held_out: &val,
         diagnosis: diagnosis.as_ref(),
         sources,
+        noise: noise.map(|n| (&model, n)),
     };
     // The diagnosis (`auto`) ran the explorer when held-out runs are given, and its headline names the
     // family the explorer passed: the section shows that exploration. `--explore` runs it alone otherwise.

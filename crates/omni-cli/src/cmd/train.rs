@@ -1,12 +1,12 @@
 //! `omnical train`: fit a model to training runs.
 
 use super::{DataArgs, OutputArgs};
-use crate::api::fit::{FitOptions, check_fit, check_step};
-use crate::api::train::{Prepared, Summarized, TrainRequest, prepare, summarize, write_model};
+use crate::api::fit::{FitOptions, check_step};
+use crate::api::train::{Fitted, Prepared, Summarized, TrainRequest, fit_prepared, prepare, write_model};
 use crate::cli::{choice, effect_help};
 use crate::units::{count, std_error_text, value_text};
 use crate::{interrupt, out_path, progress};
-use omni_ga::calibrate::{Calibration, Preset, Unexcited, calibrate_with_effects};
+use omni_ga::calibrate::{Calibration, Preset, Unexcited};
 use omni_ga::identify::IdentifyOptions;
 use omni_ga::science::text;
 use omni_kin::KinematicsKind;
@@ -131,29 +131,31 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
         // Ctrl-C while loading: nothing was fitted, whatever the preparation gave.
         return Err(interrupt::Interrupted.into());
     }
-    let Prepared { ds, start, effects, plan, priors } = prepared?;
+    let prepared = prepared?;
     let preset_name = a.preset.id();
-    if let Some(w) = check_step(&plan, &ds.runs, a.force)? {
+    if let Some(w) = check_step(&prepared.plan, &prepared.ds.runs, a.force)? {
         tracing::warn!("{w}");
     }
     let mut bar = progress::ProgressObserver::new(quiet);
     crate::note!(
         "training on {}: preset {preset_name}, seed {} (Ctrl-C stops early and keeps the best so far)",
-        count(ds.runs.len(), "run"),
+        count(prepared.ds.runs.len(), "run"),
         a.seed
     );
-    let c = calibrate_with_effects(&start, &effects, &ds.runs, &plan, &mut interrupt::StopOnInterrupt(&mut bar))?;
+    let recipe = a.request().recipe();
+    let fitted = fit_prepared(&prepared, recipe, a.force, &mut interrupt::StopOnInterrupt(&mut bar))?;
     bar.finish();
-    if let Some(w) = check_fit(&c, &plan, &ds.runs, a.force)? {
+    let Fitted { calibration: c, summarized: Summarized { summary: mut s, designs, mount }, warning } = fitted;
+    if let Some(w) = warning {
         tracing::warn!("{w}");
     }
     let interrupted = interrupt::requested();
-    let Summarized { summary: mut s, designs, mount } = summarize(&c, &ds, &plan, &priors, &a.request())?;
+    let Prepared { ds, priors, .. } = prepared;
     if interrupted {
         s["interrupted"] = json!(true);
     }
     if let Some(out) = &a.out {
-        write_model(&c, &s, out)?;
+        write_model(&c.fitted, &s, out)?;
     }
     if a.output.json {
         if !ds.ground_truth_clocks.is_empty() {

@@ -12,6 +12,7 @@ pub mod explore;
 pub mod figures;
 pub mod html;
 pub mod png;
+pub mod trust;
 pub mod tum;
 
 use omni_ga::diagnose::{Costs, Diagnosis};
@@ -50,6 +51,9 @@ pub struct ReportInput<'a> {
     pub diagnosis: Option<&'a Diagnosis>,
     /// Where the data came from (shown in the summary).
     pub sources: Vec<String>,
+    /// The fitted model and the noise model `train` fitted with it (its model file's `[noise]`), when it has
+    /// one: the figures of how far to trust the odometry ([`trust::trust`] along the figure runs).
+    pub noise: Option<(&'a FittedModel, omni_kin::noise::OdometryNoise)>,
 }
 
 /// One model's numbers.
@@ -138,6 +142,9 @@ pub struct Report {
     pub noise_floor_m: Option<f64>,
     /// Error ladder (label, held-out path RMS m, held-out Eq. 6), from the diagnosis or the models.
     pub ladder: Vec<(String, f64, f64)>,
+    /// How far to trust the odometry along the figure runs (drawn, not in the JSON).
+    #[serde(skip)]
+    pub trust: Option<trust::Trust>,
 }
 
 impl Report {
@@ -254,6 +261,10 @@ impl Report {
             growth,
             noise_floor_m: input.diagnosis.and_then(|d| d.noise_floor.as_ref().map(|n| n.path_rms)),
             ladder,
+            trust: match &input.noise {
+                Some((fitted, n)) => Some(trust::trust(fitted, n, fig_runs)?),
+                None => None,
+            },
         })
     }
 }
@@ -414,6 +425,7 @@ mod tests {
             held_out: &[],
             diagnosis: None,
             sources: vec![],
+            noise: None,
         }
     }
 
@@ -456,7 +468,14 @@ mod tests {
         let (figs, notes) = figures::all(&r, None).unwrap();
         let ids: Vec<&str> = figs.iter().map(|f| f.id.as_str()).collect();
         assert_eq!(ids, ["ladder", "overlay-worst", "overlay-typical", "flower", "heat-map", "growth"]);
-        assert_eq!(notes, ["No diagnosis was run, so the effect ranking is left out."]);
+        assert_eq!(
+            notes,
+            [
+                "The model has no odometry noise model (a model file written by `omnical train` carries one as \
+                 [noise]), so the figures of how far to trust the odometry are left out.",
+                "No diagnosis was run, so the effect ranking is left out."
+            ]
+        );
         assert!(figs.iter().all(|f| f.svg.contains("<svg") && f.svg.len() > 2000));
         let page = html::render(&r, &figs, &notes, None);
         assert!(page.contains("<title>t &lt;&amp;&gt;</title>"));

@@ -99,8 +99,17 @@ pub fn options() -> usvg::Options<'static> {
 }
 
 /// Every figure a report can draw (`figures::all`), by id: the PNG files a report owns in its folder.
-pub const FIGURE_IDS: &[&str] =
-    &["ladder", "overlay-worst", "overlay-typical", "flower", "heat-map", "growth", "ranking"];
+pub const FIGURE_IDS: &[&str] = &[
+    "ladder",
+    "overlay-worst",
+    "overlay-typical",
+    "flower",
+    "heat-map",
+    "growth",
+    "trust-ellipses",
+    "trust-growth",
+    "ranking",
+];
 
 /// Writes `DIR/<figure id>.png` for every figure (atomically) and removes the figures of [`FIGURE_IDS`]
 /// that this report does not draw (an earlier report's, which would pass for this one's); other files in

@@ -180,44 +180,72 @@ pub fn window_error(run: &RunPoses, i: usize, j: usize) -> [f64; 3] {
 /// the window's covariance is `Σ_m θ_m B_m`. `holonomic` false leaves `strafe_per_m` (and the across part
 /// of `trans_per_rad`) out.
 pub fn window_basis(run: &RunPoses, i: usize, j: usize, holonomic: bool) -> [Matrix3<f64>; N_PARAMS] {
+    let mut b = start_floor();
+    for k in i..j {
+        propagate(&mut b, run, i, k, holonomic);
+    }
+    with_end_floor(b)
+}
+
+/// [`window_basis`] of every window from pose `i` to a later pose `j` (`out[j - i - 1]` is `i → j`), built
+/// step by step: linear in the run's length where one window at a time is quadratic (the report's
+/// ellipses and error band along a whole run).
+pub fn path_bases(run: &RunPoses, i: usize, holonomic: bool) -> Vec<[Matrix3<f64>; N_PARAMS]> {
+    let n = run.odometry.len().min(run.truth.len());
+    let mut b = start_floor();
+    let mut out = Vec::with_capacity(n.saturating_sub(i + 1));
+    for k in i..n.saturating_sub(1) {
+        propagate(&mut b, run, i, k, holonomic);
+        out.push(with_end_floor(b));
+    }
+    out
+}
+
+/// The floor at a window's start: position per axis, heading.
+fn start_floor() -> [Matrix3<f64>; N_PARAMS] {
     let mut b = [Matrix3::zeros(); N_PARAMS];
-    // The floor at the window's start: position per axis, heading.
     b[5][(0, 0)] = 1.0;
     b[5][(1, 1)] = 1.0;
     b[6][(2, 2)] = 1.0;
-    let origin = run.odometry[i];
-    for k in i..j {
-        let at = between(&origin, &run.odometry[k]);
-        let u = between(&run.odometry[k], &run.odometry[k + 1]);
-        let (s, c) = at.theta_rad.sin_cos();
-        let (dx, dy) = (c * u.x_m - s * u.y_m, s * u.x_m + c * u.y_m);
-        let f = Matrix3::new(1.0, 0.0, -dy, 0.0, 1.0, dx, 0.0, 0.0, 1.0);
-        let d = u.x_m.hypot(u.y_m);
-        let phi = u.theta_rad.abs();
-        // Direction of the motion in the window's frame (any, when the step does not translate).
-        let bearing = at.theta_rad + if d > 0.0 { u.y_m.atan2(u.x_m) } else { 0.0 };
-        let (sb, cb) = bearing.sin_cos();
-        let along = Matrix3::new(cb * cb, cb * sb, 0.0, cb * sb, sb * sb, 0.0, 0.0, 0.0, 0.0);
-        let across = Matrix3::new(sb * sb, -cb * sb, 0.0, -cb * sb, cb * cb, 0.0, 0.0, 0.0, 0.0);
-        let mut heading = Matrix3::zeros();
-        heading[(2, 2)] = 1.0;
-        for m in &mut b {
-            *m = f * *m * f.transpose();
-        }
-        b[0] += heading * phi;
-        b[1] += heading * d;
-        b[2] += along * d;
-        b[3] += along * phi;
-        if holonomic {
-            b[3] += across * phi;
-            b[4] += across * d;
-        }
-    }
-    // The floor at the window's end.
+    b
+}
+
+/// The bases with the floor at the window's end added.
+fn with_end_floor(mut b: [Matrix3<f64>; N_PARAMS]) -> [Matrix3<f64>; N_PARAMS] {
     b[5][(0, 0)] += 1.0;
     b[5][(1, 1)] += 1.0;
     b[6][(2, 2)] += 1.0;
     b
+}
+
+/// The window from pose `i` extended by the odometry's step `k → k + 1`: the covariance so far carried
+/// through the step (its heading error swings the position), and the step's own noise added.
+fn propagate(b: &mut [Matrix3<f64>; N_PARAMS], run: &RunPoses, i: usize, k: usize, holonomic: bool) {
+    let at = between(&run.odometry[i], &run.odometry[k]);
+    let u = between(&run.odometry[k], &run.odometry[k + 1]);
+    let (s, c) = at.theta_rad.sin_cos();
+    let (dx, dy) = (c * u.x_m - s * u.y_m, s * u.x_m + c * u.y_m);
+    let f = Matrix3::new(1.0, 0.0, -dy, 0.0, 1.0, dx, 0.0, 0.0, 1.0);
+    let d = u.x_m.hypot(u.y_m);
+    let phi = u.theta_rad.abs();
+    // Direction of the motion in the window's frame (any, when the step does not translate).
+    let bearing = at.theta_rad + if d > 0.0 { u.y_m.atan2(u.x_m) } else { 0.0 };
+    let (sb, cb) = bearing.sin_cos();
+    let along = Matrix3::new(cb * cb, cb * sb, 0.0, cb * sb, sb * sb, 0.0, 0.0, 0.0, 0.0);
+    let across = Matrix3::new(sb * sb, -cb * sb, 0.0, -cb * sb, cb * cb, 0.0, 0.0, 0.0, 0.0);
+    let mut heading = Matrix3::zeros();
+    heading[(2, 2)] = 1.0;
+    for m in b.iter_mut() {
+        *m = f * *m * f.transpose();
+    }
+    b[0] += heading * phi;
+    b[1] += heading * d;
+    b[2] += along * d;
+    b[3] += along * phi;
+    if holonomic {
+        b[3] += across * phi;
+        b[4] += across * d;
+    }
 }
 
 /// `Σ_m θ_m B_m`.
@@ -310,6 +338,29 @@ mod tests {
         // A differential drive does not strafe.
         let diff = covariance(&window_basis(&run, 0, 100, false), &rates);
         assert!((diff[(1, 1)] - driven).abs() < 1e-12);
+    }
+
+    #[test]
+    fn path_bases_are_every_window_from_the_start_built_step_by_step() {
+        // An arc that turns while it drives, with odometry off the truth.
+        let truth: Vec<Pose2> =
+            (0..40).map(|k| Pose2::new((k as f64 * 0.05).sin(), 0.3 * k as f64 * 0.05, 0.05 * k as f64)).collect();
+        let odometry: Vec<Pose2> = truth.iter().map(|p| Pose2::new(1.01 * p.x_m, p.y_m, 1.02 * p.theta_rad)).collect();
+        let run = RunPoses { truth, odometry };
+        for holonomic in [true, false] {
+            for start in [0, 7] {
+                let all = path_bases(&run, start, holonomic);
+                assert_eq!(all.len(), 39 - start);
+                for (n, b) in all.iter().enumerate() {
+                    assert_eq!(
+                        *b,
+                        window_basis(&run, start, start + n + 1, holonomic),
+                        "window {start} -> {}",
+                        start + n + 1
+                    );
+                }
+            }
+        }
     }
 
     #[test]

@@ -187,6 +187,10 @@ class Model:
 class Calibration:
     """The outcome of ``train``."""
 
+    def save(self, path: _Path) -> None:
+        """Write the model file as ``omnical train --out`` writes it (the model and its ``[fit]`` summary),
+        atomically: the same runs, preset and seed give the CLI's bytes."""
+
     @property
     def model(self) -> Model: ...
     @property

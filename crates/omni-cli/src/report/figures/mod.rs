@@ -10,6 +10,7 @@
 //! - `heat_map.rs`: [`heat_map`], the errors over α × ω.
 //! - `growth.rs`: [`growth`], the errors along the runs.
 //! - `ranking.rs`: [`ranking`], the diagnosis' candidate effects.
+//! - `trust.rs`: [`trust_ellipses`], [`trust_growth`], how far to trust the odometry (the noise model).
 
 mod by_command;
 mod flower;
@@ -18,6 +19,7 @@ mod heat_map;
 mod ladder;
 mod overlay;
 mod ranking;
+mod trust;
 
 pub use flower::flower;
 pub use growth::growth;
@@ -25,6 +27,7 @@ pub use heat_map::heat_map;
 pub use ladder::ladder;
 pub use overlay::overlay;
 pub use ranking::ranking;
+pub use trust::{trust_ellipses, trust_growth};
 
 use super::Report;
 use omni_ga::diagnose::Diagnosis;
@@ -109,6 +112,17 @@ pub fn all(r: &Report, diagnosis: Option<&Diagnosis>) -> Result<(Vec<Figure>, Ve
         );
     }
     figs.push(growth(r)?);
+    match &r.trust {
+        Some(t) if !t.runs.is_empty() => {
+            figs.push(trust_ellipses(r, t)?);
+            figs.push(trust_growth(t)?);
+        }
+        _ => notes.push(
+            "The model has no odometry noise model (a model file written by `omnical train` carries one as \
+             [noise]), so the figures of how far to trust the odometry are left out."
+                .to_string(),
+        ),
+    }
     match diagnosis {
         Some(d) if !d.ranking.is_empty() => figs.push(ranking(d)?),
         _ => notes.push("No diagnosis was run, so the effect ranking is left out.".to_string()),

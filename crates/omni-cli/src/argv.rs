@@ -3,8 +3,12 @@
 //! and its `omnical fleet` command): the command line's own parser, so a list means what it means there and
 //! each option is declared once.
 
-use super::diagnose::DiagnoseRequest;
-use super::train::TrainRequest;
+//!
+//! A front end beside `cmd/` and the Python keywords, not part of [`crate::api`]: the API takes typed
+//! requests and never a command line.
+
+use crate::api::diagnose::DiagnoseRequest;
+use crate::api::train::TrainRequest;
 use crate::cli::{Cli, Command};
 use std::path::PathBuf;
 
