@@ -244,7 +244,7 @@ const MOUNT_SHARE: f64 = 0.2;
 /// some unconstrained direction moves it. A base model as free as a matrix absorbs any mount (the sensor
 /// moves with the base, so its twist is a fixed linear map of the base's), whatever the motions.
 pub fn mount_warning(c: &Calibration) -> Option<String> {
-    let mount = |name: &str| name.starts_with("sensor_offset");
+    let mount = |name: &str| name.starts_with(omni_kin::effect::SensorOffset::ID);
     let weak: Vec<&str> = c
         .identifiability
         .weak

@@ -363,7 +363,8 @@ fn hidden_and_found(hidden: &str, d: &Diagnosis) -> String {
     let (head, _) = hidden.split_once('=').unwrap_or((hidden, ""));
     let learned = head.starts_with(omni_kin::effect::learned::PREFIX);
     let id = if learned { head } else { head.split(':').next().unwrap_or(head) };
-    let id = if id == "sensor_offset_yaw" { "sensor_offset" } else { id };
+    use omni_kin::effect::SensorOffset;
+    let id = if id == SensorOffset::ID_YAW { SensorOffset::ID } else { id };
     let found: Vec<String> = d
         .final_model
         .iter()

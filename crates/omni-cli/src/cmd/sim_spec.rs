@@ -95,9 +95,10 @@ fn add_effect(
     config: &mut SimConfig,
 ) -> anyhow::Result<()> {
     let n_wheels = truth.model.n_wheels();
-    let id = if name == "sensor_offset" && values.len() == 3 { "sensor_offset_yaw" } else { name };
+    use omni_kin::effect::{SampleTiming, SensorOffset};
+    let id = if name == SensorOffset::ID && values.len() == 3 { SensorOffset::ID_YAW } else { name };
     let effect = EffectKind::from_id(id, n_wheels).with_context(|| format!("--effect {spec}"))?;
-    if id == "sample_timing" {
+    if id == SampleTiming::ID {
         if values.is_empty() || values.len() > 2 {
             bail!("--effect {spec}: sample_timing takes DROP_PROBABILITY[,JITTER_S], e.g. sample_timing=0.05,0.002");
         }

@@ -24,9 +24,16 @@ pub struct SensorOffset {
     pub with_yaw: bool,
 }
 
+impl SensorOffset {
+    /// Its id in model files, the CLI and Python: the one place it is spelt.
+    pub const ID: &'static str = "sensor_offset";
+    /// The id of the effect with a yaw parameter (`with_yaw`).
+    pub const ID_YAW: &'static str = "sensor_offset_yaw";
+}
+
 impl Effect for SensorOffset {
     fn id(&self) -> &str {
-        "sensor_offset"
+        Self::ID
     }
     fn describe(&self) -> String {
         "the ground-truth sensor is not at the rotation centre (lever arm)".into()
@@ -54,9 +61,14 @@ impl Effect for SensorOffset {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct TimeOffset {}
 
+impl TimeOffset {
+    /// Its id in model files, the CLI and Python: the one place it is spelt.
+    pub const ID: &'static str = "time_offset";
+}
+
 impl Effect for TimeOffset {
     fn id(&self) -> &str {
-        "time_offset"
+        Self::ID
     }
     fn describe(&self) -> String {
         "the wheel-encoder clock lags or leads the ground-truth clock".into()
@@ -82,9 +94,14 @@ pub struct WheelAsymmetry {
     pub n_wheels: usize,
 }
 
+impl WheelAsymmetry {
+    /// Its id in model files, the CLI and Python: the one place it is spelt.
+    pub const ID: &'static str = "wheel_asymmetry";
+}
+
 impl Effect for WheelAsymmetry {
     fn id(&self) -> &str {
-        "wheel_asymmetry"
+        Self::ID
     }
     fn describe(&self) -> String {
         "a wheel's effective radius differs forward vs backward".into()
@@ -119,9 +136,14 @@ pub struct SpeedScale {
     pub n_wheels: usize,
 }
 
+impl SpeedScale {
+    /// Its id in model files, the CLI and Python: the one place it is spelt.
+    pub const ID: &'static str = "speed_scale";
+}
+
 impl Effect for SpeedScale {
     fn id(&self) -> &str {
-        "speed_scale"
+        Self::ID
     }
     fn describe(&self) -> String {
         "the effective wheel radius changes with wheel speed (tyre deformation)".into()
@@ -151,9 +173,14 @@ impl Effect for SpeedScale {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct RotationSlip {}
 
+impl RotationSlip {
+    /// Its id in model files, the CLI and Python: the one place it is spelt.
+    pub const ID: &'static str = "rotation_slip";
+}
+
 impl Effect for RotationSlip {
     fn id(&self) -> &str {
-        "rotation_slip"
+        Self::ID
     }
     fn describe(&self) -> String {
         "slip coupled to rotating while translating turns the translation by k·ω".into()
@@ -183,9 +210,14 @@ impl Effect for RotationSlip {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct TurnScrub {}
 
+impl TurnScrub {
+    /// Its id in model files, the CLI and Python: the one place it is spelt.
+    pub const ID: &'static str = "turn_scrub";
+}
+
 impl Effect for TurnScrub {
     fn id(&self) -> &str {
-        "turn_scrub"
+        Self::ID
     }
     fn describe(&self) -> String {
         "tyre scrub while turning and driving at once scales the turn rate by 1 + k·|v|".into()
@@ -221,9 +253,14 @@ pub struct AccelSlip {
     pub n_wheels: usize,
 }
 
+impl AccelSlip {
+    /// Its id in model files, the CLI and Python: the one place it is spelt.
+    pub const ID: &'static str = "accel_slip";
+}
+
 impl Effect for AccelSlip {
     fn id(&self) -> &str {
-        "accel_slip"
+        Self::ID
     }
     fn describe(&self) -> String {
         "traction lost while a wheel accelerates".into()
@@ -279,9 +316,14 @@ pub struct Backlash {
     pub n_wheels: usize,
 }
 
+impl Backlash {
+    /// Its id in model files, the CLI and Python: the one place it is spelt.
+    pub const ID: &'static str = "backlash";
+}
+
 impl Effect for Backlash {
     fn id(&self) -> &str {
-        "backlash"
+        Self::ID
     }
     fn describe(&self) -> String {
         "lost motion after a wheel reverses (gear play)".into()
@@ -322,9 +364,14 @@ pub struct WheelEccentricity {
     pub n_wheels: usize,
 }
 
+impl WheelEccentricity {
+    /// Its id in model files, the CLI and Python: the one place it is spelt.
+    pub const ID: &'static str = "wheel_eccentricity";
+}
+
 impl Effect for WheelEccentricity {
     fn id(&self) -> &str {
-        "wheel_eccentricity"
+        Self::ID
     }
     fn describe(&self) -> String {
         "an out-of-round wheel: its radius varies with the wheel's angle".into()
@@ -373,9 +420,14 @@ impl Effect for WheelEccentricity {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct WorldDrift {}
 
+impl WorldDrift {
+    /// Its id in model files, the CLI and Python: the one place it is spelt.
+    pub const ID: &'static str = "world_drift";
+}
+
 impl Effect for WorldDrift {
     fn id(&self) -> &str {
-        "world_drift"
+        Self::ID
     }
     fn describe(&self) -> String {
         "a constant world-frame drift while moving (a tilted floor, or a moving ground-truth frame)".into()
@@ -403,9 +455,14 @@ impl Effect for WorldDrift {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct SampleTiming {}
 
+impl SampleTiming {
+    /// Its id in model files, the CLI and Python: the one place it is spelt.
+    pub const ID: &'static str = "sample_timing";
+}
+
 impl Effect for SampleTiming {
     fn id(&self) -> &str {
-        "sample_timing"
+        Self::ID
     }
     fn describe(&self) -> String {
         "late or dropped encoder samples: integrate with measured stamps instead of a fixed step".into()

@@ -195,27 +195,42 @@ pub enum EffectKind {
     Custom(Arc<dyn Effect>),
 }
 
-/// Ids of the built-in catalogue, in catalogue order.
-pub const CATALOGUE: &[&str] = &[
-    "sensor_offset",
-    "time_offset",
-    "wheel_asymmetry",
-    "speed_scale",
-    "rotation_slip",
-    "turn_scrub",
-    "accel_slip",
-    "backlash",
-    "wheel_eccentricity",
-    "sample_timing",
-    "world_drift",
+/// Makes a built-in effect for a robot of `n` wheels.
+type MakeEffect = fn(usize) -> EffectKind;
+
+/// The built-in catalogue, in catalogue order: each effect's id (its struct's `ID`, the one place it is
+/// spelt) and how to make it for a robot of `n` wheels. [`CATALOGUE`] and [`EffectKind::from_id`] read it.
+const BUILTIN: [(&str, MakeEffect); 11] = [
+    (SensorOffset::ID, |_| EffectKind::SensorOffset(SensorOffset { with_yaw: false })),
+    (TimeOffset::ID, |_| EffectKind::TimeOffset(TimeOffset {})),
+    (WheelAsymmetry::ID, |n_wheels| EffectKind::WheelAsymmetry(WheelAsymmetry { n_wheels })),
+    (SpeedScale::ID, |n_wheels| EffectKind::SpeedScale(SpeedScale { n_wheels })),
+    (RotationSlip::ID, |_| EffectKind::RotationSlip(RotationSlip {})),
+    (TurnScrub::ID, |_| EffectKind::TurnScrub(TurnScrub {})),
+    (AccelSlip::ID, |n_wheels| EffectKind::AccelSlip(AccelSlip { n_wheels })),
+    (Backlash::ID, |n_wheels| EffectKind::Backlash(Backlash { n_wheels })),
+    (WheelEccentricity::ID, |n_wheels| EffectKind::WheelEccentricity(WheelEccentricity { n_wheels })),
+    (SampleTiming::ID, |_| EffectKind::SampleTiming(SampleTiming {})),
+    (WorldDrift::ID, |_| EffectKind::WorldDrift(WorldDrift {})),
 ];
+
+/// Ids of the built-in catalogue, in catalogue order (one table, `BUILTIN`, spells them with their makers).
+pub const CATALOGUE: &[&str] = &{
+    let mut ids = [""; BUILTIN.len()];
+    let mut i = 0;
+    while i < BUILTIN.len() {
+        ids[i] = BUILTIN[i].0;
+        i += 1;
+    }
+    ids
+};
 
 /// Every id [`EffectKind::from_id`] accepts, for help texts and messages: the [`CATALOGUE`] with
 /// `sensor_offset_yaw` after `sensor_offset`, then the learned corrections (`learned:wheel`, …).
 pub fn ids() -> Vec<String> {
     let mut ids: Vec<String> = CATALOGUE.iter().map(|s| s.to_string()).collect();
-    if let Some(i) = ids.iter().position(|id| id == "sensor_offset") {
-        ids.insert(i + 1, "sensor_offset_yaw".into());
+    if let Some(i) = ids.iter().position(|id| id == SensorOffset::ID) {
+        ids.insert(i + 1, SensorOffset::ID_YAW.into());
     }
     ids.extend(learned::ids());
     ids
@@ -225,22 +240,16 @@ impl EffectKind {
     /// A built-in effect by id for a robot with `n_wheels` wheels. `sensor_offset_yaw` is `sensor_offset`
     /// with a yaw parameter.
     pub fn from_id(id: &str, n_wheels: usize) -> Result<Self, KinError> {
-        Ok(match id {
-            "sensor_offset" => Self::SensorOffset(SensorOffset { with_yaw: false }),
-            "sensor_offset_yaw" => Self::SensorOffset(SensorOffset { with_yaw: true }),
-            "time_offset" => Self::TimeOffset(TimeOffset {}),
-            "wheel_asymmetry" => Self::WheelAsymmetry(WheelAsymmetry { n_wheels }),
-            "speed_scale" => Self::SpeedScale(SpeedScale { n_wheels }),
-            "rotation_slip" => Self::RotationSlip(RotationSlip {}),
-            "turn_scrub" => Self::TurnScrub(TurnScrub {}),
-            "accel_slip" => Self::AccelSlip(AccelSlip { n_wheels }),
-            "backlash" => Self::Backlash(Backlash { n_wheels }),
-            "wheel_eccentricity" => Self::WheelEccentricity(WheelEccentricity { n_wheels }),
-            "sample_timing" => Self::SampleTiming(SampleTiming {}),
-            "world_drift" => Self::WorldDrift(WorldDrift {}),
-            other if other.starts_with(learned::PREFIX) => Self::Learned(Learned::from_id(other, n_wheels)?),
-            other => return Err(KinError::unknown("effect", other, &ids())),
-        })
+        if id == SensorOffset::ID_YAW {
+            return Ok(Self::SensorOffset(SensorOffset { with_yaw: true }));
+        }
+        if let Some((_, make)) = BUILTIN.iter().find(|(known, _)| *known == id) {
+            return Ok(make(n_wheels));
+        }
+        if id.starts_with(learned::PREFIX) {
+            return Ok(Self::Learned(Learned::from_id(id, n_wheels)?));
+        }
+        Err(KinError::unknown("effect", id, &ids()))
     }
 
     /// The whole built-in catalogue for `n_wheels` wheels.
@@ -270,7 +279,7 @@ impl EffectKind {
 impl Effect for EffectKind {
     fn id(&self) -> &str {
         match self {
-            Self::SensorOffset(e) if e.with_yaw => "sensor_offset_yaw",
+            Self::SensorOffset(e) if e.with_yaw => SensorOffset::ID_YAW,
             _ => self.inner().id(),
         }
     }
@@ -305,5 +314,25 @@ impl Effect for EffectKind {
     }
     fn uses_stamps(&self) -> bool {
         self.inner().uses_stamps()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_catalogue_id_is_spelt_once_and_makes_its_own_effect() {
+        assert_eq!(CATALOGUE.len(), BUILTIN.len());
+        for (id, make) in BUILTIN {
+            let e = make(4);
+            assert_eq!(e.id(), id, "the table's id and the effect's own");
+            assert_eq!(EffectKind::from_id(id, 4).map(|e| e.id().to_string()).ok().as_deref(), Some(id));
+        }
+        let yaw = EffectKind::from_id(SensorOffset::ID_YAW, 3).ok();
+        assert!(matches!(yaw, Some(EffectKind::SensorOffset(SensorOffset { with_yaw: true }))));
+        assert_eq!(ids()[..3], [SensorOffset::ID, SensorOffset::ID_YAW, TimeOffset::ID]);
+        let err = EffectKind::from_id("wobble", 3).err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(err.contains("\"wobble\"") && err.contains("world_drift"), "{err}");
     }
 }

@@ -414,7 +414,7 @@ fn recommend(
         return Ok(Recommendation { effect: None, kind_check: None, held_kinds, lag });
     }
     let confirmed = lag.as_ref().is_some_and(|l| {
-        winner.effect == "time_offset"
+        winner.effect == omni_kin::effect::TimeOffset::ID
             && l.named()
             && winner.params.first().is_some_and(|p| l.confirms(p.value, p.std_error))
     });
