@@ -106,3 +106,15 @@ def test_a_model_marked_interrupted_is_loaded_with_a_warning(tmp_path: Path) -> 
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         omnical.load_model(done)
+
+
+def test_a_skid_steer_base_has_its_own_model() -> None:
+    """`kind = "skid"` (issue 47): the ICR model's five parameters at the design, the differential drive of
+    the sides' mean positions, no sideways row."""
+    robot = Path(__file__).resolve().parents[2] / "omni-cli" / "tests" / "data" / "skid_robot.toml"
+    m = omnical.Model.design(robot, kinematics="skid")
+    assert m.kinematics == "skid" and m.n_wheels == 4
+    assert m.param_names == ["r_right", "r_left", "y_icr_left", "y_icr_right", "x_icr"]
+    np.testing.assert_allclose(m.param_values, [0.165, 0.165, 0.2775, -0.2775, 0.0], atol=1e-12)
+    np.testing.assert_array_equal(m.matrix[1], np.zeros(4))
+    np.testing.assert_allclose(m.matrix[2], [-0.165 / 1.11, -0.165 / 1.11, 0.165 / 1.11, 0.165 / 1.11], rtol=1e-12)

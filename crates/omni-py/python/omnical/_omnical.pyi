@@ -18,8 +18,14 @@ _EffectArg = Any  # a catalogue id (str) or a Python effect object (see omnical.
 # A model as the CLI's --model: a Model, "design", "paper" or a model file path (train: also "ik",
 # "geometry", "diff", "mecanum", "skid").
 _ModelArg = Union["Model", str, PathLike[str]]
-# The base models (KinematicsKind's ids).
+# Closed choices, as the CLI's (each the library's choice table, checked by crates/omni-cli/tests/python_stubs.rs;
+# an id with "_" is also taken with "-").
 _Kinematics = Literal["ik", "geometry", "diff", "mecanum", "skid"]
+_Preset = Literal["default", "paper"]
+_Objective = Literal["path", "end_pose", "end-pose"]
+_Unexcited = Literal["hold", "move"]
+_GtKind = Literal["absolute", "relative", "end_pose", "end-pose"]
+_LidarModel = Literal["ideal", "urg04lx", "rplidar"]
 
 __all__ = [
     "CATALOGUE",
@@ -379,7 +385,7 @@ def load(
     gt_time_offset: Optional[float] = None,
     gt_columns: Optional[dict[str, str]] = None,
     gt_units: Optional[dict[str, str]] = None,
-    gt_kind: Optional[str] = None,
+    gt_kind: Optional[_GtKind] = None,
     gt_window_s: Optional[float] = None,
     gt_mount: Optional[tuple[float, float, float]] = None,
     gt_mount_start: Optional[tuple[float, float, float]] = None,
@@ -405,7 +411,7 @@ def info(
     gt_time_offset: Optional[float] = None,
     gt_columns: Optional[dict[str, str]] = None,
     gt_units: Optional[dict[str, str]] = None,
-    gt_kind: Optional[str] = None,
+    gt_kind: Optional[_GtKind] = None,
     gt_window_s: Optional[float] = None,
     gt_mount: Optional[tuple[float, float, float]] = None,
     gt_mount_start: Optional[tuple[float, float, float]] = None,
@@ -471,7 +477,7 @@ def simulate(
     lidar_noise: float = 0.01,
     lidar_dropout: float = 0.01,
     lidar_sweep: bool = False,
-    lidar_model: str = "ideal",
+    lidar_model: _LidarModel = "ideal",
     imu: bool = False,
     imu_rate: float = 100.0,
     imu_bias: float = 0.005,
@@ -495,12 +501,12 @@ def train(
     *,
     robot: Optional[_Path] = None,
     effects: Sequence[_EffectArg] = ...,
-    preset: str = "default",
+    preset: _Preset = "default",
     seed: int = 0,
-    objective: Optional[str] = None,
+    objective: Optional[_Objective] = None,
     every: int = 1,
     heading_weight: float = 1.0,
-    unexcited: Optional[str] = None,
+    unexcited: Optional[_Unexcited] = None,
     max_std_error: float = 0.05,
     min_excitation: float = 0.01,
     progress: Optional[Callable[[dict[str, Any]], Optional[bool]]] = None,
