@@ -42,10 +42,33 @@ pub struct Wheel {
     pub roller_angle_rad: f64,
 }
 
+/// Largest |sin| of a wheel's drive direction (and |roller angle|, rad) that still counts as driving along x.
+const ALONG_X: f64 = 1e-9;
+
 impl Wheel {
     /// An omni wheel on the circle of radius `distance_m`, driving along the tangent.
     pub fn omni(radius_m: f64, distance_m: f64, angle_rad: f64) -> Self {
         Self { radius_m, distance_m, angle_rad, drive_offset_rad: 0.0, roller_angle_rad: 0.0 }
+    }
+
+    /// A wheel at `(x_m, y_m)` driving forward (along +x) at positive speed, with rollers at `roller_angle_rad`
+    /// (0: none, or an omni wheel's across the drive).
+    pub fn forward_at(radius_m: f64, x_m: f64, y_m: f64, roller_angle_rad: f64) -> Self {
+        let angle_rad = y_m.atan2(x_m);
+        Self {
+            radius_m,
+            distance_m: x_m.hypot(y_m),
+            angle_rad,
+            drive_offset_rad: -angle_rad - FRAC_PI_2,
+            roller_angle_rad,
+        }
+    }
+
+    /// Whether the wheel drives along the x axis (forward or backward) without rollers: it cannot push the
+    /// base sideways (a differential drive's or a skid-steer base's wheel). Within 1e-9 (|sin|, rad).
+    pub fn drives_along_x(&self) -> bool {
+        let beta = self.angle_rad + FRAC_PI_2 + self.drive_offset_rad;
+        beta.sin().abs() <= ALONG_X && self.roller_angle_rad.abs() <= ALONG_X
     }
 
     /// The forward-kinematics row: wheel speed (rad/s) per unit (vx m/s, vy m/s, ω rad/s).
@@ -143,19 +166,7 @@ impl RobotGeometry {
     pub fn mecanum4(radius_m: f64, lx_m: f64, ly_m: f64) -> Self {
         let q = std::f64::consts::FRAC_PI_4;
         let corners = [(lx_m, ly_m, -q), (lx_m, -ly_m, q), (-lx_m, ly_m, q), (-lx_m, -ly_m, -q)];
-        let wheels = corners
-            .iter()
-            .map(|&(x, y, roller)| {
-                let angle = y.atan2(x);
-                Wheel {
-                    radius_m,
-                    distance_m: x.hypot(y),
-                    angle_rad: angle,
-                    drive_offset_rad: -angle - FRAC_PI_2,
-                    roller_angle_rad: roller,
-                }
-            })
-            .collect();
+        let wheels = corners.iter().map(|&(x, y, roller)| Wheel::forward_at(radius_m, x, y, roller)).collect();
         Self { wheel_names: default_wheel_names(4), wheels }
     }
 
@@ -164,19 +175,7 @@ impl RobotGeometry {
     /// robot description; Husky: r 0.165 m, lx 0.256 m, ly 0.2775 m).
     pub fn skid4(radius_m: f64, lx_m: f64, ly_m: f64) -> Self {
         let corners = [(lx_m, ly_m), (-lx_m, ly_m), (lx_m, -ly_m), (-lx_m, -ly_m)];
-        let wheels = corners
-            .iter()
-            .map(|&(x, y)| {
-                let angle = y.atan2(x);
-                Wheel {
-                    radius_m,
-                    distance_m: x.hypot(y),
-                    angle_rad: angle,
-                    drive_offset_rad: -angle - FRAC_PI_2,
-                    roller_angle_rad: 0.0,
-                }
-            })
-            .collect();
+        let wheels = corners.iter().map(|&(x, y)| Wheel::forward_at(radius_m, x, y, 0.0)).collect();
         Self { wheel_names: default_wheel_names(4), wheels }
     }
 
@@ -232,11 +231,11 @@ impl RobotGeometry {
     /// vehicle moves forward and turns), else 3 (omni, mecanum: every planar twist). The wheels' kinds
     /// decide, not their number.
     pub fn twist_dof(&self) -> usize {
-        let along_x = |w: &Wheel| {
-            let beta = w.angle_rad + std::f64::consts::FRAC_PI_2 + w.drive_offset_rad;
-            beta.sin().abs() <= 1e-9 && w.roller_angle_rad.abs() <= 1e-9
-        };
-        if !self.wheels.is_empty() && self.wheels.iter().all(along_x) { 2 } else { PLANAR_TWIST_DIMENSIONS }
+        if !self.wheels.is_empty() && self.wheels.iter().all(Wheel::drives_along_x) {
+            2
+        } else {
+            PLANAR_TWIST_DIMENSIONS
+        }
     }
 
     /// Checks every wheel, the names and that the wheels drive at least `needed` independent twist

@@ -71,6 +71,7 @@ pub fn report(
     } else {
         String::new()
     };
+    // As the CLI: a model file's noise model draws how far to trust the odometry.
     let noise = model
         .extract::<std::path::PathBuf>()
         .ok()
@@ -82,13 +83,11 @@ pub fn report(
             true => "omnical report".to_string(),
             false => format!("omnical report: {label}"),
         }),
-        models: rs_report::models_for(&design, &fm, d.as_ref()),
+        models: rs_report::models_for(&design, &fm, noise, d.as_ref()),
         train: &train,
         held_out: &held_out,
         diagnosis: d.as_ref(),
         sources: Vec::new(),
-        // As the CLI: a model file's noise model draws how far to trust the odometry.
-        noise: noise.map(|n| (&fm, n)),
     };
     let written = py.detach(|| rs_report::write_with(&input, &out, png.as_deref(), &extra));
     written.map(|w| w.figures).map_err(|e| file_error(&e))

@@ -30,7 +30,7 @@ pub fn stock_pose_variance_m2(fitted: &FittedModel) -> f64 {
 }
 
 /// The ground truth and `fitted`'s odometry at the same stamps, for each run.
-pub fn poses(fitted: &FittedModel, runs: &[Run]) -> Result<Vec<RunPoses>, KinError> {
+fn poses(fitted: &FittedModel, runs: &[Run]) -> Result<Vec<RunPoses>, KinError> {
     let errors =
         Evaluator::for_report(&fitted.model, runs, Selection::Path(1))?.errors(&fitted.model.resolve(&fitted.params)?);
     noise::run_poses(runs, &errors)

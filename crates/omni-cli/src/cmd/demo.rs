@@ -294,7 +294,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     // `omnical train`'s sequence (api::train::fit_prepared) on the runs read back from train/, so that
     // fitted_matrix.toml is the file `omnical train train/ --out fitted_matrix.toml` writes.
     let prepared = Prepared {
-        ds: crate::dataset::Dataset { runs: train.clone(), ..Default::default() },
+        ds: crate::dataset::Dataset { runs: train, ..Default::default() },
         start: setup.start.clone(),
         effects: Vec::new(),
         plan: Plan::preset(preset, n_base).seed(0),
@@ -307,6 +307,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     if let Some(w) = warning {
         tracing::warn!("{w}");
     }
+    let train = &prepared.ds.runs;
     if text {
         print_summary(&fit, preset.id(), train.len());
         println!("== diagnose: which physical effect is missing? (--auto: add effects while held-out error falls)");
@@ -314,7 +315,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     let opts = DiagnoseOptions { auto: true, ..DiagnoseOptions::default() };
     let spinner = progress::spinner("diagnosing: refitting each candidate effect", quiet);
     let design = design_for(&fit.fitted);
-    let d = diagnose(&fit.fitted, &design, &train, Some(&val), &opts)?;
+    let d = diagnose(&fit.fitted, &design, train, Some(&val), &opts)?;
     spinner.finish_and_clear();
     if text {
         print_diagnosis(&d);
@@ -326,8 +327,13 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
             None | Some(robot_file::BUILTIN_APR02) => format!("omnical demo: Eq. 9 robot with a hidden {hidden}"),
             Some(_) => format!("omnical demo: {} with a hidden {hidden}", setup.true_robot),
         },
-        models: report::models_for(&design, &fit.fitted, Some(&d)),
-        train: &train,
+        models: report::models_for(
+            &design,
+            &fit.fitted,
+            crate::api::noise::from_summary(&summarized.summary),
+            Some(&d),
+        ),
+        train,
         held_out: &val,
         diagnosis: Some(&d),
         sources: vec![format!(
@@ -335,7 +341,6 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
             setup.commands,
             DEFAULT_SEED + 1
         )],
-        noise: crate::api::noise::from_summary(&summarized.summary).map(|n| (&fit.fitted, n)),
     };
     let w = report::write(&input, &dir.join(REPORT), None)?;
     spinner.finish_and_clear();
@@ -343,7 +348,7 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     let (dir, html) = (a.out.as_path(), a.out.join(REPORT));
     let commands = repeat_commands(a, &setup, dir, d.final_model.is_some());
     if !text {
-        let doc = demo_json(a, &setup, (&train, &val), &fit, &d, &w, &commands)?;
+        let doc = demo_json(a, &setup, (train, &val), &fit, &d, &w, &commands)?;
         return super::print_json("demo", doc);
     }
     println!("== report");

@@ -77,12 +77,11 @@ pub fn run(a: &Args, quiet: bool) -> anyhow::Result<()> {
     sources.push(format!("model: {}", a.model));
     let input = ReportInput {
         title: format!("omnical report: {}", a.model),
-        models: report::models_for(&design, &model, diagnosis.as_ref()),
+        models: report::models_for(&design, &model, noise, diagnosis.as_ref()),
         train: &ds.runs,
         held_out: &val,
         diagnosis: diagnosis.as_ref(),
         sources,
-        noise: noise.map(|n| (&model, n)),
     };
     // The diagnosis (`auto`) ran the explorer when held-out runs are given, and its headline names the
     // family the explorer passed: the section shows that exploration. `--explore` runs it alone otherwise.

@@ -34,6 +34,9 @@ pub struct Labelled {
     /// The model and its parameters: one for every run, or each run's own (the design, when the robot's
     /// inputs declare different designs; it must know every training and held-out run).
     pub model: RunModels,
+    /// The noise model `train` fitted with it (its model file's `[noise]`), when it has one: the figures of
+    /// how far to trust the odometry ([`trust::trust`] along the figure runs).
+    pub noise: Option<omni_kin::noise::OdometryNoise>,
 }
 
 /// Everything the report is made from.
@@ -51,9 +54,6 @@ pub struct ReportInput<'a> {
     pub diagnosis: Option<&'a Diagnosis>,
     /// Where the data came from (shown in the summary).
     pub sources: Vec<String>,
-    /// The fitted model and the noise model `train` fitted with it (its model file's `[noise]`), when it has
-    /// one: the figures of how far to trust the odometry ([`trust::trust`] along the figure runs).
-    pub noise: Option<(&'a FittedModel, omni_kin::noise::OdometryNoise)>,
 }
 
 /// One model's numbers.
@@ -190,6 +190,14 @@ impl Report {
             });
         }
 
+        // The first model with a noise model, through the errors just computed on the figure runs.
+        let trust = input
+            .models
+            .iter()
+            .zip(&fig_errors)
+            .find_map(|(m, errors)| m.noise.as_ref().map(|n| trust::trust(fig_runs, errors, n)))
+            .transpose()?;
+
         let mut runs = Vec::with_capacity(fig_runs.len());
         let mut growth_sum = vec![vec![(0.0, 0.0, 0usize); GROWTH_BINS]; input.models.len()];
         for (ri, run) in fig_runs.iter().enumerate() {
@@ -261,10 +269,7 @@ impl Report {
             growth,
             noise_floor_m: input.diagnosis.and_then(|d| d.noise_floor.as_ref().map(|n| n.path_rms)),
             ladder,
-            trust: match &input.noise {
-                Some((fitted, n)) => Some(trust::trust(fitted, n, fig_runs)?),
-                None => None,
-            },
+            trust,
         })
     }
 }
@@ -373,22 +378,28 @@ pub fn write_with(
     Ok(Written { report, figures: figs.into_iter().map(|f| f.id).collect(), png })
 }
 
-/// The models a report shows for a fitted model and its diagnosis: the design (one, or each run's own),
-/// the model itself, and the model with the effects the diagnosis added (when it added any).
-pub fn models_for(design: &impl ToRunModels, fitted: &FittedModel, diagnosis: Option<&Diagnosis>) -> Vec<Labelled> {
+/// The models a report shows for a fitted model (with the noise model `train` fitted with it, if any) and
+/// its diagnosis: the design (one, or each run's own), the model itself, and the model with the effects the
+/// diagnosis added (when it added any).
+pub fn models_for(
+    design: &impl ToRunModels,
+    fitted: &FittedModel,
+    noise: Option<omni_kin::noise::OdometryNoise>,
+    diagnosis: Option<&Diagnosis>,
+) -> Vec<Labelled> {
     let base = format!("fitted {}", fitted.model.kinematics.noun());
     let with_effects = |m: &FittedModel, base: &str| {
         let ids: Vec<&str> = m.model.effects.iter().map(omni_kin::effect::Effect::id).collect();
         if ids.is_empty() { base.to_string() } else { format!("{base} + {}", ids.join(" + ")) }
     };
     let mut v = vec![
-        Labelled { label: "design".into(), model: design.to_run_models() },
-        Labelled { label: with_effects(fitted, &base), model: fitted.into() },
+        Labelled { label: "design".into(), model: design.to_run_models(), noise: None },
+        Labelled { label: with_effects(fitted, &base), model: fitted.into(), noise },
     ];
     if let Some(f) = diagnosis.and_then(|d| d.final_model.as_ref())
         && f.model.effects.len() > fitted.model.effects.len()
     {
-        v.push(Labelled { label: with_effects(f, &base), model: f.into() });
+        v.push(Labelled { label: with_effects(f, &base), model: f.into(), noise: None });
     }
     v
 }
@@ -415,17 +426,17 @@ mod tests {
         ReportInput {
             title: "t <&>".into(),
             models: vec![
-                Labelled { label: "design".into(), model: FittedModel::paper_design().into() },
+                Labelled { label: "design".into(), model: FittedModel::paper_design().into(), noise: None },
                 Labelled {
                     label: "truth".into(),
                     model: FittedModel::nominal(Model::ik(IkMatrix::paper_calibrated())).into(),
+                    noise: None,
                 },
             ],
             train: runs,
             held_out: &[],
             diagnosis: None,
             sources: vec![],
-            noise: None,
         }
     }
 

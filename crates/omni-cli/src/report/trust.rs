@@ -3,8 +3,9 @@
 //! model's covariance of it at every ground-truth pose ([`omni_kin::noise::path_bases`], built step by
 //! step along the run).
 
+use omni_kin::evaluate::RunErrors;
 use omni_kin::noise::{self, OdometryNoise};
-use omni_kin::{FittedModel, KinError, Run};
+use omni_kin::{KinError, Run};
 use serde::Serialize;
 
 /// χ² of 2 degrees of freedom at 95 %: a 2D position error lies inside `x Σ⁻¹ x ≤ 5.991` 95 % of the time.
@@ -59,9 +60,10 @@ pub struct Trust {
     pub runs: Vec<TrustRun>,
 }
 
-/// `fitted`'s odometry on `runs` with the noise model `n` (fitted with it by `train`).
-pub fn trust(fitted: &FittedModel, n: &OdometryNoise, runs: &[Run]) -> Result<Trust, KinError> {
-    let poses = crate::api::noise::poses(fitted, runs)?;
+/// A model's odometry on `runs`, from its `errors` at every ground-truth pose (the report's, at
+/// [`omni_kin::odometry::Selection::Path`]`(1)`), with the noise model `n` `train` fitted with it.
+pub fn trust(runs: &[Run], errors: &RunErrors, n: &OdometryNoise) -> Result<Trust, KinError> {
+    let poses = noise::run_poses(runs, errors)?;
     let mut out = Vec::with_capacity(runs.len());
     for (run, p) in runs.iter().zip(&poses) {
         let len = p.truth.len().min(p.odometry.len());

@@ -43,9 +43,6 @@ struct Axle {
     kappa: f64,
 }
 
-/// Largest |sin| of a wheel's drive direction (and |roller angle|, rad) that still counts as driving along x.
-const ALONG_X: f64 = 1e-9;
-
 fn not_an_axle(why: &'static str) -> KinError {
     KinError::Layout { model: KinematicsKind::Diff, why }
 }
@@ -62,7 +59,7 @@ impl Axle {
             if !(w.radius_m > 0.0 && w.radius_m.is_finite()) {
                 return Err(KinError::BadWheel { wheel: i, field: "radius_m", value: w.radius_m, why: "must be > 0" });
             }
-            if beta.sin().abs() > ALONG_X || w.roller_angle_rad.abs() > ALONG_X {
+            if !w.drives_along_x() {
                 return Err(not_an_axle("both wheels must drive along x (a common axle), without rollers"));
             }
             y[i] = w.distance_m * w.angle_rad.sin();

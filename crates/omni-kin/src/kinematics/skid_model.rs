@@ -80,9 +80,6 @@ struct Sides {
     half_span_m: f64,
 }
 
-/// Largest |sin| of a wheel's drive direction (and |roller angle|, rad) that still counts as driving along x.
-const ALONG_X: f64 = 1e-9;
-
 fn not_skid(why: &'static str) -> KinError {
     KinError::Layout { model: KinematicsKind::Skid, why }
 }
@@ -100,7 +97,7 @@ impl Sides {
                 return Err(KinError::BadWheel { wheel: i, field: "radius_m", value: w.radius_m, why: "must be > 0" });
             }
             let beta = w.angle_rad + FRAC_PI_2 + w.drive_offset_rad;
-            if beta.sin().abs() > ALONG_X || w.roller_angle_rad.abs() > ALONG_X {
+            if !w.drives_along_x() {
                 return Err(not_skid("every wheel must drive along x, without rollers (no steering)"));
             }
             let (x, y) = (w.distance_m * w.angle_rad.cos(), w.distance_m * w.angle_rad.sin());

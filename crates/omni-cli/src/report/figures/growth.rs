@@ -1,6 +1,6 @@
 //! Error growth along the runs: mean position and heading error against the fraction of run time.
 
-use super::{DrawError, FONT, Figure, colour, draw};
+use super::{DrawError, FONT, Figure, colour, draw, upper_left_legend};
 use crate::report::Report;
 use plotters::prelude::*;
 
@@ -36,12 +36,7 @@ pub fn growth(r: &Report) -> Result<Figure, DrawError> {
                     .label(r.models[m].label.clone())
                     .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], c.stroke_width(2)));
             }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperLeft)
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .draw()?;
+            upper_left_legend(&mut chart)?;
         }
         Ok(())
     })?;

@@ -130,6 +130,18 @@ pub fn all(r: &Report, diagnosis: Option<&Diagnosis>) -> Result<(Vec<Figure>, Ve
     Ok((figs, notes))
 }
 
+/// The figures' legend: upper left, on a white box with a black border.
+fn upper_left_legend<'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, CT>,
+) -> Result<(), DrawError> {
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+}
+
 fn colour_name(i: usize) -> &'static str {
     ["grey", "blue", "green", "red", "purple", "orange"][i % MODEL_COLOURS.len()]
 }

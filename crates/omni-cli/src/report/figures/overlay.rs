@@ -1,6 +1,6 @@
 //! Ground truth against each model's odometry for one run, with a zoom on the end point.
 
-use super::{Area, DrawError, FONT, Figure, TRUTH, colour, draw, span};
+use super::{Area, DrawError, FONT, Figure, TRUTH, colour, draw, span, upper_left_legend};
 use crate::report::{Overlay, Report};
 use plotters::prelude::*;
 
@@ -96,12 +96,7 @@ fn path_panel(
         }
     }
     if legend {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()?;
+        upper_left_legend(&mut chart)?;
     }
     Ok(())
 }

@@ -1,7 +1,7 @@
 //! How far to trust the odometry (issue 46): the noise model's 95 % ellipses along one run, and the
 //! position error against the distance driven with the model's 95 % band.
 
-use super::{DrawError, FONT, Figure, TRUTH, colour, draw, span};
+use super::{DrawError, FONT, Figure, TRUTH, colour, draw, span, upper_left_legend};
 use crate::report::Report;
 use crate::report::trust::{Trust, TrustRun};
 use plotters::prelude::*;
@@ -104,12 +104,7 @@ pub fn trust_ellipses(r: &Report, t: &Trust) -> Result<Figure, DrawError> {
             .draw_series(LineSeries::new(xy(&run.odometry_xy_m), fitted.stroke_width(2)))?
             .label(r.models[r.models.len().min(2) - 1].label.clone())
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], fitted.stroke_width(2)));
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()?;
+        upper_left_legend(&mut chart)?;
         Ok(())
     })?;
     Ok(Figure {
@@ -209,12 +204,7 @@ pub fn trust_growth(t: &Trust) -> Result<Figure, DrawError> {
             .draw_series(LineSeries::new(p95, TRUTH.stroke_width(2)))?
             .label("measured: 95th percentile of the errors")
             .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], TRUTH.stroke_width(2)));
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()?;
+        upper_left_legend(&mut chart)?;
         Ok(())
     })?;
     let inside: f64 = t.runs.iter().map(|r| r.inside_share() * r.error_m.len() as f64).sum::<f64>()
