@@ -6,57 +6,25 @@
 //! installs them from requirements-dev.txt.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test code: a failed unwrap is a failed test
 
+#[macro_use]
+#[path = "mcap/fixtures.rs"]
+mod fixtures;
 #[path = "mcap/helpers.rs"]
 mod helpers;
 mod support;
 
+use fixtures::{error, fixtures, read, read_ok};
 use helpers::{check_run, close, design_odometry, floats, simulated_run};
-use omni_cli::dataset::mcap::{McapOptions, McapRead, WriteOptions, read_file, write_run};
+use omni_cli::dataset::mcap::{McapOptions, WriteOptions, write_run};
 use omni_kin::Command as RunCommand;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::sync::OnceLock;
-use support::{expected_json, made_by_python, python};
+use support::python;
 
 /// The script that writes the fixture bags and checks ours.
 fn script() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/mcap/make_bags.py")
-}
-
-/// The generated bags and their expected values (the tests using them are ignored, with the reason in
-/// cargo's summary, when the Python tools are missing: see build.rs).
-fn fixtures() -> &'static (PathBuf, Value) {
-    static FIXTURES: OnceLock<(PathBuf, Value)> = OnceLock::new();
-    FIXTURES.get_or_init(|| {
-        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("mcap_rosbags");
-        let _ = std::fs::remove_dir_all(&dir);
-        let dir = made_by_python("mcap/make_bags.py", dir);
-        let expected = expected_json(&dir);
-        (dir, expected)
-    })
-}
-
-macro_rules! fixtures_or_skip {
-    () => {{
-        let (dir, expected) = fixtures();
-        (dir, expected)
-    }};
-}
-
-fn read(dir: &Path, name: &str, opts: &McapOptions) -> Result<McapRead, String> {
-    read_file(&dir.join(format!("{name}.mcap")), opts).map_err(|e| e.to_string())
-}
-
-fn read_ok(dir: &Path, name: &str) -> McapRead {
-    read(dir, name, &McapOptions::default()).unwrap()
-}
-
-/// The error reading `name`, without the leading `<path>: `.
-fn error(dir: &Path, name: &str, opts: &McapOptions) -> String {
-    let e = read(dir, name, opts).unwrap_err();
-    let prefix = format!("{}: ", dir.join(format!("{name}.mcap")).display());
-    e.strip_prefix(&prefix).unwrap_or_else(|| panic!("{e:?} does not start with the path")).to_string()
 }
 
 #[test]
@@ -118,24 +86,6 @@ fn split_cuts_at_the_standstill() {
     assert_eq!(r.runs.iter().map(|r| r.name()).collect::<Vec<_>>(), ["split"]);
     assert_eq!(r.runs[0].command(), Some(RunCommand { v_m_s: 0.2, alpha_rad: 0.0, omega_rad_s: 0.5 }));
     assert!(r.notes.is_empty(), "{:?}", r.notes);
-}
-
-#[test]
-#[cfg_attr(
-    not(python_bag_tools),
-    ignore = "needs rosbags, mcap, mcap-ros2-support and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
-)]
-fn skip_invalid_collects_a_bad_piece() {
-    let (dir, expected) = fixtures_or_skip!();
-    let path = dir.join("split_gap.mcap");
-    let reason =
-        format!("{}: run split_gap#2: ground-truth poses has 1 entries, at least 2 are needed", path.display());
-    let opts = McapOptions { split: Some(1.0), ..Default::default() };
-    assert_eq!(read(dir, "split_gap", &opts).unwrap_err(), reason);
-    let r = read(dir, "split_gap", &McapOptions { skip_invalid: true, ..opts }).unwrap();
-    assert_eq!(r.runs.len(), 1);
-    check_run(&r.runs[0], &expected["split_gap"]["runs"][0]);
-    assert_eq!(r.skipped, [("split_gap#2".to_string(), reason)]);
 }
 
 #[test]
@@ -310,39 +260,6 @@ fn encoder_counts_and_motor_rpm_are_read_with_the_declared_units() {
     not(python_bag_tools),
     ignore = "needs rosbags, mcap, mcap-ros2-support and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
 )]
-fn unindexed_and_truncated_ros1_bags_say_to_reindex() {
-    let (dir, _) = fixtures_or_skip!();
-    let bytes = std::fs::read(dir.join("ros1_bz2.bag")).unwrap();
-    let read_err = |name: &str, bytes: &[u8]| {
-        let path = dir.join(name);
-        std::fs::write(&path, bytes).unwrap();
-        let e = omni_cli::dataset::ros1::read_bag(&path, &McapOptions::default(), None).unwrap_err();
-        (e.to_string(), path.display().to_string())
-    };
-    // An interrupted `rosbag record` leaves index_pos 0 in the bag header.
-    let at = bytes.windows(10).position(|w| w == b"index_pos=").unwrap() + 10;
-    let mut unindexed = bytes.clone();
-    unindexed[at..at + 8].fill(0);
-    let (e, path) = read_err("unindexed.bag", &unindexed);
-    assert_eq!(
-        e,
-        format!(
-            "{path}: the bag has no index (was its recording interrupted?): run `rosbag reindex {path}` (ROS 1) and \
-             read the reindexed bag"
-        )
-    );
-    let (e, path) = read_err("cut.bag", &bytes[..bytes.len() / 2]);
-    assert!(e.starts_with(&format!("{path}: the file is truncated: its index should start at byte ")), "{e}");
-    assert!(e.ends_with(&format!("run `rosbag reindex {path}` (ROS 1) and read the reindexed bag")), "{e}");
-    let (e, path) = read_err("text.bag", b"not a bag");
-    assert_eq!(e, format!("{path}: not a ROS 1 bag: it does not start with \"#ROSBAG V2.0\""));
-}
-
-#[test]
-#[cfg_attr(
-    not(python_bag_tools),
-    ignore = "needs rosbags, mcap, mcap-ros2-support and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
-)]
 fn ground_truth_from_tf_pose_with_covariance_and_odometry() {
     let (dir, expected) = fixtures_or_skip!();
     for name in ["tf", "pose_cov", "odom_truth"] {
@@ -399,123 +316,6 @@ fn ground_truth_from_tf_pose_with_covariance_and_odometry() {
          21 messages, frame \"mocap\"). Without motion capture: a lidar's scans (--gt-scans TOPIC); a sensor's or a \
          localization's own path (--gt-kind relative with --gt-topic or --gt); tape-measured end poses (--gt-kind end-pose --gt TABLE; \
          omnical plan --umbmark)"
-    );
-}
-
-#[test]
-#[cfg_attr(
-    not(python_bag_tools),
-    ignore = "needs rosbags, mcap, mcap-ros2-support and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
-)]
-fn errors_name_file_topic_message_and_field() {
-    let (dir, _) = fixtures_or_skip!();
-    let d = McapOptions::default();
-    let cases: [(&str, McapOptions, &str); 12] = [
-        ("not_mcap", d.clone(), "not an MCAP file (it does not start with the MCAP magic bytes)"),
-        (
-            "no_truth",
-            d.clone(),
-            "no ground truth: no geometry_msgs/msg/PoseStamped, geometry_msgs/msg/PoseWithCovarianceStamped, \
-             nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage, geometry_msgs/msg/PointStamped and sensor_msgs/msg/NavSatFix (positions only) \
-             source outside the robot's frames (odom, base_link, base_footprint); topics: /chatter (std_msgs/msg/String, 1 message), /joint_states \
-             (sensor_msgs/msg/JointState, 101 messages), /odom (nav_msgs/msg/Odometry, 1 message, frame \"odom\": \
-             the robot's own odometry). Without motion capture: a lidar's scans (--gt-scans TOPIC); a sensor's or a \
-             localization's own path (--gt-kind relative with --gt-topic or --gt); tape-measured end poses (--gt-kind end-pose --gt TABLE; \
-             omnical plan --umbmark)",
-        ),
-        (
-            "no_truth",
-            McapOptions { truth_topic: Some("/chatter".into()), ..d.clone() },
-            "topic \"/chatter\": type std_msgs/msg/String cannot be ground truth (supported: \
-             geometry_msgs/msg/PoseStamped, geometry_msgs/msg/PoseWithCovarianceStamped, nav_msgs/msg/Odometry, \
-             tf2_msgs/msg/TFMessage, geometry_msgs/msg/PointStamped and sensor_msgs/msg/NavSatFix (positions only))",
-        ),
-        (
-            "no_truth",
-            McapOptions { truth_topic: Some("/odom".into()), ..d.clone() },
-            "topic \"/odom\": is the robot's own wheel odometry (frame \"odom\", REP-105): the model under test, \
-             never ground truth; choose a map, world or motion-capture source",
-        ),
-        (
-            "no_truth",
-            McapOptions { joints_topic: Some("/chatter".into()), ..d.clone() },
-            "topic \"/chatter\": type std_msgs/msg/String is not sensor_msgs/msg/JointState (wheel speeds) or \
-             nav_msgs/msg/Odometry (the robot's own odometry)",
-        ),
-        (
-            "no_truth",
-            McapOptions { joints_topic: Some("/odom".into()), ..d.clone() },
-            "topic \"/odom\": is nav_msgs/msg/Odometry: wheel speeds can come from it only through the robot's \
-             design; describe the robot (omnical init RECORDING writes robot.toml from its URDF, or --robot FILE)",
-        ),
-        (
-            "no_truth",
-            McapOptions { truth_topic: Some("/mocap".into()), ..d.clone() },
-            "--gt-topic /mocap: no such topic; topics: /chatter (std_msgs/msg/String, 1 message), /joint_states \
-             (sensor_msgs/msg/JointState, 101 messages), /odom (nav_msgs/msg/Odometry, 1 message, frame \"odom\": \
-             the robot's own odometry)",
-        ),
-        ("nan_velocity", d.clone(), "topic \"/joint_states\", message 7: field velocity[1] (joint \"wheel_b\") is NaN"),
-        ("nan_pose", d.clone(), "topic \"/mocap/pose\", message 3: field pose.position.x is NaN"),
-        (
-            "backwards",
-            d.clone(),
-            "topic \"/joint_states\", message 10: header.stamp 1700000000.325000000 is not after the previous \
-             message's 1700000000.340000000 (stamps must increase)",
-        ),
-        ("empty", d.clone(), "topic \"/joint_states\": has no messages (empty run)"),
-        (
-            "json_encoding",
-            d.clone(),
-            "topic \"/joint_states\": schema encoding \"ros2msg\" with message encoding \"json\" is not supported \
-             (expected schema encoding \"ros2msg\" and message encoding \"cdr\", as rosbag2 records)",
-        ),
-    ];
-    for (name, opts, want) in cases {
-        assert_eq!(error(dir, name, &opts), want, "{name}");
-    }
-    // A wheel missing from one message (5) is mended from its neighbours, with a note that counts it
-    // (issue 44); a long gap is refused (joint_state::repair's own tests).
-    let mended = read(dir, "missing_joint", &d).unwrap();
-    let notes: Vec<String> = mended.notes.iter().map(|n| n.text.clone()).collect();
-    assert!(
-        notes
-            .iter()
-            .any(|n| n.contains("wheel joint \"wheel_c\" is missing from 1 of 101 messages (at most 1 in a row)")),
-        "{notes:?}"
-    );
-    assert_eq!(
-        error(dir, "ambiguous", &d),
-        "several ground-truth sources: /mocap/pose (geometry_msgs/msg/PoseStamped, frame \"map\"), /vicon/pose \
-         (geometry_msgs/msg/PoseStamped, frame \"map\"); choose one with --gt-topic (for a TF topic, also \
-         --gt-parent-frame and --gt-child-frame)"
-    );
-    let r = read(dir, "ambiguous", &McapOptions { truth_topic: Some("/mocap/pose".into()), ..d.clone() }).unwrap();
-    assert_eq!(r.runs[0].truth().len(), 21);
-    // The arm's JointState topic has no wheel joints; it fails only when chosen, and points at the robot's
-    // own odometry the bag also holds.
-    assert_eq!(
-        error(dir, "normal", &McapOptions { joints_topic: Some("/arm/joint_states".into()), ..d.clone() }),
-        "topic \"/arm/joint_states\", message 0: wheel joint \"wheel_a\" is missing (names: shoulder, elbow); if no \
-         JointState topic carries the wheels, the robot's own odometry /odom can stand in through the robot's \
-         design: --joints-topic /odom ([topics] joint_states in robot.toml)"
-    );
-}
-
-#[test]
-#[cfg_attr(
-    not(python_bag_tools),
-    ignore = "needs rosbags, mcap, mcap-ros2-support and numpy in $OMNICAL_PYTHON: bash scripts/test.sh installs them"
-)]
-fn truncated_bag_is_an_error() {
-    let (dir, _) = fixtures_or_skip!();
-    let bytes = std::fs::read(dir.join("zstd.mcap")).unwrap();
-    let cut = dir.join("truncated.mcap");
-    std::fs::write(&cut, &bytes[..bytes.len() * 3 / 5]).unwrap();
-    assert_eq!(
-        error(dir, "truncated", &McapOptions::default()),
-        "the file is truncated: it ends in the middle of a record, before the MCAP end marker (was the recording \
-         interrupted?)"
     );
 }
 
