@@ -39,7 +39,7 @@ pub struct RunReport {
 }
 
 /// Errors of a group of runs sharing a command direction and turn sign, or (runs without a command) the
-/// same kind of path ([`MotionKind`]).
+/// same kind of path ([`MotionKind`](super::MotionKind)).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct GroupReport {
     /// `α=30° ω>0` style label, or the kind of path (`arcs, net turn left, ~0.20 m/s, ~4.00 m`).
@@ -181,7 +181,7 @@ pub enum NoiseSource {
 pub struct Diagnosis {
     /// Effect to add (None: nothing helps beyond `min_gain`).
     pub verdict: Option<String>,
-    /// The verdict in words (`conclusion`, worded by [`text::verdict`]).
+    /// The verdict in words (`conclusion`, worded by [`text::verdict`](crate::science::text::verdict)).
     pub verdict_text: String,
     /// A systematic error remains that no accepted effect (the verdict's, or those `auto` added) removes:
     /// decided by the share of command groups biased beyond their repeat scatter, or, without repeats, by
@@ -202,7 +202,7 @@ pub struct Diagnosis {
     pub groups: Vec<GroupReport>,
     /// Error growth along the path (training runs, 10 bins).
     pub growth: Growth,
-    /// Where it fails, in words (`facts`, worded by [`text::finding`]).
+    /// Where it fails, in words (`facts`, worded by [`text::finding`](crate::science::text::finding)).
     pub findings: Vec<String>,
     /// Candidates, best held-out gain first.
     pub ranking: Vec<Candidate>,

@@ -171,10 +171,10 @@ impl Moments {
 }
 
 /// Each column's standard error from the residuals' [`Moments`] (parameter units; NaN where the runs do
-/// not determine it): the covariance [`analyse`] uses — the per-run sandwich
+/// not determine it): the covariance [`analyse`](super::analyse) uses — the per-run sandwich
 /// `B (Σ_g s_g s_gᵀ) B · G/(G − 1) · (m − 1)/(m − p)` with `B = (JᵀJ)⁺` and `s_g = J_gᵀ r_g`, or `s² B`
-/// with fewer than `p + 2` runs — without [`analyse`]'s naming of weak directions, for fits whose columns
-/// are not a [`Model`]'s parameters (the explorer's free subset). `rcond`: relative singular value of the
+/// with fewer than `p + 2` runs — without [`analyse`](super::analyse)'s naming of weak directions, for fits whose columns
+/// are not a [`Model`](omni_kin::Model)'s parameters (the explorer's free subset). `rcond`: relative singular value of the
 /// column-normalised Jacobian below which a direction is dropped; a column whose normalised `B` entry
 /// exceeds 1e6 is undetermined.
 pub fn column_std_errors(moments: &Moments, rcond: f64) -> Vec<f64> {
