@@ -197,13 +197,28 @@ pub fn file_error(e: &(dyn std::error::Error + 'static)) -> PyErr {
 }
 
 /// An output folder refused or not written: `FileExistsError` for one that already holds files (without
-/// `force`), `ValueError` for one that holds or lies inside an input (whatever `force`), else as its cause.
+/// `force`), `ValueError` for one that holds or lies inside an input (whatever `force`) or that `force` will
+/// not replace (the folder of the working directory, the home folder), else as its cause. A refusal for a
+/// keyword (`out=`, `tum=`) says `force=True` where the command line says `--force`.
 pub fn out_error(e: omni_cli::out_path::OutPathError) -> PyErr {
     use omni_cli::out_path::OutPathError;
+    let keyword = match &e {
+        OutPathError::NotEmpty { flag, .. }
+        | OutPathError::OverlapsInput { flag, .. }
+        | OutPathError::HoldsWorkingDirectory { flag, .. }
+        | OutPathError::Home { flag, .. } => flag.ends_with('='),
+        _ => false,
+    };
+    let text = || {
+        let text = chain_text(&e);
+        if keyword { text.replace("--force", "force=True") } else { text }
+    };
     match e {
-        OutPathError::NotEmpty { .. } => pyo3::exceptions::PyFileExistsError::new_err(chain_text(&e)),
-        OutPathError::OverlapsInput { .. } => value_error(chain_text(&e)),
-        e => file_error(&e),
+        OutPathError::NotEmpty { .. } => pyo3::exceptions::PyFileExistsError::new_err(text()),
+        OutPathError::OverlapsInput { .. } | OutPathError::HoldsWorkingDirectory { .. } | OutPathError::Home { .. } => {
+            value_error(text())
+        }
+        ref other => file_error(other),
     }
 }
 

@@ -27,6 +27,7 @@ mod export;
 mod imu;
 mod info;
 mod model;
+mod out_dir;
 mod pickle;
 mod report;
 mod robot;
@@ -61,6 +62,8 @@ mod _omnical {
     use crate::info::info;
     #[pymodule_export]
     use crate::model::{_model_from_toml, PyModel, effect_catalogue, load_model};
+    #[pymodule_export]
+    use crate::out_dir::{_prepare_dir, _write_atomic, PyOutDir};
     #[pymodule_export]
     use crate::report::report;
     #[pymodule_export]

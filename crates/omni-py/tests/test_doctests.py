@@ -35,8 +35,8 @@ def public() -> dict[str, Any]:
             obj = getattr(module, name)
             if not (inspect.isclass(obj) or callable(obj)):
                 continue  # CATALOGUE, __version__, fleet's thresholds
-            if module is omnical.fleet and getattr(obj, "__module__", None) != "omnical.fleet":
-                continue  # fleet's imports (Path, dataclass, ...)
+            if module is omnical.fleet and not str(getattr(obj, "__module__", "")).startswith("omnical.fleet."):
+                continue  # fleet's imports (PathLike's Union, ...); its own names come from its modules
             key = f"omnical.{name}" if module is not omnical.fleet else f"omnical.fleet.{name}"
             found.setdefault(key, obj)
     return found

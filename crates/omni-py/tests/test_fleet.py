@@ -217,15 +217,63 @@ def test_simulate_fleet_command(tmp_path: Path) -> None:
     truth = json.loads((tmp_path / "f" / "truth.json").read_text())
     assert sorted(truth["degrading"]) == ["r01", "r02"] and len(fleet.find_sessions(tmp_path / "f")) == 8
     # A folder that holds a fleet already is refused (its sessions would mix with the new ones) unless
-    # --force, which replaces it whole.
+    # --force, which replaces it whole: the library's rule and words, as `omnical simulate --out`'s.
     smaller = [*omnical_command(), "simulate", "--fleet", "3", "--sessions", "1", "--out", str(tmp_path / "f")]
     again = subprocess.run(smaller, capture_output=True, text=True)
     assert again.returncode == 2 and again.stderr == (
-        f"error: {tmp_path / 'f'}: the folder already holds files (r00, r01, r02, …); give --force (force=True) to "
-        "replace it whole, or another folder\n"), again.stderr
+        f"error: --out {tmp_path / 'f'}: the folder already holds files (r00, r01, r02, …); give --force to "
+        "replace it whole, or another --out\n"), again.stderr
     forced = subprocess.run([*smaller, "--force"], capture_output=True, text=True)
     assert forced.returncode == 0, forced.stderr
     assert len(fleet.find_sessions(tmp_path / "f")) == 3 and sorted(p.name for p in tmp_path.iterdir()) == ["f"]
+
+
+def test_the_fleet_never_writes_among_its_inputs(sim_fleet: tuple[Path, dict[str, Any]], client: Any, tmp_path: Path) -> None:
+    """The library's output-folder rule (issue 47 item 6), as every omnical command follows it: a result
+    folder that holds or lies inside the fleet folder the run reads is refused before any work, with the
+    library's words (``out=`` from Python, ``--out`` from the command line), and nothing is written or
+    deleted."""
+    root, _ = sim_fleet
+    small = tmp_path / "fleet"
+    shutil.copytree(root / "r00" / "s00", small / "r00" / "s00")
+    shutil.copy(root / "robot.toml", small / "robot.toml")
+
+    def snapshot() -> dict[str, bytes]:
+        return {str(p.relative_to(tmp_path)): p.read_bytes() for p in sorted(tmp_path.rglob("*")) if p.is_file()}
+
+    before = snapshot()
+    for out, relation in ((small, "holds"), (small / "out", "is inside"), (small / "r00" / "s00", "is inside"),
+                          (tmp_path, "holds")):
+        with pytest.raises(ValueError) as e:
+            fleet.calibrate_fleet(small, out, client=client, diagnose="none")
+        assert str(e.value) == (
+            f"out= {out}: this folder {relation} the data {small}, which this command reads; give out= a folder "
+            "apart from its inputs (force=True never replaces an input)")
+    r = subprocess.run([*omnical_command(), "fleet", str(small), "--out", str(small / "out"), "--quiet"],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and r.stderr == (
+        f"error: --out {small / 'out'}: this folder is inside the data {small}, which this command reads; give "
+        "--out a folder apart from its inputs (--force never replaces an input)\n"), r.stderr
+    assert snapshot() == before and sorted(p.name for p in tmp_path.iterdir()) == ["fleet"]
+
+
+def test_simulate_fleet_claims_its_folder_by_the_librarys_rule(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """simulate_fleet's folder: new or empty unless force=True, which replaces it whole, but never a folder
+    that holds the working directory; each refusal before any work, with the library's words, nothing
+    deleted."""
+    out = tmp_path / "f"
+    fleet.simulate_fleet(out, n_robots=1, n_sessions=1, n_wearing=0, n_lagging=0, duration_s=0.5)
+    files = {str(p.relative_to(out)): p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    with pytest.raises(FileExistsError) as e:
+        fleet.simulate_fleet(out, n_robots=1, n_sessions=1, n_wearing=0, n_lagging=0, duration_s=0.5)
+    assert str(e.value) == (f"out= {out}: the folder already holds files (r00, robot.toml, truth.json); give "
+                            "force=True to replace it whole, or another out=")
+    monkeypatch.chdir(out / "r00")
+    with pytest.raises(ValueError) as e:
+        fleet.simulate_fleet(out, n_robots=1, n_sessions=1, n_wearing=0, n_lagging=0, duration_s=0.5, force=True)
+    assert str(e.value) == f"out= {out}: force=True will not replace a folder that holds the working directory"
+    assert {str(p.relative_to(out)): p.read_bytes() for p in out.rglob("*") if p.is_file()} == files
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f"]
 
 
 def test_a_lidar_session_is_diagnosed_on_its_lidar(tmp_path: Path) -> None:

@@ -258,7 +258,7 @@ def test_export_writes_the_cli_files(csv_runs: Path, tmp_path: Path) -> None:
     first = sorted(py_tum)[0]
     assert py_tum[first].startswith(b"# run ")
     # A folder that holds files already (another export's runs) is refused unless force=True, as --force.
-    with pytest.raises(FileExistsError, match=r"tum= .*py_tum: the folder already holds files \(.*\); give --force"):
+    with pytest.raises(FileExistsError, match=r"tum= .*py_tum: the folder already holds files \(.*\); give force=True"):
         omnical.export(str(fit), [ds[0]], tum=tmp_path / "py_tum")
     assert _read(tmp_path / "py_tum") == cli_tum
     one = omnical.export(str(fit), [ds[0]], tum=tmp_path / "py_tum", force=True)

@@ -21,8 +21,8 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parents[2] / 'crates/omni-cli/tests/mcap'))
 
 import numpy as np  # noqa: E402
-from make_bags import (JOINT_STATE, MS, POSE_STAMPED, T, T0, TS, WHEELS, Bag, header,  # noqa: E402
-                       pose_stamped)
+from bag_kit import (JOINT_STATE, MS, POSE_STAMPED, T, T0, TS, WHEELS, Bag, header,  # noqa: E402
+                     pose_stamped)
 from mcap.writer import CompressionType, Writer as McapWriter  # noqa: E402
 
 OPCODES = {0x01: 'header', 0x02: 'footer', 0x03: 'schema', 0x04: 'channel', 0x05: 'message', 0x06: 'chunk',

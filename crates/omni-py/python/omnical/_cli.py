@@ -10,7 +10,8 @@ import signal
 import sys
 from typing import Sequence
 
-from ._omnical import cli_main
+from ._omnical import _OutDir, cli_main
+
 
 def _simulate_fleet(argv: Sequence[str]) -> int:
     """``omnical simulate --fleet N [--sessions S] --out DIR [--seed N]``."""
@@ -31,7 +32,11 @@ def _simulate_fleet(argv: Sequence[str]) -> int:
     p.add_argument("--quiet", "-q", action="store_true")
     a = p.parse_args(list(argv))
     try:
-        truth = simulate_fleet(a.out, a.fleet, a.sessions, seed=a.seed, force=a.force)
+        # The folder is claimed with the command line's spelling (`--out`, `--force`), as `omnical simulate
+        # --out` claims its own; simulate_fleet fills the claim's (empty) staging folder.
+        with _OutDir.claim(a.out, flag="--out", force=a.force) as claimed:
+            truth = simulate_fleet(claimed.path, a.fleet, a.sessions, seed=a.seed)
+            claimed.commit()
     except (OSError, ValueError, RuntimeError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2

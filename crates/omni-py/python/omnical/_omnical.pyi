@@ -62,7 +62,10 @@ __all__ = [
     "_dataset_from_state",
     "_fleet_args",
     "_model_from_toml",
+    "_OutDir",
+    "_prepare_dir",
     "_run_from_bytes",
+    "_write_atomic",
 ]
 
 __version__: str
@@ -570,6 +573,33 @@ def diagnose_files(args: list[str], train_args: Optional[list[str]] = None) -> d
 def _fleet_args(args: list[str]) -> tuple[Optional[dict[str, Any]], str, int]:
     """``omnical fleet ARGS...`` parsed by the command line's parser: (options, "", 0), or (None, text,
     status) for ``--help`` and bad arguments."""
+
+# The library's output-folder rules (omni_cli::out_path, omni_cli::atomic) for omnical's Python parts
+# (omnical.fleet). ``flag`` names the option in messages: ``"out="`` (then ``force=True``) or ``"--out"``.
+@final
+class _OutDir:
+    """A result folder of per-run files claimed by the library's rule: refused when it holds or lies inside
+    one of ``inputs`` (``(what, path)`` pairs; whatever ``force``), or holds files without ``force``. Fill
+    ``path`` (a staging folder beside the target), then ``commit()``; leaving a ``with`` block without a
+    commit, or ``discard()``, removes what was written."""
+
+    @staticmethod
+    def claim(
+        target: _Path, *, flag: str, force: bool = False, inputs: Sequence[tuple[str, _Path]] = ...
+    ) -> _OutDir: ...
+    @property
+    def path(self) -> str: ...
+    @property
+    def target(self) -> str: ...
+    def commit(self) -> None: ...
+    def discard(self) -> None: ...
+    def __enter__(self) -> _OutDir: ...
+    def __exit__(self, *_exc: object) -> bool: ...
+
+def _prepare_dir(dir: _Path, *, flag: str, inputs: Sequence[tuple[str, _Path]] = ...) -> None:
+    """A folder of fixed file names: refused when it holds or lies inside an input, created when missing."""
+def _write_atomic(path: _Path, data: bytes) -> None:
+    """``data`` written to ``path`` atomically (a temporary file beside it, synced, renamed)."""
 
 # Unpickling (the targets of the classes' __reduce__).
 def _run_from_bytes(data: bytes) -> Run: ...

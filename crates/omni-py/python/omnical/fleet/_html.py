@@ -7,7 +7,8 @@ import html
 import math
 from typing import Any, Sequence
 
-from . import __version__
+from .. import __version__
+from ._analysis import _trend_text
 
 STYLE = (
     "body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;max-width:960px;margin:2em auto;"
@@ -154,8 +155,6 @@ def _trend_svg(pts: list[tuple[int, float, Any]], t: dict[str, Any], colour: str
 
 
 def _trends(ok: Sequence[dict[str, Any]], a: dict[str, Any]) -> str:
-    from .fleet import _trend_text
-
     out = ['<h2 id="trends">Trends over sessions</h2>\n']
     flagged = [t for t in a["trends"] if t["flagged"]]
     if flagged:
