@@ -3,18 +3,11 @@
 
 Usage: scripts/long_files.py [LIMIT] [DIR ...]   (default DIR: crates, benches, examples, scripts)
 
-A file counts its lines as `wc -l` does. Skipped: target/ and hidden folders, and the files in BEING_SPLIT
-below. Exit status 1 when a file over the limit remains.
+A file counts its lines as `wc -l` does. Skipped: target/ and hidden folders. Exit status 1 when a file over
+the limit remains.
 """
 import os
 import sys
-
-# Being split right now by another change; remove each entry once its split has landed.
-BEING_SPLIT = {
-    "crates/omni-py/python/omnical/fleet.py",
-    "crates/omni-cli/tests/mcap/make_bags.py",
-}
-
 
 def main():
     args = sys.argv[1:]
@@ -28,8 +21,6 @@ def main():
                 if not name.endswith((".rs", ".py")):
                     continue
                 path = os.path.join(dirpath, name)
-                if os.path.normpath(path) in BEING_SPLIT:
-                    continue
                 with open(path, encoding="utf-8") as f:
                     n = f.read().count("\n")
                 if n > limit:
