@@ -17,29 +17,12 @@ use serde::Deserialize;
 use std::path::Path;
 
 pub use crate::dataset::mcap::ScanRead;
+pub use crate::dataset::returns_text;
 pub use omni_kin::lidar::room::BUILTIN_ROOMS;
 pub use omni_kin::lidar::{
     CLEARANCE_M, LidarModel, MatchQuality, MatchSettings, Rejection, Room, Scan, ScanSettings, SensorPath,
     first_collision, sensor_path, simulate_scans,
 };
-
-/// What the scans returned, for a message about matches that failed: `each scan returned a median of N of
-/// its M beams (range_min … range_max m; a match needs K)`. A lidar whose range is short for its room
-/// (most beams beyond `range_max`) returns too few points to match.
-pub fn returns_text(scans: &[Scan], settings: &MatchSettings) -> String {
-    let mut returns: Vec<usize> =
-        scans.iter().map(|s| (0..s.ranges_m.len()).filter(|&i| s.is_return(i)).count()).collect();
-    returns.sort_unstable();
-    let Some(first) = scans.first() else { return "no scans".into() };
-    format!(
-        "each scan returned a median of {} of its {} beams (range {:.2} to {:.2} m; a match needs {} points)",
-        returns[returns.len() / 2],
-        first.ranges_m.len(),
-        first.range_min_m,
-        first.range_max_m,
-        settings.min_inliers
-    )
-}
 
 /// The default LaserScan topic.
 pub const DEFAULT_SCAN_TOPIC: &str = "/scan";

@@ -1,12 +1,12 @@
 //! A 2D lidar as the reference of a ROS recording (`--gt-scans TOPIC`): its scans matched into the
-//! sensor's own path ([`crate::lidar::sensor_path`]), which replaces the runs' placeholder ground truth (the
+//! sensor's own path ([`omni_kin::lidar::sensor_path`]), which replaces the runs' placeholder ground truth (the
 //! recording was read wheels only). Each stretch of the path (a segment ends where the matches failed) is a
 //! run of its own; a relative reference's windows cut them further (`api::load`). When the recording's
 //! static transforms hold the lidar's pose on the base, the path is moved to the base by it (the fit then
 //! corrects the mount around it); otherwise the mount is fitted, started where the motions put it.
 
 use super::{DatasetError, Loaded, Note};
-use crate::lidar::{self, MatchSettings};
+use omni_kin::lidar::{self, MatchSettings, Scan};
 use omni_kin::{Run, StampedPose};
 use std::path::Path;
 
@@ -46,7 +46,7 @@ pub(super) fn with_lidar_path(
                  the robot moves too far between scans; the lidar cannot be the reference here",
                 sensor.rejected,
                 rejections(&sensor.rejected_why),
-                lidar::returns_text(&read.scans, settings)
+                returns_text(&read.scans, settings)
             ),
         ));
     }
@@ -120,7 +120,7 @@ fn rejections(why: &std::collections::BTreeMap<&'static str, usize>) -> String {
 }
 
 /// Where the lidar's mount came from, in words: given, the chain of static transforms, or why there is none.
-fn mount_text(read: &lidar::ScanRead, mount: Mount) -> String {
+fn mount_text(read: &super::mcap::ScanRead, mount: Mount) -> String {
     let frame = &read.frame_id;
     let upside_down = if read.mirrored { " (mounted upside down: its scans are read mirrored)" } else { "" };
     let from_zero = "the lidar's mount is fitted, started where the motions put it";
@@ -152,7 +152,7 @@ fn mount_text(read: &lidar::ScanRead, mount: Mount) -> String {
 fn notes(
     path: &Path,
     topic: &str,
-    (read, mount): (&lidar::ScanRead, Mount),
+    (read, mount): (&super::mcap::ScanRead, Mount),
     sensor: &lidar::SensorPath,
     runs: usize,
 ) -> Vec<Note> {
@@ -199,4 +199,22 @@ fn notes(
         ));
     }
     out
+}
+
+/// What the scans returned, for a message about matches that failed: `each scan returned a median of N of
+/// its M beams (range_min … range_max m; a match needs K)`. A lidar whose range is short for its room
+/// (most beams beyond `range_max`) returns too few points to match.
+pub fn returns_text(scans: &[Scan], settings: &MatchSettings) -> String {
+    let mut returns: Vec<usize> =
+        scans.iter().map(|s| (0..s.ranges_m.len()).filter(|&i| s.is_return(i)).count()).collect();
+    returns.sort_unstable();
+    let Some(first) = scans.first() else { return "no scans".into() };
+    format!(
+        "each scan returned a median of {} of its {} beams (range {:.2} to {:.2} m; a match needs {} points)",
+        returns[returns.len() / 2],
+        first.ranges_m.len(),
+        first.range_min_m,
+        first.range_max_m,
+        settings.min_inliers
+    )
 }

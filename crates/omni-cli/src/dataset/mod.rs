@@ -9,6 +9,7 @@ mod error;
 pub mod ground_truth;
 mod input;
 mod lidar_reference;
+pub use lidar_reference::returns_text;
 pub mod mcap;
 mod note;
 pub mod optiodom;
@@ -218,7 +219,7 @@ pub struct LoadOptions {
     pub csv_joints: Vec<String>,
     /// A ROS recording's ground truth from its 2D lidar: the LaserScan topic, matched scan to scan with these
     /// settings (`--gt-scans`); the recording is read wheels only. Default none.
-    pub scans: Option<(String, crate::lidar::MatchSettings)>,
+    pub scans: Option<(String, omni_kin::lidar::MatchSettings)>,
     /// The lidar's mount is given (`--gt-mount`, `--gt-mount-start`): the recordings' static transforms do
     /// not move its path. Default false.
     pub scan_mount_given: bool,
