@@ -162,13 +162,19 @@ pub fn describe(n: &OdometryNoise) -> String {
     let alphas: Vec<String> = a.alpha.iter().map(|x| format!("{x:.3e}")).collect();
     format!(
         "odometry noise (fitted on {} windows of {} runs): along {:.2} cm/√m, across {:.2} cm/√m, heading {:.3}°/√m \
-         and {:.3}°/√rad; Nav2 AMCL alpha1…5 = {} (update_min_d {} m, update_min_a {} rad)",
+         and {:.3}°/√rad; from run to run the distance scale varies by {:.2} %, the heading drift by {:.3}°/m \
+         and the turn scale by {:.2} %, and the heading wanders by {:.2}°; Nav2 AMCL alpha1…5 = {} (update_min_d \
+         {} m, update_min_a {} rad; the run-to-run and wandering parts are not in them)",
         n.windows,
         n.runs,
         100.0 * r.trans_per_m.sqrt(),
         100.0 * r.strafe_per_m.sqrt(),
         r.rot_per_m.sqrt().to_degrees(),
         r.rot_per_rad.sqrt().to_degrees(),
+        100.0 * r.run_scale_var.sqrt(),
+        r.run_drift_var.sqrt().to_degrees(),
+        100.0 * r.run_turn_scale_var.sqrt(),
+        r.heading_wander_rad2.sqrt().to_degrees(),
         alphas.join(", "),
         a.update_min_d_m,
         a.update_min_a_rad

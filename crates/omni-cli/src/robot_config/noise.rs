@@ -37,13 +37,18 @@ pub struct TypicalMotion {
     pub turn_rad_s: f64,
 }
 
-/// The pose covariance diagonal (x, y, z, roll, pitch, yaw) after `POSE_HORIZON_M` (1 m) driven straight.
+/// The pose covariance diagonal (x, y, z, roll, pitch, yaw) after `POSE_HORIZON_M` (1 m) driven straight,
+/// the per-run biases included (a straight drive does not renew the wandering heading error).
 pub fn pose_diagonal(n: &OdometryNoise) -> [f64; 6] {
     let r = n.rates.without_floor();
     let d = POSE_HORIZON_M;
     let strafe = if n.holonomic { r.strafe_per_m * d } else { 0.0 };
-    // Heading noise driven on grows the lateral variance by rot_per_m d³ / 3.
-    [r.trans_per_m * d, strafe + r.rot_per_m * d.powi(3) / 3.0, UNMEASURED, UNMEASURED, UNMEASURED, r.rot_per_m * d]
+    // Heading noise driven on grows the lateral variance by rot_per_m d³ / 3; a run's heading drift κ
+    // moves it by κ d² / 2.
+    let lateral = strafe + r.rot_per_m * d.powi(3) / 3.0 + r.run_drift_var * d.powi(4) / 4.0;
+    let along = r.trans_per_m * d + r.run_scale_var * d * d;
+    let heading = r.rot_per_m * d + r.run_drift_var * d * d;
+    [along, lateral, UNMEASURED, UNMEASURED, UNMEASURED, heading]
 }
 
 /// The twist covariance diagonal (vx, vy, vz, ωx, ωy, ωz) of one message at `motion`.

@@ -41,7 +41,7 @@ pub struct FitNoiseOptions {
 
 impl Default for FitNoiseOptions {
     fn default() -> Self {
-        Self { window_m: vec![0.25, 0.5, 1.0, 2.0], bootstrap: 100, seed: 0 }
+        Self { window_m: vec![0.25, 0.5, 1.0, 2.0, 4.0], bootstrap: 100, seed: 0 }
     }
 }
 

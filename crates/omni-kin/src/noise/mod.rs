@@ -21,12 +21,28 @@
 //! The ground truth's own noise enters every comparison at both ends of a window as a **floor** (position
 //! variance per axis, heading variance), fitted too and kept out of what is exported.
 //!
+//! ## Per-run biases
+//! Real odometry is also wrong in the same way for a whole run, and differently from one run (or day) to
+//! the next: a tyre a little softer, a floor a little more slippery. Such an error grows with the distance
+//! itself (its variance with `d²`), not with its square root, and no random walk stands for it. The model
+//! carries three, each a zero-mean constant per run with a fitted variance:
+//!
+//! - `run_scale_var`: the distance driven is off by a factor `1 + s` (`s²`, unitless);
+//! - `run_drift_var`: the heading drifts by `κ` per metre driven (`κ²`, rad²/m²);
+//! - `run_turn_scale_var`: the angle turned is off by a factor `1 + γ` (`γ²`, unitless).
+//!
+//! Their mean over the training runs is the systematic error ([`fit::Systematic`]), kept apart; what is
+//! fitted is how much they vary around it. They are not AMCL's (whose noise is drawn afresh every update)
+//! and are not exported there.
+//!
 //! ## Propagation
 //! Over a window of the odometry from pose `i` to `j`, in the frame of pose `i`, the covariance of the
 //! end pose grows as `Σ ← F Σ Fᵀ + G Q Gᵀ` per step (`F` moves the heading error into position by the
 //! step's displacement, `G` turns the along/across errors by the motion's direction). It is linear in the
 //! noise parameters, so each window's covariance is `Σ_w = Σ_m θ_m B_{w,m}` with basis matrices `B` taken
-//! once ([`window_basis`]).
+//! once ([`window_basis`]). A per-run bias `b` moves the end pose by `v b`, where `v ← F v + g` per step
+//! (`g` the step's displacement for the scale, its distance in heading for the drift, its signed turn in
+//! heading for the turn scale): its basis is `v vᵀ`.
 //!
 //! Plain data: no I/O. The odometry at the ground-truth stamps comes from the evaluator's errors
 //! ([`crate::relative::estimate_at_truth`]).
@@ -42,11 +58,19 @@ use crate::evaluate::RunErrors;
 use crate::pose::Pose2;
 use crate::relative::estimates_at_truth;
 use crate::run::Run;
-use nalgebra::Matrix3;
+use nalgebra::{Matrix3, Matrix4, Vector3};
 use serde::{Deserialize, Serialize};
 
-/// Number of noise parameters: five rates and two floor terms.
-pub const N_PARAMS: usize = 7;
+/// Number of noise parameters: five rates, two floor terms and three per-run bias variances.
+pub const N_PARAMS: usize = 11;
+
+/// The first per-run bias parameter's index: `run_scale_var`, `run_drift_var`, `run_turn_scale_var` follow.
+const FIRST_BIAS: usize = 7;
+/// The index of `heading_wander_rad2`.
+const WANDER: usize = 10;
+/// How much turning renews the wandering heading error: after `φ` turned, its correlation with what it
+/// was is `exp(−φ / HEADING_MEMORY_RAD)`. rad.
+pub const HEADING_MEMORY_RAD: f64 = 1.0;
 
 /// The parameters' names in vector order (as in model files and JSON).
 pub const PARAM_NAMES: [&str; N_PARAMS] = [
@@ -57,10 +81,15 @@ pub const PARAM_NAMES: [&str; N_PARAMS] = [
     "strafe_per_m",
     "floor_position_m2",
     "floor_heading_rad2",
+    "run_scale_var",
+    "run_drift_var",
+    "run_turn_scale_var",
+    "heading_wander_rad2",
 ];
 
 /// The parameters' units in vector order.
-pub const PARAM_UNITS: [&str; N_PARAMS] = ["rad²/rad", "rad²/m", "m²/m", "m²/rad", "m²/m", "m²", "rad²"];
+pub const PARAM_UNITS: [&str; N_PARAMS] =
+    ["rad²/rad", "rad²/m", "m²/m", "m²/rad", "m²/m", "m²", "rad²", "1", "rad²/m²", "1", "rad²"];
 
 /// A noise model: the variance rates of the odometry and the ground truth's floor.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -79,6 +108,22 @@ pub struct NoiseRates {
     pub floor_position_m2: f64,
     /// Ground-truth heading variance at each end of a window. rad².
     pub floor_heading_rad2: f64,
+    /// Variance over runs of a run's distance scale error `s` (the run drives `1 + s` times the
+    /// odometry's distance). Unitless (1 % → 1e-4). 0 in model files written before it.
+    #[serde(default)]
+    pub run_scale_var: f64,
+    /// Variance over runs of a run's heading drift per metre driven. rad²/m².
+    #[serde(default)]
+    pub run_drift_var: f64,
+    /// Variance over runs of a run's turn scale error `γ` (it turns `1 + γ` times the odometry's angle).
+    /// Unitless.
+    #[serde(default)]
+    pub run_turn_scale_var: f64,
+    /// Variance of a heading error that comes and goes: a stationary error of the odometry's heading,
+    /// renewed as the robot turns (forgotten over [`HEADING_MEMORY_RAD`] turned), which swings the position
+    /// while it lasts but does not add up the way a random walk's does. rad².
+    #[serde(default)]
+    pub heading_wander_rad2: f64,
 }
 
 impl NoiseRates {
@@ -91,6 +136,10 @@ impl NoiseRates {
         strafe_per_m: 0.0,
         floor_position_m2: 0.0,
         floor_heading_rad2: 0.0,
+        run_scale_var: 0.0,
+        run_drift_var: 0.0,
+        run_turn_scale_var: 0.0,
+        heading_wander_rad2: 0.0,
     };
 
     /// The parameters in [`PARAM_NAMES`] order.
@@ -103,6 +152,10 @@ impl NoiseRates {
             self.strafe_per_m,
             self.floor_position_m2,
             self.floor_heading_rad2,
+            self.run_scale_var,
+            self.run_drift_var,
+            self.run_turn_scale_var,
+            self.heading_wander_rad2,
         ]
     }
 
@@ -116,12 +169,28 @@ impl NoiseRates {
             strafe_per_m: p[4],
             floor_position_m2: p[5],
             floor_heading_rad2: p[6],
+            run_scale_var: p[7],
+            run_drift_var: p[8],
+            run_turn_scale_var: p[9],
+            heading_wander_rad2: p[10],
         }
     }
 
-    /// The same rates without the floor (what the odometry itself does: the exported part).
+    /// The same rates without the floor (what the odometry itself does).
     pub fn without_floor(&self) -> Self {
         Self { floor_position_m2: 0.0, floor_heading_rad2: 0.0, ..*self }
+    }
+
+    /// The random walk alone: without the floor and the per-run biases (what AMCL's alphas and a
+    /// controller's per-message covariance can carry).
+    pub fn random_walk(&self) -> Self {
+        Self {
+            run_scale_var: 0.0,
+            run_drift_var: 0.0,
+            run_turn_scale_var: 0.0,
+            heading_wander_rad2: 0.0,
+            ..self.without_floor()
+        }
     }
 }
 
@@ -180,11 +249,11 @@ pub fn window_error(run: &RunPoses, i: usize, j: usize) -> [f64; 3] {
 /// the window's covariance is `Σ_m θ_m B_m`. `holonomic` false leaves `strafe_per_m` (and the across part
 /// of `trans_per_rad`) out.
 pub fn window_basis(run: &RunPoses, i: usize, j: usize, holonomic: bool) -> [Matrix3<f64>; N_PARAMS] {
-    let mut b = start_floor();
+    let mut b = Basis::new();
     for k in i..j {
-        propagate(&mut b, run, i, k, holonomic);
+        b.propagate(run, i, k, holonomic);
     }
-    with_end_floor(b)
+    b.at_end()
 }
 
 /// [`window_basis`] of every window from pose `i` to a later pose `j` (`out[j - i - 1]` is `i → j`), built
@@ -192,59 +261,100 @@ pub fn window_basis(run: &RunPoses, i: usize, j: usize, holonomic: bool) -> [Mat
 /// ellipses and error band along a whole run).
 pub fn path_bases(run: &RunPoses, i: usize, holonomic: bool) -> Vec<[Matrix3<f64>; N_PARAMS]> {
     let n = run.odometry.len().min(run.truth.len());
-    let mut b = start_floor();
+    let mut b = Basis::new();
     let mut out = Vec::with_capacity(n.saturating_sub(i + 1));
     for k in i..n.saturating_sub(1) {
-        propagate(&mut b, run, i, k, holonomic);
-        out.push(with_end_floor(b));
+        b.propagate(run, i, k, holonomic);
+        out.push(b.at_end());
     }
     out
 }
 
-/// The floor at a window's start: position per axis, heading.
-fn start_floor() -> [Matrix3<f64>; N_PARAMS] {
-    let mut b = [Matrix3::zeros(); N_PARAMS];
-    b[5][(0, 0)] = 1.0;
-    b[5][(1, 1)] = 1.0;
-    b[6][(2, 2)] = 1.0;
-    b
+/// A window's bases while it grows: the random walk's and the floor's covariances, and how far each
+/// per-run bias has moved the end pose (`v`; its basis is `v vᵀ`).
+struct Basis {
+    /// Covariance bases of the random walk and the floor (the bias entries stay zero here).
+    walk: [Matrix3<f64>; N_PARAMS],
+    /// The end pose's response to a unit scale error, heading drift per metre and turn scale error.
+    bias: [Vector3<f64>; WANDER - FIRST_BIAS],
+    /// Covariance of (x, y, the wandering heading error now, and at the window's start) per unit variance.
+    wander: Matrix4<f64>,
 }
 
-/// The bases with the floor at the window's end added.
-fn with_end_floor(mut b: [Matrix3<f64>; N_PARAMS]) -> [Matrix3<f64>; N_PARAMS] {
-    b[5][(0, 0)] += 1.0;
-    b[5][(1, 1)] += 1.0;
-    b[6][(2, 2)] += 1.0;
-    b
-}
-
-/// The window from pose `i` extended by the odometry's step `k → k + 1`: the covariance so far carried
-/// through the step (its heading error swings the position), and the step's own noise added.
-fn propagate(b: &mut [Matrix3<f64>; N_PARAMS], run: &RunPoses, i: usize, k: usize, holonomic: bool) {
-    let at = between(&run.odometry[i], &run.odometry[k]);
-    let u = between(&run.odometry[k], &run.odometry[k + 1]);
-    let (s, c) = at.theta_rad.sin_cos();
-    let (dx, dy) = (c * u.x_m - s * u.y_m, s * u.x_m + c * u.y_m);
-    let f = Matrix3::new(1.0, 0.0, -dy, 0.0, 1.0, dx, 0.0, 0.0, 1.0);
-    let d = u.x_m.hypot(u.y_m);
-    let phi = u.theta_rad.abs();
-    // Direction of the motion in the window's frame (any, when the step does not translate).
-    let bearing = at.theta_rad + if d > 0.0 { u.y_m.atan2(u.x_m) } else { 0.0 };
-    let (sb, cb) = bearing.sin_cos();
-    let along = Matrix3::new(cb * cb, cb * sb, 0.0, cb * sb, sb * sb, 0.0, 0.0, 0.0, 0.0);
-    let across = Matrix3::new(sb * sb, -cb * sb, 0.0, -cb * sb, cb * cb, 0.0, 0.0, 0.0, 0.0);
-    let mut heading = Matrix3::zeros();
-    heading[(2, 2)] = 1.0;
-    for m in b.iter_mut() {
-        *m = f * *m * f.transpose();
+impl Basis {
+    /// A window at its start: the ground truth's floor there, no motion yet.
+    fn new() -> Self {
+        let mut walk = [Matrix3::zeros(); N_PARAMS];
+        walk[5][(0, 0)] = 1.0;
+        walk[5][(1, 1)] = 1.0;
+        walk[6][(2, 2)] = 1.0;
+        let mut wander = Matrix4::zeros();
+        for (r, c) in [(2, 2), (2, 3), (3, 2), (3, 3)] {
+            wander[(r, c)] = 1.0;
+        }
+        Self { walk, bias: [Vector3::zeros(); WANDER - FIRST_BIAS], wander }
     }
-    b[0] += heading * phi;
-    b[1] += heading * d;
-    b[2] += along * d;
-    b[3] += along * phi;
-    if holonomic {
-        b[3] += across * phi;
-        b[4] += across * d;
+
+    /// The bases of the window as it ends here: the floor at its end added, the biases' `v vᵀ`.
+    fn at_end(&self) -> [Matrix3<f64>; N_PARAMS] {
+        let mut b = self.walk;
+        b[5][(0, 0)] += 1.0;
+        b[5][(1, 1)] += 1.0;
+        b[6][(2, 2)] += 1.0;
+        for (m, v) in self.bias.iter().enumerate() {
+            b[FIRST_BIAS + m] = v * v.transpose();
+        }
+        // The window's heading error is the wandering error now less its value at the start.
+        let pick = nalgebra::Matrix3x4::new(1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, -1.0);
+        b[WANDER] = pick * self.wander * pick.transpose();
+        b
+    }
+
+    /// The window from pose `i` extended by the odometry's step `k → k + 1`: the covariance so far carried
+    /// through the step (its heading error swings the position), and the step's own noise added.
+    fn propagate(&mut self, run: &RunPoses, i: usize, k: usize, holonomic: bool) {
+        let at = between(&run.odometry[i], &run.odometry[k]);
+        let u = between(&run.odometry[k], &run.odometry[k + 1]);
+        let (s, c) = at.theta_rad.sin_cos();
+        let (dx, dy) = (c * u.x_m - s * u.y_m, s * u.x_m + c * u.y_m);
+        let f = Matrix3::new(1.0, 0.0, -dy, 0.0, 1.0, dx, 0.0, 0.0, 1.0);
+        let d = u.x_m.hypot(u.y_m);
+        let phi = u.theta_rad.abs();
+        // Direction of the motion in the window's frame (any, when the step does not translate).
+        let bearing = at.theta_rad + if d > 0.0 { u.y_m.atan2(u.x_m) } else { 0.0 };
+        let (sb, cb) = bearing.sin_cos();
+        let along = Matrix3::new(cb * cb, cb * sb, 0.0, cb * sb, sb * sb, 0.0, 0.0, 0.0, 0.0);
+        let across = Matrix3::new(sb * sb, -cb * sb, 0.0, -cb * sb, cb * cb, 0.0, 0.0, 0.0, 0.0);
+        let mut heading = Matrix3::zeros();
+        heading[(2, 2)] = 1.0;
+        let b = &mut self.walk;
+        for m in b.iter_mut() {
+            *m = f * *m * f.transpose();
+        }
+        b[0] += heading * phi;
+        b[1] += heading * d;
+        b[2] += along * d;
+        b[3] += along * phi;
+        if holonomic {
+            b[3] += across * phi;
+            b[4] += across * d;
+        }
+        // The biases: the scale moves the step's displacement, the drift and the turn scale its heading.
+        let moved = [Vector3::new(dx, dy, 0.0), Vector3::new(0.0, 0.0, d), Vector3::new(0.0, 0.0, u.theta_rad)];
+        for (v, g) in self.bias.iter_mut().zip(moved) {
+            *v = f * *v + g;
+        }
+        // The wandering heading error swings this step, then is partly renewed by its turn.
+        let rho = (-phi / HEADING_MEMORY_RAD).exp();
+        #[rustfmt::skip]
+        let g = Matrix4::new(
+            1.0, 0.0, -dy, dy,
+            0.0, 1.0, dx, -dx,
+            0.0, 0.0, rho, 0.0,
+            0.0, 0.0, 0.0, 1.0,
+        );
+        self.wander = g * self.wander * g.transpose();
+        self.wander[(2, 2)] += 1.0 - rho * rho;
     }
 }
 
@@ -286,7 +396,7 @@ impl Amcl {
         }
     }
 
-    /// The rates (no floor) AMCL's alphas stand for, the inverse of [`Self::from_rates`].
+    /// The rates (no floor, no per-run bias) AMCL's alphas stand for, the inverse of [`Self::from_rates`].
     pub fn to_rates(&self, holonomic: bool) -> NoiseRates {
         let (d, a) = (self.update_min_d_m, self.update_min_a_rad);
         NoiseRates {
@@ -295,8 +405,7 @@ impl Amcl {
             trans_per_m: self.alpha[2] * d,
             trans_per_rad: self.alpha[3] * a,
             strafe_per_m: if holonomic { self.alpha[4] * d } else { 0.0 },
-            floor_position_m2: 0.0,
-            floor_heading_rad2: 0.0,
+            ..NoiseRates::ZERO
         }
     }
 }
