@@ -109,7 +109,8 @@ pub fn verdict(n: &OdometryNoise, fitted: &Coverage) -> Option<String> {
         )
     } else {
         "the noise model is too cautious on these runs: their errors are smaller than the training runs' (a \
-         noisier training set, or a ground truth less noisy here)"
+         noisier training set, a ground truth less noisy here, or paths that close on themselves, such as squares \
+         driven round, over which a direction-dependent error cancels where the odometry's noise would not)"
             .to_string()
     };
     Some(format!(
