@@ -3,18 +3,15 @@
 //! held-out windows inside the 95 % ellipse at 1 m and 5 m. Reported as ignored without the data (build.rs).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-#[path = "optiodom/helpers.rs"]
-mod helpers;
 mod support;
 
-use helpers::train;
 use std::path::Path;
 use support::{json, shared_data};
 
 /// The fitted model's coverage at 1 m and 5 m (`None`: no held-out window drives that far) of the model
 /// trained on `train_set`, judged on `held_out`.
 fn coverage(dir: &Path, train_set: &Path, held_out: &[&Path]) -> Vec<Option<f64>> {
-    train(dir, &[train_set.to_str().unwrap(), "--out", "m.toml"]);
+    json(&["train", "--json", "-q", train_set.to_str().unwrap(), "--out", "m.toml"], dir);
     let mut args = vec!["eval", "--model", "m.toml", "--json"];
     args.extend(held_out.iter().map(|p| p.to_str().unwrap()));
     let e = json(&args, dir);
