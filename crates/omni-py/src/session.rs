@@ -88,8 +88,8 @@ fn session_json(t: &Trained) -> serde_json::Value {
         "start_s": first.is_finite().then_some(first),
         "end_s": last.is_finite().then_some(last),
         "runs": runs.len(),
-        "notes": t.dataset.notes,
-        "skipped": t.dataset.skipped.iter().map(|s| [&s.source, &s.reason]).collect::<Vec<_>>(),
+        "notes": t.dataset.notes.iter().map(|n| omni_cli::api::settings::as_flags(&n.to_string())).collect::<Vec<_>>(),
+        "skipped": t.dataset.skipped.iter().map(|s| [s.source.clone(), omni_cli::api::settings::as_flags(&s.reason)]).collect::<Vec<_>>(),
         "warnings": t.warnings.iter().map(|w| omni_cli::api::settings::as_flags(w)).collect::<Vec<_>>(),
     })
 }

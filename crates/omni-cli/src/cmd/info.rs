@@ -63,7 +63,7 @@ fn print_info(info: &RecordingInfo) {
         if !t.joint_names.is_empty() {
             println!("      joints: {}", t.joint_names.join(", "));
         }
-        println!("      {}: {}", role_word(t.role), t.why);
+        println!("      {}: {}", role_word(t.role), as_flags(&t.why));
     }
     print_read_or_error(info);
 }
@@ -118,6 +118,6 @@ fn print_read(ds: &Dataset) {
         println!("  skipped {}: {}", s.source, as_flags(&s.reason));
     }
     for n in &ds.notes {
-        println!("  note: {n}");
+        println!("  note: {}", as_flags(&n.to_string()));
     }
 }
