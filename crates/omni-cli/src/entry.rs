@@ -55,15 +55,15 @@ pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
             // A closed pipe (`omnical eval … | head`) is not a failure.
             Failure::ClosedPipe => 0,
             Failure::Refused => {
-                eprintln!("error: {e:#}");
+                eprintln!("error: {}", said(&e));
                 crate::cmd::train::EXIT_REFUSED
             }
             Failure::Interrupted => {
-                eprintln!("omnical: {e:#}");
+                eprintln!("omnical: {}", said(&e));
                 crate::interrupt::EXIT_INTERRUPTED
             }
             Failure::Error => {
-                let text = format!("{e:#}");
+                let text = said(&e);
                 eprintln!(
                     "error: {}",
                     project.map_or_else(|| text.clone(), |p| with_project_origins(&text, &p, &args))
@@ -72,6 +72,12 @@ pub fn main_with_args(args: impl IntoIterator<Item = OsString>) -> i32 {
             }
         },
     }
+}
+
+/// A failed command's error and its sources (`{e:#}`) with the settings the library names as the command
+/// line's flags ([`crate::api::settings::as_flags`]).
+fn said(e: &anyhow::Error) -> String {
+    crate::api::settings::as_flags(&format!("{e:#}"))
 }
 
 /// How a failed command ends, from the first error among `e`'s sources that has an exit status of its own

@@ -100,7 +100,8 @@ pub fn first_in_command(key: &str) -> bool {
     true
 }
 
-/// One line per event: notes as written, others after their level (`warning: …`), then any fields.
+/// One line per event: notes as written, others after their level (`warning: …`), then any fields; the
+/// settings the library names are spelled as flags ([`crate::api::settings::as_flags`]).
 struct Plain;
 
 impl<S, N> FormatEvent<S, N> for Plain
@@ -120,8 +121,10 @@ where
             };
             write!(w, "{label}: ")?;
         }
-        ctx.field_format().format_fields(w.by_ref(), event)?;
-        writeln!(w)
+        // The library's words for its settings become the command line's flags here, once for every line.
+        let mut text = String::new();
+        ctx.field_format().format_fields(Writer::new(&mut text), event)?;
+        writeln!(w, "{}", crate::api::settings::as_flags(&text))
     }
 }
 

@@ -71,7 +71,8 @@ fn load(dir: &Path, name: &str, gt: &Path) -> Result<dataset::Dataset, String> {
         ground_truth: Some(GroundTruthOptions { path: gt.to_path_buf(), ..Default::default() }),
         ..Default::default()
     };
-    dataset::load(&[dir.join(format!("{name}.csv"))], &opts).map_err(|e| e.to_string())
+    dataset::load(&[dir.join(format!("{name}.csv"))], &opts)
+        .map_err(|e| omni_cli::api::settings::as_flags(&e.to_string()))
 }
 
 #[test]

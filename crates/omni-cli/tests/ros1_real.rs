@@ -463,6 +463,7 @@ fn the_size_cap_reaches_every_reader() {
     assert!(err.contains("rec.bag: the file is "), "{err}");
     assert!(err.contains("raise the limit with --max-file-mb"), "{err}");
     let e = omni_cli::lidar::read_scans_within(&d.join("rec.bag"), "/scan", None, 1000).unwrap_err().to_string();
+    let e = omni_cli::api::settings::as_flags(&e);
     assert!(e.contains("raise the limit with --max-file-mb"), "{e}");
     let e = omni_cli::lidar::read_scans_within(&d.join("rec.bag"), "/scan", None, 1 << 30).unwrap_err().to_string();
     assert!(e.contains("no topic \"/scan\" in the recording"), "{e}");

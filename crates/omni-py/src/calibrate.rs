@@ -136,7 +136,7 @@ pub fn train(
     // As `omnical train`: the parameter count with the effects (the paper preset's GA fits them all at once).
     let plan = Plan::preset(preset, start.model.n_params() + kinds.iter().map(|e| e.params().len()).sum::<usize>());
     let plan = plan.seed(seed);
-    let mut plan = fit.apply(plan).map_err(|e| value_error(flag_names(&format!("omnical.train: {e}"))))?;
+    let mut plan = fit.apply(plan).map_err(|e| value_error(crate::errors::keywords(&format!("omnical.train: {e}"))))?;
     if from_design {
         plan.half_widths = prior_half_widths(&start, &origin).into_iter().collect();
     }
@@ -256,23 +256,14 @@ fn calibration_of(
 
 /// A refusal of the CLI's `train` as `omnical.CalibrationError`, in Python's spelling.
 fn refused(e: Refused) -> PyErr {
-    CalibrationError::new_err(flag_names(&format!("omnical.train: {e}")))
+    CalibrationError::new_err(crate::errors::keywords(&format!("omnical.train: {e}")))
 }
 
-/// A `UserWarning` in Python's spelling.
+/// A `UserWarning`, the settings it names as Python's keywords.
 fn warn(py: Python<'_>, message: &str) -> PyResult<()> {
-    let text = std::ffi::CString::new(flag_names(&format!("omnical.train: {message}")))
+    let text = std::ffi::CString::new(crate::errors::keywords(&format!("omnical.train: {message}")))
         .map_err(|e| value_error(e.to_string()))?;
     PyErr::warn(py, &py.get_type::<PyUserWarning>(), &text, 1)
-}
-
-/// The CLI's message with Python's spelling of its flags (`--every` → `every=`).
-fn flag_names(message: &str) -> String {
-    let mut out = message.replace("--preset default", "preset=\"default\"").replace("--force", "force=True");
-    for flag in ["every", "heading-weight", "max-std-error", "min-excitation"] {
-        out = out.replace(&format!("--{flag}"), &format!("{}=", flag.replace('-', "_")));
-    }
-    out
 }
 
 /// The start of `train` and whether it is a robot's design (then its `[priors]` bound the search, as

@@ -1,4 +1,5 @@
-//! Rust errors as Python exceptions, in one place. Messages are the Rust `Display` text, unchanged.
+//! Rust errors as Python exceptions, in one place. Messages are the Rust `Display` text, with the settings it
+//! names as Python keywords ([`keywords`]).
 //!
 //! | Rust | Python |
 //! |---|---|
@@ -13,7 +14,8 @@
 //! | a report or export that fails ([`file_error`]: the first `io::Error` among the error's sources) | `FileNotFoundError`, `OSError`, else `omnical.OmnicalError`; an export folder that already holds files: `FileExistsError` |
 //!
 //! All omnical-specific exceptions derive from `omnical.OmnicalError`. A message made of an error and its
-//! sources is [`chain_text`]: the CLI's `error: …` text.
+//! sources is [`chain_text`]: the CLI's `error: …` text. The settings the library names in its messages
+//! (`` `gt_scans` ``) are Python's keywords here (`gt_scans=`), in one place: [`keywords`].
 
 use omni_cli::api::imu::ImuError;
 use omni_cli::api::simulate::SimulateError;
@@ -97,13 +99,13 @@ pub(crate) fn io_error(message: String, error: &std::io::Error) -> PyErr {
 
 impl ToPyErr for KinError {
     fn to_py_err(self) -> PyErr {
-        PyValueError::new_err(self.to_string())
+        PyValueError::new_err(keywords(&self.to_string()))
     }
 }
 
 impl ToPyErr for OptimizeError {
     fn to_py_err(self) -> PyErr {
-        CalibrationError::new_err(self.to_string())
+        CalibrationError::new_err(keywords(&self.to_string()))
     }
 }
 
@@ -112,14 +114,14 @@ impl ToPyErr for GaError {
         match self {
             GaError::Kin(e) => e.to_py_err(),
             GaError::Optimize(e) => e.to_py_err(),
-            GaError::NoRuns | GaError::BadPlanRequest { .. } => PyValueError::new_err(self.to_string()),
+            GaError::NoRuns | GaError::BadPlanRequest { .. } => PyValueError::new_err(keywords(&self.to_string())),
         }
     }
 }
 
 impl ToPyErr for RsDatasetError {
     fn to_py_err(self) -> PyErr {
-        let message = self.to_string();
+        let message = keywords(&self.to_string());
         match &self {
             RsDatasetError::Io { error, .. } => io_error(message, error),
             _ => DatasetError::new_err(message),
@@ -148,7 +150,7 @@ impl ToPyErr for ImuError {
             ImuError::NoRecording
             | ImuError::UpsideDown { .. }
             | ImuError::OnItsSide { .. }
-            | ImuError::Units { .. } => DatasetError::new_err(self.to_string()),
+            | ImuError::Units { .. } => DatasetError::new_err(keywords(&self.to_string())),
             ImuError::Design(DesignError::NoDesign(_)) => crate::robot::no_design("omnical.imu"),
             ImuError::Fit { .. } | ImuError::Design(_) | ImuError::Kin(_) => PyValueError::new_err(chain_text(&self)),
             ImuError::OutPath(_) | ImuError::ModelText(_) | ImuError::Write { .. } => file_error(&self),
@@ -159,7 +161,7 @@ impl ToPyErr for ImuError {
 
 impl ToPyErr for RsModelFileError {
     fn to_py_err(self) -> PyErr {
-        let message = self.to_string();
+        let message = keywords(&self.to_string());
         match &self {
             RsModelFileError::Io { error, .. } => io_error(message, error),
             _ => ModelFileError::new_err(message),
@@ -170,6 +172,17 @@ impl ToPyErr for RsModelFileError {
 /// An error and its sources, each joined to the one before by `: `: the text the command line prints after
 /// `error: `, so that Python and the CLI say the same.
 pub fn chain_text(e: &(dyn std::error::Error + 'static)) -> String {
+    keywords(&chain_text_as_written(e))
+}
+
+/// An error and its sources as [`chain_text`], the settings it names as the command line's flags: for the
+/// commands Python runs with command-line arguments (the fleet's sessions).
+pub fn chain_text_as_flags(e: &(dyn std::error::Error + 'static)) -> String {
+    omni_cli::api::settings::as_flags(&chain_text_as_written(e))
+}
+
+/// An error and its sources as [`chain_text`], with the library's words for its settings as written.
+fn chain_text_as_written(e: &(dyn std::error::Error + 'static)) -> String {
     let mut text = e.to_string();
     let mut cause = e.source();
     while let Some(c) = cause {
@@ -178,6 +191,13 @@ pub fn chain_text(e: &(dyn std::error::Error + 'static)) -> String {
         cause = c.source();
     }
     text
+}
+
+/// `text` with the settings the library names (`` `gt_scans` ``, `` `force` ``, `` `preset=default` ``) as
+/// Python's keywords (`gt_scans=`, `force=True`, `preset="default"`): the binding's one mapping of the
+/// library's words, for every exception and warning ([`omni_cli::api::settings::as_keywords`]).
+pub fn keywords(text: &str) -> String {
+    omni_cli::api::settings::as_keywords(text)
 }
 
 /// The first OS error among `e` and its sources, if any.
@@ -199,19 +219,20 @@ pub fn file_error(e: &(dyn std::error::Error + 'static)) -> PyErr {
 /// An output folder refused or not written: `FileExistsError` for one that already holds files (without
 /// `force`), `ValueError` for one that holds or lies inside an input (whatever `force`) or that `force` will
 /// not replace (the folder of the working directory, the home folder), else as its cause. A refusal for a
-/// keyword (`out=`, `tum=`) says `force=True` where the command line says `--force`.
+/// keyword (`out=`, `tum=`) says `force=True` ([`keywords`]); one for a command line's flag (`--out`, the
+/// fleet's commands) says `--force`, as the command line does.
 pub fn out_error(e: omni_cli::out_path::OutPathError) -> PyErr {
     use omni_cli::out_path::OutPathError;
-    let keyword = match &e {
+    let flag = match &e {
         OutPathError::NotEmpty { flag, .. }
         | OutPathError::OverlapsInput { flag, .. }
         | OutPathError::HoldsWorkingDirectory { flag, .. }
-        | OutPathError::Home { flag, .. } => flag.ends_with('='),
+        | OutPathError::Home { flag, .. } => flag.starts_with("--"),
         _ => false,
     };
     let text = || {
-        let text = chain_text(&e);
-        if keyword { text.replace("--force", "force=True") } else { text }
+        let text = chain_text_as_written(&e);
+        if flag { omni_cli::api::settings::as_flags(&text) } else { keywords(&text) }
     };
     match e {
         OutPathError::NotEmpty { .. } => pyo3::exceptions::PyFileExistsError::new_err(text()),
@@ -224,5 +245,5 @@ pub fn out_error(e: omni_cli::out_path::OutPathError) -> PyErr {
 
 /// A `ValueError` with this message (bad shapes, bad option values).
 pub fn value_error(message: impl Into<String>) -> PyErr {
-    PyValueError::new_err(message.into())
+    PyValueError::new_err(keywords(&message.into()))
 }

@@ -78,6 +78,23 @@ pub fn info(
         ticks_per_rev,
         max_file_mb,
     )?;
-    let text = py.detach(|| api::info(&paths, &data).map(|infos| api::document(&infos).to_string()));
+    let text = py.detach(|| {
+        api::info(&paths, &data).map(|infos| {
+            let mut doc = api::document(&infos);
+            keywords_in(&mut doc);
+            doc.to_string()
+        })
+    });
     Ok(py.import("json")?.call_method1("loads", (text.map_err(load_error)?,))?.unbind())
+}
+
+/// Every string of `v` with the settings the library names as Python's keywords ([`crate::errors::keywords`]),
+/// as the command line's `info --json` spells them as its flags.
+fn keywords_in(v: &mut serde_json::Value) {
+    match v {
+        serde_json::Value::String(s) => *s = crate::errors::keywords(s),
+        serde_json::Value::Array(a) => a.iter_mut().for_each(keywords_in),
+        serde_json::Value::Object(o) => o.values_mut().for_each(keywords_in),
+        _ => {}
+    }
 }

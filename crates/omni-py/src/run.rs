@@ -6,7 +6,7 @@ mod dataset;
 pub use dataset::{_dataset_from_state, PyDataset};
 
 use crate::arrays::{matrix, matrix_to_poses, poses_to_matrix, shape_text, to_matrix, to_vector, vector};
-use crate::errors::{PyResultExt, ToPyErr, chain_text, value_error};
+use crate::errors::{PyResultExt, ToPyErr, chain_text, keywords, value_error};
 use crate::robot::robot_error;
 use numpy::{PyArray1, PyArray2};
 use omni_cli::api::load::{DataOptions, LoadError, LoadRequest};
@@ -245,7 +245,7 @@ pub fn load(
     let ds = py.detach(|| request.read_for_robot(robot)).map_err(load_error)?;
     let design = omni_cli::design::declared(&ds).map_err(|e| value_error(chain_text(&e)))?;
     let source = ds.robot_file.as_ref().map(|f| f.source.clone());
-    let mut notes: Vec<String> = ds.notes.iter().map(ToString::to_string).collect();
+    let mut notes: Vec<String> = ds.notes.iter().map(|n| keywords(&n.to_string())).collect();
     if let Some(s @ robot_file::Source::Discovered(_)) = &source {
         notes.insert(0, format!("robot: {s}"));
     }
@@ -267,7 +267,7 @@ pub fn load(
     Ok(PyDataset {
         runs: ds.runs,
         notes,
-        skipped: ds.skipped.into_iter().map(|s| (s.source, s.reason)).collect(),
+        skipped: ds.skipped.into_iter().map(|s| (s.source, keywords(&s.reason))).collect(),
         design,
         robot: source.map(|s| s.to_string()),
         origin,

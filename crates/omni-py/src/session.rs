@@ -3,7 +3,7 @@
 //! file it writes is byte-identical to `omnical train … --out FILE`; nothing is printed and no Ctrl-C
 //! handler is installed (the host process keeps its own).
 
-use crate::errors::{OmnicalError, chain_text, value_error};
+use crate::errors::{OmnicalError, chain_text_as_flags, value_error};
 use omni_cli::api::diagnose::diagnose_quietly;
 use omni_cli::api::train::{Trained, train_quietly};
 use omni_cli::argv::{ArgvError, diagnose_request, diagnose_request_reading_as, fleet_request, train_request};
@@ -28,7 +28,7 @@ use serde_json::json;
 #[pyfunction]
 pub fn train_files<'py>(py: Python<'py>, args: Vec<String>) -> PyResult<Bound<'py, PyAny>> {
     let request = train_request(&args).map_err(|e| argv_error("train_files", e))?;
-    let t = py.detach(|| train_quietly(&request)).map_err(|e| OmnicalError::new_err(chain_text(&e)))?;
+    let t = py.detach(|| train_quietly(&request)).map_err(|e| OmnicalError::new_err(chain_text_as_flags(&e)))?;
     let text = serde_json::to_string(&session_json(&t)).map_err(|e| value_error(e.to_string()))?;
     py.import("json")?.call_method1("loads", (text,))
 }
@@ -60,7 +60,7 @@ pub fn diagnose_files<'py>(
         None => diagnose_request(&args),
     }
     .map_err(|e| argv_error("diagnose_files", e))?;
-    let d = py.detach(|| diagnose_quietly(&request)).map_err(|e| OmnicalError::new_err(chain_text(&e)))?;
+    let d = py.detach(|| diagnose_quietly(&request)).map_err(|e| OmnicalError::new_err(chain_text_as_flags(&e)))?;
     let text = serde_json::to_string(&d).map_err(|e| value_error(e.to_string()))?;
     py.import("json")?.call_method1("loads", (text,))
 }
@@ -88,9 +88,9 @@ fn session_json(t: &Trained) -> serde_json::Value {
         "start_s": first.is_finite().then_some(first),
         "end_s": last.is_finite().then_some(last),
         "runs": runs.len(),
-        "notes": t.dataset.notes,
-        "skipped": t.dataset.skipped.iter().map(|s| [&s.source, &s.reason]).collect::<Vec<_>>(),
-        "warnings": t.warnings,
+        "notes": t.dataset.notes.iter().map(|n| omni_cli::api::settings::as_flags(&n.to_string())).collect::<Vec<_>>(),
+        "skipped": t.dataset.skipped.iter().map(|s| [s.source.clone(), omni_cli::api::settings::as_flags(&s.reason)]).collect::<Vec<_>>(),
+        "warnings": t.warnings.iter().map(|w| omni_cli::api::settings::as_flags(w)).collect::<Vec<_>>(),
     })
 }
 

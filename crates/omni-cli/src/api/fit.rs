@@ -1,6 +1,7 @@
 //! The fit settings over a preset ([`FitOptions`], validated once) and the refusals of a fit ([`Refused`]):
 //! what `omnical train` and Python's `train` share.
 
+use crate::api::settings::{named, named_with};
 use crate::robot_file::{self, Design};
 use omni_ga::calibrate::{Calibration, Plan, Unexcited};
 use omni_ga::identify::IdentifyOptions;
@@ -42,20 +43,20 @@ impl Default for FitOptions {
     }
 }
 
-/// A fit setting out of its range; the message names the command line's flag.
+/// A fit setting out of its range; the message names the setting ([`named`]).
 #[derive(Debug, PartialEq, thiserror::Error)]
 pub enum FitOptionsError {
     /// `every` is 0.
-    #[error("--every must be ≥ 1 (1 = every ground-truth pose)")]
+    #[error("{} must be ≥ 1 (1 = every ground-truth pose)", named("every"))]
     Every,
     /// `heading_weight_m_per_rad` is negative or not finite.
-    #[error("--heading-weight must be a finite number ≥ 0 (m/rad), got {0}")]
+    #[error("{} must be a finite number ≥ 0 (m/rad), got {value}", named("heading_weight"), value = .0)]
     HeadingWeight(f64),
     /// `max_std_error` is not a finite positive fraction.
-    #[error("--max-std-error must be a finite fraction > 0, got {0}")]
+    #[error("{} must be a finite fraction > 0, got {value}", named("max_std_error"), value = .0)]
     MaxStdError(f64),
     /// `min_excitation` is outside [0, 1).
-    #[error("--min-excitation must be a fraction in [0, 1), got {0}")]
+    #[error("{} must be a fraction in [0, 1), got {value}", named("min_excitation"), value = .0)]
     MinExcitation(f64),
 }
 
@@ -104,11 +105,12 @@ pub fn fixed_step_mismatch(plan: &Plan, runs: &[omni_kin::Run]) -> Option<String
     Some(format!(
         "the {} preset integrates fixed {:.0} ms steps (Eq. 1), but these runs are sampled every {:.0} ms (median \
          wheel-sample interval): odometry would be off by a factor {:.2} and the fit worse than the design; use \
-         --preset default (each run's own step)",
+         {} (each run's own step)",
         plan.preset,
         1e3 * m.step_s,
         1e3 * m.median_interval_s,
-        m.factor()
+        m.factor(),
+        named_with("preset", "default")
     ))
 }
 
@@ -138,7 +140,7 @@ pub fn worse_than_start_text(c: &Calibration, plan: &Plan, runs: &[omni_kin::Run
 /// warning (returned, for the caller to say).
 pub fn check_step(plan: &Plan, runs: &[omni_kin::Run], force: bool) -> Result<Option<String>, Refused> {
     match fixed_step_mismatch(plan, runs) {
-        Some(m) if !force => Err(Refused(format!("{m}; --force fits with the fixed step anyway"))),
+        Some(m) if !force => Err(Refused(format!("{m}; {} fits with the fixed step anyway", named("force")))),
         other => Ok(other),
     }
 }
@@ -153,9 +155,9 @@ pub fn check_fit(c: &Calibration, plan: &Plan, runs: &[omni_kin::Run], force: bo
     }
     let w = found.join("; ");
     if force {
-        Ok(Some(format!("{w}; kept because of --force")))
+        Ok(Some(format!("{w}; kept because of {}", named("force"))))
     } else {
-        Err(Refused(format!("{w}; nothing written (--force writes it anyway)")))
+        Err(Refused(format!("{w}; nothing written ({} writes it anyway)", named("force"))))
     }
 }
 

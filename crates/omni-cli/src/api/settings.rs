@@ -350,3 +350,147 @@ pub fn project_keys() -> impl Iterator<Item = &'static Setting> {
 pub fn get(key: &str) -> Option<&'static Setting> {
     SETTINGS.iter().find(|s| s.key == key)
 }
+
+// ---- Settings named in library text ----------------------------------------------------------------------
+//
+// The library names a setting by its key in backticks, [`named`] (`` `gt_scans` ``), or with a value,
+// [`named_with`] (`` `preset=default` ``): never by a front end's spelling. Each front end renders the
+// names in one place: the command line as its flags ([`as_flags`]: `--gt-scans`, `--preset default`),
+// Python as keywords ([`as_keywords`]: `gt_scans=`, `preset="default"`). A backticked word that is no
+// setting's key is left as written.
+
+/// The settings whose long flag is not their key in kebab-case: (key, long flag without `--`).
+const LONG_FLAGS: &[(&str, &str)] = &[("effects", "effect")];
+
+/// The settings given without a value (a switch): Python names them `key=True`, as a flag names itself.
+pub const SWITCHES: &[&str] = &["force", "skip_invalid"];
+
+/// The setting `key` as library text names it: `` `gt_scans` ``, for `format!`. Each front end renders it
+/// as its own spelling ([`as_flags`], [`as_keywords`]).
+pub fn named(key: &str) -> String {
+    debug_assert!(get(key).is_some(), "{key} is no setting");
+    format!("`{key}`")
+}
+
+/// The setting `key` with a value as library text names it: `` `preset=default` `` (the value as the
+/// command line writes it), which the command line renders `--preset default` and Python `preset="default"`.
+pub fn named_with(key: &str, value: impl std::fmt::Display) -> String {
+    debug_assert!(get(key).is_some(), "{key} is no setting");
+    format!("`{key}={value}`")
+}
+
+/// The long flag of a setting that has one: `--gt-scans`.
+pub fn long_flag(s: &Setting) -> Option<String> {
+    if let Flag::No(_) = s.flag {
+        return None;
+    }
+    let long =
+        LONG_FLAGS.iter().find(|(k, _)| *k == s.key).map_or_else(|| s.key.replace('_', "-"), |(_, l)| (*l).into());
+    Some(format!("--{long}"))
+}
+
+/// The Python keyword of a setting that has one (the same in every function that takes it): `split_s`.
+pub fn keyword(s: &Setting) -> Option<&'static str> {
+    s.python.ok()?.first().map(|(_, k)| *k)
+}
+
+/// `text` with every named setting as the command line's flag: `` `gt_scans` `` → `--gt-scans`,
+/// `` `preset=default` `` → `--preset default`. The one mapping of the command line (its error and warning
+/// printers call it).
+pub fn as_flags(text: &str) -> String {
+    render(text, |s, value| {
+        let flag = long_flag(s)?;
+        Some(value.map_or_else(|| flag.clone(), |v| format!("{flag} {v}")))
+    })
+}
+
+/// `text` with every named setting as Python's keyword: `` `gt_scans` `` → `gt_scans=`, `` `force` `` →
+/// `force=True`, `` `preset=default` `` → `preset="default"` (a number unquoted). The one mapping of the
+/// Python binding (its exceptions and warnings call it).
+pub fn as_keywords(text: &str) -> String {
+    render(text, |s, value| {
+        let keyword = keyword(s)?;
+        Some(match value {
+            None if SWITCHES.contains(&s.key) => format!("{keyword}=True"),
+            None => format!("{keyword}="),
+            Some(v) if v.parse::<f64>().is_ok() => format!("{keyword}={v}"),
+            Some(v) => format!("{keyword}={v:?}"),
+        })
+    })
+}
+
+/// `text` with each `` `key` `` or `` `key=value` `` of a setting replaced by `spell(setting, value)`; a
+/// backticked word that is no setting's key, or that `spell` has no spelling for, is left as written.
+fn render(text: &str, spell: impl Fn(&Setting, Option<&str>) -> Option<String>) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(open) = rest.find('`') {
+        out.push_str(&rest[..open]);
+        let after = &rest[open + 1..];
+        let spelled = after.find('`').and_then(|close| {
+            let inner = &after[..close];
+            let (key, value) = inner.split_once('=').map_or((inner, None), |(k, v)| (k, Some(v)));
+            let s = get(key).filter(|_| !key.is_empty())?;
+            Some((spell(s, value)?, close))
+        });
+        match spelled {
+            Some((words, close)) => {
+                out.push_str(&words);
+                rest = &after[close + 1..];
+            }
+            None => {
+                out.push('`');
+                rest = after;
+            }
+        }
+    }
+    out.push_str(rest);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    #[test]
+    fn every_named_setting_is_its_flag_on_the_command_line_and_its_keyword_in_python() {
+        let mut cli = crate::cli::Cli::command();
+        cli.build();
+        let args: Vec<clap::Arg> =
+            cli.get_arguments().chain(cli.get_subcommands().flat_map(|c| c.get_arguments())).cloned().collect();
+        for s in SETTINGS {
+            let text = format!("give {}.", named(s.key));
+            match s.flag {
+                Flag::No(_) => assert_eq!(as_flags(&text), text, "{}", s.key),
+                _ => {
+                    let arg = args.iter().find(|a| a.get_id() == s.key);
+                    let long = arg.and_then(|a| a.get_long()).unwrap_or_else(|| panic!("no flag {}", s.key));
+                    assert_eq!(as_flags(&text), format!("give --{long}."));
+                    assert_eq!(as_flags(&named_with(s.key, "v 1")), format!("--{long} v 1"));
+                }
+            }
+            match s.python {
+                Ok(functions) => {
+                    let kw = functions[0].1;
+                    assert!(functions.iter().all(|(_, k)| *k == kw), "{}: one keyword", s.key);
+                    let value = if SWITCHES.contains(&s.key) { "True" } else { "" };
+                    assert_eq!(as_keywords(&text), format!("give {kw}={value}."));
+                    assert_eq!(as_keywords(&named_with(s.key, "0.5")), format!("{kw}=0.5"));
+                    assert_eq!(as_keywords(&named_with(s.key, "/scan")), format!("{kw}=\"/scan\""));
+                }
+                Err(_) => assert_eq!(as_keywords(&text), text, "{}", s.key),
+            }
+        }
+    }
+
+    #[test]
+    fn other_backticks_are_left_alone() {
+        for text in ["`omnical plan --umbmark` and `gt_scan`", "`` and `", "`=x` `gt_scans", "no ticks `"] {
+            assert_eq!(as_flags(text), text);
+            assert_eq!(as_keywords(text), text);
+        }
+        assert_eq!(as_flags("see `omnical plan` or `every`"), "see `omnical plan` or --every");
+        assert_eq!(as_keywords("`preset=default`; `force` keeps it"), "preset=\"default\"; force=True keeps it");
+    }
+}

@@ -159,8 +159,9 @@ fn named_columns(design: Model, joints: Option<&[String]>) -> Result<Model, KinE
     }
     if names != joints {
         tracing::warn!(
-            "--joints reads the wheels as {}, but the design's columns are the robot's {}: give the \
-             joints in the robot description's order",
+            "{} reads the wheels as {}, but the design's columns are the robot's {}: give the joints in the \
+             robot description's order",
+            crate::api::settings::named("joints"),
             joints.join(", "),
             names.join(", ")
         );

@@ -3,6 +3,7 @@
 
 use super::{DataArgs, OutputArgs};
 use crate::api::info::{self as api, RecordingInfo, RunInfo};
+use crate::api::settings::as_flags;
 use crate::dataset::Dataset;
 use crate::dataset::mcap::Role;
 use std::path::PathBuf;
@@ -28,7 +29,7 @@ pub struct Args {
 pub fn run(a: &Args) -> anyhow::Result<()> {
     let infos = api::info(&a.recordings, &a.data.options())?;
     if a.output.json {
-        println!("{}", serde_json::to_string_pretty(&api::document(&infos))?);
+        println!("{}", as_flags(&serde_json::to_string_pretty(&api::document(&infos))?));
         return Ok(());
     }
     for (k, info) in infos.iter().enumerate() {
@@ -62,7 +63,7 @@ fn print_info(info: &RecordingInfo) {
         if !t.joint_names.is_empty() {
             println!("      joints: {}", t.joint_names.join(", "));
         }
-        println!("      {}: {}", role_word(t.role), t.why);
+        println!("      {}: {}", role_word(t.role), as_flags(&t.why));
     }
     print_read_or_error(info);
 }
@@ -70,7 +71,7 @@ fn print_info(info: &RecordingInfo) {
 fn print_read_or_error(info: &RecordingInfo) {
     match &info.read {
         Ok(ds) => print_read(ds),
-        Err(e) => println!("  omnical cannot read it with these options: {e}"),
+        Err(e) => println!("  omnical cannot read it with these options: {}", as_flags(&e.to_string())),
     }
 }
 
@@ -114,9 +115,9 @@ fn print_read(ds: &Dataset) {
         println!("  clock: {}", c.describe());
     }
     for s in &ds.skipped {
-        println!("  skipped {}: {}", s.source, s.reason);
+        println!("  skipped {}: {}", s.source, as_flags(&s.reason));
     }
     for n in &ds.notes {
-        println!("  note: {n}");
+        println!("  note: {}", as_flags(&n.to_string()));
     }
 }

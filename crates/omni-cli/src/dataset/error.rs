@@ -17,9 +17,10 @@ pub(crate) fn too_large(p: &Path, len: u64, max_file_bytes: u64) -> DatasetError
         p,
         format!(
             "the file is {:.1} MiB, above the limit of {:.1} MiB per input file (files are read into memory \
-             whole); raise the limit with --max-file-mb if the machine has the memory",
+             whole); raise the limit with {} if the machine has the memory",
             len as f64 / MIB,
-            max_file_bytes as f64 / MIB
+            max_file_bytes as f64 / MIB,
+            crate::api::settings::named("max_file_mb")
         ),
     )
 }

@@ -6,6 +6,7 @@ use super::{
     DatasetError, LoadOptions, Note, SUPPORTED, Skipped, check_size, csv, ground_truth, lidar_reference, mcap,
     optiodom, ros1, rosbag2,
 };
+use crate::api::settings::named;
 use omni_kin::{RobotGeometry, Run};
 use std::path::{Path, PathBuf};
 
@@ -239,8 +240,11 @@ pub(super) fn refuse_foreign_reference(input: &Input, opts: &LoadOptions) -> Res
     if opts.ground_truth.is_some() && matches!(input, Input::OptiOdom(_)) {
         return Err(DatasetError::file(
             input.path(),
-            "--gt gives the ground truth of ROS recordings (.mcap, .db3, rosbag2 folders, .bag) and of CSV runs \
-             without pose columns; an OptiOdom set has its own",
+            format!(
+                "{} gives the ground truth of ROS recordings (.mcap, .db3, rosbag2 folders, .bag) and of CSV runs \
+                 without pose columns; an OptiOdom set has its own",
+                named("gt")
+            ),
         ));
     }
     Ok(())
@@ -249,7 +253,9 @@ pub(super) fn refuse_foreign_reference(input: &Input, opts: &LoadOptions) -> Res
 /// A CSV run without pose columns with its ground truth from `--gt` (the file named after it, or the
 /// folder's file that covers it), on the wheel clock as a recording's ([`mcap::assembly::truth_for_wheels`]).
 pub(super) fn csv_with_gt(p: &Path, opts: &LoadOptions) -> Result<Loaded, DatasetError> {
-    let Some(gt) = opts.ground_truth.as_ref() else { return Err(DatasetError::file(p, "no --gt given")) };
+    let Some(gt) = opts.ground_truth.as_ref() else {
+        return Err(DatasetError::file(p, format!("no {} given", named("gt"))));
+    };
     let stem = recording_name(p, false);
     let ext = ground_truth::read_for(gt, p, &stem)?;
     let (mut notes, mut clock) = (Vec::new(), None);

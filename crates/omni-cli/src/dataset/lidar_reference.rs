@@ -6,6 +6,7 @@
 //! corrects the mount around it); otherwise the mount is fitted, started where the motions put it.
 
 use super::{DatasetError, Loaded, Note};
+use crate::api::settings::named;
 use omni_kin::lidar::{self, MatchSettings, Scan};
 use omni_kin::{Run, StampedPose};
 use std::path::Path;
@@ -126,7 +127,9 @@ fn mount_text(read: &super::mcap::ScanRead, mount: Mount) -> String {
     let from_zero = "the lidar's mount is fitted, started where the motions put it";
     if mount == Mount::Given {
         return format!(
-            "its mount is given (--gt-mount or --gt-mount-start): the static transforms are not used{upside_down}"
+            "its mount is given ({} or {}): the static transforms are not used{upside_down}",
+            named("gt_mount"),
+            named("gt_mount_start")
         );
     }
     match read.base_from_sensor {

@@ -365,8 +365,9 @@ fn shared_clock_retry(inputs: &[Result<Input, DatasetError>], reads: &mut Reads,
             input.path(),
             format!(
                 "{why}; the ground truth is read at {median:+.4} s, the median offset of the {} recording(s) aligned \
-                 clearly with the same --gt (one clock)",
-                offsets.len()
+                 clearly with the same {} (one clock)",
+                offsets.len(),
+                crate::api::settings::named("gt")
             ),
         ));
         *read = Some(read_input(input, &forced));

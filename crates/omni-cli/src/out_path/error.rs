@@ -1,6 +1,7 @@
 //! What is wrong with a place for results ([`OutPathError`]): each variant names the option and the path it
 //! gave, with the OS error chained as the source.
 
+use crate::api::settings::named;
 use std::path::PathBuf;
 
 /// What is wrong with a place for results. Every variant names the option (`flag`: `--out`, `out=`) and
@@ -82,8 +83,9 @@ pub enum OutPathError {
     },
     /// A result folder already holds files, claimed without `--force`.
     #[error(
-        "{flag} {}: the folder already holds files ({entries}); give --force to replace it whole, or another {flag}",
-        dir.display()
+        "{flag} {}: the folder already holds files ({entries}); give {force} to replace it whole, or another {flag}",
+        dir.display(),
+        force = named("force")
     )]
     NotEmpty {
         /// The option.
@@ -104,7 +106,7 @@ pub enum OutPathError {
         source: std::io::Error,
     },
     /// `--force` on a folder that holds the working directory.
-    #[error("{flag} {}: --force will not replace a folder that holds the working directory", dir.display())]
+    #[error("{flag} {}: {} will not replace a folder that holds the working directory", dir.display(), named("force"))]
     HoldsWorkingDirectory {
         /// The option.
         flag: String,
@@ -112,7 +114,7 @@ pub enum OutPathError {
         dir: PathBuf,
     },
     /// `--force` on the home folder.
-    #[error("{flag} {}: --force will not replace the home folder", dir.display())]
+    #[error("{flag} {}: {} will not replace the home folder", dir.display(), named("force"))]
     Home {
         /// The option.
         flag: String,
@@ -146,9 +148,10 @@ pub enum OutPathError {
     /// A result folder holds, or lies inside, an input of the command (refused with or without `--force`).
     #[error(
         "{flag} {}: {relation} {what} {}, which this command reads; give {flag} a folder apart from its inputs \
-         (--force never replaces an input)",
+         ({} never replaces an input)",
         dir.display(),
-        input.display()
+        input.display(),
+        named("force")
     )]
     OverlapsInput {
         /// The option.

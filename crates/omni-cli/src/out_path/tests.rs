@@ -17,7 +17,8 @@ fn a_folder_with_files_is_refused_without_force_and_replaced_whole_with_it() {
     std::fs::create_dir_all(out.join("train")).unwrap();
     std::fs::write(out.join("train/old.csv"), "old").unwrap();
     std::fs::write(out.join("truth.json"), "{}").unwrap();
-    let e = OutDir::claim(&out, "--out", false, &Inputs::new()).unwrap_err().to_string();
+    let e =
+        crate::api::settings::as_flags(&OutDir::claim(&out, "--out", false, &Inputs::new()).unwrap_err().to_string());
     assert_eq!(
         e,
         format!(
@@ -73,7 +74,8 @@ fn new_and_empty_folders_need_no_force() {
 fn force_never_replaces_a_folder_holding_the_working_directory() {
     let here = std::env::current_dir().unwrap();
     let parent = here.parent().unwrap();
-    let e = OutDir::claim(parent, "--out", true, &Inputs::new()).unwrap_err().to_string();
+    let e =
+        crate::api::settings::as_flags(&OutDir::claim(parent, "--out", true, &Inputs::new()).unwrap_err().to_string());
     assert!(e.ends_with("--force will not replace a folder that holds the working directory"), "{e}");
 }
 
@@ -85,7 +87,7 @@ fn a_folder_that_holds_or_lies_inside_an_input_is_refused_even_with_force() {
     std::fs::write(data.join("run.mcap"), "bag").unwrap();
     let inputs = Inputs::data(std::slice::from_ref(&data.join("run.mcap"))).with("--robot", data.join("r.toml"));
     for force in [false, true] {
-        let e = OutDir::claim(&data, "--tum", force, &inputs).unwrap_err().to_string();
+        let e = crate::api::settings::as_flags(&OutDir::claim(&data, "--tum", force, &inputs).unwrap_err().to_string());
         assert_eq!(
             e,
             format!(
@@ -99,10 +101,12 @@ fn a_folder_that_holds_or_lies_inside_an_input_is_refused_even_with_force() {
     // Inside the data's folder, through a `..` and a link: refused too, and nothing is created.
     let inputs = Inputs::data(std::slice::from_ref(&data));
     let inside = tmp.path().join("other/../data/exported");
-    let e = OutDir::claim(&inside, "--mcap", true, &inputs).unwrap_err().to_string();
+    let e = crate::api::settings::as_flags(&OutDir::claim(&inside, "--mcap", true, &inputs).unwrap_err().to_string());
     assert!(e.contains(": this folder is inside the data "), "{e}");
     std::os::unix::fs::symlink(&data, tmp.path().join("link")).unwrap();
-    let e = OutDir::claim(&tmp.path().join("link"), "--out", true, &inputs).unwrap_err().to_string();
+    let e = crate::api::settings::as_flags(
+        &OutDir::claim(&tmp.path().join("link"), "--out", true, &inputs).unwrap_err().to_string(),
+    );
     assert!(e.contains(": this folder holds the data "), "{e}");
     assert_eq!(files(&data), ["run.mcap"]);
     assert_eq!(files(tmp.path()), ["data", "link"]);

@@ -29,8 +29,9 @@ macro_rules! fixtures_or_skip {
     }};
 }
 
+/// `read_file`'s runs or its error, the settings it names as the command line's flags (as `omnical` says it).
 pub fn read(dir: &Path, name: &str, opts: &McapOptions) -> Result<McapRead, String> {
-    read_file(&dir.join(format!("{name}.mcap")), opts).map_err(|e| e.to_string())
+    read_file(&dir.join(format!("{name}.mcap")), opts).map_err(|e| omni_cli::api::settings::as_flags(&e.to_string()))
 }
 
 pub fn read_ok(dir: &Path, name: &str) -> McapRead {

@@ -1,5 +1,6 @@
 //! Why runs could not be read ([`LoadError`]).
 
+use crate::api::settings::{named, named_with};
 use crate::dataset::DatasetError;
 use crate::dataset::ground_truth::CsvColumnsError;
 use crate::robot_file::{self, RobotFileError};
@@ -8,7 +9,7 @@ use omni_kin::travel::Travel;
 use std::path::PathBuf;
 
 /// Why runs could not be read: the robot description, the data, or data options that do not go together
-/// (each message names the flags).
+/// (each message names the settings: [`named`]).
 #[derive(Debug, thiserror::Error)]
 pub enum LoadError {
     /// The robot description could not be read.
@@ -30,8 +31,10 @@ pub enum LoadError {
     },
     /// `--gt-time-offset` on runs that have no ground-truth clock to shift.
     #[error(
-        "--gt-time-offset {offset_s} changes nothing here: it applies to a --gt file or to a ground-truth topic of \
-         a recording (MCAP, rosbag2), and these runs have neither"
+        "{} changes nothing here: it applies to a {} file or to a ground-truth topic of a recording (MCAP, \
+         rosbag2), and these runs have neither",
+        named_with("gt_time_offset", offset_s),
+        named("gt")
     )]
     OffsetUnused {
         /// The offset given. s.
@@ -44,9 +47,9 @@ pub enum LoadError {
         topic: String,
     },
     /// `--gt-scans` with another source of ground truth (`flag`).
-    #[error("{flag} does not go with --gt-scans {topic}: the lidar's path is the ground truth")]
+    #[error("{flag} does not go with {}: the lidar's path is the ground truth", named_with("gt_scans", topic))]
     ScansWith {
-        /// The other option (`--gt`, `--gt-topic`).
+        /// The other option, named (`` `gt` ``, `` `gt_topic` ``).
         flag: &'static str,
         /// The LaserScan topic.
         topic: String,
@@ -109,8 +112,10 @@ pub enum LoadError {
     },
     /// `--gt-window` without a relative reference.
     #[error(
-        "--gt-window {window_s} changes nothing here: it is the window of a relative reference (--gt-kind \
-         relative: the ground truth is a sensor's own motion, as lidar or visual odometry)"
+        "{} changes nothing here: it is the window of a relative reference ({}: the ground truth is a sensor's \
+         own motion, as lidar or visual odometry)",
+        named_with("gt_window", window_s),
+        named_with("gt_kind", "relative")
     )]
     WindowUnused {
         /// The window given. s.
@@ -119,7 +124,9 @@ pub enum LoadError {
     /// A relative reference that never moves within a window.
     #[error(
         "the relative reference of these {runs} runs never moves in a window of {window_s} s: nothing to compare \
-         the wheels with (drive the robot, or check --gt-topic / --gt names the sensor's path)"
+         the wheels with (drive the robot, or check {} / {} names the sensor's path)",
+        named("gt_topic"),
+        named("gt")
     )]
     NeverMoves {
         /// The runs read.
@@ -157,11 +164,13 @@ pub enum LoadError {
     },
     /// `--gt-mount-start` where no mount is fitted.
     #[error(
-        "--gt-mount-start does not go with {flag}: it starts the fit of a relative reference's sensor mount \
-         (--gt-kind relative, --gt-scans)"
+        "{} does not go with {flag}: it starts the fit of a relative reference's sensor mount ({}, {})",
+        named("gt_mount_start"),
+        named_with("gt_kind", "relative"),
+        named("gt_scans")
     )]
     MountStartWith {
-        /// What it was given with: `--gt-mount`, or an absolute reference.
+        /// What it was given with: `` `gt_mount` `` (named), or an absolute reference.
         flag: &'static str,
     },
     /// A relative reference whose turning goes against the wheels': its frame is mirrored.

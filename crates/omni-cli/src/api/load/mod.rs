@@ -16,6 +16,7 @@ mod reference;
 pub use error::LoadError;
 pub use options::DataOptions;
 
+use crate::api::settings::named_with;
 use crate::dataset::{self, Dataset, LoadOptions, Note};
 use crate::robot_file;
 use options::{csv_joints, end_pose_file, ground_truth_options, scans_topic};
@@ -144,7 +145,7 @@ impl LoadRequest {
     pub fn truth_elsewhere(&self, robot: Option<&robot_file::RobotFile>) -> Result<Option<String>, LoadError> {
         let data = &self.data;
         if let Some(topic) = scans_topic(data)? {
-            return Ok(Some(format!("the lidar's path from scan matching (--gt-scans {topic})")));
+            return Ok(Some(format!("the lidar's path from scan matching ({})", named_with("gt_scans", &topic))));
         }
         if let Some(file) = end_pose_file(data)? {
             return Ok(Some(format!("the measured end poses in {}", file.display())));

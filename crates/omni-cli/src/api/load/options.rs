@@ -112,7 +112,8 @@ pub(super) fn scans_topic(data: &DataOptions) -> Result<Option<String>, LoadErro
     if data.gt_kind == ReferenceKind::EndPose {
         return Err(LoadError::ScansWithEndPose { topic: topic.clone() });
     }
-    for (set, flag) in [(data.gt.is_some(), "--gt"), (data.gt_topic.is_some(), "--gt-topic")] {
+    // The other option as the library names a setting (`crate::api::settings::named`).
+    for (set, flag) in [(data.gt.is_some(), "`gt`"), (data.gt_topic.is_some(), "`gt_topic`")] {
         if set {
             return Err(LoadError::ScansWith { flag, topic: topic.clone() });
         }

@@ -3,6 +3,7 @@
 //! the wheels travel about as far as the ground truth.
 
 use super::{DataOptions, LoadError};
+use crate::api::settings::{named, named_with};
 use crate::dataset::{self, Dataset, Note};
 use crate::robot_file;
 use omni_kin::reference::ReferenceKind;
@@ -72,10 +73,11 @@ pub(super) fn move_to_base(ds: &mut Dataset, data: &DataOptions) -> Result<(), L
         })
         .collect::<Result<_, _>>()?;
     ds.notes.push(Note::general(format!(
-        "ground truth moved to the base from the measured point at x {:.4} m, y {:.4} m, yaw {:.3}° (--gt-mount)",
+        "ground truth moved to the base from the measured point at x {:.4} m, y {:.4} m, yaw {:.3}° ({})",
         mount.x_m,
         mount.y_m,
-        mount.theta_rad.to_degrees()
+        mount.theta_rad.to_degrees(),
+        named("gt_mount")
     )));
     ds.mount = Some(mount);
     Ok(())
@@ -273,7 +275,7 @@ pub(super) fn start_sensor_mount(ds: &mut Dataset, data: &DataOptions) -> Result
         };
     }
     if data.gt_mount.is_some() && data.gt_mount_start.is_some() {
-        return Err(LoadError::MountStartWith { flag: "--gt-mount" });
+        return Err(LoadError::MountStartWith { flag: "`gt_mount`" });
     }
     ds.mount_start = data.gt_mount_start;
     let Some(ik) = crate::design::model_of(omni_kin::KinematicsKind::Ik, ds)
@@ -344,10 +346,10 @@ pub(super) fn start_sensor_mount(ds: &mut Dataset, data: &DataOptions) -> Result
 /// The relative reference as its options name it: a lidar's topic, a ground-truth topic or file.
 fn reference_text(data: &DataOptions) -> String {
     match (&data.gt_scans, &data.gt_topic, &data.gt) {
-        (Some(t), _, _) => format!("lidar {t:?} (--gt-scans)"),
-        (None, Some(t), _) => format!("topic {t:?} (--gt-kind relative)"),
-        (None, None, Some(f)) => format!("{} (--gt-kind relative)", f.display()),
-        (None, None, None) => "the relative reference (--gt-kind relative)".to_string(),
+        (Some(t), _, _) => format!("lidar {t:?} ({})", named("gt_scans")),
+        (None, Some(t), _) => format!("topic {t:?} ({})", named_with("gt_kind", "relative")),
+        (None, None, Some(f)) => format!("{} ({})", f.display(), named_with("gt_kind", "relative")),
+        (None, None, None) => format!("the relative reference ({})", named_with("gt_kind", "relative")),
     }
 }
 

@@ -2,6 +2,7 @@
 //! columns each part of a row (time, wheels, ground truth, recorded odometry) is read from.
 
 use super::{ODOM, POSE, parse_num};
+use crate::api::settings::named;
 use crate::dataset::DatasetError;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -115,7 +116,10 @@ impl Columns {
             (true, None) => {
                 return Err(DatasetError::file(
                     path,
-                    "wheel columns are ticks but no ticks_per_rev is given (add '# ticks_per_rev: N' or --ticks-per-rev)",
+                    format!(
+                        "wheel columns are ticks but no ticks_per_rev is given (add '# ticks_per_rev: N' or {})",
+                        named("ticks_per_rev")
+                    ),
                 ));
             }
             (_, v) => v.unwrap_or(1.0),
@@ -160,9 +164,10 @@ fn pose_columns(
             path,
             format!("line {header_line}"),
             format!(
-                "has ground-truth columns of its own ({}), and --gt gives another: drop --gt, or remove the \
-                 columns to use the --gt file",
-                POSE.join(", ")
+                "has ground-truth columns of its own ({}), and {gt} gives another: drop {gt}, or remove the \
+                 columns to use the {gt} file",
+                POSE.join(", "),
+                gt = named("gt")
             ),
         ));
     }

@@ -30,7 +30,7 @@ fn messages_name_file_line_and_column() {
     let dir = tempfile::tempdir().unwrap();
     let p = write(dir.path(), "a.csv", "t_s,w_ticks,x_m,y_m,theta_rad\n0,1,0,0,0\n");
     assert_eq!(
-        read_run(&p, None).unwrap_err().to_string(),
+        crate::api::settings::as_flags(&read_run(&p, None).unwrap_err().to_string()),
         format!(
             "{}: wheel columns are ticks but no ticks_per_rev is given (add '# ticks_per_rev: N' or --ticks-per-rev)",
             p.display()

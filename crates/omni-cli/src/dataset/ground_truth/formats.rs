@@ -2,6 +2,7 @@
 //! stamps, quaternion headings and errors naming the line and column; and the heading's unwrapping.
 
 use super::{CsvColumns, TruthSample};
+use crate::api::settings::named;
 use crate::dataset::DatasetError;
 use std::path::Path;
 
@@ -55,9 +56,10 @@ pub(super) fn read_csv(
             DatasetError::file(
                 path,
                 format!(
-                    "no column {name:?} for the {what} (columns: {}); name it with --gt-columns or [ground_truth] in \
+                    "no column {name:?} for the {what} (columns: {}); name it with {} or [ground_truth] in \
                      robot.toml",
-                    header.join(", ")
+                    header.join(", "),
+                    named("gt_columns")
                 ),
             )
         })

@@ -31,6 +31,7 @@ mod options;
 pub use formats::parse_stamp_ns;
 pub use options::{CsvColumns, CsvColumnsError, GroundTruthOptions, TimeUnit};
 
+use crate::api::settings::named;
 use crate::dataset::DatasetError;
 use formats::{read_csv, read_tum, unwrap_yaw};
 use std::path::{Path, PathBuf};
@@ -214,8 +215,9 @@ pub fn file_for(opts: &GroundTruthOptions, recording: &Path, name: &str) -> Resu
     Err(DatasetError::file(
         recording,
         format!(
-            "no ground-truth file for recording {name:?} in --gt folder {} (expected {name}.tum, {name}.txt or \
+            "no ground-truth file for recording {name:?} in {} folder {} (expected {name}.tum, {name}.txt or \
              {name}.csv)",
+            named("gt"),
             opts.path.display()
         ),
     ))
@@ -386,6 +388,7 @@ mod tests {
         let e = read_csv(Path::new("g.csv"), "a,b\n1,2\n", &CsvColumns::default(), &mut Vec::new())
             .unwrap_err()
             .to_string();
+        let e = crate::api::settings::as_flags(&e);
         assert_eq!(
             e,
             "g.csv: no column \"t\" for the time (columns: a, b); name it with --gt-columns or [ground_truth] in \

@@ -15,6 +15,7 @@ use super::recording::{Content, Recording};
 use super::selection::{Bag, Truth, WheelSource, localization_note, topic_clock, topic_location};
 use super::twist::Commands;
 use super::{McapOptions, McapRead, split};
+use crate::api::settings::named;
 use crate::dataset::ground_truth::ExternalTruth;
 use crate::dataset::{DatasetError, Note};
 use gt_file::external_file;
@@ -224,11 +225,12 @@ fn overlapping_file(
     let at = |t: f64| origin_s * NS_PER_S + (t * 1e9).round() as i64;
     let (ext, share) = folder
         .overlapping(at(t_s[0]), at(t_s[t_s.len() - 1]))
-        .map_err(|e| DatasetError::file(path, format!("--gt folder {}: {e}", folder.path.display())))?;
+        .map_err(|e| DatasetError::file(path, format!("{} folder {}: {e}", named("gt"), folder.path.display())))?;
     notes.push(Note::about(
         path,
         format!(
-            "no file of the --gt folder is named after it: {} covers {:.0} % of its span and is its ground truth",
+            "no file of the {} folder is named after it: {} covers {:.0} % of its span and is its ground truth",
+            named("gt"),
             ext.path.display(),
             100.0 * share
         ),

@@ -10,6 +10,7 @@ use super::common::{RosString, decode};
 use super::framing;
 use super::joint_state::{self, JointState};
 use super::recording::{MessageSink, payload};
+use crate::api::settings::named;
 use crate::dataset::DatasetError;
 use std::path::{Path, PathBuf};
 /// The topic `robot_state_publisher` publishes the URDF on.
@@ -55,7 +56,7 @@ pub fn inspect(path: &Path, max_bytes: u64) -> Result<Inventory, DatasetError> {
     if len > max_bytes {
         return Err(DatasetError::file(
             path,
-            format!("the file is {len} bytes, above the limit of {max_bytes} bytes (--max-file-mb)"),
+            format!("the file is {len} bytes, above the limit of {max_bytes} bytes ({})", named("max_file_mb")),
         ));
     }
     let buf = std::fs::read(path).map_err(|e| DatasetError::io(path, e))?;

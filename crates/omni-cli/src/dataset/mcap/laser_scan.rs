@@ -10,6 +10,7 @@ use super::common::{
 use super::recording::{MessageSink, payload};
 use super::statics::{SeenPairs, StaticTree, base_frames};
 use super::tf::{self, TfMessage, Transform, TransformStamped};
+use crate::api::settings::named_with;
 use crate::dataset::DatasetError;
 use omni_kin::Pose2;
 use omni_kin::lidar::Scan;
@@ -278,8 +279,9 @@ impl ScanSink {
                 "no topic holds sensor_msgs/msg/LaserScan: record the lidar's scans".to_string()
             } else {
                 format!(
-                    "the LaserScan topics are {}: name one (--gt-scans TOPIC, scan-odometry --topic TOPIC)",
-                    scans.join(", ")
+                    "the LaserScan topics are {}: name one ({}, scan-odometry --topic TOPIC)",
+                    scans.join(", "),
+                    named_with("gt_scans", "TOPIC")
                 )
             };
             return Err(DatasetError::file(

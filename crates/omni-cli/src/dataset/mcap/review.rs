@@ -7,6 +7,7 @@
 use super::recording::{Channel, Content, MsgType, Recording};
 use super::selection::{self, Bag, Truth, WheelSource};
 use super::{McapOptions, imu, inspect::ROBOT_DESCRIPTION_TOPIC, laser_scan, tf};
+use crate::api::settings::{self, named_with};
 use crate::dataset::DatasetError;
 use std::path::Path;
 
@@ -120,7 +121,9 @@ fn topic_role(
             if let (Some(Err(e)), Some(named)) = (&choices.truth, &opts.truth_topic)
                 && *named == c.topic
             {
-                return (Role::Unused, format!("named as the ground truth (--gt-topic), refused: {}", message(e)));
+                let why =
+                    format!("named as the ground truth ({}), refused: {}", settings::named("gt_topic"), message(e));
+                return (Role::Unused, why);
             }
             if let Ok(WheelSource::Odometry(o)) = choices.joints
                 && o == i
@@ -202,9 +205,11 @@ fn pose_role(
         _ if selection::is_localization(&c.topic) => {
             return (
                 Role::Unused,
-                "a localization: it may fuse the wheel odometry being calibrated, so it is ground truth only when \
-                 named (--gt-topic)"
-                    .into(),
+                format!(
+                    "a localization: it may fuse the wheel odometry being calibrated, so it is ground truth only when \
+                     named ({})",
+                    settings::named("gt_topic")
+                ),
             );
         }
         _ => {}
@@ -256,7 +261,10 @@ fn other_role(c: &Channel) -> (Role, String) {
     match c.schema.as_str() {
         laser_scan::NAME => (
             Role::Lidar,
-            format!("a relative reference with --gt-scans {t}; its path: omnical scan-odometry --topic {t}"),
+            format!(
+                "a relative reference with {}; its path: omnical scan-odometry --topic {t}",
+                named_with("gt_scans", t)
+            ),
         ),
         imu::NAME => (Role::Imu, format!("omnical imu --topic {t} fits the wheel matrix's rotation row")),
         "std_msgs/msg/String" if t.ends_with(ROBOT_DESCRIPTION_TOPIC) => {

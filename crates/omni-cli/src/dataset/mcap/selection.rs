@@ -13,6 +13,7 @@ use super::odometry::{self, ODOM_FRAME};
 use super::recording::{Channel, Content, MsgType};
 use super::statics::StaticTree;
 use super::{McapOptions, Origin, tf, twist};
+use crate::api::settings::{named, named_with};
 use crate::dataset::{DatasetError, Note};
 use std::path::Path;
 
@@ -132,8 +133,9 @@ impl Bag<'_> {
                     self.path,
                     format!(
                         "no {} topic for the wheel speeds; {topic} is the robot's own odometry: {NEED_DESIGN}; with \
-                         it, {topic} stands in for the wheels (--joints-topic {topic})",
+                         it, {topic} stands in for the wheels ({})",
                         joint_state::NAME,
+                        named_with("joints_topic", &self.channels[i].topic),
                         topic = self.channels[i].topic
                     ),
                 )),
@@ -160,10 +162,11 @@ impl Bag<'_> {
         Err(DatasetError::file(
             self.path,
             format!(
-                "cannot tell which {} topic has the wheel joints ({}): {}; choose one with --joints-topic",
+                "cannot tell which {} topic has the wheel joints ({}): {}; choose one with {}",
                 joint_state::NAME,
                 opts.wheel_joints.join(", "),
-                list.join(", ")
+                list.join(", "),
+                named("joints_topic")
             ),
         ))
     }
@@ -188,8 +191,9 @@ impl Bag<'_> {
         odometry.map_or_else(String::new, |c| {
             format!(
                 "; if {topic} is the robot's own wheel odometry, it can stand in for the wheels through the robot's \
-                 design: --joints-topic {topic}, with a robot description (omnical init RECORDING writes robot.toml \
-                 from its URDF, or --robot FILE)",
+                 design: {}, with a robot description (omnical init RECORDING writes robot.toml from its URDF, or \
+                 --robot FILE)",
+                named_with("joints_topic", &c.topic),
                 topic = c.topic
             )
         })
@@ -202,7 +206,8 @@ impl Bag<'_> {
         let topic = &self.channels[i].topic;
         Some(format!(
             "if no JointState topic carries the wheels, the robot's own odometry {topic} can stand in through the \
-             robot's design: --joints-topic {topic} ([topics] joint_states in robot.toml)"
+             robot's design: {} ([topics] joint_states in robot.toml)",
+            named_with("joints_topic", topic)
         ))
     }
 

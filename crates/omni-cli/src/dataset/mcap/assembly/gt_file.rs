@@ -34,7 +34,9 @@ pub(crate) fn truth_for_wheels(
         &folder_file
     };
     let (all, truth_where, label, clock) = external_file(ext, stem, origin, &rel, rad_s, n_wheels)?;
-    let clock = clock.ok_or_else(|| DatasetError::file(path, "no clock for the --gt file"))?;
+    let clock = clock.ok_or_else(|| {
+        DatasetError::file(path, format!("no clock for the {} file", crate::api::settings::named("gt")))
+    })?;
     let poses = within_wheels(path, &all, &rel, ("the wheel columns", &truth_where, &label), notes)?;
     Ok((poses.into_iter().map(|p| StampedPose { t_s: p.t_s + origin_s, ..p }).collect(), clock))
 }

@@ -49,7 +49,7 @@ fn optional_sources_are_left_out_with_a_note() {
 fn a_localization_is_never_taken_as_ground_truth_unless_named() {
     let path = Path::new("a.mcap");
     let bag = Bag { path, channels: vec![channel("/amcl_pose", MsgType::Odometry, Some("map"), None)] };
-    let e = bag.truth(&McapOptions::default()).err().unwrap().to_string();
+    let e = crate::api::settings::as_flags(&bag.truth(&McapOptions::default()).err().unwrap().to_string());
     assert!(
         e.contains(
             "; /amcl_pose looks like a localization, which may fuse the wheel odometry being calibrated, so it is \

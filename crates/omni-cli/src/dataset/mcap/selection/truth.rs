@@ -3,6 +3,7 @@
 //! clock checked against the wheels'.
 
 use super::{Bag, ROBOT_FRAMES, TRUTH_TYPES, schema_or_none, topic_location};
+use crate::api::settings::{named, named_with};
 use crate::dataset::DatasetError;
 use crate::dataset::Note;
 use crate::dataset::ground_truth::{GtClock, Kept};
@@ -82,9 +83,10 @@ impl Bag<'_> {
                                 self.path,
                                 topic_location(topic),
                                 format!(
-                                    "{what} could be the ground truth (transforms: {}); choose one with \
-                                     --gt-parent-frame and --gt-child-frame",
-                                    if all.is_empty() { "none".into() } else { all.join(", ") }
+                                    "{what} could be the ground truth (transforms: {}); choose one with {} and {}",
+                                    if all.is_empty() { "none".into() } else { all.join(", ") },
+                                    named("gt_parent_frame"),
+                                    named("gt_child_frame")
                                 ),
                             ))
                         }
@@ -162,9 +164,11 @@ impl Bag<'_> {
                 Err(DatasetError::file(
                     self.path,
                     format!(
-                        "several ground-truth sources: {}; choose one with --gt-topic (for a TF topic, also \
-                         --gt-parent-frame and --gt-child-frame)",
-                        list.join(", ")
+                        "several ground-truth sources: {}; choose one with {} (for a TF topic, also {} and {})",
+                        list.join(", "),
+                        named("gt_topic"),
+                        named("gt_parent_frame"),
+                        named("gt_child_frame")
                     ),
                 ))
             }
@@ -285,10 +289,15 @@ impl Bag<'_> {
         };
         let mut ways = Vec::new();
         match topics("LaserScan").first() {
-            Some(t) => ways.push(format!("its lidar's scans as the reference: --gt-scans {t}")),
-            None => ways.push("a lidar's scans (--gt-scans TOPIC)".to_string()),
+            Some(t) => ways.push(format!("its lidar's scans as the reference: {}", named_with("gt_scans", t))),
+            None => ways.push(format!("a lidar's scans ({})", named_with("gt_scans", "TOPIC"))),
         }
-        ways.push("a sensor's or a localization's own path (--gt-kind relative with --gt-topic or --gt)".into());
+        ways.push(format!(
+            "a sensor's or a localization's own path ({} with {} or {})",
+            named_with("gt_kind", "relative"),
+            named("gt_topic"),
+            named("gt")
+        ));
         ways.push("tape-measured end poses (--gt-kind end-pose --gt TABLE; omnical plan --umbmark)".into());
         if let Some(t) = topics("Imu").first() {
             ways.push(format!("its IMU for the rotation row alone: omnical imu RECORDING --topic {t}"));
@@ -304,8 +313,9 @@ fn localization_hint(localizations: &[&str]) -> String {
     }
     format!(
         "; {} looks like a localization, which may fuse the wheel odometry being calibrated, so it is not taken \
-         as ground truth unless named with --gt-topic",
-        localizations.join(", ")
+         as ground truth unless named with {}",
+        localizations.join(", "),
+        named("gt_topic")
     )
 }
 
