@@ -35,5 +35,7 @@ fn a_recording_with_a_lidar_reference_is_read_once_within_the_size_limit() {
         Ok(_) => panic!("a recording above the size limit was read"),
         Err(e) => e.to_string(),
     };
-    assert!(e.contains("--max-file-mb"), "{e}");
+    // The library names the setting; the command line spells it as its flag.
+    assert!(e.contains("`max_file_mb`"), "{e}");
+    assert!(omni_cli::api::settings::as_flags(&e).contains("--max-file-mb"), "{e}");
 }
