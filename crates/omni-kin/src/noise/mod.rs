@@ -32,8 +32,10 @@
 //! - `run_turn_scale_var`: the angle turned is off by a factor `1 + γ` (`γ²`, unitless).
 //!
 //! Their mean over the training runs is the systematic error ([`fit::Systematic`]), kept apart; what is
-//! fitted is how much they vary around it. They are not AMCL's (whose noise is drawn afresh every update)
-//! and are not exported there.
+//! fitted is how much they vary around it. Beside them, `heading_wander_rad2`: a heading error that is
+//! renewed as the robot turns (its correlation falls as `exp(−φ / HEADING_MEMORY_RAD)` over the angle `φ`
+//! turned) instead of adding up, as the corners of real squares show. None of the four is AMCL's (whose
+//! noise is drawn afresh every update), and none is exported there.
 //!
 //! ## Propagation
 //! Over a window of the odometry from pose `i` to `j`, in the frame of pose `i`, the covariance of the
@@ -61,7 +63,8 @@ use crate::run::Run;
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use serde::{Deserialize, Serialize};
 
-/// Number of noise parameters: five rates, two floor terms and three per-run bias variances.
+/// Number of noise parameters: five rates, two floor terms, three per-run bias variances and the wandering
+/// heading.
 pub const N_PARAMS: usize = 11;
 
 /// The first per-run bias parameter's index: `run_scale_var`, `run_drift_var`, `run_turn_scale_var` follow.
