@@ -93,9 +93,7 @@ pub fn diagnose_loaded(a: &DiagnoseRequest) -> Result<(Diagnosis, Loaded), Diagn
         // The final model carries its own noise model, fitted as `train` fits one: what the effects added
         // explain is no longer noise (`eval` checks it on held-out runs, `export` writes it).
         let mut file = model_file::ModelFile::from_fitted(fm, None).map_err(ModelTextError::from)?;
-        if !ds.runs.iter().any(Run::truth_position_only) {
-            file.noise = super::noise::fit(fm, &ds.runs).map_err(ModelTextError::from)?.ok();
-        }
+        file.noise = super::noise::fit(fm, &ds.runs).map_err(ModelTextError::from)?.ok();
         let text = file.to_toml()?;
         atomic::write_atomic(out, text.as_bytes())
             .map_err(|source| DiagnoseError::Write { path: out.clone(), source })?;

@@ -36,25 +36,29 @@ fn poses(fitted: &FittedModel, runs: &[Run]) -> Result<Vec<RunPoses>, KinError> 
     noise::run_poses(runs, &errors)
 }
 
-/// The noise model of `fitted`'s odometry on its training runs: `Ok(Err(_))` when the runs are too short
-/// to fit it (the model file then has none; `train` says why).
-pub fn fit(fitted: &FittedModel, runs: &[Run]) -> Result<Result<OdometryNoise, noise::NoiseFitError>, KinError> {
-    Ok(noise::fit(&poses(fitted, runs)?, holonomic(fitted), &FitNoiseOptions::default()))
+/// Why a fit has no noise model.
+#[derive(Debug, thiserror::Error)]
+pub enum NoNoise {
+    /// The reference measures no heading: the noise model's heading and turning terms need one.
+    #[error("the reference gives positions only, and the noise model's heading terms need a measured heading")]
+    PositionOnly,
+    /// The runs are too short to fit it.
+    #[error(transparent)]
+    Fit(#[from] noise::NoiseFitError),
+}
+
+/// The noise model of `fitted`'s odometry on its training runs: `Ok(Err(_))` when the runs cannot give one
+/// (the model file then has none; `train` says why). `train` and `diagnose --out` fit it here.
+pub fn fit(fitted: &FittedModel, runs: &[Run]) -> Result<Result<OdometryNoise, NoNoise>, KinError> {
+    if runs.iter().any(Run::truth_position_only) {
+        return Ok(Err(NoNoise::PositionOnly));
+    }
+    Ok(noise::fit(&poses(fitted, runs)?, holonomic(fitted), &FitNoiseOptions::default()).map_err(NoNoise::from))
 }
 
 /// Adds the noise model of a fit to `train`'s summary `s` (`noise`, which the model file holds as `[noise]`),
 /// or a warning when it cannot be fitted.
 pub fn add_to_summary(s: &mut serde_json::Value, fitted: &FittedModel, runs: &[Run]) -> Result<(), KinError> {
-    if runs.iter().any(Run::truth_position_only) {
-        // Its headings and its turning noise need a reference that measures the heading.
-        if let Some(list) = s["warnings"].as_array_mut() {
-            list.push(json!(
-                "no odometry noise model: the reference gives positions only, and the noise model's \
-                             heading terms need a measured heading"
-            ));
-        }
-        return Ok(());
-    }
     match fit(fitted, runs)? {
         Ok(n) => s["noise"] = serde_json::to_value(&n).unwrap_or_default(),
         Err(e) => {
